@@ -1,0 +1,11 @@
+//! keyrig-core: keys, tracks, Kochanek–Bartels (TCB) and Squad interpolation, and the scene
+//! document. Pure: no file I/O, no GPU, no UI.
+
+pub mod key;
+pub mod scene;
+
+pub use key::{Animated, Interpolation, Key, RawTrack, Tcb};
+pub use scene::{
+    Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
+    ProceduralMesh, Scene, Skeleton,
+};

@@ -1,0 +1,294 @@
+//! The scene document: what a `.ron` scene file holds and what the editor edits.
+//!
+//! Plain serializable data with no invariants of its own; [`Scene::problems`] lists what is
+//! wrong with it (non-finite numbers, bad joint parents, keys out of order) with the path of
+//! each problem, so that loaders and `keyrig info` can report them.
+
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::key::{Animated, RawTrack};
+
+/// A whole scene: timing, animated objects, lights and a camera.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Frames per second of the timeline. Key times are stored in seconds.
+    pub fps: f64,
+    /// First and last frame of the playback range (inclusive).
+    pub frame_range: FrameRange,
+    /// Ambient light colour (linear RGB), added to every lit surface.
+    #[serde(default = "default_ambient")]
+    pub ambient: Vec3,
+    #[serde(default)]
+    pub objects: Vec<Object>,
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    #[serde(default)]
+    pub camera: Camera,
+}
+
+fn default_ambient() -> Vec3 {
+    Vec3::splat(0.1)
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Scene {
+            fps: 30.0,
+            frame_range: FrameRange { start: 0, end: 60 },
+            ambient: default_ambient(),
+            objects: Vec::new(),
+            lights: Vec::new(),
+            camera: Camera::default(),
+        }
+    }
+}
+
+/// Inclusive frame range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameRange {
+    pub start: i32,
+    pub end: i32,
+}
+
+/// An object in the scene: a keyed transform, optionally a mesh and a skeleton that deforms it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    pub name: String,
+    pub translation: Animated<Vec3>,
+    pub rotation: Animated<Quat>,
+    pub scale: Animated<Vec3>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<MeshSource>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skeleton: Option<Skeleton>,
+    #[serde(default)]
+    pub deformer: DeformerSettings,
+}
+
+impl Object {
+    /// An object at the origin, not animated, with no mesh.
+    #[must_use]
+    pub fn new(name: impl Into<String>) -> Self {
+        Object {
+            name: name.into(),
+            translation: Animated::constant(Vec3::ZERO),
+            rotation: Animated::constant(Quat::IDENTITY),
+            scale: Animated::constant(Vec3::ONE),
+            mesh: None,
+            skeleton: None,
+            deformer: DeformerSettings::default(),
+        }
+    }
+}
+
+/// Where an object's mesh comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum MeshSource {
+    /// A mesh generated in code (the paper's test arms, a hand, a cube).
+    Procedural(ProceduralMesh),
+    /// A model file (glTF, MD2) with a path relative to the scene file.
+    File {
+        path: String,
+        /// Index of the mesh inside the file; `None` takes the first.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mesh: Option<usize>,
+    },
+}
+
+/// Meshes keyrig can generate (DESIGN.md §6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ProceduralMesh {
+    /// 78 vertices, 152 triangles, 4 bones along X, 160.158 cm.
+    ArmLowPoly,
+    /// 1250 vertices, 2496 triangles, 4 bones along X, 160.158 cm.
+    ArmHighPoly,
+    /// A palm with three fingers: a branching skeleton.
+    Hand,
+    /// A unit cube centred on the origin.
+    Cube,
+}
+
+/// A joint hierarchy with its rest pose and animation. Joints are stored parents first.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Skeleton {
+    pub joints: Vec<Joint>,
+    /// Translation of the root joint over time (in the object's space), added to its rest
+    /// translation.
+    #[serde(default = "zero_translation")]
+    pub root_translation: Animated<Vec3>,
+}
+
+fn zero_translation() -> Animated<Vec3> {
+    Animated::constant(Vec3::ZERO)
+}
+
+/// One joint: rest transform R(j) relative to its parent and its animated local rotation T(j).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Joint {
+    pub name: String,
+    /// Index of the parent joint; `None` for the root. Must be smaller than this joint's index.
+    pub parent: Option<usize>,
+    /// Rest translation relative to the parent joint (R(j)'s translation).
+    pub rest_translation: Vec3,
+    /// Rest rotation relative to the parent joint (R(j)'s rotation).
+    pub rest_rotation: Quat,
+    /// Animated local rotation T(j), applied after the rest transform; identity at rest.
+    pub rotation: Animated<Quat>,
+}
+
+/// Which skin deformer an object uses, and the deformers' parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeformerSettings {
+    pub kind: DeformerKind,
+    /// Bones blending: how far the blend zone reaches into the parent bone, as a fraction of
+    /// the parent bone's length (0..=1).
+    #[serde(default = "default_blend_fraction")]
+    pub blend_parent_fraction: f32,
+    /// Bones blending: how far the blend zone reaches into the child bone, as a fraction of
+    /// the child bone's length (0..=1).
+    #[serde(default = "default_blend_fraction")]
+    pub blend_child_fraction: f32,
+}
+
+fn default_blend_fraction() -> f32 {
+    0.25
+}
+
+impl Default for DeformerSettings {
+    fn default() -> Self {
+        DeformerSettings {
+            kind: DeformerKind::LinearBlend,
+            blend_parent_fraction: default_blend_fraction(),
+            blend_child_fraction: default_blend_fraction(),
+        }
+    }
+}
+
+/// The four skin deformers (DESIGN.md §5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum DeformerKind {
+    /// One weight per vertex: v' = M(j)·v.
+    Rigid,
+    /// Linear blend skinning: v' = Σ wᵢ·M(jᵢ)·v.
+    #[default]
+    LinearBlend,
+    /// Kavan & Žára's bones blending.
+    BonesBlending,
+    /// Dual quaternion skinning (Kavan et al. 2008).
+    DualQuaternion,
+}
+
+impl DeformerKind {
+    pub const ALL: [DeformerKind; 4] =
+        [DeformerKind::Rigid, DeformerKind::LinearBlend, DeformerKind::BonesBlending, DeformerKind::DualQuaternion];
+
+    /// The name used on the command line (`rigid`, `linear`, `bones-blending`, `dual-quaternion`).
+    #[must_use]
+    pub fn cli_name(self) -> &'static str {
+        match self {
+            DeformerKind::Rigid => "rigid",
+            DeformerKind::LinearBlend => "linear",
+            DeformerKind::BonesBlending => "bones-blending",
+            DeformerKind::DualQuaternion => "dual-quaternion",
+        }
+    }
+
+    /// The name shown in the editor.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            DeformerKind::Rigid => "Rigid",
+            DeformerKind::LinearBlend => "Linear blend",
+            DeformerKind::BonesBlending => "Bones blending",
+            DeformerKind::DualQuaternion => "Dual quaternion",
+        }
+    }
+
+    /// Parses a command-line name; see [`DeformerKind::cli_name`].
+    #[must_use]
+    pub fn from_cli_name(name: &str) -> Option<Self> {
+        DeformerKind::ALL.into_iter().find(|k| k.cli_name() == name)
+    }
+}
+
+/// A light with keyed position, direction, colour and intensity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    #[serde(default = "default_true")]
+    pub enabled: bool,
+    /// Position in world space (unused by directional lights).
+    pub position: Animated<Vec3>,
+    /// Direction the light shines in, world space (unused by point lights). Need not be unit.
+    pub direction: Animated<Vec3>,
+    /// Linear RGB colour.
+    pub colour: Animated<Vec3>,
+    pub intensity: Animated<f32>,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+/// Kinds of light (seed text 002: directional, point and spot lights).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum LightKind {
+    Directional,
+    /// A point light whose intensity falls off with the square of the distance.
+    Point,
+    /// A spot light: full intensity inside `inner_angle_deg`, none outside `cutoff_deg`
+    /// (half-angles from the direction), falling off as `cos^dropoff` in between.
+    Spot { cutoff_deg: f32, inner_angle_deg: f32, dropoff: f32 },
+}
+
+/// The viewing camera: an orbit around a target point.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub target: Vec3,
+    /// Rotation about the world Y axis, degrees.
+    pub yaw_deg: f32,
+    /// Elevation above the ground plane, degrees.
+    pub pitch_deg: f32,
+    pub distance: f32,
+    /// Vertical field of view, degrees.
+    pub fov_y_deg: f32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera { target: Vec3::ZERO, yaw_deg: 30.0, pitch_deg: 20.0, distance: 5.0, fov_y_deg: 45.0 }
+    }
+}
+
+/// Something wrong with a scene, with the path of the field it concerns
+/// (e.g. `objects[0].skeleton.joints[2].rotation.track[4].value`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Problem {
+    pub path: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for Problem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.path, self.message)
+    }
+}
+
+/// The raw-track access used when walking a scene.
+impl<T> Animated<T> {
+    /// The keys of the track.
+    #[must_use]
+    pub fn keys(&self) -> &RawTrack<T> {
+        &self.track
+    }
+}

@@ -1,0 +1,4 @@
+//! Headless subcommands of the `keyrig` binary. Each module has an `…Args` (clap) and a
+//! `run(args) -> anyhow::Result<()>`.
+
+pub mod edit;

@@ -1,0 +1,1 @@
+//! keyrig render

@@ -1,0 +1,1 @@
+//! Shared helpers for keyrig end-to-end tests.
