@@ -2,10 +2,13 @@
 //! document. Pure: no file I/O, no GPU, no UI.
 
 pub mod key;
+pub mod quat;
 pub mod scene;
+pub mod track;
 
 pub use key::{Animated, Interpolation, Key, RawTrack, Tcb};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
     ProceduralMesh, Scene, Skeleton,
 };
+pub use track::{AnimatedCursor, AnimatedTrack, Cursor, TangentSide, Track, TrackError, TrackValue};

@@ -1,0 +1,229 @@
+//! Guarded quaternion helpers in f64: logarithm, exponential and slerp that never divide by
+//! `sin(0)`.
+//!
+//! Conventions: a unit quaternion `q = (cos φ, sin φ · n)` rotates by `2φ` about the unit axis
+//! `n`. [`log`] returns the *half-angle* vector `φ · n` and [`exp`] is its inverse, so that
+//! `exp(log(q)) = q` for every unit `q` (Shoemake 1987; Eberly, "Key Frame Interpolation via
+//! Splines and Quaternions").
+//!
+//! Angles between quaternions are measured with Kahan's formula `θ = 2·atan2(|a − b|, |a + b|)`,
+//! which stays accurate near 0 and near π where `acos(a·b)` loses half of its digits.
+
+use glam::{DQuat, DVec3, DVec4};
+
+/// Below this 4-D angle (radians) between two unit quaternions, [`slerp`] falls back to a
+/// normalized lerp. The difference between slerp and nlerp is of order θ³ ≈ 1e-18 there, far
+/// below f64 resolution of the result, and `sin θ` would be too small to divide by safely.
+pub const SLERP_NLERP_ANGLE: f64 = 1e-6;
+
+/// Above `π − ANTIPODAL_MARGIN` two unit quaternions are treated as antipodal: the great arc
+/// between them is not unique, and [`slerp`] turns through a fixed perpendicular quaternion.
+pub const ANTIPODAL_MARGIN: f64 = 1e-9;
+
+/// Below this norm (of the half-angle vector) [`exp`] uses the Taylor series of `sin φ / φ`.
+const EXP_SERIES_BELOW: f64 = 1e-4;
+
+/// The 4-D angle between two unit quaternions, in `[0, π]` (no shortest-path flip).
+#[must_use]
+pub fn angle_between(a: DQuat, b: DQuat) -> f64 {
+    let a = DVec4::from(a);
+    let b = DVec4::from(b);
+    2.0 * (a - b).length().atan2((a + b).length())
+}
+
+/// Quaternion logarithm of a unit quaternion: the half-angle vector `φ · n`.
+///
+/// For `q = ±1` (no rotation, or a full turn) the result is the zero vector. There is no
+/// division by `sin φ`: `atan2(|v|, w) / |v|` is finite for every `|v| > 0`.
+#[must_use]
+pub fn log(q: DQuat) -> DVec3 {
+    let v = DVec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    if s > 0.0 {
+        v * (s.atan2(q.w) / s)
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// Quaternion exponential of a half-angle vector: `(cos |v|, sin |v| · v / |v|)`.
+#[must_use]
+pub fn exp(v: DVec3) -> DQuat {
+    let phi = v.length();
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    // sin φ / φ, with the series 1 − φ²/6 + φ⁴/120 near 0 (error below φ⁶/5040).
+    let sinc = if phi < EXP_SERIES_BELOW {
+        let p2 = phi * phi;
+        1.0 - p2 / 6.0 + p2 * p2 / 120.0
+    } else {
+        sin_phi / phi
+    };
+    let xyz = v * sinc;
+    DQuat::from_xyzw(xyz.x, xyz.y, xyz.z, cos_phi)
+}
+
+/// `log(a⁻¹ · b)`: the half-angle vector that turns `a` into `b` in `a`'s frame
+/// (DESIGN.md §3 writes it `L(a, b)`).
+#[must_use]
+pub fn log_between(a: DQuat, b: DQuat) -> DVec3 {
+    log(a.conjugate() * b)
+}
+
+/// A precomputed great arc from `from` to `to` (no shortest-path flip), evaluated with one
+/// `sin_cos` per sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Arc {
+    from: DVec4,
+    to: DVec4,
+    /// 4-D angle θ between the ends; 0 means "use nlerp".
+    angle: f64,
+    cos_angle: f64,
+    sin_angle: f64,
+    inv_sin: f64,
+}
+
+impl Arc {
+    /// Prepares the arc between two unit quaternions. Antipodal ends are routed through a
+    /// perpendicular quaternion by [`slerp`]; [`Arc`] stores them as such a two-leg arc is not
+    /// needed by keyrig (callers check with [`angle_between`] first).
+    #[must_use]
+    pub fn new(from: DQuat, to: DQuat) -> Self {
+        let angle = angle_between(from, to);
+        let (from, to) = (DVec4::from(from), DVec4::from(to));
+        if angle < SLERP_NLERP_ANGLE {
+            Arc { from, to, angle: 0.0, cos_angle: 1.0, sin_angle: 0.0, inv_sin: 0.0 }
+        } else {
+            let (sin_angle, cos_angle) = angle.sin_cos();
+            Arc { from, to, angle, cos_angle, sin_angle, inv_sin: 1.0 / sin_angle }
+        }
+    }
+
+    /// Whether the ends are (nearly) antipodal, so that the arc is not unique.
+    #[must_use]
+    pub fn is_antipodal(&self) -> bool {
+        self.angle > std::f64::consts::PI - ANTIPODAL_MARGIN
+    }
+
+    /// The point at parameter `s` (0 gives `from`, 1 gives `to`).
+    #[must_use]
+    pub fn eval(&self, s: f64) -> DQuat {
+        if self.angle == 0.0 {
+            return DQuat::from_vec4((self.from + (self.to - self.from) * s).normalize());
+        }
+        if self.is_antipodal() {
+            return slerp(DQuat::from_vec4(self.from), DQuat::from_vec4(self.to), s);
+        }
+        // sin((1−s)θ) = sin θ cos sθ − cos θ sin sθ: one sin_cos instead of two sines.
+        let (sin_b, cos_b) = (s * self.angle).sin_cos();
+        let wa = (self.sin_angle * cos_b - self.cos_angle * sin_b) * self.inv_sin;
+        let wb = sin_b * self.inv_sin;
+        DQuat::from_vec4(self.from * wa + self.to * wb)
+    }
+}
+
+/// Spherical linear interpolation along the great arc from `a` to `b` (no shortest-path flip:
+/// make keys sign-consistent first when the short way is wanted).
+///
+/// `s = 0` gives `a`, `s = 1` gives `b`. Below [`SLERP_NLERP_ANGLE`] it is a normalized lerp;
+/// for antipodal ends (`a ≈ −b`) it turns through the quaternion perpendicular to `a`
+/// `(−y, x, −w, z)` (Shoemake's fallback), so the result is always finite and unit length.
+#[must_use]
+pub fn slerp(a: DQuat, b: DQuat, s: f64) -> DQuat {
+    let angle = angle_between(a, b);
+    let (va, vb) = (DVec4::from(a), DVec4::from(b));
+    if angle < SLERP_NLERP_ANGLE {
+        return DQuat::from_vec4((va + (vb - va) * s).normalize());
+    }
+    if angle > std::f64::consts::PI - ANTIPODAL_MARGIN {
+        // Half a turn through the perpendicular quaternion, then on to b (≈ −a).
+        let perp = DVec4::new(-a.y, a.x, -a.w, a.z);
+        let half = std::f64::consts::FRAC_PI_2;
+        return if s <= 0.5 {
+            let (sn, cs) = (2.0 * s * half).sin_cos();
+            DQuat::from_vec4(va * cs + perp * sn)
+        } else {
+            let (sn, cs) = ((2.0 * s - 1.0) * half).sin_cos();
+            DQuat::from_vec4(perp * cs + vb * sn)
+        };
+    }
+    let inv_sin = 1.0 / angle.sin();
+    let wa = ((1.0 - s) * angle).sin() * inv_sin;
+    let wb = (s * angle).sin() * inv_sin;
+    DQuat::from_vec4(va * wa + vb * wb)
+}
+
+/// Flips every quaternion whose dot product with its predecessor is negative, so that
+/// consecutive keys are at most 90° apart in 4-D (180° of rotation) and interpolation takes
+/// the short way. Returns, per element, whether it was flipped (relative to the input).
+pub fn make_sign_consistent(quats: &mut [DQuat]) -> Vec<bool> {
+    let mut flipped = vec![false; quats.len()];
+    for i in 1..quats.len() {
+        if quats[i - 1].dot(quats[i]) < 0.0 {
+            quats[i] = -quats[i];
+            flipped[i] = true;
+        }
+    }
+    flipped
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: DQuat, b: DQuat, eps: f64) -> bool {
+        (DVec4::from(a) - DVec4::from(b)).length() < eps
+    }
+
+    #[test]
+    fn log_exp_round_trip_including_zero_and_half_turn() {
+        let cases = [
+            DQuat::IDENTITY,
+            DQuat::from_axis_angle(DVec3::X, 1e-12),
+            DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 1.0),
+            DQuat::from_axis_angle(DVec3::Y, std::f64::consts::PI),
+            DQuat::from_axis_angle(DVec3::Z, 3.0),
+        ];
+        for q in cases {
+            let back = exp(log(q));
+            assert!(close(back, q, 1e-14), "{q:?} -> {back:?}");
+        }
+        assert_eq!(log(DQuat::IDENTITY), DVec3::ZERO);
+        assert_eq!(log(-DQuat::IDENTITY), DVec3::ZERO);
+        let e = exp(DVec3::ZERO);
+        assert_eq!(e, DQuat::IDENTITY);
+    }
+
+    #[test]
+    fn slerp_ends_and_midpoint() {
+        let a = DQuat::from_axis_angle(DVec3::Z, 0.2);
+        let b = DQuat::from_axis_angle(DVec3::Z, 1.4);
+        assert!(close(slerp(a, b, 0.0), a, 1e-15));
+        assert!(close(slerp(a, b, 1.0), b, 1e-15));
+        assert!(close(slerp(a, b, 0.5), DQuat::from_axis_angle(DVec3::Z, 0.8), 1e-15));
+        let arc = Arc::new(a, b);
+        for s in [0.0, 0.25, 0.5, 0.9, 1.0] {
+            assert!(close(arc.eval(s), slerp(a, b, s), 1e-14));
+        }
+    }
+
+    #[test]
+    fn slerp_identical_and_antipodal_inputs_stay_unit() {
+        let a = DQuat::from_axis_angle(DVec3::X, 0.7);
+        for s in [0.0, 0.3, 0.5, 1.0] {
+            let same = slerp(a, a, s);
+            assert!(close(same, a, 1e-15));
+            let anti = slerp(a, -a, s);
+            assert!((anti.length() - 1.0).abs() < 1e-14 && anti.is_finite(), "{anti:?}");
+        }
+        assert!(close(slerp(a, -a, 1.0), -a, 1e-14));
+    }
+
+    #[test]
+    fn sign_consistency_flips_only_when_needed() {
+        let q = DQuat::from_axis_angle(DVec3::X, 0.5);
+        let mut qs = [q, -q, q, -q];
+        let flipped = make_sign_consistent(&mut qs);
+        assert_eq!(flipped, vec![false, true, false, true]);
+        assert!(qs.iter().all(|&x| x == q));
+    }
+}

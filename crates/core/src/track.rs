@@ -1,0 +1,807 @@
+//! Validated, evaluable keyframe tracks (DESIGN.md §3).
+//!
+//! A [`RawTrack`] is checked once by [`Track::new`] into a [`Track`], which precomputes
+//! everything that depends only on the keys (Kochanek–Bartels tangents with the non-uniform
+//! spacing factors, Squad control quaternions, sign-consistent unit quaternions). Sampling then
+//! only locates the segment (binary search, or an amortized O(1) step with a [`Cursor`]) and
+//! evaluates one cubic or one Squad.
+//!
+//! # Sampling rule
+//! * `t` before the first key (or NaN) gives the first key's value; `t` at or after the last key
+//!   gives the last key's value (constant extrapolation).
+//! * At a key time `t_i` the result is exactly the key's value (normalized and sign-adjusted for
+//!   rotations, see [`Track::key_values`]).
+//! * Inside segment i (`t_i < t < t_{i+1}`), the mode of key i decides: Step holds `P_i`;
+//!   Linear is `P_i + u (P_{i+1} − P_i)` (slerp for rotations); Tcb is the Hermite segment
+//!   `h00·P_i + h10·S_i + h01·P_{i+1} + h11·D_{i+1}` (Squad with TCB for rotations); Hermite uses
+//!   the keys' per-second tangents times the segment duration (glTF CUBICSPLINE; for rotations
+//!   component-wise Hermite, then normalized). `u = (t − t_i)/(t_{i+1} − t_i)`.
+//!
+//! # End keys
+//! The first and the last key have one neighbour only. keyrig uses `P_{−1} := P_0` and
+//! `P_{n+1} := P_n` (for rotations `L(q_{−1}, q_0) = L(q_n, q_{n+1}) = 0`) together with a
+//! mirrored spacing (`Δ_{−1} := Δ_0`, `Δ_n := Δ_{n−1}`), so the spacing factor at an end key is 1.
+//! With T = C = B = 0 the end tangent is half the chord: `S_0 = (P_1 − P_0)/2`.
+//!
+//! All arithmetic is done in f64 (values are widened from f32 once, at validation) and the
+//! result is rounded to the value type at the end; [`Track::sample_wide`] returns the f64
+//! value before rounding.
+
+use std::fmt::Debug;
+use std::ops::{Add, Mul, Sub};
+
+use glam::{DQuat, DVec3, DVec4, Quat, Vec3};
+
+use crate::key::{Animated, Interpolation, Key, RawTrack, Tcb};
+use crate::quat::{self, Arc};
+
+/// Quaternion keys shorter than this (before normalization) are rejected as zero.
+pub const MIN_QUATERNION_NORM: f64 = 1e-6;
+
+/// Which tangent of a key a Hermite segment is missing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TangentSide {
+    /// `in_tangent`, used by the segment that ends at the key.
+    In,
+    /// `out_tangent`, used by the segment that starts at the key.
+    Out,
+}
+
+impl std::fmt::Display for TangentSide {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TangentSide::In => "in_tangent",
+            TangentSide::Out => "out_tangent",
+        })
+    }
+}
+
+/// Why a [`RawTrack`] (or an [`Animated`] value) cannot be evaluated. `index` is the position
+/// of the offending key in the raw key list.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TrackError {
+    #[error("track has no keys")]
+    Empty,
+    #[error("key {index}: time is earlier than the previous key's (keys must be sorted by time)")]
+    Unsorted { index: usize },
+    #[error("key {index}: same time as the previous key (key times must be distinct)")]
+    DuplicateTime { index: usize },
+    #[error("key {index}: time is not a finite number")]
+    NonFiniteTime { index: usize },
+    #[error("key {index}: value is not finite (NaN or infinity)")]
+    NonFiniteValue { index: usize },
+    #[error("key {index}: rotation quaternion has (nearly) zero length")]
+    ZeroQuaternion { index: usize },
+    #[error("key {index}: tangent is not finite (NaN or infinity)")]
+    NonFiniteTangent { index: usize },
+    #[error("key {index}: Hermite interpolation needs the key's {side}")]
+    MissingTangent { index: usize, side: TangentSide },
+    #[error("key {index}: tension, continuity and bias must be finite and within [-1, 1]")]
+    TcbOutOfRange { index: usize },
+    #[error("static value is not finite (NaN or infinity)")]
+    NonFiniteStaticValue,
+    #[error("static rotation quaternion has (nearly) zero length")]
+    ZeroStaticQuaternion,
+}
+
+/// What is wrong with one value (before an index is attached).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ValueProblem {
+    NonFinite,
+    ZeroQuaternion,
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for f32 {}
+    impl Sealed for glam::Vec3 {}
+    impl Sealed for glam::Quat {}
+}
+
+/// A value type a [`Track`] can interpolate: `f32` (scalars), [`Vec3`] and unit [`Quat`]
+/// (rotations). Sealed; the hidden items are keyrig's internals.
+pub trait TrackValue: Copy + Debug + PartialEq + sealed::Sealed {
+    /// The f64 form all interpolation is done in (`f64`, [`DVec3`], [`DQuat`]).
+    type Wide: Copy + Debug + PartialEq;
+    #[doc(hidden)]
+    type Shape: Clone + Debug + PartialEq;
+
+    /// Widens to f64 (exact).
+    fn widen(self) -> Self::Wide;
+    /// Rounds the f64 form to the value type.
+    fn narrow(wide: Self::Wide) -> Self;
+
+    /// Checks one key value; returns its f64 form (unit length for rotations).
+    #[doc(hidden)]
+    fn check(self) -> Result<Self::Wide, ValueProblem>;
+    #[doc(hidden)]
+    fn is_finite_tangent(self) -> bool;
+    /// Builds the n−1 segment shapes; `values` are the checked values, in/out may be adjusted
+    /// (sign consistency). Times are validated (finite, strictly increasing).
+    #[doc(hidden)]
+    fn build(times: &[f64], keys: &[Key<Self>], values: &mut [Self::Wide]) -> Vec<Self::Shape>;
+    #[doc(hidden)]
+    fn eval(shape: &Self::Shape, u: f64) -> Self::Wide;
+}
+
+/// One segment: from key i (at `start`) to key i+1.
+#[derive(Clone, Debug, PartialEq)]
+struct Segment<S> {
+    start: f64,
+    inv_duration: f64,
+    interpolation: Interpolation,
+    shape: S,
+}
+
+/// A validated, evaluable track of `f32`, [`Vec3`] or [`Quat`] keys.
+///
+/// Build it with [`Track::new`]; sample it with [`Track::sample`] (random access, O(log n)) or
+/// with a [`Cursor`] (sequential playback, amortized O(1)).
+///
+/// ```
+/// use glam::Vec3;
+/// use keyrig_core::{Key, RawTrack, Track};
+///
+/// let raw = RawTrack::new(vec![
+///     Key::new(0.0, Vec3::ZERO),
+///     Key::new(1.0, Vec3::X),
+///     Key::new(3.0, Vec3::new(1.0, 2.0, 0.0)),
+/// ]);
+/// let track = Track::new(&raw)?;
+/// assert_eq!(track.domain(), (0.0, 3.0));
+/// assert_eq!(track.sample(1.0), Vec3::X); // passes through keys exactly
+/// assert_eq!(track.sample(-5.0), Vec3::ZERO); // clamped before the first key
+/// # Ok::<(), keyrig_core::TrackError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Track<T: TrackValue> {
+    /// Key times, strictly increasing, at least one.
+    times: Vec<f64>,
+    /// Key values as given (rotations: normalized and sign-consistent), rounded to `T`.
+    values: Vec<T>,
+    /// The same values in f64.
+    wide: Vec<T::Wide>,
+    /// `times.len() − 1` segments.
+    segments: Vec<Segment<T::Shape>>,
+}
+
+impl<T: TrackValue> Track<T> {
+    /// Validates `raw` and precomputes its interpolation data.
+    ///
+    /// # Errors
+    /// [`TrackError`] naming the first offending key: no keys, a non-finite time, a time not
+    /// after the previous key's, a non-finite value or tangent, a zero quaternion, T/C/B outside
+    /// [-1, 1], or a Hermite segment whose keys lack the tangents it needs.
+    pub fn new(raw: &RawTrack<T>) -> Result<Self, TrackError> {
+        Self::from_keys(&raw.keys)
+    }
+
+    /// [`Track::new`] on a slice of keys.
+    ///
+    /// # Errors
+    /// See [`Track::new`].
+    pub fn from_keys(keys: &[Key<T>]) -> Result<Self, TrackError> {
+        if keys.is_empty() {
+            return Err(TrackError::Empty);
+        }
+        let mut times = Vec::with_capacity(keys.len());
+        let mut wide = Vec::with_capacity(keys.len());
+        for (index, key) in keys.iter().enumerate() {
+            if !key.time.is_finite() {
+                return Err(TrackError::NonFiniteTime { index });
+            }
+            if let Some(&previous) = times.last() {
+                if key.time < previous {
+                    return Err(TrackError::Unsorted { index });
+                }
+                if key.time == previous {
+                    return Err(TrackError::DuplicateTime { index });
+                }
+            }
+            times.push(key.time);
+            wide.push(key.value.check().map_err(|problem| match problem {
+                ValueProblem::NonFinite => TrackError::NonFiniteValue { index },
+                ValueProblem::ZeroQuaternion => TrackError::ZeroQuaternion { index },
+            })?);
+            if !tcb_in_range(key.tcb) {
+                return Err(TrackError::TcbOutOfRange { index });
+            }
+            let tangents = [key.in_tangent, key.out_tangent];
+            if tangents.iter().flatten().any(|tangent| !tangent.is_finite_tangent()) {
+                return Err(TrackError::NonFiniteTangent { index });
+            }
+        }
+        for (index, pair) in keys.windows(2).enumerate() {
+            if pair[0].interpolation == Interpolation::Hermite {
+                if pair[0].out_tangent.is_none() {
+                    return Err(TrackError::MissingTangent { index, side: TangentSide::Out });
+                }
+                if pair[1].in_tangent.is_none() {
+                    return Err(TrackError::MissingTangent { index: index + 1, side: TangentSide::In });
+                }
+            }
+        }
+        let shapes = T::build(&times, keys, &mut wide);
+        let segments = shapes
+            .into_iter()
+            .enumerate()
+            .map(|(i, shape)| Segment {
+                start: times[i],
+                inv_duration: 1.0 / (times[i + 1] - times[i]),
+                interpolation: keys[i].interpolation,
+                shape,
+            })
+            .collect();
+        let values = wide.iter().map(|&w| T::narrow(w)).collect();
+        Ok(Track { times, values, wide, segments })
+    }
+
+    /// `(first key time, last key time)`; equal for a single key.
+    #[must_use]
+    pub fn domain(&self) -> (f64, f64) {
+        (self.times[0], self.times[self.times.len() - 1])
+    }
+
+    #[must_use]
+    pub fn key_count(&self) -> usize {
+        self.times.len()
+    }
+
+    /// Key times, strictly increasing.
+    #[must_use]
+    pub fn key_times(&self) -> &[f64] {
+        &self.times
+    }
+
+    /// Key values as the track interpolates them: as given for scalars and vectors; for
+    /// rotations normalized and made sign-consistent (`q_{i+1}` negated where `q_i·q_{i+1} < 0`).
+    #[must_use]
+    pub fn key_values(&self) -> &[T] {
+        &self.values
+    }
+
+    /// The interpolation mode of segment `i` (from key i to key i+1), `None` past the end.
+    #[must_use]
+    pub fn segment_interpolation(&self, i: usize) -> Option<Interpolation> {
+        self.segments.get(i).map(|s| s.interpolation)
+    }
+
+    /// The value at time `t` (seconds), clamped to the first/last key outside the domain.
+    /// O(log n) binary search; use [`Track::cursor`] for playback.
+    #[must_use]
+    pub fn sample(&self, t: f64) -> T {
+        T::narrow(self.sample_wide(t))
+    }
+
+    /// [`Track::sample`] in f64, before rounding to the value type.
+    #[must_use]
+    pub fn sample_wide(&self, t: f64) -> T::Wide {
+        match self.clamp(t) {
+            Clamped::Key(i) => self.wide[i],
+            Clamped::Inside => {
+                let i = self.times.partition_point(|&x| x <= t) - 1;
+                self.eval_segment(i, t)
+            }
+        }
+    }
+
+    /// A sequential sampler: amortized O(1) when `t` moves forward in small steps, still exact
+    /// (O(log n)) when it jumps, including backwards.
+    #[must_use]
+    pub fn cursor(&self) -> Cursor<'_, T> {
+        Cursor { track: self, segment: 0 }
+    }
+
+    /// Outside the open domain: the key whose value holds; inside: needs a segment.
+    #[inline]
+    fn clamp(&self, t: f64) -> Clamped {
+        let last = self.times.len() - 1;
+        if t.is_nan() || t <= self.times[0] {
+            Clamped::Key(0)
+        } else if t >= self.times[last] {
+            Clamped::Key(last)
+        } else {
+            Clamped::Inside
+        }
+    }
+
+    /// Segment `i` at `t` with `t_i <= t < t_{i+1}`.
+    #[inline]
+    fn eval_segment(&self, i: usize, t: f64) -> T::Wide {
+        let segment = &self.segments[i];
+        if t == segment.start {
+            return self.wide[i];
+        }
+        let u = ((t - segment.start) * segment.inv_duration).min(1.0);
+        T::eval(&segment.shape, u)
+    }
+}
+
+enum Clamped {
+    Key(usize),
+    Inside,
+}
+
+/// Sequential sampler over a [`Track`], remembering the last segment.
+#[derive(Clone, Debug)]
+pub struct Cursor<'a, T: TrackValue> {
+    track: &'a Track<T>,
+    segment: usize,
+}
+
+impl<T: TrackValue> Cursor<'_, T> {
+    /// Same value as [`Track::sample`] at `t`.
+    pub fn sample(&mut self, t: f64) -> T {
+        T::narrow(self.sample_wide(t))
+    }
+
+    /// Same value as [`Track::sample_wide`] at `t`.
+    pub fn sample_wide(&mut self, t: f64) -> T::Wide {
+        match self.track.clamp(t) {
+            Clamped::Key(i) => self.track.wide[i],
+            Clamped::Inside => {
+                let i = self.seek(t);
+                self.track.eval_segment(i, t)
+            }
+        }
+    }
+
+    /// The segment containing `t`, for `t` strictly inside the domain.
+    #[inline]
+    fn seek(&mut self, t: f64) -> usize {
+        let times = &self.track.times;
+        let mut i = self.segment;
+        if t < times[i] {
+            // Backwards: search the keys before the current segment (times[0] < t).
+            i = times[..=i].partition_point(|&x| x <= t) - 1;
+        } else if t >= times[i + 1] {
+            // Forward: the next segment is the common case during playback.
+            if t < times[i + 2] {
+                i += 1;
+            } else {
+                // times[i + 1] <= t < times[last], so the partition point is in 1..len.
+                i += times[i + 1..].partition_point(|&x| x <= t);
+            }
+        }
+        self.segment = i;
+        i
+    }
+}
+
+fn tcb_in_range(tcb: Tcb) -> bool {
+    [tcb.tension, tcb.continuity, tcb.bias].iter().all(|x| x.is_finite() && (-1.0..=1.0).contains(x))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Kochanek–Bartels tangents, shared by vectors (differences) and rotations (logarithms).
+
+/// A value that tangents are linear combinations of.
+#[doc(hidden)]
+pub trait Vector:
+    Copy + Debug + PartialEq + Add<Output = Self> + Sub<Output = Self> + Mul<f64, Output = Self>
+{
+    const ZERO: Self;
+}
+
+impl Vector for f64 {
+    const ZERO: Self = 0.0;
+}
+impl Vector for DVec3 {
+    const ZERO: Self = DVec3::ZERO;
+}
+impl Vector for DVec4 {
+    const ZERO: Self = DVec4::ZERO;
+}
+
+/// The Kochanek–Bartels tangents of every key: `(D_i, S_i)` (incoming, outgoing), in value units
+/// per segment (not per second), with the non-uniform spacing factors.
+///
+/// `chords[j]` is the difference from key j to key j+1 (`P_{j+1} − P_j`, or `L(q_j, q_{j+1})`).
+/// DESIGN.md §3:
+/// `S_i = 2Δ_i/(Δ_{i−1}+Δ_i) · [(1−T)(1+B)(1+C)/2 · d_{i−1} + (1−T)(1−B)(1−C)/2 · d_i]`,
+/// `D_i = 2Δ_{i−1}/(Δ_{i−1}+Δ_i) · [(1−T)(1+B)(1−C)/2 · d_{i−1} + (1−T)(1−B)(1+C)/2 · d_i]`,
+/// with `d_{−1} = d_n = 0` and `Δ_{−1} = Δ_0`, `Δ_n = Δ_{n−1}` at the ends.
+fn kb_tangents<W: Vector>(times: &[f64], tcbs: impl Iterator<Item = Tcb>, chords: &[W]) -> Vec<(W, W)> {
+    let n = times.len();
+    tcbs.enumerate()
+        .map(|(i, tcb)| {
+            if n < 2 {
+                return (W::ZERO, W::ZERO);
+            }
+            let d_prev = if i > 0 { chords[i - 1] } else { W::ZERO };
+            let d_next = if i + 1 < n { chords[i] } else { W::ZERO };
+            let dt_prev = if i > 0 { times[i] - times[i - 1] } else { times[1] - times[0] };
+            let dt_next = if i + 1 < n { times[i + 1] - times[i] } else { times[n - 1] - times[n - 2] };
+            let (t, c, b) = (f64::from(tcb.tension), f64::from(tcb.continuity), f64::from(tcb.bias));
+            let out = d_prev * ((1.0 - t) * (1.0 + b) * (1.0 + c) / 2.0)
+                + d_next * ((1.0 - t) * (1.0 - b) * (1.0 - c) / 2.0);
+            let inc = d_prev * ((1.0 - t) * (1.0 + b) * (1.0 - c) / 2.0)
+                + d_next * ((1.0 - t) * (1.0 - b) * (1.0 + c) / 2.0);
+            let sum = dt_prev + dt_next;
+            (inc * (2.0 * dt_prev / sum), out * (2.0 * dt_next / sum))
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scalars and vectors: every mode is a cubic in power form.
+
+/// `p(u) = ((c3·u + c2)·u + c1)·u + c0` on u ∈ [0, 1].
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cubic<W> {
+    c3: W,
+    c2: W,
+    c1: W,
+    c0: W,
+}
+
+impl<W: Vector> Cubic<W> {
+    fn constant(p0: W) -> Self {
+        Cubic { c3: W::ZERO, c2: W::ZERO, c1: W::ZERO, c0: p0 }
+    }
+
+    fn linear(p0: W, p1: W) -> Self {
+        Cubic { c3: W::ZERO, c2: W::ZERO, c1: p1 - p0, c0: p0 }
+    }
+
+    /// Hermite segment `h00·p0 + h10·m0 + h01·p1 + h11·m1` in power form.
+    fn hermite(p0: W, m0: W, p1: W, m1: W) -> Self {
+        Cubic { c3: (p0 - p1) * 2.0 + m0 + m1, c2: (p1 - p0) * 3.0 - m0 * 2.0 - m1, c1: m0, c0: p0 }
+    }
+
+    #[inline]
+    fn eval(&self, u: f64) -> W {
+        ((self.c3 * u + self.c2) * u + self.c1) * u + self.c0
+    }
+
+    /// dp/du.
+    #[inline]
+    fn derivative(&self, u: f64) -> W {
+        (self.c3 * (3.0 * u) + self.c2 * 2.0) * u + self.c1
+    }
+}
+
+/// Segment shapes for scalar and vector values.
+fn build_cubics<T: TrackValue>(times: &[f64], keys: &[Key<T>], values: &[T::Wide]) -> Vec<Cubic<T::Wide>>
+where
+    T::Wide: Vector,
+{
+    let chords: Vec<T::Wide> = values.windows(2).map(|w| w[1] - w[0]).collect();
+    let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &chords);
+    (0..values.len().saturating_sub(1))
+        .map(|i| {
+            let (p0, p1) = (values[i], values[i + 1]);
+            match keys[i].interpolation {
+                Interpolation::Step => Cubic::constant(p0),
+                Interpolation::Linear => Cubic::linear(p0, p1),
+                Interpolation::Tcb => Cubic::hermite(p0, tangents[i].1, p1, tangents[i + 1].0),
+                Interpolation::Hermite => {
+                    let duration = times[i + 1] - times[i];
+                    let m0 = keys[i].out_tangent.map_or(T::Wide::ZERO, T::widen);
+                    let m1 = keys[i + 1].in_tangent.map_or(T::Wide::ZERO, T::widen);
+                    Cubic::hermite(p0, m0 * duration, p1, m1 * duration)
+                }
+            }
+        })
+        .collect()
+}
+
+impl TrackValue for f32 {
+    type Wide = f64;
+    type Shape = Cubic<f64>;
+
+    fn widen(self) -> f64 {
+        f64::from(self)
+    }
+
+    fn narrow(wide: f64) -> f32 {
+        wide as f32
+    }
+
+    fn check(self) -> Result<f64, ValueProblem> {
+        if self.is_finite() {
+            Ok(f64::from(self))
+        } else {
+            Err(ValueProblem::NonFinite)
+        }
+    }
+
+    fn is_finite_tangent(self) -> bool {
+        self.is_finite()
+    }
+
+    fn build(times: &[f64], keys: &[Key<f32>], values: &mut [f64]) -> Vec<Cubic<f64>> {
+        build_cubics(times, keys, values)
+    }
+
+    #[inline]
+    fn eval(shape: &Cubic<f64>, u: f64) -> f64 {
+        shape.eval(u)
+    }
+}
+
+impl TrackValue for Vec3 {
+    type Wide = DVec3;
+    type Shape = Cubic<DVec3>;
+
+    fn widen(self) -> DVec3 {
+        self.as_dvec3()
+    }
+
+    fn narrow(wide: DVec3) -> Vec3 {
+        wide.as_vec3()
+    }
+
+    fn check(self) -> Result<DVec3, ValueProblem> {
+        if self.is_finite() {
+            Ok(self.as_dvec3())
+        } else {
+            Err(ValueProblem::NonFinite)
+        }
+    }
+
+    fn is_finite_tangent(self) -> bool {
+        self.is_finite()
+    }
+
+    fn build(times: &[f64], keys: &[Key<Vec3>], values: &mut [DVec3]) -> Vec<Cubic<DVec3>> {
+        build_cubics(times, keys, values)
+    }
+
+    #[inline]
+    fn eval(shape: &Cubic<DVec3>, u: f64) -> DVec3 {
+        shape.eval(u)
+    }
+}
+
+/// Velocity (derivative with respect to time) and glTF tangents of scalar and vector tracks.
+impl<T, W> Track<T>
+where
+    T: TrackValue<Wide = W, Shape = Cubic<W>>,
+    W: Vector,
+{
+    /// Velocity in value units per second at `t`: the right-hand derivative (at a key, the
+    /// velocity leaving it). Zero outside the domain and on Step segments.
+    #[must_use]
+    pub fn velocity(&self, t: f64) -> T {
+        T::narrow(self.velocity_wide(t))
+    }
+
+    /// [`Track::velocity`] in f64.
+    #[must_use]
+    pub fn velocity_wide(&self, t: f64) -> W {
+        match self.clamp(t) {
+            Clamped::Key(_) => W::ZERO,
+            Clamped::Inside => {
+                let i = self.times.partition_point(|&x| x <= t) - 1;
+                self.segment_velocity(i, t)
+            }
+        }
+    }
+
+    /// The left-hand derivative at `t` (at a key, the velocity arriving at it). Zero outside the
+    /// domain. With [`Track::velocity`] it shows whether the track is C¹ at a key.
+    #[must_use]
+    pub fn velocity_before(&self, t: f64) -> T {
+        T::narrow(self.velocity_before_wide(t))
+    }
+
+    /// [`Track::velocity_before`] in f64.
+    #[must_use]
+    pub fn velocity_before_wide(&self, t: f64) -> W {
+        let last = self.times.len() - 1;
+        if t.is_nan() || t <= self.times[0] || t > self.times[last] {
+            return W::ZERO;
+        }
+        let i = self.times.partition_point(|&x| x < t) - 1;
+        self.segment_velocity(i, t)
+    }
+
+    fn segment_velocity(&self, i: usize, t: f64) -> W {
+        let segment = &self.segments[i];
+        let u = ((t - segment.start) * segment.inv_duration).clamp(0.0, 1.0);
+        segment.shape.derivative(u) * segment.inv_duration
+    }
+
+    /// Per-second Hermite tangents of segment `i` as glTF CUBICSPLINE stores them:
+    /// `(out-tangent of key i, in-tangent of key i+1)` = `(S_i / t_d, D_{i+1} / t_d)` for TCB
+    /// segments, the chord slope for Linear ones. `None` for Step segments (not a cubic that
+    /// glTF can express exactly) and past the end.
+    #[must_use]
+    pub fn segment_tangents(&self, i: usize) -> Option<(T, T)> {
+        let segment = self.segments.get(i)?;
+        if segment.interpolation == Interpolation::Step {
+            return None;
+        }
+        let shape = &segment.shape;
+        Some((
+            T::narrow(shape.derivative(0.0) * segment.inv_duration),
+            T::narrow(shape.derivative(1.0) * segment.inv_duration),
+        ))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rotations.
+
+/// Segment shapes for unit quaternions.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum QuatShape {
+    Step(DQuat),
+    /// Slerp between the (sign-consistent) keys.
+    Slerp(Arc),
+    /// `squad(u) = slerp(slerp(q_i, q_{i+1}, u), slerp(a_i, b_{i+1}, u), 2u(1−u))`.
+    Squad {
+        keys: Arc,
+        controls: Arc,
+    },
+    /// glTF CUBICSPLINE rotation: component-wise Hermite, then normalized.
+    Hermite(Cubic<DVec4>),
+}
+
+impl TrackValue for Quat {
+    type Wide = DQuat;
+    type Shape = QuatShape;
+
+    fn widen(self) -> DQuat {
+        self.as_dquat()
+    }
+
+    fn narrow(wide: DQuat) -> Quat {
+        wide.as_quat()
+    }
+
+    fn check(self) -> Result<DQuat, ValueProblem> {
+        if !self.is_finite() {
+            return Err(ValueProblem::NonFinite);
+        }
+        let q = self.as_dquat();
+        let norm = q.length();
+        if norm < MIN_QUATERNION_NORM {
+            return Err(ValueProblem::ZeroQuaternion);
+        }
+        Ok(q * (1.0 / norm))
+    }
+
+    fn is_finite_tangent(self) -> bool {
+        self.is_finite()
+    }
+
+    fn build(times: &[f64], keys: &[Key<Quat>], values: &mut [DQuat]) -> Vec<QuatShape> {
+        let flipped = quat::make_sign_consistent(values);
+        let logs: Vec<DVec3> = values.windows(2).map(|w| quat::log_between(w[0], w[1])).collect();
+        let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &logs);
+        let sign = |i: usize| if flipped[i] { -1.0 } else { 1.0 };
+        (0..values.len().saturating_sub(1))
+            .map(|i| {
+                let (q0, q1) = (values[i], values[i + 1]);
+                match keys[i].interpolation {
+                    Interpolation::Step => QuatShape::Step(q0),
+                    Interpolation::Linear => QuatShape::Slerp(Arc::new(q0, q1)),
+                    Interpolation::Tcb => {
+                        let (out_tangent, in_tangent) = (tangents[i].1, tangents[i + 1].0);
+                        let a = q0 * quat::exp((out_tangent - logs[i]) * 0.5);
+                        let b = q1 * quat::exp((logs[i] - in_tangent) * 0.5);
+                        QuatShape::Squad { keys: Arc::new(q0, q1), controls: Arc::new(a, b) }
+                    }
+                    Interpolation::Hermite => {
+                        let duration = times[i + 1] - times[i];
+                        let vec4 = |q: Option<Quat>| q.map_or(DVec4::ZERO, |q| DVec4::from(q.as_dquat()));
+                        let m0 = vec4(keys[i].out_tangent) * (sign(i) * duration);
+                        let m1 = vec4(keys[i + 1].in_tangent) * (sign(i + 1) * duration);
+                        QuatShape::Hermite(Cubic::hermite(DVec4::from(q0), m0, DVec4::from(q1), m1))
+                    }
+                }
+            })
+            .collect()
+    }
+
+    #[inline]
+    fn eval(shape: &QuatShape, u: f64) -> DQuat {
+        match shape {
+            QuatShape::Step(q) => *q,
+            QuatShape::Slerp(arc) => arc.eval(u),
+            QuatShape::Squad { keys, controls } => {
+                quat::slerp(keys.eval(u), controls.eval(u), 2.0 * u * (1.0 - u))
+            }
+            QuatShape::Hermite(cubic) => {
+                let v = cubic.eval(u);
+                let norm = v.length();
+                if norm > MIN_QUATERNION_NORM && norm.is_finite() {
+                    DQuat::from_vec4(v / norm)
+                } else {
+                    // The tangents cancel the keys: fall back to the segment's first key.
+                    DQuat::from_vec4(cubic.c0)
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Animated values.
+
+/// The validated form of an [`Animated`] value: the static value while the track has no keys,
+/// else the evaluable [`Track`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnimatedTrack<T: TrackValue> {
+    Constant(T),
+    Keyed(Track<T>),
+}
+
+impl<T: TrackValue> AnimatedTrack<T> {
+    /// Validates the static value (finite; non-zero and normalized for rotations) or the track.
+    ///
+    /// # Errors
+    /// [`TrackError::NonFiniteStaticValue`] / [`TrackError::ZeroStaticQuaternion`] for a bad
+    /// static value of an unanimated property, else the errors of [`Track::new`].
+    pub fn new(animated: &Animated<T>) -> Result<Self, TrackError> {
+        if animated.track.is_empty() {
+            let wide = animated.value.check().map_err(|problem| match problem {
+                ValueProblem::NonFinite => TrackError::NonFiniteStaticValue,
+                ValueProblem::ZeroQuaternion => TrackError::ZeroStaticQuaternion,
+            })?;
+            Ok(AnimatedTrack::Constant(T::narrow(wide)))
+        } else {
+            Track::new(&animated.track).map(AnimatedTrack::Keyed)
+        }
+    }
+
+    /// The value at `t` (seconds).
+    #[must_use]
+    pub fn sample(&self, t: f64) -> T {
+        match self {
+            AnimatedTrack::Constant(value) => *value,
+            AnimatedTrack::Keyed(track) => track.sample(t),
+        }
+    }
+
+    /// The keyed track, if animated.
+    #[must_use]
+    pub fn track(&self) -> Option<&Track<T>> {
+        match self {
+            AnimatedTrack::Constant(_) => None,
+            AnimatedTrack::Keyed(track) => Some(track),
+        }
+    }
+
+    #[must_use]
+    pub fn is_animated(&self) -> bool {
+        matches!(self, AnimatedTrack::Keyed(_))
+    }
+
+    /// The keyed time range, `None` when constant.
+    #[must_use]
+    pub fn domain(&self) -> Option<(f64, f64)> {
+        self.track().map(Track::domain)
+    }
+
+    /// A sequential sampler (see [`Cursor`]).
+    #[must_use]
+    pub fn cursor(&self) -> AnimatedCursor<'_, T> {
+        match self {
+            AnimatedTrack::Constant(value) => AnimatedCursor::Constant(*value),
+            AnimatedTrack::Keyed(track) => AnimatedCursor::Keyed(track.cursor()),
+        }
+    }
+}
+
+/// Sequential sampler over an [`AnimatedTrack`].
+#[derive(Clone, Debug)]
+pub enum AnimatedCursor<'a, T: TrackValue> {
+    Constant(T),
+    Keyed(Cursor<'a, T>),
+}
+
+impl<T: TrackValue> AnimatedCursor<'_, T> {
+    /// Same value as [`AnimatedTrack::sample`] at `t`.
+    pub fn sample(&mut self, t: f64) -> T {
+        match self {
+            AnimatedCursor::Constant(value) => *value,
+            AnimatedCursor::Keyed(cursor) => cursor.sample(t),
+        }
+    }
+}
