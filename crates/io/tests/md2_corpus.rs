@@ -1,0 +1,152 @@
+//! Every MD2 model of the external corpus imports, has the documented counts and clips, and
+//! plays.
+
+use std::path::{Path, PathBuf};
+
+use keyrig_io::md2::{clip_name, load_md2_file, parse_md2, Md2ErrorKind};
+
+fn corpus(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+}
+
+/// (file, MD2 vertices, triangles, frames, clips, skin file name)
+const MODELS: [(&str, usize, usize, usize, usize, &str); 5] = [
+    ("ratamahatta/ratamahatta.md2", 344, 666, 198, 16, "ratamahatta.png"),
+    ("ratamahatta/weapon.md2", 85, 119, 198, 16, "weapon.png"),
+    ("sydney/sydney.md2", 342, 679, 198, 16, "sydney.bmp"),
+    ("faerie/faerie.md2", 366, 654, 198, 16, "faerie2.bmp"),
+    ("dolphin/dolphin.md2", 324, 500, 59, 2, "dolphin_f.bmp"),
+];
+
+#[test]
+fn every_corpus_model_imports_with_expected_counts_and_skin() {
+    for (file, xyz, tris, frames, clips, skin) in MODELS {
+        let model = load_md2_file(&corpus(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(model.frames[0].positions.len(), xyz, "{file}: vertices");
+        assert_eq!(model.indices.len(), tris * 3, "{file}: triangles");
+        assert_eq!(model.frames.len(), frames, "{file}: frames");
+        assert_eq!(model.clips.len(), clips, "{file}: clips {:?}", model.clips);
+        let skin_image = model.skin.as_ref().unwrap_or_else(|| panic!("{file}: no skin found"));
+        assert_eq!(skin_image.path.file_name().and_then(|n| n.to_str()), Some(skin), "{file}");
+        assert_eq!(skin_image.rgba.len(), (skin_image.width * skin_image.height * 4) as usize);
+        assert!(model.indices.iter().all(|&i| (i as usize) < model.vertex_count()));
+        // Clips cover all frames, in order, and every frame's clip name matches.
+        let mut next = 0;
+        for clip in &model.clips {
+            assert_eq!(clip.frames.start, next);
+            next = clip.frames.end;
+            for f in clip.frames.clone() {
+                assert_eq!(clip_name(&model.frames[f].name), clip.name);
+            }
+        }
+        assert_eq!(next, frames);
+    }
+}
+
+#[test]
+fn ratamahatta_has_the_sixteen_quake2_clips() {
+    let model = load_md2_file(&corpus("ratamahatta/ratamahatta.md2")).expect("import");
+    let names: Vec<(&str, usize)> = model.clips.iter().map(|c| (c.name.as_str(), c.frames.len())).collect();
+    assert_eq!(
+        names,
+        [
+            ("stand", 40),
+            ("run", 6),
+            ("attack", 8),
+            ("pain", 12),
+            ("jump", 6),
+            ("flip", 12),
+            ("salute", 11),
+            ("taunt", 17),
+            ("wave", 11),
+            ("point", 12),
+            ("crstand", 19),
+            ("crwalk", 6),
+            ("crattack", 9),
+            ("crpain", 4),
+            ("crdeath", 5),
+            ("death", 20),
+        ]
+    );
+}
+
+#[test]
+fn texcoords_are_normalized_by_the_header_skin_size() {
+    for (file, ..) in MODELS {
+        let model = load_md2_file(&corpus(file)).expect("import");
+        for uv in &model.texcoords {
+            assert!(uv.is_finite(), "{file}");
+            assert!((-0.01..=1.01).contains(&uv.x) && (-0.01..=1.01).contains(&uv.y), "{file}: uv {uv}");
+        }
+    }
+}
+
+#[test]
+fn playback_hits_frames_and_interpolates_between_them() {
+    let model = load_md2_file(&corpus("ratamahatta/ratamahatta.md2")).expect("import");
+    let run = model.clip_index("run").expect("run clip");
+    let first = model.clips[run].frames.start;
+    let fps = 10.0;
+    // At t = k / fps the pose is exactly frame k of the clip.
+    for k in 0..6 {
+        let pose = model.sample_clip(run, fps, k as f64 / fps, true).expect("sample");
+        let frame = model.frame_pose(first + k).expect("frame");
+        assert_eq!(pose.positions, frame.positions, "frame {k}");
+    }
+    // Half way between frames 2 and 3: the midpoint of each vertex.
+    let mid = model.sample_clip(run, fps, 2.5 / fps, true).expect("sample");
+    let (a, b) = (model.frame_pose(first + 2).expect("a"), model.frame_pose(first + 3).expect("b"));
+    for i in 0..mid.positions.len() {
+        let expected = (a.positions[i] + b.positions[i]) * 0.5;
+        assert!((mid.positions[i] - expected).length() < 1e-4, "vertex {i}");
+        assert!((mid.normals[i].length() - 1.0).abs() < 1e-4);
+    }
+    // Looping: the last frame blends into the first; t = 6 / fps is frame 0 again.
+    let wrapped = model.sample_clip(run, fps, 6.0 / fps, true).expect("sample");
+    assert_eq!(wrapped.positions, model.frame_pose(first).expect("frame").positions);
+    // Not looping: clamped at the last frame.
+    let clamped = model.sample_clip(run, fps, 100.0, false).expect("sample");
+    assert_eq!(clamped.positions, model.frame_pose(first + 5).expect("frame").positions);
+    // Bad input is an error, not a panic.
+    assert!(model.sample_clip(99, fps, 0.0, true).is_err());
+    assert!(model.sample_clip(run, 0.0, 0.0, true).is_err());
+    assert!(model.sample_clip(run, fps, f64::NAN, true).is_err());
+}
+
+#[test]
+fn every_clip_of_every_model_plays_finite() {
+    for (file, ..) in MODELS {
+        let model = load_md2_file(&corpus(file)).expect("import");
+        for clip in 0..model.clips.len() {
+            for step in 0..20 {
+                let pose = model.sample_clip(clip, 9.0, step as f64 * 0.137, true).expect("sample");
+                assert_eq!(pose.positions.len(), model.vertex_count());
+                assert!(
+                    pose.positions.iter().all(|p| p.is_finite() && p.abs().max_element() < 1e4),
+                    "{file}"
+                );
+                assert!(pose.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-3), "{file}");
+            }
+        }
+    }
+}
+
+#[test]
+fn header_checks_name_the_byte() {
+    let data = std::fs::read(corpus("dolphin/dolphin.md2")).expect("read");
+    let mut bad = data.clone();
+    bad[0] = b'X';
+    let e = parse_md2(&bad).expect_err("bad magic");
+    assert_eq!(e.offset, 0);
+    assert!(matches!(e.kind, Md2ErrorKind::BadMagic { .. }));
+
+    let mut bad = data.clone();
+    bad[4] = 7;
+    let e = parse_md2(&bad).expect_err("bad version");
+    assert_eq!((e.offset, e.kind.clone()), (4, Md2ErrorKind::BadVersion { found: 7 }));
+
+    let e = parse_md2(&data[..data.len() - 1]).expect_err("size");
+    assert_eq!(e.offset, 64);
+    assert!(matches!(e.kind, Md2ErrorKind::FileSizeMismatch { .. }));
+    assert!(e.to_string().starts_with("byte 64: "), "{e}");
+}
