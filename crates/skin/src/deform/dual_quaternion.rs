@@ -1,0 +1,116 @@
+//! Dual quaternion skinning (Kavan, Collins, Žára, O'Sullivan, ACM TOG 2008; Blender's
+//! "Preserve Volume", Maya's dual-quaternion skinning): blend the unit dual quaternions of the
+//! palette, q̂ = Σᵢ ±wᵢ·q̂(jᵢ) with each sign chosen so that q̂(jᵢ)'s real part lies in the
+//! same hemisphere as the dominant (largest-weight) influence's, normalize, transform.
+//! Normals rotate with the blended real part. Needs a rigid palette
+//! ([`crate::pose::JointPalette::dual_quaternions`]).
+
+use glam::{Mat4, Quat, Vec3, Vec3A, Vec4};
+
+use super::{check_buffers, check_len, for_each_chunk, validate_influences, Execution};
+use crate::dual_quat::DualQuat;
+use crate::error::SkinError;
+
+/// Dual quaternion skinning with `N` influences per vertex.
+#[derive(Debug)]
+pub struct DualQuatJob<'a, const N: usize = 4> {
+    /// The palette M(j) as unit dual quaternions.
+    pub dual_quaternions: &'a [DualQuat],
+    pub joints: &'a [[u16; N]],
+    pub weights: &'a [[f32; N]],
+    pub positions: &'a [Vec3],
+    pub normals: &'a [Vec3],
+    pub out_positions: &'a mut [Vec3],
+    pub out_normals: &'a mut [Vec3],
+}
+
+impl<const N: usize> DualQuatJob<'_, N> {
+    /// Checks buffer lengths, joint indices and weights (finite, ≥ 0, not all zero, Σ = 1).
+    pub fn validate(&self) -> Result<(), SkinError> {
+        let n = self.positions.len();
+        check_len("joints", n, self.joints.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        validate_influences(self.joints, self.weights, self.dual_quaternions.len())
+    }
+
+    /// Validates, then deforms on all cores.
+    pub fn run(&mut self) -> Result<(), SkinError> {
+        self.run_with(Execution::Parallel)
+    }
+
+    /// Validates, then deforms the chosen way.
+    pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
+        self.validate()?;
+        match execution {
+            Execution::Reference => self.reference(),
+            Execution::SingleThreaded => self.fast(false),
+            Execution::Parallel => self.fast(true),
+        }
+        Ok(())
+    }
+
+    fn reference(&mut self) {
+        for v in 0..self.positions.len() {
+            let (js, ws) = (&self.joints[v], &self.weights[v]);
+            let mut dominant = 0;
+            for i in 1..N {
+                if ws[i] > ws[dominant] {
+                    dominant = i;
+                }
+            }
+            let pivot = self.dual_quaternions[js[dominant] as usize].real;
+            let mut real = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+            let mut dual = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+            for i in 0..N {
+                let q = self.dual_quaternions[js[i] as usize];
+                let w = if q.real.dot(pivot) < 0.0 { -ws[i] } else { ws[i] };
+                real += q.real * w;
+                dual += q.dual * w;
+            }
+            let (rotation, translation) = DualQuat { real, dual }.normalize().to_rotation_translation();
+            let m = Mat4::from_rotation_translation(rotation, translation);
+            self.out_positions[v] = m.transform_point3(self.positions[v]);
+            self.out_normals[v] = m.transform_vector3(self.normals[v]).normalize_or_zero();
+        }
+    }
+
+    fn fast(&mut self, parallel: bool) {
+        let dqs = self.dual_quaternions;
+        let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
+        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+            let end = start + out_p.len();
+            let inputs = joints[start..end]
+                .iter()
+                .zip(&weights[start..end])
+                .zip(positions[start..end].iter().zip(&normals[start..end]));
+            for (((js, ws), (&p, &n)), (op, on)) in inputs.zip(out_p.iter_mut().zip(out_n.iter_mut())) {
+                let mut dominant = 0;
+                for i in 1..N {
+                    if ws[i] > ws[dominant] {
+                        dominant = i;
+                    }
+                }
+                let pivot = Vec4::from(dqs[js[dominant] as usize].real);
+                let mut real = Vec4::ZERO;
+                let mut dual = Vec4::ZERO;
+                for i in 0..N {
+                    let q = &dqs[js[i] as usize];
+                    let r = Vec4::from(q.real);
+                    let w = if r.dot(pivot) < 0.0 { -ws[i] } else { ws[i] };
+                    real += r * w;
+                    dual += Vec4::from(q.dual) * w;
+                }
+                let inv = real.length_recip();
+                let (real, dual) = (real * inv, dual * inv);
+                let r = Vec3A::from_vec4(real);
+                let d = Vec3A::from_vec4(dual);
+                let (rw, dw) = (real.w, dual.w);
+                let p = Vec3A::from(p);
+                let n = Vec3A::from(n);
+                let translation = 2.0 * (rw * d - dw * r + r.cross(d));
+                *op = (p + 2.0 * r.cross(r.cross(p) + rw * p) + translation).into();
+                *on = (n + 2.0 * r.cross(r.cross(n) + rw * n)).normalize_or_zero().into();
+            }
+        });
+    }
+}

@@ -1,0 +1,91 @@
+//! Rigid skinning ("basic skeletal animation", seed text 000): one joint per vertex,
+//! v' = M(j)·v, n' = N(j)·n with N(j) the inverse-transpose of M(j)'s linear part.
+
+use glam::{Mat3, Mat4, Vec3, Vec3A};
+
+use super::{check_buffers, check_len, for_each_chunk, Execution};
+use crate::error::SkinError;
+use crate::pose::JointPalette;
+
+/// Deforms each vertex rigidly with the single joint it is bound to.
+#[derive(Debug)]
+pub struct RigidJob<'a> {
+    pub palette: &'a JointPalette,
+    /// The joint of each vertex.
+    pub joints: &'a [u16],
+    pub positions: &'a [Vec3],
+    pub normals: &'a [Vec3],
+    pub out_positions: &'a mut [Vec3],
+    pub out_normals: &'a mut [Vec3],
+}
+
+impl RigidJob<'_> {
+    /// Checks buffer lengths and that every joint index is in the palette.
+    pub fn validate(&self) -> Result<(), SkinError> {
+        let n = self.positions.len();
+        check_len("joints", n, self.joints.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        let joint_count = self.palette.len();
+        for (vertex, &j) in self.joints.iter().enumerate() {
+            if j as usize >= joint_count {
+                return Err(SkinError::JointOutOfRange {
+                    vertex,
+                    influence: 0,
+                    joint: j as usize,
+                    joint_count,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Validates, then deforms on all cores.
+    pub fn run(&mut self) -> Result<(), SkinError> {
+        self.run_with(Execution::Parallel)
+    }
+
+    /// Validates, then deforms the chosen way.
+    pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
+        self.validate()?;
+        match execution {
+            Execution::Reference => self.reference(),
+            Execution::SingleThreaded => self.fast(false),
+            Execution::Parallel => self.fast(true),
+        }
+        Ok(())
+    }
+
+    fn reference(&mut self) {
+        for v in 0..self.positions.len() {
+            let j = self.joints[v] as usize;
+            let m = Mat4::from(self.palette.skinning[j]);
+            self.out_positions[v] = m.transform_point3(self.positions[v]);
+            let n = match &self.palette.normal_skinning {
+                Some(normals) => Mat3::from(normals[j]),
+                None => Mat3::from_mat4(m).inverse().transpose(),
+            };
+            self.out_normals[v] = (n * self.normals[v]).normalize_or_zero();
+        }
+    }
+
+    fn fast(&mut self, parallel: bool) {
+        let palette = &self.palette.skinning;
+        let normal_palette = self.palette.normal_skinning.as_deref();
+        let joints = self.joints;
+        let positions = self.positions;
+        let normals = self.normals;
+        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+            let end = start + out_p.len();
+            let inputs = joints[start..end].iter().zip(&positions[start..end]).zip(&normals[start..end]);
+            for (((&j, &p), &n), (op, on)) in inputs.zip(out_p.iter_mut().zip(out_n.iter_mut())) {
+                let m = &palette[j as usize];
+                *op = m.transform_point3a(Vec3A::from(p)).into();
+                let nm = match normal_palette {
+                    Some(normals) => normals[j as usize] * Vec3A::from(n),
+                    None => m.matrix3 * Vec3A::from(n),
+                };
+                *on = nm.normalize_or_zero().into();
+            }
+        });
+    }
+}

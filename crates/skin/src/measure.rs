@@ -1,0 +1,112 @@
+//! Measures of a deformed mesh used by the paper's table and shown live in the editor.
+
+use glam::{DVec3, Vec3, Vec3A};
+
+use crate::error::SkinError;
+use crate::mesh::SkinnedMesh;
+use crate::pose::JointPalette;
+
+/// Enclosed volume of a closed, consistently oriented triangle mesh: the sum of the signed
+/// volumes of the tetrahedra (origin, a, b, c), Σ a·(b × c)/6, in f64. Positive for
+/// outward-facing triangles.
+pub fn enclosed_volume(positions: &[Vec3], indices: &[u32]) -> Result<f64, SkinError> {
+    let mut sum = 0.0f64;
+    for (triangle, tri) in indices.chunks_exact(3).enumerate() {
+        let mut p = [DVec3::ZERO; 3];
+        for (slot, &index) in p.iter_mut().zip(tri) {
+            let v = positions.get(index as usize).ok_or(SkinError::TriangleIndexOutOfRange {
+                triangle,
+                index,
+                vertex_count: positions.len(),
+            })?;
+            *slot = v.as_dvec3();
+        }
+        sum += p[0].dot(p[1].cross(p[2]));
+    }
+    Ok(sum / 6.0)
+}
+
+/// The size of a limb's cross-section at a joint, at rest and posed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CrossSection {
+    /// Mean distance of the section's vertices from the joint in the rest pose.
+    pub rest_radius: f32,
+    /// Mean distance of the same vertices from the posed joint.
+    pub posed_radius: f32,
+    /// How many vertices the section has.
+    pub vertex_count: usize,
+}
+
+impl CrossSection {
+    /// posed / rest: 1 keeps the limb's thickness, near 0 is the "candy wrapper" collapse.
+    #[must_use]
+    pub fn ratio(&self) -> f32 {
+        self.posed_radius / self.rest_radius
+    }
+}
+
+/// Relative width of the band (of the joint's bone length) that still counts as "the ring
+/// nearest the joint": absorbs rounding when two rings are equally far on either side.
+const SECTION_BAND: f32 = 1e-3;
+
+/// The cross-section of `mesh` at joint `joint`: the vertices nearest to the joint along the
+/// bone axis (the ring at the joint, or the two rings equally far either side), among those
+/// whose dominant joint is `joint` or its parent; its radius is their mean distance from the
+/// joint, at rest (`mesh.positions`, A(k)) and posed (`posed`, F(k)).
+pub fn joint_cross_section(
+    mesh: &SkinnedMesh,
+    palette: &JointPalette,
+    joint: usize,
+    posed: &[Vec3],
+) -> Result<CrossSection, SkinError> {
+    let skeleton = &mesh.skeleton;
+    if joint >= skeleton.len() || joint >= palette.len() {
+        return Err(SkinError::NoSuchJoint { joint, joint_count: skeleton.len().min(palette.len()) });
+    }
+    if posed.len() != mesh.vertex_count() {
+        return Err(SkinError::LengthMismatch {
+            what: "posed positions",
+            expected: mesh.vertex_count(),
+            found: posed.len(),
+        });
+    }
+    let parent = skeleton.parents()[joint];
+    let belongs = |v: usize| {
+        let j = match &mesh.bones {
+            Some(bones) => bones[v] as usize,
+            None => {
+                let ws = mesh.weights[v];
+                mesh.joints[v][(1..4).fold(0, |best, i| if ws[i] > ws[best] { i } else { best })] as usize
+            }
+        };
+        j == joint || Some(j) == parent
+    };
+    let r = skeleton.parent_from_joint()[joint];
+    let axis = (r.matrix3.inverse() * r.translation).try_normalize().unwrap_or(Vec3A::X);
+    let joint_from_model = skeleton.joint_from_bind_model()[joint];
+    let axial: Vec<(usize, f32)> = (0..mesh.vertex_count())
+        .filter(|&v| belongs(v))
+        .map(|v| (v, axis.dot(joint_from_model.transform_point3a(Vec3A::from(mesh.positions[v]))).abs()))
+        .collect();
+    let nearest = axial.iter().map(|a| a.1).fold(f32::INFINITY, f32::min);
+    if !nearest.is_finite() {
+        return Err(SkinError::NoSuchJoint { joint, joint_count: skeleton.len() });
+    }
+    let band = nearest + SECTION_BAND * skeleton.bone_lengths()[joint];
+    let rest_centre = skeleton.rest_position(joint);
+    let posed_centre = palette.joint_position(joint);
+    let (mut rest_sum, mut posed_sum, mut count) = (0.0f64, 0.0f64, 0usize);
+    for &(v, a) in &axial {
+        if a <= band {
+            rest_sum += f64::from(mesh.positions[v].distance(rest_centre));
+            posed_sum += f64::from(posed[v].distance(posed_centre));
+            count += 1;
+        }
+    }
+    let n = count as f64;
+    Ok(CrossSection {
+        rest_radius: (rest_sum / n) as f32,
+        posed_radius: (posed_sum / n) as f32,
+        vertex_count: count,
+    })
+}

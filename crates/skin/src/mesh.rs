@@ -1,0 +1,483 @@
+//! Skinned meshes and the meshes keyrig generates in code (DESIGN.md §6).
+//!
+//! Units: **centimetres**, as in the paper (seed text 000, chapter V). The arms lie along +X
+//! from the origin; their 4 bones are joints `arm.0` … `arm.3` at x = 0, L, 2L, 3L with
+//! L = 160.158 / 4 = 40.0395 cm.
+
+use glam::{Quat, Vec3};
+use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
+
+use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
+use crate::deform::{validate_influences, BonesBlendVertex};
+use crate::error::SkinError;
+use crate::skeleton::RestSkeleton;
+
+/// Length of the paper's arms along X, in centimetres.
+pub const ARM_LENGTH_CM: f32 = 160.158;
+/// Number of bones (joints) of each arm.
+pub const ARM_BONES: usize = 4;
+
+/// A triangle mesh bound to a rest skeleton, in bind model space.
+///
+/// # Invariants (checked by [`SkinnedMesh::new`])
+/// - `positions`, `normals`, `joints`, `weights` (and `bones` when present) have one entry
+///   per vertex; every number is finite;
+/// - `indices` holds whole triangles of in-range vertex indices;
+/// - every joint index is in the skeleton; weights are ≥ 0 and sum to 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkinnedMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    /// Triangle list, counter-clockwise seen from outside.
+    pub indices: Vec<u32>,
+    /// Up to 4 joints per vertex (unused ones: joint 0, weight 0).
+    pub joints: Vec<[u16; 4]>,
+    pub weights: Vec<[f32; 4]>,
+    /// The single joint of each vertex for single-weight meshes (the paper's arms); `None`
+    /// for meshes that come with multi-weights only.
+    pub bones: Option<Vec<u16>>,
+    pub skeleton: RestSkeleton,
+}
+
+/// Per-vertex data the deformers need besides the weights, computed once per mesh and blend
+/// zone (not per frame).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshBindings {
+    /// The rigid deformer's joint per vertex: the single weight, or the dominant influence.
+    pub rigid: Vec<u16>,
+    /// Bones-blending (joint, t) per vertex.
+    pub bones_blending: Vec<BonesBlendVertex>,
+}
+
+impl SkinnedMesh {
+    /// Checks and assembles a mesh.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        positions: Vec<Vec3>,
+        normals: Vec<Vec3>,
+        indices: Vec<u32>,
+        joints: Vec<[u16; 4]>,
+        weights: Vec<[f32; 4]>,
+        bones: Option<Vec<u16>>,
+        skeleton: RestSkeleton,
+    ) -> Result<Self, SkinError> {
+        let mesh = SkinnedMesh { positions, normals, indices, joints, weights, bones, skeleton };
+        mesh.validate()?;
+        Ok(mesh)
+    }
+
+    /// A single-weight mesh with smooth 4-influence weights derived across each joint
+    /// ([`crate::binding::smooth_weights`]).
+    pub fn from_single_weights(
+        positions: Vec<Vec3>,
+        normals: Vec<Vec3>,
+        indices: Vec<u32>,
+        bones: Vec<u16>,
+        skeleton: RestSkeleton,
+        zone: BlendZone,
+    ) -> Result<Self, SkinError> {
+        let (joints, weights) = smooth_weights(&skeleton, &positions, &bones, zone)?;
+        Self::new(positions, normals, indices, joints, weights, Some(bones), skeleton)
+    }
+
+    /// Checks the invariants listed on the type.
+    pub fn validate(&self) -> Result<(), SkinError> {
+        let n = self.positions.len();
+        let len = |what, found| {
+            if found == n {
+                Ok(())
+            } else {
+                Err(SkinError::LengthMismatch { what, expected: n, found })
+            }
+        };
+        len("normals", self.normals.len())?;
+        len("joints", self.joints.len())?;
+        len("weights", self.weights.len())?;
+        if let Some(bones) = &self.bones {
+            len("single-weight joints", bones.len())?;
+            let joint_count = self.skeleton.len();
+            if let Some((vertex, &b)) = bones.iter().enumerate().find(|(_, &b)| b as usize >= joint_count) {
+                return Err(SkinError::JointOutOfRange {
+                    vertex,
+                    influence: 0,
+                    joint: b as usize,
+                    joint_count,
+                });
+            }
+        }
+        for (vertex, (p, nm)) in self.positions.iter().zip(&self.normals).enumerate() {
+            if !p.is_finite() {
+                return Err(SkinError::NonFiniteVertex { vertex, what: "position" });
+            }
+            if !nm.is_finite() {
+                return Err(SkinError::NonFiniteVertex { vertex, what: "normal" });
+            }
+        }
+        if !self.indices.len().is_multiple_of(3) {
+            return Err(SkinError::LengthMismatch {
+                what: "triangle indices (a multiple of 3)",
+                expected: self.indices.len() / 3 * 3,
+                found: self.indices.len(),
+            });
+        }
+        if let Some((i, &index)) = self.indices.iter().enumerate().find(|(_, &i)| i as usize >= n) {
+            return Err(SkinError::TriangleIndexOutOfRange { triangle: i / 3, index, vertex_count: n });
+        }
+        validate_influences(&self.joints, &self.weights, self.skeleton.len())
+    }
+
+    /// Replaces the rest skeleton (e.g. by the scene object's own, possibly edited, one),
+    /// keeping the weights; fails if a joint index no longer exists.
+    pub fn with_skeleton(mut self, skeleton: RestSkeleton) -> Result<Self, SkinError> {
+        self.skeleton = skeleton;
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// Number of vertices.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// The rigid and bones-blending bindings for a blend zone: from the single weights when the
+    /// mesh has them (nearest joint of the vertex's bone), else from the two dominant
+    /// influences.
+    pub fn bindings(&self, zone: BlendZone) -> Result<MeshBindings, SkinError> {
+        match &self.bones {
+            Some(bones) => Ok(MeshBindings {
+                rigid: bones.clone(),
+                bones_blending: bind_single_weights(&self.skeleton, &self.positions, bones, zone)?,
+            }),
+            None => Ok(MeshBindings {
+                rigid: self.joints.iter().zip(&self.weights).map(|(js, ws)| js[dominant(ws)]).collect(),
+                bones_blending: bind_from_weights(&self.skeleton, &self.joints, &self.weights)?,
+            }),
+        }
+    }
+}
+
+fn dominant(ws: &[f32; 4]) -> usize {
+    (1..4).fold(0, |best, i| if ws[i] > ws[best] { i } else { best })
+}
+
+/// Area-weighted vertex normals of a triangle list (unit length; zero for unused vertices).
+#[must_use]
+pub fn vertex_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for tri in indices.chunks_exact(3) {
+        let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+        if a >= positions.len() || b >= positions.len() || c >= positions.len() {
+            continue;
+        }
+        let n = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+        normals[a] += n;
+        normals[b] += n;
+        normals[c] += n;
+    }
+    normals.iter().map(|n| n.normalize_or_zero()).collect()
+}
+
+/// A closed tube: `rings` rings of `sides` vertices each, ring i at `centre(i)` with the
+/// cross-section `section(k)` (in the ring's YZ plane), both ends capped by a fan without an
+/// extra vertex. Returns positions and indices; (rings − 1)·sides·2 + 2·(sides − 2) triangles.
+fn tube(
+    rings: usize,
+    sides: usize,
+    centre: impl Fn(usize) -> Vec3,
+    section: impl Fn(usize) -> (f32, f32),
+    positions: &mut Vec<Vec3>,
+    indices: &mut Vec<u32>,
+) {
+    let base = positions.len() as u32;
+    for i in 0..rings {
+        let c = centre(i);
+        for k in 0..sides {
+            let (y, z) = section(k);
+            positions.push(c + Vec3::new(0.0, y, z));
+        }
+    }
+    let at = |i: usize, k: usize| base + (i * sides + k % sides) as u32;
+    for i in 0..rings - 1 {
+        for k in 0..sides {
+            let (a, b, c, d) = (at(i, k), at(i, k + 1), at(i + 1, k + 1), at(i + 1, k));
+            indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    for k in 1..sides - 1 {
+        // First cap faces −X, last cap +X.
+        indices.extend_from_slice(&[at(0, 0), at(0, k + 1), at(0, k)]);
+        indices.extend_from_slice(&[at(rings - 1, 0), at(rings - 1, k), at(rings - 1, k + 1)]);
+    }
+}
+
+/// An elliptical cross-section of `sides` vertices at angles 2πk/sides whose bounding box is
+/// exactly `extent_y` × `extent_z`.
+fn ellipse(sides: usize, extent_y: f32, extent_z: f32) -> impl Fn(usize) -> (f32, f32) {
+    let angle = move |k: usize| std::f32::consts::TAU * k as f32 / sides as f32;
+    let (mut cmin, mut cmax, mut smin, mut smax) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+    for k in 0..sides {
+        let (s, c) = angle(k).sin_cos();
+        cmin = cmin.min(c);
+        cmax = cmax.max(c);
+        smin = smin.min(s);
+        smax = smax.max(s);
+    }
+    let a = extent_y / (cmax - cmin);
+    let b = extent_z / (smax - smin);
+    move |k| {
+        let (s, c) = angle(k).sin_cos();
+        (a * c, b * s)
+    }
+}
+
+/// The arm skeleton of the paper's test as a scene skeleton: 4 un-animated joints along +X.
+#[must_use]
+pub fn arm_scene_skeleton() -> Skeleton {
+    let bone = ARM_LENGTH_CM / ARM_BONES as f32;
+    let joints = (0..ARM_BONES)
+        .map(|j| Joint {
+            name: format!("arm.{j}"),
+            parent: j.checked_sub(1),
+            rest_translation: if j == 0 { Vec3::ZERO } else { Vec3::new(bone, 0.0, 0.0) },
+            rest_rotation: Quat::IDENTITY,
+            rotation: Animated::constant(Quat::IDENTITY),
+        })
+        .collect();
+    Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
+}
+
+/// Palm length (cm) of the hand and the finger geometry.
+const PALM_LENGTH: f32 = 9.0;
+const FINGER_OFFSETS_Z: [f32; 3] = [-2.7, 0.0, 2.7];
+const PHALANX_LENGTH: f32 = 4.0;
+
+/// The hand's scene skeleton: `palm` (root) with three fingers of two phalanges each, so the
+/// palm's end is a joint with three children.
+#[must_use]
+pub fn hand_scene_skeleton() -> Skeleton {
+    let mut joints = vec![Joint {
+        name: "palm".into(),
+        parent: None,
+        rest_translation: Vec3::ZERO,
+        rest_rotation: Quat::IDENTITY,
+        rotation: Animated::constant(Quat::IDENTITY),
+    }];
+    for (f, z) in FINGER_OFFSETS_Z.iter().enumerate() {
+        let base = joints.len();
+        joints.push(Joint {
+            name: format!("finger{f}.0"),
+            parent: Some(0),
+            rest_translation: Vec3::new(PALM_LENGTH, 0.0, *z),
+            rest_rotation: Quat::IDENTITY,
+            rotation: Animated::constant(Quat::IDENTITY),
+        });
+        joints.push(Joint {
+            name: format!("finger{f}.1"),
+            parent: Some(base),
+            rest_translation: Vec3::new(PHALANX_LENGTH, 0.0, 0.0),
+            rest_rotation: Quat::IDENTITY,
+            rotation: Animated::constant(Quat::IDENTITY),
+        });
+    }
+    Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
+}
+
+/// The rest skeleton of a procedural mesh as a scene skeleton, for building scenes; `None` for
+/// the cube, which has no skeleton.
+#[must_use]
+pub fn scene_skeleton_for(kind: ProceduralMesh) -> Option<Skeleton> {
+    match kind {
+        ProceduralMesh::ArmLowPoly | ProceduralMesh::ArmHighPoly => Some(arm_scene_skeleton()),
+        ProceduralMesh::Hand => Some(hand_scene_skeleton()),
+        ProceduralMesh::Cube => None,
+    }
+}
+
+fn arm(rings: usize, sides: usize, extent_y: f32, extent_z: f32) -> SkinnedMesh {
+    let mut positions = Vec::with_capacity(rings * sides);
+    let mut indices = Vec::new();
+    let spacing = ARM_LENGTH_CM / (rings - 1) as f32;
+    tube(
+        rings,
+        sides,
+        |i| Vec3::new(i as f32 * spacing, 0.0, 0.0),
+        ellipse(sides, extent_y, extent_z),
+        &mut positions,
+        &mut indices,
+    );
+    // Ring i lies on bone ⌊4i/(rings − 1)⌋ (a ring exactly at a joint belongs to the child bone).
+    let bones: Vec<u16> = (0..rings)
+        .flat_map(|i| std::iter::repeat_n(((ARM_BONES * i) / (rings - 1)).min(ARM_BONES - 1) as u16, sides))
+        .collect();
+    let normals = vertex_normals(&positions, &indices);
+    let skeleton =
+        RestSkeleton::from_scene(&arm_scene_skeleton()).expect("the arm skeleton is valid by construction");
+    SkinnedMesh::from_single_weights(positions, normals, indices, bones, skeleton, BlendZone::default())
+        .expect("the arm mesh is valid by construction")
+}
+
+fn hand() -> SkinnedMesh {
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    let mut bones = Vec::new();
+    let palm_rings = 7;
+    tube(
+        palm_rings,
+        12,
+        |i| Vec3::new(PALM_LENGTH * i as f32 / (palm_rings - 1) as f32, 0.0, 0.0),
+        ellipse(12, 3.0, 8.4),
+        &mut positions,
+        &mut indices,
+    );
+    bones.resize(positions.len(), 0u16);
+    let finger_rings = 9;
+    let finger_start = PALM_LENGTH - 1.0;
+    let finger_length = 1.0 + 2.0 * PHALANX_LENGTH;
+    for (f, z) in FINGER_OFFSETS_Z.iter().enumerate() {
+        let first = positions.len();
+        tube(
+            finger_rings,
+            8,
+            |i| Vec3::new(finger_start + finger_length * i as f32 / (finger_rings - 1) as f32, 0.0, *z),
+            ellipse(8, 1.6, 1.8),
+            &mut positions,
+            &mut indices,
+        );
+        let (j0, j1) = (1 + 2 * f as u16, 2 + 2 * f as u16);
+        bones.extend(positions[first..].iter().map(|p| {
+            if p.x < PALM_LENGTH {
+                0
+            } else if p.x < PALM_LENGTH + PHALANX_LENGTH {
+                j0
+            } else {
+                j1
+            }
+        }));
+    }
+    let normals = vertex_normals(&positions, &indices);
+    let skeleton =
+        RestSkeleton::from_scene(&hand_scene_skeleton()).expect("the hand skeleton is valid by construction");
+    SkinnedMesh::from_single_weights(positions, normals, indices, bones, skeleton, BlendZone::default())
+        .expect("the hand mesh is valid by construction")
+}
+
+fn cube() -> SkinnedMesh {
+    let mut positions = Vec::with_capacity(24);
+    let mut normals = Vec::with_capacity(24);
+    let mut indices = Vec::with_capacity(36);
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::AXES[axis] * sign;
+            let u = Vec3::AXES[(axis + 1) % 3];
+            let v = Vec3::AXES[(axis + 2) % 3] * sign;
+            let base = positions.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                positions.push(0.5 * (n + u * a + v * b));
+                normals.push(n);
+            }
+            indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+    }
+    let skeleton =
+        RestSkeleton::new(&[crate::skeleton::RestJoint::new("root", None, Vec3::ZERO, Quat::IDENTITY)])
+            .expect("a one-joint skeleton is valid");
+    let n = positions.len();
+    SkinnedMesh::new(
+        positions,
+        normals,
+        indices,
+        vec![[0; 4]; n],
+        vec![[1.0, 0.0, 0.0, 0.0]; n],
+        Some(vec![0; n]),
+        skeleton,
+    )
+    .expect("the cube is valid by construction")
+}
+
+/// Builds a procedural mesh with its rest skeleton (the arms and the hand: single weights plus
+/// smooth derived weights for the default blend zone; the cube: one root joint).
+#[must_use]
+pub fn mesh_for(kind: ProceduralMesh) -> SkinnedMesh {
+    match kind {
+        // 13 rings × 6 = 78 vertices, 152 triangles, 50.178 × 40.12 cm.
+        ProceduralMesh::ArmLowPoly => arm(13, 6, 50.178, 40.12),
+        // 50 rings × 25 = 1250 vertices, 2496 triangles, 43.744 × 40.12 cm.
+        ProceduralMesh::ArmHighPoly => arm(50, 25, 43.744, 40.12),
+        ProceduralMesh::Hand => hand(),
+        ProceduralMesh::Cube => cube(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn extent(mesh: &SkinnedMesh) -> Vec3 {
+        let min = mesh.positions.iter().fold(Vec3::MAX, |a, &b| a.min(b));
+        let max = mesh.positions.iter().fold(Vec3::MIN, |a, &b| a.max(b));
+        max - min
+    }
+
+    #[test]
+    fn arms_match_the_paper() {
+        let low = mesh_for(ProceduralMesh::ArmLowPoly);
+        assert_eq!(low.vertex_count(), 78);
+        assert_eq!(low.indices.len() / 3, 152);
+        assert!(extent(&low).abs_diff_eq(Vec3::new(160.158, 50.178, 40.12), 1e-3), "{}", extent(&low));
+        let high = mesh_for(ProceduralMesh::ArmHighPoly);
+        assert_eq!(high.vertex_count(), 1250);
+        assert_eq!(high.indices.len() / 3, 2496);
+        assert!(extent(&high).abs_diff_eq(Vec3::new(160.158, 43.744, 40.12), 1e-3), "{}", extent(&high));
+        assert_eq!(high.skeleton.len(), 4);
+        assert!((high.skeleton.rest_position(3).x - 3.0 * 40.0395).abs() < 1e-3);
+    }
+
+    #[test]
+    fn procedural_meshes_are_closed_and_outward() {
+        // (The cube has split vertices per face for its hard normals; its volume is checked below.)
+        for kind in [ProceduralMesh::ArmLowPoly, ProceduralMesh::ArmHighPoly, ProceduralMesh::Hand] {
+            let mesh = mesh_for(kind);
+            mesh.validate().unwrap();
+            // Every edge is used once in each direction.
+            let mut edges = std::collections::HashMap::new();
+            for t in mesh.indices.chunks_exact(3) {
+                for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                    *edges.entry((a, b)).or_insert(0) += 1;
+                }
+            }
+            for (&(a, b), &count) in &edges {
+                assert_eq!(count, 1, "{kind:?}: edge {a}->{b}");
+                assert_eq!(edges.get(&(b, a)), Some(&1), "{kind:?}: edge {b}->{a} missing");
+            }
+            let volume = crate::measure::enclosed_volume(&mesh.positions, &mesh.indices).unwrap();
+            assert!(volume > 0.0, "{kind:?}: volume {volume}");
+        }
+        let cube = mesh_for(ProceduralMesh::Cube);
+        assert!(
+            (crate::measure::enclosed_volume(&cube.positions, &cube.indices).unwrap() - 1.0).abs() < 1e-6
+        );
+    }
+
+    #[test]
+    fn hand_palm_end_is_a_branching_joint() {
+        let hand = mesh_for(ProceduralMesh::Hand);
+        assert_eq!(hand.skeleton.children(0), &[1, 3, 5]);
+        let bindings = hand.bindings(BlendZone::default()).unwrap();
+        // Palm vertices at the far end bind to the finger base nearest to them.
+        for (v, p) in hand.positions.iter().enumerate() {
+            if hand.bones.as_ref().unwrap()[v] == 0 && p.x > PALM_LENGTH - 0.01 && p.x < PALM_LENGTH + 0.01 {
+                let expected = if p.z < -1.35 {
+                    1
+                } else if p.z > 1.35 {
+                    5
+                } else {
+                    3
+                };
+                assert_eq!(bindings.bones_blending[v].joint, expected, "vertex {v} at {p}");
+            }
+        }
+        assert!(scene_skeleton_for(ProceduralMesh::Cube).is_none());
+        assert_eq!(scene_skeleton_for(ProceduralMesh::Hand).unwrap().joints.len(), 7);
+    }
+}

@@ -1,0 +1,237 @@
+//! Pose evaluation: from local joint rotations T(j) to the joint palette (DESIGN.md §4).
+//!
+//! F(j) = F(p(j))·R(j)·T(j) with F(root) = Tr·R(root)·T(root), where Tr is the pose's root
+//! translation; M(j) = F(j)·A(j)⁻¹ is the skinning matrix ("joint palette").
+
+use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
+
+use crate::dual_quat::DualQuat;
+use crate::error::SkinError;
+use crate::skeleton::RestSkeleton;
+
+/// Local joint rotations T(j) (identity at rest) and the translation of the root joint(s).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    /// T(j) for every joint, in the skeleton's joint order.
+    pub local_rotations: Vec<Quat>,
+    /// Added to the rest translation of every root joint, in the object's (model) space.
+    pub root_translation: Vec3,
+}
+
+impl Pose {
+    /// The rest pose of a skeleton with `joint_count` joints.
+    #[must_use]
+    pub fn rest(joint_count: usize) -> Self {
+        Pose { local_rotations: vec![Quat::IDENTITY; joint_count], root_translation: Vec3::ZERO }
+    }
+
+    /// The rest pose with one joint rotated.
+    #[must_use]
+    pub fn with_rotation(mut self, joint: usize, rotation: Quat) -> Self {
+        if let Some(r) = self.local_rotations.get_mut(joint) {
+            *r = rotation;
+        }
+        self
+    }
+}
+
+/// Per-joint data of the bones-blending deformer for joint k (DESIGN.md §5):
+/// v' = F(j)·R(k)·slerp(I, T(k), t)·A(k)⁻¹·v with j = p(k).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BonesBlendJoint {
+    /// P(k) = F(p(k))·R(k): the joint's frame with the posed parent but without its own
+    /// rotation (Tr·R(k) for a root).
+    pub posed_from_joint_rest: Affine3A,
+    /// A(k)⁻¹.
+    pub joint_from_bind_model: Affine3A,
+    /// T(k) with w ≥ 0 (the short way from the identity).
+    pub rotation: Quat,
+    /// Unit rotation axis of T(k) (X when T(k) is the identity).
+    pub axis: Vec3A,
+    /// Half the rotation angle of T(k), in [0, π/2].
+    pub half_angle: f32,
+}
+
+/// Everything the deformers need for one pose.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct JointPalette {
+    /// F(j): posed model space from joint space.
+    pub model_from_joint: Vec<Affine3A>,
+    /// M(j) = F(j)·A(j)⁻¹: posed model space from bind model space (the joint palette).
+    pub skinning: Vec<Affine3A>,
+    /// Inverse-transpose of M(j)'s linear part for normals; `None` when every M(j) is a
+    /// rotation times a uniform scale, so that M(j) itself maps normals correctly (after
+    /// renormalization).
+    pub normal_skinning: Option<Vec<Mat3A>>,
+    /// Per-joint data of the bones-blending deformer.
+    pub bones_blending: Vec<BonesBlendJoint>,
+}
+
+/// Relative tolerance under which a matrix counts as a rotation times a uniform scale.
+const UNIFORM_SCALE_TOLERANCE: f32 = 1e-4;
+
+impl JointPalette {
+    /// Evaluates a pose on a skeleton.
+    pub fn new(skeleton: &RestSkeleton, pose: &Pose) -> Result<Self, SkinError> {
+        let mut palette = JointPalette::default();
+        palette.update(skeleton, pose)?;
+        Ok(palette)
+    }
+
+    /// Re-evaluates in place, reusing the allocations.
+    pub fn update(&mut self, skeleton: &RestSkeleton, pose: &Pose) -> Result<(), SkinError> {
+        let n = skeleton.len();
+        if pose.local_rotations.len() != n {
+            return Err(SkinError::LengthMismatch {
+                what: "pose rotations",
+                expected: n,
+                found: pose.local_rotations.len(),
+            });
+        }
+        if !pose.root_translation.is_finite() {
+            return Err(SkinError::BadRootTranslation);
+        }
+        self.model_from_joint.clear();
+        self.skinning.clear();
+        self.bones_blending.clear();
+        let root_shift = Affine3A::from_translation(pose.root_translation);
+        let mut uniform = true;
+        for j in 0..n {
+            let q = pose.local_rotations[j];
+            let length = q.length();
+            if !length.is_finite() || length < 1e-6 {
+                return Err(SkinError::BadPoseRotation { joint: j });
+            }
+            let mut t = q / length;
+            if t.w < 0.0 {
+                t = -t;
+            }
+            let r = skeleton.parent_from_joint()[j];
+            let posed_from_joint_rest = match skeleton.parents()[j] {
+                Some(p) => self.model_from_joint[p] * r,
+                None => root_shift * r,
+            };
+            let f = posed_from_joint_rest * Affine3A::from_quat(t);
+            let a_inv = skeleton.joint_from_bind_model()[j];
+            let m = f * a_inv;
+            uniform &= is_uniform_scale(&m.matrix3);
+            self.model_from_joint.push(f);
+            self.skinning.push(m);
+            let (axis, angle) = t.to_axis_angle();
+            let (axis, half_angle) = if angle.is_finite() && angle > 0.0 && axis.is_finite() {
+                (Vec3A::from(axis), (0.5 * angle).min(std::f32::consts::FRAC_PI_2))
+            } else {
+                (Vec3A::X, 0.0)
+            };
+            self.bones_blending.push(BonesBlendJoint {
+                posed_from_joint_rest,
+                joint_from_bind_model: a_inv,
+                rotation: t,
+                axis,
+                half_angle,
+            });
+        }
+        self.normal_skinning = if uniform {
+            None
+        } else {
+            Some(self.skinning.iter().map(|m| m.matrix3.inverse().transpose()).collect())
+        };
+        Ok(())
+    }
+
+    /// Number of joints.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.skinning.len()
+    }
+
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.skinning.is_empty()
+    }
+
+    /// Posed model-space position of joint j (the origin of F(j)).
+    #[must_use]
+    pub fn joint_position(&self, j: usize) -> Vec3 {
+        self.model_from_joint[j].translation.into()
+    }
+
+    /// The palette as unit dual quaternions, for the dual-quaternion deformer. Fails when an
+    /// M(j) is not rigid (scale differs from 1 by more than 1e-3).
+    pub fn dual_quaternions(&self) -> Result<Vec<DualQuat>, SkinError> {
+        self.skinning
+            .iter()
+            .enumerate()
+            .map(|(joint, m)| DualQuat::try_from_affine(m).map_err(|e| e.at_joint(joint)))
+            .collect()
+    }
+}
+
+fn is_uniform_scale(m: &Mat3A) -> bool {
+    let lx = m.x_axis.length_squared();
+    let ly = m.y_axis.length_squared();
+    let lz = m.z_axis.length_squared();
+    let scale = lx.max(ly).max(lz);
+    if scale <= 0.0 {
+        return false;
+    }
+    let tol = UNIFORM_SCALE_TOLERANCE * scale;
+    (lx - ly).abs() <= tol
+        && (lx - lz).abs() <= tol
+        && m.x_axis.dot(m.y_axis).abs() <= tol
+        && m.x_axis.dot(m.z_axis).abs() <= tol
+        && m.y_axis.dot(m.z_axis).abs() <= tol
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skeleton::RestJoint;
+
+    fn chain() -> RestSkeleton {
+        RestSkeleton::new(&[
+            RestJoint::new("a", None, Vec3::new(1.0, 0.0, 0.0), Quat::IDENTITY),
+            RestJoint::new("b", Some(0), Vec3::new(2.0, 0.0, 0.0), Quat::IDENTITY),
+            RestJoint::new("c", Some(1), Vec3::new(2.0, 0.0, 0.0), Quat::from_rotation_z(0.3)),
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn rest_pose_gives_identity_palette() {
+        let skeleton = chain();
+        let palette = JointPalette::new(&skeleton, &Pose::rest(3)).unwrap();
+        for m in &palette.skinning {
+            assert!(m.abs_diff_eq(Affine3A::IDENTITY, 1e-6));
+        }
+        assert!(palette.normal_skinning.is_none());
+    }
+
+    #[test]
+    fn rotation_at_a_joint_moves_its_descendants_about_it() {
+        let skeleton = chain();
+        let pose = Pose::rest(3).with_rotation(1, Quat::from_rotation_z(std::f32::consts::FRAC_PI_2));
+        let palette = JointPalette::new(&skeleton, &pose).unwrap();
+        // Joint b at (3, 0, 0) stays; joint c (rest (5, 0, 0)) swings to (3, 2, 0).
+        assert!(palette.joint_position(1).abs_diff_eq(Vec3::new(3.0, 0.0, 0.0), 1e-5));
+        assert!(palette.joint_position(2).abs_diff_eq(Vec3::new(3.0, 2.0, 0.0), 1e-5));
+        let moved = palette.skinning[2].transform_point3(Vec3::new(6.0, 0.0, 0.0));
+        assert!(moved.abs_diff_eq(Vec3::new(3.0, 3.0, 0.0), 1e-5));
+    }
+
+    #[test]
+    fn bad_poses_are_typed_errors() {
+        let skeleton = chain();
+        assert!(matches!(
+            JointPalette::new(&skeleton, &Pose::rest(2)),
+            Err(SkinError::LengthMismatch { expected: 3, found: 2, .. })
+        ));
+        let pose = Pose::rest(3).with_rotation(2, Quat::from_xyzw(f32::NAN, 0.0, 0.0, 1.0));
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadPoseRotation { joint: 2 }));
+        let pose = Pose::rest(3).with_rotation(0, Quat::from_xyzw(0.0, 0.0, 0.0, 0.0));
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadPoseRotation { joint: 0 }));
+        let mut pose = Pose::rest(3);
+        pose.root_translation.y = f32::INFINITY;
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadRootTranslation));
+    }
+}
