@@ -572,13 +572,12 @@ where
     /// [`Track::velocity`] in f64.
     #[must_use]
     pub fn velocity_wide(&self, t: f64) -> W {
-        match self.clamp(t) {
-            Clamped::Key(_) => W::ZERO,
-            Clamped::Inside => {
-                let i = self.times.partition_point(|&x| x <= t) - 1;
-                self.segment_velocity(i, t)
-            }
+        let last = self.times.len() - 1;
+        if t.is_nan() || t < self.times[0] || t >= self.times[last] {
+            return W::ZERO;
         }
+        let i = self.times.partition_point(|&x| x <= t) - 1;
+        self.segment_velocity(i, t)
     }
 
     /// The left-hand derivative at `t` (at a key, the velocity arriving at it). Zero outside the

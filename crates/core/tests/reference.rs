@@ -111,7 +111,8 @@ fn vec3_tcb_uneven_matches_scipy() {
 fn scalar_tcb_uneven_matches_scipy() {
     let name = "scalar_tcb_uneven";
     let fixture = load(name);
-    let keys = fixture.keys.iter().map(|k| Key::new(k.time, f32_exact(k.value[0])).with_tcb(tcb(k))).collect();
+    let keys =
+        fixture.keys.iter().map(|k| Key::new(k.time, f32_exact(k.value[0])).with_tcb(tcb(k))).collect();
     let track: Track<f32> = Track::new(&RawTrack::new(keys)).unwrap();
     for s in &fixture.samples {
         assert_approx_eq!(track.sample(s.time), s.value[0] as f32, TOLERANCE, "{name} at t = {}", s.time);
@@ -124,7 +125,8 @@ fn check_quat(name: &str) {
     let track = quat_track(&fixture);
     let mut cursor = track.cursor();
     for s in &fixture.samples {
-        let expected = Quat::from_xyzw(s.value[0] as f32, s.value[1] as f32, s.value[2] as f32, s.value[3] as f32);
+        let expected =
+            Quat::from_xyzw(s.value[0] as f32, s.value[1] as f32, s.value[2] as f32, s.value[3] as f32);
         let exact = glam::DQuat::from_xyzw(s.value[0], s.value[1], s.value[2], s.value[3]);
         assert_approx_eq!(track.sample(s.time), expected, TOLERANCE, "{name} at t = {}", s.time);
         assert_approx_eq!(track.sample_wide(s.time), exact, 1e-12, "{name} (f64) at t = {}", s.time);
