@@ -5,6 +5,7 @@ pub mod key;
 pub mod quat;
 pub mod scene;
 pub mod track;
+pub mod validate;
 
 pub use key::{Animated, Interpolation, Key, RawTrack, Tcb};
 pub use scene::{

@@ -1,1 +1,12 @@
-//! keyrig io
+//! keyrig-io: everything that touches a file. RON scene files (versioned, checked, saved
+//! atomically), the built-in demo scene, glTF import/export and MD2 import.
+
+pub mod demo;
+pub mod gltf_import;
+pub mod md2;
+pub mod model;
+pub mod scene_file;
+mod scene_locate;
+mod scene_ser;
+
+pub use scene_file::{load, save, LocatedProblem, SceneFileError};

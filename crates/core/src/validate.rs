@@ -1,0 +1,506 @@
+//! What is wrong with a scene: [`Scene::problems`].
+//!
+//! Rules (each problem carries the path of the field it concerns, in the syntax
+//! `objects[0].skeleton.joints[2].rotation.track[4].time`; vector components are `.x .y .z .w`):
+//!
+//! 1. Every number is finite (RON can spell `NaN` and `inf`; an f32 field overflows to `inf`).
+//! 2. `fps` > 0; the frame range is not empty (`start` ≤ `end`).
+//! 3. Object names are unique and not empty, light names likewise, joint names unique within
+//!    a skeleton: channel paths (`object/Arm/joint/elbow/rotation`) address them by name.
+//! 4. A joint's parent is an existing joint stored before it (parents first); exactly one
+//!    root, the first joint.
+//! 5. Rotations (static values, rest rotations, keys) are not the zero quaternion.
+//! 6. Tracks: times finite and strictly increasing, values finite, T/C/B in [-1, 1], Hermite
+//!    keys carry both tangents (the rules of [`crate::track`]'s validator, reported per key).
+//! 7. Lights: non-negative intensity and colour, a non-zero direction for directional and spot
+//!    lights, spot angles with 0 < inner ≤ cutoff ≤ 90 and dropoff ≥ 0.
+//! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
+
+use std::collections::HashMap;
+
+use glam::{Quat, Vec3};
+
+use crate::key::{Animated, Interpolation, RawTrack};
+use crate::scene::{
+    Camera, DeformerSettings, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
+};
+
+/// Smallest quaternion length accepted as a rotation.
+const MIN_QUAT_LENGTH: f32 = 1e-6;
+
+/// A value that can sit in a key: knows its finite-ness per component.
+pub trait KeyValue: Copy {
+    /// Names of the components that are NaN or infinite (`""` for a scalar).
+    fn non_finite_components(&self) -> Vec<&'static str>;
+    /// For rotations: true when the value cannot be normalized. Always false otherwise.
+    fn is_degenerate(&self) -> bool {
+        false
+    }
+}
+
+impl KeyValue for f32 {
+    fn non_finite_components(&self) -> Vec<&'static str> {
+        if self.is_finite() {
+            Vec::new()
+        } else {
+            vec![""]
+        }
+    }
+}
+
+impl KeyValue for Vec3 {
+    fn non_finite_components(&self) -> Vec<&'static str> {
+        ["x", "y", "z"]
+            .into_iter()
+            .zip(self.to_array())
+            .filter(|(_, v)| !v.is_finite())
+            .map(|(n, _)| n)
+            .collect()
+    }
+}
+
+impl KeyValue for Quat {
+    fn non_finite_components(&self) -> Vec<&'static str> {
+        ["x", "y", "z", "w"]
+            .into_iter()
+            .zip(self.to_array())
+            .filter(|(_, v)| !v.is_finite())
+            .map(|(n, _)| n)
+            .collect()
+    }
+
+    fn is_degenerate(&self) -> bool {
+        self.length() < MIN_QUAT_LENGTH
+    }
+}
+
+/// Collects problems under a path prefix.
+struct Checker {
+    problems: Vec<Problem>,
+}
+
+fn join(path: &str, field: &str) -> String {
+    if field.is_empty() {
+        path.to_string()
+    } else if path.is_empty() {
+        field.to_string()
+    } else {
+        format!("{path}.{field}")
+    }
+}
+
+fn describe(v: f64) -> &'static str {
+    if v.is_nan() {
+        "NaN"
+    } else if v > 0.0 {
+        "+inf"
+    } else {
+        "-inf"
+    }
+}
+
+impl Checker {
+    fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
+        self.problems.push(Problem { path: path.into(), message: message.into() });
+    }
+
+    fn f32(&mut self, path: &str, v: f32) -> bool {
+        self.f64(path, f64::from(v))
+    }
+
+    fn f64(&mut self, path: &str, v: f64) -> bool {
+        if v.is_finite() {
+            true
+        } else {
+            self.push(path, format!("not a finite number ({})", describe(v)));
+            false
+        }
+    }
+
+    /// Checks a value's components; returns true when all are finite.
+    fn value<T: KeyValue>(&mut self, path: &str, v: &T) -> bool {
+        let bad = v.non_finite_components();
+        for c in &bad {
+            self.push(join(path, c), "not a finite number");
+        }
+        bad.is_empty()
+    }
+
+    fn rotation(&mut self, path: &str, q: &Quat) {
+        if self.value(path, q) && q.is_degenerate() {
+            self.push(path, "zero quaternion: not a rotation");
+        }
+    }
+
+    fn animated<T: KeyValue>(&mut self, path: &str, a: &Animated<T>) {
+        if self.value(&join(path, "value"), &a.value) && a.value.is_degenerate() {
+            self.push(join(path, "value"), "zero quaternion: not a rotation");
+        }
+        self.track(&join(path, "track"), &a.track);
+    }
+
+    fn track<T: KeyValue>(&mut self, path: &str, track: &RawTrack<T>) {
+        let mut previous: Option<f64> = None;
+        for (i, key) in track.keys.iter().enumerate() {
+            let kp = format!("{path}[{i}]");
+            if self.f64(&join(&kp, "time"), key.time) {
+                if let Some(prev) = previous {
+                    if key.time == prev {
+                        self.push(
+                            join(&kp, "time"),
+                            format!("duplicate key time {} s (same as key {})", key.time, i - 1),
+                        );
+                    } else if key.time < prev {
+                        self.push(
+                            join(&kp, "time"),
+                            format!(
+                                "keys out of order: {} s comes after key {} at {prev} s",
+                                key.time,
+                                i - 1
+                            ),
+                        );
+                    }
+                }
+                previous = Some(key.time);
+            }
+            if self.value(&join(&kp, "value"), &key.value) && key.value.is_degenerate() {
+                self.push(join(&kp, "value"), "zero quaternion: not a rotation");
+            }
+            for (name, v) in
+                [("tension", key.tcb.tension), ("continuity", key.tcb.continuity), ("bias", key.tcb.bias)]
+            {
+                let p = format!("{kp}.tcb.{name}");
+                if self.f32(&p, v) && !(-1.0..=1.0).contains(&v) {
+                    self.push(p, format!("{v} is outside [-1, 1]"));
+                }
+            }
+            for (name, tangent) in [("in_tangent", &key.in_tangent), ("out_tangent", &key.out_tangent)] {
+                match tangent {
+                    Some(t) => {
+                        self.value(&join(&kp, name), t);
+                    }
+                    None if key.interpolation == Interpolation::Hermite => {
+                        self.push(join(&kp, name), "a Hermite key needs both tangents");
+                    }
+                    None => {}
+                }
+            }
+        }
+    }
+
+    /// Reports every name used more than once (and empty names) in `names`.
+    fn unique_names<'a>(&mut self, what: &str, names: impl Iterator<Item = (String, &'a str)>) {
+        let mut seen: HashMap<&str, usize> = HashMap::new();
+        for (i, (path, name)) in names.enumerate() {
+            if name.is_empty() {
+                self.push(path, format!("{what} name is empty"));
+            } else if name.contains('/') {
+                self.push(
+                    path,
+                    format!("{what} name {name:?} contains '/', which separates channel path parts"),
+                );
+            } else if let Some(first) = seen.get(name) {
+                self.push(path, format!("duplicate {what} name {name:?} (also {what} {first})"));
+            } else {
+                seen.insert(name, i);
+            }
+        }
+    }
+
+    fn object(&mut self, path: &str, object: &Object) {
+        self.animated(&join(path, "translation"), &object.translation);
+        self.animated(&join(path, "rotation"), &object.rotation);
+        self.animated(&join(path, "scale"), &object.scale);
+        if let Some(MeshSource::File { path: file, .. }) = &object.mesh {
+            if file.is_empty() {
+                self.push(join(path, "mesh.path"), "empty model file path");
+            }
+        }
+        if let Some(skeleton) = &object.skeleton {
+            self.skeleton(&join(path, "skeleton"), skeleton);
+        }
+        self.deformer(&join(path, "deformer"), &object.deformer);
+    }
+
+    fn skeleton(&mut self, path: &str, skeleton: &Skeleton) {
+        let jp = |i: usize| format!("{path}.joints[{i}]");
+        if skeleton.joints.is_empty() {
+            self.push(join(path, "joints"), "a skeleton needs at least one joint");
+        }
+        for (i, joint) in skeleton.joints.iter().enumerate() {
+            match joint.parent {
+                None if i > 0 => self.push(
+                    join(&jp(i), "parent"),
+                    "only the first joint may be a root (parent None); give this joint a parent",
+                ),
+                Some(_) if i == 0 => {
+                    self.push(join(&jp(i), "parent"), "the first joint must be the root (parent None)")
+                }
+                Some(p) if p >= skeleton.joints.len() => self.push(
+                    join(&jp(i), "parent"),
+                    format!("parent {p} is out of range (the skeleton has {} joints)", skeleton.joints.len()),
+                ),
+                Some(p) if p >= i => self.push(
+                    join(&jp(i), "parent"),
+                    format!("parent {p} must come before joint {i} (joints are stored parents first)"),
+                ),
+                _ => {}
+            }
+            self.value(&join(&jp(i), "rest_translation"), &joint.rest_translation);
+            self.rotation(&join(&jp(i), "rest_rotation"), &joint.rest_rotation);
+            self.animated(&join(&jp(i), "rotation"), &joint.rotation);
+        }
+        self.unique_names(
+            "joint",
+            skeleton.joints.iter().enumerate().map(|(i, j)| (join(&jp(i), "name"), j.name.as_str())),
+        );
+        self.animated(&join(path, "root_translation"), &skeleton.root_translation);
+    }
+
+    fn deformer(&mut self, path: &str, d: &DeformerSettings) {
+        for (name, v) in [
+            ("blend_parent_fraction", d.blend_parent_fraction),
+            ("blend_child_fraction", d.blend_child_fraction),
+        ] {
+            let p = join(path, name);
+            if self.f32(&p, v) && !(0.0..=1.0).contains(&v) {
+                self.push(p, format!("{v} is outside [0, 1]"));
+            }
+        }
+    }
+
+    fn light(&mut self, path: &str, light: &Light) {
+        self.animated(&join(path, "position"), &light.position);
+        self.animated(&join(path, "direction"), &light.direction);
+        self.animated(&join(path, "colour"), &light.colour);
+        self.animated(&join(path, "intensity"), &light.intensity);
+        if !matches!(light.kind, LightKind::Point) {
+            let dir = &light.direction;
+            if dir.value.is_finite() && dir.value.length() < 1e-6 {
+                self.push(join(path, "direction.value"), "zero direction");
+            }
+            for (i, key) in dir.track.keys.iter().enumerate() {
+                if key.value.is_finite() && key.value.length() < 1e-6 {
+                    self.push(format!("{path}.direction.track[{i}].value"), "zero direction");
+                }
+            }
+        }
+        let colours = std::iter::once((join(path, "colour.value"), light.colour.value)).chain(
+            light
+                .colour
+                .track
+                .keys
+                .iter()
+                .enumerate()
+                .map(|(i, k)| (format!("{path}.colour.track[{i}].value"), k.value)),
+        );
+        for (p, c) in colours {
+            if c.is_finite() && c.min_element() < 0.0 {
+                self.push(p, format!("negative colour component in {c}"));
+            }
+        }
+        let intensities = std::iter::once((join(path, "intensity.value"), light.intensity.value)).chain(
+            light
+                .intensity
+                .track
+                .keys
+                .iter()
+                .enumerate()
+                .map(|(i, k)| (format!("{path}.intensity.track[{i}].value"), k.value)),
+        );
+        for (p, v) in intensities {
+            if v < 0.0 {
+                self.push(p, format!("negative intensity {v}"));
+            }
+        }
+        if let LightKind::Spot { cutoff_deg, inner_angle_deg, dropoff } = light.kind {
+            let kp = join(path, "kind");
+            let cutoff_ok = self.f32(&join(&kp, "cutoff_deg"), cutoff_deg);
+            let inner_ok = self.f32(&join(&kp, "inner_angle_deg"), inner_angle_deg);
+            if self.f32(&join(&kp, "dropoff"), dropoff) && dropoff < 0.0 {
+                self.push(join(&kp, "dropoff"), format!("negative dropoff {dropoff}"));
+            }
+            if cutoff_ok && !(cutoff_deg > 0.0 && cutoff_deg <= 90.0) {
+                self.push(join(&kp, "cutoff_deg"), format!("{cutoff_deg}° is outside (0°, 90°]"));
+            }
+            if cutoff_ok && inner_ok && !(inner_angle_deg > 0.0 && inner_angle_deg <= cutoff_deg) {
+                self.push(
+                    join(&kp, "inner_angle_deg"),
+                    format!("{inner_angle_deg}° must be in (0°, cutoff_deg = {cutoff_deg}°]"),
+                );
+            }
+        }
+    }
+
+    fn camera(&mut self, path: &str, c: &Camera) {
+        self.value(&join(path, "target"), &c.target);
+        self.f32(&join(path, "yaw_deg"), c.yaw_deg);
+        self.f32(&join(path, "pitch_deg"), c.pitch_deg);
+        if self.f32(&join(path, "distance"), c.distance) && c.distance <= 0.0 {
+            self.push(join(path, "distance"), format!("{} must be > 0", c.distance));
+        }
+        if self.f32(&join(path, "fov_y_deg"), c.fov_y_deg) && !(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0) {
+            self.push(join(path, "fov_y_deg"), format!("{}° is outside (0°, 180°)", c.fov_y_deg));
+        }
+    }
+}
+
+impl Scene {
+    /// Everything wrong with this scene, each with the path of the field it concerns; empty
+    /// when the scene is valid. See the module documentation for the rules.
+    #[must_use]
+    pub fn problems(&self) -> Vec<Problem> {
+        let mut c = Checker { problems: Vec::new() };
+        if c.f64("fps", self.fps) && self.fps <= 0.0 {
+            c.push("fps", format!("{} must be > 0", self.fps));
+        }
+        if self.frame_range.start > self.frame_range.end {
+            c.push(
+                "frame_range",
+                format!(
+                    "empty range: start {} is after end {}",
+                    self.frame_range.start, self.frame_range.end
+                ),
+            );
+        }
+        c.value("ambient", &self.ambient);
+        for (i, object) in self.objects.iter().enumerate() {
+            c.object(&format!("objects[{i}]"), object);
+        }
+        c.unique_names(
+            "object",
+            self.objects.iter().enumerate().map(|(i, o)| (format!("objects[{i}].name"), o.name.as_str())),
+        );
+        for (i, light) in self.lights.iter().enumerate() {
+            c.light(&format!("lights[{i}]"), light);
+        }
+        c.unique_names(
+            "light",
+            self.lights.iter().enumerate().map(|(i, l)| (format!("lights[{i}].name"), l.name.as_str())),
+        );
+        c.camera("camera", &self.camera);
+        c.problems
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::key::{Key, Tcb};
+    use crate::scene::Joint;
+
+    fn joint(name: &str, parent: Option<usize>) -> Joint {
+        Joint {
+            name: name.to_string(),
+            parent,
+            rest_translation: Vec3::X,
+            rest_rotation: Quat::IDENTITY,
+            rotation: Animated::constant(Quat::IDENTITY),
+        }
+    }
+
+    fn paths(scene: &Scene) -> Vec<String> {
+        scene.problems().into_iter().map(|p| p.path).collect()
+    }
+
+    #[test]
+    fn default_scene_is_valid() {
+        assert_eq!(Scene::default().problems(), Vec::new());
+    }
+
+    #[test]
+    fn timing_and_non_finite_numbers() {
+        let mut s = Scene { fps: 0.0, ..Scene::default() };
+        s.frame_range.start = 10;
+        s.frame_range.end = 9;
+        s.ambient.y = f32::NAN;
+        s.camera.distance = f32::INFINITY;
+        assert_eq!(paths(&s), ["fps", "frame_range", "ambient.y", "camera.distance"]);
+        s.fps = f64::NAN;
+        assert_eq!(s.problems()[0].message, "not a finite number (NaN)");
+    }
+
+    #[test]
+    fn key_problems_have_key_paths() {
+        let mut s = Scene::default();
+        let mut o = Object::new("Cube");
+        o.translation.track = RawTrack::new(vec![
+            Key::new(0.0, Vec3::ZERO),
+            Key::new(1.0, Vec3::new(0.0, f32::NEG_INFINITY, 0.0)),
+            Key::new(0.5, Vec3::ONE).with_tcb(Tcb::new(2.0, 0.0, 0.0)),
+            Key::new(0.5, Vec3::ONE).with_interpolation(Interpolation::Hermite),
+        ]);
+        o.rotation.track = RawTrack::new(vec![Key::new(0.0, Quat::from_xyzw(0.0, 0.0, 0.0, 0.0))]);
+        s.objects.push(o);
+        let problems = s.problems();
+        let got: Vec<&str> = problems.iter().map(|p| p.path.as_str()).collect();
+        assert_eq!(
+            got,
+            [
+                "objects[0].translation.track[1].value.y",
+                "objects[0].translation.track[2].time",
+                "objects[0].translation.track[2].tcb.tension",
+                "objects[0].translation.track[3].time",
+                "objects[0].translation.track[3].in_tangent",
+                "objects[0].translation.track[3].out_tangent",
+                "objects[0].rotation.track[0].value",
+            ]
+        );
+        assert!(problems[1].message.contains("out of order"), "{}", problems[1].message);
+        assert!(problems[3].message.contains("duplicate"), "{}", problems[3].message);
+    }
+
+    #[test]
+    fn joint_parents_and_names() {
+        let mut s = Scene::default();
+        let mut o = Object::new("Arm");
+        o.skeleton = Some(Skeleton {
+            joints: vec![
+                joint("a", None),
+                joint("b", Some(2)),
+                joint("c", Some(7)),
+                joint("b", Some(0)),
+                joint("d", None),
+            ],
+            root_translation: Animated::constant(Vec3::ZERO),
+        });
+        s.objects.push(o);
+        s.objects.push(Object::new("Arm"));
+        let problems = s.problems();
+        let got: Vec<String> = problems.iter().map(ToString::to_string).collect();
+        assert_eq!(
+            got,
+            [
+                "objects[0].skeleton.joints[1].parent: parent 2 must come before joint 1 (joints are stored parents first)",
+                "objects[0].skeleton.joints[2].parent: parent 7 is out of range (the skeleton has 5 joints)",
+                "objects[0].skeleton.joints[4].parent: only the first joint may be a root (parent None); give this joint a parent",
+                "objects[0].skeleton.joints[3].name: duplicate joint name \"b\" (also joint 1)",
+                "objects[1].name: duplicate object name \"Arm\" (also object 0)",
+            ]
+        );
+    }
+
+    #[test]
+    fn light_rules() {
+        let mut s = Scene::default();
+        s.lights.push(Light {
+            name: "Spot".into(),
+            kind: LightKind::Spot { cutoff_deg: 30.0, inner_angle_deg: 40.0, dropoff: -1.0 },
+            enabled: true,
+            position: Animated::constant(Vec3::ZERO),
+            direction: Animated::constant(Vec3::ZERO),
+            colour: Animated::constant(Vec3::new(1.0, -0.5, 1.0)),
+            intensity: Animated::constant(-2.0),
+        });
+        assert_eq!(
+            paths(&s),
+            [
+                "lights[0].direction.value",
+                "lights[0].colour.value",
+                "lights[0].intensity.value",
+                "lights[0].kind.dropoff",
+                "lights[0].kind.inner_angle_deg",
+            ]
+        );
+    }
+}
