@@ -14,6 +14,7 @@ pub mod dual_quat;
 pub mod error;
 pub mod measure;
 pub mod mesh;
+pub mod paper;
 pub mod pose;
 pub mod skeleton;
 
