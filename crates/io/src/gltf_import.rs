@@ -1,0 +1,1046 @@
+//! glTF 2.0 import (.glb, .gltf with external or `data:` buffers) into an
+//! [`ImportedModel`].
+//!
+//! The file is untrusted. The GLB container is parsed here (byte offsets in errors), the
+//! JSON by serde (line:column), the document validated by the gltf crate (JSON pointer),
+//! and then every accessor this importer reads is checked *before* it is read: element
+//! type and component type for its use, `count ≥ 1`, and `offset + stride·(count−1) +
+//! element size` inside its buffer view, the view inside its buffer, the buffer inside the
+//! bytes actually present. Counts are therefore always backed by bytes of the file, so no
+//! allocation exceeds what the file justifies. Values are checked finite, indices in range,
+//! key times strictly increasing, the node hierarchy a forest (no cycles, one parent each).
+//!
+//! External buffers must be relative paths inside the model's folder (no `..`, no absolute
+//! paths, no schemes other than `data:`) naming regular files.
+
+use std::borrow::Cow;
+use std::fmt;
+use std::path::{Component, Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::animation::util::ReadOutputs;
+use keyrig_core::{Interpolation, Key, RawTrack};
+
+use crate::model::{
+    ChannelTarget, ImageSource, ImportedModel, ModelAnimation, ModelChannel, ModelLight, ModelLightKind,
+    ModelMesh, ModelNode, ModelPrimitive, ModelSkin, MorphTarget, PrimitiveMode, TextureRef, WeightsTrack,
+};
+
+/// Where in the file a problem is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// Byte offset from the start of the file (GLB container).
+    Byte(usize),
+    /// Line and column in the JSON text; `chunk_offset` is the byte offset of the JSON chunk
+    /// inside a .glb (0 for a .gltf).
+    LineColumn { line: usize, column: usize, chunk_offset: usize },
+    /// A JSON pointer (RFC 6901) into the glTF document, e.g. `/accessors/3/count`.
+    Pointer(String),
+    /// The file as a whole (cannot be read).
+    File,
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Byte(b) => write!(f, "byte {b}"),
+            Location::LineColumn { line, column, chunk_offset: 0 } => {
+                write!(f, "line {line}, column {column}")
+            }
+            Location::LineColumn { line, column, chunk_offset } => {
+                write!(f, "JSON chunk at byte {chunk_offset}, line {line}, column {column}")
+            }
+            Location::Pointer(p) => write!(f, "{}", if p.is_empty() { "/" } else { p }),
+            Location::File => write!(f, "file"),
+        }
+    }
+}
+
+/// What is wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum GltfErrorKind {
+    #[error("cannot read: {0}")]
+    Io(#[from] std::io::Error),
+    #[error("GLB container: {0}")]
+    Glb(String),
+    #[error("JSON: {0}")]
+    Json(String),
+    #[error("invalid glTF: {0}")]
+    Invalid(String),
+    #[error("required extension {0} is not supported")]
+    UnsupportedExtension(String),
+    #[error("buffer: {0}")]
+    Buffer(String),
+    #[error("accessor: {0}")]
+    Accessor(String),
+    #[error("{0} is not finite")]
+    NonFinite(String),
+    #[error("{what} index {index} is out of range (there are {limit})")]
+    IndexOutOfRange { what: String, index: usize, limit: usize },
+    #[error("node {node} is its own ancestor (cycle in the node hierarchy)")]
+    Cycle { node: usize },
+    #[error("node {node} has more than one parent ({first} and {second})")]
+    TwoParents { node: usize, first: usize, second: usize },
+    #[error("animation: {0}")]
+    Animation(String),
+}
+
+/// A glTF import error: the file (when known), where in it, and what.
+#[derive(Debug, thiserror::Error)]
+pub struct GltfError {
+    pub file: Option<PathBuf>,
+    pub location: Location,
+    pub kind: GltfErrorKind,
+}
+
+impl fmt::Display for GltfError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(file) = &self.file {
+            write!(f, "{}: ", file.display())?;
+        }
+        write!(f, "{}: {}", self.location, self.kind)
+    }
+}
+
+fn at(location: Location, kind: GltfErrorKind) -> GltfError {
+    GltfError { file: None, location, kind }
+}
+
+fn ptr(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
+    at(Location::Pointer(p.into()), kind)
+}
+
+/// Converts a gltf-json path (`meshes[0].attributes["POSITION"]`) to a JSON pointer
+/// (`/meshes/0/attributes/POSITION`).
+#[must_use]
+pub fn json_pointer_from_path(path: &str) -> String {
+    let path = path.split(" = ").next().unwrap_or(path);
+    let mut out = String::new();
+    let mut token = String::new();
+    let mut in_quotes = false;
+    let flush = |out: &mut String, token: &mut String| {
+        if !token.is_empty() {
+            out.push('/');
+            out.push_str(&token.replace('~', "~0").replace('/', "~1"));
+            token.clear();
+        }
+    };
+    for c in path.chars() {
+        match c {
+            '"' => in_quotes = !in_quotes,
+            '.' | '[' | ']' if !in_quotes => flush(&mut out, &mut token),
+            _ => token.push(c),
+        }
+    }
+    flush(&mut out, &mut token);
+    out
+}
+
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+fn u32_at(data: &[u8], offset: usize) -> Option<u32> {
+    data.get(offset..offset + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+/// The JSON chunk (with its byte offset) and optional BIN chunk of a .glb.
+fn parse_glb(data: &[u8]) -> Result<(&[u8], usize, Option<&[u8]>), GltfError> {
+    let glb = |offset: usize, msg: String| at(Location::Byte(offset), GltfErrorKind::Glb(msg));
+    if data.len() < 12 {
+        return Err(glb(0, format!("file is {} bytes, shorter than the 12-byte header", data.len())));
+    }
+    let version = u32_at(data, 4).unwrap_or(0);
+    if version != 2 {
+        return Err(glb(4, format!("version is {version}, expected 2")));
+    }
+    let length = u32_at(data, 8).unwrap_or(0) as usize;
+    if length != data.len() {
+        return Err(glb(8, format!("header length is {length} but the file is {} bytes", data.len())));
+    }
+    let mut offset = 12;
+    let mut json = None;
+    let mut bin = None;
+    while offset < data.len() {
+        let (Some(chunk_len), Some(chunk_type)) = (u32_at(data, offset), u32_at(data, offset + 4)) else {
+            return Err(glb(offset, "chunk header is cut off".into()));
+        };
+        let start = offset + 8;
+        let end = start.checked_add(chunk_len as usize).filter(|&e| e <= data.len());
+        let Some(end) = end else {
+            return Err(glb(offset, format!("chunk length {chunk_len} reaches past the end of the file")));
+        };
+        match chunk_type {
+            CHUNK_JSON if json.is_none() && offset == 12 => json = Some((&data[start..end], start)),
+            CHUNK_JSON => return Err(glb(offset + 4, "JSON must be the first and only JSON chunk".into())),
+            CHUNK_BIN if bin.is_none() && json.is_some() => bin = Some(&data[start..end]),
+            CHUNK_BIN => return Err(glb(offset + 4, "BIN chunk must follow the JSON chunk, once".into())),
+            _ => {} // Unknown chunks are skipped, as the specification requires.
+        }
+        offset = end;
+    }
+    let (json, json_offset) = json.ok_or_else(|| glb(12, "no JSON chunk".into()))?;
+    Ok((json, json_offset, bin))
+}
+
+/// Imports a .glb or .gltf held in memory. External buffer files cannot be resolved (there
+/// is no folder) and are an error; `data:` URIs and the GLB BIN chunk work.
+///
+/// # Errors
+/// Every malformed input gives a [`GltfError`] with its location.
+pub fn import_gltf_slice(data: &[u8]) -> Result<ImportedModel, GltfError> {
+    import(data, None)
+}
+
+/// Reads and imports the .glb or .gltf at `path`; external buffers resolve next to it.
+///
+/// # Errors
+/// The file cannot be read, or is malformed ([`GltfError`] with the file and location).
+pub fn import_gltf_file(path: &Path) -> Result<ImportedModel, GltfError> {
+    let with_file = |mut e: GltfError| {
+        e.file = Some(path.to_path_buf());
+        e
+    };
+    let data = std::fs::read(path).map_err(|e| with_file(at(Location::File, GltfErrorKind::Io(e))))?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+    import(&data, Some(&base)).map_err(with_file)
+}
+
+/// Extensions this importer understands (others may be used, but not required).
+const SUPPORTED_REQUIRED: [&str; 1] = ["KHR_lights_punctual"];
+
+fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> {
+    let (json_bytes, chunk_offset, bin) =
+        if data.starts_with(GLB_MAGIC) { parse_glb(data)? } else { (data, 0, None) };
+    let root: gltf::json::Root = gltf::json::deserialize::from_slice(json_bytes).map_err(|e| {
+        at(
+            Location::LineColumn { line: e.line(), column: e.column(), chunk_offset },
+            GltfErrorKind::Json(e.to_string()),
+        )
+    })?;
+    let doc = match gltf::Document::from_json(root) {
+        Ok(doc) => doc,
+        Err(gltf::Error::Validation(errors)) => {
+            let (path, error) = errors.into_iter().next().map_or_else(
+                || (String::new(), "validation failed".to_owned()),
+                |(p, e)| (json_pointer_from_path(p.as_str()), e.to_string()),
+            );
+            return Err(ptr(path, GltfErrorKind::Invalid(error)));
+        }
+        Err(e) => return Err(ptr("", GltfErrorKind::Invalid(e.to_string()))),
+    };
+    for (i, ext) in doc.extensions_required().enumerate() {
+        if !SUPPORTED_REQUIRED.contains(&ext) {
+            return Err(ptr(
+                format!("/extensionsRequired/{i}"),
+                GltfErrorKind::UnsupportedExtension(ext.to_owned()),
+            ));
+        }
+    }
+    let buffers = load_buffers(&doc, base, bin)?;
+    let budget = data.len() + buffers.iter().map(|b| b.len()).sum::<usize>();
+    let cx = Reader { buffers: &buffers, budget };
+
+    let nodes = read_nodes(&doc)?;
+    let mut model = ImportedModel { nodes, ..ImportedModel::default() };
+    model.roots = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+        None => (0..model.nodes.len()).filter(|&i| model.nodes[i].parent.is_none()).collect(),
+    };
+    model.images = read_images(&doc);
+    model.meshes = doc.meshes().map(|m| read_mesh(&cx, &m)).collect::<Result<_, _>>()?;
+    model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
+    model.lights = read_lights(&doc)?;
+    check_skinned_meshes(&model)?;
+    model.animations = doc.animations().map(|a| read_animation(&cx, &model, &a)).collect::<Result<_, _>>()?;
+    Ok(model)
+}
+
+/// Loads every buffer: the GLB BIN chunk (borrowed), `data:` URIs, or relative files.
+fn load_buffers<'a>(
+    doc: &gltf::Document,
+    base: Option<&Path>,
+    mut bin: Option<&'a [u8]>,
+) -> Result<Vec<Cow<'a, [u8]>>, GltfError> {
+    let mut out = Vec::new();
+    for buffer in doc.buffers() {
+        let here = format!("/buffers/{}", buffer.index());
+        let bytes: Cow<'a, [u8]> = match buffer.source() {
+            gltf::buffer::Source::Bin => Cow::Borrowed(bin.take().ok_or_else(|| {
+                ptr(&here, GltfErrorKind::Buffer("refers to a missing GLB BIN chunk".into()))
+            })?),
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let data = gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+                    .map_err(|e| ptr(format!("{here}/uri"), GltfErrorKind::Buffer(e.to_string())))?;
+                Cow::Owned(data.0)
+            }
+            gltf::buffer::Source::Uri(uri) => Cow::Owned(
+                read_relative(base, uri)
+                    .map_err(|msg| ptr(format!("{here}/uri"), GltfErrorKind::Buffer(msg)))?,
+            ),
+        };
+        if bytes.len() < buffer.length() {
+            return Err(ptr(
+                format!("{here}/byteLength"),
+                GltfErrorKind::Buffer(format!(
+                    "byteLength is {} but only {} bytes exist",
+                    buffer.length(),
+                    bytes.len()
+                )),
+            ));
+        }
+        out.push(bytes);
+    }
+    Ok(out)
+}
+
+/// Decodes `%XX` escapes of a URI.
+fn percent_decode(uri: &str) -> Result<String, String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = uri.get(i + 1..i + 3).ok_or_else(|| format!("bad escape in URI {uri:?}"))?;
+            out.push(u8::from_str_radix(hex, 16).map_err(|_| format!("bad escape in URI {uri:?}"))?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).map_err(|_| format!("URI {uri:?} is not UTF-8"))
+}
+
+fn read_relative(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, String> {
+    let Some(base) = base else {
+        return Err(format!("external file {uri:?} cannot be resolved when importing from memory"));
+    };
+    if uri.contains(':') {
+        return Err(format!("URI {uri:?}: only relative paths and data: URIs are supported"));
+    }
+    let rel = PathBuf::from(percent_decode(uri)?);
+    if rel.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir)) {
+        return Err(format!("URI {uri:?} must stay inside the model's folder"));
+    }
+    let path = base.join(rel);
+    if !path.is_file() {
+        return Err(format!("{} is not a readable file", path.display()));
+    }
+    std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Borrowed buffers and the byte budget that bounds accessors without a buffer view.
+struct Reader<'a, 'b> {
+    buffers: &'a [Cow<'b, [u8]>],
+    budget: usize,
+}
+
+impl Reader<'_, '_> {
+    fn get<'s>(&'s self) -> impl Fn(gltf::Buffer<'_>) -> Option<&'s [u8]> + Clone + 's {
+        let buffers = self.buffers;
+        move |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d[..])
+    }
+}
+
+fn component_size(t: DataType) -> usize {
+    match t {
+        DataType::I8 | DataType::U8 => 1,
+        DataType::I16 | DataType::U16 => 2,
+        DataType::U32 | DataType::F32 => 4,
+    }
+}
+
+/// Checks that accessor `acc` has one of `dims`/`types` and lies inside the file's bytes.
+fn check_accessor(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    use_: &str,
+    dims: &[Dimensions],
+    types: &[DataType],
+) -> Result<usize, GltfError> {
+    let here = format!("/accessors/{}", acc.index());
+    let bad = |msg: String| ptr(&here, GltfErrorKind::Accessor(format!("{msg} (used as {use_})")));
+    if !dims.contains(&acc.dimensions()) || !types.contains(&acc.data_type()) {
+        return Err(bad(format!("type {:?} of {:?} is not allowed", acc.dimensions(), acc.data_type())));
+    }
+    let count = acc.count();
+    if count == 0 {
+        return Err(bad("count is 0".into()));
+    }
+    let elem = component_size(acc.data_type()) * acc.dimensions().multiplicity();
+    match acc.view() {
+        Some(view) => {
+            check_view(cx, &view)?;
+            let stride = view.stride().unwrap_or(elem);
+            if stride < elem {
+                return Err(bad(format!("byteStride {stride} is smaller than the element size {elem}")));
+            }
+            let end = stride
+                .checked_mul(count - 1)
+                .and_then(|n| n.checked_add(acc.offset()))
+                .and_then(|n| n.checked_add(elem));
+            if end.is_none_or(|end| end > view.length()) {
+                return Err(bad(format!(
+                    "{count} elements of {elem} bytes (stride {stride}) at offset {} do not fit in buffer view {} ({} bytes)",
+                    acc.offset(),
+                    view.index(),
+                    view.length()
+                )));
+            }
+        }
+        None if acc.sparse().is_none() => {
+            return Err(bad("has neither a bufferView nor sparse values".into()));
+        }
+        None => {}
+    }
+    if count.checked_mul(elem).is_none_or(|n| n > cx.budget) {
+        return Err(bad(format!("{count} elements of {elem} bytes are more than the file holds")));
+    }
+    if let Some(sparse) = acc.sparse() {
+        let n = sparse.count();
+        if n == 0 || n > count {
+            return Err(bad(format!("sparse count {n} must be in 1..={count}")));
+        }
+        let idx_size = match sparse.indices().index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        for (view, offset, size, what) in [
+            (sparse.indices().view(), sparse.indices().offset(), idx_size, "sparse indices"),
+            (sparse.values().view(), sparse.values().offset(), elem, "sparse values"),
+        ] {
+            check_view(cx, &view)?;
+            if n.checked_mul(size).and_then(|b| b.checked_add(offset)).is_none_or(|end| end > view.length()) {
+                return Err(bad(format!("{what} do not fit in buffer view {}", view.index())));
+            }
+        }
+    }
+    Ok(count)
+}
+
+fn check_view(cx: &Reader<'_, '_>, view: &gltf::buffer::View<'_>) -> Result<(), GltfError> {
+    let data_len = cx.buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+    let end = view.offset().checked_add(view.length());
+    if end.is_none_or(|e| e > data_len || e > view.buffer().length()) {
+        return Err(ptr(
+            format!("/bufferViews/{}", view.index()),
+            GltfErrorKind::Buffer(format!(
+                "{} bytes at offset {} do not fit in buffer {} ({} bytes)",
+                view.length(),
+                view.offset(),
+                view.buffer().index(),
+                view.buffer().length().min(data_len)
+            )),
+        ));
+    }
+    Ok(())
+}
+
+fn read_nodes(doc: &gltf::Document) -> Result<Vec<ModelNode>, GltfError> {
+    let mut nodes: Vec<ModelNode> = doc
+        .nodes()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            let here = format!("/nodes/{}", n.index());
+            let (t, r, s) = (Vec3::from_array(t), Quat::from_array(r), Vec3::from_array(s));
+            if !(t.is_finite() && r.is_finite() && s.is_finite()) {
+                return Err(ptr(&here, GltfErrorKind::NonFinite("node transform".into())));
+            }
+            let rotation = r.try_normalize_quat().ok_or_else(|| {
+                ptr(format!("{here}/rotation"), GltfErrorKind::Invalid("rotation has zero length".into()))
+            })?;
+            if let Some(w) = n.weights() {
+                if w.iter().any(|x| !x.is_finite()) {
+                    return Err(ptr(
+                        format!("{here}/weights"),
+                        GltfErrorKind::NonFinite("morph weight".into()),
+                    ));
+                }
+            }
+            Ok(ModelNode {
+                name: n.name().map_or_else(|| format!("node{}", n.index()), str::to_owned),
+                parent: None,
+                children: n.children().map(|c| c.index()).collect(),
+                translation: t,
+                rotation,
+                scale: s,
+                mesh: n.mesh().map(|m| m.index()),
+                skin: n.skin().map(|s| s.index()),
+                light: n.light().map(|l| l.index()),
+                weights: n.weights().map(<[f32]>::to_vec),
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    for p in 0..nodes.len() {
+        for ci in 0..nodes[p].children.len() {
+            let c = nodes[p].children[ci];
+            if c == p {
+                return Err(ptr(format!("/nodes/{p}/children/{ci}"), GltfErrorKind::Cycle { node: p }));
+            }
+            if let Some(first) = nodes[c].parent {
+                return Err(ptr(
+                    format!("/nodes/{p}/children/{ci}"),
+                    GltfErrorKind::TwoParents { node: c, first, second: p },
+                ));
+            }
+            nodes[c].parent = Some(p);
+        }
+    }
+    for start in 0..nodes.len() {
+        let mut cur = nodes[start].parent;
+        let mut steps = 0;
+        while let Some(c) = cur {
+            steps += 1;
+            if c == start || steps > nodes.len() {
+                return Err(ptr(format!("/nodes/{start}"), GltfErrorKind::Cycle { node: start }));
+            }
+            cur = nodes[c].parent;
+        }
+    }
+    Ok(nodes)
+}
+
+fn read_images(doc: &gltf::Document) -> Vec<ImageSource> {
+    // Read from the JSON: the wrapper API unwraps fields that validation does not require.
+    doc.as_json()
+        .images
+        .iter()
+        .map(|img| match (&img.uri, img.buffer_view) {
+            (Some(uri), _) => ImageSource::Uri(uri.clone()),
+            (None, Some(view)) => ImageSource::BufferView {
+                view: view.value(),
+                mime_type: img.mime_type.as_ref().map_or_else(String::new, |m| m.0.clone()),
+            },
+            (None, None) => ImageSource::Uri(String::new()),
+        })
+        .collect()
+}
+
+fn read_lights(doc: &gltf::Document) -> Result<Vec<ModelLight>, GltfError> {
+    use gltf::json::extensions::scene::khr_lights_punctual::Type;
+    use gltf::json::validation::Checked;
+    let Some(lights) = doc.as_json().extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()) else {
+        return Ok(Vec::new());
+    };
+    lights
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let here = format!("/extensions/KHR_lights_punctual/lights/{i}");
+            let kind = match (&l.type_, &l.spot) {
+                (Checked::Valid(Type::Directional), _) => ModelLightKind::Directional,
+                (Checked::Valid(Type::Point), _) => ModelLightKind::Point,
+                (Checked::Valid(Type::Spot), Some(spot)) => ModelLightKind::Spot {
+                    inner_cone_angle: spot.inner_cone_angle,
+                    outer_cone_angle: spot.outer_cone_angle,
+                },
+                _ => {
+                    return Err(ptr(
+                        &here,
+                        GltfErrorKind::Invalid("light type or spot parameters invalid".into()),
+                    ))
+                }
+            };
+            let numbers = l.color.iter().chain([&l.intensity]).chain(l.range.as_ref());
+            if numbers.into_iter().any(|x| !x.is_finite()) {
+                return Err(ptr(&here, GltfErrorKind::NonFinite("light parameter".into())));
+            }
+            Ok(ModelLight {
+                name: l.name.clone().unwrap_or_else(|| format!("light{i}")),
+                kind,
+                colour: Vec3::from_array(l.color),
+                intensity: l.intensity,
+                range: l.range,
+            })
+        })
+        .collect()
+}
+
+fn finite_vec3s(values: Vec<[f32; 3]>, here: &str, what: &str) -> Result<Vec<Vec3>, GltfError> {
+    values
+        .into_iter()
+        .map(|v| {
+            let v = Vec3::from_array(v);
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(ptr(here, GltfErrorKind::NonFinite(what.into())))
+            }
+        })
+        .collect()
+}
+
+fn count_matches(got: usize, expected: usize, here: &str) -> Result<(), GltfError> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(ptr(here, GltfErrorKind::Accessor(format!("read {got} elements, expected {expected}"))))
+    }
+}
+
+const F32: &[DataType] = &[DataType::F32];
+
+fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, GltfError> {
+    let mut primitives = Vec::new();
+    for prim in mesh.primitives() {
+        let here = format!("/meshes/{}/primitives/{}", mesh.index(), prim.index());
+        let reader = prim.reader(cx.get());
+        let attr = |name: &str| format!("{here}/attributes/{name}");
+
+        let pos_acc = prim.get(&gltf::Semantic::Positions).ok_or_else(|| {
+            ptr(format!("{here}/attributes"), GltfErrorKind::Invalid("primitive has no POSITION".into()))
+        })?;
+        let n = check_accessor(cx, &pos_acc, "POSITION", &[Dimensions::Vec3], F32)?;
+        let positions = finite_vec3s(
+            reader.read_positions().map(Iterator::collect).unwrap_or_default(),
+            &attr("POSITION"),
+            "position",
+        )?;
+        count_matches(positions.len(), n, &attr("POSITION"))?;
+
+        let normals = match prim.get(&gltf::Semantic::Normals) {
+            Some(acc) => {
+                check_same_count(cx, &acc, "NORMAL", &[Dimensions::Vec3], F32, n, &attr("NORMAL"))?;
+                let v = finite_vec3s(
+                    reader.read_normals().map(Iterator::collect).unwrap_or_default(),
+                    &attr("NORMAL"),
+                    "normal",
+                )?;
+                count_matches(v.len(), n, &attr("NORMAL"))?;
+                Some(v)
+            }
+            None => None,
+        };
+        let texcoords = match prim.get(&gltf::Semantic::TexCoords(0)) {
+            Some(acc) => {
+                let types = [DataType::F32, DataType::U8, DataType::U16];
+                check_same_count(
+                    cx,
+                    &acc,
+                    "TEXCOORD_0",
+                    &[Dimensions::Vec2],
+                    &types,
+                    n,
+                    &attr("TEXCOORD_0"),
+                )?;
+                let v: Vec<Vec2> = reader
+                    .read_tex_coords(0)
+                    .map(|t| t.into_f32().map(Vec2::from_array).collect())
+                    .unwrap_or_default();
+                count_matches(v.len(), n, &attr("TEXCOORD_0"))?;
+                if v.iter().any(|t| !t.is_finite()) {
+                    return Err(ptr(
+                        attr("TEXCOORD_0"),
+                        GltfErrorKind::NonFinite("texture coordinate".into()),
+                    ));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        let mut joint_sets = Vec::new();
+        let mut weight_sets = Vec::new();
+        for set in 0u32.. {
+            let (Some(j_acc), Some(w_acc)) =
+                (prim.get(&gltf::Semantic::Joints(set)), prim.get(&gltf::Semantic::Weights(set)))
+            else {
+                break;
+            };
+            let (jn, wn) = (format!("JOINTS_{set}"), format!("WEIGHTS_{set}"));
+            check_same_count(
+                cx,
+                &j_acc,
+                &jn,
+                &[Dimensions::Vec4],
+                &[DataType::U8, DataType::U16],
+                n,
+                &attr(&jn),
+            )?;
+            let wt = [DataType::F32, DataType::U8, DataType::U16];
+            check_same_count(cx, &w_acc, &wn, &[Dimensions::Vec4], &wt, n, &attr(&wn))?;
+            let joints: Vec<[u16; 4]> =
+                reader.read_joints(set).map(|j| j.into_u16().collect()).unwrap_or_default();
+            let weights: Vec<[f32; 4]> =
+                reader.read_weights(set).map(|w| w.into_f32().collect()).unwrap_or_default();
+            count_matches(joints.len(), n, &attr(&jn))?;
+            count_matches(weights.len(), n, &attr(&wn))?;
+            if weights.iter().flatten().any(|w| !w.is_finite()) {
+                return Err(ptr(attr(&wn), GltfErrorKind::NonFinite("weight".into())));
+            }
+            joint_sets.push(joints);
+            weight_sets.push(weights);
+        }
+
+        let mut morph_targets = Vec::new();
+        for (t, target) in prim.morph_targets().enumerate() {
+            let there = format!("{here}/targets/{t}");
+            let mut mt = MorphTarget::default();
+            if let Some(acc) = target.positions() {
+                check_same_count(cx, &acc, "morph POSITION", &[Dimensions::Vec3], F32, n, &there)?;
+            }
+            if let Some(acc) = target.normals() {
+                check_same_count(cx, &acc, "morph NORMAL", &[Dimensions::Vec3], F32, n, &there)?;
+            }
+            morph_targets.push((there, target.positions().is_some(), target.normals().is_some()));
+            let _ = &mut mt;
+        }
+        let read_targets: Vec<_> = reader.read_morph_targets().collect();
+        let mut targets = Vec::with_capacity(morph_targets.len());
+        for ((there, has_p, has_n), (p, nrm, _)) in morph_targets.into_iter().zip(read_targets) {
+            let positions = match (has_p, p) {
+                (true, Some(it)) => Some(finite_vec3s(it.collect(), &there, "morph position")?),
+                _ => None,
+            };
+            let normals = match (has_n, nrm) {
+                (true, Some(it)) => Some(finite_vec3s(it.collect(), &there, "morph normal")?),
+                _ => None,
+            };
+            for v in positions.iter().chain(normals.iter()) {
+                count_matches(v.len(), n, &there)?;
+            }
+            targets.push(MorphTarget { positions, normals });
+        }
+
+        let raw_indices: Vec<u32> = match prim.indices() {
+            Some(acc) => {
+                let types = [DataType::U8, DataType::U16, DataType::U32];
+                let count = check_accessor(cx, &acc, "indices", &[Dimensions::Scalar], &types)?;
+                let v: Vec<u32> = reader.read_indices().map(|i| i.into_u32().collect()).unwrap_or_default();
+                count_matches(v.len(), count, &format!("{here}/indices"))?;
+                if let Some(&bad) = v.iter().find(|&&i| i as usize >= n) {
+                    return Err(ptr(
+                        format!("{here}/indices"),
+                        GltfErrorKind::IndexOutOfRange {
+                            what: "vertex".into(),
+                            index: bad as usize,
+                            limit: n,
+                        },
+                    ));
+                }
+                v
+            }
+            None => (0..n as u32).collect(),
+        };
+        let (mode, indices) = convert_mode(prim.mode(), raw_indices);
+
+        let material = prim.material();
+        let pbr = material.pbr_metallic_roughness();
+        let base_colour_texture = pbr.base_color_texture().map(|info| TextureRef {
+            texture: info.texture().index(),
+            image: info.texture().source().index(),
+            texcoord_set: info.tex_coord(),
+        });
+        primitives.push(ModelPrimitive {
+            mode,
+            positions,
+            normals,
+            texcoords,
+            indices,
+            joint_sets,
+            weight_sets,
+            morph_targets: targets,
+            base_colour_factor: pbr.base_color_factor(),
+            base_colour_texture,
+        });
+    }
+    let weights = mesh.weights().map(<[f32]>::to_vec).unwrap_or_default();
+    if weights.iter().any(|w| !w.is_finite()) {
+        return Err(ptr(
+            format!("/meshes/{}/weights", mesh.index()),
+            GltfErrorKind::NonFinite("morph weight".into()),
+        ));
+    }
+    Ok(ModelMesh {
+        name: mesh.name().map_or_else(|| format!("mesh{}", mesh.index()), str::to_owned),
+        primitives,
+        weights,
+    })
+}
+
+fn check_same_count(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    use_: &str,
+    dims: &[Dimensions],
+    types: &[DataType],
+    expected: usize,
+    here: &str,
+) -> Result<(), GltfError> {
+    let count = check_accessor(cx, acc, use_, dims, types)?;
+    if count != expected {
+        return Err(ptr(
+            here,
+            GltfErrorKind::Accessor(format!("{use_} has {count} elements, POSITION has {expected}")),
+        ));
+    }
+    Ok(())
+}
+
+/// Triangle strips and fans become lists; line strips and loops become line lists.
+fn convert_mode(mode: gltf::mesh::Mode, idx: Vec<u32>) -> (PrimitiveMode, Vec<u32>) {
+    use gltf::mesh::Mode;
+    match mode {
+        Mode::Triangles => {
+            let whole = idx.len() / 3 * 3;
+            let mut idx = idx;
+            idx.truncate(whole);
+            (PrimitiveMode::Triangles, idx)
+        }
+        Mode::TriangleStrip => (
+            PrimitiveMode::Triangles,
+            (0..idx.len().saturating_sub(2))
+                .flat_map(|i| {
+                    if i % 2 == 0 {
+                        [idx[i], idx[i + 1], idx[i + 2]]
+                    } else {
+                        [idx[i + 1], idx[i], idx[i + 2]]
+                    }
+                })
+                .collect(),
+        ),
+        Mode::TriangleFan => (
+            PrimitiveMode::Triangles,
+            (1..idx.len().saturating_sub(1)).flat_map(|i| [idx[0], idx[i], idx[i + 1]]).collect(),
+        ),
+        Mode::Lines => (PrimitiveMode::Lines, idx[..idx.len() / 2 * 2].to_vec()),
+        Mode::LineStrip => (PrimitiveMode::Lines, idx.windows(2).flat_map(|w| [w[0], w[1]]).collect()),
+        Mode::LineLoop => {
+            let mut out: Vec<u32> = idx.windows(2).flat_map(|w| [w[0], w[1]]).collect();
+            if let (Some(&first), Some(&last)) = (idx.first(), idx.last()) {
+                if idx.len() > 2 {
+                    out.extend([last, first]);
+                }
+            }
+            (PrimitiveMode::Lines, out)
+        }
+        Mode::Points => (PrimitiveMode::Points, idx),
+    }
+}
+
+fn read_skin(cx: &Reader<'_, '_>, skin: &gltf::Skin<'_>) -> Result<ModelSkin, GltfError> {
+    let here = format!("/skins/{}", skin.index());
+    let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+    if joints.is_empty() {
+        return Err(ptr(format!("{here}/joints"), GltfErrorKind::Invalid("skin has no joints".into())));
+    }
+    let inverse_bind_matrices = match skin.inverse_bind_matrices() {
+        Some(acc) => {
+            let count = check_accessor(cx, &acc, "inverseBindMatrices", &[Dimensions::Mat4], F32)?;
+            if count < joints.len() {
+                return Err(ptr(
+                    format!("{here}/inverseBindMatrices"),
+                    GltfErrorKind::Accessor(format!("{count} matrices for {} joints", joints.len())),
+                ));
+            }
+            let m: Vec<Mat4> = skin
+                .reader(cx.get())
+                .read_inverse_bind_matrices()
+                .map(|it| it.map(|c| Mat4::from_cols_array_2d(&c)).collect())
+                .unwrap_or_default();
+            count_matches(m.len(), count, &format!("{here}/inverseBindMatrices"))?;
+            if m.iter().any(|m| !m.is_finite()) {
+                return Err(ptr(
+                    format!("{here}/inverseBindMatrices"),
+                    GltfErrorKind::NonFinite("matrix".into()),
+                ));
+            }
+            m
+        }
+        None => vec![Mat4::IDENTITY; joints.len()],
+    };
+    Ok(ModelSkin {
+        name: skin.name().map_or_else(|| format!("skin{}", skin.index()), str::to_owned),
+        joints,
+        inverse_bind_matrices,
+        skeleton: skin.skeleton().map(|n| n.index()),
+    })
+}
+
+/// Every joint index of a skinned mesh must name one of its skin's joints.
+fn check_skinned_meshes(model: &ImportedModel) -> Result<(), GltfError> {
+    for (i, node) in model.nodes.iter().enumerate() {
+        let (Some(m), Some(s)) = (node.mesh, node.skin) else { continue };
+        let (Some(mesh), Some(skin)) = (model.meshes.get(m), model.skins.get(s)) else { continue };
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (set, joints) in prim.joint_sets.iter().enumerate() {
+                if let Some(&bad) = joints.iter().flatten().find(|&&j| usize::from(j) >= skin.joints.len()) {
+                    return Err(ptr(
+                        format!("/meshes/{m}/primitives/{p}/attributes/JOINTS_{set}"),
+                        GltfErrorKind::IndexOutOfRange {
+                            what: format!("joint (mesh used by node {i} with skin {s})"),
+                            index: usize::from(bad),
+                            limit: skin.joints.len(),
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn read_animation(
+    cx: &Reader<'_, '_>,
+    model: &ImportedModel,
+    anim: &gltf::Animation<'_>,
+) -> Result<ModelAnimation, GltfError> {
+    let mut channels = Vec::new();
+    for channel in anim.channels() {
+        let sampler = channel.sampler();
+        let here = format!("/animations/{}/samplers/{}", anim.index(), sampler.index());
+        let node = channel.target().node().index();
+        let input = sampler.input();
+        let key_count = check_accessor(cx, &input, "animation input", &[Dimensions::Scalar], F32)?;
+        let reader = channel.reader(cx.get());
+        let times: Vec<f32> = reader.read_inputs().map(Iterator::collect).unwrap_or_default();
+        count_matches(times.len(), key_count, &format!("{here}/input"))?;
+        for (k, w) in times.windows(2).enumerate() {
+            if !(w[0] < w[1]) {
+                return Err(ptr(
+                    format!("/accessors/{}", input.index()),
+                    GltfErrorKind::Animation(format!(
+                        "key times must increase: key {k} at {} then {}",
+                        w[0], w[1]
+                    )),
+                ));
+            }
+        }
+        if times.iter().any(|t| !t.is_finite()) {
+            return Err(ptr(
+                format!("/accessors/{}", input.index()),
+                GltfErrorKind::NonFinite("key time".into()),
+            ));
+        }
+        let interpolation = match sampler.interpolation() {
+            gltf::animation::Interpolation::Step => Interpolation::Step,
+            gltf::animation::Interpolation::Linear => Interpolation::Linear,
+            gltf::animation::Interpolation::CubicSpline => Interpolation::Hermite,
+        };
+        let per_key = if interpolation == Interpolation::Hermite { 3 } else { 1 };
+        let output = sampler.output();
+        let out_here = format!("/accessors/{}", output.index());
+        let property = channel.target().property();
+        use gltf::animation::Property;
+        let (dims, types): (Dimensions, &[DataType]) = match property {
+            Property::Translation | Property::Scale => (Dimensions::Vec3, F32),
+            Property::Rotation => {
+                (Dimensions::Vec4, &[DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16])
+            }
+            Property::MorphTargetWeights => (
+                Dimensions::Scalar,
+                &[DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16],
+            ),
+        };
+        let out_count = check_accessor(cx, &output, "animation output", &[dims], types)?;
+        let targets = if property == Property::MorphTargetWeights {
+            let mesh = model.nodes.get(node).and_then(|n| n.mesh).and_then(|m| model.meshes.get(m));
+            let targets = mesh.and_then(|m| m.primitives.first()).map_or(0, |p| p.morph_targets.len());
+            if targets == 0 {
+                return Err(ptr(
+                    format!("/animations/{}/channels/{}/target", anim.index(), channel.index()),
+                    GltfErrorKind::Animation(format!(
+                        "animates morph weights of node {node}, whose mesh has no targets"
+                    )),
+                ));
+            }
+            targets
+        } else {
+            1
+        };
+        if out_count != key_count * per_key * targets {
+            return Err(ptr(
+                format!("{here}/output"),
+                GltfErrorKind::Animation(format!(
+                    "output has {out_count} elements, expected {key_count} keys × {per_key} × {targets}"
+                )),
+            ));
+        }
+        let outputs = reader.read_outputs().ok_or_else(|| {
+            ptr(format!("{here}/output"), GltfErrorKind::Accessor("output cannot be read".into()))
+        })?;
+        let target = match outputs {
+            ReadOutputs::Translations(it) => {
+                let v = finite_vec3s(it.collect(), &out_here, "translation")?;
+                count_matches(v.len(), out_count, &out_here)?;
+                ChannelTarget::Translation(make_track(&times, &v, interpolation))
+            }
+            ReadOutputs::Scales(it) => {
+                let v = finite_vec3s(it.collect(), &out_here, "scale")?;
+                count_matches(v.len(), out_count, &out_here)?;
+                ChannelTarget::Scale(make_track(&times, &v, interpolation))
+            }
+            ReadOutputs::Rotations(it) => {
+                let raw: Vec<[f32; 4]> = it.into_f32().collect();
+                count_matches(raw.len(), out_count, &out_here)?;
+                let mut v = Vec::with_capacity(raw.len());
+                for (i, q) in raw.into_iter().enumerate() {
+                    let q = Quat::from_array(q);
+                    if !q.is_finite() {
+                        return Err(ptr(&out_here, GltfErrorKind::NonFinite("rotation".into())));
+                    }
+                    // Values are normalized; CUBICSPLINE tangents (slots 0 and 2) are not.
+                    let is_value = per_key == 1 || i % 3 == 1;
+                    v.push(if is_value {
+                        q.try_normalize_quat().ok_or_else(|| {
+                            ptr(&out_here, GltfErrorKind::Animation(format!("rotation {i} has zero length")))
+                        })?
+                    } else {
+                        q
+                    });
+                }
+                ChannelTarget::Rotation(make_track(&times, &v, interpolation))
+            }
+            ReadOutputs::MorphTargetWeights(it) => {
+                let raw: Vec<f32> = it.into_f32().collect();
+                count_matches(raw.len(), out_count, &out_here)?;
+                if raw.iter().any(|w| !w.is_finite()) {
+                    return Err(ptr(&out_here, GltfErrorKind::NonFinite("morph weight".into())));
+                }
+                let groups: Vec<Vec<f32>> = raw.chunks(targets).map(<[f32]>::to_vec).collect();
+                let track = make_track(&times, &groups, interpolation);
+                ChannelTarget::Weights(WeightsTrack { targets, keys: track.keys })
+            }
+        };
+        channels.push(ModelChannel { node, target });
+    }
+    Ok(ModelAnimation {
+        name: anim.name().map_or_else(|| format!("animation{}", anim.index()), str::to_owned),
+        channels,
+    })
+}
+
+/// Builds keys from times and sampler outputs; CUBICSPLINE outputs come as
+/// (in-tangent a_k, value v_k, out-tangent b_k) per key and keep their per-second tangents.
+fn make_track<T: Clone>(times: &[f32], values: &[T], interpolation: Interpolation) -> RawTrack<T> {
+    let keys = times
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| {
+            if interpolation == Interpolation::Hermite {
+                let mut key =
+                    Key::new(f64::from(t), values[3 * k + 1].clone()).with_interpolation(interpolation);
+                key.in_tangent = Some(values[3 * k].clone());
+                key.out_tangent = Some(values[3 * k + 2].clone());
+                key
+            } else {
+                Key::new(f64::from(t), values[k].clone()).with_interpolation(interpolation)
+            }
+        })
+        .collect();
+    RawTrack::new(keys)
+}
+
+/// Normalization of quaternions read from a file.
+trait TryNormalizeQuat: Sized {
+    fn try_normalize_quat(self) -> Option<Self>;
+}
+
+impl TryNormalizeQuat for Quat {
+    fn try_normalize_quat(self) -> Option<Quat> {
+        glam::Vec4::from(self).try_normalize().map(Quat::from_vec4)
+    }
+}
