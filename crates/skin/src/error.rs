@@ -60,6 +60,8 @@ pub enum SkinError {
     NoSuchJoint { joint: usize, joint_count: usize },
     #[error("triangle {triangle}: vertex index {index} is out of range ({vertex_count} vertices)")]
     TriangleIndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
-    #[error("joint {joint} (`{name}`): {message}")]
-    Track { joint: usize, name: String, message: String },
+    #[error("joint {joint} (`{name}`), rotation track: {source}")]
+    RotationTrack { joint: usize, name: String, source: keyrig_core::TrackError },
+    #[error("skeleton root translation track: {0}")]
+    RootTranslationTrack(keyrig_core::TrackError),
 }

@@ -4,6 +4,7 @@
 //! translation; M(j) = F(j)·A(j)⁻¹ is the skinning matrix ("joint palette").
 
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
+use keyrig_core::AnimatedTrack;
 
 use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
@@ -32,6 +33,50 @@ impl Pose {
             *r = rotation;
         }
         self
+    }
+}
+
+/// Samples a scene skeleton's joint rotation tracks and root translation into [`Pose`]s. The
+/// tracks are validated once here (tangents cached by keyrig-core), not per frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScenePoseSampler {
+    rotations: Vec<AnimatedTrack<Quat>>,
+    root_translation: AnimatedTrack<Vec3>,
+}
+
+impl ScenePoseSampler {
+    /// Validates every joint's rotation track and the root translation track.
+    pub fn new(skeleton: &keyrig_core::Skeleton) -> Result<Self, SkinError> {
+        let rotations = skeleton
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(joint, j)| {
+                AnimatedTrack::new(&j.rotation).map_err(|source| SkinError::RotationTrack {
+                    joint,
+                    name: j.name.clone(),
+                    source,
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let root_translation =
+            AnimatedTrack::new(&skeleton.root_translation).map_err(SkinError::RootTranslationTrack)?;
+        Ok(ScenePoseSampler { rotations, root_translation })
+    }
+
+    /// The pose at time `t` (seconds).
+    #[must_use]
+    pub fn sample(&self, t: f64) -> Pose {
+        let mut pose = Pose::rest(self.rotations.len());
+        self.sample_into(t, &mut pose);
+        pose
+    }
+
+    /// The pose at time `t` (seconds), reusing `pose`'s allocation.
+    pub fn sample_into(&self, t: f64, pose: &mut Pose) {
+        pose.local_rotations.clear();
+        pose.local_rotations.extend(self.rotations.iter().map(|track| track.sample(t)));
+        pose.root_translation = self.root_translation.sample(t);
     }
 }
 
@@ -217,6 +262,27 @@ mod tests {
         assert!(palette.joint_position(2).abs_diff_eq(Vec3::new(3.0, 2.0, 0.0), 1e-5));
         let moved = palette.skinning[2].transform_point3(Vec3::new(6.0, 0.0, 0.0));
         assert!(moved.abs_diff_eq(Vec3::new(3.0, 3.0, 0.0), 1e-5));
+    }
+
+    #[test]
+    fn scene_tracks_sample_into_poses() {
+        use keyrig_core::{Animated, Interpolation, Key, RawTrack};
+        let mut skeleton = crate::mesh::arm_scene_skeleton();
+        let quarter = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        skeleton.joints[2].rotation = Animated {
+            value: Quat::IDENTITY,
+            track: RawTrack::new(vec![
+                Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
+                Key::new(1.0, quarter),
+            ]),
+        };
+        let sampler = ScenePoseSampler::new(&skeleton).unwrap();
+        let pose = sampler.sample(0.5);
+        assert!(pose.local_rotations[2].abs_diff_eq(Quat::from_rotation_x(std::f32::consts::FRAC_PI_4), 1e-6));
+        assert_eq!(pose.local_rotations[1], Quat::IDENTITY);
+        skeleton.joints[1].rotation.track =
+            RawTrack::new(vec![Key::new(1.0, quarter), Key::new(0.0, quarter)]);
+        assert!(matches!(ScenePoseSampler::new(&skeleton), Err(SkinError::RotationTrack { joint: 1, .. })));
     }
 
     #[test]
