@@ -10,8 +10,12 @@
 //! 4. A joint's parent is an existing joint stored before it (parents first); exactly one
 //!    root, the first joint.
 //! 5. Rotations (static values, rest rotations, keys) are not the zero quaternion.
-//! 6. Tracks: times finite and strictly increasing, values finite, T/C/B in [-1, 1], Hermite
-//!    keys carry both tangents (the rules of [`crate::track`]'s validator, reported per key).
+//! 6. Tracks: times finite and strictly increasing, values and tangents finite, T/C/B in
+//!    [-1, 1], a Hermite segment has its start key's out-tangent and its end key's in-tangent:
+//!    the rules of [`crate::track`]'s validator, but every offending key is reported, not only
+//!    the first. An `Animated` value with no problem of its own is then built with
+//!    [`AnimatedTrack::new`] and any error of it reported too, so a scene without problems
+//!    always gives valid tracks.
 //! 7. Lights: non-negative intensity and colour, a non-zero direction for directional and spot
 //!    lights, spot angles with 0 < inner ≤ cutoff ≤ 90 and dropoff ≥ 0.
 //! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
@@ -24,9 +28,26 @@ use crate::key::{Animated, Interpolation, RawTrack};
 use crate::scene::{
     Camera, DeformerSettings, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
 };
+use crate::track::{AnimatedTrack, TangentSide, TrackError, TrackValue, MIN_QUATERNION_NORM};
 
-/// Smallest quaternion length accepted as a rotation.
-const MIN_QUAT_LENGTH: f32 = 1e-6;
+/// The path of the field a [`TrackError`] of the `Animated` value at `animated_path` concerns,
+/// e.g. `objects[0].rotation` + `Unsorted { index: 4 }` → `objects[0].rotation.track[4].time`.
+#[must_use]
+pub fn track_error_path(animated_path: &str, err: &TrackError) -> String {
+    let key = |index: usize, field: &str| join(&format!("{animated_path}.track[{index}]"), field);
+    match *err {
+        TrackError::Empty => join(animated_path, "track"),
+        TrackError::Unsorted { index }
+        | TrackError::DuplicateTime { index }
+        | TrackError::NonFiniteTime { index } => key(index, "time"),
+        TrackError::NonFiniteValue { index } | TrackError::ZeroQuaternion { index } => key(index, "value"),
+        TrackError::NonFiniteTangent { index } => key(index, ""),
+        TrackError::MissingTangent { index, side: TangentSide::In } => key(index, "in_tangent"),
+        TrackError::MissingTangent { index, side: TangentSide::Out } => key(index, "out_tangent"),
+        TrackError::TcbOutOfRange { index } => key(index, "tcb"),
+        TrackError::NonFiniteStaticValue | TrackError::ZeroStaticQuaternion => join(animated_path, "value"),
+    }
+}
 
 /// A value that can sit in a key: knows its finite-ness per component.
 pub trait KeyValue: Copy {
@@ -70,7 +91,7 @@ impl KeyValue for Quat {
     }
 
     fn is_degenerate(&self) -> bool {
-        self.length() < MIN_QUAT_LENGTH
+        f64::from(self.length()) < MIN_QUATERNION_NORM
     }
 }
 
@@ -132,11 +153,20 @@ impl Checker {
         }
     }
 
-    fn animated<T: KeyValue>(&mut self, path: &str, a: &Animated<T>) {
+    /// Checks every key (reporting all problems, not only the first), then, when none was
+    /// found, builds the track with [`AnimatedTrack::new`] so that a scene without problems
+    /// always yields valid tracks.
+    fn animated<T: KeyValue + TrackValue>(&mut self, path: &str, a: &Animated<T>) {
+        let before = self.problems.len();
         if self.value(&join(path, "value"), &a.value) && a.value.is_degenerate() {
             self.push(join(path, "value"), "zero quaternion: not a rotation");
         }
         self.track(&join(path, "track"), &a.track);
+        if self.problems.len() == before {
+            if let Err(err) = AnimatedTrack::new(a) {
+                self.push(track_error_path(path, &err), err.to_string());
+            }
+        }
     }
 
     fn track<T: KeyValue>(&mut self, path: &str, track: &RawTrack<T>) {
@@ -175,14 +205,25 @@ impl Checker {
                 }
             }
             for (name, tangent) in [("in_tangent", &key.in_tangent), ("out_tangent", &key.out_tangent)] {
-                match tangent {
-                    Some(t) => {
-                        self.value(&join(&kp, name), t);
-                    }
-                    None if key.interpolation == Interpolation::Hermite => {
-                        self.push(join(&kp, name), "a Hermite key needs both tangents");
-                    }
-                    None => {}
+                if let Some(t) = tangent {
+                    self.value(&join(&kp, name), t);
+                }
+            }
+        }
+        // A Hermite segment i needs key i's out-tangent and key i+1's in-tangent.
+        for (i, pair) in track.keys.windows(2).enumerate() {
+            if pair[0].interpolation == Interpolation::Hermite {
+                if pair[0].out_tangent.is_none() {
+                    self.push(
+                        format!("{path}[{i}].out_tangent"),
+                        "a Hermite segment needs its start key's out_tangent",
+                    );
+                }
+                if pair[1].in_tangent.is_none() {
+                    self.push(
+                        format!("{path}[{}].in_tangent", i + 1),
+                        "a Hermite segment needs its end key's in_tangent",
+                    );
                 }
             }
         }
@@ -429,6 +470,7 @@ mod tests {
             Key::new(1.0, Vec3::new(0.0, f32::NEG_INFINITY, 0.0)),
             Key::new(0.5, Vec3::ONE).with_tcb(Tcb::new(2.0, 0.0, 0.0)),
             Key::new(0.5, Vec3::ONE).with_interpolation(Interpolation::Hermite),
+            Key::new(2.0, Vec3::ONE),
         ]);
         o.rotation.track = RawTrack::new(vec![Key::new(0.0, Quat::from_xyzw(0.0, 0.0, 0.0, 0.0))]);
         s.objects.push(o);
@@ -441,13 +483,33 @@ mod tests {
                 "objects[0].translation.track[2].time",
                 "objects[0].translation.track[2].tcb.tension",
                 "objects[0].translation.track[3].time",
-                "objects[0].translation.track[3].in_tangent",
                 "objects[0].translation.track[3].out_tangent",
+                "objects[0].translation.track[4].in_tangent",
                 "objects[0].rotation.track[0].value",
             ]
         );
         assert!(problems[1].message.contains("out of order"), "{}", problems[1].message);
         assert!(problems[3].message.contains("duplicate"), "{}", problems[3].message);
+    }
+
+    #[test]
+    fn valid_scene_means_valid_tracks() {
+        // Every `Animated` of a scene without problems builds with `AnimatedTrack::new`.
+        let mut a = Animated::constant(Vec3::ZERO);
+        a.track = RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(1.0, Vec3::ONE)]);
+        let mut c = Checker { problems: Vec::new() };
+        c.animated("a", &a);
+        assert!(c.problems.is_empty());
+        assert!(AnimatedTrack::new(&a).is_ok());
+        assert_eq!(
+            track_error_path("objects[1].rotation", &TrackError::Unsorted { index: 4 }),
+            "objects[1].rotation.track[4].time"
+        );
+        assert_eq!(
+            track_error_path("a", &TrackError::MissingTangent { index: 2, side: TangentSide::Out }),
+            "a.track[2].out_tangent"
+        );
+        assert_eq!(track_error_path("a", &TrackError::NonFiniteStaticValue), "a.value");
     }
 
     #[test]
