@@ -1,6 +1,7 @@
 //! keyrig-core: keys, tracks, Kochanek–Bartels (TCB) and Squad interpolation, and the scene
 //! document. Pure: no file I/O, no GPU, no UI.
 
+pub mod channel;
 pub mod key;
 pub mod quat;
 pub mod scene;

@@ -1,0 +1,591 @@
+//! Channel paths: how a user names one animated value of a scene, e.g.
+//! `object/Arm/joint/elbow/rotation` or `light/Key/intensity` (docs/channels.md).
+//!
+//! ```text
+//! object/<object>/translation        Vec3   the object's translation
+//! object/<object>/rotation           Quat   the object's rotation
+//! object/<object>/scale              Vec3   the object's scale
+//! object/<object>/root_translation   Vec3   translation of the skeleton's root joint
+//! object/<object>/joint/<joint>/rotation  Quat   a joint's animated local rotation T(j)
+//! light/<light>/position             Vec3
+//! light/<light>/direction            Vec3
+//! light/<light>/colour               Vec3   linear RGB
+//! light/<light>/intensity            f32
+//! ```
+//!
+//! [`ChannelPath::parse`] checks the syntax; [`ChannelPath::resolve`] finds the value in a
+//! [`Scene`] and validates its track into a [`Channel`] that samples it. Errors name what is
+//! unknown and list what exists.
+
+use std::fmt;
+
+use glam::{EulerRot, Quat, Vec3};
+
+use crate::key::Animated;
+use crate::scene::{Object, Scene};
+use crate::track::{AnimatedTrack, TrackError};
+use crate::validate::track_error_path;
+
+/// Properties of an object.
+pub const OBJECT_PROPERTIES: [&str; 5] = ["translation", "rotation", "scale", "root_translation", "joint"];
+/// Properties of a light.
+pub const LIGHT_PROPERTIES: [&str; 4] = ["position", "direction", "colour", "intensity"];
+
+/// One animated value of an object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ObjectProperty {
+    Translation,
+    Rotation,
+    Scale,
+    RootTranslation,
+}
+
+impl ObjectProperty {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ObjectProperty::Translation => "translation",
+            ObjectProperty::Rotation => "rotation",
+            ObjectProperty::Scale => "scale",
+            ObjectProperty::RootTranslation => "root_translation",
+        }
+    }
+}
+
+/// One animated value of a light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LightProperty {
+    Position,
+    Direction,
+    Colour,
+    Intensity,
+}
+
+impl LightProperty {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            LightProperty::Position => "position",
+            LightProperty::Direction => "direction",
+            LightProperty::Colour => "colour",
+            LightProperty::Intensity => "intensity",
+        }
+    }
+}
+
+/// A parsed channel path (names, not yet looked up in a scene).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum ChannelPath {
+    Object { object: String, property: ObjectProperty },
+    Joint { object: String, joint: String },
+    Light { light: String, property: LightProperty },
+}
+
+impl fmt::Display for ChannelPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ChannelPath::Object { object, property } => write!(f, "object/{object}/{}", property.name()),
+            ChannelPath::Joint { object, joint } => write!(f, "object/{object}/joint/{joint}/rotation"),
+            ChannelPath::Light { light, property } => write!(f, "light/{light}/{}", property.name()),
+        }
+    }
+}
+
+/// Why a channel path cannot be parsed or resolved.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ChannelError {
+    #[error(
+        "channel path {path:?}: {problem}; expected object/<name>/<property>, \
+         object/<name>/joint/<joint>/rotation or light/<name>/<property>"
+    )]
+    Syntax { path: String, problem: String },
+
+    #[error("channel path {path:?}: unknown {owner} property {property:?}; {owner} properties are: {}", expected.join(", "))]
+    UnknownProperty { path: String, owner: &'static str, property: String, expected: Vec<&'static str> },
+
+    #[error("channel path {path:?}: no object named {name:?}; {}", listing("objects", available))]
+    UnknownObject { path: String, name: String, available: Vec<String> },
+
+    #[error(
+        "channel path {path:?}: object {object:?} has no skeleton, so it has no joints or root_translation"
+    )]
+    NoSkeleton { path: String, object: String },
+
+    #[error(
+        "channel path {path:?}: object {object:?} has no joint named {name:?}; {}",
+        listing("joints", available)
+    )]
+    UnknownJoint { path: String, object: String, name: String, available: Vec<String> },
+
+    #[error("channel path {path:?}: no light named {name:?}; {}", listing("lights", available))]
+    UnknownLight { path: String, name: String, available: Vec<String> },
+
+    /// The channel exists but its keys are invalid.
+    #[error("channel {path}: {field}: {source}")]
+    InvalidTrack { path: String, field: String, source: TrackError },
+}
+
+fn listing(what: &str, names: &[String]) -> String {
+    if names.is_empty() {
+        format!("the scene has no {what}")
+    } else {
+        let quoted: Vec<String> = names.iter().map(|n| format!("{n:?}")).collect();
+        format!("{what}: {}", quoted.join(", "))
+    }
+}
+
+impl ChannelPath {
+    /// Parses `object/<name>/<property>`, `object/<name>/joint/<joint>/rotation` or
+    /// `light/<name>/<property>`. Names cannot contain `/`.
+    ///
+    /// # Errors
+    /// [`ChannelError::Syntax`] or [`ChannelError::UnknownProperty`], naming what is wrong.
+    pub fn parse(path: &str) -> Result<Self, ChannelError> {
+        let syntax =
+            |problem: &str| ChannelError::Syntax { path: path.to_string(), problem: problem.to_string() };
+        let parts: Vec<&str> = path.split('/').collect();
+        if parts.iter().any(|p| p.is_empty()) {
+            return Err(syntax("empty part (check for a leading, trailing or doubled '/')"));
+        }
+        match parts.as_slice() {
+            ["object", object, "joint", joint, property] => {
+                if *property == "rotation" {
+                    Ok(ChannelPath::Joint { object: (*object).to_string(), joint: (*joint).to_string() })
+                } else {
+                    Err(ChannelError::UnknownProperty {
+                        path: path.to_string(),
+                        owner: "joint",
+                        property: (*property).to_string(),
+                        expected: vec!["rotation"],
+                    })
+                }
+            }
+            ["object", _, "joint", ..] => {
+                Err(syntax("a joint channel is object/<name>/joint/<joint>/rotation"))
+            }
+            ["object", object, property] => {
+                let property = match *property {
+                    "translation" => ObjectProperty::Translation,
+                    "rotation" => ObjectProperty::Rotation,
+                    "scale" => ObjectProperty::Scale,
+                    "root_translation" => ObjectProperty::RootTranslation,
+                    other => {
+                        return Err(ChannelError::UnknownProperty {
+                            path: path.to_string(),
+                            owner: "object",
+                            property: other.to_string(),
+                            expected: OBJECT_PROPERTIES.to_vec(),
+                        })
+                    }
+                };
+                Ok(ChannelPath::Object { object: (*object).to_string(), property })
+            }
+            ["light", light, property] => {
+                let property = match *property {
+                    "position" => LightProperty::Position,
+                    "direction" => LightProperty::Direction,
+                    "colour" | "color" => LightProperty::Colour,
+                    "intensity" => LightProperty::Intensity,
+                    other => {
+                        return Err(ChannelError::UnknownProperty {
+                            path: path.to_string(),
+                            owner: "light",
+                            property: other.to_string(),
+                            expected: LIGHT_PROPERTIES.to_vec(),
+                        })
+                    }
+                };
+                Ok(ChannelPath::Light { light: (*light).to_string(), property })
+            }
+            ["object" | "light", _] | ["object" | "light"] => Err(syntax("missing property")),
+            ["object" | "light", ..] => Err(syntax("too many parts")),
+            [first, ..] => Err(syntax(&format!("unknown kind {first:?} (expected \"object\" or \"light\")"))),
+            [] => Err(syntax("empty path")),
+        }
+    }
+
+    /// Looks the channel up in `scene` and validates its track.
+    ///
+    /// # Errors
+    /// [`ChannelError`] naming the unknown object, joint or light and listing those that
+    /// exist, or [`ChannelError::InvalidTrack`] with the field path of the bad key.
+    pub fn resolve(&self, scene: &Scene) -> Result<Channel, ChannelError> {
+        let path = self.to_string();
+        let find_object = |name: &str| -> Result<(usize, &Object), ChannelError> {
+            scene.objects.iter().enumerate().find(|(_, o)| o.name == name).ok_or_else(|| {
+                ChannelError::UnknownObject {
+                    path: path.clone(),
+                    name: name.to_string(),
+                    available: scene.objects.iter().map(|o| o.name.clone()).collect(),
+                }
+            })
+        };
+        let no_skeleton =
+            |object: &Object| ChannelError::NoSkeleton { path: path.clone(), object: object.name.clone() };
+        match self {
+            ChannelPath::Object { object, property } => {
+                let (i, o) = find_object(object)?;
+                let field = format!("objects[{i}]");
+                match property {
+                    ObjectProperty::Translation => {
+                        Channel::build(path, field + ".translation", &o.translation, ValueKind::Position)
+                    }
+                    ObjectProperty::Rotation => {
+                        Channel::build(path, field + ".rotation", &o.rotation, ValueKind::Rotation)
+                    }
+                    ObjectProperty::Scale => {
+                        Channel::build(path, field + ".scale", &o.scale, ValueKind::Position)
+                    }
+                    ObjectProperty::RootTranslation => {
+                        let skeleton = o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
+                        Channel::build(
+                            path,
+                            field + ".skeleton.root_translation",
+                            &skeleton.root_translation,
+                            ValueKind::Position,
+                        )
+                    }
+                }
+            }
+            ChannelPath::Joint { object, joint } => {
+                let (i, o) = find_object(object)?;
+                let skeleton = o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
+                let (j, found) =
+                    skeleton.joints.iter().enumerate().find(|(_, j)| j.name == *joint).ok_or_else(|| {
+                        ChannelError::UnknownJoint {
+                            path: path.clone(),
+                            object: o.name.clone(),
+                            name: joint.clone(),
+                            available: skeleton.joints.iter().map(|j| j.name.clone()).collect(),
+                        }
+                    })?;
+                let field = format!("objects[{i}].skeleton.joints[{j}].rotation");
+                Channel::build(path, field, &found.rotation, ValueKind::Rotation)
+            }
+            ChannelPath::Light { light, property } => {
+                let (i, l) =
+                    scene.lights.iter().enumerate().find(|(_, l)| l.name == *light).ok_or_else(|| {
+                        ChannelError::UnknownLight {
+                            path: path.clone(),
+                            name: light.clone(),
+                            available: scene.lights.iter().map(|l| l.name.clone()).collect(),
+                        }
+                    })?;
+                let field = format!("lights[{i}].{}", property.name());
+                match property {
+                    LightProperty::Position => Channel::build(path, field, &l.position, ValueKind::Position),
+                    LightProperty::Direction => {
+                        Channel::build(path, field, &l.direction, ValueKind::Position)
+                    }
+                    LightProperty::Colour => Channel::build(path, field, &l.colour, ValueKind::Colour),
+                    LightProperty::Intensity => Channel::build(path, field, &l.intensity, ValueKind::Scalar),
+                }
+            }
+        }
+    }
+}
+
+/// Every channel of `scene`, objects first (translation, rotation, scale, root translation,
+/// joints in order), then lights.
+#[must_use]
+pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        for property in [ObjectProperty::Translation, ObjectProperty::Rotation, ObjectProperty::Scale] {
+            out.push(ChannelPath::Object { object: o.name.clone(), property });
+        }
+        if let Some(skeleton) = &o.skeleton {
+            out.push(ChannelPath::Object {
+                object: o.name.clone(),
+                property: ObjectProperty::RootTranslation,
+            });
+            for j in &skeleton.joints {
+                out.push(ChannelPath::Joint { object: o.name.clone(), joint: j.name.clone() });
+            }
+        }
+    }
+    for l in &scene.lights {
+        for property in [
+            LightProperty::Position,
+            LightProperty::Direction,
+            LightProperty::Colour,
+            LightProperty::Intensity,
+        ] {
+            out.push(ChannelPath::Light { light: l.name.clone(), property });
+        }
+    }
+    out
+}
+
+/// What a channel's values mean; decides the column names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ValueKind {
+    /// f32.
+    Scalar,
+    /// Vec3 in x, y, z (positions, directions, scales).
+    Position,
+    /// Vec3 as linear r, g, b.
+    Colour,
+    /// Unit quaternion.
+    Rotation,
+}
+
+/// How rotations are printed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RotationFormat {
+    /// The unit quaternion x, y, z, w.
+    #[default]
+    Quat,
+    /// Euler angles in degrees, extrinsic X then Y then Z (q = Rz·Ry·Rx, Blender's "XYZ Euler").
+    EulerDegrees,
+}
+
+/// A sampled value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ChannelValue {
+    Scalar(f32),
+    Vec3(Vec3),
+    Quat(Quat),
+}
+
+impl ChannelValue {
+    /// The value as numbers in the order of [`Channel::column_names`].
+    #[must_use]
+    pub fn components(self, rotation: RotationFormat) -> Vec<f64> {
+        match self {
+            ChannelValue::Scalar(v) => vec![f64::from(v)],
+            ChannelValue::Vec3(v) => v.to_array().map(f64::from).to_vec(),
+            ChannelValue::Quat(q) => match rotation {
+                RotationFormat::Quat => q.to_array().map(f64::from).to_vec(),
+                RotationFormat::EulerDegrees => {
+                    let (x, y, z) = q.as_dquat().to_euler(EulerRot::XYZEx);
+                    vec![x.to_degrees(), y.to_degrees(), z.to_degrees()]
+                }
+            },
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Sampler {
+    Scalar(AnimatedTrack<f32>),
+    Vec3(AnimatedTrack<Vec3>),
+    Quat(AnimatedTrack<Quat>),
+}
+
+/// A resolved channel: its validated track and what it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    /// The channel path as the user would write it.
+    pub path: String,
+    /// The field path of its `Animated` value in the scene (`objects[0].rotation`).
+    pub field: String,
+    pub kind: ValueKind,
+    /// Number of keys (0 when not animated).
+    pub key_count: usize,
+    sampler: Sampler,
+}
+
+/// Value types a channel can hold.
+trait IntoSampler: Sized + crate::track::TrackValue {
+    fn sampler(track: AnimatedTrack<Self>) -> Sampler;
+}
+
+impl IntoSampler for f32 {
+    fn sampler(track: AnimatedTrack<Self>) -> Sampler {
+        Sampler::Scalar(track)
+    }
+}
+
+impl IntoSampler for Vec3 {
+    fn sampler(track: AnimatedTrack<Self>) -> Sampler {
+        Sampler::Vec3(track)
+    }
+}
+
+impl IntoSampler for Quat {
+    fn sampler(track: AnimatedTrack<Self>) -> Sampler {
+        Sampler::Quat(track)
+    }
+}
+
+impl Channel {
+    fn build<T: IntoSampler>(
+        path: String,
+        field: String,
+        animated: &Animated<T>,
+        kind: ValueKind,
+    ) -> Result<Self, ChannelError> {
+        let track = AnimatedTrack::new(animated).map_err(|source| ChannelError::InvalidTrack {
+            path: path.clone(),
+            field: track_error_path(&field, &source),
+            source,
+        })?;
+        Ok(Channel { path, field, kind, key_count: animated.track.len(), sampler: T::sampler(track) })
+    }
+
+    /// The value at `t` seconds (clamped to the first/last key outside the keyed range).
+    #[must_use]
+    pub fn sample(&self, t: f64) -> ChannelValue {
+        match &self.sampler {
+            Sampler::Scalar(s) => ChannelValue::Scalar(s.sample(t)),
+            Sampler::Vec3(s) => ChannelValue::Vec3(s.sample(t)),
+            Sampler::Quat(s) => ChannelValue::Quat(s.sample(t)),
+        }
+    }
+
+    /// First and last key time; `None` when not animated.
+    #[must_use]
+    pub fn domain(&self) -> Option<(f64, f64)> {
+        match &self.sampler {
+            Sampler::Scalar(s) => s.domain(),
+            Sampler::Vec3(s) => s.domain(),
+            Sampler::Quat(s) => s.domain(),
+        }
+    }
+
+    /// Column names of [`ChannelValue::components`] for this channel.
+    #[must_use]
+    pub fn column_names(&self, rotation: RotationFormat) -> &'static [&'static str] {
+        match (self.kind, rotation) {
+            (ValueKind::Scalar, _) => &["value"],
+            (ValueKind::Position, _) => &["x", "y", "z"],
+            (ValueKind::Colour, _) => &["r", "g", "b"],
+            (ValueKind::Rotation, RotationFormat::Quat) => &["x", "y", "z", "w"],
+            (ValueKind::Rotation, RotationFormat::EulerDegrees) => &["x_deg", "y_deg", "z_deg"],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::key::{Key, RawTrack};
+    use crate::scene::{Joint, Light, LightKind, Skeleton};
+
+    fn scene() -> Scene {
+        let mut arm = Object::new("Arm");
+        arm.translation.track =
+            RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(1.0, Vec3::new(2.0, 0.0, 0.0))]);
+        arm.skeleton = Some(Skeleton {
+            joints: vec![Joint {
+                name: "elbow".into(),
+                parent: None,
+                rest_translation: Vec3::ZERO,
+                rest_rotation: Quat::IDENTITY,
+                rotation: Animated {
+                    value: Quat::IDENTITY,
+                    track: RawTrack::new(vec![
+                        Key::new(0.0, Quat::IDENTITY),
+                        Key::new(1.0, Quat::from_rotation_x(90f32.to_radians())),
+                    ]),
+                },
+            }],
+            root_translation: Animated::constant(Vec3::ZERO),
+        });
+        let mut scene = Scene::default();
+        scene.objects.push(arm);
+        scene.objects.push(Object::new("Cube"));
+        scene.lights.push(Light {
+            name: "Key".into(),
+            kind: LightKind::Point,
+            enabled: true,
+            position: Animated::constant(Vec3::Y),
+            direction: Animated::constant(Vec3::NEG_Y),
+            colour: Animated::constant(Vec3::ONE),
+            intensity: Animated::constant(2.0),
+        });
+        scene
+    }
+
+    #[test]
+    fn parse_and_display_round_trip() {
+        for text in [
+            "object/Arm/translation",
+            "object/Arm/rotation",
+            "object/Arm/scale",
+            "object/Arm/root_translation",
+            "object/Arm/joint/elbow/rotation",
+            "light/Key/position",
+            "light/Key/direction",
+            "light/Key/colour",
+            "light/Key/intensity",
+        ] {
+            assert_eq!(ChannelPath::parse(text).map(|p| p.to_string()), Ok(text.to_string()));
+        }
+        assert_eq!(
+            ChannelPath::parse("light/Key/color").map(|p| p.to_string()),
+            Ok("light/Key/colour".into())
+        );
+    }
+
+    #[test]
+    fn parse_errors_name_the_problem() {
+        let err = |s: &str| ChannelPath::parse(s).unwrap_err().to_string();
+        assert!(err("object/Arm/size")
+            .contains("unknown object property \"size\"; object properties are: translation"));
+        assert!(err("light/Key/rotation")
+            .contains("light properties are: position, direction, colour, intensity"));
+        assert!(err("object/Arm/joint/elbow/translation").contains("unknown joint property \"translation\""));
+        assert!(err("camera/x/y").contains("unknown kind \"camera\""));
+        assert!(err("object/Arm").contains("missing property"));
+        assert!(err("object//rotation").contains("empty part"));
+        assert!(err("object/Arm/joint/elbow").contains("object/<name>/joint/<joint>/rotation"));
+        assert!(err("").contains("empty part"));
+    }
+
+    #[test]
+    fn resolve_errors_list_what_exists() {
+        let s = scene();
+        let err = |p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(&s)).unwrap_err().to_string();
+        assert!(err("object/Leg/rotation").contains("no object named \"Leg\"; objects: \"Arm\", \"Cube\""));
+        assert!(err("object/Arm/joint/knee/rotation").contains("no joint named \"knee\"; joints: \"elbow\""));
+        assert!(err("object/Cube/root_translation").contains("object \"Cube\" has no skeleton"));
+        assert!(err("light/Fill/intensity").contains("no light named \"Fill\"; lights: \"Key\""));
+    }
+
+    #[test]
+    fn samples_and_formats() {
+        let s = scene();
+        let resolve = |p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(&s)).unwrap();
+        let t = resolve("object/Arm/translation");
+        assert_eq!(t.key_count, 2);
+        assert_eq!(t.field, "objects[0].translation");
+        assert_eq!(t.domain(), Some((0.0, 1.0)));
+        assert_eq!(t.sample(1.0), ChannelValue::Vec3(Vec3::new(2.0, 0.0, 0.0)));
+        assert_eq!(t.column_names(RotationFormat::Quat), ["x", "y", "z"]);
+
+        let r = resolve("object/Arm/joint/elbow/rotation");
+        assert_eq!(r.field, "objects[0].skeleton.joints[0].rotation");
+        let euler = r.sample(1.0).components(RotationFormat::EulerDegrees);
+        assert!(
+            (euler[0] - 90.0).abs() < 1e-4 && euler[1].abs() < 1e-4 && euler[2].abs() < 1e-4,
+            "{euler:?}"
+        );
+        assert_eq!(r.sample(0.0).components(RotationFormat::Quat), vec![0.0, 0.0, 0.0, 1.0]);
+
+        let i = resolve("light/Key/intensity");
+        assert_eq!(i.key_count, 0);
+        assert_eq!(i.domain(), None);
+        assert_eq!(i.sample(5.0).components(RotationFormat::Quat), vec![2.0]);
+        assert_eq!(resolve("light/Key/colour").column_names(RotationFormat::Quat), ["r", "g", "b"]);
+    }
+
+    #[test]
+    fn invalid_track_names_the_key() {
+        let mut s = scene();
+        s.objects[0].translation.track.keys[1].time = -1.0;
+        let err = ChannelPath::parse("object/Arm/translation").and_then(|c| c.resolve(&s)).unwrap_err();
+        assert!(
+            matches!(&err, ChannelError::InvalidTrack { field, .. } if field == "objects[0].translation.track[1].time")
+        );
+    }
+
+    #[test]
+    fn lists_every_channel() {
+        let names: Vec<String> = list_channels(&scene()).iter().map(ToString::to_string).collect();
+        assert_eq!(names.len(), 3 + 2 + 3 + 4);
+        assert!(names.contains(&"object/Arm/joint/elbow/rotation".to_string()));
+        assert!(!names.contains(&"object/Cube/root_translation".to_string()));
+    }
+}
