@@ -71,11 +71,11 @@ fn check_mesh(gpu: &GpuContext, skinner: &GpuSkinner, kind: ProceduralMesh) {
             let mut worst_normal = (0.0f32, 0usize);
             for (i, v) in out.iter().enumerate() {
                 let d = (v.position() - cpu.positions[i]).length();
-                if !(d <= worst.0) {
+                if d > worst.0 || d.is_nan() {
                     worst = (d, i);
                 }
                 let dn = (v.normal() - cpu.normals[i].normalize_or_zero()).length();
-                if !(dn <= worst_normal.0) {
+                if dn > worst_normal.0 || dn.is_nan() {
                     worst_normal = (dn, i);
                 }
             }

@@ -1,0 +1,863 @@
+//! The renderer: meshes uploaded once, then per frame a compute pass per deformed mesh and a
+//! render pass into a [`Viewport`] (an offscreen colour + depth target with 4× MSAA).
+//!
+//! The same code runs headless ([`crate::HeadlessRenderer`], its own device) and inside the
+//! editor (eframe's device and queue, the viewport's colour texture shown as an egui image).
+
+use std::collections::HashMap;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use keyrig_core::{Camera, DeformerKind, LightKind};
+
+use crate::camera;
+use crate::gpu::with_error_scope;
+use crate::overlay::{self, LineVertex, Lines, MotionPath, SkeletonOverlay};
+use crate::skinning::{GpuSkinner, JointPose, MorphBuffers, SkinBuffers, SkinMeshInput, SkinnedVertex};
+use crate::RenderError;
+
+/// Identifies an uploaded mesh; chosen by the caller (e.g. the scene object's index).
+pub type MeshId = u64;
+
+/// Depth buffer format of every viewport.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Samples per pixel (4 is supported by every WebGPU adapter for the formats used here).
+pub const SAMPLE_COUNT: u32 = 4;
+/// Most lights a frame can use; further lights are ignored (and counted in [`FrameStats`]).
+pub const MAX_LIGHTS: usize = 8;
+/// Stride of the per-object uniforms (the largest `min_uniform_buffer_offset_alignment`).
+const OBJECT_STRIDE: u64 = 256;
+
+/// Mesh data to upload.
+#[derive(Clone, Copy, Debug)]
+pub enum MeshData<'a> {
+    /// A mesh that does not deform (positions and normals as drawn).
+    Static { vertices: &'a [SkinnedVertex], indices: &'a [u32] },
+    /// A skinned mesh, deformed each frame by a compute pass.
+    Skinned { skin: SkinMeshInput<'a>, indices: &'a [u32] },
+    /// A vertex-animated (MD2) mesh: all frames, interpolated each frame by a compute pass.
+    Morph { frames: &'a [Vec<SkinnedVertex>], indices: &'a [u32] },
+}
+
+/// How meshes are drawn (seed text 002's render styles).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum RenderStyle {
+    #[default]
+    Solid,
+    Wireframe,
+    Points,
+}
+
+impl RenderStyle {
+    pub const ALL: [RenderStyle; 3] = [RenderStyle::Solid, RenderStyle::Wireframe, RenderStyle::Points];
+
+    /// `solid`, `wireframe`, `points`.
+    #[must_use]
+    pub fn cli_name(self) -> &'static str {
+        match self {
+            RenderStyle::Solid => "solid",
+            RenderStyle::Wireframe => "wireframe",
+            RenderStyle::Points => "points",
+        }
+    }
+
+    #[must_use]
+    pub fn from_cli_name(name: &str) -> Option<Self> {
+        RenderStyle::ALL.into_iter().find(|s| s.cli_name() == name)
+    }
+}
+
+/// How a mesh is deformed this frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Deform {
+    /// Drawn as uploaded (static meshes; skinned/morph meshes keep their last output).
+    None,
+    /// Skin with `deformer` and one [`JointPose`] per joint.
+    Skin { deformer: DeformerKind, joints: Vec<JointPose> },
+    /// Interpolate morph frames `frame_a` → `frame_b` by `t` in 0..=1.
+    Morph { frame_a: u32, frame_b: u32, t: f32 },
+}
+
+/// One mesh drawn in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DrawItem {
+    pub mesh: MeshId,
+    /// Object transform: world space from the mesh's model space.
+    pub world_from_model: Mat4,
+    pub deform: Deform,
+    /// Linear RGB albedo.
+    pub colour: Vec3,
+    pub selected: bool,
+}
+
+/// A light's values at the frame's time (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightInput {
+    pub kind: LightKind,
+    pub position: Vec3,
+    /// The direction the light shines in (need not be unit).
+    pub direction: Vec3,
+    /// Linear RGB.
+    pub colour: Vec3,
+    pub intensity: f32,
+}
+
+/// Everything one frame needs; built by [`crate::scene_frame`] from a scene, or by hand.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameInput {
+    pub camera: Camera,
+    pub style: RenderStyle,
+    /// Linear RGB ambient light.
+    pub ambient: Vec3,
+    pub lights: Vec<LightInput>,
+    pub items: Vec<DrawItem>,
+    /// Ground grid on y = 0 with this spacing (world units); `None` hides it.
+    pub grid_spacing: Option<f32>,
+    pub skeletons: Vec<SkeletonOverlay>,
+    pub motion_paths: Vec<MotionPath>,
+    /// Linear RGB background.
+    pub background: Vec3,
+}
+
+impl FrameInput {
+    /// An empty frame seen by `camera`: solid style, default grid, dark background.
+    #[must_use]
+    pub fn new(camera: Camera) -> Self {
+        FrameInput {
+            camera,
+            style: RenderStyle::Solid,
+            ambient: Vec3::splat(0.1),
+            lights: Vec::new(),
+            items: Vec::new(),
+            grid_spacing: Some(overlay::grid_spacing_for(camera.distance)),
+            skeletons: Vec::new(),
+            motion_paths: Vec::new(),
+            background: Vec3::new(0.018, 0.02, 0.025),
+        }
+    }
+}
+
+/// What a frame cost: bytes written to the GPU and work done.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameStats {
+    /// Joint data of skinned meshes (176 bytes per joint per skinned mesh).
+    pub joint_bytes: u64,
+    /// Morph parameters (16 bytes per morphing mesh).
+    pub morph_bytes: u64,
+    /// Camera, lights and per-object uniforms.
+    pub uniform_bytes: u64,
+    /// Overlay line vertices (grid, skeletons, motion paths).
+    pub overlay_bytes: u64,
+    /// Vertices run through a compute pass.
+    pub deformed_vertices: u64,
+    pub draw_calls: u32,
+    /// Lights beyond [`MAX_LIGHTS`] that were not used.
+    pub lights_dropped: u32,
+}
+
+impl FrameStats {
+    /// Every byte written to the GPU this frame.
+    #[must_use]
+    pub fn bytes_uploaded(&self) -> u64 {
+        self.joint_bytes + self.morph_bytes + self.uniform_bytes + self.overlay_bytes
+    }
+}
+
+/// An offscreen render target: MSAA colour + depth, resolved into a single-sample colour
+/// texture that can be read back or shown as an egui texture.
+pub struct Viewport {
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    msaa_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    resolved: wgpu::Texture,
+    resolved_view: wgpu::TextureView,
+}
+
+impl Viewport {
+    /// Creates the textures. The resolved colour texture has `TEXTURE_BINDING | COPY_SRC`
+    /// usage so the editor can sample it and headless rendering can read it back.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidSize`] for a zero size or one beyond the device's limit.
+    pub fn new(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        format: wgpu::TextureFormat,
+    ) -> Result<Self, RenderError> {
+        let max = device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 {
+            return Err(RenderError::InvalidSize {
+                width,
+                height,
+                reason: "width and height must be at least 1".into(),
+            });
+        }
+        if width > max || height > max {
+            return Err(RenderError::InvalidSize {
+                width,
+                height,
+                reason: format!("the GPU allows at most {max} pixels per side"),
+            });
+        }
+        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+        let texture = |label, format, samples, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let msaa =
+            texture("keyrig viewport msaa", format, SAMPLE_COUNT, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let depth = texture(
+            "keyrig viewport depth",
+            DEPTH_FORMAT,
+            SAMPLE_COUNT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let resolved = texture(
+            "keyrig viewport colour",
+            format,
+            1,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        Ok(Viewport {
+            width,
+            height,
+            format,
+            msaa_view: msaa.create_view(&Default::default()),
+            depth_view: depth.create_view(&Default::default()),
+            resolved_view: resolved.create_view(&Default::default()),
+            resolved,
+        })
+    }
+
+    #[must_use]
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    #[must_use]
+    pub fn format(&self) -> wgpu::TextureFormat {
+        self.format
+    }
+
+    /// The finished image (after [`Renderer::render`]); register it with egui-wgpu.
+    #[must_use]
+    pub fn color_view(&self) -> &wgpu::TextureView {
+        &self.resolved_view
+    }
+
+    #[must_use]
+    pub fn color_texture(&self) -> &wgpu::Texture {
+        &self.resolved
+    }
+}
+
+enum Deformation {
+    Static(wgpu::Buffer),
+    Skinned(SkinBuffers),
+    Morph(MorphBuffers),
+}
+
+struct GpuMesh {
+    deformation: Deformation,
+    vertex_count: u32,
+    triangles: wgpu::Buffer,
+    triangle_index_count: u32,
+    edges: wgpu::Buffer,
+    edge_index_count: u32,
+}
+
+impl GpuMesh {
+    fn vertex_buffer(&self) -> &wgpu::Buffer {
+        match &self.deformation {
+            Deformation::Static(buffer) => buffer,
+            Deformation::Skinned(skin) => &skin.output,
+            Deformation::Morph(morph) => &morph.output,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuLight {
+    position: [f32; 4],
+    direction: [f32; 4],
+    radiance: [f32; 4],
+    spot: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuGlobals {
+    clip_from_world: [[f32; 4]; 4],
+    camera_position: [f32; 4],
+    ambient: [f32; 4],
+    counts: [u32; 4],
+    lights: [GpuLight; MAX_LIGHTS],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuObject {
+    world_from_model: [[f32; 4]; 4],
+    normal_from_model: [[f32; 4]; 4],
+    colour: [f32; 4],
+    flags: [f32; 4],
+}
+
+fn gpu_light(light: &LightInput) -> GpuLight {
+    let direction = light.direction.normalize_or(Vec3::NEG_Y);
+    let (kind, spot) = match light.kind {
+        LightKind::Directional => (0.0, [0.0; 4]),
+        LightKind::Point => (1.0, [0.0; 4]),
+        LightKind::Spot { cutoff_deg, inner_angle_deg, dropoff } => {
+            let cutoff = cutoff_deg.clamp(0.0, 180.0);
+            let inner = inner_angle_deg.clamp(0.0, cutoff);
+            (2.0, [cutoff.to_radians().cos(), inner.to_radians().cos(), dropoff.max(0.0), 0.0])
+        }
+    };
+    GpuLight {
+        position: light.position.extend(kind).to_array(),
+        direction: direction.extend(0.0).to_array(),
+        radiance: (light.colour * light.intensity).extend(1.0).to_array(),
+        spot,
+    }
+}
+
+/// The wgpu renderer. Create once per device; upload meshes; render frames into viewports.
+pub struct Renderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    color_format: wgpu::TextureFormat,
+    skinner: GpuSkinner,
+    solid: wgpu::RenderPipeline,
+    wireframe: wgpu::RenderPipeline,
+    points: wgpu::RenderPipeline,
+    lines_depth: wgpu::RenderPipeline,
+    lines_on_top: wgpu::RenderPipeline,
+    globals: wgpu::Buffer,
+    globals_bind_group: wgpu::BindGroup,
+    object_layout: wgpu::BindGroupLayout,
+    objects: wgpu::Buffer,
+    objects_bind_group: wgpu::BindGroup,
+    object_capacity: u64,
+    line_buffer: wgpu::Buffer,
+    line_capacity: u64,
+    meshes: HashMap<MeshId, GpuMesh>,
+}
+
+impl Renderer {
+    /// Builds the pipelines for viewports of `color_format` (headless uses
+    /// `Rgba8UnormSrgb`; the shaders write linear colour, so use an sRGB format).
+    #[must_use]
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, color_format: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("keyrig draw.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/draw.wgsl").into()),
+        });
+        let uniform_layout = |label, dynamic| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: dynamic,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                }],
+            })
+        };
+        let globals_layout = uniform_layout("keyrig globals", false);
+        let object_layout = uniform_layout("keyrig object", true);
+        let globals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("keyrig globals"),
+            size: std::mem::size_of::<GpuGlobals>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let globals_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("keyrig globals"),
+            layout: &globals_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() }],
+        });
+        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("keyrig mesh"),
+            bind_group_layouts: &[Some(&globals_layout), Some(&object_layout)],
+            immediate_size: 0,
+        });
+        let line_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("keyrig lines"),
+            bind_group_layouts: &[Some(&globals_layout)],
+            immediate_size: 0,
+        });
+        let two_vec4 = [
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
+        ];
+        let vertex_layout = wgpu::VertexBufferLayout {
+            array_stride: 32,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &two_vec4,
+        };
+        let pipeline = |label: &str,
+                        layout: &wgpu::PipelineLayout,
+                        vs: &str,
+                        fs: &str,
+                        topology: wgpu::PrimitiveTopology,
+                        depth_compare: wgpu::CompareFunction,
+                        depth_write: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: std::slice::from_ref(&vertex_layout),
+                },
+                primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(depth_compare),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState { count: SAMPLE_COUNT, ..Default::default() },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: color_format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        use wgpu::CompareFunction::{Always, LessEqual};
+        use wgpu::PrimitiveTopology::{LineList, PointList, TriangleList};
+        let solid =
+            pipeline("keyrig solid", &mesh_layout, "vs_mesh", "fs_lit", TriangleList, LessEqual, true);
+        let wireframe =
+            pipeline("keyrig wireframe", &mesh_layout, "vs_mesh", "fs_flat", LineList, LessEqual, true);
+        let points =
+            pipeline("keyrig points", &mesh_layout, "vs_mesh", "fs_flat", PointList, LessEqual, true);
+        let lines_depth =
+            pipeline("keyrig grid", &line_layout, "vs_line", "fs_line", LineList, LessEqual, false);
+        let lines_on_top =
+            pipeline("keyrig overlays", &line_layout, "vs_line", "fs_line", LineList, Always, false);
+
+        let object_capacity = 16;
+        let (objects, objects_bind_group) = Self::object_buffer(device, &object_layout, object_capacity);
+        let line_capacity = 4096;
+        let line_buffer = Self::line_buffer(device, line_capacity);
+        Renderer {
+            device: device.clone(),
+            queue: queue.clone(),
+            color_format,
+            skinner: GpuSkinner::new(device),
+            solid,
+            wireframe,
+            points,
+            lines_depth,
+            lines_on_top,
+            globals,
+            globals_bind_group,
+            object_layout,
+            objects,
+            objects_bind_group,
+            object_capacity,
+            line_buffer,
+            line_capacity,
+            meshes: HashMap::new(),
+        }
+    }
+
+    fn object_buffer(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        capacity: u64,
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("keyrig objects"),
+            size: capacity * OBJECT_STRIDE,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("keyrig objects"),
+            layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(std::mem::size_of::<GpuObject>() as u64),
+                }),
+            }],
+        });
+        (buffer, bind_group)
+    }
+
+    fn line_buffer(device: &wgpu::Device, capacity: u64) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("keyrig overlay lines"),
+            size: capacity * std::mem::size_of::<LineVertex>() as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// The colour format the pipelines were built for.
+    #[must_use]
+    pub fn color_format(&self) -> wgpu::TextureFormat {
+        self.color_format
+    }
+
+    /// The compute pipelines (for benchmarks and tests that skin without drawing).
+    #[must_use]
+    pub fn skinner(&self) -> &GpuSkinner {
+        &self.skinner
+    }
+
+    /// Uploads (or replaces) a mesh. Vertex data stays on the GPU; frames only send joint data.
+    ///
+    /// # Errors
+    /// Invalid mesh data (lengths, indices, joints, weights, NaN) or a GPU error.
+    pub fn upload_mesh(&mut self, id: MeshId, data: &MeshData<'_>) -> Result<(), RenderError> {
+        let (indices, vertex_count) = match data {
+            MeshData::Static { vertices, indices } => (*indices, vertices.len()),
+            MeshData::Skinned { skin, indices } => (*indices, skin.positions.len()),
+            MeshData::Morph { frames, indices } => (*indices, frames.first().map_or(0, Vec::len)),
+        };
+        if indices.len() % 3 != 0 {
+            return Err(RenderError::BadCount(format!(
+                "{} triangle indices is not a multiple of 3",
+                indices.len()
+            )));
+        }
+        if let Some((position, &index)) =
+            indices.iter().enumerate().find(|(_, &i)| i as usize >= vertex_count)
+        {
+            return Err(RenderError::IndexOutOfRange { position, index, vertex_count });
+        }
+        let device = self.device.clone();
+        let skinner = &self.skinner;
+        let mesh = with_error_scope(&device, || -> Result<GpuMesh, RenderError> {
+            let deformation = match data {
+                MeshData::Static { vertices, .. } => {
+                    if vertices.is_empty() {
+                        return Err(RenderError::BadCount("a mesh needs at least one vertex".into()));
+                    }
+                    if let Some(i) =
+                        vertices.iter().position(|v| !v.position().is_finite() || !v.normal().is_finite())
+                    {
+                        return Err(RenderError::NonFinite { what: "static vertex", index: i });
+                    }
+                    Deformation::Static(crate::skinning::buffer_init(
+                        &device,
+                        "keyrig static vertices",
+                        bytemuck::cast_slice(vertices),
+                        wgpu::BufferUsages::VERTEX,
+                    ))
+                }
+                MeshData::Skinned { skin, .. } => Deformation::Skinned(skinner.create_skin(&device, skin)?),
+                MeshData::Morph { frames, .. } => Deformation::Morph(skinner.create_morph(&device, frames)?),
+            };
+            // Index buffers may not be empty; a mesh without triangles still draws as points.
+            let edges = overlay::edge_indices(indices);
+            let index_buffer = |label, data: &[u32]| {
+                let padded: &[u32] = if data.is_empty() { &[0, 0, 0] } else { data };
+                crate::skinning::buffer_init(
+                    &device,
+                    label,
+                    bytemuck::cast_slice(padded),
+                    wgpu::BufferUsages::INDEX,
+                )
+            };
+            Ok(GpuMesh {
+                deformation,
+                vertex_count: vertex_count as u32,
+                triangles: index_buffer("keyrig triangles", indices),
+                triangle_index_count: indices.len() as u32,
+                edges: index_buffer("keyrig edges", &edges),
+                edge_index_count: edges.len() as u32,
+            })
+        })??;
+        self.meshes.insert(id, mesh);
+        Ok(())
+    }
+
+    /// Forgets a mesh (its GPU buffers are freed).
+    pub fn remove_mesh(&mut self, id: MeshId) {
+        self.meshes.remove(&id);
+    }
+
+    #[must_use]
+    pub fn has_mesh(&self, id: MeshId) -> bool {
+        self.meshes.contains_key(&id)
+    }
+
+    /// Encodes and submits one frame into `viewport`: compute passes for every deformed item,
+    /// then one render pass (meshes, grid, skeletons, motion paths) with MSAA resolve.
+    ///
+    /// # Errors
+    /// An unknown mesh id, joint data that does not fit its mesh, NaN input, or a GPU error.
+    pub fn render(&mut self, frame: &FrameInput, viewport: &Viewport) -> Result<FrameStats, RenderError> {
+        let device = self.device.clone();
+        let command_buffer = with_error_scope(&device, || self.encode(frame, viewport))??;
+        self.queue.submit([command_buffer.0]);
+        Ok(command_buffer.1)
+    }
+
+    /// Like [`Renderer::render`] but returns the command buffer instead of submitting it (for
+    /// an egui-wgpu callback's `prepare`, which hands command buffers to egui).
+    ///
+    /// # Errors
+    /// As [`Renderer::render`].
+    pub fn encode(
+        &mut self,
+        frame: &FrameInput,
+        viewport: &Viewport,
+    ) -> Result<(wgpu::CommandBuffer, FrameStats), RenderError> {
+        if viewport.format != self.color_format {
+            return Err(RenderError::Gpu(format!(
+                "viewport format {:?} differs from the renderer's {:?}",
+                viewport.format, self.color_format
+            )));
+        }
+        if !camera::is_usable(&frame.camera) {
+            return Err(RenderError::NonFinite { what: "camera (or distance ≤ 0)", index: 0 });
+        }
+        let mut stats = FrameStats::default();
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig frame") });
+
+        // 1. Per-frame uploads and compute passes.
+        for item in &frame.items {
+            let mesh = self.meshes.get(&item.mesh).ok_or(RenderError::UnknownMesh(item.mesh))?;
+            if !item.world_from_model.is_finite() || !item.colour.is_finite() {
+                return Err(RenderError::NonFinite {
+                    what: "draw item transform or colour",
+                    index: item.mesh as usize,
+                });
+            }
+            match (&item.deform, &mesh.deformation) {
+                (Deform::Skin { deformer, joints }, Deformation::Skinned(skin)) => {
+                    stats.joint_bytes += self.skinner.write_joints(&self.queue, skin, item.mesh, joints)?;
+                    self.skinner.encode(&mut encoder, skin, *deformer);
+                    stats.deformed_vertices += u64::from(skin.vertex_count);
+                }
+                (Deform::Morph { frame_a, frame_b, t }, Deformation::Morph(morph)) => {
+                    stats.morph_bytes +=
+                        self.skinner.write_morph(&self.queue, morph, item.mesh, *frame_a, *frame_b, *t)?;
+                    self.skinner.encode_morph(&mut encoder, morph);
+                    stats.deformed_vertices += u64::from(morph.vertex_count);
+                }
+                (Deform::None, _) => {}
+                (Deform::Skin { .. }, _) => {
+                    return Err(RenderError::BadCount(format!("mesh {} is not a skinned mesh", item.mesh)))
+                }
+                (Deform::Morph { .. }, _) => {
+                    return Err(RenderError::BadCount(format!("mesh {} is not a morphing mesh", item.mesh)))
+                }
+            }
+        }
+
+        // 2. Uniforms.
+        let (width, height) = viewport.size();
+        let aspect = width as f32 / height as f32;
+        let mut lights = [GpuLight::zeroed(); MAX_LIGHTS];
+        let mut light_count = 0usize;
+        for light in &frame.lights {
+            if light_count == MAX_LIGHTS {
+                stats.lights_dropped += 1;
+                continue;
+            }
+            lights[light_count] = gpu_light(light);
+            light_count += 1;
+        }
+        let globals = GpuGlobals {
+            clip_from_world: camera::clip_from_world(&frame.camera, aspect).to_cols_array_2d(),
+            camera_position: camera::eye_position(&frame.camera).extend(1.0).to_array(),
+            ambient: frame.ambient.extend(0.0).to_array(),
+            counts: [light_count as u32, 0, 0, 0],
+            lights,
+        };
+        self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
+        stats.uniform_bytes += std::mem::size_of::<GpuGlobals>() as u64;
+
+        let needed = frame.items.len().max(1) as u64;
+        if needed > self.object_capacity {
+            self.object_capacity = needed.next_power_of_two();
+            let (buffer, bind_group) =
+                Self::object_buffer(&self.device, &self.object_layout, self.object_capacity);
+            self.objects = buffer;
+            self.objects_bind_group = bind_group;
+        }
+        let mut object_bytes = vec![0u8; (frame.items.len() as u64 * OBJECT_STRIDE) as usize];
+        for (i, item) in frame.items.iter().enumerate() {
+            let normal = Mat4::from_mat3(glam::Mat3::from_mat4(item.world_from_model).inverse().transpose());
+            let object = GpuObject {
+                world_from_model: item.world_from_model.to_cols_array_2d(),
+                normal_from_model: if normal.is_finite() { normal } else { Mat4::IDENTITY }
+                    .to_cols_array_2d(),
+                colour: item.colour.extend(1.0).to_array(),
+                flags: [if item.selected { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
+            };
+            let start = i * OBJECT_STRIDE as usize;
+            object_bytes[start..start + std::mem::size_of::<GpuObject>()]
+                .copy_from_slice(bytemuck::bytes_of(&object));
+        }
+        if !object_bytes.is_empty() {
+            self.queue.write_buffer(&self.objects, 0, &object_bytes);
+            stats.uniform_bytes += object_bytes.len() as u64;
+        }
+
+        // 3. Overlay lines: grid (depth-tested) first, then skeletons and paths (on top).
+        let mut lines = Lines::default();
+        if let Some(spacing) = frame.grid_spacing.filter(|s| s.is_finite() && *s > 0.0) {
+            overlay::grid(&mut lines, spacing, 50);
+        }
+        let grid_vertices = lines.len() as u32;
+        let marker = frame.camera.distance * 0.008;
+        for skeleton in &frame.skeletons {
+            overlay::skeleton(&mut lines, skeleton, marker);
+        }
+        for path in &frame.motion_paths {
+            overlay::motion_path(&mut lines, path, marker);
+        }
+        if lines.vertices.iter().any(|v| !v.position.iter().all(|x| x.is_finite())) {
+            return Err(RenderError::NonFinite {
+                what: "overlay (skeleton or motion path) position",
+                index: 0,
+            });
+        }
+        let line_vertices = lines.len() as u64;
+        if line_vertices > self.line_capacity {
+            self.line_capacity = line_vertices.next_power_of_two();
+            self.line_buffer = Self::line_buffer(&self.device, self.line_capacity);
+        }
+        if line_vertices > 0 {
+            let bytes: &[u8] = bytemuck::cast_slice(&lines.vertices);
+            self.queue.write_buffer(&self.line_buffer, 0, bytes);
+            stats.overlay_bytes += bytes.len() as u64;
+        }
+
+        // 4. The render pass.
+        {
+            let bg = frame.background;
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("keyrig viewport"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &viewport.msaa_view,
+                    depth_slice: None,
+                    resolve_target: Some(&viewport.resolved_view),
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: f64::from(bg.x),
+                            g: f64::from(bg.y),
+                            b: f64::from(bg.z),
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Discard,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &viewport.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.globals_bind_group, &[]);
+            let pipeline = match frame.style {
+                RenderStyle::Solid => &self.solid,
+                RenderStyle::Wireframe => &self.wireframe,
+                RenderStyle::Points => &self.points,
+            };
+            for (i, item) in frame.items.iter().enumerate() {
+                // Checked above.
+                let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
+                pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
+                match frame.style {
+                    RenderStyle::Solid if mesh.triangle_index_count > 0 => {
+                        pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
+                        pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
+                    }
+                    RenderStyle::Wireframe if mesh.edge_index_count > 0 => {
+                        pass.set_index_buffer(mesh.edges.slice(..), wgpu::IndexFormat::Uint32);
+                        pass.draw_indexed(0..mesh.edge_index_count, 0, 0..1);
+                    }
+                    RenderStyle::Solid | RenderStyle::Wireframe => {
+                        pass.set_pipeline(&self.points);
+                        pass.draw(0..mesh.vertex_count, 0..1);
+                    }
+                    RenderStyle::Points => pass.draw(0..mesh.vertex_count, 0..1),
+                }
+                stats.draw_calls += 1;
+            }
+            if line_vertices > 0 {
+                pass.set_vertex_buffer(0, self.line_buffer.slice(..));
+                if grid_vertices > 0 {
+                    pass.set_pipeline(&self.lines_depth);
+                    pass.draw(0..grid_vertices, 0..1);
+                    stats.draw_calls += 1;
+                }
+                if line_vertices as u32 > grid_vertices {
+                    pass.set_pipeline(&self.lines_on_top);
+                    pass.draw(grid_vertices..line_vertices as u32, 0..1);
+                    stats.draw_calls += 1;
+                }
+            }
+        }
+        Ok((encoder.finish(), stats))
+    }
+
+    /// Reads back the current deformed vertices of a mesh (the last frame's compute output,
+    /// or the static vertices).
+    ///
+    /// # Errors
+    /// [`RenderError::UnknownMesh`], or a GPU error.
+    pub fn read_vertices(&self, id: MeshId) -> Result<Vec<SkinnedVertex>, RenderError> {
+        let mesh = self.meshes.get(&id).ok_or(RenderError::UnknownMesh(id))?;
+        match &mesh.deformation {
+            Deformation::Static(_) => {
+                Err(RenderError::Gpu(format!("mesh {id} is static; its vertices are the input")))
+            }
+            Deformation::Skinned(_) | Deformation::Morph(_) => crate::skinning::read_skinned(
+                &self.device,
+                &self.queue,
+                mesh.vertex_buffer(),
+                mesh.vertex_count,
+            ),
+        }
+    }
+}

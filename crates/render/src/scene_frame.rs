@@ -1,0 +1,493 @@
+//! From a keyrig `Scene` and a time to a [`FrameInput`]: the glue the `keyrig render` command
+//! and the editor share.
+//!
+//! [`SceneRig::new`] does the once-per-scene work (validates every track, builds the meshes,
+//! skeletons and bones-blending bindings); [`SceneRig::frame`] samples the tracks at a time,
+//! evaluates each skeleton's joint palette and fills in lights, overlays and draw items.
+//! The editor, which has its own transient pose overrides, can evaluate the objects itself and
+//! call [`SceneRig::frame_from_states`] instead.
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Quat, Vec3};
+use keyrig_core::{AnimatedTrack, Camera, DeformerKind, MeshSource, Scene, TrackError};
+use keyrig_skin::{
+    mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
+};
+use thiserror::Error;
+
+use crate::overlay::{grid_spacing_for, MotionPath, SkeletonOverlay};
+use crate::renderer::{Deform, DrawItem, FrameInput, LightInput, MeshData, MeshId, RenderStyle, Renderer};
+use crate::skinning::{joint_poses, OwnedSkinInput};
+use crate::RenderError;
+
+/// Most samples a motion path takes over the frame range.
+const MAX_PATH_SAMPLES: i64 = 2000;
+
+/// Albedo of the n-th mesh object (linear RGB), cycling.
+const OBJECT_COLOURS: [Vec3; 4] = [
+    Vec3::new(0.72, 0.62, 0.55),
+    Vec3::new(0.35, 0.55, 0.8),
+    Vec3::new(0.5, 0.75, 0.4),
+    Vec3::new(0.8, 0.7, 0.3),
+];
+
+/// What went wrong turning a scene into frames; every variant names the place in the scene.
+#[derive(Debug, Error)]
+pub enum SceneFrameError {
+    #[error("{path}: {source}")]
+    Track { path: String, source: TrackError },
+    #[error("{path}: {source}")]
+    Skin { path: String, source: SkinError },
+    #[error("{path}: {source}")]
+    Render { path: String, source: RenderError },
+    #[error(
+        "objects[{object}] ({name}): the mesh file `{file}` was not loaded; pass it to \
+         SceneRig::with_meshes (model files are loaded by keyrig-io)"
+    )]
+    MeshNotLoaded { object: usize, name: String, file: String },
+    #[error("{path}: {message}")]
+    Invalid { path: String, message: String },
+}
+
+fn track_err(path: String) -> impl FnOnce(TrackError) -> SceneFrameError {
+    move |source| SceneFrameError::Track { path, source }
+}
+
+fn skin_err(path: String) -> impl FnOnce(SkinError) -> SceneFrameError {
+    move |source| SceneFrameError::Skin { path, source }
+}
+
+/// What is selected in the viewport (highlighted; its motion path is drawn).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Selection {
+    #[default]
+    None,
+    Object(usize),
+    Joint {
+        object: usize,
+        joint: usize,
+    },
+    Light(usize),
+}
+
+/// View settings that are not part of the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewOptions {
+    pub style: RenderStyle,
+    /// Overrides every object's deformer when set.
+    pub deformer: Option<DeformerKind>,
+    pub grid: bool,
+    pub skeletons: bool,
+    /// Draw the motion path of the selected object or joint.
+    pub motion_path: bool,
+    pub selection: Selection,
+    /// Replaces the scene's camera when set (the editor's orbit camera).
+    pub camera: Option<Camera>,
+}
+
+impl Default for ViewOptions {
+    fn default() -> Self {
+        ViewOptions {
+            style: RenderStyle::Solid,
+            deformer: None,
+            grid: true,
+            skeletons: true,
+            motion_path: true,
+            selection: Selection::None,
+            camera: None,
+        }
+    }
+}
+
+struct SkeletonRig {
+    rotations: Vec<AnimatedTrack<Quat>>,
+    root_translation: AnimatedTrack<Vec3>,
+}
+
+struct MeshRig {
+    mesh: SkinnedMesh,
+    bindings: MeshBindings,
+}
+
+struct ObjectRig {
+    translation: AnimatedTrack<Vec3>,
+    rotation: AnimatedTrack<Quat>,
+    scale: AnimatedTrack<Vec3>,
+    mesh: Option<MeshRig>,
+    skeleton: Option<SkeletonRig>,
+    rest: Option<RestSkeleton>,
+    deformer: DeformerKind,
+    colour: Vec3,
+}
+
+struct LightRig {
+    kind: keyrig_core::LightKind,
+    enabled: bool,
+    position: AnimatedTrack<Vec3>,
+    direction: AnimatedTrack<Vec3>,
+    colour: AnimatedTrack<Vec3>,
+    intensity: AnimatedTrack<f32>,
+}
+
+/// The evaluated state of one object at a time, as [`SceneRig::frame_from_states`] takes it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectState {
+    /// World from object (T·R·S).
+    pub world_from_model: Mat4,
+    /// The skeleton's pose (one rotation per joint, root translation); `None` when the object
+    /// has no skeleton.
+    pub pose: Option<Pose>,
+}
+
+/// A scene prepared for rendering frames.
+pub struct SceneRig {
+    scene: Scene,
+    objects: Vec<ObjectRig>,
+    lights: Vec<LightRig>,
+}
+
+/// Scales a procedural mesh (built in centimetres) to a scene skeleton of the same shape in
+/// other units: the factor is the ratio of the summed rest bone lengths.
+fn fit_to_skeleton(mut mesh: SkinnedMesh, rest: &RestSkeleton) -> SkinnedMesh {
+    let length =
+        |s: &RestSkeleton| -> f32 { s.parent_from_joint().iter().map(|a| a.translation.length()).sum() };
+    let (own, scene) = (length(&mesh.skeleton), length(rest));
+    if own > 0.0 && scene > 0.0 && mesh.skeleton.len() == rest.len() {
+        let factor = scene / own;
+        if (factor - 1.0).abs() > 1e-4 {
+            for p in &mut mesh.positions {
+                *p *= factor;
+            }
+        }
+    }
+    mesh
+}
+
+impl SceneRig {
+    /// Prepares a scene whose meshes are all procedural.
+    ///
+    /// # Errors
+    /// An invalid track, skeleton or mesh binding (with its path in the scene), or a mesh file
+    /// (see [`SceneRig::with_meshes`]).
+    pub fn new(scene: &Scene) -> Result<Self, SceneFrameError> {
+        Self::with_meshes(scene, &HashMap::new())
+    }
+
+    /// Prepares a scene; `loaded` gives the meshes of objects whose mesh is a file, by object
+    /// index.
+    ///
+    /// # Errors
+    /// As [`SceneRig::new`]; [`SceneFrameError::MeshNotLoaded`] for a file mesh missing from
+    /// `loaded`.
+    pub fn with_meshes(scene: &Scene, loaded: &HashMap<usize, SkinnedMesh>) -> Result<Self, SceneFrameError> {
+        if !(scene.fps.is_finite() && scene.fps > 0.0) {
+            return Err(SceneFrameError::Invalid {
+                path: "fps".into(),
+                message: format!("{} is not > 0", scene.fps),
+            });
+        }
+        let mut objects = Vec::with_capacity(scene.objects.len());
+        let mut mesh_count = 0usize;
+        for (i, object) in scene.objects.iter().enumerate() {
+            let at = |field: &str| format!("objects[{i}].{field}");
+            let translation =
+                AnimatedTrack::new(&object.translation).map_err(track_err(at("translation")))?;
+            let rotation = AnimatedTrack::new(&object.rotation).map_err(track_err(at("rotation")))?;
+            let scale = AnimatedTrack::new(&object.scale).map_err(track_err(at("scale")))?;
+            let (skeleton, rest) = match &object.skeleton {
+                Some(skeleton) => {
+                    let rotations = skeleton
+                        .joints
+                        .iter()
+                        .enumerate()
+                        .map(|(j, joint)| {
+                            AnimatedTrack::new(&joint.rotation)
+                                .map_err(track_err(at(&format!("skeleton.joints[{j}].rotation"))))
+                        })
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let root_translation = AnimatedTrack::new(&skeleton.root_translation)
+                        .map_err(track_err(at("skeleton.root_translation")))?;
+                    let rest = RestSkeleton::from_scene(skeleton).map_err(skin_err(at("skeleton")))?;
+                    (Some(SkeletonRig { rotations, root_translation }), Some(rest))
+                }
+                None => (None, None),
+            };
+            let mesh = match &object.mesh {
+                None => None,
+                Some(source) => {
+                    let base = match source {
+                        MeshSource::Procedural(kind) => mesh_for(*kind),
+                        MeshSource::File { path, .. } => match loaded.get(&i) {
+                            Some(mesh) => mesh.clone(),
+                            None => {
+                                return Err(SceneFrameError::MeshNotLoaded {
+                                    object: i,
+                                    name: object.name.clone(),
+                                    file: path.clone(),
+                                })
+                            }
+                        },
+                    };
+                    let mesh = match &rest {
+                        Some(rest) => fit_to_skeleton(base, rest)
+                            .with_skeleton(rest.clone())
+                            .map_err(skin_err(at("mesh (bound to the object's skeleton)")))?,
+                        None => base,
+                    };
+                    let zone =
+                        BlendZone::from_settings(&object.deformer).map_err(skin_err(at("deformer")))?;
+                    let bindings = mesh.bindings(zone).map_err(skin_err(at("mesh")))?;
+                    mesh_count += 1;
+                    Some(MeshRig { mesh, bindings })
+                }
+            };
+            objects.push(ObjectRig {
+                translation,
+                rotation,
+                scale,
+                mesh,
+                skeleton,
+                rest,
+                deformer: object.deformer.kind,
+                colour: OBJECT_COLOURS[(mesh_count.max(1) - 1) % OBJECT_COLOURS.len()],
+            });
+        }
+        let lights = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, light)| {
+                let at = |field: &str| format!("lights[{i}].{field}");
+                Ok(LightRig {
+                    kind: light.kind,
+                    enabled: light.enabled,
+                    position: AnimatedTrack::new(&light.position).map_err(track_err(at("position")))?,
+                    direction: AnimatedTrack::new(&light.direction).map_err(track_err(at("direction")))?,
+                    colour: AnimatedTrack::new(&light.colour).map_err(track_err(at("colour")))?,
+                    intensity: AnimatedTrack::new(&light.intensity).map_err(track_err(at("intensity")))?,
+                })
+            })
+            .collect::<Result<Vec<_>, SceneFrameError>>()?;
+        Ok(SceneRig { scene: scene.clone(), objects, lights })
+    }
+
+    /// The scene this rig was built from.
+    #[must_use]
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Seconds at a frame number.
+    #[must_use]
+    pub fn time_of_frame(&self, frame: f64) -> f64 {
+        frame / self.scene.fps
+    }
+
+    /// Uploads every object's mesh to `renderer`, with the object's index as its [`MeshId`].
+    ///
+    /// # Errors
+    /// [`SceneFrameError::Render`] naming the object.
+    pub fn upload(&self, renderer: &mut Renderer) -> Result<(), SceneFrameError> {
+        for (i, object) in self.objects.iter().enumerate() {
+            let Some(rig) = &object.mesh else { continue };
+            let input = OwnedSkinInput::from_skinned_mesh(&rig.mesh, &rig.bindings);
+            renderer
+                .upload_mesh(
+                    i as MeshId,
+                    &MeshData::Skinned { skin: input.as_input(), indices: &rig.mesh.indices },
+                )
+                .map_err(|source| SceneFrameError::Render { path: format!("objects[{i}].mesh"), source })?;
+        }
+        Ok(())
+    }
+
+    /// Every object's state at `time` seconds, from the scene's tracks.
+    #[must_use]
+    pub fn object_states(&self, time: f64) -> Vec<ObjectState> {
+        (0..self.objects.len()).map(|i| self.object_states_one(i, time)).collect()
+    }
+
+    /// The enabled lights at `time` seconds.
+    #[must_use]
+    pub fn lights_at(&self, time: f64) -> Vec<LightInput> {
+        self.lights
+            .iter()
+            .filter(|l| l.enabled)
+            .map(|l| LightInput {
+                kind: l.kind,
+                position: l.position.sample(time),
+                direction: l.direction.sample(time),
+                colour: l.colour.sample(time),
+                intensity: l.intensity.sample(time),
+            })
+            .collect()
+    }
+
+    /// The frame at `time` seconds, from the scene's tracks.
+    ///
+    /// # Errors
+    /// A pose that cannot be evaluated (e.g. a zero quaternion), with the object's path.
+    pub fn frame(&self, time: f64, view: &ViewOptions) -> Result<FrameInput, SceneFrameError> {
+        let states = self.object_states(time);
+        let mut frame = self.frame_from_states(&states, self.lights_at(time), view)?;
+        if view.motion_path {
+            if let Some(path) = self.motion_path(view.selection, time)? {
+                frame.motion_paths.push(path);
+            }
+        }
+        Ok(frame)
+    }
+
+    /// The frame for object states evaluated elsewhere (the editor's, with its pose overrides).
+    /// Motion paths are not added here; see [`SceneRig::motion_path`].
+    ///
+    /// # Errors
+    /// A state list of the wrong length or a pose that cannot be evaluated.
+    pub fn frame_from_states(
+        &self,
+        states: &[ObjectState],
+        lights: Vec<LightInput>,
+        view: &ViewOptions,
+    ) -> Result<FrameInput, SceneFrameError> {
+        if states.len() != self.objects.len() {
+            return Err(SceneFrameError::Invalid {
+                path: "objects".into(),
+                message: format!("{} object states for {} objects", states.len(), self.objects.len()),
+            });
+        }
+        let camera = view.camera.unwrap_or(self.scene.camera);
+        let mut frame = FrameInput::new(camera);
+        frame.style = view.style;
+        frame.ambient = self.scene.ambient;
+        frame.lights = lights;
+        frame.grid_spacing = view.grid.then(|| grid_spacing_for(camera.distance));
+        for (i, (object, state)) in self.objects.iter().zip(states).enumerate() {
+            let palette = match (&object.rest, &state.pose) {
+                (Some(rest), Some(pose)) => Some(
+                    JointPalette::new(rest, pose)
+                        .map_err(skin_err(format!("objects[{i}].skeleton (pose)")))?,
+                ),
+                _ => None,
+            };
+            let object_selected = matches!(view.selection, Selection::Object(o) if o == i);
+            if let Some(rig) = &object.mesh {
+                let palette = match &palette {
+                    Some(p) => p.clone(),
+                    None => JointPalette::new(&rig.mesh.skeleton, &Pose::rest(rig.mesh.skeleton.len()))
+                        .map_err(skin_err(format!("objects[{i}].mesh (rest pose)")))?,
+                };
+                frame.items.push(DrawItem {
+                    mesh: i as MeshId,
+                    world_from_model: state.world_from_model,
+                    deform: Deform::Skin {
+                        deformer: view.deformer.unwrap_or(object.deformer),
+                        joints: joint_poses(&palette),
+                    },
+                    colour: object.colour,
+                    selected: object_selected,
+                });
+            }
+            if view.skeletons {
+                if let (Some(rest), Some(palette)) = (&object.rest, &palette) {
+                    let joints = (0..rest.len())
+                        .map(|j| state.world_from_model.transform_point3(palette.joint_position(j)))
+                        .collect();
+                    let selected = match view.selection {
+                        Selection::Joint { object, joint } if object == i => Some(joint),
+                        _ => None,
+                    };
+                    frame.skeletons.push(SkeletonOverlay {
+                        joints,
+                        parents: rest.parents().to_vec(),
+                        selected,
+                    });
+                }
+            }
+        }
+        Ok(frame)
+    }
+
+    /// The motion path of the selected object (its origin) or joint over the frame range, with
+    /// markers at its keys and at `time`; `None` when nothing path-worthy is selected.
+    ///
+    /// # Errors
+    /// A pose that cannot be evaluated.
+    pub fn motion_path(
+        &self,
+        selection: Selection,
+        time: f64,
+    ) -> Result<Option<MotionPath>, SceneFrameError> {
+        let (object, joint) = match selection {
+            Selection::Object(o) => (o, None),
+            Selection::Joint { object, joint } => (object, Some(joint)),
+            Selection::None | Selection::Light(_) => return Ok(None),
+        };
+        let Some(rig) = self.objects.get(object) else { return Ok(None) };
+        let scene_object = &self.scene.objects[object];
+        let position_at = |t: f64| -> Result<Option<Vec3>, SceneFrameError> {
+            let state = &self.object_states_one(object, t);
+            match joint {
+                None => Ok(Some(state.world_from_model.transform_point3(Vec3::ZERO))),
+                Some(j) => {
+                    let (Some(rest), Some(pose)) = (&rig.rest, &state.pose) else { return Ok(None) };
+                    if j >= rest.len() {
+                        return Ok(None);
+                    }
+                    let palette = JointPalette::new(rest, pose)
+                        .map_err(skin_err(format!("objects[{object}].skeleton (pose)")))?;
+                    Ok(Some(state.world_from_model.transform_point3(palette.joint_position(j))))
+                }
+            }
+        };
+        let range = self.scene.frame_range;
+        let frames = i64::from(range.end) - i64::from(range.start);
+        let step = (frames.max(1) as f64 / MAX_PATH_SAMPLES as f64).max(1.0);
+        let mut points = Vec::new();
+        let mut f = f64::from(range.start);
+        while f <= f64::from(range.end) + 1e-9 {
+            match position_at(self.time_of_frame(f))? {
+                Some(p) => points.push(p),
+                None => return Ok(None),
+            }
+            f += step;
+        }
+        let mut key_times: Vec<f64> = match joint {
+            None => [
+                scene_object.translation.track.keys.iter().map(|k| k.time).collect::<Vec<_>>(),
+                scene_object.rotation.track.keys.iter().map(|k| k.time).collect(),
+            ]
+            .concat(),
+            Some(j) => scene_object
+                .skeleton
+                .as_ref()
+                .and_then(|s| s.joints.get(j))
+                .map(|joint| joint.rotation.track.keys.iter().map(|k| k.time).collect())
+                .unwrap_or_default(),
+        };
+        key_times.sort_by(f64::total_cmp);
+        key_times.dedup();
+        let mut keys = Vec::with_capacity(key_times.len());
+        for t in key_times {
+            if let Some(p) = position_at(t)? {
+                keys.push(p);
+            }
+        }
+        Ok(Some(MotionPath { points, keys, current: position_at(time)? }))
+    }
+
+    fn object_states_one(&self, index: usize, time: f64) -> ObjectState {
+        let object = &self.objects[index];
+        ObjectState {
+            world_from_model: Mat4::from_scale_rotation_translation(
+                object.scale.sample(time),
+                object.rotation.sample(time).normalize(),
+                object.translation.sample(time),
+            ),
+            pose: object.skeleton.as_ref().map(|s| Pose {
+                local_rotations: s.rotations.iter().map(|r| r.sample(time)).collect(),
+                root_translation: s.root_translation.sample(time),
+            }),
+        }
+    }
+}

@@ -1,0 +1,146 @@
+// keyrig mesh drawing: skinned vertices (the compute passes' output) lit by the scene's lights.
+//
+// Lighting (all in world space, linear RGB, Y up):
+//   colour = albedo · (ambient + Σ_lights radiance · max(n·l, 0)) + specular
+//   directional: radiance = colour·intensity, l = −direction
+//   point:       radiance = colour·intensity / d²
+//   spot:        point radiance · cone(θ), cone = 1 inside the inner angle, 0 outside the
+//                cut-off, ((cos θ − cos cut) / (cos inner − cos cut))^dropoff in between.
+
+const MAX_LIGHTS: u32 = 8u;
+const KIND_DIRECTIONAL: u32 = 0u;
+const KIND_POINT: u32 = 1u;
+const KIND_SPOT: u32 = 2u;
+
+struct Light {
+    // xyz position, w = kind
+    position: vec4<f32>,
+    // xyz unit direction the light shines in
+    direction: vec4<f32>,
+    // rgb colour × intensity
+    radiance: vec4<f32>,
+    // cos(cut-off), cos(inner), dropoff, unused
+    spot: vec4<f32>,
+};
+
+struct Globals {
+    clip_from_world: mat4x4<f32>,
+    camera_position: vec4<f32>,
+    ambient: vec4<f32>,
+    // x = number of lights
+    counts: vec4<u32>,
+    lights: array<Light, 8>,
+};
+
+struct Object {
+    world_from_model: mat4x4<f32>,
+    // inverse-transpose of world_from_model's linear part (as a 4×4)
+    normal_from_model: mat4x4<f32>,
+    colour: vec4<f32>,
+    // x = selected (0/1)
+    flags: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+@group(1) @binding(0) var<uniform> object: Object;
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+};
+
+@vertex
+fn vs_mesh(@location(0) position: vec4<f32>, @location(1) normal: vec4<f32>) -> VsOut {
+    let world = object.world_from_model * vec4<f32>(position.xyz, 1.0);
+    var out: VsOut;
+    out.clip = globals.clip_from_world * world;
+    out.world_position = world.xyz;
+    out.normal = (object.normal_from_model * vec4<f32>(normal.xyz, 0.0)).xyz;
+    return out;
+}
+
+fn spot_cone(light: Light, to_surface: vec3<f32>) -> f32 {
+    let cos_theta = dot(normalize(to_surface), light.direction.xyz);
+    let cos_cut = light.spot.x;
+    let cos_inner = light.spot.y;
+    if cos_theta >= cos_inner {
+        return 1.0;
+    }
+    if cos_theta <= cos_cut {
+        return 0.0;
+    }
+    let s = (cos_theta - cos_cut) / max(cos_inner - cos_cut, 1e-6);
+    return pow(s, max(light.spot.z, 0.0));
+}
+
+@fragment
+fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    var n = normalize(in.normal);
+    if !front {
+        n = -n;
+    }
+    let to_eye = normalize(globals.camera_position.xyz - in.world_position);
+    let albedo = object.colour.rgb;
+    var diffuse = globals.ambient.rgb;
+    var specular = vec3<f32>(0.0);
+    let count = min(globals.counts.x, MAX_LIGHTS);
+    for (var i = 0u; i < count; i = i + 1u) {
+        let light = globals.lights[i];
+        let kind = u32(light.position.w);
+        var l: vec3<f32>;
+        var radiance = light.radiance.rgb;
+        if kind == KIND_DIRECTIONAL {
+            l = -light.direction.xyz;
+        } else {
+            let offset = in.world_position - light.position.xyz;
+            let d2 = max(dot(offset, offset), 1e-8);
+            l = -offset / sqrt(d2);
+            radiance = radiance / d2;
+            if kind == KIND_SPOT {
+                radiance = radiance * spot_cone(light, offset);
+            }
+        }
+        let n_dot_l = max(dot(n, l), 0.0);
+        diffuse = diffuse + radiance * n_dot_l;
+        if n_dot_l > 0.0 {
+            let h = normalize(l + to_eye);
+            specular = specular + radiance * 0.25 * pow(max(dot(n, h), 0.0), 32.0);
+        }
+    }
+    var colour = albedo * diffuse + specular;
+    if object.flags.x > 0.5 {
+        // Selection: an orange rim.
+        let rim = pow(1.0 - max(dot(n, to_eye), 0.0), 2.0);
+        colour = mix(colour, vec3<f32>(1.0, 0.45, 0.05), clamp(0.25 + 0.75 * rim, 0.0, 1.0));
+    }
+    return vec4<f32>(colour, 1.0);
+}
+
+// Wireframe and points: the object's colour (orange when selected), unlit.
+@fragment
+fn fs_flat(in: VsOut) -> @location(0) vec4<f32> {
+    if object.flags.x > 0.5 {
+        return vec4<f32>(1.0, 0.45, 0.05, 1.0);
+    }
+    return vec4<f32>(object.colour.rgb, 1.0);
+}
+
+// Overlay lines (grid, bones, motion paths): world-space positions with a colour.
+struct LineOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) colour: vec4<f32>,
+};
+
+@vertex
+fn vs_line(@location(0) position: vec4<f32>, @location(1) colour: vec4<f32>) -> LineOut {
+    var out: LineOut;
+    out.clip = globals.clip_from_world * vec4<f32>(position.xyz, 1.0);
+    out.colour = colour;
+    return out;
+}
+
+@fragment
+fn fs_line(in: LineOut) -> @location(0) vec4<f32> {
+    return in.colour;
+}
