@@ -219,6 +219,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
             GltfErrorKind::Json(e.to_string()),
         )
     })?;
+    check_position_indices(&root)?;
     let doc = match gltf::Document::from_json(root) {
         Ok(doc) => doc,
         Err(gltf::Error::Validation(errors)) => {
@@ -253,6 +254,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
     check_skinned_meshes(&model)?;
+    check_animation_json(doc.as_json())?;
     model.animations = doc.animations().map(|a| read_animation(&cx, &model, &a)).collect::<Result<_, _>>()?;
     Ok(model)
 }
@@ -675,33 +677,22 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
             weight_sets.push(weights);
         }
 
-        let mut morph_targets = Vec::new();
+        let mut targets = Vec::new();
         for (t, target) in prim.morph_targets().enumerate() {
             let there = format!("{here}/targets/{t}");
-            let mut mt = MorphTarget::default();
-            if let Some(acc) = target.positions() {
-                check_same_count(cx, &acc, "morph POSITION", &[Dimensions::Vec3], F32, n, &there)?;
-            }
-            if let Some(acc) = target.normals() {
-                check_same_count(cx, &acc, "morph NORMAL", &[Dimensions::Vec3], F32, n, &there)?;
-            }
-            morph_targets.push((there, target.positions().is_some(), target.normals().is_some()));
-            let _ = &mut mt;
-        }
-        let read_targets: Vec<_> = reader.read_morph_targets().collect();
-        let mut targets = Vec::with_capacity(morph_targets.len());
-        for ((there, has_p, has_n), (p, nrm, _)) in morph_targets.into_iter().zip(read_targets) {
-            let positions = match (has_p, p) {
-                (true, Some(it)) => Some(finite_vec3s(it.collect(), &there, "morph position")?),
-                _ => None,
-            };
-            let normals = match (has_n, nrm) {
-                (true, Some(it)) => Some(finite_vec3s(it.collect(), &there, "morph normal")?),
-                _ => None,
-            };
-            for v in positions.iter().chain(normals.iter()) {
-                count_matches(v.len(), n, &there)?;
-            }
+            let mut read =
+                |acc: Option<gltf::Accessor<'_>>, what: &str| -> Result<Option<Vec<Vec3>>, GltfError> {
+                    let Some(acc) = acc else { return Ok(None) };
+                    check_same_count(cx, &acc, what, &[Dimensions::Vec3], F32, n, &there)?;
+                    let values: Vec<[f32; 3]> = gltf::accessor::Iter::<[f32; 3]>::new(acc, cx.get())
+                        .map(Iterator::collect)
+                        .unwrap_or_default();
+                    let v = finite_vec3s(values, &there, what)?;
+                    count_matches(v.len(), n, &there)?;
+                    Ok(Some(v))
+                };
+            let positions = read(target.positions(), "morph POSITION")?;
+            let normals = read(target.normals(), "morph NORMAL")?;
             targets.push(MorphTarget { positions, normals });
         }
 
@@ -877,6 +868,80 @@ fn check_skinned_meshes(model: &ImportedModel) -> Result<(), GltfError> {
                         },
                     ));
                 }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// gltf-json's own validation indexes the POSITION accessor before checking its index.
+fn check_position_indices(root: &gltf::json::Root) -> Result<(), GltfError> {
+    let position = gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = prim.attributes.get(&position) {
+                let limit = root.accessors.len();
+                if index.value() >= limit {
+                    return Err(ptr(
+                        format!("/meshes/{m}/primitives/{p}/attributes/POSITION"),
+                        GltfErrorKind::IndexOutOfRange {
+                            what: "accessor".into(),
+                            index: index.value(),
+                            limit,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The gltf crate's validation does not check animation channels and samplers fully, and its
+/// accessors unwrap them; so check every index and enum here first.
+fn check_animation_json(root: &gltf::json::Root) -> Result<(), GltfError> {
+    use gltf::json::validation::Checked;
+    for (a, anim) in root.animations.iter().enumerate() {
+        for (c, ch) in anim.channels.iter().enumerate() {
+            let here = format!("/animations/{a}/channels/{c}");
+            let checks = [
+                (format!("{here}/sampler"), "sampler", ch.sampler.value(), anim.samplers.len()),
+                (format!("{here}/target/node"), "node", ch.target.node.value(), root.nodes.len()),
+            ];
+            for (pointer, what, index, limit) in checks {
+                if index >= limit {
+                    return Err(ptr(
+                        pointer,
+                        GltfErrorKind::IndexOutOfRange { what: what.into(), index, limit },
+                    ));
+                }
+            }
+            if !matches!(ch.target.path, Checked::Valid(_)) {
+                return Err(ptr(
+                    format!("{here}/target/path"),
+                    GltfErrorKind::Invalid("unknown target path".into()),
+                ));
+            }
+        }
+        for (s, sampler) in anim.samplers.iter().enumerate() {
+            let here = format!("/animations/{a}/samplers/{s}");
+            for (field, index) in [("input", sampler.input.value()), ("output", sampler.output.value())] {
+                if index >= root.accessors.len() {
+                    return Err(ptr(
+                        format!("{here}/{field}"),
+                        GltfErrorKind::IndexOutOfRange {
+                            what: "accessor".into(),
+                            index,
+                            limit: root.accessors.len(),
+                        },
+                    ));
+                }
+            }
+            if !matches!(sampler.interpolation, Checked::Valid(_)) {
+                return Err(ptr(
+                    format!("{here}/interpolation"),
+                    GltfErrorKind::Invalid("unknown interpolation".into()),
+                ));
             }
         }
     }

@@ -130,7 +130,10 @@ pub fn run_suite<E: std::fmt::Display, T>(
     let mut failures = Vec::new();
     let (mut ok, mut rejected) = (0, 0);
     let previous_hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
+    // MALFORMED_SHOW_PANICS=1 keeps the default hook, to see where a panic comes from.
+    if std::env::var_os("MALFORMED_SHOW_PANICS").is_none() {
+        std::panic::set_hook(Box::new(|_| {}));
+    }
     for m in mutants {
         let outcome = measure_peak(|| catch_unwind(AssertUnwindSafe(|| parse(&m.bytes).map(|_| ()))));
         match outcome {
