@@ -19,6 +19,12 @@ struct Cli {
 enum Command {
     /// Open the editor on a scene (.ron) or a model (.glb, .gltf, .md2).
     Edit(cli::edit::EditArgs),
+    /// Render a frame or a frame range of a scene (.ron) or MD2 model to PNG, offscreen.
+    Render(cli::render::RenderArgs),
+    /// Summarize a scene: timing, objects, joints, lights, tracks, keys and validation problems.
+    Info(cli::info::InfoArgs),
+    /// Print one channel's values over a frame or time range as CSV or JSON.
+    Sample(cli::sample::SampleArgs),
 }
 
 fn main() -> ExitCode {
@@ -26,6 +32,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => cli::edit::run(cli::edit::EditArgs::default()),
         Some(Command::Edit(args)) => cli::edit::run(args),
+        Some(Command::Render(args)) => cli::render::run(args),
+        Some(Command::Info(args)) => cli::info::run(args),
+        Some(Command::Sample(args)) => cli::sample::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

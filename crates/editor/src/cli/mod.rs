@@ -2,3 +2,6 @@
 //! `run(args) -> anyhow::Result<()>`.
 
 pub mod edit;
+pub mod info;
+pub mod sample;
+pub mod render;

@@ -1,0 +1,279 @@
+//! `keyrig info FILE`: what a scene holds (timing, objects, skeletons, lights, tracks and key
+//! counts) and what is wrong with it.
+//!
+//! Exits non-zero when the file cannot be read or parsed, and also when the scene has
+//! validation problems (after printing the summary and every problem).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use keyrig_core::channel::{list_channels, ChannelPath};
+use keyrig_core::{LightKind, MeshSource, Scene};
+use keyrig_io::scene_file::{self, LocatedProblem};
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InfoFormat {
+    /// Human-readable text.
+    #[default]
+    Text,
+    /// One JSON object.
+    Json,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct InfoArgs {
+    /// Scene file (.ron).
+    pub file: PathBuf,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = InfoFormat::Text)]
+    pub format: InfoFormat,
+}
+
+/// Loads the scene at `path` for a headless command: `.ron` scenes only for now. Problems are
+/// returned beside the scene, located in the file.
+pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, Vec<LocatedProblem>)> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("ron") => {}
+        Some(model @ ("glb" | "gltf" | "md2")) => bail!(
+            "{}: .{model} model files are not supported by `keyrig {command}` yet; give a .ron scene",
+            path.display()
+        ),
+        _ => bail!("{}: unknown file type; `keyrig {command}` reads .ron scene files", path.display()),
+    }
+    Ok(scene_file::load_lenient(path)?)
+}
+
+pub fn run(args: InfoArgs) -> anyhow::Result<()> {
+    let (scene, problems) = load_scene_lenient(&args.file, "info")?;
+    let text = match args.format {
+        InfoFormat::Text => summary_text(&args.file, &scene, &problems),
+        InfoFormat::Json => {
+            serde_json::to_string_pretty(&summary_json(&args.file, &scene, &problems))
+                .context("writing JSON")?
+                + "\n"
+        }
+    };
+    super::sample::write_stdout(text.as_bytes())?;
+    if !problems.is_empty() {
+        bail!(
+            "{}: {} validation problem{}, listed above",
+            args.file.display(),
+            problems.len(),
+            if problems.len() == 1 { "" } else { "s" }
+        );
+    }
+    Ok(())
+}
+
+fn mesh_text(mesh: Option<&MeshSource>) -> String {
+    match mesh {
+        None => "none".to_string(),
+        Some(MeshSource::Procedural(p)) => format!("procedural {p:?}"),
+        Some(MeshSource::File { path, mesh: None }) => format!("file {path:?}"),
+        Some(MeshSource::File { path, mesh: Some(i) }) => format!("file {path:?}, mesh {i}"),
+    }
+}
+
+fn light_kind_text(kind: &LightKind) -> String {
+    match kind {
+        LightKind::Directional => "directional".to_string(),
+        LightKind::Point => "point".to_string(),
+        LightKind::Spot { cutoff_deg, inner_angle_deg, dropoff } => {
+            format!("spot (cutoff {cutoff_deg}°, inner {inner_angle_deg}°, dropoff {dropoff})")
+        }
+    }
+}
+
+/// Key count and key time range of one channel, read from the raw keys (also for invalid ones).
+fn channel_keys(scene: &Scene, channel: &ChannelPath) -> (usize, Option<(f64, f64)>) {
+    use keyrig_core::channel::{LightProperty as L, ObjectProperty as O};
+    fn span<T>(keys: &[keyrig_core::Key<T>]) -> (usize, Option<(f64, f64)>) {
+        let range = match (keys.first(), keys.last()) {
+            (Some(a), Some(b)) => Some((a.time, b.time)),
+            _ => None,
+        };
+        (keys.len(), range)
+    }
+    match channel {
+        ChannelPath::Object { object, property } => {
+            let Some(o) = scene.objects.iter().find(|o| &o.name == object) else { return (0, None) };
+            match property {
+                O::Translation => span(&o.translation.track.keys),
+                O::Rotation => span(&o.rotation.track.keys),
+                O::Scale => span(&o.scale.track.keys),
+                O::RootTranslation => {
+                    o.skeleton.as_ref().map_or((0, None), |s| span(&s.root_translation.track.keys))
+                }
+            }
+        }
+        ChannelPath::Joint { object, joint } => scene
+            .objects
+            .iter()
+            .find(|o| &o.name == object)
+            .and_then(|o| o.skeleton.as_ref())
+            .and_then(|s| s.joints.iter().find(|j| &j.name == joint))
+            .map_or((0, None), |j| span(&j.rotation.track.keys)),
+        ChannelPath::Light { light, property } => {
+            let Some(l) = scene.lights.iter().find(|l| &l.name == light) else { return (0, None) };
+            match property {
+                L::Position => span(&l.position.track.keys),
+                L::Direction => span(&l.direction.track.keys),
+                L::Colour => span(&l.colour.track.keys),
+                L::Intensity => span(&l.intensity.track.keys),
+            }
+        }
+    }
+}
+
+fn duration_s(scene: &Scene) -> f64 {
+    f64::from(scene.frame_range.end - scene.frame_range.start) / scene.fps
+}
+
+fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    let w = &mut out;
+    let range = scene.frame_range;
+    let _ = writeln!(w, "file:     {}", path.display());
+    let _ = writeln!(w, "format:   keyrig scene, version {}", scene_file::CURRENT_VERSION);
+    let _ = writeln!(
+        w,
+        "timing:   {} fps, frames {}..={} ({} frames, {:.3} s)",
+        scene.fps,
+        range.start,
+        range.end,
+        i64::from(range.end) - i64::from(range.start) + 1,
+        duration_s(scene)
+    );
+    let _ = writeln!(w, "ambient:  {}", scene.ambient);
+    let _ = writeln!(w, "objects:  {}", scene.objects.len());
+    for o in &scene.objects {
+        let _ = writeln!(
+            w,
+            "  {:?}: mesh {}, deformer {}",
+            o.name,
+            mesh_text(o.mesh.as_ref()),
+            o.deformer.kind.cli_name()
+        );
+        if let Some(skeleton) = &o.skeleton {
+            let _ = writeln!(w, "    skeleton: {} joints", skeleton.joints.len());
+            for (i, j) in skeleton.joints.iter().enumerate() {
+                let parent = match j.parent.and_then(|p| skeleton.joints.get(p)) {
+                    Some(p) => format!("parent {:?}", p.name),
+                    None if j.parent.is_some() => {
+                        format!("parent {} (missing)", j.parent.unwrap_or_default())
+                    }
+                    None => "root".to_string(),
+                };
+                let _ = writeln!(
+                    w,
+                    "      [{i}] {:?}: {parent}, rest translation {}",
+                    j.name, j.rest_translation
+                );
+            }
+        }
+    }
+    let _ = writeln!(w, "lights:   {}", scene.lights.len());
+    for l in &scene.lights {
+        let _ = writeln!(
+            w,
+            "  {:?}: {}{}",
+            l.name,
+            light_kind_text(&l.kind),
+            if l.enabled { "" } else { ", disabled" }
+        );
+    }
+    let c = &scene.camera;
+    let _ = writeln!(
+        w,
+        "camera:   target {}, yaw {}°, pitch {}°, distance {}, fov {}°",
+        c.target, c.yaw_deg, c.pitch_deg, c.distance, c.fov_y_deg
+    );
+    let channels = list_channels(scene);
+    let animated: Vec<(String, usize, Option<(f64, f64)>)> = channels
+        .iter()
+        .filter_map(|ch| {
+            let (n, span) = channel_keys(scene, ch);
+            (n > 0).then(|| (ch.to_string(), n, span))
+        })
+        .collect();
+    let total: usize = animated.iter().map(|a| a.1).sum();
+    let _ =
+        writeln!(w, "tracks:   {} animated of {} channels, {} keys", animated.len(), channels.len(), total);
+    let width = animated.iter().map(|a| a.0.len()).max().unwrap_or(0);
+    for (name, n, span) in &animated {
+        let span = span.map_or(String::new(), |(a, b)| format!(", {a:.3}..{b:.3} s"));
+        let _ = writeln!(w, "  {name:<width$}  {n} key{}{span}", if *n == 1 { "" } else { "s" });
+    }
+    if problems.is_empty() {
+        let _ = writeln!(w, "problems: none");
+    } else {
+        let _ = writeln!(w, "problems: {}", problems.len());
+        for p in problems {
+            match p.position {
+                Some((line, column)) => {
+                    let _ = writeln!(w, "  {}:{line}:{column}: {}", path.display(), p.problem);
+                }
+                None => {
+                    let _ = writeln!(w, "  {}: {}", path.display(), p.problem);
+                }
+            }
+        }
+    }
+    out
+}
+
+fn summary_json(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> serde_json::Value {
+    use serde_json::json;
+    let objects: Vec<_> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            json!({
+                "name": o.name,
+                "mesh": mesh_text(o.mesh.as_ref()),
+                "deformer": o.deformer.kind.cli_name(),
+                "joints": o.skeleton.as_ref().map(|s| s.joints.iter().map(|j| json!({
+                    "name": j.name,
+                    "parent": j.parent,
+                })).collect::<Vec<_>>()),
+            })
+        })
+        .collect();
+    let lights: Vec<_> = scene
+        .lights
+        .iter()
+        .map(|l| json!({"name": l.name, "kind": light_kind_text(&l.kind), "enabled": l.enabled}))
+        .collect();
+    let tracks: Vec<_> = list_channels(scene)
+        .iter()
+        .filter_map(|ch| {
+            let (n, span) = channel_keys(scene, ch);
+            (n > 0).then(|| json!({"channel": ch.to_string(), "keys": n, "first_time": span.map(|s| s.0), "last_time": span.map(|s| s.1)}))
+        })
+        .collect();
+    let problems: Vec<_> = problems
+        .iter()
+        .map(|p| {
+            json!({
+                "path": p.problem.path,
+                "message": p.problem.message,
+                "line": p.position.map(|p| p.0),
+                "column": p.position.map(|p| p.1),
+            })
+        })
+        .collect();
+    json!({
+        "file": path.display().to_string(),
+        "version": scene_file::CURRENT_VERSION,
+        "fps": scene.fps,
+        "frame_range": [scene.frame_range.start, scene.frame_range.end],
+        "duration_s": duration_s(scene),
+        "objects": objects,
+        "lights": lights,
+        "tracks": tracks,
+        "keys": tracks.iter().filter_map(|t| t["keys"].as_u64()).sum::<u64>(),
+        "problems": problems,
+    })
+}

@@ -1,0 +1,318 @@
+//! `keyrig info` and `keyrig sample` end to end: the real binary on the demo scene and on bad
+//! files and arguments.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const KEYRIG: &str = env!("CARGO_BIN_EXE_keyrig");
+
+fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron")
+}
+
+fn keyrig(args: &[&str]) -> Output {
+    Command::new(KEYRIG).args(args).output().expect("run keyrig")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A failed run: non-zero exit, no panic, and stderr containing every `needle`.
+fn assert_fails_with(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "expected failure, got success; stdout:\n{}", stdout(o));
+    assert!(!err.contains("panicked"), "panic:\n{err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks {n:?}:\n{err}");
+    }
+}
+
+fn write_temp(dir: &tempfile::TempDir, name: &str, text: &str) -> PathBuf {
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).expect("write temp file");
+    path
+}
+
+#[test]
+fn info_summarizes_the_demo() {
+    let demo = demo();
+    let o = keyrig(&["info", demo.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    for needle in [
+        "timing:   30 fps, frames 0..=90 (91 frames, 3.000 s)",
+        "\"Arm\": mesh procedural ArmHighPoly, deformer bones-blending",
+        "skeleton: 4 joints",
+        "[2] \"forearm\": parent \"elbow\"",
+        "\"Key\": spot (cutoff 35°",
+        "\"Sun\": directional",
+        "tracks:   8 animated of 19 channels, 37 keys",
+        "object/Arm/joint/forearm/rotation   8 keys, 0.000..3.000 s",
+        "problems: none",
+    ] {
+        assert!(out.contains(needle), "info lacks {needle:?}:\n{out}");
+    }
+}
+
+#[test]
+fn info_json() {
+    let demo = demo();
+    let o = keyrig(&["info", demo.to_str().unwrap(), "--format", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("info --format json is JSON");
+    assert_eq!(v["fps"], 30.0);
+    assert_eq!(v["frame_range"], serde_json::json!([0, 90]));
+    assert_eq!(v["duration_s"], 3.0);
+    assert_eq!(v["keys"], 37);
+    assert_eq!(v["objects"][0]["joints"].as_array().map(Vec::len), Some(4));
+    assert_eq!(v["lights"].as_array().map(Vec::len), Some(2));
+    assert_eq!(v["problems"], serde_json::json!([]));
+}
+
+#[test]
+fn info_lists_problems_with_place_and_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    // Key 1 comes before key 0; the light's intensity is negative.
+    let text = r#"(
+    version: 1,
+    scene: (
+        fps: 24.0,
+        frame_range: (start: 0, end: 48),
+        objects: [
+            (
+                name: "Box",
+                translation: (
+                    value: (0.0, 0.0, 0.0),
+                    track: [
+                        (time: 1.0, value: (0.0, 0.0, 0.0)),
+                        (time: 0.5, value: (1.0, 0.0, 0.0)),
+                    ],
+                ),
+                rotation: (value: (0.0, 0.0, 0.0, 1.0)),
+                scale: (value: (1.0, 1.0, 1.0)),
+            ),
+        ],
+        lights: [
+            (
+                name: "Lamp",
+                kind: Point,
+                position: (value: (0.0, 2.0, 0.0)),
+                direction: (value: (0.0, -1.0, 0.0)),
+                colour: (value: (1.0, 1.0, 1.0)),
+                intensity: (value: -3.0),
+            ),
+        ],
+    ),
+)
+"#;
+    let path = write_temp(&dir, "bad.ron", text);
+    let o = keyrig(&["info", path.to_str().unwrap()]);
+    assert_fails_with(&o, &["bad.ron: 2 validation problems"]);
+    let out = stdout(&o);
+    assert!(out.contains("problems: 2"), "{out}");
+    assert!(out.contains("bad.ron:13:32: objects[0].translation.track[1].time: keys out of order"), "{out}");
+    assert!(out.contains("bad.ron:27:36: lights[0].intensity.value: negative intensity -3"), "{out}");
+    // `sample` still samples a valid channel of that scene, with a warning.
+    let o = keyrig(&["sample", path.to_str().unwrap(), "--channel", "light/Lamp/position", "--frame", "0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("2 validation problems"), "{}", stderr(&o));
+    assert_eq!(stdout(&o), "frame,time,x,y,z\n0,0,0,2,0\n");
+    // … but not the invalid one, and says which key is wrong.
+    let o =
+        keyrig(&["sample", path.to_str().unwrap(), "--channel", "object/Box/translation", "--frame", "0"]);
+    assert_fails_with(&o, &["objects[0].translation.track[1].time", "earlier than the previous key"]);
+}
+
+#[test]
+fn bad_files_name_file_place_and_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, &[&str]); 5] = [
+        ("syntax.ron", "(\n    version: 1,\n    scene: (fps: 30.0,, )\n)\n", &["syntax.ron:3:"]),
+        (
+            "truncated.ron",
+            "(\n    version: 1,\n    scene: (\n        fps: 30.0,\n",
+            &["truncated.ron:", "truncated"],
+        ),
+        ("newer.ron", "(version: 7, scene: (future: true))\n", &["newer.ron:1:11:", "version 7 is newer"]),
+        (
+            "unknown.ron",
+            "(version: 1, scene: (fps: 30.0, frame_range: (start: 0, end: 1), colour_grading: 2))\n",
+            &["unknown.ron:1:", "colour_grading"],
+        ),
+        (
+            "nan.ron",
+            "(version: 1, scene: (fps: NaN, frame_range: (start: 0, end: 1)))\n",
+            &["nan.ron", "1:27:", "fps: not a finite number"],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        let path = write_temp(&dir, name, text);
+        let o = keyrig(&["info", path.to_str().unwrap()]);
+        let err = stderr(&o) + &stdout(&o);
+        assert!(!o.status.success(), "{name}: expected failure");
+        assert!(!err.contains("panicked"), "{name}: panic:\n{err}");
+        for n in needles {
+            assert!(err.contains(n), "{name}: output lacks {n:?}:\n{err}");
+        }
+    }
+    let missing = dir.path().join("missing.ron");
+    assert_fails_with(&keyrig(&["info", missing.to_str().unwrap()]), &["missing.ron: cannot read"]);
+    let glb = write_temp(&dir, "model.glb", "glTF");
+    assert_fails_with(
+        &keyrig(&["info", glb.to_str().unwrap()]),
+        &["model.glb: .glb model files are not supported"],
+    );
+    let txt = write_temp(&dir, "notes.txt", "hello");
+    assert_fails_with(
+        &keyrig(&["sample", txt.to_str().unwrap(), "--frame", "1"]),
+        &["notes.txt: unknown file type"],
+    );
+}
+
+#[test]
+fn sample_csv_over_frames_passes_through_keys() {
+    let demo = demo();
+    let o = keyrig(&[
+        "sample",
+        demo.to_str().unwrap(),
+        "--channel",
+        "object/Arm/joint/forearm/rotation",
+        "--frames",
+        "0..90",
+        "--step",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "frame,time,x,y,z,w");
+    assert_eq!(lines.len(), 1 + 10, "{out}");
+    assert_eq!(lines[1], "0,0,0,0,0,1");
+    // Frame 60 is the 180° twist key: q = (1, 0, 0, 0) up to f32 rounding of the key.
+    let row: Vec<f64> = lines[7].split(',').map(|c| c.parse().unwrap()).collect();
+    assert_eq!(row[0], 60.0);
+    assert!((row[1] - 2.0).abs() < 1e-12);
+    assert!((row[2].abs() - 1.0).abs() < 1e-6 && row[5].abs() < 1e-6, "{}", lines[7]);
+}
+
+#[test]
+fn sample_euler_degrees_and_times() {
+    let demo = demo();
+    let o = keyrig(&[
+        "sample",
+        demo.to_str().unwrap(),
+        "--channel",
+        "object/Arm/joint/elbow/rotation",
+        "--times",
+        "0.5..1.5",
+        "--step",
+        "0.5",
+        "--rotation-format",
+        "euler",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "frame,time,x_deg,y_deg,z_deg");
+    // Keys: 45° at 0.5 s, 90° at 1.0 s and 1.5 s, about −Z.
+    let z: Vec<f64> = lines[1..].iter().map(|l| l.split(',').nth(4).unwrap().parse().unwrap()).collect();
+    assert_eq!(z.len(), 3);
+    for (got, want) in z.iter().zip([-45.0, -90.0, -90.0]) {
+        assert!((got - want).abs() < 1e-3, "{out}");
+    }
+    assert!(lines[1].starts_with("15,0.5,"), "{out}");
+}
+
+#[test]
+fn sample_json() {
+    let demo = demo();
+    let o = keyrig(&[
+        "sample",
+        demo.to_str().unwrap(),
+        "--channel",
+        "object/Cube/translation",
+        "--frames",
+        "0..2",
+        "--format",
+        "json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["channel"], "object/Cube/translation");
+    assert_eq!(v["field"], "objects[1].translation");
+    assert_eq!(v["columns"], serde_json::json!(["x", "y", "z"]));
+    assert_eq!(v["keys"], 5);
+    let samples = v["samples"].as_array().expect("samples");
+    assert_eq!(samples.len(), 3);
+    assert_eq!(samples[0]["value"], serde_json::json!([-0.8f32, 0.3f32, 0.8f32]));
+    assert_eq!(samples[2]["frame"], 2.0);
+
+    let o = keyrig(&[
+        "sample",
+        demo.to_str().unwrap(),
+        "--channel",
+        "light/Key/intensity",
+        "--time",
+        "1",
+        "--format",
+        "json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["samples"][0]["value"], 2.5);
+}
+
+#[test]
+fn sample_bad_arguments() {
+    let demo = demo();
+    let d = demo.to_str().unwrap();
+    let cases: [(&[&str], &[&str]); 9] = [
+        (
+            &["--channel", "object/Leg/rotation", "--frame", "1"],
+            &["no object named \"Leg\"", "\"Arm\", \"Cube\""],
+        ),
+        (&["--channel", "object/Arm/size", "--frame", "1"], &["unknown object property \"size\""]),
+        (
+            &["--channel", "object/Arm/joint/knee/rotation", "--frame", "1"],
+            &["joints: \"shoulder\", \"elbow\""],
+        ),
+        (
+            &["--channel", "light/Fill/colour", "--frame", "1"],
+            &["no light named \"Fill\"", "\"Key\", \"Sun\""],
+        ),
+        (&["--frame", "1"], &["missing --channel", "object/Arm/joint/elbow/rotation"]),
+        (&["--channel", "object/Arm/rotation", "--frames", "9..1"], &["start 9 is after the end 1"]),
+        (&["--channel", "object/Arm/rotation", "--frames", "0..x"], &["end \"x\" is not a number"]),
+        (
+            &["--channel", "object/Arm/rotation", "--frames", "0..9", "--step", "0"],
+            &["--step 0: must be a positive"],
+        ),
+        (
+            &["--channel", "object/Arm/rotation", "--frames", "0..1e12", "--step", "1e-3"],
+            &["at most 10000000"],
+        ),
+    ];
+    for (args, needles) in cases {
+        let mut all = vec!["sample", d];
+        all.extend_from_slice(args);
+        assert_fails_with(&keyrig(&all), needles);
+    }
+    // Clap-level errors: no time given, two given, unknown format.
+    assert_fails_with(&keyrig(&["sample", d, "--channel", "object/Arm/rotation"]), &["--frames"]);
+    assert_fails_with(
+        &keyrig(&["sample", d, "--channel", "object/Arm/rotation", "--frame", "1", "--time", "1"]),
+        &["cannot be used with"],
+    );
+    assert_fails_with(
+        &keyrig(&["sample", d, "--channel", "object/Arm/rotation", "--frame", "1", "--format", "xml"]),
+        &["invalid value 'xml'"],
+    );
+    assert_fails_with(
+        &keyrig(&["sample", d, "--channel", "object/Arm/rotation", "--time", "NaN"]),
+        &["--time NaN"],
+    );
+}
