@@ -145,8 +145,11 @@ fn u32_at(data: &[u8], offset: usize) -> Option<u32> {
     data.get(offset..offset + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
 }
 
-/// The JSON chunk (with its byte offset) and optional BIN chunk of a .glb.
-fn parse_glb(data: &[u8]) -> Result<(&[u8], usize, Option<&[u8]>), GltfError> {
+/// The chunks of a .glb: JSON bytes, the JSON chunk's byte offset, and the BIN chunk.
+type GlbChunks<'a> = (&'a [u8], usize, Option<&'a [u8]>);
+
+/// Splits a .glb into its chunks, checking the header and every chunk length.
+fn parse_glb(data: &[u8]) -> Result<GlbChunks<'_>, GltfError> {
     let glb = |offset: usize, msg: String| at(Location::Byte(offset), GltfErrorKind::Glb(msg));
     if data.len() < 12 {
         return Err(glb(0, format!("file is {} bytes, shorter than the 12-byte header", data.len())));
@@ -680,7 +683,7 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
         let mut targets = Vec::new();
         for (t, target) in prim.morph_targets().enumerate() {
             let there = format!("{here}/targets/{t}");
-            let mut read =
+            let read =
                 |acc: Option<gltf::Accessor<'_>>, what: &str| -> Result<Option<Vec<Vec3>>, GltfError> {
                     let Some(acc) = acc else { return Ok(None) };
                     check_same_count(cx, &acc, what, &[Dimensions::Vec3], F32, n, &there)?;
@@ -964,7 +967,7 @@ fn read_animation(
         let times: Vec<f32> = reader.read_inputs().map(Iterator::collect).unwrap_or_default();
         count_matches(times.len(), key_count, &format!("{here}/input"))?;
         for (k, w) in times.windows(2).enumerate() {
-            if !(w[0] < w[1]) {
+            if w[0].partial_cmp(&w[1]) != Some(std::cmp::Ordering::Less) {
                 return Err(ptr(
                     format!("/accessors/{}", input.index()),
                     GltfErrorKind::Animation(format!(
