@@ -704,7 +704,7 @@ impl TrackValue for Quat {
             QuatShape::Step(q) => *q,
             QuatShape::Slerp(arc) => arc.eval(u),
             QuatShape::Squad { keys, controls } => {
-                quat::slerp(keys.eval(u), controls.eval(u), 2.0 * u * (1.0 - u))
+                quat::slerp_fast(keys.eval(u), controls.eval(u), 2.0 * u * (1.0 - u))
             }
             QuatShape::Hermite(cubic) => {
                 let v = cubic.eval(u);
