@@ -1,9 +1,68 @@
 //! keyrig-editor: the eframe/egui application.
+//!
+//! - [`state`]: the document (scene, file, dirty flag, undo/redo), selection and playback.
+//! - [`commands`]: every user action with label, tooltip and shortcuts (menus, shortcut
+//!   handler and help window all read it).
+//! - [`channels`]: addressing animated values and the key operations on them.
+//! - [`panels`]: outliner, inspector, timeline (dope sheet), curves, viewport, dialogs.
+//! - [`widgets`]: key diamond, TCB slider.
+//! - [`app`]: [`EditorApp`], which ties them together; [`run_editor`] opens the window.
 
 use std::path::PathBuf;
 
+pub mod app;
+pub mod camera;
+pub mod channels;
+pub mod commands;
+pub mod eval;
+pub mod files;
+pub mod panels;
+pub mod skinning;
+pub mod state;
+pub mod widgets;
+
+pub use app::{EditorApp, EditorOptions};
+pub use commands::Command;
+
+/// Initial window size, points.
+pub const WINDOW_SIZE: [f32; 2] = [1280.0, 800.0];
+
+/// Builds the editor for `file` (a scene or a model), or for the demo scene when `None`. An
+/// unreadable file opens the demo scene with the error in the status bar, so the editor
+/// always starts.
+#[must_use]
+pub fn editor_for(file: Option<PathBuf>, options: EditorOptions) -> EditorApp {
+    match file {
+        None => EditorApp::new(keyrig_io::demo::demo_scene(), None, options),
+        Some(path) => match files::open_any(&path) {
+            Ok(scene) => {
+                let scene_path = files::is_scene_file(&path).then(|| path.clone());
+                let mut app = EditorApp::new(scene, scene_path, options);
+                app.recent.add(&path);
+                app
+            }
+            Err(e) => {
+                let mut app = EditorApp::new(keyrig_io::demo::demo_scene(), None, options);
+                app.error(e);
+                app
+            }
+        },
+    }
+}
+
 /// Opens the editor window on `file`, or on the demo scene when `None`.
 pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
-    let _ = file;
-    anyhow::bail!("the editor window is not built yet")
+    let app = editor_for(file, EditorOptions::default());
+    let title = app.doc.title();
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title(title)
+            .with_inner_size(WINDOW_SIZE)
+            .with_min_inner_size([800.0, 500.0])
+            .with_drag_and_drop(true),
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    eframe::run_native("keyrig", options, Box::new(|_cc| Ok(Box::new(app))))
+        .map_err(|e| anyhow::anyhow!("cannot open the editor window: {e}"))
 }

@@ -1,0 +1,645 @@
+//! The editor application: state, command dispatch and the frame's layout.
+
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::rc::Rc;
+
+use egui::{Context, Key, Modifiers};
+use glam::Quat;
+use keyrig_core::{DeformerKind, Scene};
+
+use crate::camera::OrbitCamera;
+use crate::channels::{self, ChannelId, ChannelValue, KeyCopy};
+use crate::commands::{pressed_commands, Command};
+use crate::eval::{ObjectPose, PoseOverrides, Tracks};
+use crate::files::{self, Recent, Recovery};
+use crate::panels;
+use crate::state::{Document, KeyRef, Playback, Selected, Selection};
+
+/// Validated tracks and the document key (document, revision) they were built for.
+type CachedTracks = ((u64, u64), Rc<Tracks>);
+
+/// How the viewport draws the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderStyle {
+    /// Flat-shaded surfaces with the wireframe on top.
+    Shaded,
+    /// Edges only.
+    Wireframe,
+    /// Bones only, no mesh.
+    BonesOnly,
+}
+
+impl RenderStyle {
+    pub const ALL: [RenderStyle; 3] = [RenderStyle::Shaded, RenderStyle::Wireframe, RenderStyle::BonesOnly];
+
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            RenderStyle::Shaded => "Shaded",
+            RenderStyle::Wireframe => "Wireframe",
+            RenderStyle::BonesOnly => "Bones only",
+        }
+    }
+}
+
+/// Viewport settings that are not part of the document.
+#[derive(Clone, Debug)]
+pub struct ViewSettings {
+    pub camera: OrbitCamera,
+    pub grid: bool,
+    pub bones: bool,
+    pub style: RenderStyle,
+}
+
+/// A status-bar message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Status {
+    pub text: String,
+    pub is_error: bool,
+}
+
+/// What to do once unsaved changes have been dealt with.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PendingAction {
+    New,
+    Open(Option<PathBuf>),
+    Quit,
+}
+
+/// Why the file dialog is open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DialogPurpose {
+    Open,
+    SaveAs,
+    Import,
+    Export,
+}
+
+/// Start-up options (tests use a temporary folder for recovery and recent files).
+#[derive(Clone, Debug, Default)]
+pub struct EditorOptions {
+    /// Folder for the recovery file and the recent-files list; the platform's data folder
+    /// when `None`.
+    pub data_dir: Option<PathBuf>,
+    /// Seconds between autosaves of a dirty document (default 30).
+    pub autosave_seconds: Option<f64>,
+}
+
+/// The whole editor.
+pub struct EditorApp {
+    pub doc: Document,
+    pub selection: Selection,
+    pub playback: Playback,
+    pub record: bool,
+    pub overrides: PoseOverrides,
+    pub view: ViewSettings,
+    pub clipboard: Vec<KeyCopy>,
+    pub status: Option<Status>,
+    pub show_help: bool,
+    pub pending: Option<PendingAction>,
+    pub recent: Recent,
+    pub recovery: Recovery,
+    /// A recovered scene the user has been offered, not yet accepted or declined.
+    pub recovery_offer: Option<Scene>,
+    pub(crate) file_dialog: egui_file_dialog::FileDialog,
+    pub(crate) dialog_purpose: Option<DialogPurpose>,
+    pub(crate) gizmo: transform_gizmo_egui::Gizmo,
+    pub(crate) timeline: panels::timeline::TimelineState,
+    pub skin: crate::skinning::SkinCache,
+    tracks: RefCell<Option<CachedTracks>>,
+    window_title: String,
+    close_sent: bool,
+    last_autosave: f64,
+    autosave_seconds: f64,
+    quit_confirmed: bool,
+}
+
+impl EditorApp {
+    /// An editor on `scene` (from `path` when it came from a file).
+    #[must_use]
+    pub fn new(scene: Scene, path: Option<PathBuf>, options: EditorOptions) -> Self {
+        let data_dir = options.data_dir.clone().or_else(files::default_data_dir);
+        let recovery = Recovery::new(data_dir.as_deref());
+        let recovery_offer = recovery.load_pending();
+        let camera = OrbitCamera::from(scene.camera);
+        let mut playback = Playback::default();
+        playback.go_to(scene.frame_range.start, scene.frame_range.start, scene.frame_range.end);
+        EditorApp {
+            doc: Document::new(scene, path),
+            selection: Selection::default(),
+            playback,
+            record: false,
+            overrides: PoseOverrides::new(),
+            view: ViewSettings { camera, grid: true, bones: true, style: RenderStyle::Shaded },
+            clipboard: Vec::new(),
+            status: None,
+            show_help: false,
+            pending: None,
+            recent: Recent::load(data_dir.as_deref()),
+            recovery,
+            recovery_offer,
+            file_dialog: egui_file_dialog::FileDialog::new(),
+            dialog_purpose: None,
+            gizmo: transform_gizmo_egui::Gizmo::default(),
+            timeline: panels::timeline::TimelineState::default(),
+            skin: crate::skinning::SkinCache::default(),
+            tracks: RefCell::new(None),
+            window_title: String::new(),
+            close_sent: false,
+            last_autosave: 0.0,
+            autosave_seconds: options.autosave_seconds.unwrap_or(30.0),
+            quit_confirmed: false,
+        }
+    }
+
+    /// The document's validated tracks, rebuilt when the document changes.
+    #[must_use]
+    pub fn tracks(&self) -> Rc<Tracks> {
+        let key = self.doc.cache_key();
+        let mut cache = self.tracks.borrow_mut();
+        match &*cache {
+            Some((k, tracks)) if *k == key => Rc::clone(tracks),
+            _ => {
+                let tracks = Rc::new(Tracks::new(self.doc.scene()));
+                *cache = Some((key, Rc::clone(&tracks)));
+                tracks
+            }
+        }
+    }
+
+    /// The value of a channel now (sampled, or its pose override).
+    #[must_use]
+    pub fn value_now(&self, id: ChannelId) -> Option<ChannelValue> {
+        self.tracks().value(id, self.time(), &self.overrides)
+    }
+
+    /// Object `o` evaluated now.
+    #[must_use]
+    pub fn object_pose_now(&self, o: usize) -> Option<ObjectPose> {
+        self.tracks().object_pose(self.doc.scene(), o, self.time(), &self.overrides)
+    }
+
+    /// Current time in seconds.
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.playback.time(self.doc.scene().fps)
+    }
+
+    /// Shows a message in the status bar.
+    pub fn info(&mut self, text: impl Into<String>) {
+        self.status = Some(Status { text: text.into(), is_error: false });
+    }
+
+    /// Shows an error in the status bar.
+    pub fn error(&mut self, text: impl Into<String>) {
+        self.status = Some(Status { text: text.into(), is_error: true });
+    }
+
+    /// Moves the clock to a whole frame; pose overrides are dropped.
+    pub fn set_frame(&mut self, frame: i32) {
+        let range = self.doc.scene().frame_range;
+        self.playback.go_to(frame, range.start, range.end);
+        self.overrides.clear();
+    }
+
+    /// Replaces the document (new, open, recover).
+    pub fn replace_document(&mut self, scene: Scene, path: Option<PathBuf>) {
+        self.view.camera = OrbitCamera::from(scene.camera);
+        let range = scene.frame_range;
+        self.doc = Document::new(scene, path);
+        self.selection = Selection::default();
+        self.overrides.clear();
+        self.playback = Playback::default();
+        self.playback.go_to(range.start, range.start, range.end);
+    }
+
+    /// The object index the selection belongs to (the joint's object for joints).
+    #[must_use]
+    pub fn selected_object(&self) -> Option<usize> {
+        match self.selection.item {
+            Some(Selected::Object(o)) | Some(Selected::Joint { object: o, .. }) => Some(o),
+            _ => None,
+        }
+    }
+
+    /// Applies a pose change made with a gizmo or the inspector. In record mode it writes a key
+    /// at the current frame; otherwise an animated channel gets a transient override (key it
+    /// with I) and a static one changes its value. `group` merges a drag into one undo step.
+    pub fn apply_pose(&mut self, id: ChannelId, value: ChannelValue, group: &str) {
+        let animated = channels::key_count(self.doc.scene(), id) > 0;
+        if self.record {
+            let time = f64::from(self.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+            let label = format!("key {}", id.label(self.doc.scene()));
+            self.doc.edit_continuous(group, &label, |scene| {
+                channels::set_key(scene, id, time, value);
+            });
+            self.overrides.remove(&id);
+        } else if animated {
+            self.overrides.insert(id, value);
+        } else {
+            let label = format!("pose {}", id.label(self.doc.scene()));
+            self.doc.edit_continuous(group, &label, |scene| {
+                channels::set_static_value(scene, id, value);
+            });
+        }
+    }
+
+    /// Keys the current values of the selection's channels at the current frame.
+    pub fn insert_key(&mut self) {
+        let ids = self.selection.channels(self.doc.scene());
+        if ids.is_empty() {
+            self.error("Insert key: select an object, joint or light first");
+            return;
+        }
+        let time = f64::from(self.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+        let values: Vec<(ChannelId, ChannelValue)> =
+            ids.iter().filter_map(|&id| self.value_now(id).map(|v| (id, v))).collect();
+        let frame = self.playback.whole_frame();
+        self.doc.edit(&format!("insert key at frame {frame}"), |scene| {
+            for (id, v) in &values {
+                channels::set_key(scene, *id, time, *v);
+            }
+        });
+        for id in ids {
+            self.overrides.remove(&id);
+        }
+        self.selection.retain_valid(self.doc.scene());
+        self.info(format!("Keyed {} channel(s) at frame {frame}", values.len()));
+    }
+
+    /// Deletes the selected keys.
+    pub fn delete_selected_keys(&mut self) {
+        if self.selection.keys.is_empty() {
+            self.info("Delete: no keys selected");
+            return;
+        }
+        let keys: Vec<KeyRef> = self.selection.keys.iter().copied().collect();
+        let n = keys.len();
+        self.doc.edit(&format!("delete {n} key(s)"), |scene| {
+            let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
+            for k in &keys {
+                by_channel.entry(k.channel).or_default().push(k.index);
+            }
+            for (id, indices) in by_channel {
+                channels::delete_keys(scene, id, &indices);
+            }
+        });
+        self.selection.keys.clear();
+        self.info(format!("Deleted {n} key(s)"));
+    }
+
+    /// Copies the selected keys to the editor's clipboard.
+    pub fn copy_selected_keys(&mut self) {
+        self.clipboard = self
+            .selection
+            .keys
+            .iter()
+            .filter_map(|k| channels::copy_key(self.doc.scene(), k.channel, k.index))
+            .collect();
+        self.info(format!("Copied {} key(s)", self.clipboard.len()));
+    }
+
+    /// Pastes the clipboard at the current frame, keeping the keys' relative timing.
+    pub fn paste_keys(&mut self) {
+        if self.clipboard.is_empty() {
+            self.info("Paste: the clipboard is empty");
+            return;
+        }
+        let fps = self.doc.scene().fps.max(1e-9);
+        let now = f64::from(self.playback.whole_frame()) / fps;
+        let earliest = self.clipboard.iter().map(|k| k.time).fold(f64::INFINITY, f64::min);
+        let copies = self.clipboard.clone();
+        let mut pasted = Vec::new();
+        self.doc.edit(&format!("paste {} key(s)", copies.len()), |scene| {
+            for c in &copies {
+                if let Some(index) = channels::paste_key(scene, c, now + (c.time - earliest)) {
+                    pasted.push(KeyRef { channel: c.channel, index });
+                }
+            }
+        });
+        self.selection.keys = pasted.into_iter().collect();
+        self.selection.retain_valid(self.doc.scene());
+    }
+
+    /// Sets the deformer of the selected object (or of every skinned object when none is
+    /// selected).
+    pub fn set_deformer(&mut self, kind: DeformerKind) {
+        let targets: Vec<usize> = match self.selected_object() {
+            Some(o) => vec![o],
+            None => (0..self.doc.scene().objects.len())
+                .filter(|&o| self.doc.scene().objects[o].skeleton.is_some())
+                .collect(),
+        };
+        self.doc.edit(&format!("deformer {}", kind.label()), |scene| {
+            for o in targets {
+                if let Some(object) = scene.objects.get_mut(o) {
+                    object.deformer.kind = kind;
+                }
+            }
+        });
+        self.info(format!("Deformer: {}", kind.label()));
+    }
+
+    /// Points the camera at a preset.
+    pub fn camera_preset(&mut self, command: Command) {
+        let c = &mut self.view.camera;
+        match command {
+            Command::CameraFront => (c.yaw_deg, c.pitch_deg) = (0.0, 0.0),
+            Command::CameraSide => (c.yaw_deg, c.pitch_deg) = (90.0, 0.0),
+            Command::CameraTop => (c.yaw_deg, c.pitch_deg) = (0.0, 89.9),
+            Command::CameraShoulder | Command::CameraElbow => {
+                let joint = if command == Command::CameraShoulder { 0 } else { 1 };
+                let object = self
+                    .selected_object()
+                    .or_else(|| self.doc.scene().objects.iter().position(|o| o.skeleton.is_some()));
+                let Some(o) = object else {
+                    self.error("No skeleton in the scene to look at");
+                    return;
+                };
+                let Some(pose) = self.object_pose_now(o) else { return };
+                let Some(f) = pose.object_from_joint.get(joint) else {
+                    self.error("The skeleton has too few joints for this view");
+                    return;
+                };
+                let world = pose.world_from_object * *f;
+                let c = &mut self.view.camera;
+                c.target = world.translation.into();
+                // Look along the bone (+X of the joint frame) from the child side, slightly above.
+                c.yaw_deg = 90.0;
+                c.pitch_deg = 10.0;
+                c.distance = 0.9;
+            }
+            _ => {}
+        }
+    }
+
+    /// Runs a command.
+    pub fn run_command(&mut self, ctx: &Context, command: Command) {
+        let range = self.doc.scene().frame_range;
+        match command {
+            Command::New => self.request(PendingAction::New),
+            Command::Open => self.request(PendingAction::Open(None)),
+            Command::Save => self.save(),
+            Command::SaveAs => self.open_dialog(DialogPurpose::SaveAs),
+            Command::Import => self.open_dialog(DialogPurpose::Import),
+            Command::ExportGltf => self.open_dialog(DialogPurpose::Export),
+            Command::Quit => self.request(PendingAction::Quit),
+            Command::Undo => {
+                if let Some(label) = self.doc.undo_label().map(str::to_owned) {
+                    self.doc.undo();
+                    self.info(format!("Undo {label}"));
+                }
+                self.selection.retain_valid(self.doc.scene());
+            }
+            Command::Redo => {
+                if let Some(label) = self.doc.redo_label().map(str::to_owned) {
+                    self.doc.redo();
+                    self.info(format!("Redo {label}"));
+                }
+                self.selection.retain_valid(self.doc.scene());
+            }
+            Command::ToggleRecord => self.record = !self.record,
+            Command::InsertKey => self.insert_key(),
+            Command::DeleteKeys => self.delete_selected_keys(),
+            Command::CopyKeys => self.copy_selected_keys(),
+            Command::PasteKeys => self.paste_keys(),
+            Command::PlayPause => {
+                self.playback.playing = !self.playback.playing;
+                self.overrides.clear();
+            }
+            Command::ToggleLoop => self.playback.looping = !self.playback.looping,
+            Command::NextFrame => self.set_frame(self.playback.whole_frame() + 1),
+            Command::PrevFrame => self.set_frame(self.playback.whole_frame() - 1),
+            Command::FirstFrame => self.set_frame(range.start),
+            Command::LastFrame => self.set_frame(range.end),
+            Command::ToggleGrid => self.view.grid = !self.view.grid,
+            Command::ToggleBones => self.view.bones = !self.view.bones,
+            Command::SetDeformer(kind) => self.set_deformer(kind),
+            Command::CameraFront
+            | Command::CameraSide
+            | Command::CameraTop
+            | Command::CameraShoulder
+            | Command::CameraElbow => self.camera_preset(command),
+            Command::ShowHelp => self.show_help = !self.show_help,
+        }
+        ctx.request_repaint();
+    }
+
+    /// Asks to run an action that would lose unsaved changes; it runs at once when the
+    /// document is clean, otherwise a confirmation dialog appears.
+    pub fn request(&mut self, action: PendingAction) {
+        if self.doc.is_dirty() {
+            self.pending = Some(action);
+        } else {
+            self.perform(action);
+        }
+    }
+
+    /// Runs an action without asking.
+    pub fn perform(&mut self, action: PendingAction) {
+        match action {
+            PendingAction::New => {
+                self.replace_document(Scene::default(), None);
+                self.info("New scene");
+            }
+            PendingAction::Open(Some(path)) => self.open_path(path),
+            PendingAction::Open(None) => self.open_dialog(DialogPurpose::Open),
+            PendingAction::Quit => {
+                self.recovery.clear();
+                self.quit_confirmed = true;
+            }
+        }
+    }
+
+    /// Opens a scene or model file (decided by its extension).
+    pub fn open_path(&mut self, path: PathBuf) {
+        match files::open_any(&path) {
+            Ok(scene) => {
+                self.replace_document(scene, files::is_scene_file(&path).then(|| path.clone()));
+                self.recent.add(&path);
+                self.info(format!("Opened {}", path.display()));
+            }
+            Err(e) => self.error(e),
+        }
+    }
+
+    /// Saves to the document's file, or asks for one.
+    pub fn save(&mut self) {
+        match self.doc.path().map(PathBuf::from) {
+            Some(path) => self.save_to(path),
+            None => self.open_dialog(DialogPurpose::SaveAs),
+        }
+    }
+
+    /// Saves to `path`.
+    pub fn save_to(&mut self, path: PathBuf) {
+        let scene = self.doc.scene();
+        match files::save_scene(&path, scene) {
+            Ok(()) => {
+                self.doc.mark_saved(path.clone());
+                self.recovery.clear();
+                self.recent.add(&path);
+                self.info(format!("Saved {}", path.display()));
+            }
+            Err(e) => self.error(e),
+        }
+    }
+
+    fn open_dialog(&mut self, purpose: DialogPurpose) {
+        self.dialog_purpose = Some(purpose);
+        match purpose {
+            DialogPurpose::Open | DialogPurpose::Import => self.file_dialog.pick_file(),
+            DialogPurpose::SaveAs | DialogPurpose::Export => self.file_dialog.save_file(),
+        }
+    }
+
+    fn dialog_ui(&mut self, ctx: &Context) {
+        let Some(purpose) = self.dialog_purpose else { return };
+        self.file_dialog.update(ctx);
+        if let Some(path) = self.file_dialog.take_picked() {
+            self.dialog_purpose = None;
+            match purpose {
+                DialogPurpose::Open => self.open_path(path),
+                DialogPurpose::SaveAs => self.save_to(files::with_extension_if_missing(path, "ron")),
+                DialogPurpose::Import => self.import_path(path),
+                DialogPurpose::Export => self.export_to(files::with_extension_if_missing(path, "glb")),
+            }
+        } else if matches!(
+            self.file_dialog.state(),
+            egui_file_dialog::DialogState::Cancelled | egui_file_dialog::DialogState::Closed
+        ) {
+            self.dialog_purpose = None;
+        }
+    }
+
+    /// Imports a model into the current scene as a new object.
+    pub fn import_path(&mut self, path: PathBuf) {
+        match files::import_model(&path) {
+            Ok(imported) => {
+                let n = imported.objects.len();
+                self.doc.edit(&format!("import {}", path.display()), |scene| {
+                    scene.objects.extend(imported.objects);
+                    scene.lights.extend(imported.lights);
+                });
+                self.recent.add(&path);
+                self.info(format!("Imported {n} object(s) from {}", path.display()));
+            }
+            Err(e) => self.error(e),
+        }
+    }
+
+    /// Exports the scene as glTF.
+    pub fn export_to(&mut self, path: PathBuf) {
+        match files::export_gltf(&path, self.doc.scene()) {
+            Ok(()) => self.info(format!("Exported {}", path.display())),
+            Err(e) => self.error(e),
+        }
+    }
+
+    fn handle_dropped_files(&mut self, ctx: &Context) {
+        let dropped: Vec<PathBuf> =
+            ctx.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.path.clone()).collect());
+        for path in dropped {
+            if files::is_scene_file(&path) {
+                self.request(PendingAction::Open(Some(path)));
+            } else {
+                self.import_path(path);
+            }
+        }
+    }
+
+    fn autosave(&mut self, ctx: &Context) {
+        let now = ctx.input(|i| i.time);
+        if self.doc.is_dirty() && now - self.last_autosave >= self.autosave_seconds {
+            self.last_autosave = now;
+            if let Err(e) = self.recovery.write(self.doc.scene(), self.doc.path()) {
+                self.error(format!("Autosave failed: {e}"));
+            }
+        }
+    }
+
+    /// One frame of the editor, drawn into `ui` (the whole window).
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        // Playback clock.
+        let dt = ctx.input(|i| f64::from(i.stable_dt));
+        let scene = self.doc.scene();
+        let (fps, range) = (scene.fps, scene.frame_range);
+        if self.playback.playing {
+            self.playback.advance(dt, fps, range.start, range.end);
+            ctx.request_repaint();
+        }
+
+        for command in pressed_commands(&ctx) {
+            self.run_command(&ctx, command);
+        }
+        // Escape closes the help window.
+        if self.show_help && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {
+            self.show_help = false;
+        }
+        self.handle_dropped_files(&ctx);
+
+        panels::menu::ui(ui, self);
+        panels::status::ui(ui, self);
+        panels::timeline::ui(ui, self);
+        panels::outliner::ui(ui, self);
+        panels::inspector::ui(ui, self);
+        panels::viewport::ui(ui, self);
+
+        panels::dialogs::help_ui(&ctx, self);
+        panels::dialogs::confirm_ui(&ctx, self);
+        panels::dialogs::recovery_ui(&ctx, self);
+        self.dialog_ui(&ctx);
+
+        // A drag (slider, gizmo, key drag) ends when the pointer is released.
+        if !ctx.input(|i| i.pointer.any_down()) {
+            self.doc.close_group();
+        }
+        self.selection.retain_valid(self.doc.scene());
+        self.autosave(&ctx);
+
+        // Viewport commands request a repaint: send the title only when it changes.
+        let title = self.doc.title();
+        if title != self.window_title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.window_title = title;
+        }
+        if self.quit_confirmed && !self.close_sent {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            self.close_sent = true;
+        }
+        if ctx.input(|i| i.viewport().close_requested()) && !self.quit_confirmed && self.doc.is_dirty() {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.pending = Some(PendingAction::Quit);
+        }
+    }
+
+    /// Whether the user confirmed quitting (tests check it instead of a closed window).
+    #[must_use]
+    pub fn quit_confirmed(&self) -> bool {
+        self.quit_confirmed
+    }
+
+    /// The rotation of a joint shown now (sampled, or its override).
+    #[must_use]
+    pub fn joint_rotation(&self, object: usize, joint: usize) -> Option<Quat> {
+        match self.value_now(ChannelId::JointRotation { object, joint })? {
+            ChannelValue::Rotation(q) => Some(q),
+            _ => None,
+        }
+    }
+}
+
+impl eframe::App for EditorApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        EditorApp::ui(self, ui);
+    }
+
+    fn on_exit(&mut self) {
+        // A clean exit leaves no recovery file; a dirty one keeps the last autosave.
+        if !self.doc.is_dirty() {
+            self.recovery.clear();
+        }
+    }
+}

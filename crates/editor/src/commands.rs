@@ -1,0 +1,268 @@
+//! Every user action of the editor, with its label, tooltip and keyboard shortcuts. The one
+//! list drives the menus, the toolbar tooltips, the shortcut handler and the help window.
+
+use egui::{Key, KeyboardShortcut, Modifiers};
+use keyrig_core::DeformerKind;
+
+/// A user action.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Command {
+    New,
+    Open,
+    Save,
+    SaveAs,
+    Import,
+    ExportGltf,
+    Quit,
+    Undo,
+    Redo,
+    ToggleRecord,
+    InsertKey,
+    DeleteKeys,
+    CopyKeys,
+    PasteKeys,
+    PlayPause,
+    ToggleLoop,
+    NextFrame,
+    PrevFrame,
+    FirstFrame,
+    LastFrame,
+    ToggleGrid,
+    ToggleBones,
+    SetDeformer(DeformerKind),
+    CameraFront,
+    CameraSide,
+    CameraTop,
+    CameraShoulder,
+    CameraElbow,
+    ShowHelp,
+}
+
+const fn sc(modifiers: Modifiers, key: Key) -> KeyboardShortcut {
+    KeyboardShortcut::new(modifiers, key)
+}
+
+const NONE: Modifiers = Modifiers::NONE;
+const CMD: Modifiers = Modifiers::COMMAND;
+const CMD_SHIFT: Modifiers = Modifiers::COMMAND.plus(Modifiers::SHIFT);
+
+impl Command {
+    /// All commands, in the order the help window lists them. Commands that share a shortcut
+    /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
+    /// the shortcut handler tries the most specific first.
+    pub const ALL: [Command; 32] = [
+        Command::New,
+        Command::Open,
+        Command::SaveAs,
+        Command::Save,
+        Command::Import,
+        Command::ExportGltf,
+        Command::Quit,
+        Command::Redo,
+        Command::Undo,
+        Command::ToggleRecord,
+        Command::InsertKey,
+        Command::DeleteKeys,
+        Command::CopyKeys,
+        Command::PasteKeys,
+        Command::PlayPause,
+        Command::ToggleLoop,
+        Command::NextFrame,
+        Command::PrevFrame,
+        Command::FirstFrame,
+        Command::LastFrame,
+        Command::ToggleGrid,
+        Command::ToggleBones,
+        Command::SetDeformer(DeformerKind::Rigid),
+        Command::SetDeformer(DeformerKind::LinearBlend),
+        Command::SetDeformer(DeformerKind::BonesBlending),
+        Command::SetDeformer(DeformerKind::DualQuaternion),
+        Command::CameraFront,
+        Command::CameraSide,
+        Command::CameraTop,
+        Command::CameraShoulder,
+        Command::CameraElbow,
+        Command::ShowHelp,
+    ];
+
+    /// Text for menus and the help window.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            Command::New => "New",
+            Command::Open => "Open…",
+            Command::Save => "Save",
+            Command::SaveAs => "Save as…",
+            Command::Import => "Import model…",
+            Command::ExportGltf => "Export glTF…",
+            Command::Quit => "Quit",
+            Command::Undo => "Undo",
+            Command::Redo => "Redo",
+            Command::ToggleRecord => "Record mode",
+            Command::InsertKey => "Insert key",
+            Command::DeleteKeys => "Delete keys",
+            Command::CopyKeys => "Copy keys",
+            Command::PasteKeys => "Paste keys",
+            Command::PlayPause => "Play / pause",
+            Command::ToggleLoop => "Loop",
+            Command::NextFrame => "Next frame",
+            Command::PrevFrame => "Previous frame",
+            Command::FirstFrame => "First frame",
+            Command::LastFrame => "Last frame",
+            Command::ToggleGrid => "Grid",
+            Command::ToggleBones => "Bones",
+            Command::SetDeformer(k) => k.label(),
+            Command::CameraFront => "Front view",
+            Command::CameraSide => "Side view",
+            Command::CameraTop => "Top view",
+            Command::CameraShoulder => "Shoulder view",
+            Command::CameraElbow => "Elbow view",
+            Command::ShowHelp => "Keyboard shortcuts",
+        }
+    }
+
+    /// One sentence saying what the command does.
+    #[must_use]
+    pub fn tooltip(self) -> &'static str {
+        match self {
+            Command::New => "Start a new, empty scene",
+            Command::Open => "Open a scene file (.ron)",
+            Command::Save => "Save the scene to its file",
+            Command::SaveAs => "Save the scene to a new file",
+            Command::Import => "Import a model (glTF, MD2) into the scene",
+            Command::ExportGltf => "Export the scene's meshes, skins and animation as glTF",
+            Command::Quit => "Close the editor (asks before losing changes)",
+            Command::Undo => "Revert the last edit",
+            Command::Redo => "Repeat the last undone edit",
+            Command::ToggleRecord => {
+                "Auto-key: a gizmo or inspector change writes a key at the current frame"
+            }
+            Command::InsertKey => "Key the selection's current pose at the current frame",
+            Command::DeleteKeys => "Delete the selected keys",
+            Command::CopyKeys => "Copy the selected keys",
+            Command::PasteKeys => "Paste copied keys at the current frame",
+            Command::PlayPause => "Start or stop playback",
+            Command::ToggleLoop => "Loop playback over the frame range",
+            Command::NextFrame => "Step one frame forward",
+            Command::PrevFrame => "Step one frame back",
+            Command::FirstFrame => "Go to the first frame of the range",
+            Command::LastFrame => "Go to the last frame of the range",
+            Command::ToggleGrid => "Show or hide the ground grid",
+            Command::ToggleBones => "Show or hide the skeleton's bones",
+            Command::SetDeformer(DeformerKind::Rigid) => "Skin each vertex to one bone (v' = M(j)·v)",
+            Command::SetDeformer(DeformerKind::LinearBlend) => {
+                "Linear blend skinning; collapses under twist (candy wrapper)"
+            }
+            Command::SetDeformer(DeformerKind::BonesBlending) => {
+                "Kavan & Žára bones blending: keeps the cross-section under twist"
+            }
+            Command::SetDeformer(DeformerKind::DualQuaternion) => {
+                "Dual quaternion skinning: preserves volume"
+            }
+            Command::CameraFront => "Look along −Z at the scene",
+            Command::CameraSide => "Look along −X at the scene",
+            Command::CameraTop => "Look down at the scene",
+            Command::CameraShoulder => "Look down the arm at the first joint",
+            Command::CameraElbow => "Look down the arm at the second joint",
+            Command::ShowHelp => "List every command and its shortcut",
+        }
+    }
+
+    /// The keyboard shortcuts that run the command (the first is shown in menus).
+    #[must_use]
+    pub fn shortcuts(self) -> Vec<KeyboardShortcut> {
+        match self {
+            Command::New => vec![sc(CMD, Key::N)],
+            Command::Open => vec![sc(CMD, Key::O)],
+            Command::Save => vec![sc(CMD, Key::S)],
+            Command::SaveAs => vec![sc(CMD_SHIFT, Key::S)],
+            Command::Import => vec![sc(CMD, Key::I)],
+            Command::ExportGltf => vec![sc(CMD, Key::E)],
+            Command::Quit => vec![sc(CMD, Key::Q)],
+            Command::Undo => vec![sc(CMD, Key::Z)],
+            Command::Redo => vec![sc(CMD_SHIFT, Key::Z), sc(CMD, Key::Y)],
+            Command::ToggleRecord => vec![sc(NONE, Key::R)],
+            Command::InsertKey => vec![sc(NONE, Key::I)],
+            Command::DeleteKeys => vec![sc(NONE, Key::Delete), sc(NONE, Key::Backspace)],
+            Command::CopyKeys => vec![sc(CMD, Key::C)],
+            Command::PasteKeys => vec![sc(CMD, Key::V)],
+            Command::PlayPause => vec![sc(CMD, Key::P), sc(NONE, Key::Space)],
+            Command::ToggleLoop => vec![sc(NONE, Key::L)],
+            Command::NextFrame => vec![sc(NONE, Key::ArrowRight)],
+            Command::PrevFrame => vec![sc(NONE, Key::ArrowLeft)],
+            Command::FirstFrame => vec![sc(NONE, Key::Home)],
+            Command::LastFrame => vec![sc(NONE, Key::End)],
+            Command::ToggleGrid => vec![sc(NONE, Key::G)],
+            Command::ToggleBones => vec![sc(NONE, Key::B)],
+            Command::SetDeformer(DeformerKind::Rigid) => vec![sc(NONE, Key::Num1)],
+            Command::SetDeformer(DeformerKind::LinearBlend) => vec![sc(NONE, Key::Num2)],
+            Command::SetDeformer(DeformerKind::BonesBlending) => vec![sc(NONE, Key::Num3)],
+            Command::SetDeformer(DeformerKind::DualQuaternion) => vec![sc(NONE, Key::Num4)],
+            Command::CameraFront => vec![sc(NONE, Key::F1)],
+            Command::CameraSide => vec![sc(NONE, Key::F2)],
+            Command::CameraTop => vec![sc(NONE, Key::F3)],
+            Command::CameraShoulder => vec![sc(NONE, Key::F4)],
+            Command::CameraElbow => vec![sc(NONE, Key::F5)],
+            Command::ShowHelp => vec![sc(NONE, Key::F12)],
+        }
+    }
+
+    /// All shortcuts as text ("Ctrl+P, Space"), as the help window shows them.
+    #[must_use]
+    pub fn shortcut_text(self, ctx: &egui::Context) -> String {
+        self.shortcuts().iter().map(|s| ctx.format_shortcut(s)).collect::<Vec<_>>().join(", ")
+    }
+
+    /// Whether the shortcut must not fire while a text field has the keyboard (plain keys).
+    #[must_use]
+    pub fn is_plain_key(shortcut: &KeyboardShortcut) -> bool {
+        shortcut.modifiers.is_none()
+    }
+}
+
+/// Finds the commands whose shortcuts were pressed this frame and consumes those key presses.
+/// Plain-key shortcuts (R, Space, arrows, 1–4) are skipped while a text field has the
+/// keyboard, so typing a value does not toggle record mode.
+#[must_use]
+pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
+    let typing = ctx.text_edit_focused();
+    let mut out = Vec::new();
+    ctx.input_mut(|input| {
+        for command in Command::ALL {
+            for shortcut in &command.shortcuts() {
+                if typing && Command::is_plain_key(shortcut) {
+                    continue;
+                }
+                if input.consume_shortcut(shortcut) {
+                    out.push(command);
+                }
+            }
+        }
+    });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashSet;
+
+    #[test]
+    fn no_two_commands_share_a_shortcut() {
+        let mut seen = HashSet::new();
+        for command in Command::ALL {
+            for s in &command.shortcuts() {
+                assert!(seen.insert((s.modifiers.command, s.modifiers.shift, s.logical_key)), "{command:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn every_command_has_label_tooltip_and_shortcut() {
+        for command in Command::ALL {
+            assert!(!command.label().is_empty());
+            assert!(!command.tooltip().is_empty());
+            assert!(!command.shortcuts().is_empty(), "{command:?}");
+        }
+    }
+}

@@ -1,0 +1,167 @@
+//! The curve view: the selected channels over the frame range, sampled through the same code
+//! as the viewport, so it updates live while a key or a T/C/B slider changes. Positions are
+//! drawn per component; rotations as XYZ Euler angles in degrees, unwrapped along the curve.
+
+use egui::{Align2, Color32, FontId, Pos2, Sense, Shape, Stroke, Ui, Vec2};
+
+use crate::app::EditorApp;
+use crate::channels::{self, ChannelId, ChannelValue};
+use crate::eval::{euler_degrees, PoseOverrides};
+
+const COMPONENT_COLOURS: [Color32; 3] =
+    [Color32::from_rgb(230, 80, 80), Color32::from_rgb(90, 200, 90), Color32::from_rgb(90, 140, 240)];
+
+/// One component over time: (frame, value) samples.
+pub type Curve = Vec<(f64, f32)>;
+
+/// The channels the curve view shows: those of the selected item and of the selected keys.
+#[must_use]
+pub fn shown_channels(app: &EditorApp) -> Vec<ChannelId> {
+    let scene = app.doc.scene();
+    let mut ids: Vec<ChannelId> = app.selection.channels(scene);
+    for k in &app.selection.keys {
+        if !ids.contains(&k.channel) {
+            ids.push(k.channel);
+        }
+    }
+    ids.retain(|&id| channels::key_count(scene, id) > 0);
+    ids
+}
+
+/// Samples `id` over frames `[start, end]` at `samples` points as one or three curves of
+/// numbers (components, or Euler degrees for rotations).
+#[must_use]
+pub fn sample_curves(
+    app: &EditorApp,
+    id: ChannelId,
+    start: f64,
+    end: f64,
+    samples: usize,
+) -> Vec<Vec<(f64, f32)>> {
+    let scene = app.doc.scene();
+    let fps = scene.fps.max(1e-9);
+    let none = PoseOverrides::new();
+    let tracks = app.tracks();
+    let n = samples.max(2);
+    let mut curves: Vec<Curve> = Vec::new();
+    for i in 0..n {
+        let frame = start + (end - start) * i as f64 / (n - 1) as f64;
+        let values: Vec<f32> = match tracks.value(id, frame / fps, &none) {
+            Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
+            Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
+            Some(ChannelValue::Scalar(s)) => vec![s],
+            None => Vec::new(),
+        };
+        if curves.is_empty() {
+            curves = vec![Vec::with_capacity(n); values.len()];
+        }
+        for (c, v) in values.into_iter().enumerate() {
+            let v = if id.kind() == channels::ChannelKind::Rotation {
+                // Unwrap Euler angles so a turn past ±180° stays continuous.
+                match curves[c].last() {
+                    Some(&(_, prev)) => prev + (v - prev + 180.0).rem_euclid(360.0) - 180.0,
+                    None => v,
+                }
+            } else {
+                v
+            };
+            curves[c].push((frame, v));
+        }
+    }
+    curves
+}
+
+pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+    let ids = shown_channels(app);
+    let title = match ids.as_slice() {
+        [] => "Curves: select an animated object, joint or light".to_owned(),
+        [one] => format!("Curves: {}", one.label(app.doc.scene())),
+        many => format!("Curves: {} channels", many.len()),
+    };
+    ui.label(title);
+    let size = ui.available_size().max(Vec2::new(100.0, 60.0));
+    let (rect, _response) = ui.allocate_exact_size(size, Sense::hover());
+    let painter = ui.painter_at(rect);
+    let visuals = ui.visuals().clone();
+    painter.rect_filled(rect, 2.0, visuals.extreme_bg_color);
+    if ids.is_empty() {
+        return;
+    }
+    let scene = app.doc.scene();
+    let (start, end) = (
+        f64::from(scene.frame_range.start),
+        f64::from(scene.frame_range.end.max(scene.frame_range.start + 1)),
+    );
+    let samples = (rect.width() / 2.0).clamp(16.0, 800.0) as usize;
+    let all: Vec<(ChannelId, Vec<Curve>)> =
+        ids.iter().map(|&id| (id, sample_curves(app, id, start, end, samples))).collect();
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (_, curves) in &all {
+        for curve in curves {
+            for &(_, v) in curve {
+                if v.is_finite() {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+            }
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return;
+    }
+    if hi - lo < 1e-3 {
+        lo -= 0.5;
+        hi += 0.5;
+    }
+    let pad = (hi - lo) * 0.08;
+    let (lo, hi) = (lo - pad, hi + pad);
+    let plot = rect.shrink2(Vec2::new(28.0, 8.0));
+    let to_screen = |frame: f64, v: f32| {
+        Pos2::new(
+            plot.left() + ((frame - start) / (end - start)) as f32 * plot.width(),
+            plot.bottom() - (v - lo) / (hi - lo) * plot.height(),
+        )
+    };
+    // Zero line and value labels.
+    if lo < 0.0 && hi > 0.0 {
+        let y = to_screen(start, 0.0).y;
+        painter.line_segment(
+            [Pos2::new(plot.left(), y), Pos2::new(plot.right(), y)],
+            Stroke::new(1.0, visuals.faint_bg_color),
+        );
+    }
+    for v in [lo + pad, hi - pad] {
+        painter.text(
+            Pos2::new(rect.left() + 2.0, to_screen(start, v).y),
+            Align2::LEFT_CENTER,
+            format!("{v:.1}"),
+            FontId::proportional(9.0),
+            visuals.weak_text_color(),
+        );
+    }
+    let fps = scene.fps.max(1e-9);
+    for (id, curves) in &all {
+        for (c, curve) in curves.iter().enumerate() {
+            let colour =
+                if curves.len() == 1 { Color32::from_rgb(230, 200, 90) } else { COMPONENT_COLOURS[c % 3] };
+            let points: Vec<Pos2> = curve.iter().map(|&(f, v)| to_screen(f, v)).collect();
+            painter.add(Shape::line(points, Stroke::new(1.5, colour)));
+            // Key markers: the curve's value at each key time.
+            for time in channels::key_times(scene, *id) {
+                let frame = time * fps;
+                if frame < start || frame > end {
+                    continue;
+                }
+                let i = (((frame - start) / (end - start)) * (curve.len() - 1) as f64).round() as usize;
+                if let Some(&(_, v)) = curve.get(i) {
+                    painter.circle_filled(to_screen(frame, v), 3.0, colour);
+                }
+            }
+        }
+    }
+    let x = to_screen(app.playback.frame, lo).x;
+    painter.line_segment(
+        [Pos2::new(x, plot.top()), Pos2::new(x, plot.bottom())],
+        Stroke::new(1.5, Color32::from_rgb(90, 170, 255)),
+    );
+}

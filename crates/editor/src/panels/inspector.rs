@@ -1,0 +1,258 @@
+//! The inspector: the selection's transform (changes go through record mode or the pose), the
+//! key inspector (interpolation mode and T/C/B of the selected keys), and the deformer with its
+//! parameters, plus the cross-section measure of the selected joint.
+
+use egui::{DragValue, Ui};
+use glam::Vec3;
+use keyrig_core::{DeformerKind, Interpolation, Tcb};
+
+use crate::app::EditorApp;
+use crate::channels::{self, ChannelId, ChannelValue};
+use crate::eval::{euler_degrees, quat_from_euler_degrees};
+use crate::state::Selected;
+use crate::widgets::tcb_slider::tcb_slider_ui;
+
+pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+    egui::Panel::right("inspector").resizable(true).default_size(270.0).show_inside(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.heading("Inspector");
+            selection_ui(ui, app);
+            ui.separator();
+            key_inspector_ui(ui, app);
+            ui.separator();
+            deformer_ui(ui, app);
+        });
+    });
+}
+
+/// A row of three drag values. Each carries the accessible label "<label> X" (Y, Z), which is
+/// what screen readers and the UI tests find.
+fn vec3_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3, speed: f64) -> bool {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        if !marker.is_empty() {
+            ui.weak(marker);
+        }
+    });
+    ui.horizontal(|ui| {
+        let mut changed = false;
+        for (axis, c) in ["X", "Y", "Z"].iter().zip([&mut v.x, &mut v.y, &mut v.z]) {
+            ui.label(*axis);
+            let response = ui.add(DragValue::new(c).speed(speed).max_decimals(3));
+            let name = format!("{label} {axis}");
+            ui.ctx().accesskit_node_builder(response.id, |node| node.set_label(name));
+            changed |= response.changed();
+        }
+        changed
+    })
+    .inner
+}
+
+fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) {
+    let Some(value) = app.value_now(id) else { return };
+    let keyed_here = channels::key_at(
+        app.doc.scene(),
+        id,
+        f64::from(app.playback.whole_frame()) / app.doc.scene().fps.max(1e-9),
+    )
+    .is_some();
+    let marker = if app.overrides.contains_key(&id) {
+        "posed, press I to key"
+    } else if keyed_here {
+        "◆ key"
+    } else {
+        ""
+    };
+    let group = format!("inspector {id:?}");
+    match value {
+        ChannelValue::Vec3(mut v) => {
+            if vec3_editor(ui, label, marker, &mut v, 0.01) && v.is_finite() {
+                app.apply_pose(id, ChannelValue::Vec3(v), &group);
+            }
+        }
+        ChannelValue::Rotation(q) => {
+            let mut e = euler_degrees(q);
+            if vec3_editor(ui, label, marker, &mut e, 0.5) && e.is_finite() {
+                app.apply_pose(id, ChannelValue::Rotation(quat_from_euler_degrees(e)), &group);
+            }
+        }
+        ChannelValue::Scalar(mut s) => {
+            let changed = ui
+                .horizontal(|ui| {
+                    ui.label(label);
+                    let response = ui.add(DragValue::new(&mut s).speed(0.05));
+                    let name = label.to_owned();
+                    ui.ctx().accesskit_node_builder(response.id, |node| node.set_label(name));
+                    ui.weak(marker);
+                    response.changed()
+                })
+                .inner;
+            if changed && s.is_finite() {
+                app.apply_pose(id, ChannelValue::Scalar(s), &group);
+            }
+        }
+    }
+}
+
+fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
+    let scene = app.doc.scene();
+    match app.selection.item {
+        None => {
+            ui.label("Nothing selected. Click an object, joint or light in the outliner or the viewport.");
+        }
+        Some(Selected::Object(o)) => {
+            let name = scene.objects.get(o).map(|x| x.name.clone()).unwrap_or_default();
+            ui.strong(format!("Object: {name}"));
+            channel_editor(ui, app, ChannelId::ObjectTranslation(o), "Translation");
+            channel_editor(ui, app, ChannelId::ObjectRotation(o), "Rotation (°)");
+            channel_editor(ui, app, ChannelId::ObjectScale(o), "Scale");
+        }
+        Some(Selected::Joint { object, joint }) => {
+            let name = scene
+                .objects
+                .get(object)
+                .and_then(|x| x.skeleton.as_ref())
+                .and_then(|s| s.joints.get(joint))
+                .map(|j| j.name.clone())
+                .unwrap_or_default();
+            ui.strong(format!("Joint: {name}"));
+            channel_editor(ui, app, ChannelId::JointRotation { object, joint }, "Rotation (°)");
+        }
+        Some(Selected::Light(l)) => {
+            let name = scene.lights.get(l).map(|x| x.name.clone()).unwrap_or_default();
+            ui.strong(format!("Light: {name}"));
+            for (id, label) in
+                ChannelId::of_light(l).into_iter().zip(["Position", "Direction", "Colour", "Intensity"])
+            {
+                channel_editor(ui, app, id, label);
+            }
+        }
+    }
+}
+
+/// Interpolation mode names shown in the key inspector.
+fn mode_label(mode: Interpolation) -> &'static str {
+    match mode {
+        Interpolation::Step => "Step",
+        Interpolation::Linear => "Linear",
+        Interpolation::Tcb => "TCB spline",
+        Interpolation::Hermite => "Hermite (tangents)",
+    }
+}
+
+fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
+    ui.strong("Key");
+    let keys: Vec<_> = app.selection.keys.iter().copied().collect();
+    let Some(first) = keys.first().copied() else {
+        ui.weak("No key selected. Click a diamond in the dope sheet.");
+        return;
+    };
+    let Some((time, mut mode, mut tcb)) = channels::key_params(app.doc.scene(), first.channel, first.index)
+    else {
+        return;
+    };
+    let fps = app.doc.scene().fps.max(1e-9);
+    if keys.len() == 1 {
+        ui.label(format!(
+            "{} at frame {}",
+            first.channel.label(app.doc.scene()),
+            (time * fps).round() as i64
+        ));
+    } else {
+        ui.label(format!("{} keys selected (editing all)", keys.len()));
+    }
+    let before = (mode, tcb);
+    egui::ComboBox::from_label("Interpolation").selected_text(mode_label(mode)).show_ui(ui, |ui| {
+        for m in [Interpolation::Step, Interpolation::Linear, Interpolation::Tcb] {
+            ui.selectable_value(&mut mode, m, mode_label(m));
+        }
+        // Hermite needs stored tangents (imported glTF CUBICSPLINE keys); it is only offered
+        // for keys that already have it.
+        if before.0 == Interpolation::Hermite {
+            ui.selectable_value(&mut mode, Interpolation::Hermite, mode_label(Interpolation::Hermite));
+        }
+    });
+    let tcb_enabled = mode == Interpolation::Tcb;
+    ui.add_enabled_ui(tcb_enabled, |ui| {
+        tcb_slider_ui(
+            ui,
+            &mut tcb.tension,
+            "Tension",
+            "Tension: +1 tightens the curve at the key, −1 loosens it",
+        );
+        tcb_slider_ui(
+            ui,
+            &mut tcb.continuity,
+            "Continuity",
+            "Continuity: 0 is smooth; ±1 makes a corner at the key",
+        );
+        tcb_slider_ui(
+            ui,
+            &mut tcb.bias,
+            "Bias",
+            "Bias: −1 anticipates (overshoots before), +1 overshoots after the key",
+        );
+        if ui.button("Reset T/C/B").on_hover_text("Catmull–Rom / Shoemake squad").clicked() {
+            tcb = Tcb::ZERO;
+        }
+    });
+    if (mode, tcb) != before {
+        let label = if keys.len() == 1 { "edit key".to_owned() } else { format!("edit {} keys", keys.len()) };
+        app.doc.edit_continuous("key inspector", &label, |scene| {
+            for k in &keys {
+                let Some((_, old_mode, old_tcb)) = channels::key_params(scene, k.channel, k.index) else {
+                    continue;
+                };
+                // Only the field that moved is written to every selected key.
+                let m = if mode != before.0 { mode } else { old_mode };
+                let t = Tcb {
+                    tension: if tcb.tension != before.1.tension { tcb.tension } else { old_tcb.tension },
+                    continuity: if tcb.continuity != before.1.continuity {
+                        tcb.continuity
+                    } else {
+                        old_tcb.continuity
+                    },
+                    bias: if tcb.bias != before.1.bias { tcb.bias } else { old_tcb.bias },
+                };
+                channels::set_key_params(scene, k.channel, k.index, m, t);
+            }
+        });
+    }
+}
+
+fn deformer_ui(ui: &mut Ui, app: &mut EditorApp) {
+    ui.strong("Deformer");
+    let Some(o) =
+        app.selected_object().or_else(|| app.doc.scene().objects.iter().position(|x| x.skeleton.is_some()))
+    else {
+        ui.weak("No skinned object.");
+        return;
+    };
+    let Some(object) = app.doc.scene().objects.get(o) else { return };
+    if object.skeleton.is_none() {
+        ui.weak(format!("{} has no skeleton.", object.name));
+        return;
+    }
+    let mut settings = object.deformer;
+    ui.label(format!("Object: {}", object.name));
+    egui::ComboBox::from_label("Method").selected_text(settings.kind.label()).show_ui(ui, |ui| {
+        for k in DeformerKind::ALL {
+            ui.selectable_value(&mut settings.kind, k, k.label());
+        }
+    });
+    if settings.kind == DeformerKind::BonesBlending {
+        ui.add(egui::Slider::new(&mut settings.blend_parent_fraction, 0.0..=1.0).text("Zone into parent"))
+            .on_hover_text("How far the blend zone reaches into the parent bone (fraction of its length)");
+        ui.add(egui::Slider::new(&mut settings.blend_child_fraction, 0.0..=1.0).text("Zone into child"))
+            .on_hover_text("How far the blend zone reaches into the child bone (fraction of its length)");
+    }
+    crate::panels::viewport::measure_ui(ui, app);
+    if settings != object.deformer {
+        let label = format!("deformer {}", settings.kind.label());
+        app.doc.edit_continuous("deformer settings", &label, |scene| {
+            if let Some(obj) = scene.objects.get_mut(o) {
+                obj.deformer = settings;
+            }
+        });
+    }
+}

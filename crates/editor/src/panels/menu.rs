@@ -1,0 +1,182 @@
+//! The menu bar and the toolbar under it. Menu items come from [`Command`]: label, tooltip and
+//! shortcut text.
+
+use egui::{Button, Ui};
+use keyrig_core::DeformerKind;
+
+use crate::app::{EditorApp, PendingAction, RenderStyle};
+use crate::commands::Command;
+
+/// A menu entry for `command`; runs it when clicked.
+fn command_button(ui: &mut Ui, app: &mut EditorApp, command: Command, checked: Option<bool>) {
+    let ctx = ui.ctx().clone();
+    let shortcut = command.shortcuts().first().map(|s| ctx.format_shortcut(s)).unwrap_or_default();
+    let label = match checked {
+        Some(true) => format!("✔ {}", command.label()),
+        Some(false) => format!("   {}", command.label()),
+        None => command.label().to_owned(),
+    };
+    let enabled = match command {
+        Command::Undo => app.doc.undo_label().is_some(),
+        Command::Redo => app.doc.redo_label().is_some(),
+        _ => true,
+    };
+    let response =
+        ui.add_enabled(enabled, Button::new(label).shortcut_text(shortcut)).on_hover_text(command.tooltip());
+    if response.clicked() {
+        app.run_command(&ctx, command);
+        ui.close();
+    }
+}
+
+/// A toolbar button for `command` showing `text` (selected when `on`).
+pub fn tool_button(ui: &mut Ui, app: &mut EditorApp, command: Command, text: &str, on: bool) {
+    let ctx = ui.ctx().clone();
+    let tip = format!("{} ({})", command.tooltip(), command.shortcut_text(&ctx));
+    if ui.selectable_label(on, text).on_hover_text(tip).clicked() {
+        app.run_command(&ctx, command);
+    }
+}
+
+/// Draws the menu bar and toolbar as a top panel.
+pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+    egui::Panel::top("menu_bar").show_inside(ui, |ui| {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                for c in [Command::New, Command::Open] {
+                    command_button(ui, app, c, None);
+                }
+                ui.menu_button("Open recent", |ui| {
+                    if app.recent.paths.is_empty() {
+                        ui.label("No recent files");
+                    }
+                    for path in app.recent.paths.clone() {
+                        if ui.button(path.display().to_string()).clicked() {
+                            app.request(PendingAction::Open(Some(path)));
+                            ui.close();
+                        }
+                    }
+                });
+                ui.separator();
+                for c in [Command::Save, Command::SaveAs] {
+                    command_button(ui, app, c, None);
+                }
+                ui.separator();
+                for c in [Command::Import, Command::ExportGltf] {
+                    command_button(ui, app, c, None);
+                }
+                ui.separator();
+                command_button(ui, app, Command::Quit, None);
+            });
+            ui.menu_button("Edit", |ui| {
+                command_button(ui, app, Command::Undo, None);
+                command_button(ui, app, Command::Redo, None);
+                ui.separator();
+                for c in [Command::InsertKey, Command::DeleteKeys, Command::CopyKeys, Command::PasteKeys] {
+                    command_button(ui, app, c, None);
+                }
+                ui.separator();
+                let record = app.record;
+                command_button(ui, app, Command::ToggleRecord, Some(record));
+            });
+            ui.menu_button("View", |ui| {
+                let (grid, bones) = (app.view.grid, app.view.bones);
+                command_button(ui, app, Command::ToggleGrid, Some(grid));
+                command_button(ui, app, Command::ToggleBones, Some(bones));
+                ui.separator();
+                for c in [
+                    Command::CameraFront,
+                    Command::CameraSide,
+                    Command::CameraTop,
+                    Command::CameraShoulder,
+                    Command::CameraElbow,
+                ] {
+                    command_button(ui, app, c, None);
+                }
+                ui.separator();
+                for style in RenderStyle::ALL {
+                    if ui.radio(app.view.style == style, style.label()).clicked() {
+                        app.view.style = style;
+                        ui.close();
+                    }
+                }
+            });
+            ui.menu_button("Deformer", |ui| {
+                let current = app
+                    .selected_object()
+                    .or(Some(0))
+                    .and_then(|o| app.doc.scene().objects.get(o))
+                    .map(|o| o.deformer.kind);
+                for kind in DeformerKind::ALL {
+                    command_button(ui, app, Command::SetDeformer(kind), Some(current == Some(kind)));
+                }
+            });
+            ui.menu_button("Playback", |ui| {
+                let (playing, looping) = (app.playback.playing, app.playback.looping);
+                command_button(ui, app, Command::PlayPause, Some(playing));
+                command_button(ui, app, Command::ToggleLoop, Some(looping));
+                for c in [Command::FirstFrame, Command::PrevFrame, Command::NextFrame, Command::LastFrame] {
+                    command_button(ui, app, c, None);
+                }
+            });
+            ui.menu_button("Help", |ui| {
+                command_button(ui, app, Command::ShowHelp, None);
+            });
+        });
+        toolbar_ui(ui, app);
+    });
+}
+
+fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
+    ui.horizontal(|ui| {
+        let record = app.record;
+        let rec_text = "⏺ Record";
+        let tip = format!(
+            "{} ({})",
+            Command::ToggleRecord.tooltip(),
+            Command::ToggleRecord.shortcut_text(ui.ctx())
+        );
+        let rec = egui::Button::selectable(
+            record,
+            egui::RichText::new(rec_text).color(if record {
+                egui::Color32::from_rgb(255, 80, 80)
+            } else {
+                ui.visuals().text_color()
+            }),
+        );
+        if ui.add(rec).on_hover_text(tip).clicked() {
+            app.run_command(&ui.ctx().clone(), Command::ToggleRecord);
+        }
+        tool_button(ui, app, Command::InsertKey, "◆ Key", false);
+        ui.separator();
+        let (grid, bones) = (app.view.grid, app.view.bones);
+        tool_button(ui, app, Command::ToggleGrid, "# Grid", grid);
+        tool_button(ui, app, Command::ToggleBones, "Bones", bones);
+        ui.separator();
+        ui.label("Deformer:");
+        let current = app
+            .selected_object()
+            .or(Some(0))
+            .and_then(|o| app.doc.scene().objects.get(o))
+            .map(|o| o.deformer.kind);
+        for (i, kind) in DeformerKind::ALL.into_iter().enumerate() {
+            tool_button(
+                ui,
+                app,
+                Command::SetDeformer(kind),
+                &format!("{} {}", i + 1, kind.label()),
+                current == Some(kind),
+            );
+        }
+        ui.separator();
+        for (c, t) in [
+            (Command::CameraFront, "Front"),
+            (Command::CameraSide, "Side"),
+            (Command::CameraTop, "Top"),
+            (Command::CameraShoulder, "Shoulder"),
+            (Command::CameraElbow, "Elbow"),
+        ] {
+            tool_button(ui, app, c, t, false);
+        }
+    });
+}

@@ -1,0 +1,11 @@
+//! The editor's panels, one file each. Every panel is a `ui(ui, app)` function that draws
+//! itself into the window and changes the document only through [`crate::state::Document`].
+
+pub mod curves;
+pub mod dialogs;
+pub mod inspector;
+pub mod menu;
+pub mod outliner;
+pub mod status;
+pub mod timeline;
+pub mod viewport;

@@ -1,0 +1,469 @@
+//! The 3D viewport: orbit (left drag on empty space), pan (right or middle drag, or
+//! Shift+left drag), zoom (scroll); the ground grid, the skeleton's bones, objects, lights, the
+//! transform gizmo of the selection, and click-to-select on joints, objects and lights.
+
+use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};
+use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
+use transform_gizmo_egui::math::Transform;
+use transform_gizmo_egui::{GizmoConfig, GizmoExt, GizmoMode, GizmoOrientation, GizmoResult};
+
+use crate::app::{EditorApp, RenderStyle};
+use crate::camera::Projection;
+use crate::channels::{ChannelId, ChannelValue};
+use crate::eval::ObjectPose;
+use crate::state::Selected;
+
+/// Pick radius around joints and lights, points.
+const PICK_RADIUS: f32 = 9.0;
+
+pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+    egui::CentralPanel::default().frame(egui::Frame::NONE).show_inside(ui, |ui| {
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let painter = ui.painter_at(rect);
+        painter.rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46));
+
+        let projection = Projection::new(&app.view.camera, rect);
+        let time = app.time();
+        let scene = app.doc.scene();
+        let tracks = app.tracks();
+        let poses: Vec<Option<ObjectPose>> =
+            (0..scene.objects.len()).map(|o| tracks.object_pose(scene, o, time, &app.overrides)).collect();
+
+        if app.view.grid {
+            draw_grid(&painter, &projection);
+        }
+        let mut pick_targets: Vec<(Pos2, Selected)> = Vec::new();
+        let mut mesh_errors: Vec<String> = Vec::new();
+        for (o, pose) in poses.iter().enumerate() {
+            let Some(pose) = pose else { continue };
+            let object = &scene.objects[o];
+            let selected_object = app.selection.item == Some(Selected::Object(o));
+            let colour =
+                if selected_object { Color32::from_rgb(255, 200, 60) } else { Color32::from_gray(190) };
+            if app.view.style != RenderStyle::BonesOnly {
+                let kind = object.deformer.kind;
+                match app.skin.skin(o, object, pose, kind) {
+                    Ok(Some(view)) => {
+                        let world = crate::skinning::to_world(pose.world_from_object, view.positions);
+                        draw_mesh(
+                            &painter,
+                            &projection,
+                            &app.view.camera,
+                            &world,
+                            view.indices,
+                            app.view.style,
+                            selected_object,
+                        );
+                    }
+                    Ok(None) => match object.mesh {
+                        Some(keyrig_core::MeshSource::Procedural(kind)) => {
+                            let (positions, indices) = app.skin.static_mesh(kind);
+                            let world = crate::skinning::to_world(pose.world_from_object, positions);
+                            draw_mesh(
+                                &painter,
+                                &projection,
+                                &app.view.camera,
+                                &world,
+                                indices,
+                                app.view.style,
+                                selected_object,
+                            );
+                        }
+                        _ => draw_box(&painter, &projection, pose.world_from_object, colour),
+                    },
+                    Err(e) => {
+                        mesh_errors.push(format!("{}: {e}", object.name));
+                    }
+                }
+            }
+            if let Some(p) = projection.project(pose.world_from_object.translation.into()) {
+                pick_targets.push((p, Selected::Object(o)));
+            }
+            if let Some(skeleton) = &object.skeleton {
+                if app.view.bones || app.view.style == RenderStyle::BonesOnly {
+                    for (j, joint) in skeleton.joints.iter().enumerate() {
+                        let world = pose.world_from_object * pose.object_from_joint[j];
+                        let at: Vec3 = world.translation.into();
+                        let selected = app.selection.item == Some(Selected::Joint { object: o, joint: j });
+                        let bone_colour = if selected {
+                            Color32::from_rgb(255, 200, 60)
+                        } else {
+                            Color32::from_rgb(120, 200, 255)
+                        };
+                        if let Some(p) = joint.parent.filter(|&p| p < j) {
+                            let from: Vec3 =
+                                (pose.world_from_object * pose.object_from_joint[p]).translation.into();
+                            if let Some(seg) = projection.project_segment(from, at) {
+                                painter.line_segment(seg, Stroke::new(3.0, bone_colour));
+                            }
+                        }
+                        // The last joint of a chain draws a stub along its local X.
+                        if !skeleton.joints.iter().any(|c| c.parent == Some(j)) {
+                            let tip = world.transform_point3(Vec3::X * 0.15);
+                            if let Some(seg) = projection.project_segment(at, tip) {
+                                painter.line_segment(seg, Stroke::new(2.0, bone_colour));
+                            }
+                        }
+                        if let Some(p) = projection.project(at) {
+                            painter.circle(
+                                p,
+                                5.0,
+                                Color32::from_rgb(30, 30, 30),
+                                Stroke::new(2.0, bone_colour),
+                            );
+                            pick_targets.push((p, Selected::Joint { object: o, joint: j }));
+                        }
+                    }
+                }
+            }
+        }
+        for (l, light) in scene.lights.iter().enumerate() {
+            let Some(ChannelValue::Vec3(pos)) =
+                tracks.value(ChannelId::LightPosition(l), time, &app.overrides)
+            else {
+                continue;
+            };
+            let Some(p) = projection.project(pos) else { continue };
+            let selected = app.selection.item == Some(Selected::Light(l));
+            let colour = if selected {
+                Color32::from_rgb(255, 200, 60)
+            } else if light.enabled {
+                Color32::from_rgb(255, 240, 150)
+            } else {
+                Color32::GRAY
+            };
+            painter.circle_stroke(p, 7.0, Stroke::new(2.0, colour));
+            for k in 0..8 {
+                let a = k as f32 * std::f32::consts::TAU / 8.0;
+                let d = egui::vec2(a.cos(), a.sin());
+                painter.line_segment([p + d * 9.0, p + d * 13.0], Stroke::new(1.5, colour));
+            }
+            if let Some(ChannelValue::Vec3(dir)) =
+                tracks.value(ChannelId::LightDirection(l), time, &app.overrides)
+            {
+                if let Some(seg) = projection.project_segment(pos, pos + dir.normalize_or_zero() * 0.5) {
+                    painter.arrow(seg[0], seg[1] - seg[0], Stroke::new(1.0, colour));
+                }
+            }
+            pick_targets.push((p, Selected::Light(l)));
+        }
+
+        // Gizmo for the selection (drawn last, on top).
+        let gizmo_active = gizmo_ui(ui, app, &projection, rect, &poses);
+
+        // Camera navigation and picking.
+        if !gizmo_active {
+            let shift = ui.input(|i| i.modifiers.shift);
+            if response.dragged_by(egui::PointerButton::Primary) && !shift {
+                let d = response.drag_delta();
+                app.view.camera.orbit(d.x, d.y);
+            } else if response.dragged_by(egui::PointerButton::Secondary)
+                || response.dragged_by(egui::PointerButton::Middle)
+                || (response.dragged_by(egui::PointerButton::Primary) && shift)
+            {
+                let d = response.drag_delta();
+                app.view.camera.pan(d.x, d.y, rect.height());
+            }
+            if response.clicked() {
+                if let Some(pos) = response.interact_pointer_pos() {
+                    let hit = pick_targets
+                        .iter()
+                        .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
+                        .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)));
+                    app.selection.item = hit.map(|(_, s)| *s);
+                }
+            }
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                app.view.camera.zoom(scroll);
+            }
+        }
+        overlay_ui(&painter, rect, app, &mesh_errors);
+    });
+}
+
+fn draw_grid(painter: &egui::Painter, projection: &Projection) {
+    let n = 10;
+    for i in -n..=n {
+        let f = i as f32 * 0.5;
+        let e = n as f32 * 0.5;
+        let colour = if i == 0 { Color32::from_gray(110) } else { Color32::from_gray(62) };
+        for (a, b) in
+            [(Vec3::new(f, 0.0, -e), Vec3::new(f, 0.0, e)), (Vec3::new(-e, 0.0, f), Vec3::new(e, 0.0, f))]
+        {
+            if let Some(seg) = projection.project_segment(a, b) {
+                painter.line_segment(seg, Stroke::new(1.0, colour));
+            }
+        }
+    }
+    // World axes.
+    for (axis, colour) in
+        [(Vec3::X, Color32::from_rgb(200, 70, 70)), (Vec3::Z, Color32::from_rgb(70, 110, 220))]
+    {
+        if let Some(seg) = projection.project_segment(Vec3::ZERO, axis * 0.5) {
+            painter.line_segment(seg, Stroke::new(2.0, colour));
+        }
+    }
+}
+
+fn draw_box(painter: &egui::Painter, projection: &Projection, world_from_object: Affine3A, colour: Color32) {
+    let corners: Vec<Vec3> = (0..8)
+        .map(|i| {
+            let c = Vec3::new(
+                if i & 1 == 0 { -0.5 } else { 0.5 },
+                if i & 2 == 0 { -0.5 } else { 0.5 },
+                if i & 4 == 0 { -0.5 } else { 0.5 },
+            );
+            world_from_object.transform_point3(c)
+        })
+        .collect();
+    for (a, b) in
+        [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
+    {
+        if let Some(seg) = projection.project_segment(corners[a], corners[b]) {
+            painter.line_segment(seg, Stroke::new(1.5, colour));
+        }
+    }
+}
+
+fn overlay_ui(painter: &egui::Painter, rect: Rect, app: &EditorApp, errors: &[String]) {
+    let mut lines = vec![format!("Frame {}  ·  {:.2} s", app.playback.whole_frame(), app.time())];
+    if let Some(o) =
+        app.selected_object().or_else(|| app.doc.scene().objects.iter().position(|x| x.skeleton.is_some()))
+    {
+        if let Some(object) = app.doc.scene().objects.get(o) {
+            if object.skeleton.is_some() {
+                lines.push(format!("{}: {}", object.name, object.deformer.kind.label()));
+            }
+        }
+    }
+    if let Some(text) = measure_text(app) {
+        lines.push(text);
+    }
+    let text = lines.join("\n");
+    painter.text(
+        rect.left_top() + egui::vec2(10.0, 8.0),
+        Align2::LEFT_TOP,
+        text,
+        FontId::proportional(13.0),
+        Color32::from_gray(220),
+    );
+    for (i, e) in errors.iter().enumerate() {
+        painter.text(
+            rect.left_bottom() + egui::vec2(10.0, -10.0 - 16.0 * i as f32),
+            Align2::LEFT_BOTTOM,
+            e,
+            FontId::proportional(13.0),
+            Color32::from_rgb(255, 110, 110),
+        );
+    }
+    if app.record {
+        painter.rect_stroke(
+            rect.shrink(1.0),
+            0.0,
+            Stroke::new(2.0, Color32::from_rgb(220, 50, 50)),
+            egui::StrokeKind::Inside,
+        );
+        painter.text(
+            rect.right_top() + egui::vec2(-10.0, 8.0),
+            Align2::RIGHT_TOP,
+            "● REC",
+            FontId::proportional(14.0),
+            Color32::from_rgb(255, 80, 80),
+        );
+    }
+}
+
+/// The world transform the gizmo edits for the selection, and which channels it drives.
+fn gizmo_target(app: &EditorApp, poses: &[Option<ObjectPose>]) -> Option<(Affine3A, GizmoKind)> {
+    match app.selection.item? {
+        Selected::Joint { object, joint } => {
+            let pose = poses.get(object)?.as_ref()?;
+            Some((
+                pose.world_from_object * *pose.object_from_joint.get(joint)?,
+                GizmoKind::Joint { object, joint },
+            ))
+        }
+        Selected::Object(o) => Some((poses.get(o)?.as_ref()?.world_from_object, GizmoKind::Object(o))),
+        Selected::Light(l) => {
+            let Some(ChannelValue::Vec3(p)) = app.value_now(ChannelId::LightPosition(l)) else { return None };
+            Some((Affine3A::from_translation(p), GizmoKind::Light(l)))
+        }
+    }
+}
+
+#[derive(Clone, Copy)]
+enum GizmoKind {
+    Joint { object: usize, joint: usize },
+    Object(usize),
+    Light(usize),
+}
+
+fn to_transform(a: Affine3A) -> Transform {
+    let (s, r, t) = a.to_scale_rotation_translation();
+    Transform::from_scale_rotation_translation(s.as_dvec3(), r.as_dquat(), t.as_dvec3())
+}
+
+/// Shows the gizmo; returns true while it is hovered or dragged (so the camera stays put).
+fn gizmo_ui(
+    ui: &mut Ui,
+    app: &mut EditorApp,
+    projection: &Projection,
+    rect: Rect,
+    poses: &[Option<ObjectPose>],
+) -> bool {
+    let Some((world, kind)) = gizmo_target(app, poses) else { return false };
+    let modes = match kind {
+        GizmoKind::Joint { .. } => GizmoMode::all_rotate(),
+        GizmoKind::Object(_) => GizmoMode::all_rotate() | GizmoMode::all_translate(),
+        GizmoKind::Light(_) => GizmoMode::all_translate(),
+    };
+    let to_rows = |m: glam::Mat4| m.as_dmat4().into();
+    app.gizmo.update_config(GizmoConfig {
+        view_matrix: to_rows(projection.camera_from_world),
+        projection_matrix: to_rows(projection.clip_from_camera),
+        viewport: transform_gizmo_egui::Rect::from_min_max(
+            transform_gizmo_egui::math::Pos2::new(rect.min.x, rect.min.y),
+            transform_gizmo_egui::math::Pos2::new(rect.max.x, rect.max.y),
+        ),
+        modes,
+        orientation: GizmoOrientation::Local,
+        ..Default::default()
+    });
+    let result = app.gizmo.interact(ui, &[to_transform(world)]);
+    let Some((result, transforms)) = result else { return app.gizmo.is_focused() };
+    let Some(new) = transforms.first() else { return true };
+    let new_rotation: Quat = DQuat::from(new.rotation).as_quat().normalize();
+    let new_translation: Vec3 = DVec3::from(new.translation).as_vec3();
+    let group = "gizmo";
+    match kind {
+        GizmoKind::Joint { object, joint } => {
+            // F(j) = F(p)·R(j)·T(j): T = (world_from_parent·R(j))⁻¹ · new world rotation.
+            let scene = app.doc.scene();
+            let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else {
+                return true;
+            };
+            let Some(pose) = poses.get(object).and_then(|p| p.as_ref()) else { return true };
+            let j = &skeleton.joints[joint];
+            let parent_world = match j.parent.filter(|&p| p < joint) {
+                Some(p) => pose.world_from_object * pose.object_from_joint[p],
+                None => pose.world_from_object,
+            };
+            let (_, parent_rotation, _) = parent_world.to_scale_rotation_translation();
+            let local = (parent_rotation * j.rest_rotation).inverse() * new_rotation;
+            app.apply_pose(
+                ChannelId::JointRotation { object, joint },
+                ChannelValue::Rotation(local.normalize()),
+                group,
+            );
+        }
+        GizmoKind::Object(o) => {
+            if matches!(result, GizmoResult::Translation { .. }) {
+                app.apply_pose(ChannelId::ObjectTranslation(o), ChannelValue::Vec3(new_translation), group);
+            } else {
+                app.apply_pose(ChannelId::ObjectRotation(o), ChannelValue::Rotation(new_rotation), group);
+            }
+        }
+        GizmoKind::Light(l) => {
+            app.apply_pose(ChannelId::LightPosition(l), ChannelValue::Vec3(new_translation), group);
+        }
+    }
+    true
+}
+
+/// "Cross-section at elbow: 0.98 × rest" for the selected joint, from the last skinned frame.
+#[must_use]
+pub fn measure_text(app: &EditorApp) -> Option<String> {
+    let Some(Selected::Joint { object, joint }) = app.selection.item else { return None };
+    let name = app.doc.scene().objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone();
+    Some(match app.skin.cross_section(object, joint)? {
+        Ok(section) => format!("Cross-section at {name}: {:.2} × rest", section.ratio()),
+        Err(e) => format!("Cross-section at {name}: {e}"),
+    })
+}
+
+/// The measure beside the deformer settings in the inspector.
+pub fn measure_ui(ui: &mut Ui, app: &EditorApp) {
+    match measure_text(app) {
+        Some(text) => {
+            ui.label(text).on_hover_text(
+                "Mean distance of the limb's surface from the joint, posed / rest (DESIGN.md §6). \
+                 Near 0 is the candy-wrapper collapse of linear blending under twist.",
+            );
+        }
+        None => {
+            ui.weak("Select a joint of a skinned mesh to see its cross-section relative to rest.");
+        }
+    }
+}
+
+/// Draws a triangle mesh given in world space: flat-shaded (head light) with back faces culled
+/// and triangles sorted far to near, or as a wireframe.
+fn draw_mesh(
+    painter: &egui::Painter,
+    projection: &Projection,
+    camera: &crate::camera::OrbitCamera,
+    world: &[Vec3],
+    indices: &[u32],
+    style: RenderStyle,
+    selected: bool,
+) {
+    let eye = camera.eye();
+    let screen: Vec<Option<Pos2>> = world.iter().map(|&p| projection.project(p)).collect();
+    let base = if selected { [235.0, 200.0, 120.0] } else { [200.0, 180.0, 165.0] };
+    let mut tris: Vec<(f32, [usize; 3], f32)> = Vec::with_capacity(indices.len() / 3);
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+        let (Some(pa), Some(pb), Some(pc)) = (world.get(a), world.get(b), world.get(c)) else { continue };
+        let normal = (*pb - *pa).cross(*pc - *pa).normalize_or_zero();
+        let centre = (*pa + *pb + *pc) / 3.0;
+        let to_eye = (eye - centre).normalize_or_zero();
+        let facing = normal.dot(to_eye);
+        if style == RenderStyle::Shaded && facing <= 0.0 {
+            continue;
+        }
+        tris.push(((eye - centre).length_squared(), [a, b, c], facing.max(0.0)));
+    }
+    match style {
+        RenderStyle::Shaded => {
+            tris.sort_by(|x, y| y.0.total_cmp(&x.0));
+            let mut mesh = egui::Mesh::default();
+            for (_, [a, b, c], facing) in &tris {
+                let (Some(pa), Some(pb), Some(pc)) = (screen[*a], screen[*b], screen[*c]) else { continue };
+                let light = 0.25 + 0.75 * facing;
+                let colour = Color32::from_rgb(
+                    (base[0] * light) as u8,
+                    (base[1] * light) as u8,
+                    (base[2] * light) as u8,
+                );
+                let i = mesh.vertices.len() as u32;
+                for p in [pa, pb, pc] {
+                    mesh.colored_vertex(p, colour);
+                }
+                mesh.add_triangle(i, i + 1, i + 2);
+            }
+            painter.add(egui::Shape::mesh(mesh));
+            let edge = Stroke::new(0.5, Color32::from_rgba_unmultiplied(40, 30, 20, 90));
+            for (_, [a, b, c], _) in &tris {
+                if let (Some(pa), Some(pb), Some(pc)) = (screen[*a], screen[*b], screen[*c]) {
+                    painter.add(egui::Shape::closed_line(vec![pa, pb, pc], edge));
+                }
+            }
+        }
+        RenderStyle::Wireframe => {
+            let edge = Stroke::new(
+                1.0,
+                if selected { Color32::from_rgb(255, 200, 60) } else { Color32::from_gray(200) },
+            );
+            for (_, [a, b, c], _) in &tris {
+                if let (Some(pa), Some(pb), Some(pc)) = (screen[*a], screen[*b], screen[*c]) {
+                    painter.add(egui::Shape::closed_line(vec![pa, pb, pc], edge));
+                }
+            }
+        }
+        RenderStyle::BonesOnly => {}
+    }
+}

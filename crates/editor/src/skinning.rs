@@ -1,0 +1,170 @@
+//! CPU skinning of the scene's procedural meshes for the viewport, through keyrig-skin: the
+//! mesh and its bindings are built when the object's mesh, rest skeleton or blend zone change;
+//! each frame only the joint palette and the deformer run. Also the cross-section measure of
+//! DESIGN.md §6 for the selected joint.
+//!
+//! keyrig-skin builds its procedural meshes in centimetres with their own rest skeleton; a
+//! scene skeleton may use other units (the demo uses metres). The mesh is fitted to the
+//! object's skeleton by the ratio of the two skeletons' chain lengths, then bound to the
+//! object's rest skeleton.
+
+use std::collections::HashMap;
+
+use glam::{Affine3A, Vec3};
+use keyrig_core::{DeformerKind, DeformerSettings, MeshSource, ProceduralMesh, Skeleton};
+use keyrig_skin::{
+    deform_mesh_into, joint_cross_section, mesh_for, scene_skeleton_for, BlendZone, CrossSection, Deformed,
+    Execution, JointPalette, MeshBindings, Pose, RestSkeleton, SkinnedMesh,
+};
+
+use crate::eval::ObjectPose;
+
+/// One object's skinned mesh, rebuilt only when its inputs change.
+struct Entry {
+    kind: ProceduralMesh,
+    skeleton: Skeleton,
+    settings: DeformerSettings,
+    mesh: SkinnedMesh,
+    bindings: MeshBindings,
+    palette: JointPalette,
+    deformed: Deformed,
+}
+
+/// What the viewport draws for one skinned object this frame.
+pub struct SkinnedView<'a> {
+    /// Deformed positions in object (model) space.
+    pub positions: &'a [Vec3],
+    pub normals: &'a [Vec3],
+    pub indices: &'a [u32],
+}
+
+/// Skinned meshes of the scene's objects, by object index.
+#[derive(Default)]
+pub struct SkinCache {
+    entries: HashMap<usize, Entry>,
+    statics: Vec<(ProceduralMesh, Vec<Vec3>, Vec<u32>)>,
+}
+
+/// Sum of the rest offsets of non-root joints: the skeleton's "length".
+fn chain_length(skeleton: &Skeleton) -> f32 {
+    skeleton.joints.iter().filter(|j| j.parent.is_some()).map(|j| j.rest_translation.length()).sum()
+}
+
+fn build_entry(
+    kind: ProceduralMesh,
+    skeleton: &Skeleton,
+    settings: DeformerSettings,
+) -> Result<Entry, String> {
+    let mut mesh = mesh_for(kind);
+    let scale = match scene_skeleton_for(kind) {
+        Some(native) => {
+            let (native_len, scene_len) = (chain_length(&native), chain_length(skeleton));
+            if native_len > 0.0 && scene_len > 0.0 {
+                scene_len / native_len
+            } else {
+                1.0
+            }
+        }
+        None => 1.0,
+    };
+    for p in &mut mesh.positions {
+        *p *= scale;
+    }
+    let rest = RestSkeleton::from_scene(skeleton).map_err(|e| format!("skeleton: {e}"))?;
+    let mesh = mesh.with_skeleton(rest).map_err(|e| format!("mesh does not fit the skeleton: {e}"))?;
+    let zone = BlendZone::from_settings(&settings).map_err(|e| format!("blend zone: {e}"))?;
+    let bindings = mesh.bindings(zone).map_err(|e| format!("bindings: {e}"))?;
+    Ok(Entry {
+        kind,
+        skeleton: skeleton.clone(),
+        settings,
+        mesh,
+        bindings,
+        palette: JointPalette::default(),
+        deformed: Deformed::default(),
+    })
+}
+
+impl SkinCache {
+    /// Skins object `index` (a procedural mesh with a skeleton) in `pose` with `kind`.
+    /// `Ok(None)` for objects without a skinned procedural mesh.
+    pub fn skin(
+        &mut self,
+        index: usize,
+        object: &keyrig_core::Object,
+        pose: &ObjectPose,
+        kind: DeformerKind,
+    ) -> Result<Option<SkinnedView<'_>>, String> {
+        let (Some(MeshSource::Procedural(mesh_kind)), Some(skeleton)) = (&object.mesh, &object.skeleton)
+        else {
+            self.entries.remove(&index);
+            return Ok(None);
+        };
+        let stale = match self.entries.get(&index) {
+            Some(e) => e.kind != *mesh_kind || &e.skeleton != skeleton || e.settings != object.deformer,
+            None => true,
+        };
+        if stale {
+            self.entries.remove(&index);
+            let entry = build_entry(*mesh_kind, skeleton, object.deformer)?;
+            self.entries.insert(index, entry);
+        }
+        let Some(entry) = self.entries.get_mut(&index) else { return Ok(None) };
+        let skin_pose =
+            Pose { local_rotations: pose.joint_rotations.clone(), root_translation: pose.root_translation };
+        entry.palette.update(&entry.mesh.skeleton, &skin_pose).map_err(|e| format!("pose: {e}"))?;
+        deform_mesh_into(
+            &entry.mesh,
+            &entry.bindings,
+            &entry.palette,
+            kind,
+            Execution::Parallel,
+            &mut entry.deformed,
+        )
+        .map_err(|e| format!("{}: {e}", kind.label()))?;
+        Ok(Some(SkinnedView {
+            positions: &entry.deformed.positions,
+            normals: &entry.deformed.normals,
+            indices: &entry.mesh.indices,
+        }))
+    }
+
+    /// The cross-section at `joint` of the object's last skinned frame, relative to rest.
+    #[must_use]
+    pub fn cross_section(&self, index: usize, joint: usize) -> Option<Result<CrossSection, String>> {
+        let entry = self.entries.get(&index)?;
+        if entry.deformed.positions.len() != entry.mesh.vertex_count() {
+            return None;
+        }
+        Some(
+            joint_cross_section(&entry.mesh, &entry.palette, joint, &entry.deformed.positions)
+                .map_err(|e| e.to_string()),
+        )
+    }
+
+    /// Positions and triangles of an unskinned procedural mesh (the cube), built once.
+    pub fn static_mesh(&mut self, kind: ProceduralMesh) -> (&[Vec3], &[u32]) {
+        let i = match self.statics.iter().position(|(k, _, _)| *k == kind) {
+            Some(i) => i,
+            None => {
+                let mesh = mesh_for(kind);
+                self.statics.push((kind, mesh.positions, mesh.indices));
+                self.statics.len() - 1
+            }
+        };
+        let (_, positions, indices) = &self.statics[i];
+        (positions, indices)
+    }
+
+    /// Deformed positions (object space) of the last skinned frame of an object.
+    #[must_use]
+    pub fn deformed_positions(&self, index: usize) -> Option<&[Vec3]> {
+        self.entries.get(&index).map(|e| e.deformed.positions.as_slice())
+    }
+}
+
+/// Transforms object-space points to world space.
+#[must_use]
+pub fn to_world(world_from_object: Affine3A, points: &[Vec3]) -> Vec<Vec3> {
+    points.iter().map(|&p| world_from_object.transform_point3(p)).collect()
+}

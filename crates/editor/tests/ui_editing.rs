@@ -1,0 +1,320 @@
+//! The editor driven as a user would: clicks on labelled widgets, AccessKit value changes and
+//! key presses, through egui_kittest. Each test checks the document afterwards.
+
+use egui::accesskit::{Action, ActionData, ActionRequest, Role};
+use egui::{Event, Key, Modifiers};
+use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::Harness;
+use keyrig_core::{Interpolation, Scene};
+use keyrig_editor::channels::{self, ChannelId};
+use keyrig_editor::state::Selected;
+use keyrig_editor::{editor_for, Command, EditorApp, EditorOptions};
+
+/// An editor on the demo scene whose recovery and recent files live in `dir`.
+fn harness(dir: &std::path::Path, file: Option<std::path::PathBuf>) -> Harness<'static, EditorApp> {
+    let app =
+        editor_for(file, EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(1e9) });
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1280.0, 800.0))
+        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
+    harness.run();
+    harness
+}
+
+/// Sets a drag value or slider found by its role and accessible label, as a screen reader
+/// would.
+fn set_value(harness: &mut Harness<'_, EditorApp>, role: Role, label: &str, value: f64) {
+    let (target_node, target_tree) = harness.get_by_role_and_label(role, label).accesskit_node().locate();
+    harness.event(Event::AccessKitActionRequest(ActionRequest {
+        action: Action::SetValue,
+        target_node,
+        target_tree,
+        data: Some(ActionData::NumericValue(value)),
+    }));
+    harness.run();
+}
+
+fn press(harness: &mut Harness<'_, EditorApp>, modifiers: Modifiers, key: Key) {
+    harness.key_press_modifiers(modifiers, key);
+    harness.run();
+}
+
+fn go_to_frame(harness: &mut Harness<'_, EditorApp>, frame: i32) {
+    press(harness, Modifiers::NONE, Key::Home);
+    for _ in 0..frame {
+        press(harness, Modifiers::NONE, Key::ArrowRight);
+    }
+    assert_eq!(harness.state().playback.whole_frame(), frame);
+}
+
+const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
+
+/// Selects the wrist (unkeyed in the demo), turns record on, and sets its X rotation at two
+/// frames: two keys appear, at those frames, with those angles.
+fn record_two_wrist_keys(harness: &mut Harness<'_, EditorApp>) {
+    harness.get_by_label("wrist").click();
+    harness.run();
+    assert_eq!(harness.state().selection.item, Some(Selected::Joint { object: 0, joint: 3 }));
+    harness.get_by_label("⏺ Record").click();
+    harness.run();
+    assert!(harness.state().record, "the Record button turns record mode on");
+
+    go_to_frame(harness, 10);
+    set_value(harness, Role::SpinButton, "Rotation (°) X", 45.0);
+    go_to_frame(harness, 20);
+    set_value(harness, Role::SpinButton, "Rotation (°) X", 90.0);
+}
+
+#[test]
+fn record_mode_writes_one_key_per_frame_changed() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    assert_eq!(channels::key_count(h.state().doc.scene(), WRIST), 0);
+    record_two_wrist_keys(&mut h);
+
+    let scene = h.state().doc.scene();
+    let fps = scene.fps;
+    let times: Vec<i64> =
+        channels::key_times(scene, WRIST).iter().map(|t| (t * fps).round() as i64).collect();
+    assert_eq!(times, vec![10, 20]);
+    let skeleton = scene.objects[0].skeleton.as_ref().expect("arm skeleton");
+    let angles: Vec<f32> = skeleton.joints[3]
+        .rotation
+        .track
+        .keys
+        .iter()
+        .map(|k| keyrig_editor::eval::euler_degrees(k.value).x)
+        .collect();
+    assert!((angles[0] - 45.0).abs() < 0.01 && (angles[1] - 90.0).abs() < 0.01, "{angles:?}");
+    assert!(h.state().doc.is_dirty());
+}
+
+#[test]
+fn without_record_mode_a_change_is_a_pose_that_i_keys() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("elbow").click();
+    h.run();
+    go_to_frame(&mut h, 5);
+    let before = h.state().doc.scene().clone();
+    set_value(&mut h, Role::SpinButton, "Rotation (°) X", 30.0);
+    // The elbow is keyed: the change is a transient pose, not an edit.
+    assert_eq!(h.state().doc.scene(), &before);
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    assert!(h.state().overrides.contains_key(&elbow));
+    press(&mut h, Modifiers::NONE, Key::I);
+    let scene = h.state().doc.scene();
+    let index = channels::key_at(scene, elbow, 5.0 / scene.fps).expect("I wrote a key at frame 5");
+    let key = &scene.objects[0].skeleton.as_ref().expect("skeleton").joints[1].rotation.track.keys[index];
+    assert!((keyrig_editor::eval::euler_degrees(key.value).x - 30.0).abs() < 0.01);
+    assert!(h.state().overrides.is_empty());
+}
+
+/// Selects the elbow key at frame 15 by clicking its diamond in the dope sheet.
+fn select_elbow_key_15(h: &mut Harness<'_, EditorApp>) {
+    h.get_by_label("key elbow rotation frame 15").click();
+    h.run();
+    assert_eq!(h.state().selection.keys.len(), 1);
+}
+
+#[test]
+fn moving_a_tcb_slider_changes_the_sampled_value() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    // The elbow key at frame 30 (90°) sits between 45° and 90°: its tangents depend on T, C
+    // and B, so the curve between frames 30 and 45 moves with each slider.
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let sample = |app: &EditorApp| {
+        let scene = app.doc.scene();
+        match keyrig_editor::eval::channel_value(scene, elbow, 36.0 / scene.fps, &Default::default()) {
+            Some(keyrig_editor::channels::ChannelValue::Rotation(q)) => q,
+            other => panic!("elbow rotation is a rotation, got {other:?}"),
+        }
+    };
+    let mut previous = sample(h.state());
+    for (slider, value) in [("Tension", 0.8), ("Continuity", 0.4), ("Bias", -0.5)] {
+        set_value(&mut h, Role::Slider, slider, value);
+        let now = sample(h.state());
+        assert!(previous.angle_between(now) > 1e-4, "{slider} = {value} moves the curve");
+        previous = now;
+    }
+    let (_, mode, tcb) = channels::key_params(h.state().doc.scene(), elbow, 2).expect("key 2");
+    assert_eq!(mode, Interpolation::Tcb);
+    assert_eq!((tcb.tension, tcb.continuity, tcb.bias), (0.8, 0.4, -0.5));
+}
+
+#[test]
+fn undo_and_redo_return_the_document_exactly() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let original: Scene = h.state().doc.scene().clone();
+    record_two_wrist_keys(&mut h);
+    select_elbow_key_15(&mut h);
+    set_value(&mut h, Role::Slider, "Continuity", 0.5);
+    press(&mut h, Modifiers::NONE, Key::Delete);
+    let edited = h.state().doc.scene().clone();
+    assert_ne!(edited, original);
+
+    let mut steps = 0;
+    while h.state().doc.undo_label().is_some() {
+        press(&mut h, Modifiers::COMMAND, Key::Z);
+        steps += 1;
+        assert!(steps < 50, "undo terminates");
+    }
+    assert_eq!(steps, 4, "two keys, one TCB drag, one delete");
+    assert_eq!(h.state().doc.scene(), &original);
+    for _ in 0..steps {
+        press(&mut h, Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    }
+    assert_eq!(h.state().doc.scene(), &edited);
+}
+
+#[test]
+fn save_reopen_compare() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("arm.ron");
+    keyrig_io::scene_file::save(&path, &keyrig_io::demo::demo_scene()).expect("write the demo scene");
+    let mut h = harness(dir.path(), Some(path.clone()));
+    assert_eq!(h.state().doc.title(), "keyrig — arm.ron");
+    record_two_wrist_keys(&mut h);
+    assert_eq!(h.state().doc.title(), "keyrig — arm.ron*");
+    press(&mut h, Modifiers::COMMAND, Key::S);
+    assert!(!h.state().doc.is_dirty(), "{:?}", h.state().status);
+    assert_eq!(h.state().doc.title(), "keyrig — arm.ron");
+    let saved = h.state().doc.scene().clone();
+
+    let reopened = harness(dir.path(), Some(path));
+    assert_eq!(reopened.state().doc.scene(), &saved);
+    assert!(!reopened.state().doc.is_dirty());
+}
+
+#[test]
+fn a_bad_file_is_an_error_in_the_status_bar_not_a_panic() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("broken.ron");
+    std::fs::write(&path, "(version: 1, scene: (fps: NaN").expect("write");
+    let h = harness(dir.path(), Some(path));
+    let status = h.state().status.clone().expect("an error is shown");
+    assert!(status.is_error && status.text.contains("broken.ron"), "{status:?}");
+    // The editor still opened (on the demo scene).
+    assert!(!h.state().doc.scene().objects.is_empty());
+}
+
+#[test]
+fn shortcuts_do_what_the_help_window_says() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    press(&mut h, Modifiers::NONE, Key::F12);
+    assert!(h.state().show_help);
+    // Every command is listed with its shortcut text.
+    let ctx = h.ctx.clone();
+    for command in Command::ALL {
+        let text = command.shortcut_text(&ctx);
+        assert!(h.query_all_by_label(&text).next().is_some(), "help lists {text} for {command:?}");
+        assert!(h.query_all_by_label(command.tooltip()).next().is_some(), "help explains {command:?}");
+    }
+    press(&mut h, Modifiers::NONE, Key::Escape);
+    assert!(!h.state().show_help);
+
+    // Each shortcut runs its command.
+    press(&mut h, Modifiers::NONE, Key::R);
+    assert!(h.state().record);
+    press(&mut h, Modifiers::NONE, Key::R);
+    assert!(!h.state().record);
+    let grid = h.state().view.grid;
+    press(&mut h, Modifiers::NONE, Key::G);
+    assert_eq!(h.state().view.grid, !grid);
+    press(&mut h, Modifiers::NONE, Key::End);
+    assert_eq!(h.state().playback.whole_frame(), h.state().doc.scene().frame_range.end);
+    press(&mut h, Modifiers::NONE, Key::Home);
+    assert_eq!(h.state().playback.whole_frame(), h.state().doc.scene().frame_range.start);
+    press(&mut h, Modifiers::NONE, Key::ArrowRight);
+    assert_eq!(h.state().playback.whole_frame(), 1);
+    press(&mut h, Modifiers::NONE, Key::ArrowLeft);
+    assert_eq!(h.state().playback.whole_frame(), 0);
+    for (key, kind) in [
+        (Key::Num1, keyrig_core::DeformerKind::Rigid),
+        (Key::Num3, keyrig_core::DeformerKind::BonesBlending),
+        (Key::Num4, keyrig_core::DeformerKind::DualQuaternion),
+        (Key::Num2, keyrig_core::DeformerKind::LinearBlend),
+    ] {
+        press(&mut h, Modifiers::NONE, key);
+        assert_eq!(h.state().doc.scene().objects[0].deformer.kind, kind);
+    }
+    // Space and Ctrl+P toggle playback (stop again so the harness settles).
+    h.key_press(Key::Space);
+    h.step();
+    assert!(h.state().playback.playing);
+    h.key_press(Key::Space);
+    h.run();
+    assert!(!h.state().playback.playing);
+    h.key_press_modifiers(Modifiers::COMMAND, Key::P);
+    h.step();
+    assert!(h.state().playback.playing);
+    h.key_press_modifiers(Modifiers::COMMAND, Key::P);
+    h.run();
+    assert!(!h.state().playback.playing);
+    // Ctrl+N on a dirty document asks first; Discard goes ahead.
+    assert!(h.state().doc.is_dirty(), "deformer switches are edits");
+    press(&mut h, Modifiers::COMMAND, Key::N);
+    assert!(h.state().pending.is_some());
+    h.get_by_label("Discard changes").click();
+    h.run();
+    assert!(h.state().doc.scene().objects.is_empty(), "a new, empty scene");
+    // Ctrl+Q on a clean document quits at once.
+    press(&mut h, Modifiers::COMMAND, Key::Q);
+    assert!(h.state().quit_confirmed());
+}
+
+#[test]
+fn copy_paste_and_box_select_keys() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_elbow_key_15(&mut h);
+    press(&mut h, Modifiers::COMMAND, Key::C);
+    go_to_frame(&mut h, 40);
+    press(&mut h, Modifiers::COMMAND, Key::V);
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let scene = h.state().doc.scene();
+    assert!(channels::key_at(scene, elbow, 40.0 / scene.fps).is_some(), "pasted at frame 40");
+    assert_eq!(channels::key_count(scene, elbow), 7);
+
+    // Drag a box over the whole dope sheet: every key is selected.
+    let first = h.get_by_label("key shoulder rotation frame 0").rect();
+    let last = h.get_by_label("key Key intensity frame 90").rect();
+    let start = first.left_top() - egui::vec2(4.0, 4.0);
+    let end = last.right_bottom() + egui::vec2(4.0, 4.0);
+    h.event(Event::PointerMoved(start));
+    h.event(Event::PointerButton {
+        pos: start,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    h.step();
+    for i in 1..=10 {
+        h.event(Event::PointerMoved(start + (end - start) * (i as f32 / 10.0)));
+        h.step();
+    }
+    h.event(Event::PointerButton {
+        pos: end,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    h.run();
+    let scene = h.state().doc.scene();
+    let all: Vec<(ChannelId, usize)> = ChannelId::all(scene)
+        .into_iter()
+        .flat_map(|id| (0..channels::key_count(scene, id)).map(move |i| (id, i)))
+        .collect();
+    let missed: Vec<_> = all
+        .iter()
+        .filter(|(id, i)| {
+            !h.state().selection.keys.contains(&keyrig_editor::state::KeyRef { channel: *id, index: *i })
+        })
+        .collect();
+    assert!(missed.is_empty(), "box selection missed {missed:?}");
+}
