@@ -354,9 +354,14 @@ pub fn save(path: &Path, scene: &Scene) -> Result<(), SceneFileError> {
 
 /// Errors when `path` exists and declares a format version newer than [`CURRENT_VERSION`].
 fn refuse_newer(path: &Path) -> Result<(), SceneFileError> {
+    match fs::metadata(path) {
+        // Nothing there, or not a file (the write itself will then fail and say why).
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
+        Ok(meta) if !meta.is_file() => return Ok(()),
+        _ => {}
+    }
     let text = match fs::read(path) {
         Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
-        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
         Err(source) => return Err(SceneFileError::Read { path: path.to_path_buf(), source }),
     };
     // Read only the version, with the lightest parser possible: a newer format may have
@@ -403,7 +408,10 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SceneFileError> {
         file.sync_all()?;
         drop(file);
         if fs::symlink_metadata(path).is_ok() {
-            keep_backup(path)?;
+            keep_backup(path).map_err(|e| {
+                let bak = backup_path(path);
+                io::Error::new(e.kind(), format!("cannot keep the previous file as {}: {e}", bak.display()))
+            })?;
         }
         fs::rename(&tmp_path, path)?;
         sync_dir(&dir);
