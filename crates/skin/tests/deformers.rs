@@ -95,7 +95,7 @@ fn run_all(
     n: usize,
     mut job: impl FnMut(Execution, &mut [Vec3], &mut [Vec3]) -> Result<(), SkinError>,
 ) -> Vec<Deformed> {
-    [Execution::Reference, Execution::SingleThreaded, Execution::Parallel]
+    [Execution::Reference, Execution::SingleThreaded, Execution::Parallel, Execution::Portable]
         .into_iter()
         .map(|e| {
             let mut out = Deformed { positions: vec![Vec3::NAN; n], normals: vec![Vec3::NAN; n] };

@@ -14,7 +14,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Quat, Vec3, Vec3A};
 
-use super::{check_buffers, check_len, for_each_chunk, Execution};
+use super::{check_buffers, check_len, for_each_chunk, Execution, CHUNK};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -51,6 +51,24 @@ impl BonesBlendJob<'_> {
         check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
         let joint_count = self.palette.bones_blending.len();
         check_len("joint parents", joint_count, self.parents.len())?;
+        // A branch-light pass answers "all good?"; the loop below finds the first bad vertex.
+        let parents = self.parents;
+        let pass = |bindings: &[BonesBlendVertex]| {
+            bindings.iter().fold(true, |ok, b| {
+                let joint = b.joint as usize;
+                let has_parent = parents.get(joint).is_some_and(|p| p.is_some());
+                ok & (joint < joint_count) & (b.t >= 0.0) & ((b.t < 1.0) & has_parent | (b.t == 1.0))
+            })
+        };
+        let all_good = if n > CHUNK {
+            use rayon::prelude::*;
+            self.bindings.par_chunks(CHUNK).all(pass)
+        } else {
+            pass(self.bindings)
+        };
+        if all_good {
+            return Ok(());
+        }
         for (vertex, b) in self.bindings.iter().enumerate() {
             let joint = b.joint as usize;
             if joint >= joint_count {
@@ -76,8 +94,7 @@ impl BonesBlendJob<'_> {
         self.validate()?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded => self.fast(false),
-            Execution::Parallel => self.fast(true),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
         }
         Ok(())
     }
@@ -92,11 +109,12 @@ impl BonesBlendJob<'_> {
                 * Mat4::from_quat(blended)
                 * Mat4::from(k.joint_from_bind_model);
             self.out_positions[v] = m.transform_point3(self.positions[v]);
-            self.out_normals[v] = m.transform_vector3(self.normals[v]).normalize_or_zero();
+            self.out_normals[v] = m.transform_vector3(self.normals[v]);
         }
     }
 
-    fn fast(&mut self, parallel: bool) {
+    fn fast(&mut self, execution: Execution) {
+        let parallel = execution.parallel();
         let joints = &self.palette.bones_blending;
         let (bindings, positions, normals) = (self.bindings, self.positions, self.normals);
         for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
@@ -113,7 +131,7 @@ impl BonesBlendJob<'_> {
                 let rotated = rotate(u, c, local);
                 let rotated_n = rotate(u, c, local_n);
                 *op = k.posed_from_joint_rest.transform_point3a(rotated).into();
-                *on = (k.posed_from_joint_rest.matrix3 * rotated_n).normalize_or_zero().into();
+                *on = (k.posed_from_joint_rest.matrix3 * rotated_n).into();
             }
         });
     }

@@ -5,9 +5,9 @@
 //! Normals rotate with the blended real part. Needs a rigid palette
 //! ([`crate::pose::JointPalette::dual_quaternions`]).
 
-use glam::{Mat4, Quat, Vec3, Vec3A, Vec4};
+use glam::{BVec4A, Mat4, Quat, Vec3, Vec3A, Vec4};
 
-use super::{check_buffers, check_len, for_each_chunk, validate_influences, Execution};
+use super::{check_buffers, check_len, for_each_chunk, validate_influences_with, Execution};
 use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
 
@@ -27,10 +27,14 @@ pub struct DualQuatJob<'a, const N: usize = 4> {
 impl<const N: usize> DualQuatJob<'_, N> {
     /// Checks buffer lengths, joint indices and weights (finite, ≥ 0, not all zero, Σ = 1).
     pub fn validate(&self) -> Result<(), SkinError> {
+        self.validate_with(true)
+    }
+
+    fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
         let n = self.positions.len();
         check_len("joints", n, self.joints.len())?;
         check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
-        validate_influences(self.joints, self.weights, self.dual_quaternions.len())
+        validate_influences_with(self.joints, self.weights, self.dual_quaternions.len(), parallel)
     }
 
     /// Validates, then deforms on all cores.
@@ -40,11 +44,10 @@ impl<const N: usize> DualQuatJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate()?;
+        self.validate_with(execution.parallel())?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded => self.fast(false),
-            Execution::Parallel => self.fast(true),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
         }
         Ok(())
     }
@@ -70,13 +73,36 @@ impl<const N: usize> DualQuatJob<'_, N> {
             let (rotation, translation) = DualQuat { real, dual }.normalize().to_rotation_translation();
             let m = Mat4::from_rotation_translation(rotation, translation);
             self.out_positions[v] = m.transform_point3(self.positions[v]);
-            self.out_normals[v] = m.transform_vector3(self.normals[v]).normalize_or_zero();
+            self.out_normals[v] = m.transform_vector3(self.normals[v]);
         }
     }
 
-    fn fast(&mut self, parallel: bool) {
+    fn fast(&mut self, execution: Execution) {
+        let parallel = execution.parallel();
         let dqs = self.dual_quaternions;
         let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
+        #[cfg(target_arch = "x86_64")]
+        if execution.simd() {
+            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
+            // index against the palette.
+            let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                // SAFETY: as above.
+                unsafe {
+                    super::simd::dual_quaternion_chunk(
+                        &packed,
+                        &joints[start..end],
+                        &weights[start..end],
+                        &positions[start..end],
+                        &normals[start..end],
+                        out_p,
+                        out_n,
+                    )
+                }
+            });
+            return;
+        }
         for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
@@ -84,19 +110,22 @@ impl<const N: usize> DualQuatJob<'_, N> {
                 .zip(&weights[start..end])
                 .zip(positions[start..end].iter().zip(&normals[start..end]));
             for (((js, ws), (&p, &n)), (op, on)) in inputs.zip(out_p.iter_mut().zip(out_n.iter_mut())) {
-                let mut dominant = 0;
+                // Branch-free (random rotations make the signs unpredictable): the pivot is
+                // the real part of the largest-weight influence (the first on ties), and each
+                // weight takes the sign of its real part's dot product with the pivot.
+                let mut pivot = Vec4::from(dqs[js[0] as usize].real);
+                let mut best = ws[0];
                 for i in 1..N {
-                    if ws[i] > ws[dominant] {
-                        dominant = i;
-                    }
+                    let larger = ws[i] > best;
+                    best = if larger { ws[i] } else { best };
+                    pivot = Vec4::select(BVec4A::splat(larger), Vec4::from(dqs[js[i] as usize].real), pivot);
                 }
-                let pivot = Vec4::from(dqs[js[dominant] as usize].real);
                 let mut real = Vec4::ZERO;
                 let mut dual = Vec4::ZERO;
                 for i in 0..N {
                     let q = &dqs[js[i] as usize];
                     let r = Vec4::from(q.real);
-                    let w = if r.dot(pivot) < 0.0 { -ws[i] } else { ws[i] };
+                    let w = Vec4::splat(ws[i]).copysign(Vec4::splat(r.dot(pivot)));
                     real += r * w;
                     dual += Vec4::from(q.dual) * w;
                 }
@@ -109,7 +138,7 @@ impl<const N: usize> DualQuatJob<'_, N> {
                 let n = Vec3A::from(n);
                 let translation = 2.0 * (rw * d - dw * r + r.cross(d));
                 *op = (p + 2.0 * r.cross(r.cross(p) + rw * p) + translation).into();
-                *on = (n + 2.0 * r.cross(r.cross(n) + rw * n)).normalize_or_zero().into();
+                *on = (n + 2.0 * r.cross(r.cross(n) + rw * n)).into();
             }
         });
     }

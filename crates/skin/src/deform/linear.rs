@@ -4,7 +4,7 @@
 
 use glam::{Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
-use super::{check_buffers, check_len, for_each_chunk, validate_influences, Execution};
+use super::{check_buffers, check_len, for_each_chunk, validate_influences_with, Execution};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -24,10 +24,19 @@ pub struct LinearBlendJob<'a, const N: usize = 4> {
 impl<const N: usize> LinearBlendJob<'_, N> {
     /// Checks buffer lengths, joint indices and weights (finite, ≥ 0, not all zero, Σ = 1).
     pub fn validate(&self) -> Result<(), SkinError> {
+        self.validate_with(true)
+    }
+
+    /// [`Self::validate`] on the calling thread.
+    pub fn validate_single_threaded(&self) -> Result<(), SkinError> {
+        self.validate_with(false)
+    }
+
+    fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
         let n = self.positions.len();
         check_len("joints", n, self.joints.len())?;
         check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
-        validate_influences(self.joints, self.weights, self.palette.len())
+        validate_influences_with(self.joints, self.weights, self.palette.len(), parallel)
     }
 
     /// Validates, then deforms on all cores.
@@ -37,11 +46,10 @@ impl<const N: usize> LinearBlendJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate()?;
+        self.validate_with(execution.parallel())?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded => self.fast(false),
-            Execution::Parallel => self.fast(true),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
         }
         Ok(())
     }
@@ -62,14 +70,37 @@ impl<const N: usize> LinearBlendJob<'_, N> {
                 } * w;
             }
             self.out_positions[v] = m.transform_point3(self.positions[v]);
-            self.out_normals[v] = (nm * self.normals[v]).normalize_or_zero();
+            self.out_normals[v] = nm * self.normals[v];
         }
     }
 
-    fn fast(&mut self, parallel: bool) {
+    fn fast(&mut self, execution: Execution) {
+        let parallel = execution.parallel();
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
+        #[cfg(target_arch = "x86_64")]
+        if normal_palette.is_none() && execution.simd() {
+            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
+            // index against the palette.
+            let packed = unsafe { super::simd::pack_palette(palette) };
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                // SAFETY: as above.
+                unsafe {
+                    super::simd::linear_blend_chunk(
+                        &packed,
+                        &joints[start..end],
+                        &weights[start..end],
+                        &positions[start..end],
+                        &normals[start..end],
+                        out_p,
+                        out_n,
+                    )
+                }
+            });
+            return;
+        }
         for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
@@ -102,7 +133,7 @@ impl<const N: usize> LinearBlendJob<'_, N> {
                     }
                     None => x * n.x + y * n.y + z * n.z,
                 };
-                *on = nm.normalize_or_zero().into();
+                *on = nm.into();
             }
         });
     }

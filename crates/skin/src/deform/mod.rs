@@ -16,6 +16,8 @@ mod bones_blending;
 mod dual_quaternion;
 mod linear;
 mod rigid;
+#[cfg(target_arch = "x86_64")]
+mod simd;
 
 pub use bones_blending::{BonesBlendJob, BonesBlendVertex};
 pub use dual_quaternion::DualQuatJob;
@@ -32,6 +34,21 @@ pub enum Execution {
     /// The fast path on rayon's thread pool, in chunks of [`CHUNK`] vertices.
     #[default]
     Parallel,
+    /// The fast path on the calling thread without the CPU-specific (AVX2 + FMA) kernels: what
+    /// runs on CPUs without them; for tests.
+    Portable,
+}
+
+impl Execution {
+    pub(crate) fn parallel(self) -> bool {
+        self == Execution::Parallel
+    }
+
+    /// Whether CPU-specific kernels may be used.
+    #[cfg(target_arch = "x86_64")]
+    pub(crate) fn simd(self) -> bool {
+        self != Execution::Portable && simd::available()
+    }
 }
 
 /// Vertices per rayon task: large enough to amortize scheduling, small enough to balance.
@@ -67,7 +84,59 @@ pub fn validate_influences<const N: usize>(
     weights: &[[f32; N]],
     joint_count: usize,
 ) -> Result<(), SkinError> {
+    validate_influences_with(joints, weights, joint_count, true)
+}
+
+/// [`validate_influences`], on the calling thread or in parallel chunks. A branch-free pass
+/// over all vertices answers "all good?" cheaply (it runs every frame); only when it fails does
+/// a second pass look for the first bad vertex to report.
+pub(crate) fn validate_influences_with<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+    parallel: bool,
+) -> Result<(), SkinError> {
     check_len("weights", joints.len(), weights.len())?;
+    let all_good = if parallel && joints.len() > CHUNK {
+        joints
+            .par_chunks(CHUNK)
+            .zip(weights.par_chunks(CHUNK))
+            .all(|(j, w)| influences_pass(j, w, joint_count))
+    } else {
+        influences_pass(joints, weights, joint_count)
+    };
+    if all_good {
+        Ok(())
+    } else {
+        first_bad_influence(joints, weights, joint_count)
+    }
+}
+
+/// True when every vertex passes; written without early exits so that it vectorizes: the
+/// largest joint index must be in range, the largest weight bit pattern must be that of a
+/// finite non-negative float (≤ 0x7F7F_FFFF: negative numbers have the sign bit set, NaN and
+/// infinity an all-ones exponent), and every vertex's sum must be 1 within the tolerance.
+fn influences_pass<const N: usize>(joints: &[[u16; N]], weights: &[[f32; N]], joint_count: usize) -> bool {
+    let mut max_joint = 0u16;
+    let mut max_bits = 0u32;
+    let mut sums_ok = true;
+    for (js, ws) in joints.iter().zip(weights) {
+        let mut sum = 0.0f32;
+        for i in 0..N {
+            max_joint = max_joint.max(js[i]);
+            max_bits = max_bits.max(ws[i].to_bits());
+            sum += ws[i];
+        }
+        sums_ok &= (sum - 1.0).abs() <= WEIGHT_SUM_TOLERANCE;
+    }
+    (max_joint as usize) < joint_count && max_bits <= 0x7F7F_FFFF && sums_ok
+}
+
+fn first_bad_influence<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+) -> Result<(), SkinError> {
     for (vertex, (js, ws)) in joints.iter().zip(weights).enumerate() {
         let mut sum = 0.0f32;
         for influence in 0..N {

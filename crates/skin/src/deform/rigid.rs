@@ -49,8 +49,7 @@ impl RigidJob<'_> {
         self.validate()?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded => self.fast(false),
-            Execution::Parallel => self.fast(true),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
         }
         Ok(())
     }
@@ -64,11 +63,12 @@ impl RigidJob<'_> {
                 Some(normals) => Mat3::from(normals[j]),
                 None => Mat3::from_mat4(m).inverse().transpose(),
             };
-            self.out_normals[v] = (n * self.normals[v]).normalize_or_zero();
+            self.out_normals[v] = n * self.normals[v];
         }
     }
 
-    fn fast(&mut self, parallel: bool) {
+    fn fast(&mut self, execution: Execution) {
+        let parallel = execution.parallel();
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let joints = self.joints;
@@ -84,7 +84,7 @@ impl RigidJob<'_> {
                     Some(normals) => normals[j as usize] * Vec3A::from(n),
                     None => m.matrix3 * Vec3A::from(n),
                 };
-                *on = nm.normalize_or_zero().into();
+                *on = nm.into();
             }
         });
     }
