@@ -20,7 +20,9 @@ pub mod skinning;
 pub use error::RenderError;
 pub use gpu::GpuContext;
 pub use headless::{HeadlessRenderer, HEADLESS_FORMAT};
-pub use overlay::{MotionPath, SkeletonOverlay};
+/// The `image` crate this crate renders into (re-exported so callers save PNGs with the same version).
+pub use image;
+pub use overlay::{LightGizmo, MotionPath, SkeletonOverlay};
 pub use renderer::{
     Deform, DrawItem, FrameInput, FrameStats, LightInput, MeshData, MeshId, RenderStyle, Renderer, Viewport,
 };

@@ -14,8 +14,8 @@ pub struct LineVertex {
 
 /// Linear RGBA colours of the overlays.
 pub mod colours {
-    pub const GRID: [f32; 4] = [0.22, 0.22, 0.24, 1.0];
-    pub const GRID_MAJOR: [f32; 4] = [0.32, 0.32, 0.35, 1.0];
+    pub const GRID: [f32; 4] = [0.07, 0.07, 0.08, 1.0];
+    pub const GRID_MAJOR: [f32; 4] = [0.14, 0.14, 0.16, 1.0];
     pub const AXIS_X: [f32; 4] = [0.75, 0.12, 0.12, 1.0];
     pub const AXIS_Z: [f32; 4] = [0.12, 0.25, 0.8, 1.0];
     pub const BONE: [f32; 4] = [0.85, 0.85, 0.55, 1.0];
@@ -23,6 +23,7 @@ pub mod colours {
     pub const SELECTED: [f32; 4] = [1.0, 0.45, 0.05, 1.0];
     pub const PATH: [f32; 4] = [0.2, 0.9, 0.4, 1.0];
     pub const KEY: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
+    pub const LIGHT: [f32; 4] = [1.0, 0.85, 0.3, 1.0];
 }
 
 /// A batch of line segments (pairs of vertices).
@@ -80,11 +81,19 @@ pub fn grid(lines: &mut Lines, spacing: f32, half_count: u32) {
     }
 }
 
-/// A grid spacing that suits an orbit distance: a power of ten about a twentieth of it.
+/// A grid spacing that suits an orbit distance: the 1-2-5 step (…, 0.1, 0.2, 0.5, 1, 2, …)
+/// nearest to an eighth of it, in log scale.
 #[must_use]
 pub fn grid_spacing_for(distance: f32) -> f32 {
     let d = if distance.is_finite() && distance > 0.0 { distance } else { 1.0 };
-    10f32.powf((d / 20.0).log10().round())
+    let target = (d / 8.0).log10();
+    let decade = target.floor();
+    let steps = [1.0f32, 2.0, 5.0, 10.0];
+    let best = steps
+        .into_iter()
+        .min_by(|a, b| (a.log10() + decade - target).abs().total_cmp(&(b.log10() + decade - target).abs()))
+        .unwrap_or(1.0);
+    best * 10f32.powf(decade)
 }
 
 /// A skeleton to draw: world-space joint positions, parents, and the selected joint.
@@ -146,6 +155,58 @@ pub fn motion_path(lines: &mut Lines, path: &MotionPath, marker: f32) {
     }
 }
 
+/// A light drawn in the viewport: where it is and where it shines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightGizmo {
+    pub kind: keyrig_core::LightKind,
+    pub position: Vec3,
+    pub direction: Vec3,
+    pub selected: bool,
+}
+
+/// Every light gets a diamond at its position; a point light a cross through it; a directional
+/// light an arrow along its direction; a spot light the edges of its cut-off cone and a ring at
+/// the cone's end. `marker` is the diamond's half-size; the arrow and cone are 10 markers long.
+pub fn light_gizmo(lines: &mut Lines, gizmo: &LightGizmo, marker: f32) {
+    use keyrig_core::LightKind;
+    let colour = if gizmo.selected { colours::SELECTED } else { colours::LIGHT };
+    let p = gizmo.position;
+    lines.diamond(p, marker, colour);
+    let dir = gizmo.direction.normalize_or(Vec3::NEG_Y);
+    let length = marker * 10.0;
+    match gizmo.kind {
+        LightKind::Point => lines.cross(p, marker * 2.0, colour),
+        LightKind::Directional => {
+            let tip = p + dir * length;
+            lines.segment(p, tip, colour);
+            let side = dir.any_orthonormal_vector();
+            let up = dir.cross(side);
+            for d in [side, -side, up, -up] {
+                lines.segment(tip, tip - dir * marker * 2.0 + d * marker, colour);
+            }
+        }
+        LightKind::Spot { cutoff_deg, .. } => {
+            let angle = cutoff_deg.clamp(0.0, 89.0).to_radians();
+            let side = dir.any_orthonormal_vector();
+            let up = dir.cross(side);
+            let centre = p + dir * length;
+            let radius = length * angle.tan();
+            let ring: Vec<Vec3> = (0..16)
+                .map(|i| {
+                    let a = i as f32 / 16.0 * std::f32::consts::TAU;
+                    centre + (side * a.cos() + up * a.sin()) * radius
+                })
+                .collect();
+            for i in 0..16 {
+                lines.segment(ring[i], ring[(i + 1) % 16], colour);
+            }
+            for i in (0..16).step_by(4) {
+                lines.segment(p, ring[i], colour);
+            }
+        }
+    }
+}
+
 /// Moves every vertex by a transform (e.g. model to world).
 pub fn transform(lines: &mut [LineVertex], world_from_model: &Mat4) {
     for v in lines {
@@ -180,10 +241,13 @@ mod tests {
     }
 
     #[test]
-    fn grid_spacing_is_a_power_of_ten() {
-        assert_eq!(grid_spacing_for(200.0), 10.0);
-        assert_eq!(grid_spacing_for(5.0), 0.1);
-        assert_eq!(grid_spacing_for(f32::NAN), 0.1);
+    fn grid_spacing_is_a_one_two_five_step() {
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5 * b;
+        assert!(close(grid_spacing_for(80.0), 10.0));
+        assert!(close(grid_spacing_for(3.2), 0.5));
+        assert!(close(grid_spacing_for(320.0), 50.0));
+        assert!(close(grid_spacing_for(1.6), 0.2));
+        assert!(close(grid_spacing_for(f32::NAN), 0.1));
     }
 
     #[test]

@@ -12,7 +12,7 @@ use keyrig_core::{Camera, DeformerKind, LightKind};
 
 use crate::camera;
 use crate::gpu::with_error_scope;
-use crate::overlay::{self, LineVertex, Lines, MotionPath, SkeletonOverlay};
+use crate::overlay::{self, LightGizmo, LineVertex, Lines, MotionPath, SkeletonOverlay};
 use crate::skinning::{GpuSkinner, JointPose, MorphBuffers, SkinBuffers, SkinMeshInput, SkinnedVertex};
 use crate::RenderError;
 
@@ -115,6 +115,8 @@ pub struct FrameInput {
     pub grid_spacing: Option<f32>,
     pub skeletons: Vec<SkeletonOverlay>,
     pub motion_paths: Vec<MotionPath>,
+    /// Lights drawn as gizmos (position, direction, cone).
+    pub light_gizmos: Vec<LightGizmo>,
     /// Linear RGB background.
     pub background: Vec3,
 }
@@ -132,6 +134,7 @@ impl FrameInput {
             grid_spacing: Some(overlay::grid_spacing_for(camera.distance)),
             skeletons: Vec::new(),
             motion_paths: Vec::new(),
+            light_gizmos: Vec::new(),
             background: Vec3::new(0.018, 0.02, 0.025),
         }
     }
@@ -746,6 +749,9 @@ impl Renderer {
         }
         for path in &frame.motion_paths {
             overlay::motion_path(&mut lines, path, marker);
+        }
+        for gizmo in &frame.light_gizmos {
+            overlay::light_gizmo(&mut lines, gizmo, marker);
         }
         if lines.vertices.iter().any(|v| !v.position.iter().all(|x| x.is_finite())) {
             return Err(RenderError::NonFinite {

@@ -16,7 +16,7 @@ use keyrig_skin::{
 };
 use thiserror::Error;
 
-use crate::overlay::{grid_spacing_for, MotionPath, SkeletonOverlay};
+use crate::overlay::{grid_spacing_for, LightGizmo, MotionPath, SkeletonOverlay};
 use crate::renderer::{Deform, DrawItem, FrameInput, LightInput, MeshData, MeshId, RenderStyle, Renderer};
 use crate::skinning::{joint_poses, OwnedSkinInput};
 use crate::RenderError;
@@ -81,6 +81,8 @@ pub struct ViewOptions {
     pub skeletons: bool,
     /// Draw the motion path of the selected object or joint.
     pub motion_path: bool,
+    /// Draw lights as gizmos.
+    pub lights: bool,
     pub selection: Selection,
     /// Replaces the scene's camera when set (the editor's orbit camera).
     pub camera: Option<Camera>,
@@ -94,6 +96,7 @@ impl Default for ViewOptions {
             grid: true,
             skeletons: true,
             motion_path: true,
+            lights: true,
             selection: Selection::None,
             camera: None,
         }
@@ -336,11 +339,31 @@ impl SceneRig {
                 frame.motion_paths.push(path);
             }
         }
+        if view.lights {
+            frame.light_gizmos = self.light_gizmos(view.selection, time);
+        }
         Ok(frame)
     }
 
+    /// Gizmos of the enabled lights at `time` seconds (the selected one highlighted).
+    #[must_use]
+    pub fn light_gizmos(&self, selection: Selection, time: f64) -> Vec<LightGizmo> {
+        self.lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.enabled)
+            .map(|(i, l)| LightGizmo {
+                kind: l.kind,
+                position: l.position.sample(time),
+                direction: l.direction.sample(time),
+                selected: selection == Selection::Light(i),
+            })
+            .collect()
+    }
+
     /// The frame for object states evaluated elsewhere (the editor's, with its pose overrides).
-    /// Motion paths are not added here; see [`SceneRig::motion_path`].
+    /// Motion paths and light gizmos are not added here; see [`SceneRig::motion_path`] and
+    /// [`SceneRig::light_gizmos`].
     ///
     /// # Errors
     /// A state list of the wrong length or a pose that cannot be evaluated.
