@@ -3,5 +3,5 @@
 
 pub mod edit;
 pub mod info;
-pub mod sample;
 pub mod render;
+pub mod sample;

@@ -1,0 +1,148 @@
+//! `keyrig render` end to end: the demo scene to PNG (one frame and a range), an MD2 model from
+//! the shared corpus through GPU morphing, and clear errors for bad arguments and files.
+//!
+//! Renders on the adapter wgpu finds (lavapipe without a GPU); no adapter fails these tests.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn keyrig(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_keyrig")).args(args).output().expect("run keyrig")
+}
+
+fn demo_scene() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn distinct_colours(image: &keyrig_render::image::RgbaImage) -> usize {
+    let mut colours: Vec<[u8; 4]> = image.pixels().map(|p| p.0).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    colours.len()
+}
+
+#[test]
+fn renders_one_frame_of_the_demo_scene() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("frame.png");
+    let demo = demo_scene();
+    let result = keyrig(&[
+        "render",
+        demo.to_str().expect("utf-8 path"),
+        "--frame",
+        "45",
+        "--size",
+        "320x180",
+        "--deformer",
+        "dual-quaternion",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    assert!(result.status.success(), "keyrig render failed: {}", stderr(&result));
+    let image = keyrig_render::image::open(&out).expect("a PNG").to_rgba8();
+    assert_eq!(image.dimensions(), (320, 180));
+    // A lit mesh, a grid and a background: far more than a handful of colours.
+    assert!(distinct_colours(&image) > 50, "the image looks empty");
+}
+
+#[test]
+fn renders_a_numbered_range_with_a_pattern() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pattern = dir.path().join("seq").join("arm_###.png");
+    let demo = demo_scene();
+    let result = keyrig(&[
+        "render",
+        demo.to_str().expect("utf-8 path"),
+        "--frames",
+        "10..12",
+        "--size",
+        "96x64",
+        "--style",
+        "wireframe",
+        "-o",
+        pattern.to_str().expect("utf-8 path"),
+    ]);
+    assert!(result.status.success(), "keyrig render failed: {}", stderr(&result));
+    let mut images = Vec::new();
+    for frame in 10..=12 {
+        let path = dir.path().join("seq").join(format!("arm_{frame:03}.png"));
+        images.push(
+            keyrig_render::image::open(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+                .to_rgba8(),
+        );
+    }
+    // The arm moves between frames.
+    assert_ne!(images[0], images[2]);
+}
+
+#[test]
+fn renders_an_md2_model_through_gpu_morphing() {
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2");
+    let model = std::fs::read_dir(&corpus)
+        .unwrap_or_else(|e| {
+            panic!("{}: {e} (the shared corpus must be beside the checkout)", corpus.display())
+        })
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .flat_map(|p| {
+            if p.is_dir() {
+                std::fs::read_dir(&p)
+                    .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+                    .unwrap_or_default()
+            } else {
+                vec![p]
+            }
+        })
+        .find(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("md2")))
+        .expect("an .md2 file in the corpus");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("md2.png");
+    let result = keyrig(&[
+        "render",
+        model.to_str().expect("utf-8 path"),
+        "--frame",
+        "4",
+        "--size",
+        "128x128",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    assert!(result.status.success(), "keyrig render {} failed: {}", model.display(), stderr(&result));
+    let image = keyrig_render::image::open(&out).expect("a PNG").to_rgba8();
+    assert!(distinct_colours(&image) > 20, "the image looks empty");
+}
+
+#[test]
+fn bad_arguments_and_files_are_explained() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.png");
+    let out = out.to_str().expect("utf-8 path");
+    let demo = demo_scene();
+    let demo = demo.to_str().expect("utf-8 path");
+
+    let cases: [(&[&str], &str); 5] = [
+        (&["render", demo, "--deformer", "wobbly", "-o", out], "--deformer `wobbly`"),
+        (&["render", demo, "--size", "0x10", "-o", out], "between 1 and"),
+        (&["render", demo, "--frames", "9..3", "-o", out], "after end"),
+        (&["render", demo, "--frame", "NaN", "-o", out], "not a finite number"),
+        (&["render", "/nonexistent/scene.ron", "-o", out], "/nonexistent/scene.ron"),
+    ];
+    for (args, expected) in cases {
+        let result = keyrig(args);
+        assert!(!result.status.success(), "{args:?} should fail");
+        let message = stderr(&result);
+        assert!(message.contains(expected), "{args:?}: expected `{expected}` in: {message}");
+        assert!(!message.contains("panicked"), "{args:?} panicked: {message}");
+    }
+
+    // A scene file that is not RON at all.
+    let broken = dir.path().join("broken.ron");
+    std::fs::write(&broken, "(version: 1, scene: (fps: ").expect("write");
+    let result = keyrig(&["render", broken.to_str().expect("utf-8 path"), "-o", out]);
+    assert!(!result.status.success());
+    assert!(stderr(&result).contains("broken.ron"), "{}", stderr(&result));
+}
