@@ -1,0 +1,167 @@
+//! glTF export: the demo scene passes the Khronos glTF-Validator with zero errors (as .glb
+//! and as .gltf), and importing the export samples within tolerance of the original scene —
+//! object tracks, joint rotations, and the linear-blend-skinned arm against keyrig-skin.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use glam::Vec3;
+use keyrig_core::{AnimatedTrack, DeformerKind, Interpolation, Key, RawTrack, Scene, Tcb};
+use keyrig_io::gltf_export::{export_scene, rotation_angle, ExportOptions};
+use keyrig_io::gltf_import::import_gltf_slice;
+use keyrig_io::model::{ChannelTarget, ImportedModel};
+
+fn validator_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/validate-gltf")
+}
+
+/// Runs the Khronos glTF-Validator on `file` and returns (errors, full report). Fails with
+/// instructions when Node.js or the validator package is missing.
+fn validate(file: &Path) -> (u64, String) {
+    let dir = validator_dir();
+    assert!(
+        dir.join("node_modules/gltf-validator").is_dir(),
+        "the Khronos glTF-Validator is not installed: install Node.js (18 or newer) and run \
+         `npm ci --prefix tools/validate-gltf` in the repository root"
+    );
+    let output = Command::new("node").arg(dir.join("validate.mjs")).arg(file).output().unwrap_or_else(|e| {
+        panic!("cannot run `node` ({e}): install Node.js (18 or newer) and run `npm ci --prefix tools/validate-gltf`")
+    });
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let report: serde_json::Value = serde_json::from_str(stdout.trim())
+        .unwrap_or_else(|e| panic!("validator output ({e}): {stdout} {stderr}"));
+    (report["errors"].as_u64().expect("errors count"), stdout)
+}
+
+fn node_named(model: &ImportedModel, name: &str) -> usize {
+    model.nodes.iter().position(|n| n.name == name).unwrap_or_else(|| panic!("no node {name}"))
+}
+
+fn sample_times(scene: &Scene) -> Vec<f64> {
+    let end = f64::from(scene.frame_range.end) / scene.fps;
+    (0..=200).map(|i| end * f64::from(i) / 200.0).collect()
+}
+
+#[test]
+fn demo_scene_export_passes_the_khronos_validator() {
+    let scene = keyrig_io::demo::demo_scene();
+    let exported = export_scene(&scene, &ExportOptions::default()).expect("export");
+    let dir = tempfile::tempdir().expect("tempdir");
+    for name in ["demo.glb", "demo.gltf"] {
+        let path = dir.path().join(name);
+        exported.write(&path).expect("write");
+        let (errors, report) = validate(&path);
+        assert_eq!(errors, 0, "{name}: {report}");
+    }
+}
+
+#[test]
+fn import_of_the_export_samples_like_the_scene() {
+    let scene = keyrig_io::demo::demo_scene();
+    let options = ExportOptions::default();
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    assert_eq!(model.animations.len(), 1);
+    let tol = options.rotation_tolerance_deg.to_radians() + 1e-5;
+    for object in &scene.objects {
+        let node = node_named(&model, &object.name);
+        let translation = AnimatedTrack::new(&object.translation).expect("track");
+        let rotation = AnimatedTrack::new(&object.rotation).expect("track");
+        for t in sample_times(&scene) {
+            let pose = model.pose_at(Some(0), t);
+            let expected = translation.sample(t);
+            assert!((pose.translation[node] - expected).length() < 1e-4, "{} t {t}", object.name);
+            let angle = rotation_angle(pose.rotation[node], rotation.sample(t));
+            assert!(angle <= tol, "{} rotation t {t}: {} deg", object.name, angle.to_degrees());
+        }
+        if let Some(skeleton) = &object.skeleton {
+            for joint in &skeleton.joints {
+                let node = node_named(&model, &joint.name);
+                let track = AnimatedTrack::new(&joint.rotation).expect("track");
+                for t in sample_times(&scene) {
+                    let expected = joint.rest_rotation * track.sample(t);
+                    let angle = rotation_angle(model.pose_at(Some(0), t).rotation[node], expected);
+                    assert!(angle <= tol, "{} t {t}: {} deg", joint.name, angle.to_degrees());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn position_tracks_export_exactly_as_cubic_spline() {
+    // A TCB track with non-uniform spacing and non-zero T/C/B: the glTF Hermite curve must
+    // be the same curve, not an approximation.
+    let mut scene = Scene::default();
+    let mut object = keyrig_core::Object::new("mover");
+    object.translation.track = RawTrack::new(vec![
+        Key::new(0.0, Vec3::ZERO),
+        Key::new(0.3, Vec3::new(1.0, 2.0, 0.0)).with_tcb(Tcb::new(0.4, -0.3, 0.2)),
+        Key::new(1.1, Vec3::new(-1.0, 0.5, 3.0)).with_tcb(Tcb::new(-0.5, 0.5, -0.2)),
+        Key::new(1.5, Vec3::new(0.0, 0.0, 1.0)).with_interpolation(Interpolation::Linear),
+        Key::new(2.0, Vec3::new(2.0, 0.0, 1.0)),
+    ]);
+    scene.objects.push(object);
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let ChannelTarget::Translation(track) = &model.animations[0].channels[0].target else {
+        panic!("channel")
+    };
+    assert!(track.keys.iter().all(|k| k.interpolation == Interpolation::Hermite));
+    let original = AnimatedTrack::new(&scene.objects[0].translation).expect("track");
+    for i in 0..=400 {
+        let t = 2.0 * f64::from(i) / 400.0;
+        let got = model.pose_at(Some(0), t).translation[0];
+        let want = original.sample(t);
+        assert!((got - want).length() < 2e-5, "t {t}: {got} vs {want}");
+    }
+}
+
+#[test]
+fn skinned_arm_deforms_like_keyrig_skin_after_export() {
+    let scene = keyrig_io::demo::demo_scene();
+    let options = ExportOptions::default();
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    let arm = &scene.objects[0];
+    let skeleton = arm.skeleton.as_ref().expect("arm skeleton");
+    let mesh_node = node_named(&model, &format!("{}.mesh", arm.name));
+    let kind = match arm.mesh {
+        Some(keyrig_core::MeshSource::Procedural(kind)) => kind,
+        _ => panic!("demo arm is procedural"),
+    };
+    // keyrig's own linear blend, with the mesh fitted to the scene skeleton as the editor does.
+    let mut mesh = keyrig_skin::mesh_for(kind);
+    let native = keyrig_skin::scene_skeleton_for(kind).expect("native skeleton");
+    let len = |s: &keyrig_core::Skeleton| -> f32 {
+        s.joints.iter().filter(|j| j.parent.is_some()).map(|j| j.rest_translation.length()).sum()
+    };
+    let factor = len(skeleton) / len(&native);
+    for p in &mut mesh.positions {
+        *p *= factor;
+    }
+    let rest = keyrig_skin::RestSkeleton::from_scene(skeleton).expect("rest");
+    let mesh = mesh.with_skeleton(rest.clone()).expect("fits");
+    let bindings =
+        mesh.bindings(keyrig_skin::BlendZone::from_settings(&arm.deformer).expect("zone")).expect("bind");
+    let sampler = keyrig_skin::ScenePoseSampler::new(skeleton).expect("sampler");
+    let object_translation = arm.translation.value;
+    let reach: f32 = len(skeleton);
+    // Each of the 4 joints may deviate by the rotation tolerance; the tip moves at most
+    // Σ tolerance × distance to the tip.
+    let bound = 4.0 * (options.rotation_tolerance_deg.to_radians() as f32) * reach + 1e-4;
+    for t in sample_times(&scene).into_iter().step_by(10) {
+        let palette = keyrig_skin::JointPalette::new(&rest, &sampler.sample(t)).expect("palette");
+        let ours =
+            keyrig_skin::deform_mesh(&mesh, &bindings, &palette, DeformerKind::LinearBlend).expect("deform");
+        let gltf = model.deformed_positions(mesh_node, Some(0), t).expect("mesh");
+        let worst = ours
+            .positions
+            .iter()
+            .zip(&gltf[0])
+            .map(|(a, b)| ((*a + object_translation) - *b).length())
+            .fold(0.0, f32::max);
+        assert!(worst <= bound, "t {t}: worst vertex {worst} m (bound {bound})");
+    }
+}
