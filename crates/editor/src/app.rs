@@ -19,26 +19,36 @@ use crate::state::{Document, KeyRef, Playback, Selected, Selection};
 /// Validated tracks and the document key (document, revision) they were built for.
 type CachedTracks = ((u64, u64), Rc<Tracks>);
 
-/// How the viewport draws the scene.
+/// How the viewport draws meshes (seed text 002's render styles).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RenderStyle {
-    /// Flat-shaded surfaces with the wireframe on top.
-    Shaded,
-    /// Edges only.
+    /// Lit, filled surfaces.
+    Solid,
+    /// Triangle edges only.
     Wireframe,
-    /// Bones only, no mesh.
-    BonesOnly,
+    /// Vertices only.
+    Points,
 }
 
 impl RenderStyle {
-    pub const ALL: [RenderStyle; 3] = [RenderStyle::Shaded, RenderStyle::Wireframe, RenderStyle::BonesOnly];
+    pub const ALL: [RenderStyle; 3] = [RenderStyle::Solid, RenderStyle::Wireframe, RenderStyle::Points];
 
     #[must_use]
     pub fn label(self) -> &'static str {
         match self {
-            RenderStyle::Shaded => "Shaded",
+            RenderStyle::Solid => "Solid",
             RenderStyle::Wireframe => "Wireframe",
-            RenderStyle::BonesOnly => "Bones only",
+            RenderStyle::Points => "Points",
+        }
+    }
+
+    /// keyrig-render's style.
+    #[must_use]
+    pub fn to_render(self) -> keyrig_render::RenderStyle {
+        match self {
+            RenderStyle::Solid => keyrig_render::RenderStyle::Solid,
+            RenderStyle::Wireframe => keyrig_render::RenderStyle::Wireframe,
+            RenderStyle::Points => keyrig_render::RenderStyle::Points,
         }
     }
 }
@@ -49,6 +59,8 @@ pub struct ViewSettings {
     pub camera: OrbitCamera,
     pub grid: bool,
     pub bones: bool,
+    /// Draw the selected object's or joint's motion path (GPU viewport).
+    pub motion_path: bool,
     pub style: RenderStyle,
 }
 
@@ -107,6 +119,8 @@ pub struct EditorApp {
     pub(crate) gizmo: transform_gizmo_egui::Gizmo,
     pub(crate) timeline: panels::timeline::TimelineState,
     pub skin: crate::skinning::SkinCache,
+    /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
+    pub gpu: Option<crate::gpu_view::GpuView>,
     tracks: RefCell<Option<CachedTracks>>,
     window_title: String,
     close_sent: bool,
@@ -131,7 +145,13 @@ impl EditorApp {
             playback,
             record: false,
             overrides: PoseOverrides::new(),
-            view: ViewSettings { camera, grid: true, bones: true, style: RenderStyle::Shaded },
+            view: ViewSettings {
+                camera,
+                grid: true,
+                bones: true,
+                motion_path: true,
+                style: RenderStyle::Solid,
+            },
             clipboard: Vec::new(),
             status: None,
             show_help: false,
@@ -144,6 +164,7 @@ impl EditorApp {
             gizmo: transform_gizmo_egui::Gizmo::default(),
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
+            gpu: None,
             tracks: RefCell::new(None),
             window_title: String::new(),
             close_sent: false,

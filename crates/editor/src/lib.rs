@@ -16,6 +16,7 @@ pub mod channels;
 pub mod commands;
 pub mod eval;
 pub mod files;
+pub mod gpu_view;
 pub mod panels;
 pub mod skinning;
 pub mod state;
@@ -63,6 +64,15 @@ pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
         renderer: eframe::Renderer::Wgpu,
         ..Default::default()
     };
-    eframe::run_native("keyrig", options, Box::new(|_cc| Ok(Box::new(app))))
-        .map_err(|e| anyhow::anyhow!("cannot open the editor window: {e}"))
+    let mut app = app;
+    eframe::run_native(
+        "keyrig",
+        options,
+        Box::new(|cc| {
+            // The GPU viewport needs eframe's wgpu device; without it the painter draws.
+            app.gpu = cc.wgpu_render_state.as_ref().map(gpu_view::GpuView::new);
+            Ok(Box::new(app))
+        }),
+    )
+    .map_err(|e| anyhow::anyhow!("cannot open the editor window: {e}"))
 }

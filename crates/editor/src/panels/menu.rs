@@ -11,18 +11,16 @@ use crate::commands::Command;
 fn command_button(ui: &mut Ui, app: &mut EditorApp, command: Command, checked: Option<bool>) {
     let ctx = ui.ctx().clone();
     let shortcut = command.shortcuts().first().map(|s| ctx.format_shortcut(s)).unwrap_or_default();
-    let label = match checked {
-        Some(true) => format!("✔ {}", command.label()),
-        Some(false) => format!("   {}", command.label()),
-        None => command.label().to_owned(),
-    };
     let enabled = match command {
         Command::Undo => app.doc.undo_label().is_some(),
         Command::Redo => app.doc.redo_label().is_some(),
         _ => true,
     };
-    let response =
-        ui.add_enabled(enabled, Button::new(label).shortcut_text(shortcut)).on_hover_text(command.tooltip());
+    let button = match checked {
+        Some(on) => Button::selectable(on, command.label()),
+        None => Button::new(command.label()),
+    };
+    let response = ui.add_enabled(enabled, button.shortcut_text(shortcut)).on_hover_text(command.tooltip());
     if response.clicked() {
         app.run_command(&ctx, command);
         ui.close();

@@ -25,96 +25,87 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
 
         let projection = Projection::new(&app.view.camera, rect);
         let time = app.time();
-        let scene = app.doc.scene();
         let tracks = app.tracks();
-        let poses: Vec<Option<ObjectPose>> =
-            (0..scene.objects.len()).map(|o| tracks.object_pose(scene, o, time, &app.overrides)).collect();
+        let poses: Vec<Option<ObjectPose>> = (0..app.doc.scene().objects.len())
+            .map(|o| tracks.object_pose(app.doc.scene(), o, time, &app.overrides))
+            .collect();
 
-        if app.view.grid {
-            draw_grid(&painter, &projection);
+        let mut errors: Vec<String> = Vec::new();
+        // CPU skinning runs every frame: it feeds the cross-section measure and, without a
+        // GPU viewport, the painter.
+        let mut cpu_meshes: Vec<(usize, Vec<Vec3>, Vec<u32>)> = Vec::new();
+        for (o, pose) in poses.iter().enumerate() {
+            let Some(pose) = pose else { continue };
+            let object = &app.doc.scene().objects[o];
+            match app.skin.skin(o, object, pose, object.deformer.kind) {
+                Ok(Some(view)) => cpu_meshes.push((
+                    o,
+                    crate::skinning::to_world(pose.world_from_object, view.positions),
+                    view.indices.to_vec(),
+                )),
+                Ok(None) => {
+                    if let Some(keyrig_core::MeshSource::Procedural(kind)) = object.mesh {
+                        let (positions, indices) = app.skin.static_mesh(kind);
+                        cpu_meshes.push((
+                            o,
+                            crate::skinning::to_world(pose.world_from_object, positions),
+                            indices.to_vec(),
+                        ));
+                    }
+                }
+                Err(e) => errors.push(format!("{}: {e}", object.name)),
+            }
+        }
+
+        let gpu_drawn = gpu_ui(ui, app, rect, &poses, &mut errors);
+        let scene = app.doc.scene();
+        if !gpu_drawn {
+            if app.view.grid {
+                draw_grid(&painter, &projection);
+            }
+            for (o, world, indices) in &cpu_meshes {
+                let selected = app.selection.item == Some(Selected::Object(*o));
+                draw_mesh(&painter, &projection, &app.view.camera, world, indices, app.view.style, selected);
+            }
         }
         let mut pick_targets: Vec<(Pos2, Selected)> = Vec::new();
-        let mut mesh_errors: Vec<String> = Vec::new();
         for (o, pose) in poses.iter().enumerate() {
             let Some(pose) = pose else { continue };
             let object = &scene.objects[o];
-            let selected_object = app.selection.item == Some(Selected::Object(o));
-            let colour =
-                if selected_object { Color32::from_rgb(255, 200, 60) } else { Color32::from_gray(190) };
-            if app.view.style != RenderStyle::BonesOnly {
-                let kind = object.deformer.kind;
-                match app.skin.skin(o, object, pose, kind) {
-                    Ok(Some(view)) => {
-                        let world = crate::skinning::to_world(pose.world_from_object, view.positions);
-                        draw_mesh(
-                            &painter,
-                            &projection,
-                            &app.view.camera,
-                            &world,
-                            view.indices,
-                            app.view.style,
-                            selected_object,
-                        );
-                    }
-                    Ok(None) => match object.mesh {
-                        Some(keyrig_core::MeshSource::Procedural(kind)) => {
-                            let (positions, indices) = app.skin.static_mesh(kind);
-                            let world = crate::skinning::to_world(pose.world_from_object, positions);
-                            draw_mesh(
-                                &painter,
-                                &projection,
-                                &app.view.camera,
-                                &world,
-                                indices,
-                                app.view.style,
-                                selected_object,
-                            );
-                        }
-                        _ => draw_box(&painter, &projection, pose.world_from_object, colour),
-                    },
-                    Err(e) => {
-                        mesh_errors.push(format!("{}: {e}", object.name));
-                    }
-                }
-            }
             if let Some(p) = projection.project(pose.world_from_object.translation.into()) {
                 pick_targets.push((p, Selected::Object(o)));
             }
-            if let Some(skeleton) = &object.skeleton {
-                if app.view.bones || app.view.style == RenderStyle::BonesOnly {
-                    for (j, joint) in skeleton.joints.iter().enumerate() {
-                        let world = pose.world_from_object * pose.object_from_joint[j];
-                        let at: Vec3 = world.translation.into();
-                        let selected = app.selection.item == Some(Selected::Joint { object: o, joint: j });
-                        let bone_colour = if selected {
-                            Color32::from_rgb(255, 200, 60)
-                        } else {
-                            Color32::from_rgb(120, 200, 255)
-                        };
-                        if let Some(p) = joint.parent.filter(|&p| p < j) {
-                            let from: Vec3 =
-                                (pose.world_from_object * pose.object_from_joint[p]).translation.into();
-                            if let Some(seg) = projection.project_segment(from, at) {
-                                painter.line_segment(seg, Stroke::new(3.0, bone_colour));
-                            }
-                        }
-                        // The last joint of a chain draws a stub along its local X.
-                        if !skeleton.joints.iter().any(|c| c.parent == Some(j)) {
-                            let tip = world.transform_point3(Vec3::X * 0.15);
-                            if let Some(seg) = projection.project_segment(at, tip) {
-                                painter.line_segment(seg, Stroke::new(2.0, bone_colour));
-                            }
-                        }
-                        if let Some(p) = projection.project(at) {
-                            painter.circle(
-                                p,
-                                5.0,
-                                Color32::from_rgb(30, 30, 30),
-                                Stroke::new(2.0, bone_colour),
-                            );
-                            pick_targets.push((p, Selected::Joint { object: o, joint: j }));
-                        }
+            if object.mesh.is_none() {
+                draw_axes(&painter, &projection, pose.world_from_object);
+            }
+            let Some(skeleton) = &object.skeleton else { continue };
+            for (j, joint) in skeleton.joints.iter().enumerate() {
+                let world = pose.world_from_object * pose.object_from_joint[j];
+                let at: Vec3 = world.translation.into();
+                if let Some(p) = projection.project(at) {
+                    pick_targets.push((p, Selected::Joint { object: o, joint: j }));
+                }
+                if gpu_drawn || !app.view.bones {
+                    continue;
+                }
+                let selected = app.selection.item == Some(Selected::Joint { object: o, joint: j });
+                let bone_colour =
+                    if selected { Color32::from_rgb(255, 200, 60) } else { Color32::from_rgb(120, 200, 255) };
+                if let Some(p) = joint.parent.filter(|&p| p < j) {
+                    let from: Vec3 = (pose.world_from_object * pose.object_from_joint[p]).translation.into();
+                    if let Some(seg) = projection.project_segment(from, at) {
+                        painter.line_segment(seg, Stroke::new(3.0, bone_colour));
                     }
+                }
+                // The last joint of a chain draws a stub along its local X.
+                if !skeleton.joints.iter().any(|c| c.parent == Some(j)) {
+                    let tip = world.transform_point3(Vec3::X * 0.15);
+                    if let Some(seg) = projection.project_segment(at, tip) {
+                        painter.line_segment(seg, Stroke::new(2.0, bone_colour));
+                    }
+                }
+                if let Some(p) = projection.project(at) {
+                    painter.circle(p, 5.0, Color32::from_rgb(30, 30, 30), Stroke::new(2.0, bone_colour));
                 }
             }
         }
@@ -181,8 +172,86 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 app.view.camera.zoom(scroll);
             }
         }
-        overlay_ui(&painter, rect, app, &mesh_errors);
+        overlay_ui(&painter, rect, app, &errors);
     });
+}
+
+/// Renders the viewport with keyrig-render when the editor runs on eframe's wgpu backend.
+/// Returns false (and adds the reason to `errors` when there is one) to let the painter draw.
+fn gpu_ui(
+    ui: &Ui,
+    app: &mut EditorApp,
+    rect: Rect,
+    poses: &[Option<ObjectPose>],
+    errors: &mut Vec<String>,
+) -> bool {
+    let Some(mut gpu) = app.gpu.take() else { return false };
+    let scene = app.doc.scene();
+    let time = app.time();
+    let tracks = app.tracks();
+    let states: Vec<_> = poses
+        .iter()
+        .zip(&scene.objects)
+        .map(|(pose, object)| match pose {
+            Some(p) => crate::gpu_view::object_state(p, object.skeleton.is_some()),
+            None => keyrig_render::ObjectState { world_from_model: glam::Mat4::IDENTITY, pose: None },
+        })
+        .collect();
+    let lights = scene
+        .lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.enabled)
+        .map(|(l, light)| {
+            let v3 = |id, d| match tracks.value(id, time, &app.overrides) {
+                Some(ChannelValue::Vec3(v)) => v,
+                _ => d,
+            };
+            keyrig_render::LightInput {
+                kind: light.kind,
+                position: v3(ChannelId::LightPosition(l), light.position.value),
+                direction: v3(ChannelId::LightDirection(l), light.direction.value),
+                colour: v3(ChannelId::LightColour(l), light.colour.value),
+                intensity: match tracks.value(ChannelId::LightIntensity(l), time, &app.overrides) {
+                    Some(ChannelValue::Scalar(s)) => s,
+                    _ => light.intensity.value,
+                },
+            }
+        })
+        .collect();
+    let c = app.view.camera;
+    let view = keyrig_render::ViewOptions {
+        style: app.view.style.to_render(),
+        deformer: None,
+        grid: app.view.grid,
+        skeletons: app.view.bones,
+        motion_path: app.view.motion_path,
+        selection: crate::gpu_view::selection_for(app.selection.item),
+        camera: Some(keyrig_core::Camera {
+            target: c.target,
+            yaw_deg: c.yaw_deg,
+            pitch_deg: c.pitch_deg,
+            distance: c.distance,
+            fov_y_deg: c.fov_y_deg,
+        }),
+        ..keyrig_render::ViewOptions::default()
+    };
+    let ppp = ui.ctx().pixels_per_point();
+    let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
+    let frame = crate::gpu_view::GpuFrame { scene, doc_key: app.doc.cache_key(), states, lights, view, time };
+    let drawn = match gpu.render(frame, size) {
+        Ok(texture) => {
+            let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+            ui.painter().with_clip_rect(rect).image(texture, rect, uv, Color32::WHITE);
+            true
+        }
+        Err(e) => {
+            errors.push(format!("GPU viewport: {e}"));
+            false
+        }
+    };
+    app.gpu = Some(gpu);
+    drawn
 }
 
 fn draw_grid(painter: &egui::Painter, projection: &Projection) {
@@ -209,22 +278,17 @@ fn draw_grid(painter: &egui::Painter, projection: &Projection) {
     }
 }
 
-fn draw_box(painter: &egui::Painter, projection: &Projection, world_from_object: Affine3A, colour: Color32) {
-    let corners: Vec<Vec3> = (0..8)
-        .map(|i| {
-            let c = Vec3::new(
-                if i & 1 == 0 { -0.5 } else { 0.5 },
-                if i & 2 == 0 { -0.5 } else { 0.5 },
-                if i & 4 == 0 { -0.5 } else { 0.5 },
-            );
-            world_from_object.transform_point3(c)
-        })
-        .collect();
-    for (a, b) in
-        [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
-    {
-        if let Some(seg) = projection.project_segment(corners[a], corners[b]) {
-            painter.line_segment(seg, Stroke::new(1.5, colour));
+/// Axes of an object without a mesh (X red, Y green, Z blue), 0.2 units long.
+fn draw_axes(painter: &egui::Painter, projection: &Projection, world_from_object: Affine3A) {
+    let origin: Vec3 = world_from_object.translation.into();
+    for (axis, colour) in [
+        (Vec3::X, Color32::from_rgb(220, 80, 80)),
+        (Vec3::Y, Color32::from_rgb(80, 200, 80)),
+        (Vec3::Z, Color32::from_rgb(80, 130, 240)),
+    ] {
+        let tip = world_from_object.transform_point3(axis * 0.2);
+        if let Some(seg) = projection.project_segment(origin, tip) {
+            painter.line_segment(seg, Stroke::new(2.0, colour));
         }
     }
 }
@@ -422,13 +486,13 @@ fn draw_mesh(
         let centre = (*pa + *pb + *pc) / 3.0;
         let to_eye = (eye - centre).normalize_or_zero();
         let facing = normal.dot(to_eye);
-        if style == RenderStyle::Shaded && facing <= 0.0 {
+        if style == RenderStyle::Solid && facing <= 0.0 {
             continue;
         }
         tris.push(((eye - centre).length_squared(), [a, b, c], facing.max(0.0)));
     }
     match style {
-        RenderStyle::Shaded => {
+        RenderStyle::Solid => {
             tris.sort_by(|x, y| y.0.total_cmp(&x.0));
             let mut mesh = egui::Mesh::default();
             for (_, [a, b, c], facing) in &tris {
@@ -464,6 +528,11 @@ fn draw_mesh(
                 }
             }
         }
-        RenderStyle::BonesOnly => {}
+        RenderStyle::Points => {
+            let colour = if selected { Color32::from_rgb(255, 200, 60) } else { Color32::from_gray(220) };
+            for p in screen.iter().flatten() {
+                painter.circle_filled(*p, 1.5, colour);
+            }
+        }
     }
 }

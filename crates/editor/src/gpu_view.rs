@@ -1,0 +1,125 @@
+//! The viewport drawn by keyrig-render on eframe's wgpu device: GPU skinning with the object's
+//! deformer, lights, grid, skeletons and the selection's motion path, rendered into an
+//! offscreen texture that the viewport panel shows as an egui image (docs/rendering.md,
+//! "Embedding in the editor"). The editor's own evaluation (with pose overrides) provides
+//! the object states; the [`SceneRig`] is rebuilt when the document changes.
+//!
+//! Without a wgpu render state (the UI tests, or a failure here) the viewport panel falls back
+//! to drawing the CPU-skinned mesh with egui's painter.
+
+use egui::TextureId;
+use egui_wgpu::{wgpu, RenderState};
+use glam::Mat4;
+use keyrig_render::{
+    FrameStats, LightInput, ObjectState, Renderer, SceneRig, Selection, ViewOptions, Viewport,
+};
+
+/// The colour format of the offscreen viewport (sRGB: the shaders write linear colour).
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// What the viewport panel hands over each frame.
+pub struct GpuFrame<'a> {
+    pub scene: &'a keyrig_core::Scene,
+    /// (document, revision): the rig is rebuilt when it changes.
+    pub doc_key: (u64, u64),
+    pub states: Vec<ObjectState>,
+    pub lights: Vec<LightInput>,
+    pub view: ViewOptions,
+    pub time: f64,
+}
+
+/// keyrig-render's renderer and offscreen viewport on the editor's device.
+pub struct GpuView {
+    render_state: RenderState,
+    renderer: Renderer,
+    target: Option<(Viewport, TextureId)>,
+    rig: Option<((u64, u64), SceneRig)>,
+    /// Statistics of the last rendered frame.
+    pub last_stats: Option<FrameStats>,
+}
+
+impl GpuView {
+    /// Creates the renderer on eframe's device.
+    #[must_use]
+    pub fn new(render_state: &RenderState) -> Self {
+        let renderer = Renderer::new(&render_state.device, &render_state.queue, FORMAT);
+        GpuView { render_state: render_state.clone(), renderer, target: None, rig: None, last_stats: None }
+    }
+
+    fn ensure_target(&mut self, width: u32, height: u32) -> Result<TextureId, String> {
+        if let Some((viewport, id)) = &self.target {
+            if viewport.size() == (width, height) {
+                return Ok(*id);
+            }
+        }
+        let device = &self.render_state.device;
+        let viewport = Viewport::new(device, width, height, FORMAT).map_err(|e| e.to_string())?;
+        let mut egui_renderer = self.render_state.renderer.write();
+        let id = match &self.target {
+            Some((_, id)) => {
+                egui_renderer.update_egui_texture_from_wgpu_texture(
+                    device,
+                    viewport.color_view(),
+                    wgpu::FilterMode::Linear,
+                    *id,
+                );
+                *id
+            }
+            None => {
+                egui_renderer.register_native_texture(device, viewport.color_view(), wgpu::FilterMode::Linear)
+            }
+        };
+        drop(egui_renderer);
+        self.target = Some((viewport, id));
+        Ok(id)
+    }
+
+    /// Renders the frame into a texture of `size_px` pixels and returns its egui texture id.
+    pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
+        let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
+        let stale = self.rig.as_ref().is_none_or(|(key, _)| *key != frame.doc_key);
+        if stale {
+            self.rig = None;
+            let rig = SceneRig::new(frame.scene).map_err(|e| e.to_string())?;
+            rig.upload(&mut self.renderer).map_err(|e| e.to_string())?;
+            self.rig = Some((frame.doc_key, rig));
+        }
+        let Some((_, rig)) = &self.rig else { return Err("no scene prepared for rendering".to_owned()) };
+        let mut input =
+            rig.frame_from_states(&frame.states, frame.lights, &frame.view).map_err(|e| e.to_string())?;
+        if frame.view.motion_path {
+            if let Some(path) =
+                rig.motion_path(frame.view.selection, frame.time).map_err(|e| e.to_string())?
+            {
+                input.motion_paths.push(path);
+            }
+        }
+        let Some((viewport, _)) = &self.target else { return Err("no viewport texture".to_owned()) };
+        self.last_stats = Some(self.renderer.render(&input, viewport).map_err(|e| e.to_string())?);
+        Ok(texture)
+    }
+}
+
+/// The renderer's selection for the editor's.
+#[must_use]
+pub fn selection_for(item: Option<crate::state::Selected>) -> Selection {
+    use crate::state::Selected;
+    match item {
+        None => Selection::None,
+        Some(Selected::Object(o)) => Selection::Object(o),
+        Some(Selected::Joint { object, joint }) => Selection::Joint { object, joint },
+        Some(Selected::Light(l)) => Selection::Light(l),
+    }
+}
+
+/// An object state for the renderer from the editor's evaluation.
+#[must_use]
+pub fn object_state(pose: &crate::eval::ObjectPose, has_skeleton: bool) -> ObjectState {
+    ObjectState {
+        world_from_model: Mat4::from(pose.world_from_object),
+        pose: has_skeleton.then(|| keyrig_skin::Pose {
+            local_rotations: pose.joint_rotations.clone(),
+            root_translation: pose.root_translation,
+        }),
+    }
+}
