@@ -820,3 +820,109 @@ fn static_mesh(model: &ImportedModel, index: usize) -> Option<MeshData> {
     }
     (!data.positions.is_empty()).then_some(data)
 }
+
+/// Options of [`export_md2`].
+#[derive(Clone, Copy, Debug)]
+pub struct Md2ExportOptions {
+    /// Playback rate of the clips (Quake 2 played its models at 10 frames per second).
+    pub fps: f64,
+}
+
+impl Default for Md2ExportOptions {
+    fn default() -> Self {
+        Md2ExportOptions { fps: 10.0 }
+    }
+}
+
+/// Converts an MD2 model to glTF morph-target animation.
+///
+/// The mesh's base shape is frame 0; every frame is a morph target (position and normal
+/// displacements from frame 0). Each clip becomes an animation that drives the weights
+/// LINEARly, one-hot per frame at `k / fps`, with a closing key that blends the last frame
+/// back into the first — exactly [`crate::md2::Md2Model::sample_clip`] with looping.
+/// Quake's Z-up axes become glTF's Y-up by a −90° rotation about X on the root node. The skin
+/// image, when loaded, is embedded as PNG and used as the base-colour texture.
+///
+/// # Errors
+/// A non-positive or non-finite frame rate, or a skin image that cannot be encoded.
+pub fn export_md2(
+    model: &crate::md2::Md2Model,
+    options: Md2ExportOptions,
+) -> Result<ExportedGltf, ExportError> {
+    if !(options.fps.is_finite() && options.fps > 0.0) {
+        return Err(scene_err("fps", format!("{} is not a positive frame rate", options.fps)));
+    }
+    let mut b = Builder::default();
+    let base = model.frame_pose(0).ok_or_else(|| scene_err("frames", "the model has no frames"))?;
+    let mut attributes = serde_json::Map::new();
+    attributes.insert("POSITION".into(), json!(b.vec3s(&base.positions, Some(ARRAY_BUFFER), true)));
+    attributes.insert("NORMAL".into(), json!(b.vec3s(&base.normals, Some(ARRAY_BUFFER), false)));
+    let uv: Vec<f32> = model.texcoords.iter().flat_map(|t| t.to_array()).collect();
+    attributes.insert("TEXCOORD_0".into(), json!(b.floats(&uv, 2, "VEC2", Some(ARRAY_BUFFER), false)));
+    let indices = b.indices(&model.indices);
+    let mut targets = Vec::with_capacity(model.frames.len());
+    for f in 0..model.frames.len() {
+        let pose = model.frame_pose(f).ok_or_else(|| scene_err("frames", "frame vanished"))?;
+        let dp: Vec<Vec3> = pose.positions.iter().zip(&base.positions).map(|(p, q)| *p - *q).collect();
+        let dn: Vec<Vec3> = pose.normals.iter().zip(&base.normals).map(|(p, q)| *p - *q).collect();
+        targets.push(json!({
+            "POSITION": b.vec3s(&dp, Some(ARRAY_BUFFER), true),
+            "NORMAL": b.vec3s(&dn, Some(ARRAY_BUFFER), false),
+        }));
+    }
+    let mut primitive = json!({"attributes": attributes, "indices": indices, "mode": 4, "targets": targets});
+    let mut root = json!({
+        "asset": {"version": "2.0", "generator": concat!("keyrig ", env!("CARGO_PKG_VERSION"), " (MD2 conversion)")},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{
+            "name": "md2",
+            "mesh": 0,
+            "rotation": Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2).to_array(),
+        }],
+    });
+    if let Some(skin) = &model.skin {
+        let mut png = Vec::new();
+        image::RgbaImage::from_raw(skin.width, skin.height, skin.rgba.clone())
+            .ok_or_else(|| scene_err("skin", "image size does not match its pixels"))?
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| scene_err("skin", e.to_string()))?;
+        let view = b.view(&png, None);
+        root["images"] = json!([{"bufferView": view, "mimeType": "image/png"}]);
+        root["samplers"] = json!([{"magFilter": 9729, "minFilter": 9729}]);
+        root["textures"] = json!([{"sampler": 0, "source": 0}]);
+        root["materials"] = json!([{
+            "name": "skin",
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        }]);
+        primitive["material"] = json!(0);
+    }
+    let n_targets = model.frames.len();
+    root["meshes"] = json!([{
+        "name": "md2",
+        "primitives": [primitive],
+        "weights": vec![0.0f32; n_targets],
+        "extras": {"targetNames": model.frames.iter().map(|f| f.name.clone()).collect::<Vec<_>>()},
+    }]);
+    let mut animations = Vec::new();
+    for clip in &model.clips {
+        let frames: Vec<usize> = clip.frames.clone().chain(std::iter::once(clip.frames.start)).collect();
+        let times: Vec<f32> = (0..frames.len()).map(|k| (k as f64 / options.fps) as f32).collect();
+        let mut weights = vec![0.0f32; frames.len() * n_targets];
+        for (k, &f) in frames.iter().enumerate() {
+            weights[k * n_targets + f] = 1.0;
+        }
+        let input = b.floats(&times, 1, "SCALAR", None, true);
+        let output = b.floats(&weights, 1, "SCALAR", None, false);
+        animations.push(json!({
+            "name": clip.name,
+            "samplers": [{"input": input, "output": output, "interpolation": "LINEAR"}],
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
+        }));
+    }
+    root["animations"] = json!(animations);
+    root["buffers"] = json!([{"byteLength": b.bin.len()}]);
+    root["bufferViews"] = json!(b.views);
+    root["accessors"] = json!(b.accessors);
+    Ok(ExportedGltf { json: root, bin: b.bin })
+}
