@@ -19,6 +19,10 @@ struct Cli {
 enum Command {
     /// Open the editor on a scene (.ron) or a model (.glb, .gltf, .md2).
     Edit(cli::edit::EditArgs),
+    /// Export a scene (.ron) as glTF 2.0 (.glb or .gltf) with skins, animation and lights.
+    Export(cli::export::ExportArgs),
+    /// Convert an MD2 model to glTF 2.0 morph-target animation (.glb or .gltf).
+    Convert(cli::convert::ConvertArgs),
     /// Render a frame or a frame range of a scene (.ron) or MD2 model to PNG, offscreen.
     Render(cli::render::RenderArgs),
     /// Summarize a scene: timing, objects, joints, lights, tracks, keys and validation problems.
@@ -32,6 +36,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => cli::edit::run(cli::edit::EditArgs::default()),
         Some(Command::Edit(args)) => cli::edit::run(args),
+        Some(Command::Export(args)) => cli::export::run(args),
+        Some(Command::Convert(args)) => cli::convert::run(args),
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Info(args)) => cli::info::run(args),
         Some(Command::Sample(args)) => cli::sample::run(args),

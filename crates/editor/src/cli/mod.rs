@@ -1,7 +1,9 @@
 //! Headless subcommands of the `keyrig` binary. Each module has an `…Args` (clap) and a
 //! `run(args) -> anyhow::Result<()>`.
 
+pub mod convert;
 pub mod edit;
+pub mod export;
 pub mod info;
 pub mod render;
 pub mod sample;

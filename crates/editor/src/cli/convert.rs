@@ -1,0 +1,46 @@
+//! `keyrig convert IN.md2 -o OUT.glb|OUT.gltf`: an MD2 model's frames as glTF morph targets,
+//! one animation per clip (stand, run, …) at `--fps` frames per second, the skin image found
+//! next to the model as the base-colour texture (see docs/interchange.md). The written file
+//! is imported again as a check.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context};
+use keyrig_io::gltf_export::{export_md2, Md2ExportOptions};
+
+#[derive(clap::Args, Debug)]
+pub struct ConvertArgs {
+    /// Input model (.md2).
+    pub input: PathBuf,
+    /// Output file: .glb (binary) or .gltf (JSON with the buffer embedded).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Playback rate of the clips, frames per second (Quake 2 used 10).
+    #[arg(long, default_value_t = 10.0)]
+    pub fps: f64,
+}
+
+pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
+    crate::cli::export::check_output_extension(&args.output)?;
+    let ext = args.input.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some("md2") {
+        bail!("{}: only .md2 models can be converted (glTF files are already glTF)", args.input.display());
+    }
+    let model = keyrig_io::md2::load_md2_file(&args.input)?;
+    let exported = export_md2(&model, Md2ExportOptions { fps: args.fps })
+        .with_context(|| format!("{}: cannot convert", args.input.display()))?;
+    exported.write(&args.output)?;
+    keyrig_io::gltf_import::import_gltf_file(&args.output)
+        .with_context(|| format!("{}: the written file does not import again", args.output.display()))?;
+    let skin = model
+        .skin
+        .as_ref()
+        .map_or_else(|| "no skin image".to_owned(), |s| format!("skin {}", s.path.display()));
+    eprintln!(
+        "keyrig: wrote {} ({} frames, {} clips, {skin})",
+        args.output.display(),
+        model.frames.len(),
+        model.clips.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,127 @@
+//! `keyrig export` and `keyrig convert` end to end: the real binary on the demo scene and the
+//! MD2 corpus, the Khronos glTF-Validator on what they write, and clear errors on bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const KEYRIG: &str = env!("CARGO_BIN_EXE_keyrig");
+
+fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron")
+}
+
+fn md2(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+}
+
+fn keyrig(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(KEYRIG).args(args).output().expect("run keyrig")
+}
+
+fn os<S: AsRef<std::ffi::OsStr> + ?Sized>(s: &S) -> &std::ffi::OsStr {
+    s.as_ref()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_fails_with(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "expected failure; stderr:\n{err}");
+    assert!(!err.contains("panicked"), "panic:\n{err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks {n:?}:\n{err}");
+    }
+}
+
+/// Zero errors from the Khronos glTF-Validator (tools/validate-gltf).
+fn assert_valid(file: &Path) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/validate-gltf");
+    assert!(
+        dir.join("node_modules/gltf-validator").is_dir(),
+        "the Khronos glTF-Validator is not installed: install Node.js (18 or newer) and run \
+         `npm ci --prefix tools/validate-gltf` in the repository root"
+    );
+    let out = Command::new("node").arg(dir.join("validate.mjs")).arg(file).output().unwrap_or_else(|e| {
+        panic!("cannot run `node` ({e}): install Node.js (18 or newer) and run `npm ci --prefix tools/validate-gltf`")
+    });
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && report.contains("\"errors\":0"), "{}: {report}", file.display());
+}
+
+#[test]
+fn export_writes_a_valid_glb_and_gltf_of_the_demo_scene() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for name in ["demo.glb", "demo.gltf"] {
+        let out = dir.path().join(name);
+        let o = keyrig(&[os("export"), demo().as_os_str(), os("-o"), out.as_os_str()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_valid(&out);
+        let model = keyrig_io::gltf_import::import_gltf_file(&out).expect("imports");
+        assert_eq!(model.skins.len(), 1, "the arm's skin");
+        assert_eq!(model.lights.len(), 2);
+        assert_eq!(model.animations.len(), 1);
+    }
+}
+
+#[test]
+fn convert_writes_valid_morph_animation_of_an_md2() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("rat.glb");
+    let o =
+        keyrig(&[os("convert"), md2("ratamahatta/ratamahatta.md2").as_os_str(), os("-o"), out.as_os_str()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("16 clips"), "{}", stderr(&o));
+    assert_valid(&out);
+    let model = keyrig_io::gltf_import::import_gltf_file(&out).expect("imports");
+    assert_eq!(model.animations.len(), 16);
+    assert_eq!(model.animations[1].name, "run");
+}
+
+#[test]
+fn bad_inputs_fail_with_the_file_and_the_place() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.glb");
+    // Missing scene.
+    let missing = dir.path().join("missing.ron");
+    assert_fails_with(
+        &keyrig(&[os("export"), missing.as_os_str(), os("-o"), out.as_os_str()]),
+        &["missing.ron"],
+    );
+    // Wrong output extension.
+    assert_fails_with(
+        &keyrig(&[os("export"), demo().as_os_str(), os("-o"), os("out.obj")]),
+        &["out.obj", ".glb"],
+    );
+    // A truncated MD2: the byte offset of the problem.
+    let bytes = std::fs::read(md2("dolphin/dolphin.md2")).expect("read");
+    let bad = dir.path().join("bad.md2");
+    std::fs::write(&bad, &bytes[..1000]).expect("write");
+    assert_fails_with(
+        &keyrig(&[os("convert"), bad.as_os_str(), os("-o"), out.as_os_str()]),
+        &["bad.md2", "byte 64"],
+    );
+    // Not an MD2.
+    assert_fails_with(
+        &keyrig(&[os("convert"), demo().as_os_str(), os("-o"), out.as_os_str()]),
+        &["only .md2"],
+    );
+    // A bad frame rate.
+    let o = keyrig(&[
+        os("convert"),
+        md2("dolphin/dolphin.md2").as_os_str(),
+        os("-o"),
+        out.as_os_str(),
+        os("--fps"),
+        os("0"),
+    ]);
+    assert_fails_with(&o, &["fps"]);
+    // A scene with a syntax error: line and column.
+    let broken = dir.path().join("broken.ron");
+    std::fs::write(&broken, "(version: 1, fps: 30.0,, )").expect("write");
+    assert_fails_with(
+        &keyrig(&[os("export"), broken.as_os_str(), os("-o"), out.as_os_str()]),
+        &["broken.ron"],
+    );
+}
