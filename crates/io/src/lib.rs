@@ -2,7 +2,10 @@
 //! atomically), the built-in demo scene, glTF import/export and MD2 import.
 
 pub mod demo;
+pub mod gltf_export;
+pub mod gltf_import;
 pub mod md2;
+pub mod model;
 pub mod scene_file;
 mod scene_locate;
 mod scene_ser;
