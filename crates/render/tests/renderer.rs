@@ -1,0 +1,220 @@
+//! The renderer with hand-built frames: lights behave as documented (spot cone, point fall-off,
+//! directional), styles draw, and bad input gets a typed error instead of a panic.
+
+use glam::{Mat4, Quat, Vec3};
+use keyrig_core::{Camera, DeformerKind, LightKind};
+use keyrig_render::{
+    Deform, DrawItem, FrameInput, HeadlessRenderer, JointPose, LightInput, MeshData, RenderError,
+    RenderStyle, SkinnedVertex,
+};
+
+const SIZE: u32 = 64;
+
+fn headless() -> HeadlessRenderer {
+    HeadlessRenderer::new().unwrap_or_else(|e| panic!("GPU tests need a wgpu adapter: {e}"))
+}
+
+/// A 2×2 quad on y = 0 facing up (two triangles), subdivided so lighting is per pixel anyway.
+fn floor() -> (Vec<SkinnedVertex>, Vec<u32>) {
+    let corners = [
+        Vec3::new(-1.0, 0.0, -1.0),
+        Vec3::new(1.0, 0.0, -1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(-1.0, 0.0, 1.0),
+    ];
+    let vertices = corners.iter().map(|&p| SkinnedVertex::new(p, Vec3::Y)).collect();
+    (vertices, vec![0, 2, 1, 0, 3, 2])
+}
+
+/// Looking straight down at the floor, which fills the image.
+fn top_camera() -> Camera {
+    Camera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 90.0, distance: 1.0, fov_y_deg: 80.0 }
+}
+
+fn floor_frame(lights: Vec<LightInput>) -> FrameInput {
+    let mut frame = FrameInput::new(top_camera());
+    frame.grid_spacing = None;
+    frame.ambient = Vec3::ZERO;
+    frame.background = Vec3::ZERO;
+    frame.lights = lights;
+    frame.items.push(DrawItem {
+        mesh: 1,
+        world_from_model: Mat4::IDENTITY,
+        deform: Deform::None,
+        colour: Vec3::ONE,
+        selected: false,
+    });
+    frame
+}
+
+fn red(image: &keyrig_render::image::RgbaImage, x: u32, y: u32) -> u8 {
+    image.get_pixel(x, y).0[0]
+}
+
+fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32) -> LightInput {
+    LightInput { kind, position, direction, colour: Vec3::ONE, intensity }
+}
+
+#[test]
+fn spot_light_lights_its_cone_only() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let spot = light(
+        LightKind::Spot { cutoff_deg: 20.0, inner_angle_deg: 10.0, dropoff: 1.0 },
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::NEG_Y,
+        0.2,
+    );
+    let (image, _) = r.render_image(&floor_frame(vec![spot]), SIZE, SIZE).expect("render");
+    let centre = red(&image, SIZE / 2, SIZE / 2);
+    let corner = red(&image, 3, 3);
+    assert!(centre > 150, "inside the inner cone: {centre}");
+    assert_eq!(corner, 0, "outside the cut-off the spot adds nothing");
+
+    // The same light as a point light reaches the corner, dimmer than the centre (1/d² and
+    // the angle of incidence).
+    let point = light(LightKind::Point, Vec3::new(0.0, 0.5, 0.0), Vec3::NEG_Y, 0.2);
+    let (image, _) = r.render_image(&floor_frame(vec![point]), SIZE, SIZE).expect("render");
+    let (centre, corner) = (red(&image, SIZE / 2, SIZE / 2), red(&image, 3, 3));
+    assert!(corner > 0 && corner < centre / 2, "point light: centre {centre}, corner {corner}");
+}
+
+#[test]
+fn directional_light_is_even_and_one_sided() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let sun = light(LightKind::Directional, Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0), 0.5);
+    let (image, _) = r.render_image(&floor_frame(vec![sun]), SIZE, SIZE).expect("render");
+    let (centre, corner) = (red(&image, SIZE / 2, SIZE / 2), red(&image, 3, 3));
+    // Diffuse 0.5 everywhere (specular varies a little with the view direction).
+    assert!(centre.abs_diff(corner) < 40, "centre {centre}, corner {corner}");
+    assert!(corner > 150, "0.5 linear is about 188 in sRGB: {corner}");
+
+    // Light from below: the floor's lit side faces away; the view sees its unlit top.
+    let below = light(LightKind::Directional, Vec3::ZERO, Vec3::Y, 0.5);
+    let (image, _) = r.render_image(&floor_frame(vec![below]), SIZE, SIZE).expect("render");
+    assert_eq!(red(&image, SIZE / 2, SIZE / 2), 0);
+}
+
+#[test]
+fn styles_draw_different_pixels() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let sun = light(LightKind::Directional, Vec3::ZERO, Vec3::NEG_Y, 1.0);
+    let mut lit = |style| {
+        let mut frame = floor_frame(vec![sun]);
+        // Far enough that the whole floor, corners included, is in view.
+        frame.camera.distance = 3.0;
+        frame.style = style;
+        let (image, stats) = r.render_image(&frame, SIZE, SIZE).expect("render");
+        assert_eq!(stats.draw_calls, 1);
+        image.pixels().filter(|p| p.0[0] > 0).count()
+    };
+    let solid = lit(RenderStyle::Solid);
+    let wireframe = lit(RenderStyle::Wireframe);
+    let points = lit(RenderStyle::Points);
+    assert!(solid > (SIZE * SIZE) as usize / 8, "the floor covers a good part of the image: {solid}");
+    assert!(wireframe > 0 && wireframe < solid / 2, "wireframe covers only edges: {wireframe} of {solid}");
+    assert!(points > 0 && points < wireframe, "points cover only vertices: {points}");
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+
+    let err = r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &[0, 1, 9] }).unwrap_err();
+    assert!(matches!(err, RenderError::IndexOutOfRange { position: 2, index: 9, vertex_count: 4 }), "{err}");
+
+    let mut nan = vertices.clone();
+    nan[2] = SkinnedVertex::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y);
+    let err = r.upload_mesh(1, &MeshData::Static { vertices: &nan, indices: &indices }).unwrap_err();
+    assert!(matches!(err, RenderError::NonFinite { index: 2, .. }), "{err}");
+
+    // A frame that names a mesh never uploaded.
+    let err = r.render_image(&floor_frame(vec![]), SIZE, SIZE).unwrap_err();
+    assert!(matches!(err, RenderError::UnknownMesh(1)), "{err}");
+
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let err = r.render_image(&floor_frame(vec![]), 0, 10).unwrap_err();
+    assert!(matches!(err, RenderError::InvalidSize { width: 0, .. }), "{err}");
+
+    // Skinning a static mesh, and a skin with the wrong number of joints.
+    let mut frame = floor_frame(vec![]);
+    let pose = JointPose::from_rigid(Mat4::IDENTITY, Mat4::IDENTITY, Quat::IDENTITY);
+    frame.items[0].deform = Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose] };
+    let err = r.render_image(&frame, SIZE, SIZE).unwrap_err();
+    assert!(err.to_string().contains("not a skinned mesh"), "{err}");
+
+    let positions: Vec<Vec3> = vertices.iter().map(SkinnedVertex::position).collect();
+    let normals = vec![Vec3::Y; 4];
+    let joints = vec![[0u32, 0, 0, 0]; 4];
+    let weights = vec![[1.0f32, 0.0, 0.0, 0.0]; 4];
+    let rigid = vec![0u32; 4];
+    let blend = vec![keyrig_render::BlendBinding { joint: 0, t: 0.0 }; 4];
+    let binds = vec![Mat4::IDENTITY; 2];
+    let skin = keyrig_render::SkinMeshInput {
+        positions: &positions,
+        normals: &normals,
+        joints: &joints,
+        weights: &weights,
+        rigid_joints: &rigid,
+        blend: &blend,
+        bind_from_model: &binds,
+    };
+    r.upload_mesh(1, &MeshData::Skinned { skin, indices: &indices }).expect("upload skin");
+    let err = r.render_image(&frame, SIZE, SIZE).unwrap_err();
+    assert!(matches!(err, RenderError::JointCountMismatch { mesh: 1, expected: 2, actual: 1 }), "{err}");
+
+    // A camera with a NaN.
+    let mut frame = floor_frame(vec![]);
+    frame.camera.yaw_deg = f32::NAN;
+    assert!(matches!(r.render_image(&frame, SIZE, SIZE), Err(RenderError::NonFinite { .. })));
+}
+
+#[test]
+fn skinned_item_moves_with_its_joints() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    let positions: Vec<Vec3> = vertices.iter().map(SkinnedVertex::position).collect();
+    let normals = vec![Vec3::Y; 4];
+    let joints = vec![[0u32, 0, 0, 0]; 4];
+    let weights = vec![[1.0f32, 0.0, 0.0, 0.0]; 4];
+    let rigid = vec![0u32; 4];
+    let blend = vec![keyrig_render::BlendBinding { joint: 0, t: 1.0 }; 4];
+    let binds = vec![Mat4::IDENTITY];
+    let skin = keyrig_render::SkinMeshInput {
+        positions: &positions,
+        normals: &normals,
+        joints: &joints,
+        weights: &weights,
+        rigid_joints: &rigid,
+        blend: &blend,
+        bind_from_model: &binds,
+    };
+    r.upload_mesh(1, &MeshData::Skinned { skin, indices: &indices }).expect("upload");
+    let shift = Vec3::new(0.25, 0.0, 0.0);
+    for deformer in DeformerKind::ALL {
+        let mut frame = floor_frame(vec![]);
+        let pose = JointPose::from_rigid(
+            Mat4::from_translation(shift),
+            Mat4::from_translation(shift),
+            Quat::IDENTITY,
+        );
+        frame.items[0].deform = Deform::Skin { deformer, joints: vec![pose] };
+        let (_, stats) = r.render_image(&frame, SIZE, SIZE).expect("render");
+        assert_eq!(stats.joint_bytes, 176);
+        let out = r.renderer().read_vertices(1).expect("readback");
+        for (v, p) in out.iter().zip(&positions) {
+            assert!(
+                (v.position() - (*p + shift)).length() < 1e-6,
+                "{deformer:?}: {} vs {}",
+                v.position(),
+                *p + shift
+            );
+        }
+    }
+}
