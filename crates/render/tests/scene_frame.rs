@@ -1,0 +1,130 @@
+//! Scene → frame glue: what `SceneRig::frame` produces, and the errors it
+//! reports with their place in the scene.
+
+use glam::{Quat, Vec3};
+use keyrig_core::{Animated, DeformerKind, Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene};
+use keyrig_render::{Deform, ObjectState, RenderStyle, SceneFrameError, SceneRig, Selection, ViewOptions};
+
+fn arm_scene() -> Scene {
+    let mut arm = Object::new("Arm");
+    arm.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmLowPoly));
+    let mut skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly).expect("arm skeleton");
+    skeleton.joints[2].rotation = Animated {
+        value: Quat::IDENTITY,
+        track: RawTrack::new(vec![
+            Key::new(0.0, Quat::IDENTITY),
+            Key::new(1.0, Quat::from_rotation_x(1.5)),
+            Key::new(2.0, Quat::from_rotation_x(3.0)),
+        ]),
+    };
+    arm.skeleton = Some(skeleton);
+    arm.deformer.kind = DeformerKind::DualQuaternion;
+    arm.translation = Animated {
+        value: Vec3::ZERO,
+        track: RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(2.0, Vec3::new(0.0, 100.0, 0.0))]),
+    };
+    Scene { objects: vec![arm], ..Scene::default() }
+}
+
+#[test]
+fn frame_has_the_skinned_arm_its_skeleton_and_the_selected_path() {
+    let rig = SceneRig::new(&arm_scene()).expect("rig");
+    let view = ViewOptions {
+        style: RenderStyle::Wireframe,
+        selection: Selection::Joint { object: 0, joint: 3 },
+        ..ViewOptions::default()
+    };
+    let frame = rig.frame(1.0, &view).expect("frame");
+    assert_eq!(frame.style, RenderStyle::Wireframe);
+    assert_eq!(frame.items.len(), 1);
+    let Deform::Skin { deformer, joints } = &frame.items[0].deform else { panic!("the arm is skinned") };
+    assert_eq!(*deformer, DeformerKind::DualQuaternion);
+    assert_eq!(joints.len(), 4);
+    // Halfway through the translation track.
+    let origin = frame.items[0].world_from_model.transform_point3(Vec3::ZERO);
+    assert!((origin.y - 50.0).abs() < 1e-3, "{origin}");
+
+    assert_eq!(frame.skeletons.len(), 1);
+    assert_eq!(frame.skeletons[0].selected, Some(3));
+    assert_eq!(frame.skeletons[0].parents, vec![None, Some(0), Some(1), Some(2)]);
+
+    // Joint 3's path: one point per frame of the default range (0..=60), a marker per key of
+    // joint 3's rotation track (none: it is not keyed), and the current position.
+    let path = &frame.motion_paths[0];
+    assert_eq!(path.points.len(), 61);
+    assert!(path.keys.is_empty());
+    assert!(path.current.is_some());
+
+    // Overriding the deformer.
+    let view = ViewOptions { deformer: Some(DeformerKind::Rigid), ..ViewOptions::default() };
+    let frame = rig.frame(1.0, &view).expect("frame");
+    assert!(matches!(frame.items[0].deform, Deform::Skin { deformer: DeformerKind::Rigid, .. }));
+    assert!(frame.motion_paths.is_empty(), "nothing selected");
+}
+
+#[test]
+fn object_path_has_a_marker_per_key() {
+    let rig = SceneRig::new(&arm_scene()).expect("rig");
+    let path = rig.motion_path(Selection::Object(0), 0.5).expect("path").expect("a path");
+    assert_eq!(path.keys.len(), 2);
+    assert!((path.keys[1] - Vec3::new(0.0, 100.0, 0.0)).length() < 1e-4);
+}
+
+#[test]
+fn editor_states_replace_the_tracks() {
+    let rig = SceneRig::new(&arm_scene()).expect("rig");
+    let mut states = rig.object_states(0.0);
+    states[0].world_from_model = glam::Mat4::from_translation(Vec3::new(7.0, 0.0, 0.0));
+    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default()).expect("frame");
+    assert_eq!(frame.items[0].world_from_model.w_axis.x, 7.0);
+
+    let err = rig.frame_from_states(&[] as &[ObjectState], Vec::new(), &ViewOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("0 object states for 1 objects"), "{err}");
+}
+
+#[test]
+fn bad_tracks_and_missing_meshes_name_their_place() {
+    let mut scene = arm_scene();
+    if let Some(skeleton) = &mut scene.objects[0].skeleton {
+        skeleton.joints[2].rotation.track.keys[1].time = f64::NAN;
+    }
+    let err = SceneRig::new(&scene).err().expect("NaN key time");
+    assert!(
+        err.to_string().starts_with("objects[0].skeleton.joints[2].rotation"),
+        "the error names the track: {err}"
+    );
+
+    let mut scene = arm_scene();
+    scene.objects[0].mesh = Some(MeshSource::File { path: "hero.glb".into(), mesh: None });
+    let err = SceneRig::new(&scene).err().expect("file mesh not passed in");
+    assert!(matches!(err, SceneFrameError::MeshNotLoaded { object: 0, .. }), "{err}");
+    assert!(err.to_string().contains("hero.glb"));
+
+    let scene = Scene { fps: 0.0, ..arm_scene() };
+    assert!(SceneRig::new(&scene).err().expect("fps 0").to_string().starts_with("fps"));
+}
+
+#[test]
+fn a_procedural_arm_is_fitted_to_a_skeleton_in_metres() {
+    let mut scene = arm_scene();
+    if let Some(skeleton) = &mut scene.objects[0].skeleton {
+        for joint in &mut skeleton.joints {
+            joint.rest_translation *= 0.01;
+        }
+    }
+    let rig = SceneRig::new(&scene).expect("rig");
+    // The skeleton overlay's last joint sits at 3 bones × 0.400395 m along X at rest.
+    let states =
+        vec![ObjectState { world_from_model: glam::Mat4::IDENTITY, pose: Some(keyrig_skin::Pose::rest(4)) }];
+    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default()).expect("frame");
+    assert!((frame.skeletons[0].joints[3].x - 1.201_185).abs() < 1e-4, "{}", frame.skeletons[0].joints[3]);
+
+    // The mesh, skinned on the GPU at rest, spans the arm's 1.60158 m.
+    let mut headless = keyrig_render::HeadlessRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    rig.upload(headless.renderer_mut()).expect("upload");
+    headless.render_image(&frame, 32, 32).expect("render");
+    let vertices = headless.renderer().read_vertices(0).expect("readback");
+    let max_x = vertices.iter().map(|v| v.position().x).fold(f32::MIN, f32::max);
+    let min_x = vertices.iter().map(|v| v.position().x).fold(f32::MAX, f32::min);
+    assert!((max_x - min_x - 1.601_58).abs() < 1e-3, "arm length {}", max_x - min_x);
+}
