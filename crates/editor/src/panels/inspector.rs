@@ -59,7 +59,7 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
     let marker = if app.overrides.contains_key(&id) {
         "posed, press I to key"
     } else if keyed_here {
-        "◆ key"
+        "(keyed)"
     } else {
         ""
     };

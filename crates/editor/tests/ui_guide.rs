@@ -1,0 +1,139 @@
+//! The walkthrough of docs/guide.md, performed on the real editor (GPU viewport through
+//! eframe's wgpu path): key a twist on the wrist in record mode, shape it with T/C/B, compare
+//! deformers. Each step checks the document. With `KEYRIG_WRITE_SCREENSHOTS=1` the test also
+//! writes the guide's screenshots to docs/screenshots/.
+
+use egui::accesskit::{Action, ActionData, ActionRequest, Role};
+use egui::{Event, Key, Modifiers};
+use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::Harness;
+use keyrig_core::DeformerKind;
+use keyrig_editor::channels::{self, ChannelId};
+use keyrig_editor::gpu_view::GpuView;
+use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+
+const SIZE: [f32; 2] = [1280.0, 800.0];
+/// Width of the screenshots in docs/ (scaled down from the window).
+const SHOT_WIDTH: u32 = 960;
+const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
+
+fn gpu_harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
+    let dir = dir.to_path_buf();
+    let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(SIZE)).build_eframe(move |cc| {
+        let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
+        app.gpu = cc.wgpu_render_state.as_ref().map(GpuView::new);
+        app
+    });
+    harness.run();
+    harness
+}
+
+fn press(h: &mut Harness<'_, EditorApp>, modifiers: Modifiers, key: Key) {
+    h.key_press_modifiers(modifiers, key);
+    h.run();
+}
+
+fn go_to_frame(h: &mut Harness<'_, EditorApp>, frame: i32) {
+    press(h, Modifiers::NONE, Key::Home);
+    for _ in 0..frame {
+        press(h, Modifiers::NONE, Key::ArrowRight);
+    }
+    assert_eq!(h.state().playback.whole_frame(), frame);
+}
+
+fn set_value(h: &mut Harness<'_, EditorApp>, role: Role, label: &str, value: f64) {
+    let (target_node, target_tree) = h.get_by_role_and_label(role, label).accesskit_node().locate();
+    h.event(Event::AccessKitActionRequest(ActionRequest {
+        action: Action::SetValue,
+        target_node,
+        target_tree,
+        data: Some(ActionData::NumericValue(value)),
+    }));
+    h.run();
+}
+
+/// Writes the window as docs/screenshots/<name>.png when asked to.
+fn screenshot(h: &mut Harness<'_, EditorApp>, name: &str) {
+    if std::env::var_os("KEYRIG_WRITE_SCREENSHOTS").is_none() {
+        return;
+    }
+    let image = h.render().expect("render the editor");
+    let height = (image.height() * SHOT_WIDTH) / image.width();
+    let small = image::imageops::resize(&image, SHOT_WIDTH, height, image::imageops::FilterType::Triangle);
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/screenshots");
+    std::fs::create_dir_all(&dir).expect("create docs/screenshots");
+    small.save(dir.join(format!("{name}.png"))).expect("write the screenshot");
+}
+
+fn wrist_x_degrees_at(h: &Harness<'_, EditorApp>, frame: f64) -> f32 {
+    let scene = h.state().doc.scene();
+    match keyrig_editor::eval::channel_value(scene, WRIST, frame / scene.fps, &Default::default()) {
+        Some(channels::ChannelValue::Rotation(q)) => keyrig_editor::eval::euler_degrees(q).x,
+        other => panic!("wrist rotation: {other:?}"),
+    }
+}
+
+#[test]
+fn guide_walkthrough_twist_with_record_mode_and_tcb() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = gpu_harness(dir.path());
+    assert!(h.state().gpu.is_some());
+
+    // The editor as it opens (README screenshot), at the demo's twist with bones blending.
+    h.get_by_label("forearm").click();
+    h.run();
+    go_to_frame(&mut h, 55);
+    screenshot(&mut h, "editor");
+
+    // 1. Select the wrist and turn on record mode.
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::R);
+    assert!(h.state().record);
+
+    // 2. Key a twist: 0° at frame 0, 90° at 20, 180° at 40, 90° at 60, 0° at 80 (consecutive
+    //    keys under 180° apart, so each segment turns the short way the intended direction).
+    //    At frame 0 the wrist is already at rest: I keys the current pose.
+    go_to_frame(&mut h, 0);
+    press(&mut h, Modifiers::NONE, Key::I);
+    for (frame, degrees) in [(20, 90.0), (40, 180.0), (60, 90.0), (80, 0.0)] {
+        go_to_frame(&mut h, frame);
+        set_value(&mut h, Role::SpinButton, "Rotation (°) X", degrees);
+    }
+    let scene = h.state().doc.scene();
+    let frames: Vec<i64> =
+        channels::key_times(scene, WRIST).iter().map(|t| (t * scene.fps).round() as i64).collect();
+    assert_eq!(frames, vec![0, 20, 40, 60, 80]);
+    go_to_frame(&mut h, 30);
+    screenshot(&mut h, "guide_record");
+    press(&mut h, Modifiers::NONE, Key::R);
+    assert!(!h.state().record);
+
+    // 3. Shape the key at frame 40 with tension and bias; the curve view follows.
+    h.get_by_label("key wrist rotation frame 40").click();
+    h.run();
+    let before = wrist_x_degrees_at(&h, 46.0);
+    set_value(&mut h, Role::Slider, "Tension", -0.6);
+    set_value(&mut h, Role::Slider, "Bias", 0.5);
+    let after = wrist_x_degrees_at(&h, 46.0);
+    assert!((after - before).abs() > 0.5, "T/B moved the curve: {before} → {after}");
+    screenshot(&mut h, "guide_tcb");
+
+    // 4. Compare deformers at the demo's 180° forearm twist: linear blend collapses.
+    h.get_by_label("forearm").click();
+    h.run();
+    go_to_frame(&mut h, 60);
+    press(&mut h, Modifiers::NONE, Key::Num2);
+    let linear = h.state().skin.cross_section(0, 2).expect("measured").expect("section").ratio();
+    screenshot(&mut h, "guide_linear_blend");
+    press(&mut h, Modifiers::NONE, Key::Num3);
+    assert_eq!(h.state().doc.scene().objects[0].deformer.kind, DeformerKind::BonesBlending);
+    let bones = h.state().skin.cross_section(0, 2).expect("measured").expect("section").ratio();
+    screenshot(&mut h, "guide_bones_blending");
+    assert!(linear < 0.5 && bones > 0.9, "linear {linear}, bones blending {bones}");
+
+    // 5. Help lists every shortcut.
+    press(&mut h, Modifiers::NONE, Key::F12);
+    assert!(h.state().show_help);
+    screenshot(&mut h, "guide_help");
+}

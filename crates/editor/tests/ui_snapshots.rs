@@ -1,0 +1,58 @@
+//! A few image snapshots of the whole editor, rendered through eframe's wgpu path on whatever
+//! adapter wgpu finds (lavapipe without a GPU), so the GPU viewport (keyrig-render) is in the
+//! picture. Compared with `tests/snapshots/*.png` with tolerances: rasterizers differ in
+//! anti-aliasing and MSAA patterns, so a per-pixel threshold plus a small budget of differing
+//! pixels (0.5 % of the image). Update with `UPDATE_SNAPSHOTS=1 cargo test -p keyrig-editor
+//! --test ui_snapshots`.
+
+use egui::{Key, Modifiers};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::{Harness, SnapshotOptions};
+use keyrig_editor::gpu_view::GpuView;
+use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+
+const SIZE: [f32; 2] = [960.0, 600.0];
+
+fn options() -> SnapshotOptions {
+    let pixels = (SIZE[0] * SIZE[1]) as usize;
+    SnapshotOptions::new().threshold(1.5).failed_pixel_count_threshold(pixels / 200)
+}
+
+/// The editor on the demo scene with the GPU viewport, as `keyrig` opens it.
+fn gpu_harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
+    let dir = dir.to_path_buf();
+    let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(SIZE)).build_eframe(move |cc| {
+        let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
+        app.gpu = cc.wgpu_render_state.as_ref().map(GpuView::new);
+        app
+    });
+    harness.run();
+    assert!(harness.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
+    harness
+}
+
+fn go_to_frame(h: &mut Harness<'_, EditorApp>, frame: i32) {
+    h.key_press_modifiers(Modifiers::NONE, Key::Home);
+    h.run();
+    for _ in 0..frame {
+        h.key_press_modifiers(Modifiers::NONE, Key::ArrowRight);
+        h.run();
+    }
+}
+
+#[test]
+fn twist_at_frame_60_linear_blend_and_bones_blending() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = gpu_harness(dir.path());
+    h.get_by_label("forearm").click();
+    h.run();
+    go_to_frame(&mut h, 60);
+    h.key_press_modifiers(Modifiers::NONE, Key::Num2);
+    h.run();
+    let gpu_error = h.state().status.clone().filter(|s| s.is_error);
+    assert_eq!(gpu_error, None);
+    h.snapshot_options("editor_linear_blend_twist", &options());
+    h.key_press_modifiers(Modifiers::NONE, Key::Num3);
+    h.run();
+    h.snapshot_options("editor_bones_blending_twist", &options());
+}
