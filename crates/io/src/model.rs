@@ -515,3 +515,316 @@ pub fn sample_weights(track: &WeightsTrack, time: f64) -> Option<Vec<f32>> {
         }
     })
 }
+
+/// Why an imported model cannot be mapped onto keyrig's scene or skin types.
+#[derive(Debug, thiserror::Error)]
+pub enum MappingError {
+    #[error("node {node}: {message}")]
+    Node { node: usize, message: String },
+    #[error("skin {skin}: {source}")]
+    Skin { skin: usize, source: keyrig_skin::SkinError },
+}
+
+/// How a skin's joints map onto a keyrig skeleton: joints reordered parents first, the
+/// frame P that the skeleton lives in, and each joint's rest transform relative to its
+/// nearest joint ancestor (intermediate nodes folded in, scale dropped).
+struct SkeletonMap {
+    /// glTF node of keyrig joint k.
+    nodes: Vec<usize>,
+    /// Index in the glTF skin's joint list of keyrig joint k.
+    skin_slot: Vec<usize>,
+    parents: Vec<Option<usize>>,
+    rest: Vec<(Vec3, Quat)>,
+    /// `world_from_skeleton`: rest world transform of the root joint's parent node.
+    frame: Mat4,
+}
+
+impl ImportedModel {
+    /// `model_from_node` at rest for every node.
+    fn rest_world(&self) -> Vec<Mat4> {
+        self.world_matrices(&self.rest_pose())
+    }
+
+    fn skeleton_map(&self, skin: usize) -> Option<SkeletonMap> {
+        let s = self.skins.get(skin)?;
+        let world = self.rest_world();
+        let is_joint = |n: usize| s.joints.contains(&n);
+        let joint_parent = |n: usize| {
+            let mut cur = self.nodes[n].parent;
+            while let Some(c) = cur {
+                if is_joint(c) {
+                    return Some(c);
+                }
+                cur = self.nodes[c].parent;
+            }
+            None
+        };
+        let depth = |n: usize| {
+            let mut d = 0;
+            let mut cur = joint_parent(n);
+            while let Some(c) = cur {
+                d += 1;
+                cur = joint_parent(c);
+            }
+            d
+        };
+        let mut order: Vec<usize> = (0..s.joints.len()).collect();
+        order.sort_by_key(|&slot| depth(s.joints[slot]));
+        let nodes: Vec<usize> = order.iter().map(|&slot| s.joints[slot]).collect();
+        let roots: Vec<usize> = nodes.iter().copied().filter(|&n| joint_parent(n).is_none()).collect();
+        let frame = match roots.as_slice() {
+            [root] => self.nodes[*root].parent.map_or(Mat4::IDENTITY, |p| world[p]),
+            _ => Mat4::IDENTITY,
+        };
+        let frame_inv = frame.inverse();
+        let mut parents = Vec::with_capacity(nodes.len());
+        let mut rest = Vec::with_capacity(nodes.len());
+        for &n in &nodes {
+            let parent = joint_parent(n).and_then(|p| nodes.iter().position(|&x| x == p));
+            let parent_world = parent.map_or(frame, |p| world[nodes[p]]);
+            let rel = if parent.is_none() { frame_inv * world[n] } else { parent_world.inverse() * world[n] };
+            let (_, rotation, translation) = rel.to_scale_rotation_translation();
+            parents.push(parent);
+            rest.push((translation, rotation.normalize()));
+        }
+        Some(SkeletonMap { nodes, skin_slot: order, parents, rest, frame })
+    }
+
+    /// The keyrig skeleton of skin `skin` with the rotation (and root translation) tracks of
+    /// `animation`: joints parents first, rest R(j) from the file's node transforms, and
+    /// `T(j) = q_rest(j)⁻¹ · q(t)` per key (tangents mapped the same way, which is exact
+    /// because left-multiplying by a fixed unit quaternion is linear and norm-preserving).
+    /// Joint scale and translation tracks of non-root joints stay in this model only.
+    ///
+    /// # Errors
+    /// No such skin.
+    pub fn scene_skeleton(
+        &self,
+        skin: usize,
+        animation: Option<usize>,
+    ) -> Result<keyrig_core::Skeleton, MappingError> {
+        let map = self
+            .skeleton_map(skin)
+            .ok_or(MappingError::Node { node: usize::MAX, message: format!("no skin {skin}") })?;
+        let anim = animation.and_then(|a| self.animations.get(a));
+        let mut joints = Vec::with_capacity(map.nodes.len());
+        let mut root_translation = keyrig_core::Animated::constant(Vec3::ZERO);
+        for (k, &n) in map.nodes.iter().enumerate() {
+            let node = &self.nodes[n];
+            let q_rest_inv = node.rotation.inverse();
+            let mut rotation = keyrig_core::Animated::constant(Quat::IDENTITY);
+            for channel in anim.iter().flat_map(|a| &a.channels).filter(|c| c.node == n) {
+                match &channel.target {
+                    ChannelTarget::Rotation(track) => {
+                        rotation.track = RawTrack::new(
+                            track
+                                .keys
+                                .iter()
+                                .map(|key| Key {
+                                    time: key.time,
+                                    value: (q_rest_inv * key.value).normalize(),
+                                    interpolation: key.interpolation,
+                                    tcb: key.tcb,
+                                    in_tangent: key.in_tangent.map(|t| q_rest_inv * t),
+                                    out_tangent: key.out_tangent.map(|t| q_rest_inv * t),
+                                })
+                                .collect(),
+                        );
+                        if let Some(first) = rotation.track.keys.first() {
+                            rotation.value = first.value;
+                        }
+                    }
+                    ChannelTarget::Translation(track) if map.parents[k].is_none() => {
+                        let rest = node.translation;
+                        root_translation = keyrig_core::Animated {
+                            value: track.keys.first().map_or(Vec3::ZERO, |key| key.value - rest),
+                            track: RawTrack::new(
+                                track
+                                    .keys
+                                    .iter()
+                                    .map(|key| {
+                                        let mut key = key.clone();
+                                        key.value -= rest;
+                                        key
+                                    })
+                                    .collect(),
+                            ),
+                        };
+                    }
+                    _ => {}
+                }
+            }
+            joints.push(keyrig_core::Joint {
+                name: node.name.clone(),
+                parent: map.parents[k],
+                rest_translation: map.rest[k].0,
+                rest_rotation: map.rest[k].1,
+                rotation,
+            });
+        }
+        Ok(keyrig_core::Skeleton { joints, root_translation })
+    }
+
+    /// The mesh on `node` as a keyrig-skin [`keyrig_skin::SkinnedMesh`] bound to the skeleton
+    /// of [`ImportedModel::scene_skeleton`]: triangle primitives merged, joint indices
+    /// renumbered to the parents-first order, the four largest influences kept (of JOINTS_0/1)
+    /// and normalized, the file's inverse bind matrices. The palette `F(j)·IBM(j)` then lives
+    /// in the skeleton's frame P (see [`ImportedModel::skeleton_frame`]): glTF's world
+    /// positions are `P · Σ wᵢ F(jᵢ)·IBM(jᵢ)·v`. Positions are bind-space, as in the file.
+    ///
+    /// # Errors
+    /// The node has no mesh or skin, a primitive has no weights, or keyrig-skin rejects it.
+    pub fn skinned_mesh(&self, node: usize) -> Result<keyrig_skin::SkinnedMesh, MappingError> {
+        let bad = |message: &str| MappingError::Node { node, message: message.into() };
+        let n = self.nodes.get(node).ok_or_else(|| bad("no such node"))?;
+        let (mesh, skin) =
+            (n.mesh.ok_or_else(|| bad("has no mesh"))?, n.skin.ok_or_else(|| bad("has no skin"))?);
+        let map = self.skeleton_map(skin).ok_or_else(|| bad("skin missing"))?;
+        let s = &self.skins[skin];
+        let mut renumber = vec![0u16; s.joints.len()];
+        for (k, &slot) in map.skin_slot.iter().enumerate() {
+            renumber[slot] = k as u16;
+        }
+        let (mut positions, mut normals, mut indices, mut joints, mut weights) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for prim in self.meshes[mesh].primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
+            if prim.joint_sets.is_empty() {
+                return Err(bad("a primitive has no JOINTS_0/WEIGHTS_0"));
+            }
+            let base = positions.len() as u32;
+            positions.extend_from_slice(&prim.positions);
+            match &prim.normals {
+                Some(nm) => normals.extend_from_slice(nm),
+                None => normals.extend(keyrig_skin::mesh::vertex_normals(&prim.positions, &prim.indices)),
+            }
+            indices.extend(prim.indices.iter().map(|i| i + base));
+            for v in 0..prim.positions.len() {
+                let mut influences: Vec<(u16, f32)> = prim
+                    .joint_sets
+                    .iter()
+                    .zip(&prim.weight_sets)
+                    .flat_map(|(j, w)| (0..4).map(move |i| (j[v][i], w[v][i])))
+                    .filter(|&(_, w)| w > 0.0)
+                    .collect();
+                influences.sort_by(|a, b| b.1.total_cmp(&a.1));
+                influences.truncate(4);
+                let total: f32 = influences.iter().map(|x| x.1).sum();
+                let (mut jv, mut wv) = ([0u16; 4], [0.0f32; 4]);
+                if total > 0.0 {
+                    for (i, (j, w)) in influences.iter().enumerate() {
+                        jv[i] = renumber.get(usize::from(*j)).copied().unwrap_or(0);
+                        wv[i] = w / total;
+                    }
+                } else {
+                    wv[0] = 1.0;
+                }
+                joints.push(jv);
+                weights.push(wv);
+            }
+        }
+        let rest_joints: Vec<keyrig_skin::RestJoint> = map
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(k, &nd)| {
+                keyrig_skin::RestJoint::new(
+                    &self.nodes[nd].name,
+                    map.parents[k],
+                    map.rest[k].0,
+                    map.rest[k].1,
+                )
+            })
+            .collect();
+        let ibms: Vec<Mat4> = map.skin_slot.iter().map(|&slot| s.inverse_bind_matrices[slot]).collect();
+        let skeleton = keyrig_skin::RestSkeleton::with_inverse_bind_matrices(&rest_joints, &ibms)
+            .map_err(|source| MappingError::Skin { skin, source })?;
+        keyrig_skin::SkinnedMesh::new(positions, normals, indices, joints, weights, None, skeleton)
+            .map_err(|source| MappingError::Skin { skin, source })
+    }
+
+    /// `world_from_skeleton` (P) of skin `skin`: where the keyrig skeleton's model space sits
+    /// in the file's world. keyrig-skin's deformed positions times P are glTF world positions.
+    #[must_use]
+    pub fn skeleton_frame(&self, skin: usize) -> Option<Mat4> {
+        self.skeleton_map(skin).map(|m| m.frame)
+    }
+
+    /// The model as a keyrig scene, with the tracks of `animation`:
+    /// - each skinned mesh node → an object (transform P, the skeleton's frame) with the
+    ///   skeleton of [`ImportedModel::scene_skeleton`] and its mesh as
+    ///   `MeshSource::File { path: file_name, mesh }`;
+    /// - each unskinned mesh node → an object at its rest world transform, with its own
+    ///   translation/rotation/scale tracks when it is a root node;
+    /// - each KHR_lights_punctual light → a light at its node's rest world position and
+    ///   direction (−Z), spot cone angles in degrees.
+    ///
+    /// What a scene cannot hold stays here: translation tracks of non-root joints, scale
+    /// tracks of joints, morph weights, animated lights, the other animations.
+    ///
+    /// # Errors
+    /// A skin that cannot be mapped.
+    pub fn to_scene(
+        &self,
+        file_name: &str,
+        animation: Option<usize>,
+    ) -> Result<keyrig_core::Scene, MappingError> {
+        let mut scene = keyrig_core::Scene::default();
+        let world = self.rest_world();
+        let anim = animation.and_then(|a| self.animations.get(a));
+        if let Some(a) = anim {
+            let end = (a.duration() * scene.fps).ceil();
+            scene.frame_range.end = if end.is_finite() { end.clamp(1.0, 1e6) as i32 } else { 60 };
+        }
+        for (i, node) in self.nodes.iter().enumerate() {
+            let Some(mesh) = node.mesh else { continue };
+            let mut object = keyrig_core::Object::new(node.name.clone());
+            object.mesh =
+                Some(keyrig_core::MeshSource::File { path: file_name.to_owned(), mesh: Some(mesh) });
+            let placement = match node.skin {
+                Some(skin) => {
+                    object.skeleton = Some(self.scene_skeleton(skin, animation)?);
+                    self.skeleton_frame(skin).unwrap_or(Mat4::IDENTITY)
+                }
+                None => world[i],
+            };
+            let (s, r, t) = placement.to_scale_rotation_translation();
+            object.translation = keyrig_core::Animated::constant(t);
+            object.rotation = keyrig_core::Animated::constant(r.normalize());
+            object.scale = keyrig_core::Animated::constant(s);
+            if node.skin.is_none() && node.parent.is_none() {
+                for channel in anim.iter().flat_map(|a| &a.channels).filter(|c| c.node == i) {
+                    match &channel.target {
+                        ChannelTarget::Translation(t) => object.translation.track = t.clone(),
+                        ChannelTarget::Rotation(t) => object.rotation.track = t.clone(),
+                        ChannelTarget::Scale(t) => object.scale.track = t.clone(),
+                        ChannelTarget::Weights(_) => {}
+                    }
+                }
+            }
+            scene.objects.push(object);
+        }
+        for (i, node) in self.nodes.iter().enumerate() {
+            let Some(light) = node.light.and_then(|l| self.lights.get(l)) else { continue };
+            let (_, rotation, position) = world[i].to_scale_rotation_translation();
+            let kind = match light.kind {
+                ModelLightKind::Directional => keyrig_core::LightKind::Directional,
+                ModelLightKind::Point => keyrig_core::LightKind::Point,
+                ModelLightKind::Spot { inner_cone_angle, outer_cone_angle } => keyrig_core::LightKind::Spot {
+                    cutoff_deg: outer_cone_angle.to_degrees(),
+                    inner_angle_deg: inner_cone_angle.to_degrees(),
+                    dropoff: 1.0,
+                },
+            };
+            scene.lights.push(keyrig_core::Light {
+                name: light.name.clone(),
+                kind,
+                enabled: true,
+                position: keyrig_core::Animated::constant(position),
+                direction: keyrig_core::Animated::constant(rotation * Vec3::NEG_Z),
+                colour: keyrig_core::Animated::constant(light.colour),
+                intensity: keyrig_core::Animated::constant(light.intensity),
+            });
+        }
+        Ok(scene)
+    }
+}
