@@ -270,12 +270,14 @@ impl<T: TrackValue> Track<T> {
     /// The value at time `t` (seconds), clamped to the first/last key outside the domain.
     /// O(log n) binary search; use [`Track::cursor`] for playback.
     #[must_use]
+    #[inline]
     pub fn sample(&self, t: f64) -> T {
         T::narrow(self.sample_wide(t))
     }
 
     /// [`Track::sample`] in f64, before rounding to the value type.
     #[must_use]
+    #[inline]
     pub fn sample_wide(&self, t: f64) -> T::Wide {
         match self.clamp(t) {
             Clamped::Key(i) => self.wide[i],
@@ -332,11 +334,13 @@ pub struct Cursor<'a, T: TrackValue> {
 
 impl<T: TrackValue> Cursor<'_, T> {
     /// Same value as [`Track::sample`] at `t`.
+    #[inline]
     pub fn sample(&mut self, t: f64) -> T {
         T::narrow(self.sample_wide(t))
     }
 
     /// Same value as [`Track::sample_wide`] at `t`.
+    #[inline]
     pub fn sample_wide(&mut self, t: f64) -> T::Wide {
         match self.track.clamp(t) {
             Clamped::Key(i) => self.track.wide[i],
@@ -751,6 +755,7 @@ impl<T: TrackValue> AnimatedTrack<T> {
 
     /// The value at `t` (seconds).
     #[must_use]
+    #[inline]
     pub fn sample(&self, t: f64) -> T {
         match self {
             AnimatedTrack::Constant(value) => *value,
