@@ -183,8 +183,12 @@ fn bench_build(c: &mut Criterion) {
         let vec3_raw = RawTrack::new((0..n).map(|i| Key::new(keys.times[i], keys.positions[i])).collect());
         let quat_raw = RawTrack::new((0..n).map(|i| Key::new(keys.times[i], keys.rotations[i])).collect());
         group.throughput(Throughput::Elements(n as u64));
-        group.bench_with_input(BenchmarkId::new("vec3_tcb", n), &vec3_raw, |b, raw| b.iter(|| Track::new(raw)));
-        group.bench_with_input(BenchmarkId::new("quat_squad", n), &quat_raw, |b, raw| b.iter(|| Track::new(raw)));
+        group.bench_with_input(BenchmarkId::new("vec3_tcb", n), &vec3_raw, |b, raw| {
+            b.iter(|| Track::new(raw))
+        });
+        group.bench_with_input(BenchmarkId::new("quat_squad", n), &quat_raw, |b, raw| {
+            b.iter(|| Track::new(raw))
+        });
     }
     group.finish();
 }
