@@ -117,6 +117,35 @@ fn renders_an_md2_model_through_gpu_morphing() {
 }
 
 #[test]
+fn renders_an_animated_gltf_model_with_its_skin() {
+    let model =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf/CesiumMan/CesiumMan.glb");
+    assert!(model.exists(), "{} is missing (the shared corpus must be beside the checkout)", model.display());
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut images = Vec::new();
+    for frame in ["0", "12"] {
+        let out = dir.path().join(format!("cesium_{frame}.png"));
+        let result = keyrig(&[
+            "render",
+            model.to_str().expect("utf-8 path"),
+            "--frame",
+            frame,
+            "--size",
+            "128x128",
+            "--deformer",
+            "linear",
+            "-o",
+            out.to_str().expect("utf-8 path"),
+        ]);
+        assert!(result.status.success(), "keyrig render {} failed: {}", model.display(), stderr(&result));
+        images.push(keyrig_render::image::open(&out).expect("a PNG").to_rgba8());
+    }
+    assert!(distinct_colours(&images[0]) > 20, "the image looks empty");
+    // The walk cycle moves the figure between frames 0 and 12.
+    assert_ne!(images[0], images[1]);
+}
+
+#[test]
 fn bad_arguments_and_files_are_explained() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("x.png");

@@ -178,7 +178,9 @@ impl SceneRig {
     }
 
     /// Prepares a scene; `loaded` gives the meshes of objects whose mesh is a file, by object
-    /// index.
+    /// index. A loaded mesh keeps its own rest skeleton (e.g. a glTF file's inverse bind
+    /// matrices) for skinning; the object's scene skeleton, whose tracks pose it, must list the
+    /// same joints in the same order.
     ///
     /// # Errors
     /// As [`SceneRig::new`]; [`SceneFrameError::MeshNotLoaded`] for a file mesh missing from
@@ -219,10 +221,31 @@ impl SceneRig {
             let mesh = match &object.mesh {
                 None => None,
                 Some(source) => {
-                    let base = match source {
-                        MeshSource::Procedural(kind) => mesh_for(*kind),
+                    let mesh = match source {
+                        MeshSource::Procedural(kind) => match &rest {
+                            Some(rest) => fit_to_skeleton(mesh_for(*kind), rest)
+                                .with_skeleton(rest.clone())
+                                .map_err(skin_err(at("mesh (bound to the object's skeleton)")))?,
+                            None => mesh_for(*kind),
+                        },
+                        // A loaded mesh keeps its own skeleton (a glTF file's inverse bind
+                        // matrices); the scene skeleton must have its joints in the same order.
                         MeshSource::File { path, .. } => match loaded.get(&i) {
-                            Some(mesh) => mesh.clone(),
+                            Some(mesh) => {
+                                if let Some(rest) = &rest {
+                                    if rest.len() != mesh.skeleton.len() {
+                                        return Err(SceneFrameError::Invalid {
+                                            path: at("skeleton"),
+                                            message: format!(
+                                                "{} joints, but the mesh from `{path}` is bound to {}",
+                                                rest.len(),
+                                                mesh.skeleton.len()
+                                            ),
+                                        });
+                                    }
+                                }
+                                mesh.clone()
+                            }
                             None => {
                                 return Err(SceneFrameError::MeshNotLoaded {
                                     object: i,
@@ -231,12 +254,6 @@ impl SceneRig {
                                 })
                             }
                         },
-                    };
-                    let mesh = match &rest {
-                        Some(rest) => fit_to_skeleton(base, rest)
-                            .with_skeleton(rest.clone())
-                            .map_err(skin_err(at("mesh (bound to the object's skeleton)")))?,
-                        None => base,
                     };
                     let zone =
                         BlendZone::from_settings(&object.deformer).map_err(skin_err(at("deformer")))?;
@@ -386,9 +403,12 @@ impl SceneRig {
         frame.lights = lights;
         frame.grid_spacing = view.grid.then(|| grid_spacing_for(camera.distance));
         for (i, (object, state)) in self.objects.iter().zip(states).enumerate() {
-            let palette = match (&object.rest, &state.pose) {
-                (Some(rest), Some(pose)) => Some(
-                    JointPalette::new(rest, pose)
+            // Drawing uses the mesh's skeleton (for loaded meshes: the file's inverse bind
+            // matrices); without a mesh, the scene skeleton alone gives the overlay.
+            let skeleton = object.mesh.as_ref().map(|rig| &rig.mesh.skeleton).or(object.rest.as_ref());
+            let palette = match (skeleton, &state.pose) {
+                (Some(skeleton), Some(pose)) => Some(
+                    JointPalette::new(skeleton, pose)
                         .map_err(skin_err(format!("objects[{i}].skeleton (pose)")))?,
                 ),
                 _ => None,

@@ -1,7 +1,9 @@
 //! `keyrig render FILE [--frame F | --frames A..B] [--deformer D] [--size WxH] -o OUT`:
-//! offscreen PNGs of a scene (.ron) or an MD2 model (.md2), through keyrig-render's headless
-//! path (the adapter wgpu finds; lavapipe without a GPU).
+//! offscreen PNGs of a scene (.ron) or a model (.glb/.gltf: keyrig-io's scene mapping, first
+//! animation; .md2: GPU vertex morphing), through keyrig-render's headless path (the adapter
+//! wgpu finds; lavapipe without a GPU).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
@@ -11,6 +13,7 @@ use keyrig_render::{
     Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig,
     SkinnedVertex, ViewOptions,
 };
+use keyrig_skin::SkinnedMesh;
 
 /// Largest image side accepted on the command line.
 const MAX_SIDE: u32 = 16384;
@@ -19,7 +22,7 @@ const MD2_FRAMES_PER_TIMELINE_FRAME: f64 = 10.0 / 30.0;
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// Scene (.ron) or MD2 model (.md2) to render.
+    /// Scene (.ron) or model (.glb, .gltf, .md2) to render.
     pub file: PathBuf,
     /// Frame to render (may be fractional); the first frame of the scene's range by default.
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
@@ -168,8 +171,108 @@ impl FrameSource for Md2Source {
     }
 }
 
-fn is_md2(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("md2"))
+fn has_extension(path: &Path, extensions: &[&str]) -> bool {
+    path.extension().is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// A glTF model as a scene (keyrig-io's mapping, first animation) with its meshes: skinned
+/// nodes through keyrig-io's `skinned_mesh`, other mesh nodes as rigid meshes on one joint.
+fn gltf_scene(path: &Path) -> anyhow::Result<(keyrig_core::Scene, HashMap<usize, SkinnedMesh>)> {
+    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let animation = (!model.animations.is_empty()).then_some(0);
+    let mut scene = model
+        .to_scene(&name, animation)
+        .with_context(|| format!("{}: mapping to a scene", path.display()))?;
+    // keyrig-io's to_scene makes one object per node with a mesh, in node order.
+    let mesh_nodes: Vec<usize> =
+        model.nodes.iter().enumerate().filter(|(_, n)| n.mesh.is_some()).map(|(i, _)| i).collect();
+    let mut loaded = HashMap::new();
+    for (object, &node) in mesh_nodes.iter().enumerate() {
+        let mesh = if model.nodes[node].skin.is_some() {
+            model.skinned_mesh(node).with_context(|| format!("{}: node {node}", path.display()))?
+        } else {
+            let Some(mesh) = model.nodes[node].mesh.and_then(|m| model.meshes.get(m)) else { continue };
+            rigid_mesh(mesh).with_context(|| format!("{}: mesh of node {node}", path.display()))?
+        };
+        loaded.insert(object, mesh);
+    }
+    frame_scene(&mut scene, &loaded);
+    Ok((scene, loaded))
+}
+
+/// The triangle primitives of a glTF mesh merged into one mesh bound rigidly to a root joint.
+fn rigid_mesh(mesh: &keyrig_io::model::ModelMesh) -> anyhow::Result<SkinnedMesh> {
+    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    for primitive in &mesh.primitives {
+        if primitive.mode != keyrig_io::model::PrimitiveMode::Triangles {
+            continue;
+        }
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&primitive.positions);
+        match &primitive.normals {
+            Some(n) => normals.extend_from_slice(n),
+            None => {
+                normals.extend(keyrig_skin::mesh::vertex_normals(&primitive.positions, &primitive.indices))
+            }
+        }
+        indices.extend(primitive.indices.iter().map(|&i| base + i));
+    }
+    let n = positions.len();
+    let skeleton = keyrig_skin::RestSkeleton::new(&[keyrig_skin::RestJoint::new(
+        "root",
+        None,
+        Vec3::ZERO,
+        Quat::IDENTITY,
+    )])?;
+    Ok(SkinnedMesh::new(
+        positions,
+        normals,
+        indices,
+        vec![[0; 4]; n],
+        vec![[1.0, 0.0, 0.0, 0.0]; n],
+        Some(vec![0; n]),
+        skeleton,
+    )?)
+}
+
+/// Points the scene's camera at the models' rest bounds (glTF files carry no keyrig camera).
+fn frame_scene(scene: &mut keyrig_core::Scene, loaded: &HashMap<usize, SkinnedMesh>) {
+    let mut bounds = (Vec3::MAX, Vec3::MIN);
+    for (&object, mesh) in loaded {
+        let Some(o) = scene.objects.get(object) else { continue };
+        let world = Mat4::from_scale_rotation_translation(
+            o.scale.value,
+            o.rotation.value.normalize(),
+            o.translation.value,
+        );
+        for &p in &mesh.positions {
+            let p = world.transform_point3(p);
+            bounds = (bounds.0.min(p), bounds.1.max(p));
+        }
+    }
+    if bounds.0.cmple(bounds.1).all() {
+        let radius = ((bounds.1 - bounds.0).length() * 0.5).max(1e-3);
+        scene.camera = Camera {
+            target: (bounds.0 + bounds.1) * 0.5,
+            yaw_deg: 30.0,
+            pitch_deg: 15.0,
+            distance: radius * 2.8,
+            fov_y_deg: 45.0,
+        };
+    }
+    if scene.lights.is_empty() {
+        scene.lights.push(keyrig_core::Light {
+            name: "Sun".into(),
+            kind: keyrig_core::LightKind::Directional,
+            enabled: true,
+            position: keyrig_core::Animated::constant(Vec3::ZERO),
+            direction: keyrig_core::Animated::constant(Vec3::new(-0.4, -1.0, -0.6)),
+            colour: keyrig_core::Animated::constant(Vec3::ONE),
+            intensity: keyrig_core::Animated::constant(0.9),
+        });
+        scene.ambient = Vec3::splat(0.15);
+    }
 }
 
 fn md2_source(path: &Path, headless: &mut HeadlessRenderer, args: &RenderArgs) -> anyhow::Result<Md2Source> {
@@ -225,7 +328,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let range = args.frames.as_deref().map(parse_range).transpose()?;
 
     let mut headless = HeadlessRenderer::new().context("opening a GPU device for offscreen rendering")?;
-    let source: Box<dyn FrameSource> = if is_md2(&args.file) {
+    let source: Box<dyn FrameSource> = if has_extension(&args.file, &["md2"]) {
         if deformer.is_some() {
             bail!(
                 "--deformer: {} is a vertex-animated MD2 model; it has no skin to deform",
@@ -234,9 +337,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Box::new(md2_source(&args.file, &mut headless, &args)?)
     } else {
-        let scene = keyrig_io::scene_file::load(&args.file)?;
-        let rig =
-            SceneRig::new(&scene).with_context(|| format!("{}: preparing the scene", args.file.display()))?;
+        let (scene, loaded) = if has_extension(&args.file, &["glb", "gltf"]) {
+            gltf_scene(&args.file)?
+        } else {
+            (keyrig_io::scene_file::load(&args.file)?, HashMap::new())
+        };
+        let rig = SceneRig::with_meshes(&scene, &loaded)
+            .with_context(|| format!("{}: preparing the scene", args.file.display()))?;
         rig.upload(headless.renderer_mut())
             .with_context(|| format!("{}: uploading meshes", args.file.display()))?;
         let view = ViewOptions {
