@@ -119,6 +119,8 @@ pub struct EditorApp {
     pub(crate) gizmo: transform_gizmo_egui::Gizmo,
     pub(crate) timeline: panels::timeline::TimelineState,
     pub skin: crate::skinning::SkinCache,
+    /// Meshes of model files the scene refers to.
+    pub meshes: files::MeshStore,
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
     pub gpu: Option<crate::gpu_view::GpuView>,
     tracks: RefCell<Option<CachedTracks>>,
@@ -164,6 +166,7 @@ impl EditorApp {
             gizmo: transform_gizmo_egui::Gizmo::default(),
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
+            meshes: files::MeshStore::default(),
             gpu: None,
             tracks: RefCell::new(None),
             window_title: String::new(),
@@ -552,7 +555,8 @@ impl EditorApp {
 
     /// Exports the scene as glTF.
     pub fn export_to(&mut self, path: PathBuf) {
-        match files::export_gltf(&path, self.doc.scene()) {
+        let base_dir = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        match files::export_gltf(&path, self.doc.scene(), base_dir.as_deref()) {
             Ok(()) => self.info(format!("Exported {}", path.display())),
             Err(e) => self.error(e),
         }

@@ -55,11 +55,23 @@ pub fn open_any(path: &Path) -> Result<Scene, String> {
     }
 }
 
-/// Reads a model (glTF, MD2) as a scene of its own.
+/// Reads a model as a scene of its own. glTF (.glb, .gltf) maps onto keyrig through keyrig-io:
+/// skinned meshes with their skeleton and the first animation's joint rotation tracks, other
+/// meshes as objects, KHR lights as lights; the meshes stay in the file
+/// (`MeshSource::File`, with the model's absolute path) and are loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, String> {
     match extension(path).as_deref() {
-        Some("glb" | "gltf" | "md2") => Err(format!(
-            "{}: importing this model format is not available in this build of the editor yet",
+        Some("glb" | "gltf") => {
+            let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
+            let absolute = fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+            let animation = (!model.animations.is_empty()).then_some(0);
+            model
+                .to_scene(&absolute.to_string_lossy(), animation)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        }
+        Some("md2") => Err(format!(
+            "{}: MD2 models are vertex animation, which the editor cannot key; play them with \
+             `keyrig render` or convert them with `keyrig convert`",
             path.display()
         )),
         Some(other) => Err(format!(
@@ -70,9 +82,80 @@ pub fn import_model(path: &Path) -> Result<Scene, String> {
     }
 }
 
-/// Writes the scene as glTF.
-pub fn export_gltf(path: &Path, _scene: &Scene) -> Result<(), String> {
-    Err(format!("{}: glTF export is not available in this build of the editor yet", path.display()))
+/// Writes the scene as glTF (.glb, or .gltf with the buffer embedded), resolving mesh files
+/// against `base_dir` (the scene's folder).
+pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Result<(), String> {
+    let options = keyrig_io::gltf_export::ExportOptions {
+        base_dir: base_dir.map(Path::to_path_buf),
+        ..keyrig_io::gltf_export::ExportOptions::default()
+    };
+    let exported = keyrig_io::gltf_export::export_scene(scene, &options)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    exported.write(path).map_err(|e| e.to_string())
+}
+
+/// A mesh read from a model file.
+#[derive(Clone, Debug)]
+pub enum FileMesh {
+    /// A skinned mesh, bound to its skin's skeleton.
+    Skinned(Box<keyrig_skin::SkinnedMesh>),
+    /// A mesh without a skin: positions and triangles in its node's space.
+    Static { positions: Vec<glam::Vec3>, indices: Vec<u32> },
+}
+
+/// Meshes of model files, loaded once per (file, mesh index).
+#[derive(Default)]
+pub struct MeshStore {
+    meshes: std::collections::HashMap<(PathBuf, Option<usize>), Result<FileMesh, String>>,
+}
+
+impl MeshStore {
+    /// The mesh `mesh` (the first when `None`) of the model at `path`, resolved against
+    /// `base_dir` when relative.
+    pub fn get(
+        &mut self,
+        base_dir: Option<&Path>,
+        path: &str,
+        mesh: Option<usize>,
+    ) -> Result<&FileMesh, String> {
+        let full = match base_dir {
+            Some(dir) => dir.join(path),
+            None => PathBuf::from(path),
+        };
+        self.meshes
+            .entry((full.clone(), mesh))
+            .or_insert_with(|| load_file_mesh(&full, mesh))
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+}
+
+fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> {
+    if !matches!(extension(path).as_deref(), Some("glb" | "gltf")) {
+        return Err(format!("{}: the editor shows meshes of glTF files only", path.display()));
+    }
+    let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
+    let index = mesh.unwrap_or(0);
+    let Some(node) = model.nodes.iter().position(|n| n.mesh == Some(index)) else {
+        return Err(format!("{}: no node shows mesh {index}", path.display()));
+    };
+    if model.nodes[node].skin.is_some() {
+        return model
+            .skinned_mesh(node)
+            .map(|m| FileMesh::Skinned(Box::new(m)))
+            .map_err(|e| format!("{}: {e}", path.display()));
+    }
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for prim in model.meshes.get(index).map(|m| m.primitives.as_slice()).unwrap_or_default() {
+        if prim.mode != keyrig_io::model::PrimitiveMode::Triangles {
+            continue;
+        }
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&prim.positions);
+        indices.extend(prim.indices.iter().map(|i| i + base));
+    }
+    Ok(FileMesh::Static { positions, indices })
 }
 
 /// The autosave recovery file: `recovery.ron` (a scene file) and `recovery.origin` (the path

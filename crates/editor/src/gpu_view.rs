@@ -26,6 +26,9 @@ pub struct GpuFrame<'a> {
     pub lights: Vec<LightInput>,
     pub view: ViewOptions,
     pub time: f64,
+    /// Skinned meshes of objects whose mesh is a file, by object index; only read when the
+    /// rig is rebuilt (see [`GpuView::needs_rig`]).
+    pub file_meshes: std::collections::HashMap<usize, keyrig_skin::SkinnedMesh>,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -74,13 +77,19 @@ impl GpuView {
         Ok(id)
     }
 
+    /// Whether the next [`GpuView::render`] for `doc_key` rebuilds the scene rig (and so reads
+    /// [`GpuFrame::file_meshes`]).
+    #[must_use]
+    pub fn needs_rig(&self, doc_key: (u64, u64)) -> bool {
+        self.rig.as_ref().is_none_or(|(key, _)| *key != doc_key)
+    }
+
     /// Renders the frame into a texture of `size_px` pixels and returns its egui texture id.
     pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
-        let stale = self.rig.as_ref().is_none_or(|(key, _)| *key != frame.doc_key);
-        if stale {
+        if self.needs_rig(frame.doc_key) {
             self.rig = None;
-            let rig = SceneRig::new(frame.scene).map_err(|e| e.to_string())?;
+            let rig = SceneRig::with_meshes(frame.scene, &frame.file_meshes).map_err(|e| e.to_string())?;
             rig.upload(&mut self.renderer).map_err(|e| e.to_string())?;
             self.rig = Some((frame.doc_key, rig));
         }

@@ -11,7 +11,7 @@
 use std::collections::HashMap;
 
 use glam::{Affine3A, Vec3};
-use keyrig_core::{DeformerKind, DeformerSettings, MeshSource, ProceduralMesh, Skeleton};
+use keyrig_core::{DeformerKind, DeformerSettings, ProceduralMesh, Skeleton};
 use keyrig_skin::{
     deform_mesh_into, joint_cross_section, mesh_for, scene_skeleton_for, BlendZone, CrossSection, Deformed,
     Execution, JointPalette, MeshBindings, Pose, RestSkeleton, SkinnedMesh,
@@ -19,9 +19,23 @@ use keyrig_skin::{
 
 use crate::eval::ObjectPose;
 
+/// Where an object's mesh comes from, as the cache compares it.
+#[derive(Clone, Debug, PartialEq)]
+enum MeshKey {
+    Procedural(ProceduralMesh),
+    File(String, Option<usize>),
+}
+
+/// The mesh of an object, resolved by the caller (file meshes come from
+/// [`crate::files::MeshStore`]).
+pub enum MeshInput<'a> {
+    Procedural(ProceduralMesh),
+    File { path: &'a str, mesh: Option<usize>, data: &'a crate::files::FileMesh },
+}
+
 /// One object's skinned mesh, rebuilt only when its inputs change.
 struct Entry {
-    kind: ProceduralMesh,
+    kind: MeshKey,
     skeleton: Skeleton,
     settings: DeformerSettings,
     mesh: SkinnedMesh,
@@ -51,10 +65,33 @@ fn chain_length(skeleton: &Skeleton) -> f32 {
 }
 
 fn build_entry(
-    kind: ProceduralMesh,
+    input: &MeshInput<'_>,
     skeleton: &Skeleton,
     settings: DeformerSettings,
-) -> Result<Entry, String> {
+) -> Result<Option<Entry>, String> {
+    let (key, mesh) = match input {
+        MeshInput::Procedural(kind) => (MeshKey::Procedural(*kind), fit_procedural(*kind, skeleton)?),
+        MeshInput::File { path, mesh, data } => match data {
+            // A file's skinned mesh keeps the skeleton and inverse bind matrices of its skin.
+            crate::files::FileMesh::Skinned(m) => (MeshKey::File((*path).to_owned(), *mesh), (**m).clone()),
+            crate::files::FileMesh::Static { .. } => return Ok(None),
+        },
+    };
+    let zone = BlendZone::from_settings(&settings).map_err(|e| format!("blend zone: {e}"))?;
+    let bindings = mesh.bindings(zone).map_err(|e| format!("bindings: {e}"))?;
+    Ok(Some(Entry {
+        kind: key,
+        skeleton: skeleton.clone(),
+        settings,
+        mesh,
+        bindings,
+        palette: JointPalette::default(),
+        deformed: Deformed::default(),
+    }))
+}
+
+/// A procedural mesh scaled to the object's skeleton and bound to it.
+fn fit_procedural(kind: ProceduralMesh, skeleton: &Skeleton) -> Result<SkinnedMesh, String> {
     let mut mesh = mesh_for(kind);
     let scale = match scene_skeleton_for(kind) {
         Some(native) => {
@@ -71,43 +108,40 @@ fn build_entry(
         *p *= scale;
     }
     let rest = RestSkeleton::from_scene(skeleton).map_err(|e| format!("skeleton: {e}"))?;
-    let mesh = mesh.with_skeleton(rest).map_err(|e| format!("mesh does not fit the skeleton: {e}"))?;
-    let zone = BlendZone::from_settings(&settings).map_err(|e| format!("blend zone: {e}"))?;
-    let bindings = mesh.bindings(zone).map_err(|e| format!("bindings: {e}"))?;
-    Ok(Entry {
-        kind,
-        skeleton: skeleton.clone(),
-        settings,
-        mesh,
-        bindings,
-        palette: JointPalette::default(),
-        deformed: Deformed::default(),
-    })
+    mesh.with_skeleton(rest).map_err(|e| format!("mesh does not fit the skeleton: {e}"))
 }
 
 impl SkinCache {
-    /// Skins object `index` (a procedural mesh with a skeleton) in `pose` with `kind`.
-    /// `Ok(None)` for objects without a skinned procedural mesh.
+    /// Skins object `index` (a mesh with a skeleton) in `pose` with `kind`. `Ok(None)` for
+    /// objects without a skinned mesh.
     pub fn skin(
         &mut self,
         index: usize,
         object: &keyrig_core::Object,
+        input: Option<MeshInput<'_>>,
         pose: &ObjectPose,
         kind: DeformerKind,
     ) -> Result<Option<SkinnedView<'_>>, String> {
-        let (Some(MeshSource::Procedural(mesh_kind)), Some(skeleton)) = (&object.mesh, &object.skeleton)
-        else {
+        let (Some(input), Some(skeleton)) = (input, &object.skeleton) else {
             self.entries.remove(&index);
             return Ok(None);
         };
+        let key = match &input {
+            MeshInput::Procedural(k) => MeshKey::Procedural(*k),
+            MeshInput::File { path, mesh, .. } => MeshKey::File((*path).to_owned(), *mesh),
+        };
         let stale = match self.entries.get(&index) {
-            Some(e) => e.kind != *mesh_kind || &e.skeleton != skeleton || e.settings != object.deformer,
+            Some(e) => e.kind != key || &e.skeleton != skeleton || e.settings != object.deformer,
             None => true,
         };
         if stale {
             self.entries.remove(&index);
-            let entry = build_entry(*mesh_kind, skeleton, object.deformer)?;
-            self.entries.insert(index, entry);
+            match build_entry(&input, skeleton, object.deformer)? {
+                Some(entry) => {
+                    self.entries.insert(index, entry);
+                }
+                None => return Ok(None),
+            }
         }
         let Some(entry) = self.entries.get_mut(&index) else { return Ok(None) };
         let skin_pose =

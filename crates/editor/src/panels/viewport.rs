@@ -11,6 +11,7 @@ use crate::app::{EditorApp, RenderStyle};
 use crate::camera::Projection;
 use crate::channels::{ChannelId, ChannelValue};
 use crate::eval::ObjectPose;
+use crate::skinning::MeshInput;
 use crate::state::Selected;
 
 /// Pick radius around joints and lights, points.
@@ -34,25 +35,50 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         // CPU skinning runs every frame: it feeds the cross-section measure and, without a
         // GPU viewport, the painter.
         let mut cpu_meshes: Vec<(usize, Vec<Vec3>, Vec<u32>)> = Vec::new();
+        let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
         for (o, pose) in poses.iter().enumerate() {
             let Some(pose) = pose else { continue };
             let object = &app.doc.scene().objects[o];
-            match app.skin.skin(o, object, pose, object.deformer.kind) {
+            let file_mesh = match &object.mesh {
+                Some(keyrig_core::MeshSource::File { path, mesh }) => {
+                    match app.meshes.get(base_dir.as_deref(), path, *mesh) {
+                        Ok(data) => Some((path.as_str(), *mesh, data)),
+                        Err(e) => {
+                            errors.push(format!("{}: {e}", object.name));
+                            None
+                        }
+                    }
+                }
+                _ => None,
+            };
+            let input = match (&object.mesh, &file_mesh) {
+                (Some(keyrig_core::MeshSource::Procedural(kind)), _) => Some(MeshInput::Procedural(*kind)),
+                (_, Some((path, mesh, data))) => Some(MeshInput::File { path, mesh: *mesh, data }),
+                _ => None,
+            };
+            match app.skin.skin(o, object, input, pose, object.deformer.kind) {
                 Ok(Some(view)) => cpu_meshes.push((
                     o,
                     crate::skinning::to_world(pose.world_from_object, view.positions),
                     view.indices.to_vec(),
                 )),
-                Ok(None) => {
-                    if let Some(keyrig_core::MeshSource::Procedural(kind)) = object.mesh {
-                        let (positions, indices) = app.skin.static_mesh(kind);
+                Ok(None) => match (&object.mesh, file_mesh) {
+                    (Some(keyrig_core::MeshSource::Procedural(kind)), _) => {
+                        let (positions, indices) = app.skin.static_mesh(*kind);
                         cpu_meshes.push((
                             o,
                             crate::skinning::to_world(pose.world_from_object, positions),
                             indices.to_vec(),
                         ));
                     }
-                }
+                    (_, Some((_, _, crate::files::FileMesh::Static { positions, indices }))) => cpu_meshes
+                        .push((
+                            o,
+                            crate::skinning::to_world(pose.world_from_object, positions),
+                            indices.clone(),
+                        )),
+                    _ => {}
+                },
                 Err(e) => errors.push(format!("{}: {e}", object.name)),
             }
         }
@@ -238,7 +264,21 @@ fn gpu_ui(
     };
     let ppp = ui.ctx().pixels_per_point();
     let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
-    let frame = crate::gpu_view::GpuFrame { scene, doc_key: app.doc.cache_key(), states, lights, view, time };
+    let doc_key = app.doc.cache_key();
+    let mut file_meshes = std::collections::HashMap::new();
+    if gpu.needs_rig(doc_key) {
+        let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        for (o, object) in scene.objects.iter().enumerate() {
+            if let Some(keyrig_core::MeshSource::File { path, mesh }) = &object.mesh {
+                if let Ok(crate::files::FileMesh::Skinned(m)) =
+                    app.meshes.get(base_dir.as_deref(), path, *mesh)
+                {
+                    file_meshes.insert(o, (**m).clone());
+                }
+            }
+        }
+    }
+    let frame = crate::gpu_view::GpuFrame { scene, doc_key, states, lights, view, time, file_meshes };
     let drawn = match gpu.render(frame, size) {
         Ok(texture) => {
             let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));

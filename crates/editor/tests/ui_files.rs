@@ -1,0 +1,121 @@
+//! Documents: autosave and the recovery offer, importing a glTF model, exporting glTF,
+//! dropping a file on the window, the confirmation before losing changes.
+
+use egui::{Key, Modifiers};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+
+/// `../shared/corpus` beside the repository (CI always has it).
+fn corpus(relative: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(relative)
+}
+
+fn harness(
+    dir: &std::path::Path,
+    file: Option<std::path::PathBuf>,
+    autosave: f64,
+) -> Harness<'static, EditorApp> {
+    let app = editor_for(
+        file,
+        EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(autosave) },
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1280.0, 800.0))
+        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
+    harness.run();
+    harness
+}
+
+#[test]
+fn autosave_is_offered_for_recovery_after_a_crash() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let edited = {
+        let mut h = harness(dir.path(), None, 0.0);
+        // A change makes the document dirty; the next frame autosaves it.
+        h.key_press_modifiers(Modifiers::NONE, Key::Num1);
+        h.run();
+        assert!(h.state().doc.is_dirty());
+        assert!(dir.path().join("recovery.ron").exists(), "autosaved");
+        h.state().doc.scene().clone()
+        // Dropped without quitting: as if the editor had crashed.
+    };
+    let mut h = harness(dir.path(), None, 1e9);
+    assert!(h.state().recovery_offer.is_some());
+    h.get_by_label("Recover").click();
+    h.run();
+    assert_eq!(h.state().doc.scene(), &edited);
+    assert!(h.state().doc.is_dirty(), "a recovered scene still needs saving");
+
+    // Declining removes the autosave.
+    let mut again = harness(dir.path(), None, 1e9);
+    again.get_by_label("Discard autosave").click();
+    again.run();
+    assert!(again.state().recovery_offer.is_none());
+    assert!(!dir.path().join("recovery.ron").exists());
+}
+
+#[test]
+fn import_a_skinned_gltf_into_the_scene_and_undo_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None, 1e9);
+    let before = h.state().doc.scene().objects.len();
+    let model = corpus("gltf/RiggedSimple/RiggedSimple.glb");
+    h.state_mut().import_path(model);
+    h.run();
+    let status = h.state().status.clone().expect("a message");
+    assert!(!status.is_error, "{status:?}");
+    let scene = h.state().doc.scene();
+    assert!(scene.objects.len() > before);
+    let imported = &scene.objects[before];
+    assert!(imported.skeleton.is_some(), "the skinned cylinder comes with its skeleton");
+    // The viewport skinned it on the CPU (the painter draws it without a GPU).
+    assert!(h.state().skin.deformed_positions(before).is_some_and(|p| !p.is_empty()));
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert_eq!(h.state().doc.scene().objects.len(), before);
+}
+
+#[test]
+fn export_gltf_writes_a_file_and_a_bad_file_reports_an_error() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None, 1e9);
+    let out = dir.path().join("demo.glb");
+    h.state_mut().export_to(out.clone());
+    h.run();
+    assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
+    let bytes = std::fs::read(&out).expect("exported");
+    assert_eq!(&bytes[..4], b"glTF");
+
+    let junk = dir.path().join("junk.glb");
+    std::fs::write(&junk, b"not a glTF file").expect("write");
+    h.state_mut().import_path(junk);
+    h.run();
+    let status = h.state().status.clone().expect("an error");
+    assert!(status.is_error && status.text.contains("junk.glb"), "{status:?}");
+}
+
+#[test]
+fn dropping_a_scene_on_a_dirty_document_asks_first() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("other.ron");
+    let mut other = keyrig_io::demo::demo_scene();
+    other.fps = 24.0;
+    keyrig_io::scene_file::save(&path, &other).expect("write a scene");
+    let mut h = harness(dir.path(), None, 1e9);
+    h.key_press_modifiers(Modifiers::NONE, Key::Num4);
+    h.run();
+    assert!(h.state().doc.is_dirty());
+    h.input_mut().dropped_files.push(egui::DroppedFile { path: Some(path.clone()), ..Default::default() });
+    h.run();
+    assert!(h.state().pending.is_some(), "unsaved changes: the editor asks");
+    h.get_by_label("Cancel").click();
+    h.run();
+    assert_eq!(h.state().doc.scene().fps, 30.0, "cancel keeps the document");
+    h.input_mut().dropped_files.push(egui::DroppedFile { path: Some(path), ..Default::default() });
+    h.run();
+    h.get_by_label("Discard changes").click();
+    h.run();
+    assert_eq!(h.state().doc.scene(), &other);
+    assert_eq!(h.state().doc.title(), "keyrig — other.ron");
+}
