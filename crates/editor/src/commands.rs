@@ -224,16 +224,17 @@ impl Command {
             .join(", ")
     }
 
-    /// Whether the shortcut must not fire while a text field has the keyboard (plain keys).
+    /// Whether the shortcut must not fire while a text field has the keyboard: plain keys, and
+    /// the clipboard and undo keys, which the text field uses itself.
     #[must_use]
-    pub fn is_plain_key(shortcut: &KeyboardShortcut) -> bool {
-        shortcut.modifiers.is_none()
+    pub fn yields_to_text_fields(shortcut: &KeyboardShortcut) -> bool {
+        shortcut.modifiers.is_none() || matches!(shortcut.logical_key, Key::C | Key::V | Key::Z | Key::Y)
     }
 }
 
 /// Finds the commands whose shortcuts were pressed this frame and consumes those key presses.
-/// Plain-key shortcuts (R, Space, arrows, 1–4) are skipped while a text field has the
-/// keyboard, so typing a value does not toggle record mode.
+/// While a text field has the keyboard, plain-key shortcuts (R, Space, arrows, 1–4) and the
+/// clipboard and undo keys are left to it, so typing a value does not toggle record mode.
 #[must_use]
 pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
     let typing = ctx.text_edit_focused();
@@ -241,7 +242,7 @@ pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
     ctx.input_mut(|input| {
         for command in Command::ALL {
             for shortcut in &command.shortcuts() {
-                if typing && Command::is_plain_key(shortcut) {
+                if typing && Command::yields_to_text_fields(shortcut) {
                     continue;
                 }
                 if input.consume_shortcut(shortcut) {
