@@ -121,6 +121,8 @@ pub struct EditorApp {
     pub skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
     pub meshes: files::MeshStore,
+    /// What the viewport could not draw in the last frame (shown in red over it).
+    pub viewport_errors: Vec<String>,
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
     pub gpu: Option<crate::gpu_view::GpuView>,
     tracks: RefCell<Option<CachedTracks>>,
@@ -167,6 +169,7 @@ impl EditorApp {
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
+            viewport_errors: Vec::new(),
             gpu: None,
             tracks: RefCell::new(None),
             window_title: String::new(),

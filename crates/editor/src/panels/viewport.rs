@@ -199,6 +199,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             }
         }
         overlay_ui(&painter, rect, app, &errors);
+        app.viewport_errors = errors;
     });
 }
 
