@@ -67,7 +67,7 @@ fn an_imported_skinned_gltf_renders_on_the_gpu() {
     h.run();
     assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
     assert_eq!(h.state().viewport_errors, Vec::<String>::new());
-    let stats = h.state().gpu.as_ref().and_then(|g| g.last_stats.clone()).expect("a GPU frame");
+    let stats = h.state().gpu.as_ref().and_then(|g| g.last_stats).expect("a GPU frame");
     // The demo arm has 1250 vertices; the imported cylinder is skinned on the GPU as well.
     assert!(stats.deformed_vertices > 1250, "{stats:?}");
 }
