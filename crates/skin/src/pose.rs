@@ -95,6 +95,12 @@ pub struct BonesBlendJoint {
     pub axis: Vec3A,
     /// Half the rotation angle of T(k), in [0, π/2].
     pub half_angle: f32,
+    /// The run-time form of the formula. With φ = t·θ and K the cross-product matrix of the
+    /// axis, Rodrigues' formula slerp(I, T(k), t) = I + sin φ·K + (1 − cos φ)·K² gives
+    /// v' = (B₀ + sin φ·B₁ + (1 − cos φ)·B₂)·v with B₀ = P(k)·A(k)⁻¹ (= M(p(k)) below a
+    /// parent), B₁ = P(k)₃ₓ₃·K·A(k)⁻¹ and B₂ = P(k)₃ₓ₃·K²·A(k)⁻¹: a three-term blend of
+    /// per-joint matrices, like a linear blend with weights (1, sin φ, 1 − cos φ).
+    pub blend_terms: [Affine3A; 3],
 }
 
 /// Everything the deformers need for one pose.
@@ -168,7 +174,19 @@ impl JointPalette {
             } else {
                 (Vec3A::X, 0.0)
             };
+            let k = Mat3A::from_cols(
+                Vec3A::new(0.0, axis.z, -axis.y),
+                Vec3A::new(-axis.z, 0.0, axis.x),
+                Vec3A::new(axis.y, -axis.x, 0.0),
+            );
+            let p_lin = posed_from_joint_rest.matrix3;
+            let term = |l: Mat3A| Affine3A {
+                matrix3: p_lin * l * a_inv.matrix3,
+                translation: p_lin * l * a_inv.translation,
+            };
+            let blend_terms = [posed_from_joint_rest * a_inv, term(k), term(k * k)];
             self.bones_blending.push(BonesBlendJoint {
+                blend_terms,
                 posed_from_joint_rest,
                 joint_from_bind_model: a_inv,
                 rotation: t,

@@ -12,7 +12,7 @@
 //! formula instead.) Normals go through the same rotations.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Quat, Vec3, Vec3A};
+use glam::{Mat4, Quat, Vec3};
 
 use super::{check_buffers, check_len, for_each_chunk, Execution, CHUNK};
 use crate::error::SkinError;
@@ -117,37 +117,53 @@ impl BonesBlendJob<'_> {
         let parallel = execution.parallel();
         let joints = &self.palette.bones_blending;
         let (bindings, positions, normals) = (self.bindings, self.positions, self.normals);
+        #[cfg(target_arch = "x86_64")]
+        if execution.simd() {
+            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
+            // index against the palette.
+            let packed = unsafe { super::simd::pack_bones_blending(joints) };
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                // SAFETY: as above.
+                unsafe {
+                    super::simd::bones_blending_chunk(
+                        &packed,
+                        &bindings[start..end],
+                        &positions[start..end],
+                        &normals[start..end],
+                        out_p,
+                        out_n,
+                    )
+                }
+            });
+            return;
+        }
         for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs =
                 bindings[start..end].iter().zip(positions[start..end].iter().zip(&normals[start..end]));
             for ((b, (&p, &n)), (op, on)) in inputs.zip(out_p.iter_mut().zip(out_n.iter_mut())) {
                 let k = &joints[b.joint as usize];
-                // slerp(I, T, t) = (sin(t·θ/2)·axis, cos(t·θ/2)) for T = (sin(θ/2)·axis, cos(θ/2)).
+                // sin φ = 2·sin(φ/2)·cos(φ/2), 1 − cos φ = 2·sin²(φ/2), φ/2 = t·θ/2 ∈ [0, π/2].
                 let (s, c) = sin_cos_quarter_turn(b.t * k.half_angle);
-                let u = k.axis * s;
-                let local = k.joint_from_bind_model.transform_point3a(Vec3A::from(p));
-                let local_n = k.joint_from_bind_model.matrix3 * Vec3A::from(n);
-                let rotated = rotate(u, c, local);
-                let rotated_n = rotate(u, c, local_n);
-                *op = k.posed_from_joint_rest.transform_point3a(rotated).into();
-                *on = (k.posed_from_joint_rest.matrix3 * rotated_n).into();
+                let (sin, versin) = (2.0 * s * c, 2.0 * s * s);
+                let [b0, b1, b2] = &k.blend_terms;
+                let x = b0.matrix3.x_axis + b1.matrix3.x_axis * sin + b2.matrix3.x_axis * versin;
+                let y = b0.matrix3.y_axis + b1.matrix3.y_axis * sin + b2.matrix3.y_axis * versin;
+                let z = b0.matrix3.z_axis + b1.matrix3.z_axis * sin + b2.matrix3.z_axis * versin;
+                let t = b0.translation + b1.translation * sin + b2.translation * versin;
+                *op = (x * p.x + y * p.y + z * p.z + t).into();
+                *on = (x * n.x + y * n.y + z * n.z).into();
             }
         });
     }
-}
-
-/// Rotates v by the unit quaternion (u, w): v + 2u × (u × v + w·v).
-#[inline(always)]
-fn rotate(u: Vec3A, w: f32, v: Vec3A) -> Vec3A {
-    v + 2.0 * u.cross(u.cross(v) + w * v)
 }
 
 /// sin and cos of x ∈ [0, π/2] by their Taylor polynomials to x¹³ and x¹⁴; the truncation
 /// error at π/2 is below 6e-8 (the next terms, (π/2)¹⁵/15! and (π/2)¹⁶/16!), i.e. below
 /// f32 rounding. Cheaper than libm's range reduction and inlined into the vertex loop.
 #[inline(always)]
-fn sin_cos_quarter_turn(x: f32) -> (f32, f32) {
+pub(crate) fn sin_cos_quarter_turn(x: f32) -> (f32, f32) {
     let x2 = x * x;
     let s = x
         * (1.0

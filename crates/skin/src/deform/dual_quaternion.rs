@@ -90,7 +90,7 @@ impl<const N: usize> DualQuatJob<'_, N> {
                 let end = start + out_p.len();
                 // SAFETY: as above.
                 unsafe {
-                    super::simd::dual_quaternion_chunk(
+                    super::simd::dual_quaternion_chunk_soa(
                         &packed,
                         &joints[start..end],
                         &weights[start..end],
