@@ -29,6 +29,8 @@ enum Command {
     Info(cli::info::InfoArgs),
     /// Print one channel's values over a frame or time range as CSV or JSON.
     Sample(cli::sample::SampleArgs),
+    /// Deformed vertex positions and normals of an object at a frame or time (OBJ or JSON).
+    Deform(cli::deform::DeformArgs),
 }
 
 fn main() -> ExitCode {
@@ -41,6 +43,7 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Info(args)) => cli::info::run(args),
         Some(Command::Sample(args)) => cli::sample::run(args),
+        Some(Command::Deform(args)) => cli::deform::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,6 +2,7 @@
 //! `run(args) -> anyhow::Result<()>`.
 
 pub mod convert;
+pub mod deform;
 pub mod edit;
 pub mod export;
 pub mod info;

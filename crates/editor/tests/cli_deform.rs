@@ -1,0 +1,257 @@
+//! `keyrig deform` end to end: the real binary on a scene written here, the demo scene, a glTF
+//! model of the shared corpus, and bad arguments and weights.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use glam::{Quat, Vec3};
+use keyrig_core::{
+    Animated, DeformerKind, Interpolation, Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene,
+};
+
+const KEYRIG: &str = env!("CARGO_BIN_EXE_keyrig");
+
+fn keyrig(args: &[&str]) -> Output {
+    Command::new(KEYRIG).args(args).output().expect("run keyrig")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_fails_with(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "expected failure, got success");
+    assert!(!err.contains("panicked"), "panic:\n{err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks {n:?}:\n{err}");
+    }
+}
+
+/// The low-poly arm (centimetres) whose middle joint twists from 0° at t = 0 s through 90° at
+/// t = 1 s to 180° at t = 2 s, linear keys.
+fn twist_scene(dir: &Path) -> PathBuf {
+    let mut scene = Scene::default();
+    let mut object = Object::new("Arm");
+    object.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmLowPoly));
+    let mut skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly).unwrap();
+    let half = std::f32::consts::FRAC_PI_2;
+    skeleton.joints[2].rotation = Animated {
+        value: Quat::IDENTITY,
+        track: RawTrack::new(vec![
+            Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
+            Key::new(1.0, Quat::from_rotation_x(half)).with_interpolation(Interpolation::Linear),
+            Key::new(2.0, Quat::from_rotation_x(2.0 * half)).with_interpolation(Interpolation::Linear),
+        ]),
+    };
+    object.skeleton = Some(skeleton);
+    scene.objects.push(object);
+    let path = dir.join("twist.ron");
+    keyrig_io::scene_file::save(&path, &scene).unwrap();
+    path
+}
+
+fn deform_json(file: &Path, when: &[&str], deformer: &str, dir: &Path) -> serde_json::Value {
+    let out = dir.join(format!("{deformer}.json"));
+    let mut args = vec!["deform", file.to_str().unwrap()];
+    args.extend_from_slice(when);
+    args.extend_from_slice(&["--deformer", deformer, "-o", out.to_str().unwrap()]);
+    let o = keyrig(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap()
+}
+
+fn positions(json: &serde_json::Value, key: &str) -> Vec<Vec3> {
+    json[key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let c: Vec<f32> = p.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect();
+            Vec3::new(c[0], c[1], c[2])
+        })
+        .collect()
+}
+
+/// Mean distance of ring 6 (vertices 36..42, at the middle joint x = 80.079 cm) from the joint.
+fn joint_ring_radius(p: &[Vec3]) -> f32 {
+    let joint = Vec3::new(80.079, 0.0, 0.0);
+    p[36..42].iter().map(|v| v.distance(joint)).sum::<f32>() / 6.0
+}
+
+#[test]
+fn rest_pose_is_the_mesh_for_every_deformer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = twist_scene(dir.path());
+    let mesh = keyrig_skin::mesh_for(ProceduralMesh::ArmLowPoly);
+    for kind in DeformerKind::ALL {
+        let json = deform_json(&scene, &["--frame", "0"], kind.cli_name(), dir.path());
+        assert_eq!(json["vertex_count"], 78);
+        assert_eq!(json["deformer"], kind.cli_name());
+        let p = positions(&json, "positions");
+        let n = positions(&json, "normals");
+        for (v, (a, b)) in p.iter().zip(&mesh.positions).enumerate() {
+            assert!(a.abs_diff_eq(*b, 1e-3), "{kind:?}: vertex {v} {a} vs {b}");
+        }
+        for (v, (a, b)) in n.iter().zip(&mesh.normals).enumerate() {
+            assert!(a.abs_diff_eq(*b, 1e-4), "{kind:?}: normal {v} {a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn twist_collapses_linear_blend_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = twist_scene(dir.path());
+    let rest = joint_ring_radius(&keyrig_skin::mesh_for(ProceduralMesh::ArmLowPoly).positions);
+    // t = 2 s: the 180° twist.
+    let linear = joint_ring_radius(&positions(
+        &deform_json(&scene, &["--time", "2"], "linear", dir.path()),
+        "positions",
+    ));
+    assert!(linear < 0.05 * rest, "linear blend ring radius {linear} (rest {rest})");
+    for deformer in ["bones-blending", "dual-quaternion", "rigid"] {
+        let r = joint_ring_radius(&positions(
+            &deform_json(&scene, &["--time", "2"], deformer, dir.path()),
+            "positions",
+        ));
+        assert!((r / rest - 1.0).abs() < 1e-3, "{deformer}: ring radius {r} (rest {rest})");
+    }
+    // --frame uses the scene's 30 fps: frame 30 is t = 1 s, the 90° twist.
+    let a = deform_json(&scene, &["--frame", "30"], "linear", dir.path());
+    let b = deform_json(&scene, &["--time", "1"], "linear", dir.path());
+    assert_eq!(a["positions"], b["positions"]);
+    assert_eq!(a["time"], 1.0);
+}
+
+#[test]
+fn obj_output_has_vertices_normals_and_faces_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = twist_scene(dir.path());
+    let out = dir.path().join("arm.obj");
+    let o = keyrig(&[
+        "deform",
+        scene.to_str().unwrap(),
+        "--time",
+        "1.5",
+        "--deformer",
+        "dual-quaternion",
+        "--object",
+        "Arm",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let count = |prefix: &str| text.lines().filter(|l| l.starts_with(prefix)).count();
+    assert_eq!((count("v "), count("vn "), count("f ")), (78, 78, 152));
+    assert!(text.lines().any(|l| l == "f 1//1 2//2 8//8"), "first side triangle");
+    let json = deform_json(&scene, &["--time", "1.5"], "dual-quaternion", dir.path());
+    let first: Vec<f32> = text.lines().find(|l| l.starts_with("v ")).unwrap()[2..]
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert!(Vec3::from_slice(&first).abs_diff_eq(positions(&json, "positions")[0], 1e-5));
+}
+
+#[test]
+fn demo_scene_and_gltf_model_deform() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron");
+    let json = deform_json(&demo, &["--frame", "45"], "bones-blending", dir.path());
+    assert_eq!(json["object"], "Arm");
+    assert_eq!(json["vertex_count"], 1250);
+    let model = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+    for kind in DeformerKind::ALL {
+        let json = deform_json(&model, &["--time", "0.5"], kind.cli_name(), dir.path());
+        let p = positions(&json, "positions");
+        assert!(!p.is_empty());
+        assert!(p.iter().all(|v| v.is_finite() && v.length() < 1e4), "{kind:?}");
+    }
+}
+
+#[test]
+fn bad_arguments_and_files_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = twist_scene(dir.path());
+    let s = scene.to_str().unwrap();
+    let out = dir.path().join("out.json");
+    let o = out.to_str().unwrap();
+    assert_fails_with(
+        &keyrig(&["deform", s, "--time", "1", "--deformer", "squash", "-o", o]),
+        &["unknown deformer `squash`"],
+    );
+    assert_fails_with(&keyrig(&["deform", s, "--deformer", "linear", "-o", o]), &["--frame", "--time"]);
+    assert_fails_with(
+        &keyrig(&["deform", s, "--time", "1", "--deformer", "linear", "-o", "out.txt"]),
+        &["out.txt", ".obj or .json"],
+    );
+    assert_fails_with(
+        &keyrig(&["deform", s, "--time", "1", "--deformer", "linear", "--object", "Leg", "-o", o]),
+        &["no object named `Leg`", "Arm"],
+    );
+    assert_fails_with(
+        &keyrig(&["deform", "missing.ron", "--time", "1", "--deformer", "linear", "-o", o]),
+        &["missing.ron"],
+    );
+    assert_fails_with(
+        &keyrig(&["deform", s, "--time", "NaN", "--deformer", "linear", "-o", o]),
+        &["not a finite number"],
+    );
+    assert!(!out.exists());
+}
+
+/// RiggedSimple.glb with the first vertex's four weights replaced by `weights`.
+fn glb_with_weights(dir: &Path, name: &str, weights: [f32; 4]) -> PathBuf {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+    let mut data = std::fs::read(source).unwrap();
+    let u32_at = |d: &[u8], at: usize| u32::from_le_bytes(d[at..at + 4].try_into().unwrap()) as usize;
+    let json_len = u32_at(&data, 12);
+    let json: serde_json::Value = serde_json::from_slice(&data[20..20 + json_len]).unwrap();
+    let bin_start = 20 + json_len + 8;
+    let accessor = &json["accessors"]
+        [json["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"].as_u64().unwrap() as usize];
+    assert_eq!(accessor["componentType"], 5126, "float weights");
+    let view = &json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+    let offset = bin_start
+        + view["byteOffset"].as_u64().unwrap_or(0) as usize
+        + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+    for (i, w) in weights.iter().enumerate() {
+        data[offset + 4 * i..offset + 4 * i + 4].copy_from_slice(&w.to_le_bytes());
+    }
+    let path = dir.join(format!("bad_weight_{name}.glb"));
+    std::fs::write(&path, data).unwrap();
+    path
+}
+
+#[test]
+fn bad_weights_in_a_model_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.json");
+    let cases: [(&str, [f32; 4], &[&str]); 3] = [
+        ("nan", [f32::NAN, 0.5, 0.0, 0.0], &["bad_weight_nan.glb", "WEIGHTS_0", "not finite"]),
+        (
+            "negative",
+            [-5.0, 6.0, 0.0, 0.0],
+            &["bad_weight_negative.glb", "vertex 0: weight WEIGHTS_0[0] = -5 is negative"],
+        ),
+        ("zero", [0.0; 4], &["bad_weight_zero.glb", "vertex 0: all weights are zero"]),
+    ];
+    for (name, weights, needles) in cases {
+        let model = glb_with_weights(dir.path(), name, weights);
+        let o = keyrig(&[
+            "deform",
+            model.to_str().unwrap(),
+            "--time",
+            "0",
+            "--deformer",
+            "linear",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_fails_with(&o, needles);
+        assert!(!out.exists());
+    }
+}
