@@ -326,13 +326,10 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
 ) {
     let full = out_positions.len() / 8 * 8;
     let sign_bit = _mm256_set1_ps(-0.0);
-    // One float from each of 8 consecutive vertices.
-    macro_rules! lanes {
-        (|$l:ident| $e:expr) => {{
-            let f = |$l: usize| $e;
-            _mm256_setr_ps(f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7))
-        }};
-    }
+    // Gather offsets (in floats) of one component of 8 consecutive Vec3s / [f32; N]s.
+    let stride3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    let n = N as i32;
+    let stride_n = _mm256_setr_epi32(0, n, 2 * n, 3 * n, 4 * n, 5 * n, 6 * n, 7 * n);
     for base in (0..full).step_by(8) {
         let js = &joints[base..base + 8];
         let ws = &weights[base..base + 8];
@@ -341,7 +338,8 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
         let mut wv = [_mm256_setzero_ps(); N];
         for i in 0..N {
             comps[i] = transpose8(std::array::from_fn(|l| dqs[js[l][i] as usize]));
-            wv[i] = lanes!(|l| ws[l][i]);
+            // SAFETY: lane l reads ws[l][i], inside the 8·N floats of `ws`.
+            wv[i] = unsafe { _mm256_i32gather_ps::<4>(ws.as_ptr().cast::<f32>().add(i), stride_n) };
         }
         // Pivot: the real part of each lane's largest-weight influence (first on ties).
         let mut best = wv[0];
@@ -408,10 +406,12 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
             two,
             _mm256_fmadd_ps(rw, dz, _mm256_fnmadd_ps(dw, rz, _mm256_fmsub_ps(rx, dy, _mm256_mul_ps(ry, dx)))),
         );
-        let ps = &positions[base..base + 8];
-        let (px, py, pz) = rotate(lanes!(|l| ps[l].x), lanes!(|l| ps[l].y), lanes!(|l| ps[l].z));
-        let ns = &normals[base..base + 8];
-        let (nx, ny, nz) = rotate(lanes!(|l| ns[l].x), lanes!(|l| ns[l].y), lanes!(|l| ns[l].z));
+        // SAFETY (both): lane l reads component c of vertex l, inside the 8 Vec3s (24 floats).
+        let ps = positions[base..base + 8].as_ptr().cast::<f32>();
+        let comp = |at: *const f32, c: usize| unsafe { _mm256_i32gather_ps::<4>(at.add(c), stride3) };
+        let (px, py, pz) = rotate(comp(ps, 0), comp(ps, 1), comp(ps, 2));
+        let ns = normals[base..base + 8].as_ptr().cast::<f32>();
+        let (nx, ny, nz) = rotate(comp(ns, 0), comp(ns, 1), comp(ns, 2));
         let store = |v: __m256| {
             let mut out = [0.0f32; 8];
             // SAFETY: `out` has room for 8 floats; storeu needs no alignment.
