@@ -143,7 +143,7 @@ impl FrameInput {
 /// What a frame cost: bytes written to the GPU and work done.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameStats {
-    /// Joint data of skinned meshes (176 bytes per joint per skinned mesh).
+    /// Joint data of skinned meshes (240 bytes per joint per skinned mesh).
     pub joint_bytes: u64,
     /// Morph parameters (16 bytes per morphing mesh).
     pub morph_bytes: u64,

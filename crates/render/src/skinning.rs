@@ -6,7 +6,7 @@
 //! WGSL is `shaders/skin.wgsl` (one entry point per deformer) and `shaders/morph.wgsl`.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat3, Mat4, Quat, Vec3};
 use keyrig_core::DeformerKind;
 use keyrig_skin::{JointPalette, MeshBindings, SkinnedMesh};
 
@@ -41,7 +41,7 @@ pub struct GpuSkinVertex {
     pub _pad: u32,
 }
 
-/// One joint's data for one frame (`JointFrame` in skin.wgsl, 176 bytes). Column-major
+/// One joint's data for one frame (`JointFrame` in skin.wgsl, 240 bytes). Column-major
 /// matrices, quaternions as (x, y, z, w).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -56,6 +56,9 @@ pub struct GpuJointFrame {
     pub blend_base: [[f32; 4]; 4],
     /// T(k), the joint's animated local rotation.
     pub blend_rotation: [f32; 4],
+    /// Normal matrix of M(j): the inverse-transpose of its 3×3 part (M's own 3×3 when M is a
+    /// rotation times a uniform scale), in the upper 3×3 of a 4×4.
+    pub normal_from_bind: [[f32; 4]; 4],
 }
 
 /// One skinned (or morphed) vertex, what the draw pass reads (32 bytes).
@@ -227,6 +230,9 @@ pub struct JointPose {
     pub blend_base: Mat4,
     /// T(j), the animated local rotation.
     pub local_rotation: Quat,
+    /// Maps bind-space normals for the rigid and linear-blend deformers (inverse-transpose of
+    /// M(j)'s 3×3; normals are renormalized after blending).
+    pub normal_from_bind: Mat3,
 }
 
 impl JointPose {
@@ -235,7 +241,14 @@ impl JointPose {
     #[must_use]
     pub fn from_rigid(model_from_bind: Mat4, blend_base: Mat4, local_rotation: Quat) -> Self {
         let (dq_real, dual) = dual_quaternion_from_rigid(&model_from_bind);
-        JointPose { model_from_bind, dq_real, dq_dual: Quat::from_array(dual), blend_base, local_rotation }
+        JointPose {
+            model_from_bind,
+            dq_real,
+            dq_dual: Quat::from_array(dual),
+            blend_base,
+            local_rotation,
+            normal_from_bind: Mat3::from_mat4(model_from_bind),
+        }
     }
 
     /// The GPU layout.
@@ -247,6 +260,7 @@ impl JointPose {
             dq_dual: self.dq_dual.to_array(),
             blend_base: self.blend_base.to_cols_array_2d(),
             blend_rotation: self.local_rotation.to_array(),
+            normal_from_bind: Mat4::from_mat3(self.normal_from_bind).to_cols_array_2d(),
         }
     }
 }
@@ -264,16 +278,21 @@ pub fn joint_poses(palette: &JointPalette) -> Vec<JointPose> {
         .map(|(j, (m, bb))| {
             let model_from_bind = Mat4::from(*m);
             let blend_base = Mat4::from(bb.posed_from_joint_rest);
-            match &dqs {
+            let mut pose = match &dqs {
                 Some(dqs) => JointPose {
                     model_from_bind,
                     dq_real: dqs[j].real,
                     dq_dual: dqs[j].dual,
                     blend_base,
                     local_rotation: bb.rotation,
+                    normal_from_bind: Mat3::from_mat4(model_from_bind),
                 },
                 None => JointPose::from_rigid(model_from_bind, blend_base, bb.rotation),
+            };
+            if let Some(normals) = &palette.normal_skinning {
+                pose.normal_from_bind = Mat3::from(normals[j]);
             }
+            pose
         })
         .collect()
 }
@@ -555,6 +574,7 @@ impl GpuSkinner {
             if !pose.model_from_bind.is_finite()
                 || !pose.blend_base.is_finite()
                 || !pose.local_rotation.is_finite()
+                || !pose.normal_from_bind.is_finite()
             {
                 return Err(RenderError::NonFinite { what: "joint pose", index });
             }
@@ -714,7 +734,7 @@ mod tests {
     #[test]
     fn gpu_struct_sizes_match_wgsl() {
         assert_eq!(SKIN_VERTEX_BYTES, 80);
-        assert_eq!(JOINT_FRAME_BYTES, 176);
+        assert_eq!(JOINT_FRAME_BYTES, 240);
         assert_eq!(SKINNED_VERTEX_BYTES, 32);
     }
 

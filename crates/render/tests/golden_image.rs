@@ -131,8 +131,8 @@ fn golden_images_of_each_render_style() {
         };
         let frame = rig.frame(1.0, &view).expect("frame");
         let (image, stats) = headless.render_image(&frame, WIDTH, HEIGHT).expect("render");
-        // Two skinned meshes: the arm (4 joints) and the cube (1 joint), 176 bytes per joint.
-        assert_eq!(stats.joint_bytes, 5 * 176);
+        // Two skinned meshes: the arm (4 joints) and the cube (1 joint), 240 bytes per joint.
+        assert_eq!(stats.joint_bytes, 5 * 240);
         assert_eq!(stats.deformed_vertices, 78 + 24);
         compare(&format!("scene_{}", style.cli_name()), &image);
     }

@@ -54,7 +54,7 @@ fn check_mesh(gpu: &GpuContext, skinner: &GpuSkinner, kind: ProceduralMesh) {
     for (pose_name, pose) in poses(mesh.skeleton.len()) {
         let palette = JointPalette::new(&mesh.skeleton, &pose).expect("palette");
         let uploaded = skinner.write_joints(&gpu.queue, &skin, 0, &joint_poses(&palette)).expect("joints");
-        assert_eq!(uploaded, mesh.skeleton.len() as u64 * 176);
+        assert_eq!(uploaded, mesh.skeleton.len() as u64 * 240);
         for deformer in DeformerKind::ALL {
             let mut cpu = Deformed::default();
             deform_mesh_into(&mesh, &bindings, &palette, deformer, Execution::Reference, &mut cpu)
@@ -146,4 +146,55 @@ fn morphing_interpolates_two_frames() {
     }
     let err = skinner.write_morph(&gpu.queue, &morph, 7, 0, 2, 0.5).unwrap_err();
     assert!(err.to_string().contains("morph frame 2 out of range"), "{err}");
+}
+
+/// glTF-style inverse bind matrices with non-uniform scale: the palette is not rigid, normals
+/// need the inverse-transpose (keyrig-skin's `normal_skinning`), and GPU rigid / linear blend
+/// must still agree with the CPU.
+#[test]
+fn gpu_matches_cpu_with_non_uniform_inverse_bind_matrices() {
+    let gpu = gpu();
+    let skinner = GpuSkinner::new(&gpu.device);
+    let arm = mesh_for(ProceduralMesh::ArmLowPoly);
+    let joints: Vec<keyrig_skin::RestJoint> = (0..arm.skeleton.len())
+        .map(|j| {
+            let rest = arm.skeleton.parent_from_joint()[j];
+            keyrig_skin::RestJoint::new(
+                arm.skeleton.names()[j].clone(),
+                arm.skeleton.parents()[j],
+                rest.translation.into(),
+                Quat::IDENTITY,
+            )
+        })
+        .collect();
+    let ibms: Vec<glam::Mat4> = arm
+        .skeleton
+        .joint_from_bind_model()
+        .iter()
+        .map(|a| glam::Mat4::from_scale(Vec3::new(1.0, 1.6, 0.7)) * glam::Mat4::from(*a))
+        .collect();
+    let skeleton = keyrig_skin::RestSkeleton::with_inverse_bind_matrices(&joints, &ibms).expect("skeleton");
+    let mesh = arm.with_skeleton(skeleton).expect("rebind");
+    let bindings = mesh.bindings(BlendZone::default()).expect("bindings");
+    let input = OwnedSkinInput::from_skinned_mesh(&mesh, &bindings);
+    let skin = skinner.create_skin(&gpu.device, &input.as_input()).expect("upload");
+    let pose = Pose::rest(mesh.skeleton.len()).with_rotation(2, Quat::from_rotation_x(1.0));
+    let palette = JointPalette::new(&mesh.skeleton, &pose).expect("palette");
+    assert!(palette.normal_skinning.is_some(), "the test needs a non-uniform palette");
+    skinner.write_joints(&gpu.queue, &skin, 0, &joint_poses(&palette)).expect("joints");
+    let tolerance = 1e-4 * model_size(&mesh) * 1.6;
+    for deformer in [DeformerKind::Rigid, DeformerKind::LinearBlend] {
+        let mut cpu = Deformed::default();
+        deform_mesh_into(&mesh, &bindings, &palette, deformer, Execution::Reference, &mut cpu).expect("CPU");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        skinner.encode(&mut encoder, &skin, deformer);
+        gpu.queue.submit([encoder.finish()]);
+        let out = read_skinned(&gpu.device, &gpu.queue, &skin.output, skin.vertex_count).expect("readback");
+        for (i, v) in out.iter().enumerate() {
+            let d = (v.position() - cpu.positions[i]).length();
+            assert!(d <= tolerance, "{deformer:?} vertex {i}: position off by {d}");
+            let dn = (v.normal() - cpu.normals[i].normalize_or_zero()).length();
+            assert!(dn <= 1e-3, "{deformer:?} vertex {i}: normal {} vs {}", v.normal(), cpu.normals[i]);
+        }
+    }
 }

@@ -206,7 +206,7 @@ fn skinned_item_moves_with_its_joints() {
         );
         frame.items[0].deform = Deform::Skin { deformer, joints: vec![pose] };
         let (_, stats) = r.render_image(&frame, SIZE, SIZE).expect("render");
-        assert_eq!(stats.joint_bytes, 176);
+        assert_eq!(stats.joint_bytes, 240);
         let out = r.renderer().read_vertices(1).expect("readback");
         for (v, p) in out.iter().zip(&positions) {
             assert!(

@@ -8,8 +8,9 @@
 // Layouts (std430, must match `crate::skinning`):
 //   SkinVertex    80 bytes: position.xyz, normal.xyz, 4 joints, 4 weights,
 //                           rigid joint, bones-blending joint k, bones-blending t
-//   JointFrame   176 bytes: M(j), dual quaternion of M(j) (real, dual),
-//                           B(k) = F(p(k))·R(k), T(k) as a quaternion (x, y, z, w)
+//   JointFrame   240 bytes: M(j), dual quaternion of M(j) (real, dual),
+//                           B(k) = F(p(k))·R(k), T(k) as a quaternion (x, y, z, w),
+//                           normal matrix of M(j) (inverse-transpose of its 3×3)
 //   bind_from_model 64 bytes per joint: A(k)⁻¹ (static)
 //   SkinnedVertex 32 bytes: position.xyz 1, normal.xyz 0
 
@@ -30,6 +31,7 @@ struct JointFrame {
     dq_dual: vec4<f32>,
     blend_base: mat4x4<f32>,
     blend_rotation: vec4<f32>,
+    normal_from_bind: mat4x4<f32>,
 };
 
 struct SkinnedVertex {
@@ -97,13 +99,13 @@ fn skin_rigid(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let v = vertices[i];
-    let m = joints[joint_index(v.rigid_joint)].model_from_bind;
-    let p = (m * vec4<f32>(v.position.xyz, 1.0)).xyz;
-    let n = (m * vec4<f32>(v.normal.xyz, 0.0)).xyz;
+    let jf = joints[joint_index(v.rigid_joint)];
+    let p = (jf.model_from_bind * vec4<f32>(v.position.xyz, 1.0)).xyz;
+    let n = (jf.normal_from_bind * vec4<f32>(v.normal.xyz, 0.0)).xyz;
     write_out(i, p, n);
 }
 
-// 2. Linear blend: v' = Σ wᵢ·M(jᵢ)·v (normals by the blended upper 3×3, renormalized).
+// 2. Linear blend: v' = Σ wᵢ·M(jᵢ)·v (normals by the blended normal matrices, renormalized).
 @compute @workgroup_size(64)
 fn skin_linear(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
@@ -112,14 +114,17 @@ fn skin_linear(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let v = vertices[i];
     var m = mat4x4<f32>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var nm = m;
     for (var k = 0u; k < 4u; k = k + 1u) {
         let w = v.weights[k];
         if w != 0.0 {
-            m = m + joints[joint_index(v.joints[k])].model_from_bind * w;
+            let jf = joints[joint_index(v.joints[k])];
+            m = m + jf.model_from_bind * w;
+            nm = nm + jf.normal_from_bind * w;
         }
     }
     let p = (m * vec4<f32>(v.position.xyz, 1.0)).xyz;
-    let n = (m * vec4<f32>(v.normal.xyz, 0.0)).xyz;
+    let n = (nm * vec4<f32>(v.normal.xyz, 0.0)).xyz;
     write_out(i, p, n);
 }
 
