@@ -494,15 +494,28 @@ fn read_nodes(doc: &gltf::Document) -> Result<Vec<ModelNode>, GltfError> {
             nodes[c].parent = Some(p);
         }
     }
+    // Every node has at most one parent now, so a cycle is a walk up that comes back to a
+    // node of the same walk. Marking finished nodes keeps this linear in the node count.
+    const UNSEEN: u8 = 0;
+    const ON_WALK: u8 = 1;
+    const DONE: u8 = 2;
+    let mut state = vec![UNSEEN; nodes.len()];
+    let mut walk = Vec::new();
     for start in 0..nodes.len() {
-        let mut cur = nodes[start].parent;
-        let mut steps = 0;
+        let mut cur = Some(start);
         while let Some(c) = cur {
-            steps += 1;
-            if c == start || steps > nodes.len() {
-                return Err(ptr(format!("/nodes/{start}"), GltfErrorKind::Cycle { node: start }));
+            match state[c] {
+                DONE => break,
+                ON_WALK => return Err(ptr(format!("/nodes/{c}"), GltfErrorKind::Cycle { node: c })),
+                _ => {
+                    state[c] = ON_WALK;
+                    walk.push(c);
+                    cur = nodes[c].parent;
+                }
             }
-            cur = nodes[c].parent;
+        }
+        for c in walk.drain(..) {
+            state[c] = DONE;
         }
     }
     Ok(nodes)

@@ -548,29 +548,33 @@ impl ImportedModel {
     fn skeleton_map(&self, skin: usize) -> Option<SkeletonMap> {
         let s = self.skins.get(skin)?;
         let world = self.rest_world();
-        let is_joint = |n: usize| s.joints.contains(&n);
-        let joint_parent = |n: usize| {
-            let mut cur = self.nodes[n].parent;
-            while let Some(c) = cur {
-                if is_joint(c) {
-                    return Some(c);
-                }
-                cur = self.nodes[c].parent;
+        // Nearest joint ancestor and joint depth of every node, parents first (the importer
+        // guarantees a forest), in time linear in the node count.
+        let mut is_joint = vec![false; self.nodes.len()];
+        for &j in &s.joints {
+            if let Some(flag) = is_joint.get_mut(j) {
+                *flag = true;
             }
-            None
-        };
-        let depth = |n: usize| {
-            let mut d = 0;
-            let mut cur = joint_parent(n);
-            while let Some(c) = cur {
-                d += 1;
-                cur = joint_parent(c);
+        }
+        let mut nearest: Vec<Option<usize>> = vec![None; self.nodes.len()];
+        let mut depth_of = vec![0usize; self.nodes.len()];
+        let mut queue: std::collections::VecDeque<usize> =
+            (0..self.nodes.len()).filter(|&n| self.nodes[n].parent.is_none()).collect();
+        while let Some(n) = queue.pop_front() {
+            if let Some(p) = self.nodes[n].parent {
+                nearest[n] = if is_joint[p] { Some(p) } else { nearest[p] };
+                depth_of[n] = nearest[n].map_or(0, |a| depth_of[a] + 1);
             }
-            d
-        };
+            queue.extend(self.nodes[n].children.iter().copied().filter(|&c| c < self.nodes.len()));
+        }
+        let joint_parent = |n: usize| nearest[n];
         let mut order: Vec<usize> = (0..s.joints.len()).collect();
-        order.sort_by_key(|&slot| depth(s.joints[slot]));
+        order.sort_by_key(|&slot| depth_of[s.joints[slot]]);
         let nodes: Vec<usize> = order.iter().map(|&slot| s.joints[slot]).collect();
+        let mut keyrig_index = std::collections::HashMap::new();
+        for (k, &n) in nodes.iter().enumerate() {
+            keyrig_index.entry(n).or_insert(k);
+        }
         let roots: Vec<usize> = nodes.iter().copied().filter(|&n| joint_parent(n).is_none()).collect();
         let frame = match roots.as_slice() {
             [root] => self.nodes[*root].parent.map_or(Mat4::IDENTITY, |p| world[p]),
@@ -580,7 +584,7 @@ impl ImportedModel {
         let mut parents = Vec::with_capacity(nodes.len());
         let mut rest = Vec::with_capacity(nodes.len());
         for &n in &nodes {
-            let parent = joint_parent(n).and_then(|p| nodes.iter().position(|&x| x == p));
+            let parent = joint_parent(n).and_then(|p| keyrig_index.get(&p).copied());
             let parent_world = parent.map_or(frame, |p| world[nodes[p]]);
             let rel = if parent.is_none() { frame_inv * world[n] } else { parent_world.inverse() * world[n] };
             let (_, rotation, translation) = rel.to_scale_rotation_translation();

@@ -170,5 +170,9 @@ pub fn run_suite<E: std::fmt::Display, T>(
         mutants.len(),
         failures.join("\n")
     );
+    eprintln!(
+        "{name}: {} malformed files, {ok} imported, {rejected} rejected with a location, 0 panics",
+        mutants.len()
+    );
     (ok, rejected)
 }
