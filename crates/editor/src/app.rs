@@ -61,6 +61,9 @@ pub struct ViewSettings {
     pub bones: bool,
     /// Draw the selected object's or joint's motion path (GPU viewport).
     pub motion_path: bool,
+    /// Pixels of the GPU viewport per screen pixel: 1 (full) or 0.5 (half, four times fewer
+    /// pixels to rasterize; the default on a CPU rasterizer such as lavapipe).
+    pub resolution_scale: f32,
     pub style: RenderStyle,
 }
 
@@ -154,6 +157,7 @@ impl EditorApp {
                 grid: true,
                 bones: true,
                 motion_path: true,
+                resolution_scale: 1.0,
                 style: RenderStyle::Solid,
             },
             clipboard: Vec::new(),
@@ -205,6 +209,16 @@ impl EditorApp {
     #[must_use]
     pub fn object_pose_now(&self, o: usize) -> Option<ObjectPose> {
         self.tracks().object_pose(self.doc.scene(), o, self.time(), &self.overrides)
+    }
+
+    /// Gives the editor keyrig-render on eframe's wgpu device; on a CPU rasterizer the viewport
+    /// renders at half resolution.
+    pub fn attach_gpu(&mut self, render_state: &egui_wgpu::RenderState) {
+        let gpu = crate::gpu_view::GpuView::new(render_state);
+        if gpu.is_cpu_adapter() {
+            self.view.resolution_scale = 0.5;
+        }
+        self.gpu = Some(gpu);
     }
 
     /// Current time in seconds.

@@ -49,6 +49,19 @@ impl GpuView {
         GpuView { render_state: render_state.clone(), renderer, target: None, rig: None, last_stats: None }
     }
 
+    /// Whether wgpu runs on a CPU rasterizer (lavapipe, llvmpipe, WARP).
+    #[must_use]
+    pub fn is_cpu_adapter(&self) -> bool {
+        self.render_state.adapter.get_info().device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The adapter's name and backend, for the status bar and benchmarks.
+    #[must_use]
+    pub fn adapter_name(&self) -> String {
+        let info = self.render_state.adapter.get_info();
+        format!("{} ({:?})", info.name, info.backend)
+    }
+
     fn ensure_target(&mut self, width: u32, height: u32) -> Result<TextureId, String> {
         if let Some((viewport, id)) = &self.target {
             if viewport.size() == (width, height) {

@@ -70,7 +70,9 @@ pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
         options,
         Box::new(|cc| {
             // The GPU viewport needs eframe's wgpu device; without it the painter draws.
-            app.gpu = cc.wgpu_render_state.as_ref().map(gpu_view::GpuView::new);
+            if let Some(render_state) = &cc.wgpu_render_state {
+                app.attach_gpu(render_state);
+            }
             Ok(Box::new(app))
         }),
     )

@@ -9,7 +9,6 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use keyrig_core::DeformerKind;
 use keyrig_editor::channels::{self, ChannelId};
-use keyrig_editor::gpu_view::GpuView;
 use keyrig_editor::{editor_for, EditorApp, EditorOptions};
 
 const SIZE: [f32; 2] = [1280.0, 800.0];
@@ -21,7 +20,11 @@ fn gpu_harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
     let dir = dir.to_path_buf();
     let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(SIZE)).build_eframe(move |cc| {
         let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
-        app.gpu = cc.wgpu_render_state.as_ref().map(GpuView::new);
+        if let Some(rs) = &cc.wgpu_render_state {
+            app.attach_gpu(rs);
+        }
+        // Full resolution for images, whatever the adapter.
+        app.view.resolution_scale = 1.0;
         app
     });
     harness.run();

@@ -98,6 +98,15 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                         ui.close();
                     }
                 }
+                ui.separator();
+                for (scale, label) in [(1.0, "Full resolution"), (0.5, "Half resolution")] {
+                    let tip = "Pixels the GPU viewport renders per screen pixel; half is four times cheaper \
+                               on a CPU rasterizer";
+                    if ui.radio(app.view.resolution_scale == scale, label).on_hover_text(tip).clicked() {
+                        app.view.resolution_scale = scale;
+                        ui.close();
+                    }
+                }
             });
             ui.menu_button("Deformer", |ui| {
                 let current = app

@@ -263,7 +263,7 @@ fn gpu_ui(
         }),
         ..keyrig_render::ViewOptions::default()
     };
-    let ppp = ui.ctx().pixels_per_point();
+    let ppp = ui.ctx().pixels_per_point() * app.view.resolution_scale.clamp(0.25, 1.0);
     let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
     let doc_key = app.doc.cache_key();
     let mut file_meshes = std::collections::HashMap::new();
