@@ -39,6 +39,8 @@ fn renders_one_frame_of_the_demo_scene() {
         "320x180",
         "--deformer",
         "dual-quaternion",
+        "--select",
+        "joint:Arm/wrist",
         "-o",
         out.to_str().expect("utf-8 path"),
     ]);
@@ -153,7 +155,9 @@ fn bad_arguments_and_files_are_explained() {
     let demo = demo_scene();
     let demo = demo.to_str().expect("utf-8 path");
 
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 7] = [
+        (&["render", demo, "--select", "joint:Arm/knee", "-o", out], "has no joint `knee`"),
+        (&["render", demo, "--select", "camera", "-o", out], "expected object:NAME"),
         (&["render", demo, "--deformer", "wobbly", "-o", out], "--deformer `wobbly`"),
         (&["render", demo, "--size", "0x10", "-o", out], "between 1 and"),
         (&["render", demo, "--frames", "9..3", "-o", out], "after end"),

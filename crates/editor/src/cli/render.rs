@@ -10,7 +10,7 @@ use anyhow::{bail, Context};
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{Camera, DeformerKind};
 use keyrig_render::{
-    Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig,
+    Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selection,
     SkinnedVertex, ViewOptions,
 };
 use keyrig_skin::SkinnedMesh;
@@ -46,6 +46,10 @@ pub struct RenderArgs {
     /// Hide skeletons.
     #[arg(long)]
     pub no_skeleton: bool,
+    /// Highlight something and draw its motion path: `object:NAME`, `joint:OBJECT/JOINT` or
+    /// `light:NAME`.
+    #[arg(long, value_name = "WHAT")]
+    pub select: Option<String>,
     /// Output PNG. For a range: a pattern with `#`s replaced by the zero-padded frame number
     /// (`out/arm_####.png`), an existing folder (→ `frame_0000.png` …), or a file name that
     /// gets `_0000` before its extension.
@@ -168,6 +172,39 @@ impl FrameSource for Md2Source {
 
     fn default_frame(&self) -> f64 {
         0.0
+    }
+}
+
+/// Parses `--select` against the scene's names.
+fn parse_selection(scene: &keyrig_core::Scene, text: &str) -> anyhow::Result<Selection> {
+    let object_index = |name: &str| {
+        scene.objects.iter().position(|o| o.name == name).with_context(|| {
+            let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+            format!("--select `{text}`: no object named `{name}` (objects: {})", names.join(", "))
+        })
+    };
+    match text.split_once(':') {
+        Some(("object", name)) => Ok(Selection::Object(object_index(name)?)),
+        Some(("light", name)) => {
+            let index = scene.lights.iter().position(|l| l.name == name).with_context(|| {
+                let names: Vec<&str> = scene.lights.iter().map(|l| l.name.as_str()).collect();
+                format!("--select `{text}`: no light named `{name}` (lights: {})", names.join(", "))
+            })?;
+            Ok(Selection::Light(index))
+        }
+        Some(("joint", path)) => {
+            let (object, joint) = path
+                .split_once('/')
+                .with_context(|| format!("--select `{text}`: expected joint:OBJECT/JOINT"))?;
+            let o = object_index(object)?;
+            let joints = scene.objects[o].skeleton.as_ref().map(|s| s.joints.as_slice()).unwrap_or_default();
+            let j = joints.iter().position(|j| j.name == joint).with_context(|| {
+                let names: Vec<&str> = joints.iter().map(|j| j.name.as_str()).collect();
+                format!("--select `{text}`: `{object}` has no joint `{joint}` (joints: {})", names.join(", "))
+            })?;
+            Ok(Selection::Joint { object: o, joint: j })
+        }
+        _ => bail!("--select `{text}`: expected object:NAME, joint:OBJECT/JOINT or light:NAME"),
     }
 }
 
@@ -346,11 +383,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             .with_context(|| format!("{}: preparing the scene", args.file.display()))?;
         rig.upload(headless.renderer_mut())
             .with_context(|| format!("{}: uploading meshes", args.file.display()))?;
+        let selection = match &args.select {
+            Some(text) => parse_selection(&scene, text)?,
+            None => Selection::None,
+        };
         let view = ViewOptions {
             style,
             deformer,
             grid: !args.no_grid,
             skeletons: !args.no_skeleton,
+            selection,
             ..ViewOptions::default()
         };
         Box::new(SceneSource { rig, view })
