@@ -7,6 +7,23 @@
 //! - [`gpu`]: opening a device without a window, reading buffers back.
 //!
 //! See docs/rendering.md for the architecture, the data layouts and how the editor embeds it.
+//!
+//! Headless, from a scene to a PNG:
+//!
+//! ```no_run
+//! use keyrig_render::{HeadlessRenderer, SceneRig, ViewOptions};
+//!
+//! # fn demo(scene: &keyrig_core::Scene) -> Result<(), Box<dyn std::error::Error>> {
+//! let mut headless = HeadlessRenderer::new()?; // lavapipe when there is no GPU
+//! let rig = SceneRig::new(scene)?; // validates tracks, builds meshes and bindings once
+//! rig.upload(headless.renderer_mut())?; // vertex data goes to the GPU once
+//! let frame = rig.frame(rig.time_of_frame(30.0), &ViewOptions::default())?;
+//! let (image, stats) = headless.render_image(&frame, 1280, 720)?;
+//! image.save("frame30.png")?;
+//! println!("{} bytes uploaded this frame", stats.bytes_uploaded());
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod camera;
 mod error;
