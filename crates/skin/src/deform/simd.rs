@@ -274,6 +274,40 @@ fn sin_cos_quarter_turn_x8(x: __m256) -> (__m256, __m256) {
     (s, c)
 }
 
+/// Writes 8 vertices given as x, y and z registers to 24 floats x₀y₀z₀x₁… at `out`.
+///
+/// # Safety
+/// `out` must be valid for writing 24 floats; the CPU must support AVX2.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn store_interleaved(out: *mut f32, x: __m256, y: __m256, z: __m256) {
+    // Output register r holds floats 8r..8r+8; float f is component f % 3 of vertex f / 3.
+    let idx = |r: i32, c: i32| {
+        let lane = |i: i32| {
+            let f = 8 * r + i;
+            if f % 3 == c {
+                f / 3
+            } else {
+                0
+            }
+        };
+        _mm256_setr_epi32(lane(0), lane(1), lane(2), lane(3), lane(4), lane(5), lane(6), lane(7))
+    };
+    for r in 0..3 {
+        let xs = _mm256_permutevar8x32_ps(x, idx(r, 0));
+        let ys = _mm256_permutevar8x32_ps(y, idx(r, 1));
+        let zs = _mm256_permutevar8x32_ps(z, idx(r, 2));
+        // Lane i takes x, y or z by (8r + i) % 3.
+        let pick = |c: i32| {
+            let m = |i: i32| if (8 * r + i) % 3 == c { -1 } else { 0 };
+            _mm256_castsi256_ps(_mm256_setr_epi32(m(0), m(1), m(2), m(3), m(4), m(5), m(6), m(7)))
+        };
+        let v = _mm256_blendv_ps(_mm256_blendv_ps(zs, ys, pick(1)), xs, pick(0));
+        // SAFETY: floats 8r..8r+8 of the 24 the caller provides.
+        unsafe { _mm256_storeu_ps(out.add(8 * r as usize), v) };
+    }
+}
+
 /// Transposes 8 rows of 8 floats (row l = lane l's dual quaternion) into 8 columns
 /// (column c = component c of every lane).
 #[inline]
@@ -412,18 +446,11 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
         let (px, py, pz) = rotate(comp(ps, 0), comp(ps, 1), comp(ps, 2));
         let ns = normals[base..base + 8].as_ptr().cast::<f32>();
         let (nx, ny, nz) = rotate(comp(ns, 0), comp(ns, 1), comp(ns, 2));
-        let store = |v: __m256| {
-            let mut out = [0.0f32; 8];
-            // SAFETY: `out` has room for 8 floats; storeu needs no alignment.
-            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) };
-            out
-        };
-        let (px, py, pz) =
-            (store(_mm256_add_ps(px, tx)), store(_mm256_add_ps(py, ty)), store(_mm256_add_ps(pz, tz)));
-        let (nx, ny, nz) = (store(nx), store(ny), store(nz));
-        for l in 0..8 {
-            out_positions[base + l] = Vec3::new(px[l], py[l], pz[l]);
-            out_normals[base + l] = Vec3::new(nx[l], ny[l], nz[l]);
+        let (px, py, pz) = (_mm256_add_ps(px, tx), _mm256_add_ps(py, ty), _mm256_add_ps(pz, tz));
+        // SAFETY (both): 8 Vec3s are 24 contiguous floats of the output slices.
+        unsafe {
+            store_interleaved(out_positions[base..base + 8].as_mut_ptr().cast::<f32>(), px, py, pz);
+            store_interleaved(out_normals[base..base + 8].as_mut_ptr().cast::<f32>(), nx, ny, nz);
         }
     }
     dual_quaternion_chunk(
