@@ -66,7 +66,14 @@ impl<T> Key<T> {
     /// A TCB key with T = C = B = 0.
     #[must_use]
     pub fn new(time: f64, value: T) -> Self {
-        Key { time, value, interpolation: Interpolation::Tcb, tcb: Tcb::ZERO, in_tangent: None, out_tangent: None }
+        Key {
+            time,
+            value,
+            interpolation: Interpolation::Tcb,
+            tcb: Tcb::ZERO,
+            in_tangent: None,
+            out_tangent: None,
+        }
     }
 
     #[must_use]

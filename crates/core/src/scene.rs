@@ -186,8 +186,12 @@ pub enum DeformerKind {
 }
 
 impl DeformerKind {
-    pub const ALL: [DeformerKind; 4] =
-        [DeformerKind::Rigid, DeformerKind::LinearBlend, DeformerKind::BonesBlending, DeformerKind::DualQuaternion];
+    pub const ALL: [DeformerKind; 4] = [
+        DeformerKind::Rigid,
+        DeformerKind::LinearBlend,
+        DeformerKind::BonesBlending,
+        DeformerKind::DualQuaternion,
+    ];
 
     /// The name used on the command line (`rigid`, `linear`, `bones-blending`, `dual-quaternion`).
     #[must_use]
@@ -247,7 +251,11 @@ pub enum LightKind {
     Point,
     /// A spot light: full intensity inside `inner_angle_deg`, none outside `cutoff_deg`
     /// (half-angles from the direction), falling off as `cos^dropoff` in between.
-    Spot { cutoff_deg: f32, inner_angle_deg: f32, dropoff: f32 },
+    Spot {
+        cutoff_deg: f32,
+        inner_angle_deg: f32,
+        dropoff: f32,
+    },
 }
 
 /// The viewing camera: an orbit around a target point.
