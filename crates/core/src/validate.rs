@@ -13,9 +13,8 @@
 //! 6. Tracks: times finite and strictly increasing, values and tangents finite, T/C/B in
 //!    [-1, 1], a Hermite segment has its start key's out-tangent and its end key's in-tangent:
 //!    the rules of [`crate::track`]'s validator, but every offending key is reported, not only
-//!    the first. An `Animated` value with no problem of its own is then built with
-//!    [`AnimatedTrack::new`] and any error of it reported too, so a scene without problems
-//!    always gives valid tracks.
+//!    the first. A property test keeps the rules equal to the validator's, so a scene without
+//!    problems always gives valid tracks.
 //! 7. Lights: non-negative intensity and colour, a non-zero direction for directional and spot
 //!    lights, spot angles with 0 < inner ≤ cutoff ≤ 90 and dropoff ≥ 0.
 //! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
@@ -28,7 +27,9 @@ use crate::key::{Animated, Interpolation, RawTrack};
 use crate::scene::{
     Camera, DeformerSettings, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
 };
-use crate::track::{AnimatedTrack, TangentSide, TrackError, TrackValue, MIN_QUATERNION_NORM};
+#[cfg(doc)]
+use crate::track::AnimatedTrack;
+use crate::track::{TangentSide, TrackError, MIN_QUATERNION_NORM};
 
 /// The path of the field a [`TrackError`] of the `Animated` value at `animated_path` concerns,
 /// e.g. `objects[0].rotation` + `Unsorted { index: 4 }` → `objects[0].rotation.track[4].time`.
@@ -53,6 +54,8 @@ pub fn track_error_path(animated_path: &str, err: &TrackError) -> String {
 pub trait KeyValue: Copy {
     /// Names of the components that are NaN or infinite (`""` for a scalar).
     fn non_finite_components(&self) -> Vec<&'static str>;
+    /// True when no component is NaN or infinite.
+    fn is_all_finite(&self) -> bool;
     /// For rotations: true when the value cannot be normalized. Always false otherwise.
     fn is_degenerate(&self) -> bool {
         false
@@ -60,6 +63,10 @@ pub trait KeyValue: Copy {
 }
 
 impl KeyValue for f32 {
+    fn is_all_finite(&self) -> bool {
+        self.is_finite()
+    }
+
     fn non_finite_components(&self) -> Vec<&'static str> {
         if self.is_finite() {
             Vec::new()
@@ -70,6 +77,10 @@ impl KeyValue for f32 {
 }
 
 impl KeyValue for Vec3 {
+    fn is_all_finite(&self) -> bool {
+        self.is_finite()
+    }
+
     fn non_finite_components(&self) -> Vec<&'static str> {
         ["x", "y", "z"]
             .into_iter()
@@ -81,6 +92,10 @@ impl KeyValue for Vec3 {
 }
 
 impl KeyValue for Quat {
+    fn is_all_finite(&self) -> bool {
+        self.is_finite()
+    }
+
     fn non_finite_components(&self) -> Vec<&'static str> {
         ["x", "y", "z", "w"]
             .into_iter()
@@ -91,7 +106,7 @@ impl KeyValue for Quat {
     }
 
     fn is_degenerate(&self) -> bool {
-        f64::from(self.length()) < MIN_QUATERNION_NORM
+        self.as_dquat().length() < MIN_QUATERNION_NORM
     }
 }
 
@@ -153,25 +168,33 @@ impl Checker {
         }
     }
 
-    /// Checks every key (reporting all problems, not only the first), then, when none was
-    /// found, builds the track with [`AnimatedTrack::new`] so that a scene without problems
-    /// always yields valid tracks.
-    fn animated<T: KeyValue + TrackValue>(&mut self, path: &str, a: &Animated<T>) {
-        let before = self.problems.len();
+    /// Checks the static value and every key, reporting all problems (not only the first as
+    /// [`AnimatedTrack::new`] does). The rules are the track validator's; a property test keeps
+    /// the two in agreement: no problem here ⇔ `AnimatedTrack::new` succeeds and the static
+    /// value is valid (checked here even when keys override it).
+    fn animated<T: KeyValue>(&mut self, path: &str, a: &Animated<T>) {
         if self.value(&join(path, "value"), &a.value) && a.value.is_degenerate() {
             self.push(join(path, "value"), "zero quaternion: not a rotation");
         }
         self.track(&join(path, "track"), &a.track);
-        if self.problems.len() == before {
-            if let Err(err) = AnimatedTrack::new(a) {
-                self.push(track_error_path(path, &err), err.to_string());
-            }
-        }
     }
 
     fn track<T: KeyValue>(&mut self, path: &str, track: &RawTrack<T>) {
         let mut previous: Option<f64> = None;
         for (i, key) in track.keys.iter().enumerate() {
+            // Fast path without allocation for the usual, valid key.
+            let tcb = [key.tcb.tension, key.tcb.continuity, key.tcb.bias];
+            let valid = key.time.is_finite()
+                && previous.is_none_or(|p| key.time > p)
+                && key.value.is_all_finite()
+                && !key.value.is_degenerate()
+                && tcb.iter().all(|v| (-1.0..=1.0).contains(v))
+                && key.in_tangent.is_none_or(|t| t.is_all_finite())
+                && key.out_tangent.is_none_or(|t| t.is_all_finite());
+            if valid {
+                previous = Some(key.time);
+                continue;
+            }
             let kp = format!("{path}[{i}]");
             if self.f64(&join(&kp, "time"), key.time) {
                 if let Some(prev) = previous {
@@ -429,6 +452,8 @@ mod tests {
     use super::*;
     use crate::key::{Key, Tcb};
     use crate::scene::Joint;
+    use crate::track::AnimatedTrack;
+    use proptest::prelude::*;
 
     fn joint(name: &str, parent: Option<usize>) -> Joint {
         Joint {
@@ -564,5 +589,101 @@ mod tests {
                 "lights[0].kind.inner_angle_deg",
             ]
         );
+    }
+
+    fn problems_of<T: KeyValue>(a: &Animated<T>) -> Vec<Problem> {
+        let mut c = Checker { problems: Vec::new() };
+        c.animated("a", a);
+        c.problems
+    }
+
+    /// What the track validator accepts, plus a valid static value: `problems` also checks the
+    /// static value of a keyed property (every number in a file must be finite), which
+    /// `AnimatedTrack::new` ignores once there are keys.
+    fn agrees<T: KeyValue + crate::track::TrackValue>(a: &Animated<T>) -> bool {
+        AnimatedTrack::new(a).is_ok() && a.value.is_all_finite() && !a.value.is_degenerate()
+    }
+
+    /// Numbers that hit every rule: ordinary, boundary, out of range, non-finite.
+    fn number() -> impl Strategy<Value = f32> + Clone {
+        prop_oneof![
+            4 => -1.0f32..1.0,
+            1 => Just(1.0f32),
+            1 => Just(-1.0f32),
+            1 => Just(1.5f32),
+            1 => Just(0.0f32),
+            1 => Just(f32::NAN),
+            1 => Just(f32::INFINITY),
+            1 => Just(1e-7f32),
+        ]
+    }
+
+    fn raw_keys<T: std::fmt::Debug + Clone>(
+        value: impl Strategy<Value = T> + Clone,
+    ) -> impl Strategy<Value = Vec<Key<T>>> {
+        let key = (
+            prop_oneof![8 => 0.0f64..0.5, 1 => Just(f64::NAN), 1 => Just(0.0f64)],
+            value.clone(),
+            (number(), number(), number()),
+            0..4u8,
+            prop::option::of(value.clone()),
+            prop::option::of(value),
+        );
+        prop::collection::vec(key, 0..6).prop_map(|raw| {
+            let mut t = 0.0;
+            raw.into_iter()
+                .map(|(dt, value, (tension, continuity, bias), mode, in_tangent, out_tangent)| {
+                    t += dt;
+                    Key {
+                        time: t,
+                        value,
+                        interpolation: [
+                            Interpolation::Step,
+                            Interpolation::Linear,
+                            Interpolation::Tcb,
+                            Interpolation::Hermite,
+                        ][mode as usize],
+                        tcb: Tcb { tension, continuity, bias },
+                        in_tangent,
+                        out_tangent,
+                    }
+                })
+                .collect()
+        })
+    }
+
+    fn vec3() -> impl Strategy<Value = Vec3> + Clone {
+        (number(), number(), number()).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    fn quat() -> impl Strategy<Value = Quat> + Clone {
+        prop_oneof![
+            4 => (number(), number(), number(), number()).prop_map(|(x, y, z, w)| Quat::from_xyzw(x, y, z, w)),
+            1 => Just(Quat::from_xyzw(0.0, 0.0, 0.0, 0.0)),
+            1 => Just(Quat::from_xyzw(0.0, 0.0, 0.0, 9e-7)),
+            1 => Just(Quat::from_xyzw(0.0, 0.0, 0.0, 1.1e-6)),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        #[test]
+        fn same_rules_as_the_track_validator_vec3(value in vec3(), keys in raw_keys(vec3())) {
+            let a = Animated { value, track: RawTrack::new(keys) };
+            prop_assert_eq!(problems_of(&a).is_empty(), agrees(&a), "{:?}", a);
+        }
+
+        #[test]
+        fn same_rules_as_the_track_validator_quat(value in quat(), keys in raw_keys(quat())) {
+            let a = Animated { value, track: RawTrack::new(keys) };
+            prop_assert_eq!(problems_of(&a).is_empty(), agrees(&a), "{:?}", a);
+        }
+
+        #[test]
+        fn same_rules_as_the_track_validator_scalar(value in number(), keys in raw_keys(number())) {
+            let a = Animated { value, track: RawTrack::new(keys) };
+            prop_assert_eq!(problems_of(&a).is_empty(), agrees(&a), "{:?}", a);
+        }
     }
 }

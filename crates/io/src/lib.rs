@@ -7,6 +7,7 @@ pub mod gltf_import;
 pub mod md2;
 pub mod model;
 pub mod scene_file;
+mod scene_fast;
 mod scene_locate;
 mod scene_ser;
 

@@ -37,7 +37,7 @@ use keyrig_core::{Problem, Scene};
 use serde::{Deserialize, Serialize};
 
 use crate::scene_locate::{locate, TextPosition};
-use crate::scene_ser::CompactKeys;
+use crate::scene_ser::to_ron;
 
 /// The scene format version this keyrig writes and reads without migration.
 pub const CURRENT_VERSION: u32 = 1;
@@ -162,35 +162,87 @@ struct SceneFileV1 {
     scene: Scene,
 }
 
-/// Only the version; every other field is skipped. Read first, so that a newer file with
-/// fields this keyrig does not know gets "too new" rather than "unknown field".
+/// Only the version; every other field is skipped. Used when `version` is not the first
+/// field, so that a newer file with fields this keyrig does not know still gets "too new"
+/// rather than "unknown field".
 #[derive(Deserialize)]
 struct VersionHeader {
     version: u32,
 }
 
-/// The fixed pretty-printing configuration of scene files. Changing it changes every saved
-/// file's bytes.
-fn pretty_config() -> ron::ser::PrettyConfig {
-    ron::ser::PrettyConfig::new()
-        .depth_limit(usize::MAX)
-        .new_line("\n")
-        .indentor("    ")
-        .separator(" ")
-        .struct_names(false)
-        .separate_tuple_members(false)
-        .enumerate_arrays(false)
-        .compact_arrays(false)
-}
-
-/// Serializes `scene` as a complete scene file (version and scene), pretty-printed with the
-/// fixed configuration, ending in a newline. Does not check the scene; [`save`] does.
+/// Serializes `scene` as a complete scene file (version and scene) in the fixed layout
+/// described in docs/scene-format.md, ending in a newline. Does not check the scene; [`save`] does.
 pub fn to_string(scene: &Scene) -> Result<String, SceneFileError> {
     let doc = SceneFileOut { version: CURRENT_VERSION, scene };
-    let mut text = ron::ser::to_string_pretty(&CompactKeys(&doc), pretty_config())
-        .map_err(|e| SceneFileError::Serialize { message: e.to_string() })?;
+    let mut text = to_ron(&doc).map_err(|e| SceneFileError::Serialize { message: e.to_string() })?;
     text.push('\n');
     Ok(text)
+}
+
+/// What the one-pass reader saw before it stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Seen {
+    /// The first field was `version` with this value, which is not [`CURRENT_VERSION`].
+    OtherVersion(u32),
+    /// The first field was not `version`.
+    VersionNotFirst,
+}
+
+#[derive(Deserialize)]
+#[serde(field_identifier, rename_all = "lowercase")]
+enum EnvelopeField {
+    Version,
+    Scene,
+}
+
+/// Reads a current-version document in one pass: checks that `version` comes first and
+/// equals [`CURRENT_VERSION`], then reads the scene. Anything else is recorded in `seen` and
+/// left to the slower general path.
+struct CurrentVersionReader<'a> {
+    seen: &'a std::cell::Cell<Option<Seen>>,
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for CurrentVersionReader<'_> {
+    type Value = Scene;
+
+    fn deserialize<D: serde::Deserializer<'de>>(self, deserializer: D) -> Result<Scene, D::Error> {
+        deserializer.deserialize_struct("SceneFile", &["version", "scene"], self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for CurrentVersionReader<'_> {
+    type Value = Scene;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a scene file: (version: …, scene: (…))")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Scene, A::Error> {
+        use serde::de::Error;
+        match map.next_key::<EnvelopeField>()? {
+            Some(EnvelopeField::Version) => {
+                let version: u32 = map.next_value()?;
+                if version != CURRENT_VERSION {
+                    self.seen.set(Some(Seen::OtherVersion(version)));
+                    return Err(A::Error::custom("not the current version"));
+                }
+            }
+            Some(EnvelopeField::Scene) => {
+                self.seen.set(Some(Seen::VersionNotFirst));
+                return Err(A::Error::custom("version is not the first field"));
+            }
+            None => return Err(A::Error::missing_field("version")),
+        }
+        let mut scene = None;
+        while let Some(field) = map.next_key::<EnvelopeField>()? {
+            match field {
+                EnvelopeField::Version => return Err(A::Error::duplicate_field("version")),
+                EnvelopeField::Scene if scene.is_some() => return Err(A::Error::duplicate_field("scene")),
+                EnvelopeField::Scene => scene = Some(map.next_value::<Scene>()?),
+            }
+        }
+        scene.ok_or_else(|| A::Error::missing_field("scene"))
+    }
 }
 
 /// Parses a scene file's text and checks the scene. `origin` names the text in errors
@@ -209,33 +261,10 @@ pub fn from_str(text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
 /// problems (they are returned beside it, located in the text). Syntax, type and version
 /// errors are still errors. `keyrig info` uses this to show what is wrong.
 pub fn from_str_lenient(text: &str, origin: &Path) -> Result<(Scene, Vec<LocatedProblem>), SceneFileError> {
-    let options = ron::Options::default();
-    let header: VersionHeader = options.from_str(text).map_err(|e| syntax_error(origin, &e))?;
-    let version_at =
-        || locate(text, &["version".to_string()])[0].unwrap_or(TextPosition { line: 1, column: 1 });
-    if header.version > CURRENT_VERSION {
-        let at = version_at();
-        return Err(SceneFileError::TooNew {
-            path: origin.to_path_buf(),
-            line: at.line,
-            column: at.column,
-            found: header.version,
-            supported: CURRENT_VERSION,
-        });
-    }
-    let scene = migrate(header.version, text, origin).map_err(|err| match err {
-        MigrationError::Unsupported => {
-            let at = version_at();
-            SceneFileError::TooOld {
-                path: origin.to_path_buf(),
-                line: at.line,
-                column: at.column,
-                found: header.version,
-                oldest: OLDEST_SUPPORTED_VERSION,
-            }
-        }
-        MigrationError::File(err) => err,
-    })?;
+    let scene = match read_current(text) {
+        Some(scene) => scene,
+        None => read_general(text, origin)?,
+    };
     let problems = scene.problems();
     let located = if problems.is_empty() {
         Vec::new()
@@ -249,6 +278,62 @@ pub fn from_str_lenient(text: &str, origin: &Path) -> Result<(Scene, Vec<Located
             .collect()
     };
     Ok((scene, located))
+}
+
+/// The fast path: a current-version document in the strict RON subset of
+/// [`crate::scene_fast`], read in one pass. `None` when it does not apply or the text has any
+/// error; [`read_general`] then reads it (again) with `ron`.
+fn read_current(text: &str) -> Option<Scene> {
+    let seen = std::cell::Cell::new(None);
+    crate::scene_fast::from_str_seed(text, CurrentVersionReader { seen: &seen }).ok()
+}
+
+/// The general path with `ron`: any RON syntax, versions other than the current one (refused
+/// or migrated), and errors located at line and column.
+fn read_general(text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
+    let seen = std::cell::Cell::new(None);
+    match ron::Options::default().from_str_seed(text, CurrentVersionReader { seen: &seen }) {
+        Ok(scene) => Ok(scene),
+        Err(err) => match seen.get() {
+            None => Err(syntax_error(origin, &err)),
+            Some(Seen::OtherVersion(version)) => read_version(version, text, origin),
+            Some(Seen::VersionNotFirst) => {
+                // Read only the version (skipping everything else), then the document.
+                let header: VersionHeader =
+                    ron::Options::default().from_str(text).map_err(|e| syntax_error(origin, &e))?;
+                read_version(header.version, text, origin)
+            }
+        },
+    }
+}
+
+/// Reads a document of `version`: refuses newer versions, migrates older ones.
+fn read_version(version: u32, text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
+    let version_at =
+        || locate(text, &["version".to_string()])[0].unwrap_or(TextPosition { line: 1, column: 1 });
+    if version > CURRENT_VERSION {
+        let at = version_at();
+        return Err(SceneFileError::TooNew {
+            path: origin.to_path_buf(),
+            line: at.line,
+            column: at.column,
+            found: version,
+            supported: CURRENT_VERSION,
+        });
+    }
+    migrate(version, text, origin).map_err(|err| match err {
+        MigrationError::Unsupported => {
+            let at = version_at();
+            SceneFileError::TooOld {
+                path: origin.to_path_buf(),
+                line: at.line,
+                column: at.column,
+                found: version,
+                oldest: OLDEST_SUPPORTED_VERSION,
+            }
+        }
+        MigrationError::File(err) => err,
+    })
 }
 
 /// Why [`migrate`] failed.
@@ -364,13 +449,9 @@ fn refuse_newer(path: &Path) -> Result<(), SceneFileError> {
         Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
         Err(source) => return Err(SceneFileError::Read { path: path.to_path_buf(), source }),
     };
-    // Read only the version, with the lightest parser possible: a newer format may have
-    // syntax this keyrig's full reader would reject.
-    let version = ron::Options::default()
-        .from_str::<VersionHeader>(&text)
-        .ok()
-        .map(|h| h.version)
-        .or_else(|| version_by_scan(&text));
+    // Read only the version: a newer format may have syntax this keyrig's reader would reject,
+    // and parsing a whole large file just for its first field would be slow.
+    let version = peek_version(&text).or_else(|| version_by_scan(&text));
     match version {
         Some(found) if found > CURRENT_VERSION => Err(SceneFileError::RefuseOverwriteNewer {
             path: path.to_path_buf(),
@@ -379,6 +460,36 @@ fn refuse_newer(path: &Path) -> Result<(), SceneFileError> {
         }),
         _ => Ok(()),
     }
+}
+
+/// Reads the document's first field when it is `version`, and stops there.
+fn peek_version(text: &str) -> Option<u32> {
+    struct FirstField<'a>(&'a std::cell::Cell<Option<u32>>);
+
+    impl<'de> serde::de::DeserializeSeed<'de> for FirstField<'_> {
+        type Value = ();
+        fn deserialize<D: serde::Deserializer<'de>>(self, deserializer: D) -> Result<(), D::Error> {
+            deserializer.deserialize_struct("SceneFile", &["version", "scene"], self)
+        }
+    }
+
+    impl<'de> serde::de::Visitor<'de> for FirstField<'_> {
+        type Value = ();
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("a scene file")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+            if let Some(EnvelopeField::Version) = map.next_key::<EnvelopeField>()? {
+                self.0.set(Some(map.next_value::<u32>()?));
+            }
+            // Stop reading: the rest does not matter here.
+            Err(serde::de::Error::custom("stop"))
+        }
+    }
+
+    let found = std::cell::Cell::new(None);
+    let _ = ron::Options::default().from_str_seed(text, FirstField(&found));
+    found.get()
 }
 
 /// Finds `version: N` near the start of a document that does not parse as a whole.
@@ -462,4 +573,66 @@ fn sync_dir(dir: &Path) {
     }
     #[cfg(not(unix))]
     let _ = dir;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo::{demo_scene, DEMO_RON};
+
+    fn with_ron(text: &str) -> Option<Scene> {
+        let seen = std::cell::Cell::new(None);
+        ron::Options::default().from_str_seed(text, CurrentVersionReader { seen: &seen }).ok()
+    }
+
+    #[test]
+    fn fast_path_reads_what_the_writer_writes() {
+        assert_eq!(read_current(DEMO_RON), Some(demo_scene()));
+        let mut scene = demo_scene();
+        scene.objects[0].name = "tab\there \"quoted\" back\\slash\nnew line ünïcode".into();
+        let text = to_string(&scene).unwrap();
+        assert_eq!(read_current(&text), Some(scene));
+    }
+
+    /// Texts in and outside the fast subset: whenever the fast path accepts, `ron` reads the
+    /// same scene; where it gives up, the general path still reads what `ron` accepts.
+    #[test]
+    fn fast_path_never_disagrees_with_ron() {
+        let base = "fps: 30.0, frame_range: (start: 0, end: 1)";
+        let texts = [
+            format!("(version: 1, scene: ({base}))"),
+            format!("(version: 1, scene: ({base},),)"),
+            format!("(version: 1, scene: ({base}, ambient: (1, 2e3, -0.0)))"),
+            format!("// c\n(/* a /* nested */ */ version: 1, scene: ({base}))\n// end"),
+            format!("SceneFile(version: 1, scene: Scene({base}))"),
+            format!("(version: 1, scene: ({base}, ambient: (1.0f32, 2.0, 3.0)))"),
+            format!("(version: 1, scene: ({base}, ambient: (1_0.0, 2.0, 3.0)))"),
+            format!("(version: 1, scene: ({base}, ambient: (-NaN, +inf, NaN)))"),
+            format!("(version: 1, scene: ({base}, objects: [(name: \"\\u{{41}}\", translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
+            format!("(version: 1, scene: ({base}, objects: [(name: r#\"raw\"#, translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
+            format!("(version: 1, scene: ({base}, ambient: (1.0, 2.0)))"),
+            format!("(version: 1, scene: ({base}, ambient: (1.0, 2.0, 3.0, 4.0)))"),
+            format!("(version: 1, scene: ({base}) extra)"),
+            format!("(version: 1, scene: ({base}))) "),
+            format!("(version: 1 scene: ({base}))"),
+            "(version: 1, scene: (fps: 30, frame_range: (start: 0.0, end: 1)))".to_string(),
+            format!("(version: 1, scene: ({base}, lights: [(name: \"L\", kind: Spot(cutoff_deg: 1.0, inner_angle_deg: 1.0, dropoff: 1.0), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
+            format!("(version: 1, scene: ({base}, lights: [(name: \"L\", kind: Point(), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
+            "(version: 1, scene: (fps: 30.0, frame_range: (start: 0, end: 1), unknown: 3))".to_string(),
+            "(version: 1, scene: (fps: 1e400, frame_range: (start: 0, end: 4294967296)))".to_string(),
+        ];
+        for text in &texts {
+            let fast = read_current(text);
+            let ron = with_ron(text);
+            if let Some(fast) = fast {
+                assert_eq!(format!("{:?}", Some(fast)), format!("{ron:?}"), "{text}");
+            }
+            let general = read_general(text, Path::new("t.ron")).ok();
+            assert_eq!(format!("{general:?}"), format!("{ron:?}"), "{text}");
+        }
+        // The plain forms are taken by the fast path.
+        assert!(read_current(&texts[0]).is_some());
+        assert!(read_current(&texts[3]).is_some());
+        assert!(read_current(&texts[16]).is_some());
+    }
 }

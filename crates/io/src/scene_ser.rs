@@ -1,444 +1,509 @@
-//! Pretty RON with one key per line.
+//! The RON writer of scene files: a small serde serializer with one fixed layout.
 //!
-//! `ron`'s pretty printer puts every struct field on its own line, which turns each key into
-//! eleven lines and a 100 000-key scene into ~50 MB. Scene files print keys compactly
-//! instead — `(time: 0.5, value: (0.0, 0.0, 0.0, 1.0), interpolation: Tcb, tcb: (…))` on one
-//! line — and everything else as `ron`'s pretty printer does.
+//! Layout rules (they define the bytes of every saved scene; changing them changes files):
+//! - structs, lists and maps: one field or element per line, indented by four spaces, each
+//!   followed by a comma; empty ones are `()`, `[]`, `{}`;
+//! - tuples (vectors `(x, y, z)`, quaternions `(x, y, z, w)`) and struct variants
+//!   (`Spot(cutoff_deg: 35.0, …)`) on one line;
+//! - a struct named `Key` ([`keyrig_core::Key`]) and everything inside it on one line, with
+//!   the fields equal to their defaults left out (`interpolation: Tcb`,
+//!   `tcb: (tension: 0.0, continuity: 0.0, bias: 0.0)`; `Key`'s deserializer fills them in);
+//! - `Option` as `Some(…)` / `None`, enum variants by name, no struct names;
+//! - floats in Rust's shortest round-trip form (`{:?}`: `0.1`, `1e-7`, `30.0`), so that
+//!   reading a file back gives the same bits and writing it again gives the same bytes;
+//! - strings in double quotes with `\\`, `\"`, `\n`, `\r`, `\t` and `\u{…}` escapes for other
+//!   control characters; everything else as UTF-8.
 //!
-//! [`CompactKeys`] wraps a serializer and forwards every call to it, wrapping nested values
-//! again; when an element of a sequence is a struct named `Key`
-//! ([`keyrig_core::Key`]), it is written compactly and handed to the inner serializer as a
-//! [`ron::value::RawValue`].
+//! `ron`'s own pretty printer would print each key over eleven lines (50 MB for 100 000
+//! keys) and is several times slower; this writer produces what `ron` parses, which the
+//! round-trip tests check.
 
-use serde::ser::{
-    self, Impossible, Serialize, SerializeMap, SerializeSeq, SerializeStruct, SerializeStructVariant,
-    SerializeTuple, SerializeTupleStruct, SerializeTupleVariant, Serializer,
-};
+use std::fmt::{self, Write as _};
 
-/// The struct whose instances are printed on one line.
-const COMPACT_STRUCT: &str = "Key";
+use serde::ser::{self, Serialize};
 
-/// Configuration of the one-line form.
-fn compact_config() -> ron::ser::PrettyConfig {
-    ron::ser::PrettyConfig::new()
-        .separator(" ")
-        .struct_names(false)
-        .compact_arrays(true)
-        .compact_structs(true)
-        .compact_maps(true)
-        .new_line("\n")
-        .indentor("")
-}
+/// The struct printed on one line, defaults omitted.
+const KEY_STRUCT: &str = "Key";
 
-/// Serializes `value` with `inner`, keys compact.
-pub struct CompactKeys<'a, T: ?Sized>(pub &'a T);
+/// Fields of [`KEY_STRUCT`] that are left out when equal to their default.
+const KEY_DEFAULTS: [(&str, &str); 2] =
+    [("interpolation", "Tcb"), ("tcb", "(tension: 0.0, continuity: 0.0, bias: 0.0)")];
 
-impl<T: ?Sized + Serialize> Serialize for CompactKeys<'_, T> {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        self.0.serialize(Wrap(serializer))
+/// An error of the writer (only custom errors from `Serialize` impls; the writer itself
+/// cannot fail).
+#[derive(Debug)]
+pub struct WriteError(String);
+
+impl fmt::Display for WriteError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
     }
 }
 
-/// Is `value` a struct named [`COMPACT_STRUCT`]? Serializes only up to its first call.
-fn is_compact_struct<T: ?Sized + Serialize>(value: &T) -> bool {
-    matches!(value.serialize(Probe), Err(ProbeDone(Some(name))) if name == COMPACT_STRUCT)
-}
+impl std::error::Error for WriteError {}
 
-/// Writes `value` on one line and returns it as a raw RON value.
-fn compact<T: ?Sized + Serialize, E: ser::Error>(value: &T) -> Result<Box<ron::value::RawValue>, E> {
-    let text = ron::ser::to_string_pretty(value, compact_config()).map_err(E::custom)?;
-    ron::value::RawValue::from_boxed_ron(text.into_boxed_str()).map_err(E::custom)
-}
-
-/// A value to be serialized through [`Wrap`].
-struct Wrapped<'a, T: ?Sized>(&'a T);
-
-impl<T: ?Sized + Serialize> Serialize for Wrapped<'_, T> {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        self.0.serialize(Wrap(serializer))
+impl ser::Error for WriteError {
+    fn custom<T: fmt::Display>(msg: T) -> Self {
+        WriteError(msg.to_string())
     }
 }
 
-/// An element of a sequence: compact when it is a key, wrapped otherwise.
-struct Element<'a, T: ?Sized>(&'a T);
+type Result<T = ()> = std::result::Result<T, WriteError>;
 
-impl<T: ?Sized + Serialize> Serialize for Element<'_, T> {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        if is_compact_struct(self.0) {
-            compact::<T, S::Error>(self.0)?.serialize(serializer)
-        } else {
-            self.0.serialize(Wrap(serializer))
+/// Writes `value` as RON with the scene file layout (no trailing newline).
+pub(crate) fn to_ron<T: ?Sized + Serialize>(value: &T) -> Result<String> {
+    let mut writer = Writer { out: String::with_capacity(4096), indent: 0, inline: 0 };
+    value.serialize(&mut writer)?;
+    Ok(writer.out)
+}
+
+struct Writer {
+    out: String,
+    indent: usize,
+    /// > 0 while writing something that goes on one line.
+    inline: usize,
+}
+
+impl Writer {
+    fn newline(&mut self) {
+        self.out.push('\n');
+        for _ in 0..self.indent {
+            self.out.push_str("    ");
         }
     }
-}
 
-/// The forwarding serializer (and, through `Wrap<S::SerializeSeq>` etc., its compounds).
-struct Wrap<S>(S);
+    fn write_str_literal(&mut self, s: &str) {
+        self.out.push('"');
+        for c in s.chars() {
+            match c {
+                '"' => self.out.push_str("\\\""),
+                '\\' => self.out.push_str("\\\\"),
+                '\n' => self.out.push_str("\\n"),
+                '\r' => self.out.push_str("\\r"),
+                '\t' => self.out.push_str("\\t"),
+                c if c.is_control() => {
+                    let _ = write!(self.out, "\\u{{{:x}}}", u32::from(c));
+                }
+                c => self.out.push(c),
+            }
+        }
+        self.out.push('"');
+    }
 
-impl<S: Serializer> Serializer for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    type SerializeSeq = Wrap<S::SerializeSeq>;
-    type SerializeTuple = Wrap<S::SerializeTuple>;
-    type SerializeTupleStruct = Wrap<S::SerializeTupleStruct>;
-    type SerializeTupleVariant = Wrap<S::SerializeTupleVariant>;
-    type SerializeMap = Wrap<S::SerializeMap>;
-    type SerializeStruct = Wrap<S::SerializeStruct>;
-    type SerializeStructVariant = Wrap<S::SerializeStructVariant>;
+    fn write_float<F: fmt::Debug>(&mut self, v: F) {
+        let _ = write!(self.out, "{v:?}");
+    }
 
-    fn serialize_bool(self, v: bool) -> Result<S::Ok, S::Error> {
-        self.0.serialize_bool(v)
-    }
-    fn serialize_i8(self, v: i8) -> Result<S::Ok, S::Error> {
-        self.0.serialize_i8(v)
-    }
-    fn serialize_i16(self, v: i16) -> Result<S::Ok, S::Error> {
-        self.0.serialize_i16(v)
-    }
-    fn serialize_i32(self, v: i32) -> Result<S::Ok, S::Error> {
-        self.0.serialize_i32(v)
-    }
-    fn serialize_i64(self, v: i64) -> Result<S::Ok, S::Error> {
-        self.0.serialize_i64(v)
-    }
-    fn serialize_i128(self, v: i128) -> Result<S::Ok, S::Error> {
-        self.0.serialize_i128(v)
-    }
-    fn serialize_u8(self, v: u8) -> Result<S::Ok, S::Error> {
-        self.0.serialize_u8(v)
-    }
-    fn serialize_u16(self, v: u16) -> Result<S::Ok, S::Error> {
-        self.0.serialize_u16(v)
-    }
-    fn serialize_u32(self, v: u32) -> Result<S::Ok, S::Error> {
-        self.0.serialize_u32(v)
-    }
-    fn serialize_u64(self, v: u64) -> Result<S::Ok, S::Error> {
-        self.0.serialize_u64(v)
-    }
-    fn serialize_u128(self, v: u128) -> Result<S::Ok, S::Error> {
-        self.0.serialize_u128(v)
-    }
-    fn serialize_f32(self, v: f32) -> Result<S::Ok, S::Error> {
-        self.0.serialize_f32(v)
-    }
-    fn serialize_f64(self, v: f64) -> Result<S::Ok, S::Error> {
-        self.0.serialize_f64(v)
-    }
-    fn serialize_char(self, v: char) -> Result<S::Ok, S::Error> {
-        self.0.serialize_char(v)
-    }
-    fn serialize_str(self, v: &str) -> Result<S::Ok, S::Error> {
-        self.0.serialize_str(v)
-    }
-    fn serialize_bytes(self, v: &[u8]) -> Result<S::Ok, S::Error> {
-        self.0.serialize_bytes(v)
-    }
-    fn serialize_none(self) -> Result<S::Ok, S::Error> {
-        self.0.serialize_none()
-    }
-    fn serialize_some<T: ?Sized + Serialize>(self, value: &T) -> Result<S::Ok, S::Error> {
-        self.0.serialize_some(&Wrapped(value))
-    }
-    fn serialize_unit(self) -> Result<S::Ok, S::Error> {
-        self.0.serialize_unit()
-    }
-    fn serialize_unit_struct(self, name: &'static str) -> Result<S::Ok, S::Error> {
-        self.0.serialize_unit_struct(name)
-    }
-    fn serialize_unit_variant(
-        self,
-        name: &'static str,
-        index: u32,
-        variant: &'static str,
-    ) -> Result<S::Ok, S::Error> {
-        self.0.serialize_unit_variant(name, index, variant)
-    }
-    fn serialize_newtype_struct<T: ?Sized + Serialize>(
-        self,
-        name: &'static str,
-        value: &T,
-    ) -> Result<S::Ok, S::Error> {
-        self.0.serialize_newtype_struct(name, &Wrapped(value))
-    }
-    fn serialize_newtype_variant<T: ?Sized + Serialize>(
-        self,
-        name: &'static str,
-        index: u32,
-        variant: &'static str,
-        value: &T,
-    ) -> Result<S::Ok, S::Error> {
-        self.0.serialize_newtype_variant(name, index, variant, &Wrapped(value))
-    }
-    fn serialize_seq(self, len: Option<usize>) -> Result<Self::SerializeSeq, S::Error> {
-        self.0.serialize_seq(len).map(Wrap)
-    }
-    fn serialize_tuple(self, len: usize) -> Result<Self::SerializeTuple, S::Error> {
-        self.0.serialize_tuple(len).map(Wrap)
-    }
-    fn serialize_tuple_struct(
-        self,
-        name: &'static str,
-        len: usize,
-    ) -> Result<Self::SerializeTupleStruct, S::Error> {
-        self.0.serialize_tuple_struct(name, len).map(Wrap)
-    }
-    fn serialize_tuple_variant(
-        self,
-        name: &'static str,
-        index: u32,
-        variant: &'static str,
-        len: usize,
-    ) -> Result<Self::SerializeTupleVariant, S::Error> {
-        self.0.serialize_tuple_variant(name, index, variant, len).map(Wrap)
-    }
-    fn serialize_map(self, len: Option<usize>) -> Result<Self::SerializeMap, S::Error> {
-        self.0.serialize_map(len).map(Wrap)
-    }
-    fn serialize_struct(self, name: &'static str, len: usize) -> Result<Self::SerializeStruct, S::Error> {
-        self.0.serialize_struct(name, len).map(Wrap)
-    }
-    fn serialize_struct_variant(
-        self,
-        name: &'static str,
-        index: u32,
-        variant: &'static str,
-        len: usize,
-    ) -> Result<Self::SerializeStructVariant, S::Error> {
-        self.0.serialize_struct_variant(name, index, variant, len).map(Wrap)
-    }
-    fn is_human_readable(&self) -> bool {
-        self.0.is_human_readable()
+    fn open(&mut self, bracket: char, inline: bool, skip_defaults: bool) -> Compound<'_> {
+        self.out.push(bracket);
+        if inline {
+            self.inline += 1;
+        } else {
+            self.indent += 1;
+        }
+        Compound { w: self, inline, first: true, skip_defaults }
     }
 }
 
-impl<S: SerializeSeq> SerializeSeq for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_element<T: ?Sized + Serialize>(&mut self, value: &T) -> Result<(), S::Error> {
-        self.0.serialize_element(&Element(value))
+/// A struct, tuple, list or map being written.
+struct Compound<'a> {
+    w: &'a mut Writer,
+    inline: bool,
+    first: bool,
+    skip_defaults: bool,
+}
+
+impl Compound<'_> {
+    /// Starts the next element: separator and line break as the layout wants.
+    fn next(&mut self) {
+        if self.inline {
+            if !self.first {
+                self.w.out.push_str(", ");
+            }
+        } else {
+            self.w.newline();
+        }
+        self.first = false;
     }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
+
+    fn element<T: ?Sized + Serialize>(&mut self, value: &T) -> Result {
+        self.next();
+        value.serialize(&mut *self.w)?;
+        if !self.inline {
+            self.w.out.push(',');
+        }
+        Ok(())
+    }
+
+    fn field<T: ?Sized + Serialize>(&mut self, name: &str, value: &T) -> Result {
+        let start = self.w.out.len();
+        let was_first = self.first;
+        self.next();
+        self.w.out.push_str(name);
+        self.w.out.push_str(": ");
+        let value_start = self.w.out.len();
+        value.serialize(&mut *self.w)?;
+        if self.skip_defaults
+            && KEY_DEFAULTS.iter().any(|(n, default)| *n == name && self.w.out[value_start..] == **default)
+        {
+            // Equal to its default: take the field out again.
+            self.w.out.truncate(start);
+            self.first = was_first;
+            return Ok(());
+        }
+        if !self.inline {
+            self.w.out.push(',');
+        }
+        Ok(())
+    }
+
+    fn close(self, bracket: char) -> Result {
+        if self.inline {
+            self.w.inline -= 1;
+        } else {
+            self.w.indent -= 1;
+            if !self.first {
+                self.w.newline();
+            }
+        }
+        self.w.out.push(bracket);
+        Ok(())
     }
 }
 
-impl<S: SerializeTuple> SerializeTuple for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_element<T: ?Sized + Serialize>(&mut self, value: &T) -> Result<(), S::Error> {
-        self.0.serialize_element(&Wrapped(value))
-    }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
-    }
-}
-
-impl<S: SerializeTupleStruct> SerializeTupleStruct for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_field<T: ?Sized + Serialize>(&mut self, value: &T) -> Result<(), S::Error> {
-        self.0.serialize_field(&Wrapped(value))
-    }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
-    }
-}
-
-impl<S: SerializeTupleVariant> SerializeTupleVariant for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_field<T: ?Sized + Serialize>(&mut self, value: &T) -> Result<(), S::Error> {
-        self.0.serialize_field(&Wrapped(value))
-    }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
-    }
-}
-
-impl<S: SerializeMap> SerializeMap for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_key<T: ?Sized + Serialize>(&mut self, key: &T) -> Result<(), S::Error> {
-        self.0.serialize_key(&Wrapped(key))
-    }
-    fn serialize_value<T: ?Sized + Serialize>(&mut self, value: &T) -> Result<(), S::Error> {
-        self.0.serialize_value(&Wrapped(value))
-    }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
-    }
-}
-
-impl<S: SerializeStruct> SerializeStruct for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_field<T: ?Sized + Serialize>(
-        &mut self,
-        key: &'static str,
-        value: &T,
-    ) -> Result<(), S::Error> {
-        self.0.serialize_field(key, &Wrapped(value))
-    }
-    fn skip_field(&mut self, key: &'static str) -> Result<(), S::Error> {
-        self.0.skip_field(key)
-    }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
-    }
-}
-
-impl<S: SerializeStructVariant> SerializeStructVariant for Wrap<S> {
-    type Ok = S::Ok;
-    type Error = S::Error;
-    fn serialize_field<T: ?Sized + Serialize>(
-        &mut self,
-        key: &'static str,
-        value: &T,
-    ) -> Result<(), S::Error> {
-        self.0.serialize_field(key, &Wrapped(value))
-    }
-    fn skip_field(&mut self, key: &'static str) -> Result<(), S::Error> {
-        self.0.skip_field(key)
-    }
-    fn end(self) -> Result<S::Ok, S::Error> {
-        self.0.end()
-    }
-}
-
-/// Stops at the first serializer call, reporting the struct name if it was a struct.
-#[derive(Debug)]
-struct ProbeDone(Option<&'static str>);
-
-impl std::fmt::Display for ProbeDone {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "probe stopped at {:?}", self.0)
-    }
-}
-
-impl std::error::Error for ProbeDone {}
-
-impl ser::Error for ProbeDone {
-    fn custom<T: std::fmt::Display>(_msg: T) -> Self {
-        ProbeDone(None)
-    }
-}
-
-struct Probe;
-
-type ProbeResult<T = ()> = Result<T, ProbeDone>;
-
-impl Serializer for Probe {
+impl<'a> ser::Serializer for &'a mut Writer {
     type Ok = ();
-    type Error = ProbeDone;
-    type SerializeSeq = Impossible<(), ProbeDone>;
-    type SerializeTuple = Impossible<(), ProbeDone>;
-    type SerializeTupleStruct = Impossible<(), ProbeDone>;
-    type SerializeTupleVariant = Impossible<(), ProbeDone>;
-    type SerializeMap = Impossible<(), ProbeDone>;
-    type SerializeStruct = Impossible<(), ProbeDone>;
-    type SerializeStructVariant = Impossible<(), ProbeDone>;
+    type Error = WriteError;
+    type SerializeSeq = Compound<'a>;
+    type SerializeTuple = Compound<'a>;
+    type SerializeTupleStruct = Compound<'a>;
+    type SerializeTupleVariant = Compound<'a>;
+    type SerializeMap = Compound<'a>;
+    type SerializeStruct = Compound<'a>;
+    type SerializeStructVariant = Compound<'a>;
 
-    fn serialize_struct(self, name: &'static str, _len: usize) -> ProbeResult<Self::SerializeStruct> {
-        Err(ProbeDone(Some(name)))
+    fn serialize_bool(self, v: bool) -> Result {
+        self.out.push_str(if v { "true" } else { "false" });
+        Ok(())
     }
-    fn serialize_bool(self, _: bool) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_i8(self, v: i8) -> Result {
+        self.serialize_i64(i64::from(v))
     }
-    fn serialize_i8(self, _: i8) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_i16(self, v: i16) -> Result {
+        self.serialize_i64(i64::from(v))
     }
-    fn serialize_i16(self, _: i16) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_i32(self, v: i32) -> Result {
+        self.serialize_i64(i64::from(v))
     }
-    fn serialize_i32(self, _: i32) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_i64(self, v: i64) -> Result {
+        let _ = write!(self.out, "{v}");
+        Ok(())
     }
-    fn serialize_i64(self, _: i64) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_i128(self, v: i128) -> Result {
+        let _ = write!(self.out, "{v}");
+        Ok(())
     }
-    fn serialize_u8(self, _: u8) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_u8(self, v: u8) -> Result {
+        self.serialize_u64(u64::from(v))
     }
-    fn serialize_u16(self, _: u16) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_u16(self, v: u16) -> Result {
+        self.serialize_u64(u64::from(v))
     }
-    fn serialize_u32(self, _: u32) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_u32(self, v: u32) -> Result {
+        self.serialize_u64(u64::from(v))
     }
-    fn serialize_u64(self, _: u64) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_u64(self, v: u64) -> Result {
+        let _ = write!(self.out, "{v}");
+        Ok(())
     }
-    fn serialize_f32(self, _: f32) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_u128(self, v: u128) -> Result {
+        let _ = write!(self.out, "{v}");
+        Ok(())
     }
-    fn serialize_f64(self, _: f64) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_f32(self, v: f32) -> Result {
+        self.write_float(v);
+        Ok(())
     }
-    fn serialize_char(self, _: char) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_f64(self, v: f64) -> Result {
+        self.write_float(v);
+        Ok(())
     }
-    fn serialize_str(self, _: &str) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_char(self, v: char) -> Result {
+        match v {
+            '\'' => self.out.push_str("'\\''"),
+            '\\' => self.out.push_str("'\\\\'"),
+            '\n' => self.out.push_str("'\\n'"),
+            '\r' => self.out.push_str("'\\r'"),
+            '\t' => self.out.push_str("'\\t'"),
+            c if c.is_control() => {
+                let _ = write!(self.out, "'\\u{{{:x}}}'", u32::from(c));
+            }
+            c => {
+                self.out.push('\'');
+                self.out.push(c);
+                self.out.push('\'');
+            }
+        }
+        Ok(())
     }
-    fn serialize_bytes(self, _: &[u8]) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_str(self, v: &str) -> Result {
+        self.write_str_literal(v);
+        Ok(())
     }
-    fn serialize_none(self) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_bytes(self, v: &[u8]) -> Result {
+        use ser::SerializeSeq;
+        let mut seq = self.serialize_seq(Some(v.len()))?;
+        for b in v {
+            seq.serialize_element(b)?;
+        }
+        seq.end()
     }
-    fn serialize_some<T: ?Sized + Serialize>(self, _: &T) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_none(self) -> Result {
+        self.out.push_str("None");
+        Ok(())
     }
-    fn serialize_unit(self) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_some<T: ?Sized + Serialize>(self, value: &T) -> Result {
+        self.out.push_str("Some(");
+        value.serialize(&mut *self)?;
+        self.out.push(')');
+        Ok(())
     }
-    fn serialize_unit_struct(self, _: &'static str) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_unit(self) -> Result {
+        self.out.push_str("()");
+        Ok(())
     }
-    fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_unit_struct(self, _name: &'static str) -> Result {
+        self.out.push_str("()");
+        Ok(())
     }
-    fn serialize_newtype_struct<T: ?Sized + Serialize>(self, _: &'static str, _: &T) -> ProbeResult {
-        Err(ProbeDone(None))
+    fn serialize_unit_variant(self, _name: &'static str, _index: u32, variant: &'static str) -> Result {
+        self.out.push_str(variant);
+        Ok(())
+    }
+    fn serialize_newtype_struct<T: ?Sized + Serialize>(self, _name: &'static str, value: &T) -> Result {
+        self.out.push('(');
+        value.serialize(&mut *self)?;
+        self.out.push(')');
+        Ok(())
     }
     fn serialize_newtype_variant<T: ?Sized + Serialize>(
         self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: &T,
-    ) -> ProbeResult {
-        Err(ProbeDone(None))
+        _name: &'static str,
+        _index: u32,
+        variant: &'static str,
+        value: &T,
+    ) -> Result {
+        self.out.push_str(variant);
+        self.out.push('(');
+        value.serialize(&mut *self)?;
+        self.out.push(')');
+        Ok(())
     }
-    fn serialize_seq(self, _: Option<usize>) -> ProbeResult<Self::SerializeSeq> {
-        Err(ProbeDone(None))
+    fn serialize_seq(self, _len: Option<usize>) -> Result<Compound<'a>> {
+        let inline = self.inline > 0;
+        Ok(self.open('[', inline, false))
     }
-    fn serialize_tuple(self, _: usize) -> ProbeResult<Self::SerializeTuple> {
-        Err(ProbeDone(None))
+    fn serialize_tuple(self, _len: usize) -> Result<Compound<'a>> {
+        Ok(self.open('(', true, false))
     }
-    fn serialize_tuple_struct(self, _: &'static str, _: usize) -> ProbeResult<Self::SerializeTupleStruct> {
-        Err(ProbeDone(None))
+    fn serialize_tuple_struct(self, _name: &'static str, _len: usize) -> Result<Compound<'a>> {
+        Ok(self.open('(', true, false))
     }
     fn serialize_tuple_variant(
         self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> ProbeResult<Self::SerializeTupleVariant> {
-        Err(ProbeDone(None))
+        _name: &'static str,
+        _index: u32,
+        variant: &'static str,
+        _len: usize,
+    ) -> Result<Compound<'a>> {
+        self.out.push_str(variant);
+        Ok(self.open('(', true, false))
     }
-    fn serialize_map(self, _: Option<usize>) -> ProbeResult<Self::SerializeMap> {
-        Err(ProbeDone(None))
+    fn serialize_map(self, _len: Option<usize>) -> Result<Compound<'a>> {
+        let inline = self.inline > 0;
+        Ok(self.open('{', inline, false))
+    }
+    fn serialize_struct(self, name: &'static str, _len: usize) -> Result<Compound<'a>> {
+        let key = name == KEY_STRUCT;
+        let inline = key || self.inline > 0;
+        Ok(self.open('(', inline, key))
     }
     fn serialize_struct_variant(
         self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> ProbeResult<Self::SerializeStructVariant> {
-        Err(ProbeDone(None))
+        _name: &'static str,
+        _index: u32,
+        variant: &'static str,
+        _len: usize,
+    ) -> Result<Compound<'a>> {
+        self.out.push_str(variant);
+        Ok(self.open('(', true, false))
+    }
+}
+
+impl ser::SerializeSeq for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_element<T: ?Sized + Serialize>(&mut self, value: &T) -> Result {
+        self.element(value)
+    }
+    fn end(self) -> Result {
+        self.close(']')
+    }
+}
+
+impl ser::SerializeTuple for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_element<T: ?Sized + Serialize>(&mut self, value: &T) -> Result {
+        self.element(value)
+    }
+    fn end(self) -> Result {
+        self.close(')')
+    }
+}
+
+impl ser::SerializeTupleStruct for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_field<T: ?Sized + Serialize>(&mut self, value: &T) -> Result {
+        self.element(value)
+    }
+    fn end(self) -> Result {
+        self.close(')')
+    }
+}
+
+impl ser::SerializeTupleVariant for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_field<T: ?Sized + Serialize>(&mut self, value: &T) -> Result {
+        self.element(value)
+    }
+    fn end(self) -> Result {
+        self.close(')')
+    }
+}
+
+impl ser::SerializeMap for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_key<T: ?Sized + Serialize>(&mut self, key: &T) -> Result {
+        self.next();
+        key.serialize(&mut *self.w)?;
+        self.w.out.push_str(": ");
+        Ok(())
+    }
+    fn serialize_value<T: ?Sized + Serialize>(&mut self, value: &T) -> Result {
+        value.serialize(&mut *self.w)?;
+        if !self.inline {
+            self.w.out.push(',');
+        }
+        Ok(())
+    }
+    fn end(self) -> Result {
+        self.close('}')
+    }
+}
+
+impl ser::SerializeStruct for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_field<T: ?Sized + Serialize>(&mut self, key: &'static str, value: &T) -> Result {
+        self.field(key, value)
+    }
+    fn end(self) -> Result {
+        self.close(')')
+    }
+}
+
+impl ser::SerializeStructVariant for Compound<'_> {
+    type Ok = ();
+    type Error = WriteError;
+    fn serialize_field<T: ?Sized + Serialize>(&mut self, key: &'static str, value: &T) -> Result {
+        self.field(key, value)
+    }
+    fn end(self) -> Result {
+        self.close(')')
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Serialize;
+
+    #[derive(Serialize)]
+    struct Key {
+        time: f64,
+        value: (f32, f32),
+        interpolation: &'static str,
+        tcb: Tcb,
+        flag: Option<u8>,
+    }
+
+    #[derive(Serialize)]
+    struct Tcb {
+        tension: f32,
+        continuity: f32,
+        bias: f32,
+    }
+
+    #[derive(Serialize)]
+    enum Kind {
+        Point,
+        Spot { cutoff_deg: f32 },
+        Wrapped(u8),
+    }
+
+    #[derive(Serialize)]
+    struct Doc {
+        name: String,
+        empty: Vec<u8>,
+        keys: Vec<Key>,
+        kinds: Vec<Kind>,
+        nothing: Option<u8>,
+    }
+
+    #[test]
+    fn layout() {
+        let doc = Doc {
+            name: "a \"b\"\n\\ é\u{1}".into(),
+            empty: vec![],
+            keys: vec![
+                Key {
+                    time: 0.1,
+                    value: (1.0, -0.0),
+                    interpolation: "Tcb",
+                    tcb: Tcb { tension: 0.0, continuity: 0.0, bias: 0.0 },
+                    flag: Some(1),
+                },
+                Key {
+                    time: 1e-7,
+                    value: (3.0e38, 1e-45),
+                    interpolation: "Step",
+                    tcb: Tcb { tension: 0.5, continuity: 0.0, bias: 0.0 },
+                    flag: None,
+                },
+            ],
+            kinds: vec![Kind::Point, Kind::Spot { cutoff_deg: 30.0 }, Kind::Wrapped(3)],
+            nothing: None,
+        };
+        // `interpolation` here is a string, so it is written quoted and never equals the
+        // unquoted default; the `tcb` default is recognized and left out.
+        let expected = r#"(
+    name: "a \"b\"\n\\ é\u{1}",
+    empty: [],
+    keys: [
+        (time: 0.1, value: (1.0, -0.0), interpolation: "Tcb", flag: Some(1)),
+        (time: 1e-7, value: (3e38, 1e-45), interpolation: "Step", tcb: (tension: 0.5, continuity: 0.0, bias: 0.0), flag: None),
+    ],
+    kinds: [
+        Point,
+        Spot(cutoff_deg: 30.0),
+        Wrapped(3),
+    ],
+    nothing: None,
+)"#;
+        assert_eq!(to_ron(&doc).unwrap(), expected);
     }
 }

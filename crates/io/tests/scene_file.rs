@@ -56,6 +56,18 @@ fn newer_version_is_refused_with_its_place() {
 }
 
 #[test]
+fn version_after_the_scene_is_read_too() {
+    // Hand-edited files may put `version` last: the slower two-pass path reads them.
+    let text = format!("(\n    scene: (\n{TIMING}\n    ),\n    version: 1,\n)\n");
+    assert_eq!(scene_file::from_str(&text, origin()).unwrap().frame_range.end, 10);
+    let (err, _) = parse_err(&text.replace("version: 1", "version: 4"));
+    assert!(matches!(err, SceneFileError::TooNew { found: 4, line: 6, column: 14, .. }), "{err:?}");
+    let (err, shown) = parse_err(&text.replace("version: 1,", "version: 1,\n    version: 1,"));
+    assert!(matches!(err, SceneFileError::Syntax { .. }), "{err:?}");
+    assert!(shown.contains("version"), "{shown}");
+}
+
+#[test]
 fn older_versions_without_migration_are_refused() {
     let (err, shown) = parse_err(&doc(TIMING).replace("version: 1", "version: 0"));
     assert!(matches!(err, SceneFileError::TooOld { found: 0, line: 2, column: 14, .. }), "{err:?}");
