@@ -120,10 +120,16 @@ fn assert_all_equal(runs: &[Deformed], what: &str) {
 
 #[test]
 fn reference_and_fast_paths_agree() {
-    let mut rng = Lcg(7);
-    let skeleton = random_skeleton(&mut rng, 12);
-    // More than two chunks, so the parallel path really splits.
-    let n = 10_000;
+    // (joints, vertices): more than two chunks, so the parallel path really splits; and a
+    // large skeleton with few vertices, where dual quaternions skip the per-frame sign table.
+    for (joint_count, n) in [(12, 10_000), (70, 1_003)] {
+        agreement(joint_count, n);
+    }
+}
+
+fn agreement(joint_count: usize, n: usize) {
+    let mut rng = Lcg(7 + joint_count as u64);
+    let skeleton = random_skeleton(&mut rng, joint_count);
     let d = random_data(&mut rng, &skeleton, n);
     for round in 0..3 {
         let pose = random_pose(&mut rng, skeleton.len());
