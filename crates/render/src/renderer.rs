@@ -606,6 +606,20 @@ impl Renderer {
                 edge_index_count: edges.len() as u32,
             })
         })??;
+        // Fill the output once (rest pose / first frame) so that the mesh draws sensibly even
+        // in a frame that does not deform it.
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig first skin") });
+        match &mesh.deformation {
+            Deformation::Static(_) => {}
+            // The joint buffer starts with identity poses: M(j) = I gives the rest mesh.
+            Deformation::Skinned(skin) => self.skinner.encode(&mut encoder, skin, DeformerKind::Rigid),
+            Deformation::Morph(morph) => {
+                self.skinner.write_morph(&self.queue, morph, id, 0, 0, 0.0)?;
+                self.skinner.encode_morph(&mut encoder, morph);
+            }
+        }
+        self.queue.submit([encoder.finish()]);
         self.meshes.insert(id, mesh);
         Ok(())
     }

@@ -218,3 +218,36 @@ fn skinned_item_moves_with_its_joints() {
         }
     }
 }
+
+#[test]
+fn an_uploaded_skin_draws_its_rest_pose_before_any_deformation() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    let positions: Vec<Vec3> = vertices.iter().map(SkinnedVertex::position).collect();
+    let normals = vec![Vec3::Y; 4];
+    let joints = vec![[0u32, 0, 0, 0]; 4];
+    let weights = vec![[1.0f32, 0.0, 0.0, 0.0]; 4];
+    let rigid = vec![0u32; 4];
+    let blend = vec![keyrig_render::BlendBinding { joint: 0, t: 0.0 }; 4];
+    let binds = vec![Mat4::IDENTITY];
+    let skin = keyrig_render::SkinMeshInput {
+        positions: &positions,
+        normals: &normals,
+        joints: &joints,
+        weights: &weights,
+        rigid_joints: &rigid,
+        blend: &blend,
+        bind_from_model: &binds,
+    };
+    r.upload_mesh(1, &MeshData::Skinned { skin, indices: &indices }).expect("upload");
+    let out = r.renderer().read_vertices(1).expect("readback");
+    assert_eq!(out.iter().map(SkinnedVertex::position).collect::<Vec<_>>(), positions);
+
+    let frames = vec![
+        vertices.clone(),
+        vertices.iter().map(|v| SkinnedVertex::new(v.position() * 2.0, Vec3::Y)).collect(),
+    ];
+    r.upload_mesh(2, &MeshData::Morph { frames: &frames, indices: &indices }).expect("upload morph");
+    let out = r.renderer().read_vertices(2).expect("readback");
+    assert_eq!(out, vertices, "a morphing mesh starts at its first frame");
+}
