@@ -126,6 +126,8 @@ pub struct EditorApp {
     pub meshes: files::MeshStore,
     /// What the viewport could not draw in the last frame (shown in red over it).
     pub viewport_errors: Vec<String>,
+    /// Smoothed time between frames while playing, seconds (shown in the status bar).
+    pub frame_time: Option<f32>,
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
     pub gpu: Option<crate::gpu_view::GpuView>,
     tracks: RefCell<Option<CachedTracks>>,
@@ -174,6 +176,7 @@ impl EditorApp {
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
             viewport_errors: Vec::new(),
+            frame_time: None,
             gpu: None,
             tracks: RefCell::new(None),
             window_title: String::new(),
@@ -611,6 +614,12 @@ impl EditorApp {
         if self.playback.playing {
             self.playback.advance(dt, fps, range.start, range.end);
             ctx.request_repaint();
+            let raw = ctx.input(|i| i.unstable_dt);
+            if raw.is_finite() && raw > 0.0 {
+                self.frame_time = Some(self.frame_time.map_or(raw, |t| t * 0.9 + raw * 0.1));
+            }
+        } else {
+            self.frame_time = None;
         }
 
         for command in pressed_commands(&ctx) {
