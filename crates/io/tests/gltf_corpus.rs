@@ -292,3 +292,25 @@ fn linear_blend_skinning_matches_the_gltf_definition() {
         }
     }
 }
+
+#[test]
+fn every_corpus_model_maps_onto_a_scene_that_saves_and_loads() {
+    for (file, ..) in MODELS {
+        let m = load(file);
+        let animation = if m.animations.is_empty() { None } else { Some(0) };
+        let scene = m.to_scene("model.glb", animation).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let mesh_nodes = m.nodes.iter().filter(|n| n.mesh.is_some()).count();
+        assert_eq!(scene.objects.len(), mesh_nodes, "{file}: one object per mesh node");
+        let text = keyrig_io::scene_file::to_string(&scene).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let back = keyrig_io::scene_file::from_str(&text, Path::new("model.ron"))
+            .unwrap_or_else(|e| panic!("{file}: the mapped scene does not load again: {e}"));
+        assert_eq!(back.objects.len(), scene.objects.len(), "{file}");
+        // Every rotation track of every joint validates in keyrig-core.
+        for object in &scene.objects {
+            for joint in object.skeleton.iter().flat_map(|s| &s.joints) {
+                keyrig_core::AnimatedTrack::new(&joint.rotation)
+                    .unwrap_or_else(|e| panic!("{file} {}: {e}", joint.name));
+            }
+        }
+    }
+}

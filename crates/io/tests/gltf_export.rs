@@ -165,3 +165,33 @@ fn skinned_arm_deforms_like_keyrig_skin_after_export() {
         assert!(worst <= bound, "t {t}: worst vertex {worst} m (bound {bound})");
     }
 }
+
+#[test]
+fn lights_survive_export_and_import() {
+    let scene = keyrig_io::demo::demo_scene();
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let mapped = model.to_scene("demo.glb", None).expect("scene");
+    assert_eq!(mapped.lights.len(), scene.lights.len());
+    let t0 = f64::from(scene.frame_range.start) / scene.fps;
+    for (a, b) in scene.lights.iter().zip(&mapped.lights) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(std::mem::discriminant(&a.kind), std::mem::discriminant(&b.kind));
+        let position = AnimatedTrack::new(&a.position).expect("track").sample(t0);
+        assert!(
+            (position - b.position.value).length() < 1e-4,
+            "{}: {position} vs {}",
+            a.name,
+            b.position.value
+        );
+        let direction = AnimatedTrack::new(&a.direction).expect("track").sample(t0).normalize();
+        assert!(direction.angle_between(b.direction.value) < 1e-3, "{}", a.name);
+        if let (
+            keyrig_core::LightKind::Spot { cutoff_deg, .. },
+            keyrig_core::LightKind::Spot { cutoff_deg: c2, .. },
+        ) = (a.kind, b.kind)
+        {
+            assert!((cutoff_deg - c2).abs() < 1e-3);
+        }
+    }
+}
