@@ -318,3 +318,43 @@ fn copy_paste_and_box_select_keys() {
         .collect();
     assert!(missed.is_empty(), "box selection missed {missed:?}");
 }
+
+#[test]
+fn dragging_a_key_diamond_moves_it_in_time_as_one_undo_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let original = h.state().doc.scene().clone();
+    let at_15 = h.get_by_label("key elbow rotation frame 15").rect().center();
+    let at_30 = h.get_by_label("key elbow rotation frame 30").rect().center();
+    let per_frame = (at_30.x - at_15.x) / 15.0;
+    let target = at_15 + egui::vec2(per_frame * 5.0, 0.0);
+    h.event(Event::PointerMoved(at_15));
+    h.event(Event::PointerButton {
+        pos: at_15,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    h.step();
+    for i in 1..=10 {
+        h.event(Event::PointerMoved(at_15 + (target - at_15) * (i as f32 / 10.0)));
+        h.step();
+    }
+    h.event(Event::PointerButton {
+        pos: target,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    h.run();
+    let scene = h.state().doc.scene();
+    let frames: Vec<i64> =
+        channels::key_times(scene, elbow).iter().map(|t| (t * scene.fps).round() as i64).collect();
+    assert_eq!(frames, vec![0, 20, 30, 45, 75, 90]);
+    // The moved key stays selected, and the whole drag is one undo step.
+    let selected: Vec<_> = h.state().selection.keys.iter().copied().collect();
+    assert_eq!(selected, vec![keyrig_editor::state::KeyRef { channel: elbow, index: 1 }]);
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original);
+}
