@@ -431,6 +431,9 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             LightKind::Directional => l["type"] = json!("directional"),
             LightKind::Point => l["type"] = json!("point"),
             LightKind::Spot { cutoff_deg, inner_angle_deg, .. } => {
+                if !(cutoff_deg.is_finite() && inner_angle_deg.is_finite()) {
+                    return Err(scene_err(format!("{here}.kind"), "spot angles must be finite"));
+                }
                 let outer = cutoff_deg.to_radians().clamp(1e-4, std::f32::consts::FRAC_PI_2);
                 let inner = inner_angle_deg.to_radians().clamp(0.0, outer - 1e-4);
                 l["type"] = json!("spot");

@@ -509,6 +509,9 @@ impl Md2Model {
         }
         let n = range.len();
         let f = time * fps;
+        if !f.is_finite() {
+            return Err(Md2PlaybackError::BadTime(time));
+        }
         let (a, b, u) = if looping {
             let f = f.rem_euclid(n as f64);
             let a = (f.floor() as usize).min(n - 1);
