@@ -125,10 +125,19 @@ impl RestSkeleton {
 
     /// The rest skeleton of a scene skeleton (rest translations and rotations of its joints).
     pub fn from_scene(skeleton: &keyrig_core::Skeleton) -> Result<Self, SkinError> {
+        // Rest rotations within the tolerance of unit length are normalized (checked below).
         let joints: Vec<RestJoint> = skeleton
             .joints
             .iter()
-            .map(|j| RestJoint::new(j.name.clone(), j.parent, j.rest_translation, j.rest_rotation))
+            .map(|j| {
+                let length = j.rest_rotation.length();
+                let rotation = if length.is_finite() && length > 0.0 {
+                    j.rest_rotation / length
+                } else {
+                    j.rest_rotation
+                };
+                RestJoint::new(j.name.clone(), j.parent, j.rest_translation, rotation)
+            })
             .collect();
         for (j, (joint, rest)) in skeleton.joints.iter().zip(&joints).enumerate() {
             let length = joint.rest_rotation.length();
