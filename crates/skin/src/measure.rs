@@ -110,3 +110,49 @@ pub fn joint_cross_section(
         vertex_count: count,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::mesh_for;
+    use crate::pose::Pose;
+    use keyrig_core::ProceduralMesh;
+
+    #[test]
+    fn cross_section_of_the_rest_arm_is_its_ring() {
+        let arm = mesh_for(ProceduralMesh::ArmLowPoly);
+        let palette = JointPalette::new(&arm.skeleton, &Pose::rest(4)).unwrap();
+        let section = joint_cross_section(&arm, &palette, 2, &arm.positions).unwrap();
+        // Ring 6 (6 vertices) lies exactly on joint 2.
+        assert_eq!(section.vertex_count, 6);
+        assert_eq!(section.ratio(), 1.0);
+        let expected: f32 =
+            arm.positions[36..42].iter().map(|p| p.distance(arm.skeleton.rest_position(2))).sum::<f32>()
+                / 6.0;
+        assert!((section.rest_radius - expected).abs() < 1e-4);
+        // A collapsed copy has ratio 0.
+        let mut collapsed = arm.positions.clone();
+        for p in &mut collapsed[36..42] {
+            *p = arm.skeleton.rest_position(2);
+        }
+        assert_eq!(joint_cross_section(&arm, &palette, 2, &collapsed).unwrap().ratio(), 0.0);
+    }
+
+    #[test]
+    fn measures_reject_bad_input() {
+        let arm = mesh_for(ProceduralMesh::ArmLowPoly);
+        let palette = JointPalette::new(&arm.skeleton, &Pose::rest(4)).unwrap();
+        assert_eq!(
+            joint_cross_section(&arm, &palette, 9, &arm.positions),
+            Err(SkinError::NoSuchJoint { joint: 9, joint_count: 4 })
+        );
+        assert!(matches!(
+            joint_cross_section(&arm, &palette, 1, &arm.positions[..10]),
+            Err(SkinError::LengthMismatch { expected: 78, found: 10, .. })
+        ));
+        assert_eq!(
+            enclosed_volume(&arm.positions[..3], &[0, 1, 7]),
+            Err(SkinError::TriangleIndexOutOfRange { triangle: 0, index: 7, vertex_count: 3 })
+        );
+    }
+}
