@@ -746,6 +746,56 @@ impl ImportedModel {
             .map_err(|source| MappingError::Skin { skin, source })
     }
 
+    /// A keyrig-skin joint palette for the skinned mesh on `node` at `time` of `animation`
+    /// that follows the file exactly: `F(j) = P⁻¹ · globalTransform(joint_j)` with every
+    /// channel of the animation (translations of any joint and scales included) and
+    /// `M(j) = F(j) · IBM(j)`, so rigid, linear blend and dual quaternion through keyrig-skin
+    /// reproduce glTF's joint matrices. Bones blending's per-joint rotations come from the
+    /// keyrig pose ([`ImportedModel::scene_skeleton`]), which holds rotations and the root
+    /// translation only. `skeleton` is the rest skeleton of [`ImportedModel::skinned_mesh`].
+    ///
+    /// # Errors
+    /// The node has no skin, or its tracks or skeleton are rejected by keyrig.
+    pub fn exact_joint_palette(
+        &self,
+        node: usize,
+        skeleton: &keyrig_skin::RestSkeleton,
+        animation: Option<usize>,
+        time: f64,
+    ) -> Result<keyrig_skin::JointPalette, MappingError> {
+        let bad = |message: String| MappingError::Node { node, message };
+        let skin = self.nodes.get(node).and_then(|n| n.skin).ok_or_else(|| bad("has no skin".into()))?;
+        let map = self.skeleton_map(skin).ok_or_else(|| bad("skin missing".into()))?;
+        let scene_skeleton = self.scene_skeleton(skin, animation)?;
+        let sampler = keyrig_skin::ScenePoseSampler::new(&scene_skeleton)
+            .map_err(|source| MappingError::Skin { skin, source })?;
+        let mut palette = keyrig_skin::JointPalette::new(skeleton, &sampler.sample(time))
+            .map_err(|source| MappingError::Skin { skin, source })?;
+        let world = self.world_matrices(&self.pose_at(animation, time));
+        let frame_inv = map.frame.inverse();
+        let s = &self.skins[skin];
+        for (k, (&n, &slot)) in map.nodes.iter().zip(&map.skin_slot).enumerate().take(palette.len()) {
+            let f = glam::Affine3A::from_mat4(frame_inv * world[n]);
+            palette.model_from_joint[k] = f;
+            palette.skinning[k] = f * glam::Affine3A::from_mat4(s.inverse_bind_matrices[slot]);
+        }
+        let uniform = palette.skinning.iter().all(|m| {
+            let l = [
+                m.matrix3.x_axis.length_squared(),
+                m.matrix3.y_axis.length_squared(),
+                m.matrix3.z_axis.length_squared(),
+            ];
+            let max = l[0].max(l[1]).max(l[2]);
+            max > 0.0 && l.iter().all(|x| (x - max).abs() <= 1e-4 * max)
+        });
+        palette.normal_skinning = if uniform {
+            None
+        } else {
+            Some(palette.skinning.iter().map(|m| m.matrix3.inverse().transpose()).collect())
+        };
+        Ok(palette)
+    }
+
     /// `world_from_skeleton` (P) of skin `skin`: where the keyrig skeleton's model space sits
     /// in the file's world. keyrig-skin's deformed positions times P are glTF world positions.
     #[must_use]

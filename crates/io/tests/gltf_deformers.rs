@@ -90,3 +90,38 @@ fn skinned_corpus_models_deform_with_all_four_deformers() {
         );
     }
 }
+
+#[test]
+fn exact_palette_reproduces_the_gltf_joint_matrices_through_keyrig_skin() {
+    for (file, _) in SKINNED {
+        let model = import_gltf_file(&corpus(file)).expect("import");
+        let node =
+            model.nodes.iter().position(|n| n.skin.is_some() && n.mesh.is_some()).expect("skinned node");
+        let skin = model.nodes[node].skin.expect("skin");
+        let mesh = model.skinned_mesh(node).expect("mesh");
+        let frame = model.skeleton_frame(skin).expect("frame");
+        let bindings = mesh.bindings(BlendZone::new(0.25, 0.25).expect("zone")).expect("bindings");
+        let (lo, hi) = mesh.positions.iter().fold((Vec3::MAX, Vec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
+        let size = (hi - lo).length() * frame.to_scale_rotation_translation().0.max_element();
+        let duration = model.animations[0].duration();
+        let mut worst = 0.0f32;
+        for step in 0..=8 {
+            let t = duration * f64::from(step) / 8.0;
+            let palette = model.exact_joint_palette(node, &mesh.skeleton, Some(0), t).expect("palette");
+            let exact: Vec<Vec3> =
+                model.deformed_positions(node, Some(0), t).expect("exact").into_iter().flatten().collect();
+            let linear = deform_mesh(&mesh, &bindings, &palette, DeformerKind::LinearBlend).expect("linear");
+            for (p, e) in linear.positions.iter().zip(&exact) {
+                worst = worst.max((frame.transform_point3(*p) - *e).length() / size);
+            }
+            for kind in [DeformerKind::Rigid, DeformerKind::DualQuaternion, DeformerKind::BonesBlending] {
+                let out = deform_mesh(&mesh, &bindings, &palette, kind)
+                    .unwrap_or_else(|e| panic!("{file} {kind:?}: {e}"));
+                assert!(out.positions.iter().all(|p| p.is_finite()), "{file} {kind:?}");
+            }
+        }
+        // Four influences kept and normalized; the corpus has at most four, summing to 1.
+        assert!(worst <= 1e-5, "{file}: keyrig-skin linear blend with the exact palette differs by {worst}");
+        eprintln!("{file}: exact palette, linear blend vs glTF definition: worst {worst:.2e} of the size");
+    }
+}
