@@ -603,6 +603,7 @@ mod tests {
             format!("(version: 1, scene: ({base}))"),
             format!("(version: 1, scene: ({base},),)"),
             format!("(version: 1, scene: ({base}, ambient: (1, 2e3, -0.0)))"),
+            format!("(version: 1, scene: ({base}, ambient: (3.4028235e+38, 1e-45, -2.5E-3)))"),
             format!("// c\n(/* a /* nested */ */ version: 1, scene: ({base}))\n// end"),
             format!("SceneFile(version: 1, scene: Scene({base}))"),
             format!("(version: 1, scene: ({base}, ambient: (1.0f32, 2.0, 3.0)))"),
@@ -633,6 +634,7 @@ mod tests {
         // The plain forms are taken by the fast path.
         assert!(read_current(&texts[0]).is_some());
         assert!(read_current(&texts[3]).is_some());
-        assert!(read_current(&texts[16]).is_some());
+        assert!(read_current(&texts[4]).is_some());
+        assert!(read_current(&texts[17]).is_some());
     }
 }

@@ -90,8 +90,11 @@ impl Writer {
         self.out.push('"');
     }
 
-    fn write_float<F: fmt::Debug>(&mut self, v: F) {
-        let _ = write!(self.out, "{v:?}");
+    /// Shortest round-trip text of a float (zmij, Schubfach); `NaN`, `inf`, `-inf` otherwise.
+    /// Integral values keep a `.0` so that they read as floats.
+    fn write_float<F: zmij::Float + Copy + fmt::Debug>(&mut self, v: F) {
+        let mut buffer = zmij::Buffer::new();
+        self.out.push_str(buffer.format(v));
     }
 
     fn open(&mut self, bracket: char, inline: bool, skip_defaults: bool) -> Compound<'_> {
@@ -495,7 +498,7 @@ mod tests {
     empty: [],
     keys: [
         (time: 0.1, value: (1.0, -0.0), interpolation: "Tcb", flag: Some(1)),
-        (time: 1e-7, value: (3e38, 1e-45), interpolation: "Step", tcb: (tension: 0.5, continuity: 0.0, bias: 0.0), flag: None),
+        (time: 1e-7, value: (3e+38, 1e-45), interpolation: "Step", tcb: (tension: 0.5, continuity: 0.0, bias: 0.0), flag: None),
     ],
     kinds: [
         Point,
