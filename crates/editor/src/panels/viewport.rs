@@ -458,7 +458,7 @@ fn gizmo_ui(
                 None => pose.world_from_object,
             };
             let (_, parent_rotation, _) = parent_world.to_scale_rotation_translation();
-            let local = (parent_rotation * j.rest_rotation).inverse() * new_rotation;
+            let local = joint_rotation_from_world(parent_rotation, j.rest_rotation, new_rotation);
             app.apply_pose(
                 ChannelId::JointRotation { object, joint },
                 ChannelValue::Rotation(local.normalize()),
@@ -575,5 +575,32 @@ fn draw_mesh(
                 painter.circle_filled(*p, 1.5, colour);
             }
         }
+    }
+}
+
+/// The local rotation T(j) that gives joint j the world rotation `world_rotation`, from
+/// F(j) = F(p(j))·R(j)·T(j): T(j) = (rot(F(p(j)))·R(j))⁻¹ · world rotation. For a root,
+/// `parent_world_rotation` is the object's rotation.
+#[must_use]
+pub fn joint_rotation_from_world(
+    parent_world_rotation: Quat,
+    rest_rotation: Quat,
+    world_rotation: Quat,
+) -> Quat {
+    ((parent_world_rotation * rest_rotation).inverse() * world_rotation).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn joint_rotation_from_world_inverts_the_chain() {
+        let parent = Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1);
+        let rest = Quat::from_rotation_z(0.4);
+        let local = Quat::from_euler(glam::EulerRot::XYZ, -0.2, 0.5, 0.9);
+        let world = parent * rest * local;
+        let back = joint_rotation_from_world(parent, rest, world);
+        assert!(back.angle_between(local) < 1e-5, "{back:?} vs {local:?}");
     }
 }
