@@ -6,7 +6,9 @@
 //! file with `KEYRIG_REGENERATE_DEMO=1 cargo test -p keyrig-io --test scene_demo`).
 //!
 //! Units are metres and seconds; the arm runs along +X from its root joint, 1.60158 m long in
-//! four bones of 0.400395 m (DESIGN.md §6 gives 160.158 cm).
+//! four bones of 0.400395 m (DESIGN.md §6 gives 160.158 cm). keyrig-skin builds the procedural
+//! arms in centimetres; the renderer and the editor scale a procedural mesh to the object's
+//! skeleton, and a test checks that this skeleton is keyrig-skin's arm × 0.01.
 
 use glam::{Quat, Vec3};
 use keyrig_core::{

@@ -6,8 +6,8 @@ pub mod gltf_export;
 pub mod gltf_import;
 pub mod md2;
 pub mod model;
-pub mod scene_file;
 mod scene_fast;
+pub mod scene_file;
 mod scene_locate;
 mod scene_ser;
 
