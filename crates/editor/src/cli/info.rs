@@ -126,6 +126,9 @@ fn channel_keys(scene: &Scene, channel: &ChannelPath) -> (usize, Option<(f64, f6
     }
 }
 
+/// An animated channel: its path, key count and key time range.
+type AnimatedChannel = (String, usize, Option<(f64, f64)>);
+
 fn duration_s(scene: &Scene) -> f64 {
     f64::from(scene.frame_range.end - scene.frame_range.start) / scene.fps
 }
@@ -191,7 +194,7 @@ fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> Stri
         c.target, c.yaw_deg, c.pitch_deg, c.distance, c.fov_y_deg
     );
     let channels = list_channels(scene);
-    let animated: Vec<(String, usize, Option<(f64, f64)>)> = channels
+    let animated: Vec<AnimatedChannel> = channels
         .iter()
         .filter_map(|ch| {
             let (n, span) = channel_keys(scene, ch);

@@ -138,7 +138,7 @@ fn resolve_channel(args: &SampleArgs, scene: &Scene) -> anyhow::Result<Channel> 
         bail!("missing --channel PATH; this scene's channels are:\n  {}", names.join("\n  "));
     };
     let path = ChannelPath::parse(text)?;
-    Ok(path.resolve(scene).with_context(|| format!("{}", args.file.display()))?)
+    path.resolve(scene).with_context(|| format!("{}", args.file.display()))
 }
 
 /// A component as printed: f32 (the precision of the scene's values), with −0 shown as 0.
