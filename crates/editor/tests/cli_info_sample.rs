@@ -165,7 +165,12 @@ fn bad_files_name_file_place_and_problem() {
     let glb = write_temp(&dir, "model.glb", "glTF");
     assert_fails_with(
         &keyrig(&["info", glb.to_str().unwrap()]),
-        &["model.glb: .glb model files are not supported"],
+        &["model.glb: byte 0: GLB container: file is 4 bytes, shorter than the 12-byte header"],
+    );
+    let md2 = write_temp(&dir, "model.md2", "IDP2");
+    assert_fails_with(
+        &keyrig(&["info", md2.to_str().unwrap()]),
+        &["model.md2: MD2 models hold vertex animation"],
     );
     let txt = write_temp(&dir, "notes.txt", "hello");
     assert_fails_with(
@@ -315,4 +320,37 @@ fn sample_bad_arguments() {
         &keyrig(&["sample", d, "--channel", "object/Arm/rotation", "--time", "NaN"]),
         &["--time NaN"],
     );
+}
+
+/// A skinned, animated glTF model of the shared corpus (see ../shared/corpus/SOURCES.md).
+fn rigged_simple() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb")
+}
+
+#[test]
+fn info_and_sample_read_gltf_models() {
+    let model = rigged_simple();
+    let model = model.to_str().unwrap();
+    let o = keyrig(&["info", model, "--format", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let joints = v["objects"][0]["joints"].as_array().expect("a skinned object with joints");
+    assert!(!joints.is_empty());
+    let tracks = v["tracks"].as_array().expect("tracks");
+    let channel = tracks
+        .iter()
+        .filter_map(|t| t["channel"].as_str())
+        .find(|c| c.contains("/joint/"))
+        .expect("an animated joint")
+        .to_string();
+    let o = keyrig(&["sample", model, "--channel", &channel, "--frames", "0..10", "--format", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let samples = v["samples"].as_array().expect("samples");
+    assert_eq!(samples.len(), 11);
+    for s in samples {
+        let q: Vec<f64> = s["value"].as_array().unwrap().iter().map(|c| c.as_f64().unwrap()).collect();
+        let norm = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-5, "{q:?}");
+    }
 }

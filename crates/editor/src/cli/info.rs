@@ -1,8 +1,9 @@
 //! `keyrig info FILE`: what a scene holds (timing, objects, skeletons, lights, tracks and key
 //! counts) and what is wrong with it.
 //!
-//! Exits non-zero when the file cannot be read or parsed, and also when the scene has
-//! validation problems (after printing the summary and every problem).
+//! Reads `.ron` scenes and `.glb`/`.gltf` models (mapped to a scene by keyrig-io). Exits
+//! non-zero when the file cannot be read or parsed, and also when the scene has validation
+//! problems (after printing the summary and every problem).
 
 use std::path::{Path, PathBuf};
 
@@ -22,26 +23,52 @@ pub enum InfoFormat {
 
 #[derive(clap::Args, Debug)]
 pub struct InfoArgs {
-    /// Scene file (.ron).
+    /// Scene file (.ron) or glTF model (.glb, .gltf).
     pub file: PathBuf,
     /// Output format.
     #[arg(long, value_enum, default_value_t = InfoFormat::Text)]
     pub format: InfoFormat,
 }
 
-/// Loads the scene at `path` for a headless command: `.ron` scenes only for now. Problems are
-/// returned beside the scene, located in the file.
+/// Loads the scene at `path` for a headless command. `.ron` scenes are read leniently (problems
+/// are returned beside the scene, located in the file); `.glb`/`.gltf` models are imported and
+/// mapped to a scene with keyrig-io's mapping (first animation), whose problems have no file
+/// position. MD2 models hold vertex animation, not channels, and are refused.
 pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, Vec<LocatedProblem>)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("ron") => {}
-        Some(model @ ("glb" | "gltf" | "md2")) => bail!(
-            "{}: .{model} model files are not supported by `keyrig {command}` yet; give a .ron scene",
+        Some("ron") => Ok(scene_file::load_lenient(path)?),
+        Some("glb" | "gltf") => {
+            let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let animation = (!model.animations.is_empty()).then_some(0);
+            let scene = model
+                .to_scene(&name, animation)
+                .with_context(|| format!("{}: mapping the model to a scene", path.display()))?;
+            let problems = scene
+                .problems()
+                .into_iter()
+                .map(|problem| LocatedProblem { problem, position: None })
+                .collect();
+            Ok((scene, problems))
+        }
+        Some("md2") => bail!(
+            "{}: MD2 models hold vertex animation (frames and clips), not channels; \
+             `keyrig {command}` reads .ron scenes and .glb/.gltf models",
             path.display()
         ),
-        _ => bail!("{}: unknown file type; `keyrig {command}` reads .ron scene files", path.display()),
+        _ => bail!(
+            "{}: unknown file type; `keyrig {command}` reads .ron scenes and .glb/.gltf models",
+            path.display()
+        ),
     }
-    Ok(scene_file::load_lenient(path)?)
+}
+
+fn format_line(path: &Path) -> String {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("glb" | "gltf") => "glTF model, mapped to a scene (first animation)".to_string(),
+        _ => format!("keyrig scene, version {}", scene_file::CURRENT_VERSION),
+    }
 }
 
 pub fn run(args: InfoArgs) -> anyhow::Result<()> {
@@ -139,7 +166,7 @@ fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> Stri
     let w = &mut out;
     let range = scene.frame_range;
     let _ = writeln!(w, "file:     {}", path.display());
-    let _ = writeln!(w, "format:   keyrig scene, version {}", scene_file::CURRENT_VERSION);
+    let _ = writeln!(w, "format:   {}", format_line(path));
     let _ = writeln!(
         w,
         "timing:   {} fps, frames {}..={} ({} frames, {:.3} s)",

@@ -33,7 +33,7 @@ pub enum RotationFormatArg {
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("when").required(true).args(["frames", "times", "frame", "time"])))]
 pub struct SampleArgs {
-    /// Scene file (.ron).
+    /// Scene file (.ron) or glTF model (.glb, .gltf; its first animation).
     pub file: PathBuf,
     /// The value to sample, e.g. object/Arm/joint/elbow/rotation (see docs/channels.md).
     #[arg(long)]
