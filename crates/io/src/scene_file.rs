@@ -637,4 +637,46 @@ mod tests {
         assert!(read_current(&texts[4]).is_some());
         assert!(read_current(&texts[17]).is_some());
     }
+
+    /// Deterministic mutations of the demo file (a character replaced, deleted or doubled):
+    /// the fast path never accepts a text that `ron` rejects or reads differently, and
+    /// loading never panics and always locates its error.
+    #[test]
+    fn mutated_demo_files_agree_with_ron_and_never_panic() {
+        const REPLACEMENTS: [&str; 16] =
+            [",", ")", "(", "]", " ", "1", "e", "-", "\"", "\\", "/", "*", "x", ":", "NaN", "1e999"];
+        let demo = DEMO_RON;
+        let positions: Vec<usize> =
+            (0..demo.len()).step_by(11).filter(|&i| demo.is_char_boundary(i)).collect();
+        let mut accepted = 0;
+        let mut checked = 0;
+        for (n, &i) in positions.iter().enumerate() {
+            let next = demo[i..].chars().next().map_or(i, |c| i + c.len_utf8());
+            let mutations = [
+                format!("{}{}{}", &demo[..i], REPLACEMENTS[n % REPLACEMENTS.len()], &demo[next..]),
+                format!("{}{}", &demo[..i], &demo[next..]),
+                format!("{}{}", &demo[..next], &demo[i..]),
+            ];
+            for text in &mutations {
+                checked += 1;
+                let result = std::panic::catch_unwind(|| {
+                    let fast = read_current(text);
+                    let ron = with_ron(text);
+                    (fast, ron, from_str_lenient(text, Path::new("m.ron")))
+                });
+                let Ok((fast, ron, loaded)) = result else {
+                    panic!("panic on mutation at byte {i}:\n{text}")
+                };
+                if let Some(fast) = fast {
+                    accepted += 1;
+                    assert_eq!(format!("{:?}", Some(fast)), format!("{ron:?}"), "byte {i}:\n{text}");
+                }
+                if let Err(err) = loaded {
+                    assert!(err.position().is_some(), "byte {i}: {err}");
+                }
+            }
+        }
+        // Some mutations (inside strings, numbers, whitespace) still give valid files.
+        assert!(accepted > 0 && checked > 2000, "{accepted} of {checked}");
+    }
 }
