@@ -168,8 +168,9 @@ fn bad_files_name_file_place_and_problem() {
         &["model.glb: byte 0: GLB container: file is 4 bytes, shorter than the 12-byte header"],
     );
     let md2 = write_temp(&dir, "model.md2", "IDP2");
+    assert_fails_with(&keyrig(&["info", md2.to_str().unwrap()]), &["model.md2: byte 0: file is 4 bytes"]);
     assert_fails_with(
-        &keyrig(&["info", md2.to_str().unwrap()]),
+        &keyrig(&["sample", md2.to_str().unwrap(), "--channel", "object/A/rotation", "--frame", "1"]),
         &["model.md2: MD2 models hold vertex animation"],
     );
     let txt = write_temp(&dir, "notes.txt", "hello");
@@ -353,4 +354,31 @@ fn info_and_sample_read_gltf_models() {
         let norm = q.iter().map(|c| c * c).sum::<f64>().sqrt();
         assert!((norm - 1.0).abs() < 1e-5, "{q:?}");
     }
+}
+
+#[test]
+fn info_summarizes_md2_models() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).expect("corpus md2 folder") {
+        let folder = entry.unwrap().path();
+        if !folder.is_dir() {
+            continue;
+        }
+        for file in std::fs::read_dir(&folder).unwrap() {
+            let path = file.unwrap().path();
+            if path.extension().and_then(|e| e.to_str()) != Some("md2") {
+                continue;
+            }
+            let o = keyrig(&["info", path.to_str().unwrap(), "--format", "json"]);
+            assert!(o.status.success(), "{}: {}", path.display(), stderr(&o));
+            let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+            assert!(v["frames"].as_u64().unwrap() > 0 && v["triangles"].as_u64().unwrap() > 0, "{v}");
+            let clip_frames: u64 =
+                v["clips"].as_array().unwrap().iter().map(|c| c["frames"].as_u64().unwrap()).sum();
+            assert_eq!(clip_frames, v["frames"].as_u64().unwrap(), "clips cover every frame");
+            seen += 1;
+        }
+    }
+    assert!(seen > 0, "no .md2 in {}", dir.display());
 }

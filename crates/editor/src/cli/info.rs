@@ -1,7 +1,8 @@
 //! `keyrig info FILE`: what a scene holds (timing, objects, skeletons, lights, tracks and key
 //! counts) and what is wrong with it.
 //!
-//! Reads `.ron` scenes and `.glb`/`.gltf` models (mapped to a scene by keyrig-io). Exits
+//! Reads `.ron` scenes and `.glb`/`.gltf` models (mapped to a scene by keyrig-io), and
+//! summarizes `.md2` models (mesh, frames, clips). Exits
 //! non-zero when the file cannot be read or parsed, and also when the scene has validation
 //! problems (after printing the summary and every problem).
 
@@ -72,6 +73,11 @@ fn format_line(path: &Path) -> String {
 }
 
 pub fn run(args: InfoArgs) -> anyhow::Result<()> {
+    let is_md2 =
+        args.file.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
+    if is_md2 {
+        return md2_info(&args);
+    }
     let (scene, problems) = load_scene_lenient(&args.file, "info")?;
     let text = match args.format {
         InfoFormat::Text => summary_text(&args.file, &scene, &problems),
@@ -91,6 +97,68 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// `keyrig info` of an MD2 model: its mesh, frames and clips (MD2 is vertex animation; it has
+/// no channels to sample).
+fn md2_info(args: &InfoArgs) -> anyhow::Result<()> {
+    use std::fmt::Write as _;
+    let model = keyrig_io::md2::load_md2_file(&args.file)?;
+    let vertices = model.frames.first().map_or(0, |f| f.positions.len());
+    let triangles = model.indices.len() / 3;
+    let text = match args.format {
+        InfoFormat::Text => {
+            let mut w = String::new();
+            let _ = writeln!(w, "file:     {}", args.file.display());
+            let _ = writeln!(w, "format:   MD2 model (vertex animation: whole frames, no channels)");
+            let _ = writeln!(
+                w,
+                "mesh:     {vertices} vertices, {} render vertices, {triangles} triangles",
+                model.vertex_xyz.len()
+            );
+            let _ = writeln!(
+                w,
+                "skin:     {}×{}, {}",
+                model.skin_width,
+                model.skin_height,
+                match &model.skin {
+                    Some(skin) => format!("image {}", skin.path.display()),
+                    None => "no image found next to the file".to_string(),
+                }
+            );
+            let _ = writeln!(w, "frames:   {}", model.frames.len());
+            let _ = writeln!(w, "clips:    {}", model.clips.len());
+            for clip in &model.clips {
+                let _ = writeln!(
+                    w,
+                    "  {:?}: frames {}..{} ({} frames)",
+                    clip.name,
+                    clip.frames.start,
+                    clip.frames.end,
+                    clip.frames.len()
+                );
+            }
+            w
+        }
+        InfoFormat::Json => {
+            let clips: Vec<_> = model
+                .clips
+                .iter()
+                .map(|c| serde_json::json!({"name": c.name, "first_frame": c.frames.start, "frames": c.frames.len()}))
+                .collect();
+            let doc = serde_json::json!({
+                "file": args.file.display().to_string(),
+                "format": "md2",
+                "vertices": vertices,
+                "render_vertices": model.vertex_xyz.len(),
+                "triangles": triangles,
+                "frames": model.frames.len(),
+                "clips": clips,
+            });
+            serde_json::to_string_pretty(&doc).context("writing JSON")? + "\n"
+        }
+    };
+    super::sample::write_stdout(text.as_bytes())
 }
 
 fn mesh_text(mesh: Option<&MeshSource>) -> String {
