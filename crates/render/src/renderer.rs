@@ -608,8 +608,9 @@ impl Renderer {
         })??;
         // Fill the output once (rest pose / first frame) so that the mesh draws sensibly even
         // in a frame that does not deform it.
-        let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig first skin") });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig first skin") });
         match &mesh.deformation {
             Deformation::Static(_) => {}
             // The joint buffer starts with identity poses: M(j) = I gives the rest mesh.
