@@ -1,1 +1,1 @@
-//! Shared helpers for keyrig end-to-end tests.
+//! keyrig-tests: cross-crate end-to-end tests (see `tests/`); the library itself is empty.

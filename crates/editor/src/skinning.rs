@@ -13,8 +13,8 @@ use std::collections::HashMap;
 use glam::{Affine3A, Vec3};
 use keyrig_core::{DeformerKind, DeformerSettings, ProceduralMesh, Skeleton};
 use keyrig_skin::{
-    deform_mesh_into, joint_cross_section, mesh_for, scene_skeleton_for, BlendZone, CrossSection, Deformed,
-    Execution, JointPalette, MeshBindings, Pose, RestSkeleton, SkinnedMesh,
+    deform_mesh_into, joint_cross_section, mesh_for, BlendZone, CrossSection, Deformed, Execution,
+    JointPalette, MeshBindings, Pose, RestSkeleton, SkinnedMesh,
 };
 
 use crate::eval::ObjectPose;
@@ -59,11 +59,6 @@ pub struct SkinCache {
     statics: Vec<(ProceduralMesh, Vec<Vec3>, Vec<u32>)>,
 }
 
-/// Sum of the rest offsets of non-root joints: the skeleton's "length".
-fn chain_length(skeleton: &Skeleton) -> f32 {
-    skeleton.joints.iter().filter(|j| j.parent.is_some()).map(|j| j.rest_translation.length()).sum()
-}
-
 fn build_entry(
     input: &MeshInput<'_>,
     skeleton: &Skeleton,
@@ -92,23 +87,8 @@ fn build_entry(
 
 /// A procedural mesh scaled to the object's skeleton and bound to it.
 fn fit_procedural(kind: ProceduralMesh, skeleton: &Skeleton) -> Result<SkinnedMesh, String> {
-    let mut mesh = mesh_for(kind);
-    let scale = match scene_skeleton_for(kind) {
-        Some(native) => {
-            let (native_len, scene_len) = (chain_length(&native), chain_length(skeleton));
-            if native_len > 0.0 && scene_len > 0.0 {
-                scene_len / native_len
-            } else {
-                1.0
-            }
-        }
-        None => 1.0,
-    };
-    for p in &mut mesh.positions {
-        *p *= scale;
-    }
     let rest = RestSkeleton::from_scene(skeleton).map_err(|e| format!("skeleton: {e}"))?;
-    mesh.with_skeleton(rest).map_err(|e| format!("mesh does not fit the skeleton: {e}"))
+    mesh_for(kind).fit_to_skeleton(rest).map_err(|e| format!("mesh does not fit the skeleton: {e}"))
 }
 
 impl SkinCache {

@@ -759,14 +759,11 @@ fn mesh_data(
         MeshSource::Procedural(kind) => {
             let mut mesh = keyrig_skin::mesh_for(*kind);
             // Procedural meshes are built in centimetres on their own skeleton; fit them to the
-            // object's skeleton by the ratio of chain lengths, as the editor and renderer do.
-            if let (Some(native), Some(scene_skeleton)) = (keyrig_skin::scene_skeleton_for(*kind), skeleton) {
-                let (native_len, scene_len) = (chain_length(&native), chain_length(scene_skeleton));
-                if native.joints.len() == scene_skeleton.joints.len() && native_len > 0.0 && scene_len > 0.0 {
-                    let factor = scene_len / native_len;
-                    for p in &mut mesh.positions {
-                        *p *= factor;
-                    }
+            // object's skeleton as the editor and renderer do. A skeleton that does not build is
+            // reported by the skeleton's own export; the mesh then keeps its native size.
+            if let Some(rest) = skeleton.and_then(|s| keyrig_skin::RestSkeleton::from_scene(s).ok()) {
+                if let Ok(fitted) = mesh.clone().fit_to_skeleton(rest) {
+                    mesh = fitted;
                 }
             }
             Ok(MeshData {
@@ -803,10 +800,6 @@ fn mesh_data(
 }
 
 /// Sum of the rest offsets of non-root joints: the skeleton's "length".
-fn chain_length(skeleton: &keyrig_core::Skeleton) -> f32 {
-    skeleton.joints.iter().filter(|j| j.parent.is_some()).map(|j| j.rest_translation.length()).sum()
-}
-
 /// All triangle primitives of mesh `index` merged into one (no skin).
 fn static_mesh(model: &ImportedModel, index: usize) -> Option<MeshData> {
     let mesh = model.meshes.get(index)?;

@@ -150,23 +150,6 @@ pub struct SceneRig {
     lights: Vec<LightRig>,
 }
 
-/// Scales a procedural mesh (built in centimetres) to a scene skeleton of the same shape in
-/// other units: the factor is the ratio of the summed rest bone lengths.
-fn fit_to_skeleton(mut mesh: SkinnedMesh, rest: &RestSkeleton) -> SkinnedMesh {
-    let length =
-        |s: &RestSkeleton| -> f32 { s.parent_from_joint().iter().map(|a| a.translation.length()).sum() };
-    let (own, scene) = (length(&mesh.skeleton), length(rest));
-    if own > 0.0 && scene > 0.0 && mesh.skeleton.len() == rest.len() {
-        let factor = scene / own;
-        if (factor - 1.0).abs() > 1e-4 {
-            for p in &mut mesh.positions {
-                *p *= factor;
-            }
-        }
-    }
-    mesh
-}
-
 impl SceneRig {
     /// Prepares a scene whose meshes are all procedural.
     ///
@@ -223,8 +206,8 @@ impl SceneRig {
                 Some(source) => {
                     let mesh = match source {
                         MeshSource::Procedural(kind) => match &rest {
-                            Some(rest) => fit_to_skeleton(mesh_for(*kind), rest)
-                                .with_skeleton(rest.clone())
+                            Some(rest) => mesh_for(*kind)
+                                .fit_to_skeleton(rest.clone())
                                 .map_err(skin_err(at("mesh (bound to the object's skeleton)")))?,
                             None => mesh_for(*kind),
                         },

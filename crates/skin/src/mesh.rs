@@ -134,6 +134,33 @@ impl SkinnedMesh {
         Ok(self)
     }
 
+    /// Scales the mesh to `skeleton`, a skeleton of the same shape in other units (e.g. the
+    /// paper's arms, built in centimetres, on a scene skeleton in metres), and binds it to it.
+    ///
+    /// The factor is the ratio of the summed parent-to-joint distances (the chain's length);
+    /// positions are scaled only when both skeletons have the same number of joints and a
+    /// non-zero length. Normals are unchanged by a uniform scale.
+    pub fn fit_to_skeleton(mut self, skeleton: RestSkeleton) -> Result<Self, SkinError> {
+        let chain_length = |s: &RestSkeleton| -> f32 {
+            s.parents()
+                .iter()
+                .zip(s.parent_from_joint())
+                .filter(|(parent, _)| parent.is_some())
+                .map(|(_, a)| a.translation.length())
+                .sum()
+        };
+        let (own, target) = (chain_length(&self.skeleton), chain_length(&skeleton));
+        if self.skeleton.len() == skeleton.len() && own > 0.0 && target > 0.0 {
+            let factor = target / own;
+            if (factor - 1.0).abs() > 1e-6 {
+                for p in &mut self.positions {
+                    *p *= factor;
+                }
+            }
+        }
+        self.with_skeleton(skeleton)
+    }
+
     /// Number of vertices.
     #[must_use]
     pub fn vertex_count(&self) -> usize {
@@ -417,6 +444,29 @@ mod tests {
         let min = mesh.positions.iter().fold(Vec3::MAX, |a, &b| a.min(b));
         let max = mesh.positions.iter().fold(Vec3::MIN, |a, &b| a.max(b));
         max - min
+    }
+
+    #[test]
+    fn fit_to_skeleton_scales_to_a_metre_skeleton_and_binds_it() {
+        let native = mesh_for(ProceduralMesh::ArmLowPoly);
+        let mut metres = arm_scene_skeleton();
+        for joint in &mut metres.joints {
+            joint.rest_translation *= 0.01;
+        }
+        let rest = RestSkeleton::from_scene(&metres).unwrap();
+        let fitted = native.clone().fit_to_skeleton(rest.clone()).unwrap();
+        assert_eq!(fitted.skeleton, rest);
+        for (a, b) in native.positions.iter().zip(&fitted.positions) {
+            assert!((*a * 0.01 - *b).length() < 1e-5, "{a} * 0.01 != {b}");
+        }
+        assert_eq!(fitted.normals, native.normals);
+        // A skeleton of the same length keeps the positions bit for bit.
+        let same = native.clone().fit_to_skeleton(native.skeleton.clone()).unwrap();
+        assert_eq!(same.positions, native.positions);
+        // A skeleton of another shape keeps the size but must still hold every joint index.
+        let hand = RestSkeleton::from_scene(&hand_scene_skeleton()).unwrap();
+        let on_hand = native.clone().fit_to_skeleton(hand).unwrap();
+        assert_eq!(on_hand.positions, native.positions);
     }
 
     #[test]

@@ -142,9 +142,7 @@ fn pick_target(
     let mesh = match &object.mesh {
         None => bail!("{}: object `{}` has no mesh", file.display(), object.name),
         Some(MeshSource::Procedural(kind)) => match &rest {
-            Some(rest) => fit_to_skeleton(mesh_for(*kind), rest)
-                .with_skeleton(rest.clone())
-                .with_context(|| at("skeleton"))?,
+            Some(rest) => mesh_for(*kind).fit_to_skeleton(rest.clone()).with_context(|| at("skeleton"))?,
             None => mesh_for(*kind),
         },
         Some(MeshSource::File { path, .. }) => match loaded.get_mut(index).and_then(Option::take) {
@@ -173,23 +171,6 @@ fn pick_target(
     };
     let zone = BlendZone::from_settings(&object.deformer).with_context(|| at("deformer"))?;
     Ok(Target { object: object.name.clone(), mesh, poser, zone })
-}
-
-/// Scales a procedural mesh to a scene skeleton with the same number of joints but another
-/// total bone length (e.g. the arms, made in centimetres, on a skeleton in metres).
-fn fit_to_skeleton(mut mesh: SkinnedMesh, rest: &RestSkeleton) -> SkinnedMesh {
-    let length =
-        |s: &RestSkeleton| -> f32 { s.parent_from_joint().iter().map(|a| a.translation.length()).sum() };
-    let (own, scene) = (length(&mesh.skeleton), length(rest));
-    if own > 0.0 && scene > 0.0 && mesh.skeleton.len() == rest.len() {
-        let factor = scene / own;
-        if (factor - 1.0).abs() > 1e-4 {
-            for p in &mut mesh.positions {
-                *p *= factor;
-            }
-        }
-    }
-    mesh
 }
 
 /// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
