@@ -4,8 +4,11 @@
 //! keyrig-skin's reference implementation of the chosen deformer.
 //!
 //! FILE is a scene (.ron) or a glTF model (.glb/.gltf, its first animation, through
-//! keyrig-io's scene mapping). OBJ gets `v`, `vn` and `f` lines; JSON gets positions and unit
-//! normals as arrays of [x, y, z].
+//! keyrig-io's scene mapping). A skinned glTF node is posed exactly as the glTF specification
+//! defines it (every channel, M(j) = world(j)·IBM(j), weights as stored) and written in the
+//! file's world axes and accessor order, so linear blend reproduces glTF's skinning; the other
+//! deformers use the same joints and weights. OBJ gets `v`, `vn` and `f` lines; JSON gets
+//! positions and unit normals as arrays of [x, y, z].
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -59,6 +62,8 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
 /// What `keyrig deform` deforms: a mesh bound to its rest skeleton, the pose sampler of the
 /// object's scene skeleton (none: rest pose), and the object's blend zone.
 struct Target {
+    /// Index of the object in the scene.
+    index: usize,
     object: String,
     mesh: SkinnedMesh,
     poser: Option<ScenePoseSampler>,
@@ -74,10 +79,11 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         bail!("{}: the output must end in .obj or .json", args.output.display());
     };
     let file = &args.file;
-    let (scene, loaded) = if has_extension(file, &["ron"]) {
-        (keyrig_io::scene_file::load(file)?, Vec::new())
+    let (scene, loaded, gltf) = if has_extension(file, &["ron"]) {
+        (keyrig_io::scene_file::load(file)?, Vec::new(), None)
     } else if has_extension(file, &["glb", "gltf"]) {
-        gltf_scene(file)?
+        let (scene, loaded, gltf) = gltf_scene(file)?;
+        (scene, loaded, Some(gltf))
     } else if has_extension(file, &["md2"]) {
         bail!("{}: MD2 models have no skeleton to deform (they animate by vertex morphing)", file.display());
     } else {
@@ -100,11 +106,34 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         None => Pose::rest(target.mesh.skeleton.len()),
     };
     let at = || format!("{}: object `{}`", file.display(), target.object);
-    let palette = JointPalette::new(&target.mesh.skeleton, &pose).with_context(at)?;
+    // A skinned glTF node is posed exactly as the glTF specification defines it (every
+    // channel of the animation, M(j) = world(j)·IBM(j)) and the result is put back into the
+    // file's world axes; everything else is posed from the scene's tracks.
+    let gltf_skin = gltf.as_ref().and_then(|g| {
+        let node = *g.nodes.get(target.index)?;
+        Some((g, node, g.model.nodes[node].skin?))
+    });
+    let palette = match gltf_skin {
+        Some((g, node, _)) => {
+            g.model.exact_joint_palette(node, &target.mesh.skeleton, g.animation, time).with_context(at)?
+        }
+        None => JointPalette::new(&target.mesh.skeleton, &pose).with_context(at)?,
+    };
     let bindings = target.mesh.bindings(target.zone).with_context(at)?;
     let mut out = Deformed::default();
     deform_mesh_into(&target.mesh, &bindings, &palette, args.deformer, Execution::Reference, &mut out)
         .with_context(|| format!("{}: {} deformer", at(), args.deformer.cli_name()))?;
+    if let Some((g, _, skin)) = gltf_skin {
+        if let Some(world_from_skeleton) = g.model.skeleton_frame(skin) {
+            let normal_matrix = glam::Mat3::from_mat4(world_from_skeleton).inverse().transpose();
+            for p in &mut out.positions {
+                *p = world_from_skeleton.transform_point3(*p);
+            }
+            for n in &mut out.normals {
+                *n = normal_matrix * *n;
+            }
+        }
+    }
     let text = match format {
         OutputFormat::Obj => obj_text(&target, &args, time, &out),
         OutputFormat::Json => json_text(&target, &args, time, &out)?,
@@ -170,12 +199,12 @@ fn pick_target(
         None => None,
     };
     let zone = BlendZone::from_settings(&object.deformer).with_context(|| at("deformer"))?;
-    Ok(Target { object: object.name.clone(), mesh, poser, zone })
+    Ok(Target { index, object: object.name.clone(), mesh, poser, zone })
 }
 
 /// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
 /// its skinned mesh nodes by object index.
-fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>)> {
+fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, GltfSource)> {
     let model = keyrig_io::gltf_import::import_gltf_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let animation = (!model.animations.is_empty()).then_some(0);
@@ -184,7 +213,9 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>)> 
         .with_context(|| format!("{}: mapping to a scene", path.display()))?;
     // keyrig-io's to_scene makes one object per node with a mesh, in node order.
     let mut loaded = Vec::new();
+    let mut nodes = Vec::new();
     for (node, n) in model.nodes.iter().enumerate().filter(|(_, n)| n.mesh.is_some()) {
+        nodes.push(node);
         loaded.push(match n.skin {
             Some(_) => {
                 check_weights(&model, node)
@@ -194,7 +225,15 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>)> 
             None => None,
         });
     }
-    Ok((scene, loaded))
+    Ok((scene, loaded, GltfSource { model, animation, nodes }))
+}
+
+/// The glTF model behind a scene made by [`gltf_scene`]: the model, the animation used and the
+/// node of each scene object (by object index).
+struct GltfSource {
+    model: keyrig_io::model::ImportedModel,
+    animation: Option<usize>,
+    nodes: Vec<usize>,
 }
 
 /// Checks the weights of a skinned node's mesh as stored in the file (the scene mapping keeps
