@@ -188,6 +188,7 @@ fn gltf_linear_blend_is_the_specification_s_skinning() {
         let expected: Vec<Vec3> =
             model.deformed_positions(node, Some(0), time).unwrap().into_iter().flatten().collect();
         let json = deform_json(&path, &["--time", &time.to_string()], "linear", dir.path());
+        assert_eq!(json["space"], "gltf-world", "{file}");
         let got = positions(&json, "positions");
         assert_eq!(got.len(), expected.len(), "{file}: vertex count");
         let (min, max) = expected.iter().fold((Vec3::MAX, Vec3::MIN), |(a, b), &p| (a.min(p), b.max(p)));

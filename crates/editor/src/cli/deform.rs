@@ -65,6 +65,9 @@ struct Target {
     /// Index of the object in the scene.
     index: usize,
     object: String,
+    /// The space of the output: `model` (the object's skeleton space) or `gltf-world` (a
+    /// skinned glTF node: the file's world axes, as the glTF specification skins).
+    space: &'static str,
     mesh: SkinnedMesh,
     poser: Option<ScenePoseSampler>,
     zone: BlendZone,
@@ -100,7 +103,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         (None, Some(time)) => bail!("--time {time}: not a finite number"),
         _ => bail!("give exactly one of --frame and --time"),
     };
-    let target = pick_target(file, &scene, loaded, args.object.as_deref())?;
+    let mut target = pick_target(file, &scene, loaded, args.object.as_deref())?;
     let pose = match &target.poser {
         Some(poser) => poser.sample(time),
         None => Pose::rest(target.mesh.skeleton.len()),
@@ -125,6 +128,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: {} deformer", at(), args.deformer.cli_name()))?;
     if let Some((g, _, skin)) = gltf_skin {
         if let Some(world_from_skeleton) = g.model.skeleton_frame(skin) {
+            target.space = "gltf-world";
             let normal_matrix = glam::Mat3::from_mat4(world_from_skeleton).inverse().transpose();
             for p in &mut out.positions {
                 *p = world_from_skeleton.transform_point3(*p);
@@ -199,7 +203,7 @@ fn pick_target(
         None => None,
     };
     let zone = BlendZone::from_settings(&object.deformer).with_context(|| at("deformer"))?;
-    Ok(Target { index, object: object.name.clone(), mesh, poser, zone })
+    Ok(Target { index, object: object.name.clone(), space: "model", mesh, poser, zone })
 }
 
 /// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
@@ -266,11 +270,12 @@ fn check_weights(model: &keyrig_io::model::ImportedModel, node: usize) -> anyhow
 
 fn header(target: &Target, args: &DeformArgs, time: f64) -> String {
     format!(
-        "keyrig deform: {} object `{}`, {} deformer, t = {time} s, {} vertices, model space",
+        "keyrig deform: {} object `{}`, {} deformer, t = {time} s, {} vertices, {} space",
         args.file.display(),
         target.object,
         args.deformer.cli_name(),
-        target.mesh.vertex_count()
+        target.mesh.vertex_count(),
+        target.space
     )
 }
 
@@ -299,7 +304,7 @@ fn json_text(target: &Target, args: &DeformArgs, time: f64, out: &Deformed) -> a
         "deformer": args.deformer.cli_name(),
         "time": time,
         "vertex_count": out.positions.len(),
-        "space": "model",
+        "space": target.space,
         "positions": out.positions.iter().map(|&p| triple(p)).collect::<Vec<_>>(),
         "normals": out.normals.iter().map(|n| triple(n.normalize_or_zero())).collect::<Vec<_>>(),
         "indices": target.mesh.indices,
