@@ -48,8 +48,47 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("keyrig: error: {err:#}");
+            eprintln!("keyrig: error: {}", error_text(&err));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The error and its causes joined by ": ", as anyhow's `{:#}` does, but without a cause whose
+/// text the message before it already contains: keyrig's library errors put their source in
+/// their own message (`path: cannot read: …`), so `{:#}` would print it twice.
+fn error_text(err: &anyhow::Error) -> String {
+    let mut text = err.to_string();
+    for cause in err.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_text;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("scene.ron: cannot read: {source}")]
+    struct ReadError {
+        source: std::io::Error,
+    }
+
+    #[test]
+    fn causes_already_in_the_message_are_not_repeated() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let err = anyhow::Error::new(ReadError { source: io });
+        assert_eq!(error_text(&err), "scene.ron: cannot read: no such file");
+    }
+
+    #[test]
+    fn context_keeps_the_cause_it_does_not_mention() {
+        let err = anyhow::anyhow!("weights are NaN").context("arm.ron: object `Arm`");
+        assert_eq!(error_text(&err), "arm.ron: object `Arm`: weights are NaN");
     }
 }
