@@ -274,38 +274,161 @@ fn sin_cos_quarter_turn_x8(x: __m256) -> (__m256, __m256) {
     (s, c)
 }
 
-/// Writes 8 vertices given as x, y and z registers to 24 floats x₀y₀z₀x₁… at `out`.
+/// Which of three consecutive registers (floats 0..8, 8..16, 16..24 of 8 interleaved Vec3s)
+/// holds component `c` in lane `k`: float 8r + k is component (8r + k) % 3, so r = 2·(c − k)
+/// mod 3 (8 ≡ 2 and 2·2 ≡ 1 mod 3).
+const fn register_of(c: i32, k: i32) -> i32 {
+    (2 * (c - k)).rem_euclid(3)
+}
+
+/// Blend mask: the lanes k where component `c` is in register `r`.
+const fn lanes_in(c: i32, r: i32) -> i32 {
+    let mut mask = 0;
+    let mut k = 0;
+    while k < 8 {
+        if register_of(c, k) == r {
+            mask |= 1 << k;
+        }
+        k += 1;
+    }
+    mask
+}
+
+/// Blend mask for output register `r`: the lanes k that hold component `c`.
+const fn lanes_of(r: i32, c: i32) -> i32 {
+    let mut mask = 0;
+    let mut k = 0;
+    while k < 8 {
+        if (8 * r + k) % 3 == c {
+            mask |= 1 << k;
+        }
+        k += 1;
+    }
+    mask
+}
+
+/// Permutation for [`load_deinterleaved`]: lane l of component c takes lane (3l + c) % 8.
+const fn load_order(c: i32) -> [i32; 8] {
+    let mut order = [0; 8];
+    let mut l = 0;
+    while l < 8 {
+        order[l as usize] = (3 * l + c) % 8;
+        l += 1;
+    }
+    order
+}
+
+/// Permutation for [`store_interleaved`]: lane k of component c takes the vertex whose
+/// component lands in lane k of its output register.
+const fn store_order(c: i32) -> [i32; 8] {
+    let mut order = [0; 8];
+    let mut k = 0;
+    while k < 8 {
+        order[k as usize] = (8 * register_of(c, k) + k) / 3;
+        k += 1;
+    }
+    order
+}
+
+const LOAD_ORDER: [[i32; 8]; 3] = [load_order(0), load_order(1), load_order(2)];
+const STORE_ORDER: [[i32; 8]; 3] = [store_order(0), store_order(1), store_order(2)];
+
+/// An index register from a table.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+fn indices(table: &[i32; 8]) -> __m256i {
+    // SAFETY: 8 i32s.
+    unsafe { _mm256_loadu_si256(table.as_ptr().cast::<__m256i>()) }
+}
+
+/// Reads 8 interleaved Vec3s (24 floats x₀y₀z₀x₁… at `at`) as x, y and z registers: per
+/// component, two blends gather the lanes that hold it, one permutation puts them in order.
+///
+/// # Safety
+/// `at` must be valid for reading 24 floats; the CPU must support AVX2.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn load_deinterleaved(at: *const f32) -> [__m256; 3] {
+    // SAFETY: floats 0..24 of the caller's 24.
+    let (v0, v1, v2) =
+        unsafe { (_mm256_loadu_ps(at), _mm256_loadu_ps(at.add(8)), _mm256_loadu_ps(at.add(16))) };
+    let x = _mm256_blend_ps::<{ lanes_in(0, 2) }>(_mm256_blend_ps::<{ lanes_in(0, 1) }>(v0, v1), v2);
+    let y = _mm256_blend_ps::<{ lanes_in(1, 2) }>(_mm256_blend_ps::<{ lanes_in(1, 1) }>(v0, v1), v2);
+    let z = _mm256_blend_ps::<{ lanes_in(2, 2) }>(_mm256_blend_ps::<{ lanes_in(2, 1) }>(v0, v1), v2);
+    [
+        _mm256_permutevar8x32_ps(x, indices(&LOAD_ORDER[0])),
+        _mm256_permutevar8x32_ps(y, indices(&LOAD_ORDER[1])),
+        _mm256_permutevar8x32_ps(z, indices(&LOAD_ORDER[2])),
+    ]
+}
+
+/// Writes 8 vertices given as x, y and z registers to 24 floats x₀y₀z₀x₁… at `out` (the
+/// inverse of [`load_deinterleaved`]: one permutation per component, two blends per register).
 ///
 /// # Safety
 /// `out` must be valid for writing 24 floats; the CPU must support AVX2.
 #[inline]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn store_interleaved(out: *mut f32, x: __m256, y: __m256, z: __m256) {
-    // Output register r holds floats 8r..8r+8; float f is component f % 3 of vertex f / 3.
-    let idx = |r: i32, c: i32| {
-        let lane = |i: i32| {
-            let f = 8 * r + i;
-            if f % 3 == c {
-                f / 3
-            } else {
-                0
-            }
-        };
-        _mm256_setr_epi32(lane(0), lane(1), lane(2), lane(3), lane(4), lane(5), lane(6), lane(7))
-    };
-    for r in 0..3 {
-        let xs = _mm256_permutevar8x32_ps(x, idx(r, 0));
-        let ys = _mm256_permutevar8x32_ps(y, idx(r, 1));
-        let zs = _mm256_permutevar8x32_ps(z, idx(r, 2));
-        // Lane i takes x, y or z by (8r + i) % 3.
-        let pick = |c: i32| {
-            let m = |i: i32| if (8 * r + i) % 3 == c { -1 } else { 0 };
-            _mm256_castsi256_ps(_mm256_setr_epi32(m(0), m(1), m(2), m(3), m(4), m(5), m(6), m(7)))
-        };
-        let v = _mm256_blendv_ps(_mm256_blendv_ps(zs, ys, pick(1)), xs, pick(0));
-        // SAFETY: floats 8r..8r+8 of the 24 the caller provides.
-        unsafe { _mm256_storeu_ps(out.add(8 * r as usize), v) };
+    // Lane k of the permuted component c is that component of the vertex whose float lands in
+    // lane k of its output register.
+    let xs = _mm256_permutevar8x32_ps(x, indices(&STORE_ORDER[0]));
+    let ys = _mm256_permutevar8x32_ps(y, indices(&STORE_ORDER[1]));
+    let zs = _mm256_permutevar8x32_ps(z, indices(&STORE_ORDER[2]));
+    let r0 = _mm256_blend_ps::<{ lanes_of(0, 2) }>(_mm256_blend_ps::<{ lanes_of(0, 1) }>(xs, ys), zs);
+    let r1 = _mm256_blend_ps::<{ lanes_of(1, 2) }>(_mm256_blend_ps::<{ lanes_of(1, 1) }>(xs, ys), zs);
+    let r2 = _mm256_blend_ps::<{ lanes_of(2, 2) }>(_mm256_blend_ps::<{ lanes_of(2, 1) }>(xs, ys), zs);
+    // SAFETY: floats 0..24 of the caller's 24.
+    unsafe {
+        _mm256_storeu_ps(out, r0);
+        _mm256_storeu_ps(out.add(8), r1);
+        _mm256_storeu_ps(out.add(16), r2);
     }
+}
+
+/// The weights of 8 vertices, one register per influence. N = 4: rows l and l + 4 share a
+/// register (one 128-bit half each) and a 4×4 transpose in each half puts them in order;
+/// N = 8: one 8×8 transpose; otherwise gathers.
+///
+/// # Safety
+/// `ws` must hold 8 rows; the CPU must support AVX2 and FMA.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn weights_soa<const N: usize>(ws: &[[f32; N]]) -> [__m256; N] {
+    debug_assert_eq!(ws.len(), 8);
+    let at = ws.as_ptr().cast::<f32>();
+    let mut out = [_mm256_setzero_ps(); N];
+    if N == 4 {
+        // SAFETY: row l is floats 4l..4l + 4 of the 32.
+        let (r0, r1, r2, r3) = unsafe {
+            (
+                _mm256_loadu2_m128(at.add(16), at),
+                _mm256_loadu2_m128(at.add(20), at.add(4)),
+                _mm256_loadu2_m128(at.add(24), at.add(8)),
+                _mm256_loadu2_m128(at.add(28), at.add(12)),
+            )
+        };
+        let t0 = _mm256_unpacklo_ps(r0, r1);
+        let t1 = _mm256_unpackhi_ps(r0, r1);
+        let t2 = _mm256_unpacklo_ps(r2, r3);
+        let t3 = _mm256_unpackhi_ps(r2, r3);
+        out[0] = _mm256_shuffle_ps::<0x44>(t0, t2);
+        out[1] = _mm256_shuffle_ps::<0xEE>(t0, t2);
+        out[2] = _mm256_shuffle_ps::<0x44>(t1, t3);
+        out[3] = _mm256_shuffle_ps::<0xEE>(t1, t3);
+    } else if N == 8 {
+        // SAFETY: row l is floats 8l..8l + 8 of the 64.
+        let t = transpose8(std::array::from_fn(|l| unsafe { _mm256_loadu_ps(at.add(8 * l)) }));
+        out.copy_from_slice(&t[..N]);
+    } else {
+        let n = N as i32;
+        let stride_n = _mm256_setr_epi32(0, n, 2 * n, 3 * n, 4 * n, 5 * n, 6 * n, 7 * n);
+        for (i, w) in out.iter_mut().enumerate() {
+            // SAFETY: lane l reads ws[l][i], inside the 8·N floats of `ws`.
+            *w = unsafe { _mm256_i32gather_ps::<4>(at.add(i), stride_n) };
+        }
+    }
+    out
 }
 
 /// Transposes 8 rows of 8 floats (row l = lane l's dual quaternion) into 8 columns
@@ -341,9 +464,85 @@ fn transpose8(r: [__m256; 8]) -> [__m256; 8] {
     ]
 }
 
+/// Two 4×4 transposes, one per 128-bit half: row l of each half becomes column l.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+fn transpose4x2([r0, r1, r2, r3]: [__m256; 4]) -> [__m256; 4] {
+    let t0 = _mm256_unpacklo_ps(r0, r1);
+    let t1 = _mm256_unpackhi_ps(r0, r1);
+    let t2 = _mm256_unpacklo_ps(r2, r3);
+    let t3 = _mm256_unpackhi_ps(r2, r3);
+    [
+        _mm256_shuffle_ps::<0x44>(t0, t2),
+        _mm256_shuffle_ps::<0xEE>(t0, t2),
+        _mm256_shuffle_ps::<0x44>(t1, t3),
+        _mm256_shuffle_ps::<0xEE>(t1, t3),
+    ]
+}
+
+/// The real parts of `dqs[joints[l]]` in SoA form (x, y, z, w of the 8 lanes).
+///
+/// # Safety
+/// Every index must be in `dqs`; the CPU must support AVX2 and FMA.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn real_parts_soa(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [__m256; 4] {
+    let at = |l: usize| unsafe { dqs.as_ptr().add(joints[l] as usize).cast::<f32>() };
+    // SAFETY: floats 0..4 (the real part) of palette entries.
+    unsafe {
+        transpose4x2([
+            _mm256_loadu2_m128(at(4), at(0)),
+            _mm256_loadu2_m128(at(5), at(1)),
+            _mm256_loadu2_m128(at(6), at(2)),
+            _mm256_loadu2_m128(at(7), at(3)),
+        ])
+    }
+}
+
+/// `dqs[joints[l]]` in SoA form: [real x, y, z, w; dual x, y, z, w] of the 8 lanes.
+///
+/// # Safety
+/// Every index must be in `dqs`; the CPU must support AVX2 and FMA.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn dual_quats_soa(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [[__m256; 4]; 2] {
+    // SAFETY: palette entries.
+    let (p0, p1, p2, p3, p4, p5, p6, p7) = unsafe {
+        let at = |l: usize| dqs.as_ptr().add(joints[l] as usize).cast::<f32>();
+        (at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7))
+    };
+    // SAFETY: floats 0..4 (real) and 4..8 (dual) of those entries.
+    unsafe {
+        [
+            transpose4x2([
+                _mm256_loadu2_m128(p4, p0),
+                _mm256_loadu2_m128(p5, p1),
+                _mm256_loadu2_m128(p6, p2),
+                _mm256_loadu2_m128(p7, p3),
+            ]),
+            transpose4x2([
+                _mm256_loadu2_m128(p4.add(4), p0.add(4)),
+                _mm256_loadu2_m128(p5.add(4), p1.add(4)),
+                _mm256_loadu2_m128(p6.add(4), p2.add(4)),
+                _mm256_loadu2_m128(p7.add(4), p3.add(4)),
+            ]),
+        ]
+    }
+}
+
+/// m0·x + m1·y + m2·z + t, 8 lanes.
+#[inline]
+#[target_feature(enable = "avx2,fma")]
+fn row(m0: __m256, m1: __m256, m2: __m256, [x, y, z]: [__m256; 3], t: __m256) -> __m256 {
+    _mm256_fmadd_ps(m0, x, _mm256_fmadd_ps(m1, y, _mm256_fmadd_ps(m2, z, t)))
+}
+
 /// Dual quaternion skinning of one chunk, 8 vertices at a time in structure-of-arrays form
 /// (each register holds one component of 8 vertices), the remainder one at a time with
-/// [`dual_quaternion_chunk`]. Same formula and sign rule.
+/// [`dual_quaternion_chunk`]. Same sign rule; the blended dual quaternion (r, d) becomes a
+/// rigid 3×4 matrix once per vertex, without normalizing it first: with s = 2/|r|²,
+/// R = I + s·[−(y²+z²), xy−wz, xz+wy; xy+wz, −(x²+z²), yz−wx; xz−wy, yz+wx, −(x²+y²)] and
+/// t = s·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗), which equal the normalized formulas.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA; every joint index must be in `dqs` (validated).
@@ -360,34 +559,38 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
 ) {
     let full = out_positions.len() / 8 * 8;
     let sign_bit = _mm256_set1_ps(-0.0);
-    // Gather offsets (in floats) of one component of 8 consecutive Vec3s / [f32; N]s.
-    let stride3 = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
-    let n = N as i32;
-    let stride_n = _mm256_setr_epi32(0, n, 2 * n, 3 * n, 4 * n, 5 * n, 6 * n, 7 * n);
     for base in (0..full).step_by(8) {
         let js = &joints[base..base + 8];
-        let ws = &weights[base..base + 8];
-        // Components of every influence, and the weights, in SoA form.
-        let mut comps = [[_mm256_setzero_ps(); 8]; N];
-        let mut wv = [_mm256_setzero_ps(); N];
-        for i in 0..N {
-            comps[i] = transpose8(std::array::from_fn(|l| dqs[js[l][i] as usize]));
-            // SAFETY: lane l reads ws[l][i], inside the 8·N floats of `ws`.
-            wv[i] = unsafe { _mm256_i32gather_ps::<4>(ws.as_ptr().cast::<f32>().add(i), stride_n) };
-        }
+        // SAFETY: 8 rows of weights.
+        let wv = unsafe { weights_soa::<N>(&weights[base..base + 8]) };
         // Pivot: the real part of each lane's largest-weight influence (first on ties).
         let mut best = wv[0];
-        let mut pivot = [comps[0][0], comps[0][1], comps[0][2], comps[0][3]];
-        for i in 1..N {
-            let larger = _mm256_cmp_ps::<_CMP_GT_OQ>(wv[i], best);
-            best = _mm256_blendv_ps(best, wv[i], larger);
-            for c in 0..4 {
-                pivot[c] = _mm256_blendv_ps(pivot[c], comps[i][c], larger);
-            }
+        let mut dominant = _mm256_setzero_ps();
+        for (i, &w) in wv.iter().enumerate().skip(1) {
+            let larger = _mm256_cmp_ps::<_CMP_GT_OQ>(w, best);
+            best = _mm256_blendv_ps(best, w, larger);
+            dominant = _mm256_blendv_ps(dominant, _mm256_castsi256_ps(_mm256_set1_epi32(i as i32)), larger);
         }
+        let mut influence = [0i32; 8];
+        // SAFETY: 8 i32s.
+        unsafe {
+            _mm256_storeu_si256(influence.as_mut_ptr().cast::<__m256i>(), _mm256_castps_si256(dominant))
+        };
+        let mut pivots = [0u16; 8];
+        for l in 0..8 {
+            pivots[l] = js[l][influence[l] as usize % N];
+        }
+        // SAFETY: every index is in `dqs` (validated).
+        let pivot = unsafe { real_parts_soa(dqs, pivots) };
+        // Blend, one influence at a time in SoA form.
         let mut q = [_mm256_setzero_ps(); 8];
         for i in 0..N {
-            let r = &comps[i];
+            let mut joint = [0u16; 8];
+            for l in 0..8 {
+                joint[l] = js[l][i];
+            }
+            // SAFETY: as above.
+            let [r, d] = unsafe { dual_quats_soa(dqs, joint) };
             let dot = _mm256_fmadd_ps(
                 r[3],
                 pivot[3],
@@ -398,56 +601,51 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
                 ),
             );
             let w = _mm256_xor_ps(wv[i], _mm256_and_ps(dot, sign_bit));
-            for c in 0..8 {
+            for c in 0..4 {
                 q[c] = _mm256_fmadd_ps(r[c], w, q[c]);
+                q[c + 4] = _mm256_fmadd_ps(d[c], w, q[c + 4]);
             }
         }
-        // Normalize by the real part's length (rsqrt and one Newton step).
-        let len2 = _mm256_fmadd_ps(
-            q[3],
-            q[3],
-            _mm256_fmadd_ps(q[2], q[2], _mm256_fmadd_ps(q[1], q[1], _mm256_mul_ps(q[0], q[0]))),
-        );
-        let r0 = _mm256_rsqrt_ps(len2);
-        let inv = _mm256_mul_ps(
-            _mm256_mul_ps(_mm256_set1_ps(0.5), r0),
-            _mm256_fnmadd_ps(_mm256_mul_ps(len2, r0), r0, _mm256_set1_ps(3.0)),
-        );
-        let [rx, ry, rz, rw, dx, dy, dz, dw] = q.map(|v| _mm256_mul_ps(v, inv));
-        // v + 2·r⃗ × (r⃗ × v + w·v): the rotation of v.
-        let rotate = |vx: __m256, vy: __m256, vz: __m256| {
-            let cx = _mm256_fmadd_ps(rw, vx, _mm256_fmsub_ps(ry, vz, _mm256_mul_ps(rz, vy)));
-            let cy = _mm256_fmadd_ps(rw, vy, _mm256_fmsub_ps(rz, vx, _mm256_mul_ps(rx, vz)));
-            let cz = _mm256_fmadd_ps(rw, vz, _mm256_fmsub_ps(rx, vy, _mm256_mul_ps(ry, vx)));
-            let two = _mm256_set1_ps(2.0);
-            (
-                _mm256_fmadd_ps(two, _mm256_fmsub_ps(ry, cz, _mm256_mul_ps(rz, cy)), vx),
-                _mm256_fmadd_ps(two, _mm256_fmsub_ps(rz, cx, _mm256_mul_ps(rx, cz)), vy),
-                _mm256_fmadd_ps(two, _mm256_fmsub_ps(rx, cy, _mm256_mul_ps(ry, cx)), vz),
-            )
-        };
-        // Translation 2·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗).
-        let two = _mm256_set1_ps(2.0);
+        let [rx, ry, rz, rw, dx, dy, dz, dw] = q;
+        // s = 2/|r|² (one division for 8 vertices).
+        let len2 =
+            _mm256_fmadd_ps(rw, rw, _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx))));
+        let s = _mm256_div_ps(_mm256_set1_ps(2.0), len2);
+        let (sx, sy, sz) = (_mm256_mul_ps(s, rx), _mm256_mul_ps(s, ry), _mm256_mul_ps(s, rz));
+        let (xx, yy, zz) = (_mm256_mul_ps(sx, rx), _mm256_mul_ps(sy, ry), _mm256_mul_ps(sz, rz));
+        let (xy, xz, yz) = (_mm256_mul_ps(sx, ry), _mm256_mul_ps(sx, rz), _mm256_mul_ps(sy, rz));
+        let (wx, wy, wz) = (_mm256_mul_ps(sx, rw), _mm256_mul_ps(sy, rw), _mm256_mul_ps(sz, rw));
+        let one = _mm256_set1_ps(1.0);
+        // Rows of R.
+        let m00 = _mm256_sub_ps(one, _mm256_add_ps(yy, zz));
+        let m01 = _mm256_sub_ps(xy, wz);
+        let m02 = _mm256_add_ps(xz, wy);
+        let m10 = _mm256_add_ps(xy, wz);
+        let m11 = _mm256_sub_ps(one, _mm256_add_ps(xx, zz));
+        let m12 = _mm256_sub_ps(yz, wx);
+        let m20 = _mm256_sub_ps(xz, wy);
+        let m21 = _mm256_add_ps(yz, wx);
+        let m22 = _mm256_sub_ps(one, _mm256_add_ps(xx, yy));
+        // t = s·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗).
         let tx = _mm256_mul_ps(
-            two,
+            s,
             _mm256_fmadd_ps(rw, dx, _mm256_fnmadd_ps(dw, rx, _mm256_fmsub_ps(ry, dz, _mm256_mul_ps(rz, dy)))),
         );
         let ty = _mm256_mul_ps(
-            two,
+            s,
             _mm256_fmadd_ps(rw, dy, _mm256_fnmadd_ps(dw, ry, _mm256_fmsub_ps(rz, dx, _mm256_mul_ps(rx, dz)))),
         );
         let tz = _mm256_mul_ps(
-            two,
+            s,
             _mm256_fmadd_ps(rw, dz, _mm256_fnmadd_ps(dw, rz, _mm256_fmsub_ps(rx, dy, _mm256_mul_ps(ry, dx)))),
         );
-        // SAFETY (both): lane l reads component c of vertex l, inside the 8 Vec3s (24 floats).
-        let ps = positions[base..base + 8].as_ptr().cast::<f32>();
-        let comp = |at: *const f32, c: usize| unsafe { _mm256_i32gather_ps::<4>(at.add(c), stride3) };
-        let (px, py, pz) = rotate(comp(ps, 0), comp(ps, 1), comp(ps, 2));
-        let ns = normals[base..base + 8].as_ptr().cast::<f32>();
-        let (nx, ny, nz) = rotate(comp(ns, 0), comp(ns, 1), comp(ns, 2));
-        let (px, py, pz) = (_mm256_add_ps(px, tx), _mm256_add_ps(py, ty), _mm256_add_ps(pz, tz));
-        // SAFETY (both): 8 Vec3s are 24 contiguous floats of the output slices.
+        // SAFETY (all four): 8 Vec3s are 24 contiguous floats of their slices.
+        let p = unsafe { load_deinterleaved(positions[base..base + 8].as_ptr().cast::<f32>()) };
+        let n = unsafe { load_deinterleaved(normals[base..base + 8].as_ptr().cast::<f32>()) };
+        let (px, py, pz) = (row(m00, m01, m02, p, tx), row(m10, m11, m12, p, ty), row(m20, m21, m22, p, tz));
+        let zero = _mm256_setzero_ps();
+        let (nx, ny, nz) =
+            (row(m00, m01, m02, n, zero), row(m10, m11, m12, n, zero), row(m20, m21, m22, n, zero));
         unsafe {
             store_interleaved(out_positions[base..base + 8].as_mut_ptr().cast::<f32>(), px, py, pz);
             store_interleaved(out_normals[base..base + 8].as_mut_ptr().cast::<f32>(), nx, ny, nz);
