@@ -480,15 +480,17 @@ fn transpose4x2([r0, r1, r2, r3]: [__m256; 4]) -> [__m256; 4] {
     ]
 }
 
-/// The real parts of `dqs[joints[l]]` in SoA form (x, y, z, w of the 8 lanes).
+/// Floats OFFSET..OFFSET + 4 (0: the real part, 4: the dual part) of `dqs[joints[l]]` in SoA
+/// form (x, y, z, w of the 8 lanes).
 ///
 /// # Safety
 /// Every index must be in `dqs`; the CPU must support AVX2 and FMA.
 #[inline]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn real_parts_soa(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [__m256; 4] {
-    let at = |l: usize| unsafe { dqs.as_ptr().add(joints[l] as usize).cast::<f32>() };
-    // SAFETY: floats 0..4 (the real part) of palette entries.
+unsafe fn parts_soa<const OFFSET: usize>(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [__m256; 4] {
+    // SAFETY: four floats inside palette entries.
+    let at = |l: usize| unsafe { dqs.as_ptr().add(joints[l] as usize).cast::<f32>().add(OFFSET) };
+    // SAFETY: as above.
     unsafe {
         transpose4x2([
             _mm256_loadu2_m128(at(4), at(0)),
@@ -496,37 +498,6 @@ unsafe fn real_parts_soa(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [__m256; 4
             _mm256_loadu2_m128(at(6), at(2)),
             _mm256_loadu2_m128(at(7), at(3)),
         ])
-    }
-}
-
-/// `dqs[joints[l]]` in SoA form: [real x, y, z, w; dual x, y, z, w] of the 8 lanes.
-///
-/// # Safety
-/// Every index must be in `dqs`; the CPU must support AVX2 and FMA.
-#[inline]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn dual_quats_soa(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [[__m256; 4]; 2] {
-    // SAFETY: palette entries.
-    let (p0, p1, p2, p3, p4, p5, p6, p7) = unsafe {
-        let at = |l: usize| dqs.as_ptr().add(joints[l] as usize).cast::<f32>();
-        (at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7))
-    };
-    // SAFETY: floats 0..4 (real) and 4..8 (dual) of those entries.
-    unsafe {
-        [
-            transpose4x2([
-                _mm256_loadu2_m128(p4, p0),
-                _mm256_loadu2_m128(p5, p1),
-                _mm256_loadu2_m128(p6, p2),
-                _mm256_loadu2_m128(p7, p3),
-            ]),
-            transpose4x2([
-                _mm256_loadu2_m128(p4.add(4), p0.add(4)),
-                _mm256_loadu2_m128(p5.add(4), p1.add(4)),
-                _mm256_loadu2_m128(p6.add(4), p2.add(4)),
-                _mm256_loadu2_m128(p7.add(4), p3.add(4)),
-            ]),
-        ]
     }
 }
 
@@ -563,34 +534,33 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
         let js = &joints[base..base + 8];
         // SAFETY: 8 rows of weights.
         let wv = unsafe { weights_soa::<N>(&weights[base..base + 8]) };
-        // Pivot: the real part of each lane's largest-weight influence (first on ties).
+        // Each influence's real parts in SoA form, and the pivot: the real part of each lane's
+        // largest-weight influence (first on ties).
+        let mut reals = [[_mm256_setzero_ps(); 4]; N];
+        let mut pivot = [_mm256_setzero_ps(); 4];
         let mut best = wv[0];
-        let mut dominant = _mm256_setzero_ps();
-        for (i, &w) in wv.iter().enumerate().skip(1) {
+        for (i, (r, &w)) in reals.iter_mut().zip(&wv).enumerate() {
+            let mut joint = [0u16; 8];
+            for (j, vertex) in joint.iter_mut().zip(js) {
+                *j = vertex[i];
+            }
+            // SAFETY: every index is in `dqs` (validated).
+            *r = unsafe { parts_soa::<0>(dqs, joint) };
             let larger = _mm256_cmp_ps::<_CMP_GT_OQ>(w, best);
             best = _mm256_blendv_ps(best, w, larger);
-            dominant = _mm256_blendv_ps(dominant, _mm256_castsi256_ps(_mm256_set1_epi32(i as i32)), larger);
+            for c in 0..4 {
+                pivot[c] = if i == 0 { r[c] } else { _mm256_blendv_ps(pivot[c], r[c], larger) };
+            }
         }
-        let mut influence = [0i32; 8];
-        // SAFETY: 8 i32s.
-        unsafe {
-            _mm256_storeu_si256(influence.as_mut_ptr().cast::<__m256i>(), _mm256_castps_si256(dominant))
-        };
-        let mut pivots = [0u16; 8];
-        for l in 0..8 {
-            pivots[l] = js[l][influence[l] as usize % N];
-        }
-        // SAFETY: every index is in `dqs` (validated).
-        let pivot = unsafe { real_parts_soa(dqs, pivots) };
         // Blend, one influence at a time in SoA form.
         let mut q = [_mm256_setzero_ps(); 8];
-        for i in 0..N {
+        for (i, (r, &w)) in reals.iter().zip(&wv).enumerate() {
             let mut joint = [0u16; 8];
-            for l in 0..8 {
-                joint[l] = js[l][i];
+            for (j, vertex) in joint.iter_mut().zip(js) {
+                *j = vertex[i];
             }
             // SAFETY: as above.
-            let [r, d] = unsafe { dual_quats_soa(dqs, joint) };
+            let d = unsafe { parts_soa::<4>(dqs, joint) };
             let dot = _mm256_fmadd_ps(
                 r[3],
                 pivot[3],
@@ -600,7 +570,7 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
                     _mm256_fmadd_ps(r[1], pivot[1], _mm256_mul_ps(r[0], pivot[0])),
                 ),
             );
-            let w = _mm256_xor_ps(wv[i], _mm256_and_ps(dot, sign_bit));
+            let w = _mm256_xor_ps(w, _mm256_and_ps(dot, sign_bit));
             for c in 0..4 {
                 q[c] = _mm256_fmadd_ps(r[c], w, q[c]);
                 q[c + 4] = _mm256_fmadd_ps(d[c], w, q[c + 4]);
