@@ -487,9 +487,9 @@ fn transpose4x2([r0, r1, r2, r3]: [__m256; 4]) -> [__m256; 4] {
 /// Every index must be in `dqs`; the CPU must support AVX2 and FMA.
 #[inline]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn parts_soa<const OFFSET: usize>(dqs: &[PackedDualQuat], joints: [u16; 8]) -> [__m256; 4] {
+unsafe fn parts_soa<const OFFSET: usize>(entries: &[*const f32; 8]) -> [__m256; 4] {
     // SAFETY: four floats inside palette entries.
-    let at = |l: usize| unsafe { dqs.as_ptr().add(joints[l] as usize).cast::<f32>().add(OFFSET) };
+    let at = |l: usize| unsafe { entries[l].add(OFFSET) };
     // SAFETY: as above.
     unsafe {
         transpose4x2([
@@ -539,13 +539,14 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
         let mut reals = [[_mm256_setzero_ps(); 4]; N];
         let mut pivot = [_mm256_setzero_ps(); 4];
         let mut best = wv[0];
-        for (i, (r, &w)) in reals.iter_mut().zip(&wv).enumerate() {
-            let mut joint = [0u16; 8];
-            for (j, vertex) in joint.iter_mut().zip(js) {
-                *j = vertex[i];
+        let mut entries = [[std::ptr::null::<f32>(); 8]; N];
+        for (i, ((r, &w), e)) in reals.iter_mut().zip(&wv).zip(&mut entries).enumerate() {
+            for (e, vertex) in e.iter_mut().zip(js) {
+                // SAFETY: every index is in `dqs` (validated).
+                *e = unsafe { dqs.as_ptr().add(vertex[i] as usize).cast::<f32>() };
             }
-            // SAFETY: every index is in `dqs` (validated).
-            *r = unsafe { parts_soa::<0>(dqs, joint) };
+            // SAFETY: palette entries.
+            *r = unsafe { parts_soa::<0>(e) };
             let larger = _mm256_cmp_ps::<_CMP_GT_OQ>(w, best);
             best = _mm256_blendv_ps(best, w, larger);
             for c in 0..4 {
@@ -554,13 +555,9 @@ pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
         }
         // Blend, one influence at a time in SoA form.
         let mut q = [_mm256_setzero_ps(); 8];
-        for (i, (r, &w)) in reals.iter().zip(&wv).enumerate() {
-            let mut joint = [0u16; 8];
-            for (j, vertex) in joint.iter_mut().zip(js) {
-                *j = vertex[i];
-            }
+        for ((r, &w), e) in reals.iter().zip(&wv).zip(&entries) {
             // SAFETY: as above.
-            let d = unsafe { parts_soa::<4>(dqs, joint) };
+            let d = unsafe { parts_soa::<4>(e) };
             let dot = _mm256_fmadd_ps(
                 r[3],
                 pivot[3],
