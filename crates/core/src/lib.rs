@@ -11,6 +11,6 @@ pub mod validate;
 pub use key::{Animated, Interpolation, Key, RawTrack, Tcb};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
-    ProceduralMesh, Scene, Skeleton,
+    ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
 };
 pub use track::{AnimatedCursor, AnimatedTrack, Cursor, TangentSide, Track, TrackError, TrackValue};

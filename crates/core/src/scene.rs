@@ -96,7 +96,28 @@ pub enum MeshSource {
         /// Index of the mesh inside the file; `None` takes the first.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         mesh: Option<usize>,
+        /// MD2 only: the clip (frame group, e.g. `run`) that plays; `None` plays every frame
+        /// of the file in order.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        clip: Option<String>,
+        /// MD2 only: playback rate of the model's frames, frames per second (finite, > 0);
+        /// `None` means [`MD2_DEFAULT_FPS`]. Scene time `t` shows model frame `t · fps` of the
+        /// clip, looping, morphing linearly between neighbouring frames.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        fps: Option<f64>,
     },
+}
+
+/// The frame rate MD2 models play at when a scene does not say: Quake 2 animated its models
+/// at 10 frames per second.
+pub const MD2_DEFAULT_FPS: f64 = 10.0;
+
+impl MeshSource {
+    /// A model file's mesh: `mesh` of the file at `path`, with no MD2 clip or rate.
+    #[must_use]
+    pub fn file(path: impl Into<String>, mesh: Option<usize>) -> Self {
+        MeshSource::File { path: path.into(), mesh, clip: None, fps: None }
+    }
 }
 
 /// Meshes keyrig can generate (DESIGN.md §6).

@@ -18,6 +18,8 @@
 //! 7. Lights: non-negative intensity and colour, a non-zero direction for directional and spot
 //!    lights, spot angles with 0 < inner ≤ cutoff ≤ 90 and dropoff ≥ 0.
 //! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
+//! 9. A model file mesh: a non-empty path; an MD2 clip name, when given, not empty; an MD2
+//!    playback rate, when given, finite and > 0.
 
 use std::collections::HashMap;
 
@@ -275,9 +277,21 @@ impl Checker {
         self.animated(&join(path, "translation"), &object.translation);
         self.animated(&join(path, "rotation"), &object.rotation);
         self.animated(&join(path, "scale"), &object.scale);
-        if let Some(MeshSource::File { path: file, .. }) = &object.mesh {
+        if let Some(MeshSource::File { path: file, clip, fps, .. }) = &object.mesh {
             if file.is_empty() {
                 self.push(join(path, "mesh.path"), "empty model file path");
+            }
+            if clip.as_deref() == Some("") {
+                self.push(
+                    join(path, "mesh.clip"),
+                    "empty clip name (leave the field out to play every frame)",
+                );
+            }
+            if let Some(fps) = *fps {
+                let at = join(path, "mesh.fps");
+                if self.f64(&at, fps) && fps <= 0.0 {
+                    self.push(at, format!("playback rate {fps} must be > 0 frames per second"));
+                }
             }
         }
         if let Some(skeleton) = &object.skeleton {
@@ -484,6 +498,36 @@ mod tests {
         assert_eq!(paths(&s), ["fps", "frame_range", "ambient.y", "camera.distance"]);
         s.fps = f64::NAN;
         assert_eq!(s.problems()[0].message, "not a finite number (NaN)");
+    }
+
+    #[test]
+    fn model_file_clip_and_fps() {
+        let mut s = Scene::default();
+        let mut o = Object::new("Sydney");
+        o.mesh = Some(MeshSource::File {
+            path: "sydney.md2".into(),
+            mesh: None,
+            clip: Some("run".into()),
+            fps: Some(10.0),
+        });
+        s.objects.push(o);
+        assert_eq!(s.problems(), Vec::new());
+        for (fps, message) in [
+            (0.0, "playback rate 0 must be > 0 frames per second"),
+            (-2.5, "playback rate -2.5 must be > 0 frames per second"),
+            (f64::NAN, "not a finite number (NaN)"),
+            (f64::INFINITY, "not a finite number (+inf)"),
+        ] {
+            let Some(MeshSource::File { fps: f, .. }) = &mut s.objects[0].mesh else { panic!("a file mesh") };
+            *f = Some(fps);
+            let problems = s.problems();
+            assert_eq!(problems.len(), 1, "{fps}: {problems:?}");
+            assert_eq!(problems[0].path, "objects[0].mesh.fps");
+            assert_eq!(problems[0].message, message);
+        }
+        s.objects[0].mesh =
+            Some(MeshSource::File { path: String::new(), mesh: None, clip: Some(String::new()), fps: None });
+        assert_eq!(paths(&s), ["objects[0].mesh.path", "objects[0].mesh.clip"]);
     }
 
     #[test]

@@ -773,7 +773,7 @@ fn mesh_data(
                 skin: Some((mesh.joints, mesh.weights)),
             })
         }
-        MeshSource::File { path, mesh } => {
+        MeshSource::File { path, mesh, .. } => {
             let file = options.base_dir.as_deref().unwrap_or(Path::new(".")).join(path);
             let err = |message: String| ExportError::MeshFile {
                 path: format!("{here}.mesh"),

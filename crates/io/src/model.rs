@@ -832,8 +832,7 @@ impl ImportedModel {
         for (i, node) in self.nodes.iter().enumerate() {
             let Some(mesh) = node.mesh else { continue };
             let mut object = keyrig_core::Object::new(node.name.clone());
-            object.mesh =
-                Some(keyrig_core::MeshSource::File { path: file_name.to_owned(), mesh: Some(mesh) });
+            object.mesh = Some(keyrig_core::MeshSource::file(file_name, Some(mesh)));
             let placement = match node.skin {
                 Some(skin) => {
                     object.skeleton = Some(self.scene_skeleton(skin, animation)?);

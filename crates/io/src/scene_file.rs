@@ -579,6 +579,7 @@ fn sync_dir(dir: &Path) {
 mod tests {
     use super::*;
     use crate::demo::{demo_scene, DEMO_RON};
+    use keyrig_core::MeshSource;
 
     fn with_ron(text: &str) -> Option<Scene> {
         let seen = std::cell::Cell::new(None);
@@ -621,6 +622,18 @@ mod tests {
             format!("(version: 1, scene: ({base}, lights: [(name: \"L\", kind: Point(), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
             "(version: 1, scene: (fps: 30.0, frame_range: (start: 0, end: 1), unknown: 3))".to_string(),
             "(version: 1, scene: (fps: 1e400, frame_range: (start: 0, end: 4294967296)))".to_string(),
+            // Model file meshes with and without the MD2 clip and rate (texts[21..]).
+            md2_object_text(base, "path: \"a.md2\""),
+            md2_object_text(base, "path: \"a.md2\", clip: Some(\"run\"), fps: Some(10.0)"),
+            md2_object_text(base, "path: \"a.md2\", fps: Some(12), clip: Some(\"run\"), mesh: Some(0)"),
+            md2_object_text(base, "path: \"a.md2\", clip: None, fps: None"),
+            md2_object_text(base, "path: \"a.md2\", fps: Some(-inf)"),
+            md2_object_text(base, "path: \"a.md2\", fps: 10.0"),
+            md2_object_text(base, "path: \"a.md2\", clip: \"run\""),
+            md2_object_text(base, "path: \"a.md2\", clip: Some(run)"),
+            md2_object_text(base, "path: \"a.md2\", clip: Some(\"run\"), clip: Some(\"jump\")"),
+            md2_object_text(base, "path: \"a.md2\", speed: Some(1.0)"),
+            md2_object_text(base, "path: \"a.md2\", fps: Some(1e400)"),
         ];
         for text in &texts {
             let fast = read_current(text);
@@ -636,6 +649,105 @@ mod tests {
         assert!(read_current(&texts[3]).is_some());
         assert!(read_current(&texts[4]).is_some());
         assert!(read_current(&texts[17]).is_some());
+        for text in &texts[21..24] {
+            assert!(read_current(text).is_some(), "{text}");
+        }
+        let Some(MeshSource::File { clip, fps, mesh, .. }) =
+            &read_current(&texts[23]).expect("read").objects[0].mesh
+        else {
+            panic!("a file mesh")
+        };
+        assert_eq!((clip.as_deref(), *fps, *mesh), (Some("run"), Some(12.0), Some(0)));
+    }
+
+    /// A scene (`base` fields) with one object whose mesh is `File(<fields>)`.
+    fn md2_object_text(base: &str, fields: &str) -> String {
+        format!(
+            "(version: 1, scene: ({base}, objects: [(name: \"M\", translation: (value: (0.0, 0.0, 0.0)), \
+             rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)), mesh: Some(File({fields})))]))"
+        )
+    }
+
+    /// A scene with an MD2 object: its clip and rate survive a save and load, the bytes are
+    /// stable, objects without them write no `clip`/`fps` (version-1 files keep their bytes),
+    /// and invalid rates are refused with the field's path.
+    #[test]
+    fn md2_clip_and_fps_round_trip() {
+        let mut scene = demo_scene();
+        let mut object = keyrig_core::Object::new("Sydney");
+        object.mesh = Some(MeshSource::File {
+            path: "/models/sydney.md2".into(),
+            mesh: None,
+            clip: Some("run".into()),
+            fps: Some(12.5),
+        });
+        scene.objects.push(object);
+        let text = to_string(&scene).unwrap();
+        assert!(
+            text.contains(
+                "mesh: Some(File(path: \"/models/sydney.md2\", clip: Some(\"run\"), fps: Some(12.5)))"
+            ),
+            "{text}"
+        );
+        assert_eq!(read_current(&text), Some(scene.clone()));
+        assert_eq!(with_ron(&text), Some(scene.clone()));
+        assert_eq!(to_string(&from_str(&text, Path::new("s.ron")).unwrap()).unwrap(), text);
+
+        // Without clip and rate nothing new is written.
+        scene.objects.last_mut().unwrap().mesh = Some(MeshSource::file("/models/sydney.md2", None));
+        let plain = to_string(&scene).unwrap();
+        assert!(plain.contains("mesh: Some(File(path: \"/models/sydney.md2\"))"), "{plain}");
+        assert!(!plain.contains("clip") && !plain.contains("fps: Some"), "{plain}");
+        assert_eq!(to_string(&demo_scene()).unwrap(), DEMO_RON, "the demo file keeps its bytes");
+
+        let bad = text.replace("fps: Some(12.5)", "fps: Some(0.0)");
+        let err = from_str(&bad, Path::new("bad.ron")).expect_err("fps 0");
+        let message = err.to_string();
+        assert!(message.contains("objects[2].mesh.fps") && message.contains("> 0"), "{message}");
+        assert!(err.position().is_some(), "{message}");
+    }
+
+    /// Mutations of a file with an MD2 object around its clip and rate: the fast path agrees
+    /// with `ron` whenever it accepts, and loading never panics.
+    #[test]
+    fn mutated_md2_fields_agree_with_ron() {
+        let mut scene = Scene::default();
+        let mut object = keyrig_core::Object::new("M");
+        object.mesh = Some(MeshSource::File {
+            path: "m.md2".into(),
+            mesh: Some(0),
+            clip: Some("crattak".into()),
+            fps: Some(9.5),
+        });
+        scene.objects.push(object);
+        let text = to_string(&scene).unwrap();
+        let start = text.find("mesh:").expect("mesh field");
+        let end = start + text[start..].find('\n').expect("line end");
+        let mut accepted = 0;
+        for i in (start..end).filter(|&i| text.is_char_boundary(i)) {
+            for replacement in ["", ",", ")", "(", "\"", "1", "-", "x", "NaN", "None", "Some("] {
+                let next = i + text[i..].chars().next().map_or(0, char::len_utf8);
+                let mutated = format!("{}{}{}", &text[..i], replacement, &text[next..]);
+                let result = std::panic::catch_unwind(|| {
+                    (
+                        read_current(&mutated),
+                        with_ron(&mutated),
+                        from_str_lenient(&mutated, Path::new("m.ron")),
+                    )
+                });
+                let Ok((fast, ron, loaded)) = result else {
+                    panic!("panic on mutation at byte {i}:\n{mutated}")
+                };
+                if let Some(fast) = fast {
+                    accepted += 1;
+                    assert_eq!(format!("{:?}", Some(fast)), format!("{ron:?}"), "byte {i}:\n{mutated}");
+                }
+                if let Err(err) = loaded {
+                    assert!(err.position().is_some(), "byte {i}: {err}");
+                }
+            }
+        }
+        assert!(accepted > 0, "some mutations (inside the strings and numbers) stay valid");
     }
 
     /// Deterministic mutations of the demo file (a character replaced, deleted or doubled):

@@ -95,7 +95,7 @@ fn bad_tracks_and_missing_meshes_name_their_place() {
     );
 
     let mut scene = arm_scene();
-    scene.objects[0].mesh = Some(MeshSource::File { path: "hero.glb".into(), mesh: None });
+    scene.objects[0].mesh = Some(MeshSource::file("hero.glb", None));
     let err = SceneRig::new(&scene).err().expect("file mesh not passed in");
     assert!(matches!(err, SceneFrameError::MeshNotLoaded { object: 0, .. }), "{err}");
     assert!(err.to_string().contains("hero.glb"));

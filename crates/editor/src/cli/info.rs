@@ -165,8 +165,19 @@ fn mesh_text(mesh: Option<&MeshSource>) -> String {
     match mesh {
         None => "none".to_string(),
         Some(MeshSource::Procedural(p)) => format!("procedural {p:?}"),
-        Some(MeshSource::File { path, mesh: None }) => format!("file {path:?}"),
-        Some(MeshSource::File { path, mesh: Some(i) }) => format!("file {path:?}, mesh {i}"),
+        Some(MeshSource::File { path, mesh, clip, fps }) => {
+            let mut text = format!("file {path:?}");
+            if let Some(i) = mesh {
+                text += &format!(", mesh {i}");
+            }
+            if let Some(clip) = clip {
+                text += &format!(", clip {clip:?}");
+            }
+            if let Some(fps) = fps {
+                text += &format!(", {fps} fps");
+            }
+            text
+        }
     }
 }
 

@@ -40,7 +40,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             let Some(pose) = pose else { continue };
             let object = &app.doc.scene().objects[o];
             let file_mesh = match &object.mesh {
-                Some(keyrig_core::MeshSource::File { path, mesh }) => {
+                Some(keyrig_core::MeshSource::File { path, mesh, .. }) => {
                     match app.meshes.get(base_dir.as_deref(), path, *mesh) {
                         Ok(data) => Some((path.as_str(), *mesh, data)),
                         Err(e) => {
@@ -270,7 +270,7 @@ fn gpu_ui(
     if gpu.needs_rig(doc_key) {
         let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
         for (o, object) in scene.objects.iter().enumerate() {
-            if let Some(keyrig_core::MeshSource::File { path, mesh }) = &object.mesh {
+            if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
                 if let Ok(crate::files::FileMesh::Skinned(m)) =
                     app.meshes.get(base_dir.as_deref(), path, *mesh)
                 {
