@@ -65,6 +65,9 @@ pub struct ViewSettings {
     /// pixels to rasterize; the default on a CPU rasterizer such as lavapipe).
     pub resolution_scale: f32,
     pub style: RenderStyle,
+    /// Where the viewport was laid out in the last frame (screen points), for picking tools
+    /// and tests that aim at what the viewport shows.
+    pub viewport_rect: Option<egui::Rect>,
 }
 
 /// A status-bar message.
@@ -161,6 +164,7 @@ impl EditorApp {
                 motion_path: true,
                 resolution_scale: 1.0,
                 style: RenderStyle::Solid,
+                viewport_rect: None,
             },
             clipboard: Vec::new(),
             status: None,

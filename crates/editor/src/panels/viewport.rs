@@ -24,6 +24,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46));
 
+        app.view.viewport_rect = Some(rect);
         let projection = Projection::new(&app.view.camera, rect);
         let time = app.time();
         let tracks = app.tracks();
