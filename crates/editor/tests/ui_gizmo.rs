@@ -72,41 +72,37 @@ fn pointer(harness: &mut Harness<'_, EditorApp>, event: Event) {
     harness.run();
 }
 
+/// Hovers `path[0]`, presses the primary button there, moves through the rest of `path` one
+/// frame per point, releases at the last point and moves away, so the next frame neither
+/// hovers nor drags the gizmo.
+fn drag_along(harness: &mut Harness<'_, EditorApp>, path: &[Pos2]) {
+    let (Some(&start), Some(&end)) = (path.first(), path.last()) else { return };
+    let button = |pos: Pos2, pressed: bool| Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed,
+        modifiers: Modifiers::NONE,
+    };
+    pointer(harness, Event::PointerMoved(start));
+    pointer(harness, Event::PointerMoved(start));
+    pointer(harness, button(start, true));
+    for &p in &path[1..] {
+        pointer(harness, Event::PointerMoved(p));
+    }
+    pointer(harness, button(end, false));
+    pointer(harness, Event::PointerMoved(end + egui::vec2(0.0, -200.0)));
+}
+
 /// Presses on the view ring to the right of the gizmo's centre and drags a quarter turn
-/// (counter-clockwise on screen, through the top) along the ring, in small steps.
+/// (counter-clockwise on screen, through the top) along the ring, in 5° steps.
 fn drag_quarter_turn(harness: &mut Harness<'_, EditorApp>) {
     let (centre, _) = wrist_on_screen(harness.state());
     let on_ring = |angle_deg: f32| {
         let a = angle_deg.to_radians();
         centre + egui::vec2(a.cos(), -a.sin()) * VIEW_RING_RADIUS
     };
-    let start = on_ring(0.0);
-    pointer(harness, Event::PointerMoved(start));
-    pointer(harness, Event::PointerMoved(start));
-    pointer(
-        harness,
-        Event::PointerButton {
-            pos: start,
-            button: PointerButton::Primary,
-            pressed: true,
-            modifiers: Modifiers::NONE,
-        },
-    );
-    for step in 1..=18 {
-        pointer(harness, Event::PointerMoved(on_ring(step as f32 * 5.0)));
-    }
-    let end = on_ring(90.0);
-    pointer(
-        harness,
-        Event::PointerButton {
-            pos: end,
-            button: PointerButton::Primary,
-            pressed: false,
-            modifiers: Modifiers::NONE,
-        },
-    );
-    // Move away so the next frame neither hovers nor drags the gizmo.
-    pointer(harness, Event::PointerMoved(end + egui::vec2(0.0, -200.0)));
+    let path: Vec<Pos2> = (0..=18).map(|step| on_ring(step as f32 * 5.0)).collect();
+    drag_along(harness, &path);
 }
 
 /// The rotation that takes `before` to `after` in world space: its angle in degrees and axis.
@@ -204,33 +200,10 @@ fn on_screen(app: &EditorApp, at: Vec3) -> Pos2 {
 }
 
 /// Presses on the gizmo's centre (transform-gizmo's view-plane translation disc) at `centre`
-/// and drags it by `by` screen points, in small steps.
+/// and drags it by `by` screen points, in ten steps.
 fn drag_centre(harness: &mut Harness<'_, EditorApp>, centre: Pos2, by: egui::Vec2) {
-    pointer(harness, Event::PointerMoved(centre));
-    pointer(harness, Event::PointerMoved(centre));
-    pointer(
-        harness,
-        Event::PointerButton {
-            pos: centre,
-            button: PointerButton::Primary,
-            pressed: true,
-            modifiers: Modifiers::NONE,
-        },
-    );
-    for step in 1..=10 {
-        pointer(harness, Event::PointerMoved(centre + by * (step as f32 / 10.0)));
-    }
-    let end = centre + by;
-    pointer(
-        harness,
-        Event::PointerButton {
-            pos: end,
-            button: PointerButton::Primary,
-            pressed: false,
-            modifiers: Modifiers::NONE,
-        },
-    );
-    pointer(harness, Event::PointerMoved(end + egui::vec2(0.0, -200.0)));
+    let path: Vec<Pos2> = (0..=10).map(|step| centre + by * (step as f32 / 10.0)).collect();
+    drag_along(harness, &path);
 }
 
 /// Drags the selection's gizmo centre 60 points right and checks that `position` (read from
