@@ -279,3 +279,55 @@ fn dragging_the_gizmo_translates_lights_and_objects_and_records_keys() {
     go_to_frame(&mut h, 12);
     assert!((light_position(h.state()) - moved_light).length() < 1e-4, "the key holds the dragged position");
 }
+
+/// A spot light's rotate ring turns its direction (keeping its length) and record mode keys
+/// the direction channel; its position stays.
+#[test]
+fn dragging_a_spot_lights_view_ring_turns_its_direction() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path());
+    h.get_by_label("⏺ Record").click();
+    h.run();
+    go_to_frame(&mut h, 8);
+    h.get_by_role_and_label(Role::Button, "Key").click();
+    h.run();
+    assert_eq!(h.state().selection.item, Some(Selected::Light(0)));
+    let vec3 = |app: &EditorApp, id: ChannelId| match app.value_now(id) {
+        Some(channels::ChannelValue::Vec3(v)) => v,
+        other => panic!("{id:?} is a Vec3 channel, got {other:?}"),
+    };
+    let (position, direction) = (ChannelId::LightPosition(0), ChannelId::LightDirection(0));
+    let place = vec3(h.state(), position);
+    h.state_mut().view.camera.target = place;
+    h.run();
+    let before = vec3(h.state(), direction);
+    let keys_before = channels::key_count(h.state().doc.scene(), direction);
+    let camera = h.state().view.camera;
+    let forward = (camera.target - camera.eye()).normalize();
+    let centre = on_screen(h.state(), place);
+    let path: Vec<Pos2> = (0..=18)
+        .map(|step| {
+            let a = (step as f32 * 5.0).to_radians();
+            centre + egui::vec2(a.cos(), -a.sin()) * VIEW_RING_RADIUS
+        })
+        .collect();
+    drag_along(&mut h, &path);
+
+    let after = vec3(h.state(), direction);
+    assert!((after.length() - before.length()).abs() < 1e-4, "the direction keeps its length");
+    let miss = |sign: f32| {
+        let expected = Quat::from_axis_angle(forward, sign * std::f32::consts::FRAC_PI_2) * before;
+        expected.angle_between(after).to_degrees()
+    };
+    let miss = miss(1.0).min(miss(-1.0));
+    assert!(
+        miss < 3.0,
+        "a quarter turn on the view ring turns the direction 90° about the view axis (off by {miss:.2}°)"
+    );
+    assert!((vec3(h.state(), position) - place).length() < 1e-5, "turning does not move the light");
+    assert_eq!(
+        channels::key_count(h.state().doc.scene(), direction),
+        keys_before + 1,
+        "record mode keys the direction"
+    );
+}

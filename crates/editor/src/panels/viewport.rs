@@ -4,6 +4,7 @@
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};
 use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
+use keyrig_core::LightKind;
 use transform_gizmo_egui::math::Transform;
 use transform_gizmo_egui::{GizmoConfig, GizmoExt, GizmoMode, GizmoOrientation, GizmoResult};
 
@@ -395,9 +396,31 @@ fn gizmo_target(app: &EditorApp, poses: &[Option<ObjectPose>]) -> Option<(Affine
         }
         Selected::Object(o) => Some((poses.get(o)?.as_ref()?.world_from_object, GizmoKind::Object(o))),
         Selected::Light(l) => {
+            let kind = app.doc.scene().lights.get(l)?.kind;
             let Some(ChannelValue::Vec3(p)) = app.value_now(ChannelId::LightPosition(l)) else { return None };
-            Some((Affine3A::from_translation(p), GizmoKind::Light(l)))
+            let aim = match kind {
+                LightKind::Point => Quat::IDENTITY,
+                LightKind::Directional | LightKind::Spot { .. } => {
+                    let Some(ChannelValue::Vec3(d)) = app.value_now(ChannelId::LightDirection(l)) else {
+                        return None;
+                    };
+                    light_aim(d)
+                }
+            };
+            Some((Affine3A::from_rotation_translation(aim, p), GizmoKind::Light(l, kind)))
         }
+    }
+}
+
+/// The light's local axis that points along its direction (as glTF's lights shine along −Z).
+const LIGHT_AXIS: Vec3 = Vec3::NEG_Z;
+
+/// A rotation that takes [`LIGHT_AXIS`] onto the direction `d` (any twist about `d`; only the
+/// direction is a channel).
+fn light_aim(d: Vec3) -> Quat {
+    match d.try_normalize() {
+        Some(d) => Quat::from_rotation_arc(LIGHT_AXIS, d),
+        None => Quat::IDENTITY,
     }
 }
 
@@ -405,7 +428,7 @@ fn gizmo_target(app: &EditorApp, poses: &[Option<ObjectPose>]) -> Option<(Affine
 enum GizmoKind {
     Joint { object: usize, joint: usize },
     Object(usize),
-    Light(usize),
+    Light(usize, LightKind),
 }
 
 fn to_transform(a: Affine3A) -> Transform {
@@ -425,7 +448,11 @@ fn gizmo_ui(
     let modes = match kind {
         GizmoKind::Joint { .. } => GizmoMode::all_rotate(),
         GizmoKind::Object(_) => GizmoMode::all_rotate() | GizmoMode::all_translate(),
-        GizmoKind::Light(_) => GizmoMode::all_translate(),
+        // Point lights have only a place, directional lights only a direction (their icon's
+        // place is not used for lighting), spot lights both.
+        GizmoKind::Light(_, LightKind::Point) => GizmoMode::all_translate(),
+        GizmoKind::Light(_, LightKind::Directional) => GizmoMode::all_rotate(),
+        GizmoKind::Light(_, LightKind::Spot { .. }) => GizmoMode::all_rotate() | GizmoMode::all_translate(),
     };
     let to_rows = |m: glam::Mat4| m.as_dmat4().into();
     app.gizmo.update_config(GizmoConfig {
@@ -473,8 +500,16 @@ fn gizmo_ui(
                 app.apply_pose(ChannelId::ObjectRotation(o), ChannelValue::Rotation(new_rotation), group);
             }
         }
-        GizmoKind::Light(l) => {
-            app.apply_pose(ChannelId::LightPosition(l), ChannelValue::Vec3(new_translation), group);
+        GizmoKind::Light(l, _) => {
+            if matches!(result, GizmoResult::Translation { .. }) {
+                app.apply_pose(ChannelId::LightPosition(l), ChannelValue::Vec3(new_translation), group);
+            } else if let Some(ChannelValue::Vec3(old)) = app.value_now(ChannelId::LightDirection(l)) {
+                // Keep the direction's length (it need not be unit), turn it with the gizmo.
+                let length = old.length();
+                let length = if length > 0.0 { length } else { 1.0 };
+                let direction = (new_rotation * LIGHT_AXIS) * length;
+                app.apply_pose(ChannelId::LightDirection(l), ChannelValue::Vec3(direction), group);
+            }
         }
     }
     true
