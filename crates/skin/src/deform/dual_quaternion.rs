@@ -86,19 +86,18 @@ impl<const N: usize> DualQuatJob<'_, N> {
             // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
             // index against the palette.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
+            let avx512 = super::simd::avx512_available();
             for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
                 let end = start + out_p.len();
-                // SAFETY: as above.
+                let (js, ws) = (&joints[start..end], &weights[start..end]);
+                let (ps, ns) = (&positions[start..end], &normals[start..end]);
+                // SAFETY: as above; the AVX-512VL build only where the CPU has it.
                 unsafe {
-                    super::simd::dual_quaternion_chunk_soa(
-                        &packed,
-                        &joints[start..end],
-                        &weights[start..end],
-                        &positions[start..end],
-                        &normals[start..end],
-                        out_p,
-                        out_n,
-                    )
+                    if avx512 {
+                        super::simd::dual_quaternion_chunk_soa_avx512(&packed, js, ws, ps, ns, out_p, out_n)
+                    } else {
+                        super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
+                    }
                 }
             });
             return;

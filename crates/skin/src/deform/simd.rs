@@ -17,6 +17,11 @@ pub(crate) fn available() -> bool {
     is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
 }
 
+/// Whether this CPU can also run the AVX-512VL builds of the kernels (32 vector registers).
+pub(crate) fn avx512_available() -> bool {
+    available() && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+}
+
 /// A palette matrix as ((x_axis | y_axis), (z_axis | translation)).
 pub(crate) type PackedAffine = [__m256; 2];
 
@@ -508,123 +513,249 @@ fn row(m0: __m256, m1: __m256, m2: __m256, [x, y, z]: [__m256; 3], t: __m256) ->
     _mm256_fmadd_ps(m0, x, _mm256_fmadd_ps(m1, y, _mm256_fmadd_ps(m2, z, t)))
 }
 
-/// Dual quaternion skinning of one chunk, 8 vertices at a time in structure-of-arrays form
-/// (each register holds one component of 8 vertices), the remainder one at a time with
-/// [`dual_quaternion_chunk`]. Same sign rule; the blended dual quaternion (r, d) becomes a
-/// rigid 3×4 matrix once per vertex, without normalizing it first: with s = 2/|r|²,
-/// R = I + s·[−(y²+z²), xy−wz, xz+wy; xy+wz, −(x²+z²), yz−wx; xz−wy, yz+wx, −(x²+y²)] and
-/// t = s·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗), which equal the normalized formulas.
-///
-/// # Safety
-/// The CPU must support AVX2 and FMA; every joint index must be in `dqs` (validated).
-#[target_feature(enable = "avx2,fma")]
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn dual_quaternion_chunk_soa<const N: usize>(
-    dqs: &[PackedDualQuat],
-    joints: &[[u16; N]],
-    weights: &[[f32; N]],
-    positions: &[Vec3],
-    normals: &[Vec3],
-    out_positions: &mut [Vec3],
-    out_normals: &mut [Vec3],
-) {
-    let full = out_positions.len() / 8 * 8;
-    let sign_bit = _mm256_set1_ps(-0.0);
-    for base in (0..full).step_by(8) {
-        let js = &joints[base..base + 8];
-        // SAFETY: 8 rows of weights.
-        let wv = unsafe { weights_soa::<N>(&weights[base..base + 8]) };
-        // Each influence's real parts in SoA form, and the pivot: the real part of each lane's
-        // largest-weight influence (first on ties).
-        let mut reals = [[_mm256_setzero_ps(); 4]; N];
-        let mut pivot = [_mm256_setzero_ps(); 4];
-        let mut best = wv[0];
-        let mut entries = [[std::ptr::null::<f32>(); 8]; N];
-        for (i, ((r, &w), e)) in reals.iter_mut().zip(&wv).zip(&mut entries).enumerate() {
-            for (e, vertex) in e.iter_mut().zip(js) {
-                // SAFETY: every index is in `dqs` (validated).
-                *e = unsafe { dqs.as_ptr().add(vertex[i] as usize).cast::<f32>() };
+/// Defines a dual quaternion chunk kernel with the given target features. The same body is
+/// compiled twice: for AVX2 + FMA, and for AVX2 + FMA + AVX-512VL, where the 32 vector registers
+/// (ymm0–ymm31) hold the kernel's ~25 live values without spilling them to the stack. Spills
+/// matter here beyond their own cost: every step stores them and then loads palette entries
+/// from fixed addresses, and when a spill slot and a palette entry share their address bits
+/// 11..0 ("4K aliasing") the load waits for the store. Which entries alias depends on where the
+/// stack happens to lie (randomized per process), so the AVX2 kernel's time is bimodal across
+/// runs; see docs/benchmarks.md, skinning section.
+macro_rules! dual_quaternion_kernel {
+    ($(#[$attr:meta])* $name:ident) => {
+        /// Dual quaternion skinning of one chunk, 8 vertices at a time in structure-of-arrays
+        /// form (each register holds one component of 8 vertices), the remainder one at a time
+        /// with [`dual_quaternion_chunk`]. Same sign rule; the blended dual quaternion (r, d)
+        /// becomes a rigid 3×4 matrix once per vertex, without normalizing it first: with
+        /// s = 2/|r|², R = I + s·[−(y²+z²), xy−wz, xz+wy; xy+wz, −(x²+z²), yz−wx;
+        /// xz−wy, yz+wx, −(x²+y²)] and t = s·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗), which equal the
+        /// normalized formulas.
+        ///
+        /// # Safety
+        /// The CPU must support the target features named above; every joint index must be in
+        /// `dqs` (validated).
+        $(#[$attr])*
+        #[allow(clippy::too_many_arguments)]
+        pub(crate) unsafe fn $name<const N: usize>(
+            dqs: &[PackedDualQuat],
+            joints: &[[u16; N]],
+            weights: &[[f32; N]],
+            positions: &[Vec3],
+            normals: &[Vec3],
+            out_positions: &mut [Vec3],
+            out_normals: &mut [Vec3],
+        ) {
+            let full = out_positions.len() / 8 * 8;
+            let sign_bit = _mm256_set1_ps(-0.0);
+            for base in (0..full).step_by(8) {
+                let js = &joints[base..base + 8];
+                // SAFETY: 8 rows of weights.
+                let wv = unsafe { weights_soa::<N>(&weights[base..base + 8]) };
+                // Each influence's real parts in SoA form, and the pivot: the real part of each
+                // lane's largest-weight influence (first on ties).
+                let mut reals = [[_mm256_setzero_ps(); 4]; N];
+                let mut pivot = [_mm256_setzero_ps(); 4];
+                let mut best = wv[0];
+                let mut entries = [[std::ptr::null::<f32>(); 8]; N];
+                for (i, ((r, &w), e)) in reals.iter_mut().zip(&wv).zip(&mut entries).enumerate() {
+                    for (e, vertex) in e.iter_mut().zip(js) {
+                        // SAFETY: every index is in `dqs` (validated).
+                        *e = unsafe { dqs.as_ptr().add(vertex[i] as usize).cast::<f32>() };
+                    }
+                    // SAFETY: palette entries.
+                    *r = unsafe { parts_soa::<0>(e) };
+                    let larger = _mm256_cmp_ps::<_CMP_GT_OQ>(w, best);
+                    best = _mm256_blendv_ps(best, w, larger);
+                    for c in 0..4 {
+                        pivot[c] = if i == 0 { r[c] } else { _mm256_blendv_ps(pivot[c], r[c], larger) };
+                    }
+                }
+                // Blend, one influence at a time in SoA form.
+                let mut q = [_mm256_setzero_ps(); 8];
+                for ((r, &w), e) in reals.iter().zip(&wv).zip(&entries) {
+                    // SAFETY: as above.
+                    let d = unsafe { parts_soa::<4>(e) };
+                    let dot = _mm256_fmadd_ps(
+                        r[3],
+                        pivot[3],
+                        _mm256_fmadd_ps(
+                            r[2],
+                            pivot[2],
+                            _mm256_fmadd_ps(r[1], pivot[1], _mm256_mul_ps(r[0], pivot[0])),
+                        ),
+                    );
+                    let w = _mm256_xor_ps(w, _mm256_and_ps(dot, sign_bit));
+                    for c in 0..4 {
+                        q[c] = _mm256_fmadd_ps(r[c], w, q[c]);
+                        q[c + 4] = _mm256_fmadd_ps(d[c], w, q[c + 4]);
+                    }
+                }
+                let [rx, ry, rz, rw, dx, dy, dz, dw] = q;
+                // s = 2/|r|² (one division for 8 vertices).
+                let len2 = _mm256_fmadd_ps(
+                    rw,
+                    rw,
+                    _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx))),
+                );
+                let s = _mm256_div_ps(_mm256_set1_ps(2.0), len2);
+                let (sx, sy, sz) = (_mm256_mul_ps(s, rx), _mm256_mul_ps(s, ry), _mm256_mul_ps(s, rz));
+                let (xx, yy, zz) = (_mm256_mul_ps(sx, rx), _mm256_mul_ps(sy, ry), _mm256_mul_ps(sz, rz));
+                let (xy, xz, yz) = (_mm256_mul_ps(sx, ry), _mm256_mul_ps(sx, rz), _mm256_mul_ps(sy, rz));
+                let (wx, wy, wz) = (_mm256_mul_ps(sx, rw), _mm256_mul_ps(sy, rw), _mm256_mul_ps(sz, rw));
+                let one = _mm256_set1_ps(1.0);
+                // Rows of R.
+                let m00 = _mm256_sub_ps(one, _mm256_add_ps(yy, zz));
+                let m01 = _mm256_sub_ps(xy, wz);
+                let m02 = _mm256_add_ps(xz, wy);
+                let m10 = _mm256_add_ps(xy, wz);
+                let m11 = _mm256_sub_ps(one, _mm256_add_ps(xx, zz));
+                let m12 = _mm256_sub_ps(yz, wx);
+                let m20 = _mm256_sub_ps(xz, wy);
+                let m21 = _mm256_add_ps(yz, wx);
+                let m22 = _mm256_sub_ps(one, _mm256_add_ps(xx, yy));
+                // t = s·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗).
+                let cross = |a: __m256, b: __m256, c: __m256, e: __m256| _mm256_fmsub_ps(a, b, _mm256_mul_ps(c, e));
+                let tx = _mm256_mul_ps(s, _mm256_fmadd_ps(rw, dx, _mm256_fnmadd_ps(dw, rx, cross(ry, dz, rz, dy))));
+                let ty = _mm256_mul_ps(s, _mm256_fmadd_ps(rw, dy, _mm256_fnmadd_ps(dw, ry, cross(rz, dx, rx, dz))));
+                let tz = _mm256_mul_ps(s, _mm256_fmadd_ps(rw, dz, _mm256_fnmadd_ps(dw, rz, cross(rx, dy, ry, dx))));
+                // SAFETY (all four): 8 Vec3s are 24 contiguous floats of their slices.
+                let p = unsafe { load_deinterleaved(positions[base..base + 8].as_ptr().cast::<f32>()) };
+                let n = unsafe { load_deinterleaved(normals[base..base + 8].as_ptr().cast::<f32>()) };
+                let (px, py, pz) =
+                    (row(m00, m01, m02, p, tx), row(m10, m11, m12, p, ty), row(m20, m21, m22, p, tz));
+                let zero = _mm256_setzero_ps();
+                let (nx, ny, nz) =
+                    (row(m00, m01, m02, n, zero), row(m10, m11, m12, n, zero), row(m20, m21, m22, n, zero));
+                unsafe {
+                    store_interleaved(out_positions[base..base + 8].as_mut_ptr().cast::<f32>(), px, py, pz);
+                    store_interleaved(out_normals[base..base + 8].as_mut_ptr().cast::<f32>(), nx, ny, nz);
+                }
             }
-            // SAFETY: palette entries.
-            *r = unsafe { parts_soa::<0>(e) };
-            let larger = _mm256_cmp_ps::<_CMP_GT_OQ>(w, best);
-            best = _mm256_blendv_ps(best, w, larger);
-            for c in 0..4 {
-                pivot[c] = if i == 0 { r[c] } else { _mm256_blendv_ps(pivot[c], r[c], larger) };
-            }
-        }
-        // Blend, one influence at a time in SoA form.
-        let mut q = [_mm256_setzero_ps(); 8];
-        for ((r, &w), e) in reals.iter().zip(&wv).zip(&entries) {
-            // SAFETY: as above.
-            let d = unsafe { parts_soa::<4>(e) };
-            let dot = _mm256_fmadd_ps(
-                r[3],
-                pivot[3],
-                _mm256_fmadd_ps(
-                    r[2],
-                    pivot[2],
-                    _mm256_fmadd_ps(r[1], pivot[1], _mm256_mul_ps(r[0], pivot[0])),
-                ),
+            dual_quaternion_chunk(
+                dqs,
+                &joints[full..],
+                &weights[full..],
+                &positions[full..],
+                &normals[full..],
+                &mut out_positions[full..],
+                &mut out_normals[full..],
             );
-            let w = _mm256_xor_ps(w, _mm256_and_ps(dot, sign_bit));
-            for c in 0..4 {
-                q[c] = _mm256_fmadd_ps(r[c], w, q[c]);
-                q[c + 4] = _mm256_fmadd_ps(d[c], w, q[c + 4]);
-            }
         }
-        let [rx, ry, rz, rw, dx, dy, dz, dw] = q;
-        // s = 2/|r|² (one division for 8 vertices).
-        let len2 =
-            _mm256_fmadd_ps(rw, rw, _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx))));
-        let s = _mm256_div_ps(_mm256_set1_ps(2.0), len2);
-        let (sx, sy, sz) = (_mm256_mul_ps(s, rx), _mm256_mul_ps(s, ry), _mm256_mul_ps(s, rz));
-        let (xx, yy, zz) = (_mm256_mul_ps(sx, rx), _mm256_mul_ps(sy, ry), _mm256_mul_ps(sz, rz));
-        let (xy, xz, yz) = (_mm256_mul_ps(sx, ry), _mm256_mul_ps(sx, rz), _mm256_mul_ps(sy, rz));
-        let (wx, wy, wz) = (_mm256_mul_ps(sx, rw), _mm256_mul_ps(sy, rw), _mm256_mul_ps(sz, rw));
-        let one = _mm256_set1_ps(1.0);
-        // Rows of R.
-        let m00 = _mm256_sub_ps(one, _mm256_add_ps(yy, zz));
-        let m01 = _mm256_sub_ps(xy, wz);
-        let m02 = _mm256_add_ps(xz, wy);
-        let m10 = _mm256_add_ps(xy, wz);
-        let m11 = _mm256_sub_ps(one, _mm256_add_ps(xx, zz));
-        let m12 = _mm256_sub_ps(yz, wx);
-        let m20 = _mm256_sub_ps(xz, wy);
-        let m21 = _mm256_add_ps(yz, wx);
-        let m22 = _mm256_sub_ps(one, _mm256_add_ps(xx, yy));
-        // t = s·(w_r·d⃗ − w_d·r⃗ + r⃗ × d⃗).
-        let tx = _mm256_mul_ps(
-            s,
-            _mm256_fmadd_ps(rw, dx, _mm256_fnmadd_ps(dw, rx, _mm256_fmsub_ps(ry, dz, _mm256_mul_ps(rz, dy)))),
-        );
-        let ty = _mm256_mul_ps(
-            s,
-            _mm256_fmadd_ps(rw, dy, _mm256_fnmadd_ps(dw, ry, _mm256_fmsub_ps(rz, dx, _mm256_mul_ps(rx, dz)))),
-        );
-        let tz = _mm256_mul_ps(
-            s,
-            _mm256_fmadd_ps(rw, dz, _mm256_fnmadd_ps(dw, rz, _mm256_fmsub_ps(rx, dy, _mm256_mul_ps(ry, dx)))),
-        );
-        // SAFETY (all four): 8 Vec3s are 24 contiguous floats of their slices.
-        let p = unsafe { load_deinterleaved(positions[base..base + 8].as_ptr().cast::<f32>()) };
-        let n = unsafe { load_deinterleaved(normals[base..base + 8].as_ptr().cast::<f32>()) };
-        let (px, py, pz) = (row(m00, m01, m02, p, tx), row(m10, m11, m12, p, ty), row(m20, m21, m22, p, tz));
-        let zero = _mm256_setzero_ps();
-        let (nx, ny, nz) =
-            (row(m00, m01, m02, n, zero), row(m10, m11, m12, n, zero), row(m20, m21, m22, n, zero));
-        unsafe {
-            store_interleaved(out_positions[base..base + 8].as_mut_ptr().cast::<f32>(), px, py, pz);
-            store_interleaved(out_normals[base..base + 8].as_mut_ptr().cast::<f32>(), nx, ny, nz);
+    };
+}
+
+dual_quaternion_kernel!(
+    #[target_feature(enable = "avx2,fma")]
+    dual_quaternion_chunk_soa
+);
+dual_quaternion_kernel!(
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+    dual_quaternion_chunk_soa_avx512
+);
+
+#[cfg(test)]
+mod tests {
+    use glam::{Quat, Vec3};
+
+    use super::*;
+    use crate::deform::{DualQuatJob, Execution};
+
+    /// A small deterministic generator (the tests need no statistics, only varied data).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next_f32(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            ((self.0 >> 40) as f32) / ((1u64 << 24) as f32)
+        }
+        fn vec3(&mut self, r: f32) -> Vec3 {
+            Vec3::new(self.next_f32() - 0.5, self.next_f32() - 0.5, self.next_f32() - 0.5) * 2.0 * r
         }
     }
-    dual_quaternion_chunk(
-        dqs,
-        &joints[full..],
-        &weights[full..],
-        &positions[full..],
-        &normals[full..],
-        &mut out_positions[full..],
-        &mut out_normals[full..],
-    );
+
+    /// Both builds of the dual quaternion kernel (AVX2, and AVX-512VL where the CPU has it)
+    /// against the job's reference path, with ties and zero weights, and a remainder of 3
+    /// vertices after the groups of 8.
+    fn both_builds_match_the_reference<const N: usize>() {
+        if !available() {
+            return;
+        }
+        let mut rng = Lcg(0x5EED + N as u64);
+        let dqs: Vec<DualQuat> = (0..37)
+            .map(|_| {
+                let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
+                let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                DualQuat::from_rotation_translation(rotation, rng.vec3(3.0))
+            })
+            .collect();
+        let n = 8 * 125 + 3;
+        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
+        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+        let joints: Vec<[u16; N]> = (0..n).map(|_| [0; N].map(|_| (rng.next_f32() * 36.99) as u16)).collect();
+        let weights: Vec<[f32; N]> = (0..n)
+            .map(|v| {
+                let mut ws = [0.0f32; N].map(|_| rng.next_f32() + 0.01);
+                match v % 5 {
+                    0 => ws = [1.0; N], // all tied: the first influence is the pivot
+                    1 => ws[N - 1] = 0.0,
+                    2 => ws[1] = ws[0], // a tie for the largest weight is possible
+                    _ => {}
+                }
+                let sum: f32 = ws.iter().sum();
+                ws.map(|w| w / sum)
+            })
+            .collect();
+        let mut expected = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        DualQuatJob {
+            dual_quaternions: &dqs,
+            joints: &joints,
+            weights: &weights,
+            positions: &positions,
+            normals: &normals,
+            out_positions: &mut expected.0,
+            out_normals: &mut expected.1,
+        }
+        .run_with(Execution::Reference)
+        .unwrap();
+        // SAFETY: available() checked above.
+        let packed = unsafe { pack_dual_quaternions(&dqs) };
+        let mut builds = vec!["avx2"];
+        if avx512_available() {
+            builds.push("avx512");
+        }
+        for build in builds {
+            let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+            let (op, on) = (&mut out.0, &mut out.1);
+            // SAFETY: the features were checked; every joint index is below 37.
+            unsafe {
+                match build {
+                    "avx2" => {
+                        dual_quaternion_chunk_soa(&packed, &joints, &weights, &positions, &normals, op, on)
+                    }
+                    _ => dual_quaternion_chunk_soa_avx512(
+                        &packed, &joints, &weights, &positions, &normals, op, on,
+                    ),
+                }
+            }
+            for (got, want, what) in [(&out.0, &expected.0, "position"), (&out.1, &expected.1, "normal")] {
+                for (v, (g, w)) in got.iter().zip(want).enumerate() {
+                    let diff = (*g - *w).abs().max_element();
+                    assert!(
+                        diff <= 1e-4 * (1.0 + w.abs().max_element()),
+                        "{build} N={N} {what} {v}: {g} vs {w}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn dual_quaternion_builds_match_the_reference_4() {
+        both_builds_match_the_reference::<4>();
+    }
+
+    #[test]
+    fn dual_quaternion_builds_match_the_reference_8() {
+        both_builds_match_the_reference::<8>();
+    }
 }
