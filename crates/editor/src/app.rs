@@ -389,6 +389,28 @@ impl EditorApp {
         self.info(format!("Deformer: {}", kind.label()));
     }
 
+    /// Centres the orbit camera on the selected joint, object or light (keeping its angle
+    /// and distance).
+    pub fn frame_selection(&mut self) {
+        let at: Option<glam::Vec3> = match self.selection.item {
+            Some(Selected::Joint { object, joint }) => self.object_pose_now(object).and_then(|pose| {
+                pose.object_from_joint.get(joint).map(|f| (pose.world_from_object * *f).translation.into())
+            }),
+            Some(Selected::Object(o)) => {
+                self.object_pose_now(o).map(|p| p.world_from_object.translation.into())
+            }
+            Some(Selected::Light(l)) => match self.value_now(ChannelId::LightPosition(l)) {
+                Some(ChannelValue::Vec3(p)) => Some(p),
+                _ => None,
+            },
+            None => None,
+        };
+        match at {
+            Some(at) => self.view.camera.target = at,
+            None => self.info("Select a joint, object or light to frame"),
+        }
+    }
+
     /// Points the camera at a preset.
     pub fn camera_preset(&mut self, command: Command) {
         let c = &mut self.view.camera;
@@ -469,6 +491,7 @@ impl EditorApp {
             | Command::CameraTop
             | Command::CameraShoulder
             | Command::CameraElbow => self.camera_preset(command),
+            Command::FrameSelection => self.frame_selection(),
             Command::ShowHelp => self.show_help = !self.show_help,
         }
         ctx.request_repaint();

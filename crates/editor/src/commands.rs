@@ -35,6 +35,7 @@ pub enum Command {
     CameraTop,
     CameraShoulder,
     CameraElbow,
+    FrameSelection,
     ShowHelp,
 }
 
@@ -50,7 +51,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 32] = [
+    pub const ALL: [Command; 33] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -82,6 +83,7 @@ impl Command {
         Command::CameraTop,
         Command::CameraShoulder,
         Command::CameraElbow,
+        Command::FrameSelection,
         Command::ShowHelp,
     ];
 
@@ -117,6 +119,7 @@ impl Command {
             Command::CameraTop => "Top view",
             Command::CameraShoulder => "Shoulder view",
             Command::CameraElbow => "Elbow view",
+            Command::FrameSelection => "Frame selection",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -164,6 +167,7 @@ impl Command {
             Command::CameraTop => "Look down at the scene",
             Command::CameraShoulder => "Look down the arm at the first joint",
             Command::CameraElbow => "Look down the arm at the second joint",
+            Command::FrameSelection => "Centre the view on the selected joint, object or light",
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -203,6 +207,7 @@ impl Command {
             Command::CameraTop => vec![sc(NONE, Key::F3)],
             Command::CameraShoulder => vec![sc(NONE, Key::F4)],
             Command::CameraElbow => vec![sc(NONE, Key::F5)],
+            Command::FrameSelection => vec![sc(NONE, Key::F)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

@@ -210,10 +210,13 @@ fn drag_centre(harness: &mut Harness<'_, EditorApp>, centre: Pos2, by: egui::Vec
 /// the editor) followed the pointer in the view plane; returns the new position.
 fn drag_selection_right(harness: &mut Harness<'_, EditorApp>, position: impl Fn(&EditorApp) -> Vec3) -> Vec3 {
     let before = position(harness.state());
-    // Centre the view on the selection first, as a user pans to what they edit (the demo's
+    // Frame the selection first (F), as a user brings what they edit into view (the demo's
     // light sits above the default view).
-    harness.state_mut().view.camera.target = before;
-    harness.run();
+    press(harness, Modifiers::NONE, Key::F);
+    assert!(
+        (harness.state().view.camera.target - before).length() < 1e-5,
+        "F centres the view on the selection"
+    );
     let centre = on_screen(harness.state(), before);
     let camera = harness.state().view.camera;
     let forward = (camera.target - camera.eye()).normalize();
@@ -298,8 +301,7 @@ fn dragging_a_spot_lights_view_ring_turns_its_direction() {
     };
     let (position, direction) = (ChannelId::LightPosition(0), ChannelId::LightDirection(0));
     let place = vec3(h.state(), position);
-    h.state_mut().view.camera.target = place;
-    h.run();
+    press(&mut h, Modifiers::NONE, Key::F);
     let before = vec3(h.state(), direction);
     let keys_before = channels::key_count(h.state().doc.scene(), direction);
     let camera = h.state().view.camera;

@@ -88,6 +88,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                     Command::CameraTop,
                     Command::CameraShoulder,
                     Command::CameraElbow,
+                    Command::FrameSelection,
                 ] {
                     command_button(ui, app, c, None);
                 }
