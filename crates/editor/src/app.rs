@@ -127,6 +127,8 @@ pub struct EditorApp {
     pub skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
     pub meshes: files::MeshStore,
+    /// Model imports running on background threads (the status bar shows them).
+    pub imports: Vec<files::BackgroundImport>,
     /// What the viewport could not draw in the last frame (shown in red over it).
     pub viewport_errors: Vec<String>,
     /// Smoothed time between frames while playing, seconds (shown in the status bar).
@@ -179,6 +181,7 @@ impl EditorApp {
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
+            imports: Vec::new(),
             viewport_errors: Vec::new(),
             frame_time: None,
             gpu: None,
@@ -523,8 +526,13 @@ impl EditorApp {
         }
     }
 
-    /// Opens a scene or model file (decided by its extension).
+    /// Opens a scene or model file (decided by its extension); models are read in the
+    /// background ([`EditorApp::wait_for_background_work`]).
     pub fn open_path(&mut self, path: PathBuf) {
+        if !files::is_scene_file(&path) {
+            self.start_import(path, files::ImportPurpose::Open);
+            return;
+        }
         match files::open_any(&path) {
             Ok(scene) => {
                 self.replace_document(scene, files::is_scene_file(&path).then(|| path.clone()));
@@ -584,20 +592,10 @@ impl EditorApp {
         }
     }
 
-    /// Imports a model into the current scene as a new object.
+    /// Imports a model into the current scene as new objects, read in the background and
+    /// applied as one undoable edit ([`EditorApp::wait_for_background_work`]).
     pub fn import_path(&mut self, path: PathBuf) {
-        match files::import_model(&path) {
-            Ok(imported) => {
-                let n = imported.objects.len();
-                self.doc.edit(&format!("import {}", path.display()), |scene| {
-                    scene.objects.extend(imported.objects);
-                    scene.lights.extend(imported.lights);
-                });
-                self.recent.add(&path);
-                self.info(format!("Imported {n} object(s) from {}", path.display()));
-            }
-            Err(e) => self.error(e),
-        }
+        self.start_import(path, files::ImportPurpose::Import);
     }
 
     /// Exports the scene as glTF.
@@ -656,6 +654,7 @@ impl EditorApp {
         if self.show_help && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {
             self.show_help = false;
         }
+        self.poll_background_work(&ctx);
         self.handle_dropped_files(&ctx);
 
         panels::menu::ui(ui, self);

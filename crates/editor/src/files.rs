@@ -1,11 +1,32 @@
 //! The editor's files: opening, saving, importing and exporting through keyrig-io, the
 //! autosave recovery file and the recent-files list. Errors come back as text for the status
 //! bar; nothing here panics on a bad file.
+//!
+//! Models (glTF, MD2) are read on a background thread ([`BackgroundImport`]): the UI keeps
+//! drawing, the status bar shows the stage, a fraction where one is known and the elapsed
+//! time, and the result is applied as one undoable edit (or as the new document) when the
+//! thread is done.
 
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
+use glam::{Mat4, Quat, Vec3};
 use keyrig_core::Scene;
+use keyrig_render::{MorphClip, MorphMesh, SkinnedVertex};
+
+/// MD2 models are Z-up in Quake units; keyrig scenes are Y-up in metres. An MD2 object gets
+/// this rotation (−90° about X: Quake's +Z becomes +Y, its +X stays +X and its +Y becomes −Z)
+/// and [`MD2_SCALE`] as its own (editable) transform; the file's vertices are not changed.
+#[must_use]
+pub fn md2_rotation() -> Quat {
+    Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2)
+}
+
+/// Metres per Quake unit. Quake 2 player models are about 56 units tall, so one unit as an
+/// inch (0.0254 m) makes them about 1.4 m tall, next to a 1.6 m demo arm.
+pub const MD2_SCALE: f32 = 0.0254;
 
 /// How many recent files are remembered.
 const RECENT_LIMIT: usize = 10;
@@ -46,39 +67,319 @@ pub fn save_scene(path: &Path, scene: &Scene) -> Result<(), String> {
     keyrig_io::scene_file::save(path, scene).map_err(|e| e.to_string())
 }
 
-/// Opens a scene file, or a model as a new scene.
+/// Opens a scene file, or a model as a new scene (synchronously; the editor's menus use
+/// [`BackgroundImport`] for models).
 pub fn open_any(path: &Path) -> Result<Scene, String> {
     if is_scene_file(path) {
         load_scene(path)
     } else {
-        import_model(path)
+        let mut scene = import_model(path)?;
+        let meshes = load_meshes_of(&scene, &mut |_| {});
+        frame_new_scene(&mut scene, &meshes);
+        Ok(scene)
     }
 }
 
 /// Reads a model as a scene of its own. glTF (.glb, .gltf) maps onto keyrig through keyrig-io:
 /// skinned meshes with their skeleton and the first animation's joint rotation tracks, other
-/// meshes as objects, KHR lights as lights; the meshes stay in the file
-/// (`MeshSource::File`, with the model's absolute path) and are loaded by [`MeshStore`].
+/// meshes as objects, KHR lights as lights. An MD2 model becomes one object named after the
+/// file, playing every frame at [`keyrig_core::MD2_DEFAULT_FPS`], turned Y-up and scaled to
+/// metres ([`md2_rotation`], [`MD2_SCALE`]); the frame range covers one loop of it. The
+/// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
+/// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, String> {
+    let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
             let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
-            let absolute = fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
             let animation = (!model.animations.is_empty()).then_some(0);
             model
-                .to_scene(&absolute.to_string_lossy(), animation)
+                .to_scene(&absolute().to_string_lossy(), animation)
                 .map_err(|e| format!("{}: {e}", path.display()))
         }
-        Some("md2") => Err(format!(
-            "{}: MD2 models are vertex animation, which the editor cannot key; play them with \
-             `keyrig render` or convert them with `keyrig convert`",
-            path.display()
-        )),
+        Some("md2") => {
+            let model = keyrig_io::md2::load_md2_file(path).map_err(|e| e.to_string())?;
+            let mesh = morph_mesh_from_md2(&model).map_err(|e| format!("{}: {e}", path.display()))?;
+            let mut scene = Scene::default();
+            let name =
+                path.file_stem().map_or_else(|| "MD2".to_owned(), |s| s.to_string_lossy().into_owned());
+            let mut object = keyrig_core::Object::new(name);
+            object.mesh = Some(keyrig_core::MeshSource::File {
+                path: absolute().to_string_lossy().into_owned(),
+                mesh: None,
+                clip: None,
+                fps: Some(keyrig_core::MD2_DEFAULT_FPS),
+            });
+            object.rotation = keyrig_core::Animated::constant(md2_rotation());
+            object.scale = keyrig_core::Animated::constant(Vec3::splat(MD2_SCALE));
+            scene.objects.push(object);
+            let seconds =
+                mesh.clip_duration(None, keyrig_core::MD2_DEFAULT_FPS).map_err(|e| e.to_string())?;
+            scene.frame_range.end = frame_range_end(seconds, scene.fps);
+            Ok(scene)
+        }
         Some(other) => Err(format!(
             "{}: unknown file type .{other} (expected .ron, .glb, .gltf or .md2)",
             path.display()
         )),
         None => Err(format!("{}: no file extension (expected .ron, .glb, .gltf or .md2)", path.display())),
+    }
+}
+
+/// The last frame of a range starting at 0 that shows `seconds` of looping animation at
+/// `fps` timeline frames per second (the frame after it is the loop's first again).
+#[must_use]
+pub fn frame_range_end(seconds: f64, fps: f64) -> i32 {
+    let frames = (seconds * fps).round() - 1.0;
+    if frames.is_finite() {
+        frames.clamp(1.0, 1e6) as i32
+    } else {
+        60
+    }
+}
+
+/// A keyrig morph mesh from an MD2 model: every frame's positions and normals per render
+/// vertex (in the file's Z-up Quake units) and its clips.
+///
+/// # Errors
+/// A model without frames (keyrig-io's reader refuses those already).
+pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh, String> {
+    let frames: Vec<Vec<SkinnedVertex>> = (0..model.frames.len())
+        .filter_map(|f| model.frame_pose(f))
+        .map(|pose| {
+            pose.positions.iter().zip(&pose.normals).map(|(&p, &n)| SkinnedVertex::new(p, n)).collect()
+        })
+        .collect();
+    let clips =
+        model.clips.iter().map(|c| MorphClip { name: c.name.clone(), frames: c.frames.clone() }).collect();
+    MorphMesh::new(frames, model.indices.clone(), clips).map_err(|e| e.to_string())
+}
+
+/// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame) and adds a
+/// sun when it has no light, as `keyrig render` does for models.
+fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
+    let mut bounds = (Vec3::MAX, Vec3::MIN);
+    for object in &scene.objects {
+        let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
+        let Some((_, Ok(data))) = meshes.iter().find(|((p, m), _)| p == Path::new(path) && m == mesh) else {
+            continue;
+        };
+        let world = Mat4::from_scale_rotation_translation(
+            object.scale.value,
+            object.rotation.value.normalize(),
+            object.translation.value,
+        );
+        for p in data.rest_positions() {
+            let p = world.transform_point3(p);
+            bounds = (bounds.0.min(p), bounds.1.max(p));
+        }
+    }
+    if bounds.0.cmple(bounds.1).all() {
+        let radius = ((bounds.1 - bounds.0).length() * 0.5).max(1e-3);
+        scene.camera = keyrig_core::Camera {
+            target: (bounds.0 + bounds.1) * 0.5,
+            yaw_deg: 30.0,
+            pitch_deg: 15.0,
+            distance: radius * 2.8,
+            fov_y_deg: 45.0,
+        };
+    }
+    if scene.lights.is_empty() {
+        scene.lights.push(keyrig_core::Light {
+            name: "Sun".into(),
+            kind: keyrig_core::LightKind::Directional,
+            enabled: true,
+            position: keyrig_core::Animated::constant(Vec3::new(0.0, 3.0, 0.0)),
+            direction: keyrig_core::Animated::constant(Vec3::new(-0.4, -1.0, -0.6)),
+            colour: keyrig_core::Animated::constant(Vec3::ONE),
+            intensity: keyrig_core::Animated::constant(0.9),
+        });
+        scene.ambient = Vec3::splat(0.15);
+    }
+}
+
+/// Loads the mesh of every object of `scene` whose mesh is a file (once per file and mesh
+/// index), calling `progress` with (done, total) after each.
+fn load_meshes_of(scene: &Scene, progress: &mut dyn FnMut((usize, usize))) -> Vec<LoadedMesh> {
+    let mut wanted: Vec<(PathBuf, Option<usize>)> = Vec::new();
+    for object in &scene.objects {
+        if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+            let key = (PathBuf::from(path), *mesh);
+            if !wanted.contains(&key) {
+                wanted.push(key);
+            }
+        }
+    }
+    let total = wanted.len();
+    wanted
+        .into_iter()
+        .enumerate()
+        .map(|(i, (path, mesh))| {
+            let loaded = load_file_mesh(&path, mesh);
+            progress((i + 1, total));
+            ((path, mesh), loaded)
+        })
+        .collect()
+}
+
+/// A model file's mesh as [`MeshStore`] keys it (full path, mesh index) and how loading it
+/// went.
+pub type LoadedMesh = ((PathBuf, Option<usize>), Result<FileMesh, String>);
+
+/// Whether a model import replaces the document or adds to it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImportPurpose {
+    /// Open the model as a new scene (File ▸ Open, `keyrig edit model`).
+    Open,
+    /// Add the model's objects and lights to the scene as one undoable edit (File ▸ Import,
+    /// a dropped model).
+    Import,
+}
+
+/// Where a background import is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportProgress {
+    /// What is being done (`reading and parsing`, `loading meshes`, …).
+    pub stage: String,
+    /// Done fraction where it is known (meshes loaded of meshes to load); `None` while a
+    /// single step whose length is unknown runs (reading and parsing the file).
+    pub fraction: Option<f32>,
+}
+
+/// A model read on a background thread: the scene it maps to and its meshes, ready for the
+/// [`MeshStore`].
+pub struct ImportedModel {
+    pub scene: Scene,
+    pub meshes: Vec<LoadedMesh>,
+}
+
+/// A model import running on its own thread.
+pub struct BackgroundImport {
+    pub path: PathBuf,
+    pub purpose: ImportPurpose,
+    started: Instant,
+    progress: Arc<Mutex<ImportProgress>>,
+    handle: std::thread::JoinHandle<Result<ImportedModel, String>>,
+}
+
+impl BackgroundImport {
+    /// Starts reading the model at `path` on a new thread.
+    #[must_use]
+    pub fn start(path: PathBuf, purpose: ImportPurpose) -> Self {
+        let progress =
+            Arc::new(Mutex::new(ImportProgress { stage: "reading and parsing".to_owned(), fraction: None }));
+        let shared = Arc::clone(&progress);
+        let file = path.clone();
+        let handle = std::thread::spawn(move || {
+            let set = |stage: &str, fraction: Option<f32>| {
+                if let Ok(mut p) = shared.lock() {
+                    *p = ImportProgress { stage: stage.to_owned(), fraction };
+                }
+            };
+            let mut scene = import_model(&file)?;
+            set("loading meshes", Some(0.0));
+            let meshes = load_meshes_of(&scene, &mut |(done, total)| {
+                set("loading meshes", Some(done as f32 / total.max(1) as f32));
+            });
+            if purpose == ImportPurpose::Open {
+                frame_new_scene(&mut scene, &meshes);
+            }
+            Ok(ImportedModel { scene, meshes })
+        });
+        BackgroundImport { path, purpose, started: Instant::now(), progress, handle }
+    }
+
+    /// The stage and fraction now.
+    #[must_use]
+    pub fn progress(&self) -> ImportProgress {
+        self.progress.lock().map_or_else(
+            |_| ImportProgress { stage: "reading and parsing".to_owned(), fraction: None },
+            |p| p.clone(),
+        )
+    }
+
+    /// Time since the import started.
+    #[must_use]
+    pub fn elapsed(&self) -> Duration {
+        self.started.elapsed()
+    }
+
+    /// Whether the thread is done (then [`BackgroundImport::finish`] does not block).
+    #[must_use]
+    pub fn is_finished(&self) -> bool {
+        self.handle.is_finished()
+    }
+
+    /// The result, waiting for the thread if it still runs.
+    pub fn finish(self) -> Result<ImportedModel, String> {
+        let path = self.path.clone();
+        self.handle
+            .join()
+            .unwrap_or_else(|_| Err(format!("{}: the import stopped unexpectedly", path.display())))
+    }
+}
+
+impl crate::EditorApp {
+    /// Starts reading a model in the background for `purpose`.
+    pub fn start_import(&mut self, path: PathBuf, purpose: ImportPurpose) {
+        self.imports.push(BackgroundImport::start(path, purpose));
+    }
+
+    /// Applies the imports that have finished; while some still run, asks for a repaint soon
+    /// (the status bar shows them).
+    pub fn poll_background_work(&mut self, ctx: &egui::Context) {
+        let (done, running): (Vec<_>, Vec<_>) =
+            std::mem::take(&mut self.imports).into_iter().partition(BackgroundImport::is_finished);
+        self.imports = running;
+        for import in done {
+            self.apply_import(import);
+        }
+        if !self.imports.is_empty() {
+            ctx.request_repaint_after(Duration::from_millis(50));
+        }
+    }
+
+    /// Waits for every running import and applies it (tests, and before quitting).
+    pub fn wait_for_background_work(&mut self) {
+        for import in std::mem::take(&mut self.imports) {
+            self.apply_import(import);
+        }
+    }
+
+    fn apply_import(&mut self, import: BackgroundImport) {
+        let (path, purpose, elapsed) = (import.path.clone(), import.purpose, import.elapsed());
+        let imported = match import.finish() {
+            Ok(imported) => imported,
+            Err(e) => {
+                self.error(e);
+                return;
+            }
+        };
+        if let Some(((_, _), Err(e))) = imported.meshes.iter().find(|(_, m)| m.is_err()) {
+            self.error(e.clone());
+            return;
+        }
+        for ((file, mesh), loaded) in imported.meshes {
+            self.meshes.insert(file, mesh, loaded);
+        }
+        let seconds = elapsed.as_secs_f64();
+        match purpose {
+            ImportPurpose::Open => {
+                self.replace_document(imported.scene, None);
+                self.recent.add(&path);
+                self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
+            }
+            ImportPurpose::Import => {
+                let scene = imported.scene;
+                let n = scene.objects.len();
+                self.doc.edit(&format!("import {}", path.display()), |doc| {
+                    doc.objects.extend(scene.objects);
+                    doc.lights.extend(scene.lights);
+                });
+                self.recent.add(&path);
+                self.info(format!("Imported {n} object(s) from {} ({seconds:.2} s)", path.display()));
+            }
+        }
     }
 }
 
@@ -101,6 +402,20 @@ pub enum FileMesh {
     Skinned(Box<keyrig_skin::SkinnedMesh>),
     /// A mesh without a skin: positions and triangles in its node's space.
     Static { positions: Vec<glam::Vec3>, indices: Vec<u32> },
+    /// A vertex-animated mesh (MD2): every frame, its triangles and clips.
+    Morph(Box<MorphMesh>),
+}
+
+impl FileMesh {
+    /// Positions at rest (the skinned mesh's bind pose, a morph mesh's first frame).
+    #[must_use]
+    pub fn rest_positions(&self) -> Vec<Vec3> {
+        match self {
+            FileMesh::Skinned(m) => m.positions.clone(),
+            FileMesh::Static { positions, .. } => positions.clone(),
+            FileMesh::Morph(m) => m.frames()[0].iter().map(SkinnedVertex::position).collect(),
+        }
+    }
 }
 
 /// Meshes of model files, loaded once per (file, mesh index).
@@ -128,11 +443,23 @@ impl MeshStore {
             .as_ref()
             .map_err(Clone::clone)
     }
+
+    /// Stores a mesh loaded elsewhere (by a background import) under its full path.
+    pub fn insert(&mut self, path: PathBuf, mesh: Option<usize>, loaded: Result<FileMesh, String>) {
+        self.meshes.insert((path, mesh), loaded);
+    }
 }
 
 fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> {
-    if !matches!(extension(path).as_deref(), Some("glb" | "gltf")) {
-        return Err(format!("{}: the editor shows meshes of glTF files only", path.display()));
+    match extension(path).as_deref() {
+        Some("glb" | "gltf") => {}
+        Some("md2") => {
+            let model = keyrig_io::md2::load_md2_file(path).map_err(|e| e.to_string())?;
+            return morph_mesh_from_md2(&model)
+                .map(|m| FileMesh::Morph(Box::new(m)))
+                .map_err(|e| format!("{}: {e}", path.display()));
+        }
+        _ => return Err(format!("{}: the editor shows meshes of glTF and MD2 files only", path.display())),
     }
     let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
     let index = mesh.unwrap_or(0);

@@ -29,6 +29,9 @@ pub struct GpuFrame<'a> {
     /// Skinned meshes of objects whose mesh is a file, by object index; only read when the
     /// rig is rebuilt (see [`GpuView::needs_rig`]).
     pub file_meshes: std::collections::HashMap<usize, keyrig_skin::SkinnedMesh>,
+    /// Vertex-animated meshes (MD2) of objects whose mesh is a file, by object index; read
+    /// like `file_meshes`.
+    pub morph_meshes: std::collections::HashMap<usize, keyrig_render::MorphMesh>,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -102,13 +105,15 @@ impl GpuView {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.doc_key) {
             self.rig = None;
-            let rig = SceneRig::with_meshes(frame.scene, &frame.file_meshes).map_err(|e| e.to_string())?;
+            let rig = SceneRig::with_loaded(frame.scene, &frame.file_meshes, &frame.morph_meshes)
+                .map_err(|e| e.to_string())?;
             rig.upload(&mut self.renderer).map_err(|e| e.to_string())?;
             self.rig = Some((frame.doc_key, rig));
         }
         let Some((_, rig)) = &self.rig else { return Err("no scene prepared for rendering".to_owned()) };
-        let mut input =
-            rig.frame_from_states(&frame.states, frame.lights, &frame.view).map_err(|e| e.to_string())?;
+        let mut input = rig
+            .frame_from_states(&frame.states, frame.lights, &frame.view, frame.time)
+            .map_err(|e| e.to_string())?;
         if frame.view.motion_path {
             if let Some(path) =
                 rig.motion_path(frame.view.selection, frame.time).map_err(|e| e.to_string())?

@@ -7,6 +7,9 @@
 //! scene skeleton may use other units (the demo uses metres). The mesh is fitted to the
 //! object's skeleton by the ratio of the two skeletons' chain lengths, then bound to the
 //! object's rest skeleton.
+//!
+//! Vertex-animated (MD2) meshes are morphed here too, on the CPU, for the painter fallback
+//! and for tests ([`SkinCache::morph`]); the GPU viewport morphs them in keyrig-render.
 
 use std::collections::HashMap;
 
@@ -57,6 +60,8 @@ pub struct SkinnedView<'a> {
 pub struct SkinCache {
     entries: HashMap<usize, Entry>,
     statics: Vec<(ProceduralMesh, Vec<Vec3>, Vec<u32>)>,
+    /// Morphed positions of the last frame of vertex-animated objects.
+    morphs: HashMap<usize, Vec<Vec3>>,
 }
 
 fn build_entry(
@@ -69,7 +74,7 @@ fn build_entry(
         MeshInput::File { path, mesh, data } => match data {
             // A file's skinned mesh keeps the skeleton and inverse bind matrices of its skin.
             crate::files::FileMesh::Skinned(m) => (MeshKey::File((*path).to_owned(), *mesh), (**m).clone()),
-            crate::files::FileMesh::Static { .. } => return Ok(None),
+            crate::files::FileMesh::Static { .. } | crate::files::FileMesh::Morph(_) => return Ok(None),
         },
     };
     let zone = BlendZone::from_settings(&settings).map_err(|e| format!("blend zone: {e}"))?;
@@ -102,6 +107,7 @@ impl SkinCache {
         pose: &ObjectPose,
         kind: DeformerKind,
     ) -> Result<Option<SkinnedView<'_>>, String> {
+        self.morphs.remove(&index);
         let (Some(input), Some(skeleton)) = (input, &object.skeleton) else {
             self.entries.remove(&index);
             return Ok(None);
@@ -170,10 +176,32 @@ impl SkinCache {
         (positions, indices)
     }
 
-    /// Deformed positions (object space) of the last skinned frame of an object.
+    /// Morphs object `index`'s vertex-animated mesh to `time` seconds, playing `clip` (every
+    /// frame when `None`) at `fps` model frames per second, looping (keyrig-render's
+    /// [`keyrig_render::MorphMesh::blend_at`]); returns the positions in object space.
+    ///
+    /// # Errors
+    /// An unknown clip, a bad rate or time.
+    pub fn morph(
+        &mut self,
+        index: usize,
+        mesh: &keyrig_render::MorphMesh,
+        clip: Option<&str>,
+        fps: f64,
+        time: f64,
+    ) -> Result<&[Vec3], String> {
+        let blend = mesh.blend_at(clip, fps, time).map_err(|e| e.to_string())?;
+        let (positions, _normals) = mesh.blended(blend);
+        Ok(self.morphs.entry(index).insert_entry(positions).into_mut())
+    }
+
+    /// Deformed positions (object space) of the last skinned or morphed frame of an object.
     #[must_use]
     pub fn deformed_positions(&self, index: usize) -> Option<&[Vec3]> {
-        self.entries.get(&index).map(|e| e.deformed.positions.as_slice())
+        self.entries
+            .get(&index)
+            .map(|e| e.deformed.positions.as_slice())
+            .or_else(|| self.morphs.get(&index).map(Vec::as_slice))
     }
 }
 

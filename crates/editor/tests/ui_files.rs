@@ -62,6 +62,7 @@ fn import_a_skinned_gltf_into_the_scene_and_undo_it() {
     let before = h.state().doc.scene().objects.len();
     let model = corpus("gltf/RiggedSimple/RiggedSimple.glb");
     h.state_mut().import_path(model);
+    h.state_mut().wait_for_background_work();
     h.run();
     let status = h.state().status.clone().expect("a message");
     assert!(!status.is_error, "{status:?}");
@@ -90,6 +91,7 @@ fn export_gltf_writes_a_file_and_a_bad_file_reports_an_error() {
     let junk = dir.path().join("junk.glb");
     std::fs::write(&junk, b"not a glTF file").expect("write");
     h.state_mut().import_path(junk);
+    h.state_mut().wait_for_background_work();
     h.run();
     let status = h.state().status.clone().expect("an error");
     assert!(status.is_error && status.text.contains("junk.glb"), "{status:?}");

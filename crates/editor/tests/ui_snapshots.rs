@@ -67,6 +67,7 @@ fn an_imported_skinned_gltf_renders_on_the_gpu() {
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     h.state_mut().import_path(model);
+    h.state_mut().wait_for_background_work();
     h.run();
     assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
     assert_eq!(h.state().viewport_errors, Vec::<String>::new());

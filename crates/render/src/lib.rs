@@ -43,7 +43,10 @@ pub use overlay::{LightGizmo, MotionPath, SkeletonOverlay};
 pub use renderer::{
     Deform, DrawItem, FrameInput, FrameStats, LightInput, MeshData, MeshId, RenderStyle, Renderer, Viewport,
 };
-pub use scene_frame::{ObjectState, SceneFrameError, SceneRig, Selection, ViewOptions};
+pub use scene_frame::{
+    MorphBlend, MorphClip, MorphError, MorphMesh, ObjectState, SceneFrameError, SceneRig, Selection,
+    ViewOptions,
+};
 pub use skinning::{
     joint_poses, BlendBinding, GpuSkinner, JointPose, OwnedSkinInput, SkinMeshInput, SkinnedVertex,
 };

@@ -6,8 +6,15 @@
 //! evaluates each skeleton's joint palette and fills in lights, overlays and draw items.
 //! The editor, which has its own transient pose overrides, can evaluate the objects itself and
 //! call [`SceneRig::frame_from_states`] instead.
+//!
+//! Vertex-animated meshes (Quake 2 MD2) come in as a [`MorphMesh`] (every frame's vertices
+//! and the named clips) through [`SceneRig::with_loaded`]; an object's `MeshSource::File`
+//! `clip` and `fps` choose what plays: scene time `t` shows clip frame `f = t · fps`, looping
+//! (the last frame morphs back into the first), drawn by the GPU morph pass as the blend of
+//! frames `⌊f⌋` and `⌊f⌋ + 1` with weight `f − ⌊f⌋` ([`MorphMesh::blend_at`]).
 
 use std::collections::HashMap;
+use std::ops::Range;
 
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{AnimatedTrack, Camera, DeformerKind, MeshSource, Scene, TrackError};
@@ -18,7 +25,7 @@ use thiserror::Error;
 
 use crate::overlay::{grid_spacing_for, LightGizmo, MotionPath, SkeletonOverlay};
 use crate::renderer::{Deform, DrawItem, FrameInput, LightInput, MeshData, MeshId, RenderStyle, Renderer};
-use crate::skinning::{joint_poses, OwnedSkinInput};
+use crate::skinning::{joint_poses, OwnedSkinInput, SkinnedVertex};
 use crate::RenderError;
 
 /// Most samples a motion path takes over the frame range.
@@ -48,6 +55,186 @@ pub enum SceneFrameError {
     MeshNotLoaded { object: usize, name: String, file: String },
     #[error("{path}: {message}")]
     Invalid { path: String, message: String },
+    #[error("{path}: {source}")]
+    Morph { path: String, source: MorphError },
+}
+
+/// What is wrong with a [`MorphMesh`] or a request to play it.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MorphError {
+    #[error("the mesh has no frames")]
+    NoFrames,
+    #[error("frame {frame} has {len} vertices, frame 0 has {expected}")]
+    FrameLength { frame: usize, len: usize, expected: usize },
+    #[error("{count} triangle indices is not a multiple of 3")]
+    IndexCount { count: usize },
+    #[error("triangle index {index} is out of range (the mesh has {vertices} vertices)")]
+    Index { index: u32, vertices: usize },
+    #[error("clip `{name}` covers frames {start}..{end}, outside the {frames} frames (or empty)")]
+    ClipRange { name: String, start: usize, end: usize, frames: usize },
+    #[error("no clip named `{name}` (clips: {available})")]
+    NoSuchClip { name: String, available: String },
+    #[error("playback rate must be finite and > 0 frames per second, got {0}")]
+    BadFps(f64),
+    #[error("time must be finite, got {0}")]
+    BadTime(f64),
+}
+
+/// A named run of consecutive frames of a [`MorphMesh`] (an MD2 clip: `stand`, `run`, …).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MorphClip {
+    pub name: String,
+    /// Indices into [`MorphMesh::frames`].
+    pub frames: Range<usize>,
+}
+
+/// Which two frames of a morph mesh are blended, and with what weight of the second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MorphBlend {
+    pub frame_a: u32,
+    pub frame_b: u32,
+    pub t: f32,
+}
+
+/// A vertex-animated mesh (vertex morphing, as MD2 stores it): the same triangles over
+/// frames of positions and normals, grouped into named clips.
+///
+/// # Invariants
+/// At least one frame; every frame has as many vertices as frame 0; indices are triangles
+/// of vertices that exist; every clip is a non-empty range of existing frames. Checked by
+/// [`MorphMesh::new`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MorphMesh {
+    frames: Vec<Vec<SkinnedVertex>>,
+    indices: Vec<u32>,
+    clips: Vec<MorphClip>,
+}
+
+impl MorphMesh {
+    /// A morph mesh from its frames, triangles and clips.
+    ///
+    /// # Errors
+    /// A broken invariant (see the type's documentation).
+    pub fn new(
+        frames: Vec<Vec<SkinnedVertex>>,
+        indices: Vec<u32>,
+        clips: Vec<MorphClip>,
+    ) -> Result<Self, MorphError> {
+        let Some(first) = frames.first() else { return Err(MorphError::NoFrames) };
+        let expected = first.len();
+        if let Some((frame, f)) = frames.iter().enumerate().find(|(_, f)| f.len() != expected) {
+            return Err(MorphError::FrameLength { frame, len: f.len(), expected });
+        }
+        if !indices.len().is_multiple_of(3) {
+            return Err(MorphError::IndexCount { count: indices.len() });
+        }
+        if let Some(&index) = indices.iter().find(|&&i| i as usize >= expected) {
+            return Err(MorphError::Index { index, vertices: expected });
+        }
+        if let Some(clip) = clips.iter().find(|c| c.frames.is_empty() || c.frames.end > frames.len()) {
+            return Err(MorphError::ClipRange {
+                name: clip.name.clone(),
+                start: clip.frames.start,
+                end: clip.frames.end,
+                frames: frames.len(),
+            });
+        }
+        Ok(MorphMesh { frames, indices, clips })
+    }
+
+    /// Every frame's vertices.
+    #[must_use]
+    pub fn frames(&self) -> &[Vec<SkinnedVertex>] {
+        &self.frames
+    }
+
+    /// Triangles, three vertex indices each.
+    #[must_use]
+    pub fn indices(&self) -> &[u32] {
+        &self.indices
+    }
+
+    /// The named clips, in frame order.
+    #[must_use]
+    pub fn clips(&self) -> &[MorphClip] {
+        &self.clips
+    }
+
+    /// Vertices per frame.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.frames[0].len()
+    }
+
+    /// The frames clip `clip` plays; every frame for `None`.
+    ///
+    /// # Errors
+    /// [`MorphError::NoSuchClip`] listing the clips there are.
+    pub fn clip_frames(&self, clip: Option<&str>) -> Result<Range<usize>, MorphError> {
+        match clip {
+            None => Ok(0..self.frames.len()),
+            Some(name) => {
+                self.clips.iter().find(|c| c.name == name).map(|c| c.frames.clone()).ok_or_else(|| {
+                    MorphError::NoSuchClip {
+                        name: name.to_owned(),
+                        available: self.clips.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "),
+                    }
+                })
+            }
+        }
+    }
+
+    /// Seconds one loop of `clip` lasts at `fps`: frames / fps (looping, the last frame morphs
+    /// back into the first).
+    ///
+    /// # Errors
+    /// An unknown clip or a rate that is not finite and > 0.
+    pub fn clip_duration(&self, clip: Option<&str>, fps: f64) -> Result<f64, MorphError> {
+        let frames = self.clip_frames(clip)?;
+        if !(fps.is_finite() && fps > 0.0) {
+            return Err(MorphError::BadFps(fps));
+        }
+        Ok(frames.len() as f64 / fps)
+    }
+
+    /// The frames to blend at `time` seconds when `clip` plays at `fps`, looping:
+    /// f = (time · fps) mod n over the clip's n frames; frames ⌊f⌋ and ⌊f⌋ + 1 (the clip's
+    /// first after its last) with weight t = f − ⌊f⌋. A pure function of its inputs.
+    ///
+    /// # Errors
+    /// An unknown clip, a rate that is not finite and > 0, a time that is not finite.
+    pub fn blend_at(&self, clip: Option<&str>, fps: f64, time: f64) -> Result<MorphBlend, MorphError> {
+        let frames = self.clip_frames(clip)?;
+        if !(fps.is_finite() && fps > 0.0) {
+            return Err(MorphError::BadFps(fps));
+        }
+        let f = time * fps;
+        if !f.is_finite() {
+            return Err(MorphError::BadTime(time));
+        }
+        let n = frames.len();
+        let f = f.rem_euclid(n as f64);
+        let a = (f.floor() as usize).min(n - 1);
+        let b = (a + 1) % n;
+        let t = ((f - a as f64) as f32).clamp(0.0, 1.0);
+        Ok(MorphBlend { frame_a: (frames.start + a) as u32, frame_b: (frames.start + b) as u32, t })
+    }
+
+    /// Positions and normals of `blend` computed on the CPU (the same linear blend as the GPU
+    /// morph pass; normals renormalized).
+    #[must_use]
+    pub fn blended(&self, blend: MorphBlend) -> (Vec<Vec3>, Vec<Vec3>) {
+        let last = self.frames.len() - 1;
+        let a = &self.frames[(blend.frame_a as usize).min(last)];
+        let b = &self.frames[(blend.frame_b as usize).min(last)];
+        a.iter()
+            .zip(b)
+            .map(|(va, vb)| {
+                let n = va.normal().lerp(vb.normal(), blend.t);
+                (va.position().lerp(vb.position(), blend.t), n.normalize_or(va.normal()))
+            })
+            .unzip()
+    }
 }
 
 fn track_err(path: String) -> impl FnOnce(TrackError) -> SceneFrameError {
@@ -113,11 +300,19 @@ struct MeshRig {
     bindings: MeshBindings,
 }
 
+/// A morph mesh and what of it plays.
+struct MorphRig {
+    mesh: MorphMesh,
+    clip: Option<String>,
+    fps: f64,
+}
+
 struct ObjectRig {
     translation: AnimatedTrack<Vec3>,
     rotation: AnimatedTrack<Quat>,
     scale: AnimatedTrack<Vec3>,
     mesh: Option<MeshRig>,
+    morph: Option<MorphRig>,
     skeleton: Option<SkeletonRig>,
     rest: Option<RestSkeleton>,
     deformer: DeformerKind,
@@ -169,6 +364,22 @@ impl SceneRig {
     /// As [`SceneRig::new`]; [`SceneFrameError::MeshNotLoaded`] for a file mesh missing from
     /// `loaded`.
     pub fn with_meshes(scene: &Scene, loaded: &HashMap<usize, SkinnedMesh>) -> Result<Self, SceneFrameError> {
+        Self::with_loaded(scene, loaded, &HashMap::new())
+    }
+
+    /// Prepares a scene whose file meshes are skinned (`loaded`) or vertex-animated
+    /// (`morphs`, e.g. MD2 models), by object index. A morph object plays its
+    /// `MeshSource::File` `clip` (every frame when `None`) at its `fps`
+    /// ([`keyrig_core::MD2_DEFAULT_FPS`] when `None`).
+    ///
+    /// # Errors
+    /// As [`SceneRig::with_meshes`]; [`SceneFrameError::Morph`] for a clip the mesh does not
+    /// have or a bad rate, with the field's path.
+    pub fn with_loaded(
+        scene: &Scene,
+        loaded: &HashMap<usize, SkinnedMesh>,
+        morphs: &HashMap<usize, MorphMesh>,
+    ) -> Result<Self, SceneFrameError> {
         if !(scene.fps.is_finite() && scene.fps > 0.0) {
             return Err(SceneFrameError::Invalid {
                 path: "fps".into(),
@@ -201,8 +412,25 @@ impl SceneRig {
                 }
                 None => (None, None),
             };
+            let morph = match (&object.mesh, morphs.get(&i)) {
+                (Some(MeshSource::File { clip, fps, .. }), Some(mesh)) => {
+                    let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+                    if !(fps.is_finite() && fps > 0.0) {
+                        return Err(SceneFrameError::Morph {
+                            path: at("mesh.fps"),
+                            source: MorphError::BadFps(fps),
+                        });
+                    }
+                    mesh.clip_frames(clip.as_deref())
+                        .map_err(|source| SceneFrameError::Morph { path: at("mesh.clip"), source })?;
+                    mesh_count += 1;
+                    Some(MorphRig { mesh: mesh.clone(), clip: clip.clone(), fps })
+                }
+                _ => None,
+            };
             let mesh = match &object.mesh {
                 None => None,
+                Some(_) if morph.is_some() => None,
                 Some(source) => {
                     let mesh = match source {
                         MeshSource::Procedural(kind) => match &rest {
@@ -250,6 +478,7 @@ impl SceneRig {
                 rotation,
                 scale,
                 mesh,
+                morph,
                 skeleton,
                 rest,
                 deformer: object.deformer.kind,
@@ -293,6 +522,18 @@ impl SceneRig {
     /// [`SceneFrameError::Render`] naming the object.
     pub fn upload(&self, renderer: &mut Renderer) -> Result<(), SceneFrameError> {
         for (i, object) in self.objects.iter().enumerate() {
+            if let Some(morph) = &object.morph {
+                renderer
+                    .upload_mesh(
+                        i as MeshId,
+                        &MeshData::Morph { frames: &morph.mesh.frames, indices: &morph.mesh.indices },
+                    )
+                    .map_err(|source| SceneFrameError::Render {
+                        path: format!("objects[{i}].mesh"),
+                        source,
+                    })?;
+                continue;
+            }
             let Some(rig) = &object.mesh else { continue };
             let input = OwnedSkinInput::from_skinned_mesh(&rig.mesh, &rig.bindings);
             renderer
@@ -333,7 +574,7 @@ impl SceneRig {
     /// A pose that cannot be evaluated (e.g. a zero quaternion), with the object's path.
     pub fn frame(&self, time: f64, view: &ViewOptions) -> Result<FrameInput, SceneFrameError> {
         let states = self.object_states(time);
-        let mut frame = self.frame_from_states(&states, self.lights_at(time), view)?;
+        let mut frame = self.frame_from_states(&states, self.lights_at(time), view, time)?;
         if view.motion_path {
             if let Some(path) = self.motion_path(view.selection, time)? {
                 frame.motion_paths.push(path);
@@ -361,17 +602,20 @@ impl SceneRig {
             .collect()
     }
 
-    /// The frame for object states evaluated elsewhere (the editor's, with its pose overrides).
-    /// Motion paths and light gizmos are not added here; see [`SceneRig::motion_path`] and
+    /// The frame for object states evaluated elsewhere (the editor's, with its pose overrides);
+    /// `time` (seconds) places vertex-animated objects in their clips. Motion paths and light
+    /// gizmos are not added here; see [`SceneRig::motion_path`] and
     /// [`SceneRig::light_gizmos`].
     ///
     /// # Errors
-    /// A state list of the wrong length or a pose that cannot be evaluated.
+    /// A state list of the wrong length, a pose that cannot be evaluated or a time that is not
+    /// finite while a morph mesh plays.
     pub fn frame_from_states(
         &self,
         states: &[ObjectState],
         lights: Vec<LightInput>,
         view: &ViewOptions,
+        time: f64,
     ) -> Result<FrameInput, SceneFrameError> {
         if states.len() != self.objects.len() {
             return Err(SceneFrameError::Invalid {
@@ -397,6 +641,19 @@ impl SceneRig {
                 _ => None,
             };
             let object_selected = matches!(view.selection, Selection::Object(o) if o == i);
+            if let Some(morph) = &object.morph {
+                let blend =
+                    morph.mesh.blend_at(morph.clip.as_deref(), morph.fps, time).map_err(|source| {
+                        SceneFrameError::Morph { path: format!("objects[{i}].mesh"), source }
+                    })?;
+                frame.items.push(DrawItem {
+                    mesh: i as MeshId,
+                    world_from_model: state.world_from_model,
+                    deform: Deform::Morph { frame_a: blend.frame_a, frame_b: blend.frame_b, t: blend.t },
+                    colour: object.colour,
+                    selected: object_selected,
+                });
+            }
             if let Some(rig) = &object.mesh {
                 let palette = match &palette {
                     Some(p) => p.clone(),

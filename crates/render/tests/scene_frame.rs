@@ -75,10 +75,11 @@ fn editor_states_replace_the_tracks() {
     let rig = SceneRig::new(&arm_scene()).expect("rig");
     let mut states = rig.object_states(0.0);
     states[0].world_from_model = glam::Mat4::from_translation(Vec3::new(7.0, 0.0, 0.0));
-    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default()).expect("frame");
+    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default(), 0.0).expect("frame");
     assert_eq!(frame.items[0].world_from_model.w_axis.x, 7.0);
 
-    let err = rig.frame_from_states(&[] as &[ObjectState], Vec::new(), &ViewOptions::default()).unwrap_err();
+    let err =
+        rig.frame_from_states(&[] as &[ObjectState], Vec::new(), &ViewOptions::default(), 0.0).unwrap_err();
     assert!(err.to_string().contains("0 object states for 1 objects"), "{err}");
 }
 
@@ -116,7 +117,7 @@ fn a_procedural_arm_is_fitted_to_a_skeleton_in_metres() {
     // The skeleton overlay's last joint sits at 3 bones × 0.400395 m along X at rest.
     let states =
         vec![ObjectState { world_from_model: glam::Mat4::IDENTITY, pose: Some(keyrig_skin::Pose::rest(4)) }];
-    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default()).expect("frame");
+    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default(), 0.0).expect("frame");
     assert!((frame.skeletons[0].joints[3].x - 1.201_185).abs() < 1e-4, "{}", frame.skeletons[0].joints[3]);
 
     // The mesh, skinned on the GPU at rest, spans the arm's 1.60158 m.
@@ -127,4 +128,84 @@ fn a_procedural_arm_is_fitted_to_a_skeleton_in_metres() {
     let max_x = vertices.iter().map(|v| v.position().x).fold(f32::MIN, f32::max);
     let min_x = vertices.iter().map(|v| v.position().x).fold(f32::MAX, f32::min);
     assert!((max_x - min_x - 1.601_58).abs() < 1e-3, "arm length {}", max_x - min_x);
+}
+
+/// A 3-frame morph mesh of one triangle whose first vertex moves along X by 1 per frame,
+/// with clips `a` (frames 0..2) and `b` (frame 2).
+fn morph_mesh() -> keyrig_render::MorphMesh {
+    use keyrig_render::{MorphClip, MorphMesh, SkinnedVertex};
+    let frames = (0..3)
+        .map(|f| {
+            [Vec3::new(f as f32, 0.0, 0.0), Vec3::Y, Vec3::Z]
+                .iter()
+                .map(|&p| SkinnedVertex::new(p, Vec3::Z))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let clips =
+        vec![MorphClip { name: "a".into(), frames: 0..2 }, MorphClip { name: "b".into(), frames: 2..3 }];
+    MorphMesh::new(frames, vec![0, 1, 2], clips).expect("valid morph mesh")
+}
+
+#[test]
+fn morph_blend_loops_over_the_clip() {
+    use keyrig_render::MorphBlend;
+    let mesh = morph_mesh();
+    // Every frame at 10 fps: 0.3 s is frame 3 ≡ frame 0 (the loop), 0.25 s is halfway 2 → 0.
+    //   frame:  0    1    2  | 0
+    //   time:   0   0.1  0.2   0.3
+    let all = |time: f64| mesh.blend_at(None, 10.0, time).expect("blend");
+    assert_eq!(all(0.0), MorphBlend { frame_a: 0, frame_b: 1, t: 0.0 });
+    assert_eq!(all(0.15), MorphBlend { frame_a: 1, frame_b: 2, t: 0.5 });
+    let wrap = all(0.25);
+    assert_eq!((wrap.frame_a, wrap.frame_b), (2, 0));
+    assert!((wrap.t - 0.5).abs() < 1e-5);
+    assert_eq!(all(0.3).frame_a, 0);
+    assert_eq!(all(-0.05).frame_a, 2, "time before 0 wraps too");
+    // Clip `a` plays frames 0..2 only; clip `b` is a single frame.
+    assert_eq!((mesh.blend_at(Some("a"), 10.0, 0.15).unwrap().frame_b), 0);
+    let single = mesh.blend_at(Some("b"), 10.0, 7.3).unwrap();
+    assert_eq!((single.frame_a, single.frame_b), (2, 2));
+    let (positions, normals) = mesh.blended(mesh.blend_at(None, 10.0, 0.05).unwrap());
+    assert!((positions[0].x - 0.5).abs() < 1e-6 && normals[0] == Vec3::Z);
+    assert!((mesh.clip_duration(Some("a"), 10.0).unwrap() - 0.2).abs() < 1e-12);
+    // Bad requests are errors, not panics.
+    assert!(matches!(
+        mesh.blend_at(Some("walk"), 10.0, 0.0),
+        Err(keyrig_render::MorphError::NoSuchClip { .. })
+    ));
+    assert!(mesh.blend_at(None, 0.0, 0.0).is_err());
+    assert!(mesh.blend_at(None, f64::NAN, 0.0).is_err());
+    assert!(mesh.blend_at(None, 10.0, f64::INFINITY).is_err());
+}
+
+#[test]
+fn morph_objects_draw_their_clip_at_the_time() {
+    let mut scene = Scene::default();
+    let mut object = Object::new("Model");
+    object.mesh =
+        Some(MeshSource::File { path: "m.md2".into(), mesh: None, clip: Some("a".into()), fps: Some(10.0) });
+    scene.objects.push(object);
+    let morphs = std::collections::HashMap::from([(0, morph_mesh())]);
+    let rig = SceneRig::with_loaded(&scene, &std::collections::HashMap::new(), &morphs).expect("rig");
+    let frame = rig.frame(0.15, &ViewOptions::default()).expect("frame");
+    assert_eq!(frame.items.len(), 1);
+    let Deform::Morph { frame_a, frame_b, t } = frame.items[0].deform else { panic!("a morph item") };
+    assert_eq!((frame_a, frame_b), (1, 0));
+    assert!((t - 0.5).abs() < 1e-5);
+
+    // A clip the model does not have, or a bad rate, is an error at the field.
+    let MeshSource::File { clip, .. } = scene.objects[0].mesh.as_mut().unwrap() else { panic!() };
+    *clip = Some("walk".into());
+    let err =
+        SceneRig::with_loaded(&scene, &std::collections::HashMap::new(), &morphs).err().expect("no walk");
+    assert!(err.to_string().contains("objects[0].mesh.clip") && err.to_string().contains("a, b"), "{err}");
+    let MeshSource::File { clip, fps, .. } = scene.objects[0].mesh.as_mut().unwrap() else { panic!() };
+    *clip = None;
+    *fps = Some(-1.0);
+    let err =
+        SceneRig::with_loaded(&scene, &std::collections::HashMap::new(), &morphs).err().expect("bad fps");
+    assert!(err.to_string().contains("objects[0].mesh.fps"), "{err}");
+    // Without the loaded mesh the file is reported as not loaded.
+    assert!(matches!(SceneRig::new(&scene), Err(SceneFrameError::MeshNotLoaded { object: 0, .. })));
 }

@@ -106,6 +106,7 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
             channel_editor(ui, app, ChannelId::ObjectTranslation(o), "Translation");
             channel_editor(ui, app, ChannelId::ObjectRotation(o), "Rotation (°)");
             channel_editor(ui, app, ChannelId::ObjectScale(o), "Scale");
+            md2_ui(ui, app, o);
         }
         Some(Selected::Joint { object, joint }) => {
             let name = scene
@@ -127,6 +128,66 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
                 channel_editor(ui, app, id, label);
             }
         }
+    }
+}
+
+/// The clip and playback rate of a vertex-animated (MD2) object, edited through the document
+/// (one undo step per clip choice, one per fps drag).
+fn md2_ui(ui: &mut Ui, app: &mut EditorApp, o: usize) {
+    let Some(keyrig_core::MeshSource::File { path, mesh, clip, fps }) =
+        app.doc.scene().objects.get(o).and_then(|x| x.mesh.clone())
+    else {
+        return;
+    };
+    let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+    let clips: Vec<(String, usize)> = match app.meshes.get(base_dir.as_deref(), &path, mesh) {
+        Ok(crate::files::FileMesh::Morph(m)) => {
+            m.clips().iter().map(|c| (c.name.clone(), c.frames.len())).collect()
+        }
+        _ => return,
+    };
+    ui.separator();
+    ui.strong("Vertex animation (MD2)");
+    let all_frames = "All frames";
+    let mut chosen = clip.clone();
+    let response = egui::ComboBox::from_label("Clip")
+        .selected_text(chosen.as_deref().unwrap_or(all_frames))
+        .show_ui(ui, |ui| {
+            ui.selectable_value(&mut chosen, None, all_frames);
+            for (name, frames) in &clips {
+                ui.selectable_value(&mut chosen, Some(name.clone()), format!("{name} ({frames} frames)"));
+            }
+        })
+        .response;
+    response.on_hover_text("Which frame group of the model plays, looping over scene time");
+    let mut rate = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+    let drag = ui
+        .horizontal(|ui| {
+            ui.label("Rate (fps)");
+            ui.add(DragValue::new(&mut rate).speed(0.1).range(0.1..=1000.0).max_decimals(2))
+                .on_hover_text("Model frames per second (Quake 2 played its models at 10)")
+        })
+        .inner;
+    ui.ctx().accesskit_node_builder(drag.id, |node| node.set_label("Model fps"));
+    let name = app.doc.scene().objects[o].name.clone();
+    if chosen != clip {
+        let label = format!("{name} clip {}", chosen.as_deref().unwrap_or("all frames"));
+        app.doc.edit(&label, |scene| {
+            if let Some(keyrig_core::MeshSource::File { clip, .. }) =
+                scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())
+            {
+                *clip = chosen;
+            }
+        });
+    }
+    if drag.changed() && rate.is_finite() && rate > 0.0 && Some(rate) != fps {
+        app.doc.edit_continuous("md2 fps", &format!("{name} model fps"), |scene| {
+            if let Some(keyrig_core::MeshSource::File { fps, .. }) =
+                scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())
+            {
+                *fps = Some(rate);
+            }
+        });
     }
 }
 

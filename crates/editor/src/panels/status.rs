@@ -1,4 +1,6 @@
-//! The status bar: the last message or error, the undo step, record mode and the frame.
+//! The status bar: the last message or error, the undo step, record mode and the frame, and
+//! the model imports running in the background (file, stage, a progress bar where the
+//! fraction is known or a spinner where it is not, elapsed time).
 
 use egui::{Color32, RichText, Ui};
 
@@ -20,6 +22,10 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             if let Some(label) = app.doc.undo_label() {
                 ui.weak(format!("Last edit: {label}"));
             }
+            for import in &app.imports {
+                ui.separator();
+                import_ui(ui, import);
+            }
             if let Some(status) = &app.status {
                 ui.separator();
                 let text = RichText::new(&status.text);
@@ -31,4 +37,30 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             }
         });
     });
+}
+
+/// Frames of the text spinner, one per 100 ms.
+const SPINNER: [&str; 8] = ["⠋", "⠙", "⠹", "⠸", "⠼", "⠴", "⠦", "⠧"];
+
+/// One running import: "⠋ Importing sydney.md2: reading and parsing · 0.4 s", with a bar
+/// while meshes load. The spinner is drawn from the elapsed time; the editor repaints every
+/// 50 ms while an import runs (egui's own spinner would ask for a repaint every frame).
+fn import_ui(ui: &mut Ui, import: &crate::files::BackgroundImport) {
+    let progress = import.progress();
+    let elapsed = import.elapsed().as_secs_f64();
+    let name = import
+        .path
+        .file_name()
+        .map_or_else(|| import.path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let verb = match import.purpose {
+        crate::files::ImportPurpose::Open => "Opening",
+        crate::files::ImportPurpose::Import => "Importing",
+    };
+    let spinner = SPINNER[(elapsed * 10.0) as usize % SPINNER.len()];
+    ui.label(format!("{spinner} {verb} {name}: {}", progress.stage))
+        .on_hover_text(import.path.display().to_string());
+    if let Some(fraction) = progress.fraction {
+        ui.add(egui::ProgressBar::new(fraction).desired_width(80.0).show_percentage());
+    }
+    ui.weak(format!("{elapsed:.1} s"));
 }

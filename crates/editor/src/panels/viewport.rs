@@ -79,6 +79,20 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                             crate::skinning::to_world(pose.world_from_object, positions),
                             indices.clone(),
                         )),
+                    (
+                        Some(keyrig_core::MeshSource::File { clip, fps, .. }),
+                        Some((_, _, crate::files::FileMesh::Morph(morph))),
+                    ) => {
+                        let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+                        match app.skin.morph(o, morph, clip.as_deref(), fps, time) {
+                            Ok(positions) => cpu_meshes.push((
+                                o,
+                                crate::skinning::to_world(pose.world_from_object, positions),
+                                morph.indices().to_vec(),
+                            )),
+                            Err(e) => errors.push(format!("{}: {e}", object.name)),
+                        }
+                    }
                     _ => {}
                 },
                 Err(e) => errors.push(format!("{}: {e}", object.name)),
@@ -269,19 +283,25 @@ fn gpu_ui(
     let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
     let doc_key = app.doc.cache_key();
     let mut file_meshes = std::collections::HashMap::new();
+    let mut morph_meshes = std::collections::HashMap::new();
     if gpu.needs_rig(doc_key) {
         let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
         for (o, object) in scene.objects.iter().enumerate() {
             if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
-                if let Ok(crate::files::FileMesh::Skinned(m)) =
-                    app.meshes.get(base_dir.as_deref(), path, *mesh)
-                {
-                    file_meshes.insert(o, (**m).clone());
+                match app.meshes.get(base_dir.as_deref(), path, *mesh) {
+                    Ok(crate::files::FileMesh::Skinned(m)) => {
+                        file_meshes.insert(o, (**m).clone());
+                    }
+                    Ok(crate::files::FileMesh::Morph(m)) => {
+                        morph_meshes.insert(o, (**m).clone());
+                    }
+                    _ => {}
                 }
             }
         }
     }
-    let frame = crate::gpu_view::GpuFrame { scene, doc_key, states, lights, view, time, file_meshes };
+    let frame =
+        crate::gpu_view::GpuFrame { scene, doc_key, states, lights, view, time, file_meshes, morph_meshes };
     let drawn = match gpu.render(frame, size) {
         Ok(texture) => {
             let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
