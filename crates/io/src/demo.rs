@@ -25,9 +25,10 @@ pub const ARM_LENGTH: f32 = 1.60158;
 /// Number of bones (and joints) of the arm's chain.
 pub const ARM_BONES: usize = 4;
 
-/// Names of the arm's joints, root first. Joint i sits at x = i · [`ARM_LENGTH`] / 4 in the
-/// arm's rest pose; its bone reaches to the next joint (the last one to the tip).
-pub const ARM_JOINT_NAMES: [&str; ARM_BONES] = ["shoulder", "elbow", "forearm", "wrist"];
+/// Names of the arm's joints, root first: keyrig-skin's procedural arm names them the same.
+/// Joint i sits at x = i · [`ARM_LENGTH`] / 4 in the arm's rest pose; its bone reaches to the
+/// next joint (the last one to the tip).
+pub use keyrig_skin::ARM_JOINT_NAMES;
 
 const FPS: f64 = 30.0;
 

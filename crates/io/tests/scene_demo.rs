@@ -29,8 +29,8 @@ fn committed_demo_file_loads_to_the_generated_scene() {
     assert_eq!(scene, demo_scene());
 }
 
-/// The demo arm is keyrig-skin's arm skeleton (centimetres) in metres: same parents, rest
-/// translations × 0.01, so the procedural mesh fits it after the same scaling.
+/// The demo arm is keyrig-skin's arm skeleton (centimetres) in metres: same names and parents,
+/// rest translations × 0.01, so the procedural mesh fits it after the same scaling.
 #[test]
 fn demo_arm_matches_the_skin_crates_arm_in_metres() {
     let demo = keyrig_io::demo::arm_rest_skeleton();
@@ -38,6 +38,7 @@ fn demo_arm_matches_the_skin_crates_arm_in_metres() {
         keyrig_skin::scene_skeleton_for(keyrig_core::ProceduralMesh::ArmHighPoly).expect("arm skeleton");
     assert_eq!(demo.joints.len(), skin.joints.len());
     for (d, s) in demo.joints.iter().zip(&skin.joints) {
+        assert_eq!(d.name, s.name);
         assert_eq!(d.parent, s.parent, "{}", d.name);
         assert!((d.rest_translation * 100.0 - s.rest_translation).length() < 1e-3, "{}", d.name);
         assert_eq!(d.rest_rotation, s.rest_rotation, "{}", d.name);

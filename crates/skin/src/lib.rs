@@ -27,6 +27,8 @@ pub use deformer::{deform_mesh, deform_mesh_into, Deformed};
 pub use dual_quat::DualQuat;
 pub use error::SkinError;
 pub use measure::{enclosed_volume, joint_cross_section, CrossSection};
-pub use mesh::{mesh_for, scene_skeleton_for, MeshBindings, SkinnedMesh, ARM_BONES, ARM_LENGTH_CM};
+pub use mesh::{
+    mesh_for, scene_skeleton_for, MeshBindings, SkinnedMesh, ARM_BONES, ARM_JOINT_NAMES, ARM_LENGTH_CM,
+};
 pub use pose::{BonesBlendJoint, JointPalette, Pose, ScenePoseSampler};
 pub use skeleton::{RestJoint, RestSkeleton, MAX_JOINTS};

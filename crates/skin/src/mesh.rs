@@ -1,8 +1,8 @@
 //! Skinned meshes and the meshes keyrig generates in code (DESIGN.md §6).
 //!
 //! Units: **centimetres**, as in the paper (seed text 000, chapter V). The arms lie along +X
-//! from the origin; their 4 bones are joints `arm.0` … `arm.3` at x = 0, L, 2L, 3L with
-//! L = 160.158 / 4 = 40.0395 cm.
+//! from the origin; their 4 bones are joints `shoulder`, `elbow`, `forearm` and `wrist`
+//! ([`ARM_JOINT_NAMES`]) at x = 0, L, 2L, 3L with L = 160.158 / 4 = 40.0395 cm.
 
 use glam::{Quat, Vec3};
 use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
@@ -16,6 +16,8 @@ use crate::skeleton::RestSkeleton;
 pub const ARM_LENGTH_CM: f32 = 160.158;
 /// Number of bones (joints) of each arm.
 pub const ARM_BONES: usize = 4;
+/// Names of the arm's joints, root first (the demo scene's arm uses the same names).
+pub const ARM_JOINT_NAMES: [&str; ARM_BONES] = ["shoulder", "elbow", "forearm", "wrist"];
 
 /// A triangle mesh bound to a rest skeleton, in bind model space.
 ///
@@ -264,7 +266,7 @@ pub fn arm_scene_skeleton() -> Skeleton {
     let bone = ARM_LENGTH_CM / ARM_BONES as f32;
     let joints = (0..ARM_BONES)
         .map(|j| Joint {
-            name: format!("arm.{j}"),
+            name: ARM_JOINT_NAMES[j].to_owned(),
             parent: j.checked_sub(1),
             rest_translation: if j == 0 { Vec3::ZERO } else { Vec3::new(bone, 0.0, 0.0) },
             rest_rotation: Quat::IDENTITY,
