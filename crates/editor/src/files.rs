@@ -7,6 +7,7 @@
 //! time, and the result is applied as one undoable edit (or as the new document) when the
 //! thread is done.
 
+use std::collections::HashMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -73,8 +74,8 @@ pub fn open_any(path: &Path) -> Result<Scene, String> {
     if is_scene_file(path) {
         load_scene(path)
     } else {
-        let mut scene = import_model(path)?;
-        let meshes = load_meshes_of(&scene, &mut |_| {});
+        let (mut scene, read) = read_model(path)?;
+        let meshes = load_meshes_of(&scene, read, &mut |_| {});
         frame_new_scene(&mut scene, &meshes);
         Ok(scene)
     }
@@ -84,18 +85,26 @@ pub fn open_any(path: &Path) -> Result<Scene, String> {
 /// skinned meshes with their skeleton and the first animation's joint rotation tracks, other
 /// meshes as objects, KHR lights as lights. An MD2 model becomes one object named after the
 /// file, playing every frame at [`keyrig_core::MD2_DEFAULT_FPS`], turned Y-up and scaled to
-/// metres ([`md2_rotation`], [`MD2_SCALE`]); the frame range covers one loop of it. The
+/// metres ([`md2_rotation`], [`MD2_SCALE`]) and raised so that its first frame stands on the
+/// ground; the frame range covers one loop of it. The
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, String> {
+    read_model(path).map(|(scene, _)| scene)
+}
+
+/// [`import_model`], with the meshes it read on the way (an MD2 file's morph mesh), so that
+/// they need not be read again.
+fn read_model(path: &Path) -> Result<(Scene, Vec<LoadedMesh>), String> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
             let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
             let animation = (!model.animations.is_empty()).then_some(0);
-            model
+            let scene = model
                 .to_scene(&absolute().to_string_lossy(), animation)
-                .map_err(|e| format!("{}: {e}", path.display()))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            Ok((scene, Vec::new()))
         }
         Some("md2") => {
             let model = keyrig_io::md2::load_md2_file(path).map_err(|e| e.to_string())?;
@@ -104,19 +113,26 @@ pub fn import_model(path: &Path) -> Result<Scene, String> {
             let name =
                 path.file_stem().map_or_else(|| "MD2".to_owned(), |s| s.to_string_lossy().into_owned());
             let mut object = keyrig_core::Object::new(name);
+            let file = absolute().to_string_lossy().into_owned();
             object.mesh = Some(keyrig_core::MeshSource::File {
-                path: absolute().to_string_lossy().into_owned(),
+                path: file.clone(),
                 mesh: None,
                 clip: None,
                 fps: Some(keyrig_core::MD2_DEFAULT_FPS),
             });
             object.rotation = keyrig_core::Animated::constant(md2_rotation());
             object.scale = keyrig_core::Animated::constant(Vec3::splat(MD2_SCALE));
+            // Quake models have their origin near the waist: stand the first frame on the
+            // ground (its lowest Quake Z at world height 0).
+            let lowest = mesh.frames()[0].iter().map(|v| v.position().z).fold(f32::INFINITY, f32::min);
+            if lowest.is_finite() {
+                object.translation = keyrig_core::Animated::constant(Vec3::Y * (-lowest * MD2_SCALE));
+            }
             scene.objects.push(object);
             let seconds =
                 mesh.clip_duration(None, keyrig_core::MD2_DEFAULT_FPS).map_err(|e| e.to_string())?;
             scene.frame_range.end = frame_range_end(seconds, scene.fps);
-            Ok(scene)
+            Ok((scene, vec![((PathBuf::from(file), None), Ok(FileMesh::Morph(Box::new(mesh))))]))
         }
         Some(other) => Err(format!(
             "{}: unknown file type .{other} (expected .ron, .glb, .gltf or .md2)",
@@ -199,27 +215,29 @@ fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
 }
 
 /// Loads the mesh of every object of `scene` whose mesh is a file (once per file and mesh
-/// index), calling `progress` with (done, total) after each.
-fn load_meshes_of(scene: &Scene, progress: &mut dyn FnMut((usize, usize))) -> Vec<LoadedMesh> {
+/// index) that is not among `read` already, calling `progress` with (done, total) after each.
+fn load_meshes_of(
+    scene: &Scene,
+    read: Vec<LoadedMesh>,
+    progress: &mut dyn FnMut((usize, usize)),
+) -> Vec<LoadedMesh> {
     let mut wanted: Vec<(PathBuf, Option<usize>)> = Vec::new();
     for object in &scene.objects {
         if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
             let key = (PathBuf::from(path), *mesh);
-            if !wanted.contains(&key) {
+            if !wanted.contains(&key) && !read.iter().any(|(k, _)| *k == key) {
                 wanted.push(key);
             }
         }
     }
     let total = wanted.len();
-    wanted
-        .into_iter()
-        .enumerate()
-        .map(|(i, (path, mesh))| {
-            let loaded = load_file_mesh(&path, mesh);
-            progress((i + 1, total));
-            ((path, mesh), loaded)
-        })
-        .collect()
+    let mut meshes = read;
+    for (i, (path, mesh)) in wanted.into_iter().enumerate() {
+        let loaded = load_file_mesh(&path, mesh);
+        progress((i + 1, total));
+        meshes.push(((path, mesh), loaded));
+    }
+    meshes
 }
 
 /// A model file's mesh as [`MeshStore`] keys it (full path, mesh index) and how loading it
@@ -276,9 +294,9 @@ impl BackgroundImport {
                     *p = ImportProgress { stage: stage.to_owned(), fraction };
                 }
             };
-            let mut scene = import_model(&file)?;
+            let (mut scene, read) = read_model(&file)?;
             set("loading meshes", Some(0.0));
-            let meshes = load_meshes_of(&scene, &mut |(done, total)| {
+            let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
             });
             if purpose == ImportPurpose::Open {
@@ -355,10 +373,8 @@ impl crate::EditorApp {
                 return;
             }
         };
-        if let Some(((_, _), Err(e))) = imported.meshes.iter().find(|(_, m)| m.is_err()) {
-            self.error(e.clone());
-            return;
-        }
+        // A mesh that failed to load is stored with its error: the viewport reports it over
+        // the object, as for a scene file that names a broken model.
         for ((file, mesh), loaded) in imported.meshes {
             self.meshes.insert(file, mesh, loaded);
         }
@@ -421,7 +437,7 @@ impl FileMesh {
 /// Meshes of model files, loaded once per (file, mesh index).
 #[derive(Default)]
 pub struct MeshStore {
-    meshes: std::collections::HashMap<(PathBuf, Option<usize>), Result<FileMesh, String>>,
+    meshes: HashMap<(PathBuf, Option<usize>), Result<FileMesh, String>>,
 }
 
 impl MeshStore {
@@ -483,6 +499,42 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
         indices.extend(prim.indices.iter().map(|i| i + base));
     }
     Ok(FileMesh::Static { positions, indices })
+}
+
+/// Skinned and vertex-animated (MD2) meshes of every object of `scene` whose mesh is a model
+/// file, by object index, for [`keyrig_render::SceneRig::with_loaded`]; relative paths
+/// resolve against `base_dir` (the scene's folder). `keyrig render scene.ron` and the
+/// editor's loading share this.
+///
+/// # Errors
+/// A file that cannot be read, or a glTF mesh without a skin (keyrig-render draws file
+/// meshes skinned or morphed), naming the object.
+pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMeshes, String> {
+    let mut store = MeshStore::default();
+    let (mut skinned, mut morphs) = (HashMap::new(), HashMap::new());
+    for (o, object) in scene.objects.iter().enumerate() {
+        let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
+        let at = || format!("objects[{o}] ({})", object.name);
+        match store.get(base_dir, path, *mesh).map_err(|e| format!("{}: {e}", at()))? {
+            FileMesh::Skinned(m) => {
+                skinned.insert(o, (**m).clone());
+            }
+            FileMesh::Morph(m) => {
+                morphs.insert(o, (**m).clone());
+            }
+            FileMesh::Static { .. } => {
+                return Err(format!("{}: `{path}` has no skin; only skinned glTF meshes are drawn", at()))
+            }
+        }
+    }
+    Ok(RenderMeshes { skinned, morphs })
+}
+
+/// The file meshes of a scene as keyrig-render takes them, by object index.
+#[derive(Default)]
+pub struct RenderMeshes {
+    pub skinned: HashMap<usize, keyrig_skin::SkinnedMesh>,
+    pub morphs: HashMap<usize, MorphMesh>,
 }
 
 /// The autosave recovery file: `recovery.ron` (a scene file) and `recovery.origin` (the path

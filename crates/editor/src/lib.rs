@@ -30,11 +30,17 @@ pub const WINDOW_SIZE: [f32; 2] = [1280.0, 800.0];
 
 /// Builds the editor for `file` (a scene or a model), or for the demo scene when `None`. An
 /// unreadable file opens the demo scene with the error in the status bar, so the editor
-/// always starts.
+/// always starts. A model is read in the background while the editor shows an empty scene
+/// ([`EditorApp::wait_for_background_work`]).
 #[must_use]
 pub fn editor_for(file: Option<PathBuf>, options: EditorOptions) -> EditorApp {
     match file {
         None => EditorApp::new(keyrig_io::demo::demo_scene(), None, options),
+        Some(path) if !files::is_scene_file(&path) => {
+            let mut app = EditorApp::new(keyrig_core::Scene::default(), None, options);
+            app.open_path(path);
+            app
+        }
         Some(path) => match files::open_any(&path) {
             Ok(scene) => {
                 let scene_path = files::is_scene_file(&path).then(|| path.clone());

@@ -133,8 +133,11 @@ fn clip_and_rate_are_edited_in_the_inspector_saved_and_reopened() {
 fn opening_an_md2_makes_a_scene_that_covers_it() {
     let dir = tempfile::tempdir().expect("temp dir");
     let model = corpus("md2/dolphin/dolphin.md2");
-    // `keyrig edit dolphin.md2`.
-    let h = harness(dir.path(), Some(model.clone()));
+    // `keyrig edit dolphin.md2`: the editor starts at once and reads the model in the
+    // background.
+    let mut h = harness(dir.path(), Some(model.clone()));
+    h.state_mut().wait_for_background_work();
+    h.run();
     let scene = h.state().doc.scene().clone();
     assert_eq!(scene.objects.len(), 1);
     // 59 frames at 10 fps = 5.9 s = 177 frames at 30 fps: 0..=176, then the loop starts again.
@@ -180,4 +183,32 @@ fn a_malformed_md2_is_a_status_bar_error() {
         assert!(h.query_by_label_contains(needle).is_some(), "shown in the status bar");
         assert_eq!(h.state().doc.scene(), &before, "nothing imported");
     }
+}
+
+/// `keyrig render scene.ron` plays the scene's MD2 object too (keyrig-render's GPU morph pass,
+/// on lavapipe without a GPU): the model opened and saved by the editor renders, and two
+/// frames of it differ.
+#[test]
+fn keyrig_render_plays_a_saved_scene_with_an_md2_object() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.state_mut().open_path(corpus("md2/sydney/sydney.md2"));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    let scene_file = dir.path().join("sydney.ron");
+    h.state_mut().save_to(scene_file.clone());
+    let render = |frame: &str| {
+        let out = dir.path().join(format!("frame{frame}.png"));
+        let result = std::process::Command::new(env!("CARGO_BIN_EXE_keyrig"))
+            .args(["render", scene_file.to_str().expect("utf-8"), "--frame", frame, "--size", "240x180"])
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .expect("run keyrig");
+        assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+        image::open(&out).expect("a PNG").to_rgba8()
+    };
+    let (a, b) = (render("0"), render("12"));
+    let differing = a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count();
+    assert!(differing > 100, "only {differing} pixels changed between frames 0 and 12");
 }

@@ -11,7 +11,7 @@ use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{Camera, DeformerKind};
 use keyrig_render::{
     Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selection,
-    SkinnedVertex, ViewOptions,
+    ViewOptions,
 };
 use keyrig_skin::SkinnedMesh;
 
@@ -314,17 +314,12 @@ fn frame_scene(scene: &mut keyrig_core::Scene, loaded: &HashMap<usize, SkinnedMe
 
 fn md2_source(path: &Path, headless: &mut HeadlessRenderer, args: &RenderArgs) -> anyhow::Result<Md2Source> {
     let model = keyrig_io::md2::load_md2_file(path)?;
-    let frames: Vec<Vec<SkinnedVertex>> = (0..model.frames.len())
-        .filter_map(|f| model.frame_pose(f))
-        .map(|pose| {
-            pose.positions.iter().zip(&pose.normals).map(|(&p, &n)| SkinnedVertex::new(p, n)).collect()
-        })
-        .collect();
-    if frames.is_empty() {
-        bail!("{}: the model has no frames", path.display());
-    }
+    // The editor's conversion (also used for MD2 objects of scene files).
+    let mesh = keyrig_editor::files::morph_mesh_from_md2(&model)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let frames = mesh.frames();
     headless
-        .upload_mesh(0, &MeshData::Morph { frames: &frames, indices: &model.indices })
+        .upload_mesh(0, &MeshData::Morph { frames, indices: mesh.indices() })
         .with_context(|| format!("{}: uploading the model", path.display()))?;
     // Frame the first frame's bounds (in Y-up world space).
     let to_world = Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
@@ -374,12 +369,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Box::new(md2_source(&args.file, &mut headless, &args)?)
     } else {
-        let (scene, loaded) = if has_extension(&args.file, &["glb", "gltf"]) {
-            gltf_scene(&args.file)?
+        let (scene, loaded, morphs) = if has_extension(&args.file, &["glb", "gltf"]) {
+            let (scene, loaded) = gltf_scene(&args.file)?;
+            (scene, loaded, HashMap::new())
         } else {
-            (keyrig_io::scene_file::load(&args.file)?, HashMap::new())
+            // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
+            let scene = keyrig_io::scene_file::load(&args.file)?;
+            let meshes = keyrig_editor::files::render_meshes(&scene, args.file.parent())
+                .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
+            (scene, meshes.skinned, meshes.morphs)
         };
-        let rig = SceneRig::with_meshes(&scene, &loaded)
+        let rig = SceneRig::with_loaded(&scene, &loaded, &morphs)
             .with_context(|| format!("{}: preparing the scene", args.file.display()))?;
         rig.upload(headless.renderer_mut())
             .with_context(|| format!("{}: uploading meshes", args.file.display()))?;
