@@ -14,7 +14,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Quat, Vec3};
 
-use super::{check_buffers, check_len, for_each_chunk, Execution, CHUNK};
+use super::{all_chunks, check_buffers, check_len, for_each_chunk, Execution};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -46,6 +46,10 @@ impl BonesBlendJob<'_> {
     /// Checks buffer lengths, joint indices, t ∈ [0, 1] and that t < 1 only at joints with a
     /// parent.
     pub fn validate(&self) -> Result<(), SkinError> {
+        self.validate_with(true)
+    }
+
+    fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
         let n = self.positions.len();
         check_len("bones-blending bindings", n, self.bindings.len())?;
         check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
@@ -60,12 +64,7 @@ impl BonesBlendJob<'_> {
                 ok & (joint < joint_count) & (b.t >= 0.0) & ((b.t < 1.0) & has_parent | (b.t == 1.0))
             })
         };
-        let all_good = if n > CHUNK {
-            use rayon::prelude::*;
-            self.bindings.par_chunks(CHUNK).all(pass)
-        } else {
-            pass(self.bindings)
-        };
+        let all_good = all_chunks(parallel, n, |r| pass(&self.bindings[r]));
         if all_good {
             return Ok(());
         }
@@ -91,7 +90,7 @@ impl BonesBlendJob<'_> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate()?;
+        self.validate_with(execution.parallel())?;
         match execution {
             Execution::Reference => self.reference(),
             Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),

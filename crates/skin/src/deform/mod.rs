@@ -7,8 +7,11 @@
 //! All jobs deform positions and normals from bind model space to posed model space.
 //! Output normals are unit length (zero stays zero).
 
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+
 use glam::Vec3;
-use rayon::prelude::*;
 
 use crate::error::SkinError;
 
@@ -97,14 +100,8 @@ pub(crate) fn validate_influences_with<const N: usize>(
     parallel: bool,
 ) -> Result<(), SkinError> {
     check_len("weights", joints.len(), weights.len())?;
-    let all_good = if parallel && joints.len() > CHUNK {
-        joints
-            .par_chunks(CHUNK)
-            .zip(weights.par_chunks(CHUNK))
-            .all(|(j, w)| influences_pass(j, w, joint_count))
-    } else {
-        influences_pass(joints, weights, joint_count)
-    };
+    let all_good =
+        all_chunks(parallel, joints.len(), |r| influences_pass(&joints[r.clone()], &weights[r], joint_count));
     if all_good {
         Ok(())
     } else {
@@ -188,7 +185,7 @@ pub fn normalize_weights<const N: usize>(weights: &mut [[f32; N]]) -> Result<(),
 }
 
 /// Runs `kernel(first_vertex, out_positions_chunk, out_normals_chunk)` over the outputs, on
-/// the calling thread or in parallel chunks.
+/// the calling thread or in chunks of [`CHUNK`] vertices shared out by [`run_chunks`].
 pub(crate) fn for_each_chunk<F>(
     parallel: bool,
     out_positions: &mut [Vec3],
@@ -198,14 +195,84 @@ pub(crate) fn for_each_chunk<F>(
     F: Fn(usize, &mut [Vec3], &mut [Vec3]) + Sync + Send,
 {
     if parallel && out_positions.len() > CHUNK {
-        out_positions
-            .par_chunks_mut(CHUNK)
-            .zip(out_normals.par_chunks_mut(CHUNK))
-            .enumerate()
-            .for_each(|(c, (p, n))| kernel(c * CHUNK, p, n));
+        // Each chunk's output slices, taken by whichever thread claims the chunk.
+        type Slot<'a> = Mutex<Option<(&'a mut [Vec3], &'a mut [Vec3])>>;
+        let slots: Vec<Slot> = out_positions
+            .chunks_mut(CHUNK)
+            .zip(out_normals.chunks_mut(CHUNK))
+            .map(|c| Mutex::new(Some(c)))
+            .collect();
+        run_chunks(slots.len(), |c| {
+            let taken = slots[c].lock().map(|mut slot| slot.take());
+            if let Ok(Some((p, n))) = taken {
+                kernel(c * CHUNK, p, n);
+            }
+        });
     } else {
         kernel(0, out_positions, out_normals);
     }
+}
+
+/// Whether `pass(range)` holds for every chunk of `0..len` ([`CHUNK`] vertices each), on the
+/// calling thread or shared out by [`run_chunks`]. Every chunk is checked (no early exit).
+pub(crate) fn all_chunks<P>(parallel: bool, len: usize, pass: P) -> bool
+where
+    P: Fn(Range<usize>) -> bool + Sync,
+{
+    if parallel && len > CHUNK {
+        let ok = AtomicBool::new(true);
+        run_chunks(len.div_ceil(CHUNK), |c| {
+            if !pass(c * CHUNK..((c + 1) * CHUNK).min(len)) {
+                ok.store(false, Ordering::Relaxed);
+            }
+        });
+        ok.into_inner()
+    } else {
+        pass(0..len)
+    }
+}
+
+/// Runs `work(c)` for every chunk `c` in `0..count` on the calling thread *and* rayon's
+/// other threads, each claiming the next chunk from a shared counter.
+///
+/// Why not `par_chunks`: rayon's pool threads sleep between frames, and waking one costs
+/// 25–50 µs on the 2-core VM the benchmarks ran on, while the calling thread — which
+/// `par_chunks` puts to sleep until the pool is done — would have to be woken again at the end.
+/// Against a job of 0.1–0.5 ms (100 000 vertices) those two wake-ups ate most of the second
+/// core. Here the calling thread starts on the first chunk at once, the helpers join in when they
+/// wake, and at the end the calling thread spins for the helpers' last chunks (one chunk's time
+/// at most) instead of sleeping. See docs/benchmarks.md, skinning section.
+pub(crate) fn run_chunks<W>(count: usize, work: W)
+where
+    W: Fn(usize) + Sync,
+{
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let claim_and_work = || loop {
+        let c = next.fetch_add(1, Ordering::Relaxed);
+        if c >= count {
+            break;
+        }
+        work(c);
+        done.fetch_add(1, Ordering::Release);
+    };
+    rayon::in_place_scope(|scope| {
+        for _ in 1..rayon::current_num_threads().min(count) {
+            scope.spawn(|_| claim_and_work());
+        }
+        claim_and_work();
+        // Every chunk is claimed; wait for the helpers' last ones without sleeping (yielding
+        // now and then in case a helper lost its core to another process).
+        let mut spins = 0u32;
+        while done.load(Ordering::Acquire) < count {
+            spins += 1;
+            if spins.is_multiple_of(1024) {
+                std::thread::yield_now();
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+    });
 }
 
 #[cfg(test)]
@@ -242,6 +309,39 @@ mod tests {
             validate_influences(&joints, &good[..1], 2),
             Err(SkinError::LengthMismatch { expected: 2, found: 1, .. })
         ));
+    }
+
+    #[test]
+    fn chunks_are_each_run_once_and_cover_the_outputs() {
+        for n in [0, 1, CHUNK, CHUNK + 1, 5 * CHUNK + 17] {
+            let runs: Vec<AtomicUsize> = (0..n.div_ceil(CHUNK) + 1).map(|_| AtomicUsize::new(0)).collect();
+            run_chunks(n.div_ceil(CHUNK), |c| {
+                runs[c].fetch_add(1, Ordering::Relaxed);
+            });
+            let counts: Vec<usize> = runs.iter().map(|r| r.load(Ordering::Relaxed)).collect();
+            let mut expected = vec![1; n.div_ceil(CHUNK)];
+            expected.push(0);
+            assert_eq!(counts, expected, "{n} vertices");
+
+            for parallel in [false, true] {
+                let mut p = vec![Vec3::NAN; n];
+                let mut q = vec![Vec3::NAN; n];
+                for_each_chunk(parallel, &mut p, &mut q, |start, p, q| {
+                    for (i, (p, q)) in p.iter_mut().zip(q).enumerate() {
+                        *p = Vec3::splat((start + i) as f32);
+                        *q = -*p;
+                    }
+                });
+                assert!(p.iter().enumerate().all(|(i, p)| *p == Vec3::splat(i as f32)), "{n} {parallel}");
+                assert!(q.iter().enumerate().all(|(i, q)| *q == Vec3::splat(-(i as f32))), "{n} {parallel}");
+                let bad = n / 2;
+                assert_eq!(all_chunks(parallel, n, |r| !r.contains(&bad)), n == 0, "{n} {parallel}");
+                assert!(
+                    all_chunks(parallel, n, |r| r.end <= n && (r.start < r.end || n == 0)),
+                    "{n} {parallel}"
+                );
+            }
+        }
     }
 
     #[test]

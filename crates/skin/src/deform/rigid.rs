@@ -1,9 +1,11 @@
 //! Rigid skinning ("basic skeletal animation", seed text 000): one joint per vertex,
 //! v' = M(j)·v, n' = N(j)·n with N(j) the inverse-transpose of M(j)'s linear part.
 
+use std::ops::Range;
+
 use glam::{Mat3, Mat4, Vec3, Vec3A};
 
-use super::{check_buffers, check_len, for_each_chunk, Execution};
+use super::{all_chunks, check_buffers, check_len, for_each_chunk, Execution};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -22,11 +24,23 @@ pub struct RigidJob<'a> {
 impl RigidJob<'_> {
     /// Checks buffer lengths and that every joint index is in the palette.
     pub fn validate(&self) -> Result<(), SkinError> {
+        self.validate_with(true)
+    }
+
+    fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
         let n = self.positions.len();
         check_len("joints", n, self.joints.len())?;
         check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
         let joint_count = self.palette.len();
-        for (vertex, &j) in self.joints.iter().enumerate() {
+        // A branch-free pass (the largest index; it vectorizes) answers "all good?"; only when
+        // it fails does the loop below look for the first bad vertex.
+        let joints = self.joints;
+        let largest_fits =
+            |r: Range<usize>| usize::from(joints[r].iter().fold(0u16, |m, &j| m.max(j))) < joint_count;
+        if all_chunks(parallel, n, largest_fits) {
+            return Ok(());
+        }
+        for (vertex, &j) in joints.iter().enumerate() {
             if j as usize >= joint_count {
                 return Err(SkinError::JointOutOfRange {
                     vertex,
@@ -46,7 +60,7 @@ impl RigidJob<'_> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate()?;
+        self.validate_with(execution.parallel())?;
         match execution {
             Execution::Reference => self.reference(),
             Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
