@@ -215,7 +215,8 @@ fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
 }
 
 /// Loads the mesh of every object of `scene` whose mesh is a file (once per file and mesh
-/// index) that is not among `read` already, calling `progress` with (done, total) after each.
+/// index) that is not among `read` already, calling `progress` with (done, total) before the
+/// first and after each.
 fn load_meshes_of(
     scene: &Scene,
     read: Vec<LoadedMesh>,
@@ -231,6 +232,9 @@ fn load_meshes_of(
         }
     }
     let total = wanted.len();
+    if total > 0 {
+        progress((0, total));
+    }
     let mut meshes = read;
     for (i, (path, mesh)) in wanted.into_iter().enumerate() {
         let loaded = load_file_mesh(&path, mesh);
@@ -295,7 +299,6 @@ impl BackgroundImport {
                 }
             };
             let (mut scene, read) = read_model(&file)?;
-            set("loading meshes", Some(0.0));
             let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
             });
