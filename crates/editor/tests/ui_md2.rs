@@ -212,3 +212,32 @@ fn keyrig_render_plays_a_saved_scene_with_an_md2_object() {
     let differing = a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count();
     assert!(differing > 100, "only {differing} pixels changed between frames 0 and 12");
 }
+
+/// The editor's GPU viewport (keyrig-render on the device kittest's wgpu renderer gives it;
+/// lavapipe without a GPU) morphs an imported MD2 model: no viewport error, and each frame
+/// sends the morph parameters of one morphing mesh.
+#[test]
+fn an_imported_md2_morphs_in_the_gpu_viewport() {
+    let temp = tempfile::tempdir().expect("temp dir");
+    let dir = temp.path().to_path_buf();
+    let mut h = Harness::builder().wgpu().with_size(egui::vec2(960.0, 600.0)).build_eframe(move |cc| {
+        let mut app =
+            editor_for(None, EditorOptions { data_dir: Some(dir.clone()), autosave_seconds: Some(1e9) });
+        if let Some(rs) = &cc.wgpu_render_state {
+            app.attach_gpu(rs);
+        }
+        app
+    });
+    h.run();
+    assert!(h.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
+    h.state_mut().import_path(corpus("md2/ratamahatta/ratamahatta.md2"));
+    h.state_mut().wait_for_background_work();
+    for frame in [0, 7] {
+        h.state_mut().set_frame(frame);
+        h.run();
+        assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
+        assert_eq!(h.state().viewport_errors, Vec::<String>::new());
+        let stats = h.state().gpu.as_ref().and_then(|g| g.last_stats).expect("a GPU frame");
+        assert_eq!(stats.morph_bytes, 16, "one morphing mesh: {stats:?}");
+    }
+}
