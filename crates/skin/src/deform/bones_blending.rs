@@ -12,9 +12,11 @@
 //! formula instead.) Normals go through the same rotations.
 
 use bytemuck::{Pod, Zeroable};
+use std::ops::Range;
+
 use glam::{Mat4, Quat, Vec3};
 
-use super::{all_chunks, check_buffers, check_len, for_each_chunk, Execution};
+use super::{all_chunks, check_buffers, check_len, for_each_chunk, Check, Execution};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -50,22 +52,14 @@ impl BonesBlendJob<'_> {
     }
 
     fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
-        let n = self.positions.len();
-        check_len("bones-blending bindings", n, self.bindings.len())?;
-        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        self.check_lengths()?;
         let joint_count = self.palette.bones_blending.len();
-        check_len("joint parents", joint_count, self.parents.len())?;
         // A branch-light pass answers "all good?"; the loop below finds the first bad vertex.
-        let parents = self.parents;
-        let pass = |bindings: &[BonesBlendVertex]| {
-            bindings.iter().fold(true, |ok, b| {
-                let joint = b.joint as usize;
-                let has_parent = parents.get(joint).is_some_and(|p| p.is_some());
-                ok & (joint < joint_count) & (b.t >= 0.0) & ((b.t < 1.0) & has_parent | (b.t == 1.0))
-            })
-        };
-        let all_good = all_chunks(parallel, n, |r| pass(&self.bindings[r]));
-        if all_good {
+        if all_chunks(
+            parallel,
+            self.positions.len(),
+            Self::quick_check(self.bindings, self.parents, self.palette.bones_blending.len()),
+        ) {
             return Ok(());
         }
         for (vertex, b) in self.bindings.iter().enumerate() {
@@ -83,6 +77,29 @@ impl BonesBlendJob<'_> {
         Ok(())
     }
 
+    fn check_lengths(&self) -> Result<(), SkinError> {
+        let n = self.positions.len();
+        check_len("bones-blending bindings", n, self.bindings.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        check_len("joint parents", self.palette.bones_blending.len(), self.parents.len())
+    }
+
+    /// Whether every binding in a range is valid (joint in range, t ∈ [0, 1], t < 1 only where
+    /// the joint has a parent), without early exits.
+    fn quick_check<'a>(
+        bindings: &'a [BonesBlendVertex],
+        parents: &'a [Option<usize>],
+        joint_count: usize,
+    ) -> impl Fn(Range<usize>) -> bool + Sync + 'a {
+        move |r: Range<usize>| {
+            bindings[r].iter().fold(true, |ok, b| {
+                let joint = b.joint as usize;
+                let has_parent = parents.get(joint).is_some_and(|p| p.is_some());
+                ok & (joint < joint_count) & (b.t >= 0.0) & ((b.t < 1.0) & has_parent | (b.t == 1.0))
+            })
+        }
+    }
+
     /// Validates, then deforms on all cores.
     pub fn run(&mut self) -> Result<(), SkinError> {
         self.run_with(Execution::Parallel)
@@ -90,10 +107,21 @@ impl BonesBlendJob<'_> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate_with(execution.parallel())?;
+        if execution.parallel() {
+            // The quick per-chunk check runs in the same dispatch as the kernel (see
+            // `for_each_chunk`); when it fails nothing was written, and the full validation
+            // below names the error.
+            self.check_lengths()?;
+            if self.fast(execution, true) {
+                return Ok(());
+            }
+        }
+        self.validate_with(false)?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
+                self.fast(execution, false);
+            }
         }
         Ok(())
     }
@@ -112,32 +140,41 @@ impl BonesBlendJob<'_> {
         }
     }
 
-    fn fast(&mut self, execution: Execution) {
+    /// The fast path; with `check`, only if every chunk passes the quick check (returns
+    /// whether it ran).
+    fn fast(&mut self, execution: Execution, check: bool) -> bool {
         let parallel = execution.parallel();
         let joints = &self.palette.bones_blending;
         let (bindings, positions, normals) = (self.bindings, self.positions, self.normals);
+        let quick_check = Self::quick_check(self.bindings, self.parents, self.palette.bones_blending.len());
+        let check: Option<Check> = check.then_some(&quick_check);
         #[cfg(target_arch = "x86_64")]
         if execution.simd() {
             // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
             // index against the palette.
             let packed = unsafe { super::simd::pack_bones_blending(joints) };
-            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
-                let end = start + out_p.len();
-                // SAFETY: as above.
-                unsafe {
-                    super::simd::bones_blending_chunk(
-                        &packed,
-                        &bindings[start..end],
-                        &positions[start..end],
-                        &normals[start..end],
-                        out_p,
-                        out_n,
-                    )
-                }
-            });
-            return;
+            return for_each_chunk(
+                parallel,
+                check,
+                self.out_positions,
+                self.out_normals,
+                |start, out_p, out_n| {
+                    let end = start + out_p.len();
+                    // SAFETY: as above.
+                    unsafe {
+                        super::simd::bones_blending_chunk(
+                            &packed,
+                            &bindings[start..end],
+                            &positions[start..end],
+                            &normals[start..end],
+                            out_p,
+                            out_n,
+                        )
+                    }
+                },
+            );
         }
-        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs =
                 bindings[start..end].iter().zip(positions[start..end].iter().zip(&normals[start..end]));
@@ -154,7 +191,7 @@ impl BonesBlendJob<'_> {
                 *op = (x * p.x + y * p.y + z * p.z + t).into();
                 *on = (x * n.x + y * n.y + z * n.z).into();
             }
-        });
+        })
     }
 }
 

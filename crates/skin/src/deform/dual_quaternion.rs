@@ -5,9 +5,13 @@
 //! Normals rotate with the blended real part. Needs a rigid palette
 //! ([`crate::pose::JointPalette::dual_quaternions`]).
 
+use std::ops::Range;
+
 use glam::{BVec4A, Mat4, Quat, Vec3, Vec3A, Vec4};
 
-use super::{check_buffers, check_len, for_each_chunk, validate_influences_with, Execution};
+use super::{
+    check_buffers, check_len, for_each_chunk, influences_pass, validate_influences_with, Check, Execution,
+};
 use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
 
@@ -31,10 +35,15 @@ impl<const N: usize> DualQuatJob<'_, N> {
     }
 
     fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
+        self.check_lengths()?;
+        validate_influences_with(self.joints, self.weights, self.dual_quaternions.len(), parallel)
+    }
+
+    fn check_lengths(&self) -> Result<(), SkinError> {
         let n = self.positions.len();
         check_len("joints", n, self.joints.len())?;
-        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
-        validate_influences_with(self.joints, self.weights, self.dual_quaternions.len(), parallel)
+        check_len("weights", n, self.weights.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())
     }
 
     /// Validates, then deforms on all cores.
@@ -44,10 +53,21 @@ impl<const N: usize> DualQuatJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate_with(execution.parallel())?;
+        if execution.parallel() {
+            // The quick per-chunk check runs in the same dispatch as the kernel (see
+            // `for_each_chunk`); when it fails nothing was written, and the full validation
+            // below names the error.
+            self.check_lengths()?;
+            if self.fast(execution, true) {
+                return Ok(());
+            }
+        }
+        self.validate_with(false)?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
+                self.fast(execution, false);
+            }
         }
         Ok(())
     }
@@ -77,32 +97,44 @@ impl<const N: usize> DualQuatJob<'_, N> {
         }
     }
 
-    fn fast(&mut self, execution: Execution) {
+    /// The fast path; with `check`, only if every chunk passes the quick check (returns
+    /// whether it ran).
+    fn fast(&mut self, execution: Execution, check: bool) -> bool {
         let parallel = execution.parallel();
         let dqs = self.dual_quaternions;
         let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
+        let joint_count = dqs.len();
+        let quick_check = |r: Range<usize>| influences_pass(&joints[r.clone()], &weights[r], joint_count);
+        let check: Option<Check> = check.then_some(&quick_check);
         #[cfg(target_arch = "x86_64")]
         if execution.simd() {
             // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
             // index against the palette.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
             let avx512 = super::simd::avx512_available();
-            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
-                let end = start + out_p.len();
-                let (js, ws) = (&joints[start..end], &weights[start..end]);
-                let (ps, ns) = (&positions[start..end], &normals[start..end]);
-                // SAFETY: as above; the AVX-512VL build only where the CPU has it.
-                unsafe {
-                    if avx512 {
-                        super::simd::dual_quaternion_chunk_soa_avx512(&packed, js, ws, ps, ns, out_p, out_n)
-                    } else {
-                        super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
+            return for_each_chunk(
+                parallel,
+                check,
+                self.out_positions,
+                self.out_normals,
+                |start, out_p, out_n| {
+                    let end = start + out_p.len();
+                    let (js, ws) = (&joints[start..end], &weights[start..end]);
+                    let (ps, ns) = (&positions[start..end], &normals[start..end]);
+                    // SAFETY: as above; the AVX-512VL build only where the CPU has it.
+                    unsafe {
+                        if avx512 {
+                            super::simd::dual_quaternion_chunk_soa_avx512(
+                                &packed, js, ws, ps, ns, out_p, out_n,
+                            )
+                        } else {
+                            super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
+                        }
                     }
-                }
-            });
-            return;
+                },
+            );
         }
-        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
                 .iter()
@@ -139,6 +171,6 @@ impl<const N: usize> DualQuatJob<'_, N> {
                 *op = (p + 2.0 * r.cross(r.cross(p) + rw * p) + translation).into();
                 *on = (n + 2.0 * r.cross(r.cross(n) + rw * n)).into();
             }
-        });
+        })
     }
 }

@@ -2,9 +2,13 @@
 //! v' = Σᵢ wᵢ·M(jᵢ)·v with Σ wᵢ = 1, normals by the blended inverse-transpose, renormalized.
 //! Collapses under twist (the "candy wrapper"): a 180° twist averages v with its mirror image.
 
+use std::ops::Range;
+
 use glam::{Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
-use super::{check_buffers, check_len, for_each_chunk, validate_influences_with, Execution};
+use super::{
+    check_buffers, check_len, for_each_chunk, influences_pass, validate_influences_with, Check, Execution,
+};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -33,10 +37,15 @@ impl<const N: usize> LinearBlendJob<'_, N> {
     }
 
     fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
+        self.check_lengths()?;
+        validate_influences_with(self.joints, self.weights, self.palette.len(), parallel)
+    }
+
+    fn check_lengths(&self) -> Result<(), SkinError> {
         let n = self.positions.len();
         check_len("joints", n, self.joints.len())?;
-        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
-        validate_influences_with(self.joints, self.weights, self.palette.len(), parallel)
+        check_len("weights", n, self.weights.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())
     }
 
     /// Validates, then deforms on all cores.
@@ -46,10 +55,21 @@ impl<const N: usize> LinearBlendJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate_with(execution.parallel())?;
+        if execution.parallel() {
+            // The quick per-chunk check runs in the same dispatch as the kernel (see
+            // `for_each_chunk`); when it fails nothing was written, and the full validation
+            // below names the error.
+            self.check_lengths()?;
+            if self.fast(execution, true) {
+                return Ok(());
+            }
+        }
+        self.validate_with(false)?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
+                self.fast(execution, false);
+            }
         }
         Ok(())
     }
@@ -74,34 +94,44 @@ impl<const N: usize> LinearBlendJob<'_, N> {
         }
     }
 
-    fn fast(&mut self, execution: Execution) {
+    /// The fast path; with `check`, only if every chunk passes the quick check (returns
+    /// whether it ran).
+    fn fast(&mut self, execution: Execution, check: bool) -> bool {
         let parallel = execution.parallel();
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
+        let joint_count = self.palette.len();
+        let quick_check = |r: Range<usize>| influences_pass(&joints[r.clone()], &weights[r], joint_count);
+        let check: Option<Check> = check.then_some(&quick_check);
         #[cfg(target_arch = "x86_64")]
         if normal_palette.is_none() && execution.simd() {
             // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
             // index against the palette.
             let packed = unsafe { super::simd::pack_palette(palette) };
-            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
-                let end = start + out_p.len();
-                // SAFETY: as above.
-                unsafe {
-                    super::simd::linear_blend_chunk(
-                        &packed,
-                        &joints[start..end],
-                        &weights[start..end],
-                        &positions[start..end],
-                        &normals[start..end],
-                        out_p,
-                        out_n,
-                    )
-                }
-            });
-            return;
+            return for_each_chunk(
+                parallel,
+                check,
+                self.out_positions,
+                self.out_normals,
+                |start, out_p, out_n| {
+                    let end = start + out_p.len();
+                    // SAFETY: as above.
+                    unsafe {
+                        super::simd::linear_blend_chunk(
+                            &packed,
+                            &joints[start..end],
+                            &weights[start..end],
+                            &positions[start..end],
+                            &normals[start..end],
+                            out_p,
+                            out_n,
+                        )
+                    }
+                },
+            );
         }
-        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
                 .iter()
@@ -135,6 +165,6 @@ impl<const N: usize> LinearBlendJob<'_, N> {
                 };
                 *on = nm.into();
             }
-        });
+        })
     }
 }

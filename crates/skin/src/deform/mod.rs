@@ -113,7 +113,11 @@ pub(crate) fn validate_influences_with<const N: usize>(
 /// largest joint index must be in range, the largest weight bit pattern must be that of a
 /// finite non-negative float (≤ 0x7F7F_FFFF: negative numbers have the sign bit set, NaN and
 /// infinity an all-ones exponent), and every vertex's sum must be 1 within the tolerance.
-fn influences_pass<const N: usize>(joints: &[[u16; N]], weights: &[[f32; N]], joint_count: usize) -> bool {
+pub(crate) fn influences_pass<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+) -> bool {
     let mut max_joint = 0u16;
     let mut max_bits = 0u32;
     let mut sums_ok = true;
@@ -184,32 +188,77 @@ pub fn normalize_weights<const N: usize>(weights: &mut [[f32; N]]) -> Result<(),
     Ok(())
 }
 
+/// A branch-free "all good?" test of a job's per-vertex inputs over a range of vertices.
+pub(crate) type Check<'a> = &'a (dyn Fn(Range<usize>) -> bool + Sync);
+
 /// Runs `kernel(first_vertex, out_positions_chunk, out_normals_chunk)` over the outputs, on
 /// the calling thread or in chunks of [`CHUNK`] vertices shared out by [`run_chunks`].
+///
+/// With a `check`, every chunk's inputs are checked first and the kernel runs only if all pass;
+/// the result says whether it ran (on `false` no output was touched). In parallel the checks
+/// and the kernel share one dispatch: check tickets come first, and a thread that draws a
+/// kernel ticket waits until every check is done, so a job wakes the pool once, not twice.
 pub(crate) fn for_each_chunk<F>(
     parallel: bool,
+    check: Option<Check>,
     out_positions: &mut [Vec3],
     out_normals: &mut [Vec3],
     kernel: F,
-) where
+) -> bool
+where
     F: Fn(usize, &mut [Vec3], &mut [Vec3]) + Sync + Send,
 {
-    if parallel && out_positions.len() > CHUNK {
-        // Each chunk's output slices, taken by whichever thread claims the chunk.
-        type Slot<'a> = Mutex<Option<(&'a mut [Vec3], &'a mut [Vec3])>>;
-        let slots: Vec<Slot> = out_positions
-            .chunks_mut(CHUNK)
-            .zip(out_normals.chunks_mut(CHUNK))
-            .map(|c| Mutex::new(Some(c)))
-            .collect();
-        run_chunks(slots.len(), |c| {
-            let taken = slots[c].lock().map(|mut slot| slot.take());
-            if let Ok(Some((p, n))) = taken {
-                kernel(c * CHUNK, p, n);
-            }
-        });
-    } else {
+    let n = out_positions.len();
+    if !(parallel && n > CHUNK) {
+        if check.is_some_and(|check| !check(0..n)) {
+            return false;
+        }
         kernel(0, out_positions, out_normals);
+        return true;
+    }
+    // Each chunk's output slices, taken by whichever thread claims the chunk.
+    type Slot<'a> = Mutex<Option<(&'a mut [Vec3], &'a mut [Vec3])>>;
+    let slots: Vec<Slot> = out_positions
+        .chunks_mut(CHUNK)
+        .zip(out_normals.chunks_mut(CHUNK))
+        .map(|c| Mutex::new(Some(c)))
+        .collect();
+    let chunks = slots.len();
+    let checks = if check.is_some() { chunks } else { 0 };
+    let ok = AtomicBool::new(true);
+    let checked = AtomicUsize::new(0);
+    run_chunks(checks + chunks, |ticket| {
+        if ticket < checks {
+            if check.is_some_and(|check| !check(ticket * CHUNK..((ticket + 1) * CHUNK).min(n))) {
+                ok.store(false, Ordering::Relaxed);
+            }
+            checked.fetch_add(1, Ordering::Release);
+            return;
+        }
+        // Every check ticket is already claimed and running; wait for the last ones.
+        wait_until(|| checked.load(Ordering::Acquire) == checks);
+        if ok.load(Ordering::Relaxed) {
+            let c = ticket - checks;
+            let taken = slots[c].lock().map(|mut slot| slot.take());
+            if let Ok(Some((p, q))) = taken {
+                kernel(c * CHUNK, p, q);
+            }
+        }
+    });
+    ok.into_inner()
+}
+
+/// Spins until `done()` (another thread's short piece of work), yielding now and then in case
+/// that thread lost its core to another process.
+fn wait_until(done: impl Fn() -> bool) {
+    let mut spins = 0u32;
+    while !done() {
+        spins += 1;
+        if spins.is_multiple_of(1024) {
+            std::thread::yield_now();
+        } else {
+            std::hint::spin_loop();
+        }
     }
 }
 
@@ -261,17 +310,8 @@ where
             scope.spawn(|_| claim_and_work());
         }
         claim_and_work();
-        // Every chunk is claimed; wait for the helpers' last ones without sleeping (yielding
-        // now and then in case a helper lost its core to another process).
-        let mut spins = 0u32;
-        while done.load(Ordering::Acquire) < count {
-            spins += 1;
-            if spins.is_multiple_of(1024) {
-                std::thread::yield_now();
-            } else {
-                std::hint::spin_loop();
-            }
-        }
+        // Every chunk is claimed; wait for the helpers' last ones without sleeping.
+        wait_until(|| done.load(Ordering::Acquire) == count);
     });
 }
 
@@ -326,15 +366,31 @@ mod tests {
             for parallel in [false, true] {
                 let mut p = vec![Vec3::NAN; n];
                 let mut q = vec![Vec3::NAN; n];
-                for_each_chunk(parallel, &mut p, &mut q, |start, p, q| {
+                let ran = for_each_chunk(parallel, None, &mut p, &mut q, |start, p, q| {
                     for (i, (p, q)) in p.iter_mut().zip(q).enumerate() {
                         *p = Vec3::splat((start + i) as f32);
                         *q = -*p;
                     }
                 });
+                assert!(ran);
                 assert!(p.iter().enumerate().all(|(i, p)| *p == Vec3::splat(i as f32)), "{n} {parallel}");
-                assert!(q.iter().enumerate().all(|(i, q)| *q == Vec3::splat(-(i as f32))), "{n} {parallel}");
+                // A failed check anywhere: the kernel runs nowhere.
                 let bad = n / 2;
+                let refuse = |r: Range<usize>| !r.contains(&bad);
+                let mut untouched = vec![Vec3::NAN; n];
+                let ran = for_each_chunk(parallel, Some(&refuse), &mut p, &mut untouched, |_, p, q| {
+                    p.fill(Vec3::ZERO);
+                    q.fill(Vec3::ZERO);
+                });
+                assert_eq!(ran, n == 0, "{n} {parallel}");
+                assert!(n == 0 || untouched.iter().all(|q| q.is_nan()), "{n} {parallel}");
+                let accept = |r: Range<usize>| r.end <= n;
+                assert!(for_each_chunk(parallel, Some(&accept), &mut p, &mut untouched, |_, p, q| {
+                    p.fill(Vec3::ZERO);
+                    q.fill(Vec3::ONE);
+                }));
+                assert!(untouched.iter().all(|q| *q == Vec3::ONE), "{n} {parallel}");
+                assert!(q.iter().enumerate().all(|(i, q)| *q == Vec3::splat(-(i as f32))), "{n} {parallel}");
                 assert_eq!(all_chunks(parallel, n, |r| !r.contains(&bad)), n == 0, "{n} {parallel}");
                 assert!(
                     all_chunks(parallel, n, |r| r.end <= n && (r.start < r.end || n == 0)),
@@ -342,6 +398,103 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The parallel path checks inputs in the same dispatch as the kernel: a bad vertex in the
+    /// last of several chunks still gives the typed error and leaves every output untouched.
+    #[test]
+    fn parallel_jobs_refuse_bad_input_in_any_chunk_before_writing() {
+        use glam::Quat;
+
+        use crate::pose::{JointPalette, Pose};
+        use crate::skeleton::{RestJoint, RestSkeleton};
+
+        let skeleton = RestSkeleton::new(&[
+            RestJoint::new("root", None, Vec3::ZERO, Quat::IDENTITY),
+            RestJoint::new("child", Some(0), Vec3::X, Quat::IDENTITY),
+        ])
+        .unwrap();
+        let palette = JointPalette::new(&skeleton, &Pose::rest(2)).unwrap();
+        let dqs = palette.dual_quaternions().unwrap();
+        let n = 3 * CHUNK + 5;
+        let bad = n - 2;
+        let (positions, normals) = (vec![Vec3::ONE; n], vec![Vec3::Y; n]);
+        let mut bones = vec![1u16; n];
+        let mut joints = vec![[0u16, 1, 0, 0]; n];
+        let mut weights = vec![[0.5f32, 0.5, 0.0, 0.0]; n];
+        let mut bindings = vec![BonesBlendVertex { joint: 1, t: 0.5 }; n];
+        bones[bad] = 2;
+        joints[bad][1] = 2;
+        bindings[bad].t = f32::NAN;
+        let (mut op, mut on) = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+        let out_of_range = SkinError::JointOutOfRange { vertex: bad, influence: 0, joint: 2, joint_count: 2 };
+        let rigid = RigidJob {
+            palette: &palette,
+            joints: &bones,
+            positions: &positions,
+            normals: &normals,
+            out_positions: &mut op,
+            out_normals: &mut on,
+        }
+        .run();
+        assert_eq!(rigid, Err(out_of_range));
+        let linear = LinearBlendJob {
+            palette: &palette,
+            joints: &joints,
+            weights: &weights,
+            positions: &positions,
+            normals: &normals,
+            out_positions: &mut op,
+            out_normals: &mut on,
+        }
+        .run();
+        assert_eq!(
+            linear,
+            Err(SkinError::JointOutOfRange { vertex: bad, influence: 1, joint: 2, joint_count: 2 })
+        );
+        let dual = DualQuatJob {
+            dual_quaternions: &dqs,
+            joints: &joints,
+            weights: &weights,
+            positions: &positions,
+            normals: &normals,
+            out_positions: &mut op,
+            out_normals: &mut on,
+        }
+        .run();
+        assert_eq!(
+            dual,
+            Err(SkinError::JointOutOfRange { vertex: bad, influence: 1, joint: 2, joint_count: 2 })
+        );
+        let blend = BonesBlendJob {
+            palette: &palette,
+            parents: skeleton.parents(),
+            bindings: &bindings,
+            positions: &positions,
+            normals: &normals,
+            out_positions: &mut op,
+            out_normals: &mut on,
+        }
+        .run();
+        assert!(matches!(blend, Err(SkinError::BadBlendParameter { vertex, .. }) if vertex == bad));
+        assert!(op.iter().chain(&on).all(|v| v.is_nan()));
+
+        // A weight of −0.0 fails the quick check (its sign bit) but not the full one: the job
+        // still runs.
+        joints[bad][1] = 1;
+        weights[bad] = [1.0, -0.0, 0.0, 0.0];
+        let linear = LinearBlendJob {
+            palette: &palette,
+            joints: &joints,
+            weights: &weights,
+            positions: &positions,
+            normals: &normals,
+            out_positions: &mut op,
+            out_normals: &mut on,
+        }
+        .run();
+        assert_eq!(linear, Ok(()));
+        assert!(op.iter().all(|p| (*p - Vec3::ONE).length() < 1e-5));
     }
 
     #[test]

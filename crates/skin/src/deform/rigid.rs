@@ -5,7 +5,7 @@ use std::ops::Range;
 
 use glam::{Mat3, Mat4, Vec3, Vec3A};
 
-use super::{all_chunks, check_buffers, check_len, for_each_chunk, Execution};
+use super::{all_chunks, check_buffers, check_len, for_each_chunk, Check, Execution};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -28,19 +28,14 @@ impl RigidJob<'_> {
     }
 
     fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
-        let n = self.positions.len();
-        check_len("joints", n, self.joints.len())?;
-        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        self.check_lengths()?;
         let joint_count = self.palette.len();
-        // A branch-free pass (the largest index; it vectorizes) answers "all good?"; only when
-        // it fails does the loop below look for the first bad vertex.
-        let joints = self.joints;
-        let largest_fits =
-            |r: Range<usize>| usize::from(joints[r].iter().fold(0u16, |m, &j| m.max(j))) < joint_count;
-        if all_chunks(parallel, n, largest_fits) {
+        // A branch-free pass answers "all good?"; only when it fails does the loop below look
+        // for the first bad vertex.
+        if all_chunks(parallel, self.positions.len(), Self::quick_check(self.joints, self.palette.len())) {
             return Ok(());
         }
-        for (vertex, &j) in joints.iter().enumerate() {
+        for (vertex, &j) in self.joints.iter().enumerate() {
             if j as usize >= joint_count {
                 return Err(SkinError::JointOutOfRange {
                     vertex,
@@ -53,6 +48,18 @@ impl RigidJob<'_> {
         Ok(())
     }
 
+    fn check_lengths(&self) -> Result<(), SkinError> {
+        let n = self.positions.len();
+        check_len("joints", n, self.joints.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())
+    }
+
+    /// Whether every joint index in a range is in the palette: the largest one, found without
+    /// branches (it vectorizes).
+    fn quick_check(joints: &[u16], joint_count: usize) -> impl Fn(Range<usize>) -> bool + Sync + '_ {
+        move |r: Range<usize>| usize::from(joints[r].iter().fold(0u16, |m, &j| m.max(j))) < joint_count
+    }
+
     /// Validates, then deforms on all cores.
     pub fn run(&mut self) -> Result<(), SkinError> {
         self.run_with(Execution::Parallel)
@@ -60,10 +67,21 @@ impl RigidJob<'_> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate_with(execution.parallel())?;
+        if execution.parallel() {
+            // The quick per-chunk check runs in the same dispatch as the kernel (see
+            // `for_each_chunk`); when it fails nothing was written, and the full validation
+            // below names the error.
+            self.check_lengths()?;
+            if self.fast(execution, true) {
+                return Ok(());
+            }
+        }
+        self.validate_with(false)?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
+                self.fast(execution, false);
+            }
         }
         Ok(())
     }
@@ -81,14 +99,18 @@ impl RigidJob<'_> {
         }
     }
 
-    fn fast(&mut self, execution: Execution) {
+    /// The fast path; with `check`, only if every chunk passes the quick check (returns
+    /// whether it ran).
+    fn fast(&mut self, execution: Execution, check: bool) -> bool {
         let parallel = execution.parallel();
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let joints = self.joints;
         let positions = self.positions;
         let normals = self.normals;
-        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        let quick_check = Self::quick_check(self.joints, self.palette.len());
+        let check: Option<Check> = check.then_some(&quick_check);
+        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end].iter().zip(&positions[start..end]).zip(&normals[start..end]);
             for (((&j, &p), &n), (op, on)) in inputs.zip(out_p.iter_mut().zip(out_n.iter_mut())) {
@@ -100,6 +122,6 @@ impl RigidJob<'_> {
                 };
                 *on = nm.into();
             }
-        });
+        })
     }
 }
