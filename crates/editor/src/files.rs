@@ -74,7 +74,7 @@ pub fn open_any(path: &Path) -> Result<Scene, String> {
     if is_scene_file(path) {
         load_scene(path)
     } else {
-        let (mut scene, read) = read_model(path)?;
+        let (mut scene, read) = read_model(path, &mut |_, _| {})?;
         let meshes = load_meshes_of(&scene, read, &mut |_| {});
         frame_new_scene(&mut scene, &meshes);
         Ok(scene)
@@ -90,15 +90,21 @@ pub fn open_any(path: &Path) -> Result<Scene, String> {
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, String> {
-    read_model(path).map(|(scene, _)| scene)
+    read_model(path, &mut |_, _| {}).map(|(scene, _)| scene)
 }
 
+/// Progress of a model read: the stage and, where known, the done fraction.
+type ProgressFn<'a> = &'a mut dyn FnMut(&str, Option<f32>);
+
 /// [`import_model`], with the meshes it read on the way (an MD2 file's morph mesh), so that
-/// they need not be read again.
-fn read_model(path: &Path) -> Result<(Scene, Vec<LoadedMesh>), String> {
+/// they need not be read again, reporting its stages to `progress`: glTF is read and parsed
+/// by keyrig-io in one step (no fraction); an MD2 file is read in chunks (fraction of its
+/// bytes), then parsed (no fraction).
+fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<LoadedMesh>), String> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
+            progress("reading and parsing", None);
             let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
             let animation = (!model.animations.is_empty()).then_some(0);
             let scene = model
@@ -107,8 +113,9 @@ fn read_model(path: &Path) -> Result<(Scene, Vec<LoadedMesh>), String> {
             Ok((scene, Vec::new()))
         }
         Some("md2") => {
-            let model = keyrig_io::md2::load_md2_file(path).map_err(|e| e.to_string())?;
-            let mesh = morph_mesh_from_md2(&model).map_err(|e| format!("{}: {e}", path.display()))?;
+            let data = read_with_progress(path, &mut |f| progress("reading", Some(f)))?;
+            progress("parsing", None);
+            let mesh = md2_morph_mesh(path, &data)?;
             let mut scene = Scene::default();
             let name =
                 path.file_stem().map_or_else(|| "MD2".to_owned(), |s| s.to_string_lossy().into_owned());
@@ -140,6 +147,36 @@ fn read_model(path: &Path) -> Result<(Scene, Vec<LoadedMesh>), String> {
         )),
         None => Err(format!("{}: no file extension (expected .ron, .glb, .gltf or .md2)", path.display())),
     }
+}
+
+/// Bytes per read of [`read_with_progress`].
+const READ_CHUNK: usize = 256 * 1024;
+
+/// Reads a whole file in chunks, reporting the fraction of its bytes read after each.
+fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<u8>, String> {
+    use std::io::Read as _;
+    let cannot = |e: std::io::Error| format!("{}: cannot read: {e}", path.display());
+    let mut file = fs::File::open(path).map_err(cannot)?;
+    let len = file.metadata().map_err(cannot)?.len();
+    // The length is a hint for the capacity only; what is read decides the size.
+    let mut data = Vec::with_capacity(usize::try_from(len).unwrap_or(0).min(1 << 30));
+    let mut chunk = vec![0u8; READ_CHUNK];
+    loop {
+        let n = file.read(&mut chunk).map_err(cannot)?;
+        if n == 0 {
+            break;
+        }
+        data.extend_from_slice(&chunk[..n]);
+        progress(if len > 0 { (data.len() as f64 / len as f64).min(1.0) as f32 } else { 1.0 });
+    }
+    Ok(data)
+}
+
+/// The morph mesh of the MD2 file `path` whose bytes are `data` (the skin image is not read:
+/// the editor draws MD2 models untextured).
+fn md2_morph_mesh(path: &Path, data: &[u8]) -> Result<MorphMesh, String> {
+    let model = keyrig_io::md2::parse_md2(data).map_err(|e| format!("{}: {e}", path.display()))?;
+    morph_mesh_from_md2(&model).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// The last frame of a range starting at 0 that shows `seconds` of looping animation at
@@ -288,8 +325,7 @@ impl BackgroundImport {
     /// Starts reading the model at `path` on a new thread.
     #[must_use]
     pub fn start(path: PathBuf, purpose: ImportPurpose) -> Self {
-        let progress =
-            Arc::new(Mutex::new(ImportProgress { stage: "reading and parsing".to_owned(), fraction: None }));
+        let progress = Arc::new(Mutex::new(ImportProgress { stage: "starting".to_owned(), fraction: None }));
         let shared = Arc::clone(&progress);
         let file = path.clone();
         let handle = std::thread::spawn(move || {
@@ -298,7 +334,7 @@ impl BackgroundImport {
                     *p = ImportProgress { stage: stage.to_owned(), fraction };
                 }
             };
-            let (mut scene, read) = read_model(&file)?;
+            let (mut scene, read) = read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
             let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
             });
@@ -473,10 +509,8 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {}
         Some("md2") => {
-            let model = keyrig_io::md2::load_md2_file(path).map_err(|e| e.to_string())?;
-            return morph_mesh_from_md2(&model)
-                .map(|m| FileMesh::Morph(Box::new(m)))
-                .map_err(|e| format!("{}: {e}", path.display()));
+            let data = fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+            return md2_morph_mesh(path, &data).map(|m| FileMesh::Morph(Box::new(m)));
         }
         _ => return Err(format!("{}: the editor shows meshes of glTF and MD2 files only", path.display())),
     }
@@ -655,6 +689,22 @@ mod tests {
             again.paths,
             vec![PathBuf::from("/nonexistent/a.ron"), PathBuf::from("/nonexistent/b.ron")]
         );
+    }
+
+    #[test]
+    fn reading_reports_the_fraction_of_bytes_read() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("big.md2");
+        let bytes: Vec<u8> = (0..READ_CHUNK * 2 + 1000).map(|i| (i % 251) as u8).collect();
+        fs::write(&path, &bytes).expect("write");
+        let mut fractions = Vec::new();
+        let data = read_with_progress(&path, &mut |f| fractions.push(f)).expect("read");
+        assert_eq!(data, bytes);
+        assert_eq!(fractions.len(), 3, "{fractions:?}");
+        assert!(fractions.windows(2).all(|w| w[0] < w[1]), "{fractions:?}");
+        assert_eq!(fractions.last(), Some(&1.0));
+        let err = read_with_progress(&dir.path().join("missing.md2"), &mut |_| {}).expect_err("no file");
+        assert!(err.contains("missing.md2") && err.contains("cannot read"), "{err}");
     }
 
     #[test]
