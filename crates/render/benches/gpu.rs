@@ -2,7 +2,9 @@
 //! - `skinning/<deformer>/<n>`: one compute pass over n vertices (4 influences), submitted and
 //!   waited for; joint data re-uploaded each iteration as in a real frame;
 //! - `demo_frame/1280x720`: one whole frame of assets/demo.ron (sampling, palettes, upload,
-//!   skinning, drawing, MSAA resolve), waited for but not read back.
+//!   skinning, drawing, MSAA resolve), waited for but not read back; also with 1 sample per
+//!   pixel (`1280x720_1x`) and with parts of the frame removed (`clear_only`, `meshes_only`,
+//!   `grid_only`, `no_grid`) to show where the time goes.
 //!
 //! Bytes uploaded per frame are printed (they are exact counts, not timings).
 //! Run: `cargo bench -p keyrig-render --bench gpu -- --warm-up-time 1 --measurement-time 3`
@@ -88,21 +90,58 @@ fn demo_frame(c: &mut Criterion) {
     let mut headless = HeadlessRenderer::new().unwrap_or_else(|e| panic!("{e}"));
     let rig = SceneRig::new(&scene).expect("rig");
     rig.upload(headless.renderer_mut()).expect("upload");
-    let viewport = Viewport::new(&headless.gpu().device, 1280, 720, HEADLESS_FORMAT).expect("viewport");
     let view = ViewOptions::default();
     let mut group = c.benchmark_group("demo_frame");
     group.sample_size(20);
     let mut frame_number = 0u32;
     let mut last_stats = None;
-    group.bench_function("1280x720", |b| {
-        b.iter(|| {
-            frame_number = (frame_number + 1) % 90;
-            let frame = rig.frame(rig.time_of_frame(f64::from(frame_number)), &view).expect("frame");
-            let stats = headless.renderer_mut().render(&frame, &viewport).expect("render");
-            headless.gpu().device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
-            last_stats = Some(stats);
-        });
-    });
+    // Where the time goes: the same frame with parts of it removed.
+    type Strip = fn(&mut keyrig_render::FrameInput);
+    let parts: [(&str, Strip); 5] = [
+        ("", |_| {}),
+        ("/clear_only", |f| {
+            f.items.clear();
+            f.grid_spacing = None;
+            f.skeletons.clear();
+            f.motion_paths.clear();
+            f.light_gizmos.clear();
+        }),
+        ("/meshes_only", |f| {
+            f.grid_spacing = None;
+            f.skeletons.clear();
+            f.motion_paths.clear();
+            f.light_gizmos.clear();
+        }),
+        ("/grid_only", |f| {
+            f.items.clear();
+            f.skeletons.clear();
+            f.motion_paths.clear();
+            f.light_gizmos.clear();
+        }),
+        ("/no_grid", |f| f.grid_spacing = None),
+    ];
+    // 4× MSAA (headless images, `keyrig render`) and 1 sample (the editor on a CPU adapter).
+    for (samples, size_name) in [(4, "1280x720"), (1, "1280x720_1x")] {
+        headless.renderer_mut().set_sample_count(samples).expect("sample count");
+        let viewport =
+            Viewport::with_sample_count(&headless.gpu().device, 1280, 720, HEADLESS_FORMAT, samples)
+                .expect("viewport");
+        for (part, strip) in parts {
+            group.bench_function(format!("{size_name}{part}"), |b| {
+                b.iter(|| {
+                    frame_number = (frame_number + 1) % 90;
+                    let mut frame =
+                        rig.frame(rig.time_of_frame(f64::from(frame_number)), &view).expect("frame");
+                    strip(&mut frame);
+                    let stats = headless.renderer_mut().render(&frame, &viewport).expect("render");
+                    headless.gpu().device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+                    if part.is_empty() {
+                        last_stats = Some(stats);
+                    }
+                });
+            });
+        }
+    }
     group.finish();
     if let Some(stats) = last_stats {
         eprintln!(

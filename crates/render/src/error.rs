@@ -47,6 +47,9 @@ pub enum RenderError {
     /// An image size that is zero or beyond the device's texture limit.
     #[error("image size {width}×{height} is invalid: {reason}")]
     InvalidSize { width: u32, height: u32, reason: String },
+    /// A sample count other than 1 or 4 (the counts every WebGPU adapter supports).
+    #[error("{0} samples per pixel is not supported (use 1 or 4)")]
+    UnsupportedSampleCount(u32),
     /// wgpu reported a validation or out-of-memory error, or a buffer could not be mapped.
     #[error("GPU error: {0}")]
     Gpu(String),

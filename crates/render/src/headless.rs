@@ -59,9 +59,10 @@ impl HeadlessRenderer {
         width: u32,
         height: u32,
     ) -> Result<(image::RgbaImage, FrameStats), RenderError> {
+        let samples = self.renderer.sample_count();
         let viewport = match self.viewport.take() {
-            Some(v) if v.size() == (width, height) => v,
-            _ => Viewport::new(&self.gpu.device, width, height, HEADLESS_FORMAT)?,
+            Some(v) if v.size() == (width, height) && v.sample_count() == samples => v,
+            _ => Viewport::with_sample_count(&self.gpu.device, width, height, HEADLESS_FORMAT, samples)?,
         };
         let result = self.renderer.render(frame, &viewport).and_then(|stats| {
             let image = read_viewport(&self.gpu.device, &self.gpu.queue, &viewport)?;

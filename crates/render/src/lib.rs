@@ -42,6 +42,7 @@ pub use image;
 pub use overlay::{LightGizmo, MotionPath, SkeletonOverlay};
 pub use renderer::{
     Deform, DrawItem, FrameInput, FrameStats, LightInput, MeshData, MeshId, RenderStyle, Renderer, Viewport,
+    SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
 };
 pub use scene_frame::{
     MorphBlend, MorphClip, MorphError, MorphMesh, ObjectState, SceneFrameError, SceneRig, Selection,

@@ -1,5 +1,6 @@
 //! The renderer: meshes uploaded once, then per frame a compute pass per deformed mesh and a
-//! render pass into a [`Viewport`] (an offscreen colour + depth target with 4× MSAA).
+//! render pass into a [`Viewport`] (an offscreen colour + depth target, 4× MSAA by default, or
+//! one sample per pixel where anti-aliasing costs too much, e.g. on a CPU rasterizer).
 //!
 //! The same code runs headless ([`crate::HeadlessRenderer`], its own device) and inside the
 //! editor (eframe's device and queue, the viewport's colour texture shown as an egui image).
@@ -21,8 +22,13 @@ pub type MeshId = u64;
 
 /// Depth buffer format of every viewport.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Samples per pixel (4 is supported by every WebGPU adapter for the formats used here).
+/// Samples per pixel of [`Renderer::new`] and [`Viewport::new`], so of every headless image
+/// (4 is supported by every WebGPU adapter for the formats used here).
 pub const SAMPLE_COUNT: u32 = 4;
+/// The sample counts [`Renderer::with_sample_count`] and [`Viewport::with_sample_count`]
+/// accept: 1 (no anti-aliasing) and 4, the two that every WebGPU adapter supports for the
+/// colour and depth formats used here (2 and 8 depend on the adapter).
+pub const SUPPORTED_SAMPLE_COUNTS: [u32; 2] = [1, 4];
 /// Most lights a frame can use; further lights are ignored (and counted in [`FrameStats`]).
 pub const MAX_LIGHTS: usize = 8;
 /// Stride of the per-object uniforms (the largest `min_uniform_buffer_offset_alignment`).
@@ -166,21 +172,27 @@ impl FrameStats {
     }
 }
 
-/// An offscreen render target: MSAA colour + depth, resolved into a single-sample colour
-/// texture that can be read back or shown as an egui texture.
+/// An offscreen render target: colour + depth, with MSAA resolved into a single-sample colour
+/// texture (or, at one sample per pixel, drawn into it directly) that can be read back or shown
+/// as an egui texture.
 pub struct Viewport {
     width: u32,
     height: u32,
     format: wgpu::TextureFormat,
-    msaa_view: wgpu::TextureView,
+    samples: u32,
+    /// The multisampled colour target; `None` at one sample per pixel.
+    msaa_view: Option<wgpu::TextureView>,
     depth_view: wgpu::TextureView,
     resolved: wgpu::Texture,
     resolved_view: wgpu::TextureView,
+    /// `resolved` viewed without sRGB decoding (same bytes), for egui.
+    encoded_view: wgpu::TextureView,
 }
 
 impl Viewport {
-    /// Creates the textures. The resolved colour texture has `TEXTURE_BINDING | COPY_SRC`
-    /// usage so the editor can sample it and headless rendering can read it back.
+    /// Creates the textures with [`SAMPLE_COUNT`] samples per pixel. The resolved colour
+    /// texture has `TEXTURE_BINDING | COPY_SRC` usage so the editor can sample it and headless
+    /// rendering can read it back.
     ///
     /// # Errors
     /// [`RenderError::InvalidSize`] for a zero size or one beyond the device's limit.
@@ -190,6 +202,23 @@ impl Viewport {
         height: u32,
         format: wgpu::TextureFormat,
     ) -> Result<Self, RenderError> {
+        Self::with_sample_count(device, width, height, format, SAMPLE_COUNT)
+    }
+
+    /// Like [`Viewport::new`] with `samples` per pixel (one of [`SUPPORTED_SAMPLE_COUNTS`]); it
+    /// must match the sample count of the [`Renderer`] that draws into it.
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidSize`] as for [`Viewport::new`];
+    /// [`RenderError::UnsupportedSampleCount`] for another sample count.
+    pub fn with_sample_count(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Result<Self, RenderError> {
+        check_sample_count(samples)?;
         let max = device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 {
             return Err(RenderError::InvalidSize {
@@ -206,7 +235,9 @@ impl Viewport {
             });
         }
         let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
-        let texture = |label, format, samples, usage| {
+        // The colour texture can also be viewed without the sRGB decode, for egui (below).
+        let plain_format = format.remove_srgb_suffix();
+        let texture = |label, format, samples, usage, view_formats: &[wgpu::TextureFormat]| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size,
@@ -215,16 +246,19 @@ impl Viewport {
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage,
-                view_formats: &[],
+                view_formats,
             })
         };
-        let msaa =
-            texture("keyrig viewport msaa", format, SAMPLE_COUNT, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let msaa = (samples > 1).then(|| {
+            texture("keyrig viewport msaa", format, samples, wgpu::TextureUsages::RENDER_ATTACHMENT, &[])
+                .create_view(&Default::default())
+        });
         let depth = texture(
             "keyrig viewport depth",
             DEPTH_FORMAT,
-            SAMPLE_COUNT,
+            samples,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
+            &[],
         );
         let resolved = texture(
             "keyrig viewport colour",
@@ -233,14 +267,22 @@ impl Viewport {
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
+            if plain_format == format { &[] } else { std::slice::from_ref(&plain_format) },
         );
+        let encoded_view = resolved.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("keyrig viewport colour (sRGB-encoded)"),
+            format: Some(plain_format),
+            ..Default::default()
+        });
         Ok(Viewport {
             width,
             height,
             format,
-            msaa_view: msaa.create_view(&Default::default()),
+            samples,
+            msaa_view: msaa,
             depth_view: depth.create_view(&Default::default()),
             resolved_view: resolved.create_view(&Default::default()),
+            encoded_view,
             resolved,
         })
     }
@@ -255,15 +297,40 @@ impl Viewport {
         self.format
     }
 
-    /// The finished image (after [`Renderer::render`]); register it with egui-wgpu.
+    /// Samples per pixel (1 or 4).
+    #[must_use]
+    pub fn sample_count(&self) -> u32 {
+        self.samples
+    }
+
+    /// The finished image (after [`Renderer::render`]) in the viewport's format: sampling an
+    /// sRGB format through it returns linear colour.
     #[must_use]
     pub fn color_view(&self) -> &wgpu::TextureView {
         &self.resolved_view
     }
 
+    /// The finished image viewed without the sRGB suffix (`Rgba8Unorm` for `Rgba8UnormSrgb`):
+    /// sampling returns the stored sRGB-encoded values. Register this one with egui-wgpu, whose
+    /// shader expects gamma-encoded textures (through [`Viewport::color_view`] the image would
+    /// be shown linear, far too dark).
+    #[must_use]
+    pub fn encoded_color_view(&self) -> &wgpu::TextureView {
+        &self.encoded_view
+    }
+
     #[must_use]
     pub fn color_texture(&self) -> &wgpu::Texture {
         &self.resolved
+    }
+}
+
+/// [`RenderError::UnsupportedSampleCount`] unless `samples` is in [`SUPPORTED_SAMPLE_COUNTS`].
+fn check_sample_count(samples: u32) -> Result<(), RenderError> {
+    if SUPPORTED_SAMPLE_COUNTS.contains(&samples) {
+        Ok(())
+    } else {
+        Err(RenderError::UnsupportedSampleCount(samples))
     }
 }
 
@@ -345,11 +412,10 @@ pub struct Renderer {
     queue: wgpu::Queue,
     color_format: wgpu::TextureFormat,
     skinner: GpuSkinner,
-    solid: wgpu::RenderPipeline,
-    wireframe: wgpu::RenderPipeline,
-    points: wgpu::RenderPipeline,
-    lines_depth: wgpu::RenderPipeline,
-    lines_on_top: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    mesh_layout: wgpu::PipelineLayout,
+    line_layout: wgpu::PipelineLayout,
+    pipelines: DrawPipelines,
     globals: wgpu::Buffer,
     globals_bind_group: wgpu::BindGroup,
     object_layout: wgpu::BindGroupLayout,
@@ -361,11 +427,165 @@ pub struct Renderer {
     meshes: HashMap<MeshId, GpuMesh>,
 }
 
+/// The draw pipelines for one sample count.
+struct DrawPipelines {
+    samples: u32,
+    solid: wgpu::RenderPipeline,
+    wireframe: wgpu::RenderPipeline,
+    points: wgpu::RenderPipeline,
+    lines_depth: wgpu::RenderPipeline,
+    lines_on_top: wgpu::RenderPipeline,
+}
+
+impl DrawPipelines {
+    fn new(
+        device: &wgpu::Device,
+        module: &wgpu::ShaderModule,
+        (mesh_layout, line_layout): (&wgpu::PipelineLayout, &wgpu::PipelineLayout),
+        color_format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Self {
+        let two_vec4 = [
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
+            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
+        ];
+        let vertex_layout = wgpu::VertexBufferLayout {
+            array_stride: 32,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &two_vec4,
+        };
+        let pipeline = |label: &str,
+                        layout: &wgpu::PipelineLayout,
+                        vs: &str,
+                        fs: &str,
+                        topology: wgpu::PrimitiveTopology,
+                        depth_compare: wgpu::CompareFunction,
+                        depth_write: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: std::slice::from_ref(&vertex_layout),
+                },
+                primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(depth_compare),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: color_format,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        use wgpu::CompareFunction::{Always, LessEqual};
+        use wgpu::PrimitiveTopology::{LineList, PointList, TriangleList};
+        DrawPipelines {
+            samples,
+            solid: pipeline("keyrig solid", mesh_layout, "vs_mesh", "fs_lit", TriangleList, LessEqual, true),
+            wireframe: pipeline(
+                "keyrig wireframe",
+                mesh_layout,
+                "vs_mesh",
+                "fs_flat",
+                LineList,
+                LessEqual,
+                true,
+            ),
+            points: pipeline("keyrig points", mesh_layout, "vs_mesh", "fs_flat", PointList, LessEqual, true),
+            lines_depth: pipeline(
+                "keyrig grid",
+                line_layout,
+                "vs_line",
+                "fs_line",
+                LineList,
+                LessEqual,
+                false,
+            ),
+            lines_on_top: pipeline(
+                "keyrig overlays",
+                line_layout,
+                "vs_line",
+                "fs_line",
+                LineList,
+                Always,
+                false,
+            ),
+        }
+    }
+}
+
 impl Renderer {
     /// Builds the pipelines for viewports of `color_format` (headless uses
-    /// `Rgba8UnormSrgb`; the shaders write linear colour, so use an sRGB format).
+    /// `Rgba8UnormSrgb`; the shaders write linear colour, so use an sRGB format) with
+    /// [`SAMPLE_COUNT`] samples per pixel.
     #[must_use]
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, color_format: wgpu::TextureFormat) -> Self {
+        Self::build(device, queue, color_format, SAMPLE_COUNT)
+    }
+
+    /// Like [`Renderer::new`] for viewports with `samples` per pixel (one of
+    /// [`SUPPORTED_SAMPLE_COUNTS`]; 1 turns anti-aliasing off).
+    ///
+    /// # Errors
+    /// [`RenderError::UnsupportedSampleCount`] for another sample count.
+    pub fn with_sample_count(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        color_format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Result<Self, RenderError> {
+        check_sample_count(samples)?;
+        Ok(Self::build(device, queue, color_format, samples))
+    }
+
+    /// Samples per pixel of the viewports this renderer draws into.
+    #[must_use]
+    pub fn sample_count(&self) -> u32 {
+        self.pipelines.samples
+    }
+
+    /// Rebuilds the draw pipelines for viewports with `samples` per pixel, keeping the uploaded
+    /// meshes; draw into a [`Viewport`] with the same count afterwards. Nothing happens when the
+    /// count is already `samples`.
+    ///
+    /// # Errors
+    /// [`RenderError::UnsupportedSampleCount`] for a count not in [`SUPPORTED_SAMPLE_COUNTS`].
+    pub fn set_sample_count(&mut self, samples: u32) -> Result<(), RenderError> {
+        check_sample_count(samples)?;
+        if samples != self.pipelines.samples {
+            self.pipelines = DrawPipelines::new(
+                &self.device,
+                &self.module,
+                (&self.mesh_layout, &self.line_layout),
+                self.color_format,
+                samples,
+            );
+        }
+        Ok(())
+    }
+
+    fn build(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        color_format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Self {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("keyrig draw.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("shaders/draw.wgsl").into()),
@@ -408,66 +628,8 @@ impl Renderer {
             bind_group_layouts: &[Some(&globals_layout)],
             immediate_size: 0,
         });
-        let two_vec4 = [
-            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 0, shader_location: 0 },
-            wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x4, offset: 16, shader_location: 1 },
-        ];
-        let vertex_layout = wgpu::VertexBufferLayout {
-            array_stride: 32,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &two_vec4,
-        };
-        let pipeline = |label: &str,
-                        layout: &wgpu::PipelineLayout,
-                        vs: &str,
-                        fs: &str,
-                        topology: wgpu::PrimitiveTopology,
-                        depth_compare: wgpu::CompareFunction,
-                        depth_write: bool| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers: std::slice::from_ref(&vertex_layout),
-                },
-                primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(depth_compare),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState { count: SAMPLE_COUNT, ..Default::default() },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: color_format,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        use wgpu::CompareFunction::{Always, LessEqual};
-        use wgpu::PrimitiveTopology::{LineList, PointList, TriangleList};
-        let solid =
-            pipeline("keyrig solid", &mesh_layout, "vs_mesh", "fs_lit", TriangleList, LessEqual, true);
-        let wireframe =
-            pipeline("keyrig wireframe", &mesh_layout, "vs_mesh", "fs_flat", LineList, LessEqual, true);
-        let points =
-            pipeline("keyrig points", &mesh_layout, "vs_mesh", "fs_flat", PointList, LessEqual, true);
-        let lines_depth =
-            pipeline("keyrig grid", &line_layout, "vs_line", "fs_line", LineList, LessEqual, false);
-        let lines_on_top =
-            pipeline("keyrig overlays", &line_layout, "vs_line", "fs_line", LineList, Always, false);
+        let pipelines =
+            DrawPipelines::new(device, &module, (&mesh_layout, &line_layout), color_format, samples);
 
         let object_capacity = 16;
         let (objects, objects_bind_group) = Self::object_buffer(device, &object_layout, object_capacity);
@@ -478,11 +640,10 @@ impl Renderer {
             queue: queue.clone(),
             color_format,
             skinner: GpuSkinner::new(device),
-            solid,
-            wireframe,
-            points,
-            lines_depth,
-            lines_on_top,
+            module,
+            mesh_layout,
+            line_layout,
+            pipelines,
             globals,
             globals_bind_group,
             object_layout,
@@ -663,6 +824,12 @@ impl Renderer {
                 viewport.format, self.color_format
             )));
         }
+        if viewport.samples != self.pipelines.samples {
+            return Err(RenderError::Gpu(format!(
+                "viewport has {} samples per pixel, the renderer's pipelines {}",
+                viewport.samples, self.pipelines.samples
+            )));
+        }
         if !camera::is_usable(&frame.camera) {
             return Err(RenderError::NonFinite { what: "camera (or distance ≤ 0)", index: 0 });
         }
@@ -788,12 +955,18 @@ impl Renderer {
         // 4. The render pass.
         {
             let bg = frame.background;
+            // With MSAA the multisampled image is resolved and then discarded; without, the
+            // pass draws straight into the colour texture, which must be stored.
+            let (view, resolve_target, store) = match &viewport.msaa_view {
+                Some(msaa) => (msaa, Some(&viewport.resolved_view), wgpu::StoreOp::Discard),
+                None => (&viewport.resolved_view, None, wgpu::StoreOp::Store),
+            };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("keyrig viewport"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &viewport.msaa_view,
+                    view,
                     depth_slice: None,
-                    resolve_target: Some(&viewport.resolved_view),
+                    resolve_target,
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Clear(wgpu::Color {
                             r: f64::from(bg.x),
@@ -801,7 +974,7 @@ impl Renderer {
                             b: f64::from(bg.z),
                             a: 1.0,
                         }),
-                        store: wgpu::StoreOp::Discard,
+                        store,
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -817,10 +990,11 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, &self.globals_bind_group, &[]);
+            let pipelines = &self.pipelines;
             let pipeline = match frame.style {
-                RenderStyle::Solid => &self.solid,
-                RenderStyle::Wireframe => &self.wireframe,
-                RenderStyle::Points => &self.points,
+                RenderStyle::Solid => &pipelines.solid,
+                RenderStyle::Wireframe => &pipelines.wireframe,
+                RenderStyle::Points => &pipelines.points,
             };
             for (i, item) in frame.items.iter().enumerate() {
                 // Checked above.
@@ -838,7 +1012,7 @@ impl Renderer {
                         pass.draw_indexed(0..mesh.edge_index_count, 0, 0..1);
                     }
                     RenderStyle::Solid | RenderStyle::Wireframe => {
-                        pass.set_pipeline(&self.points);
+                        pass.set_pipeline(&pipelines.points);
                         pass.draw(0..mesh.vertex_count, 0..1);
                     }
                     RenderStyle::Points => pass.draw(0..mesh.vertex_count, 0..1),
@@ -848,12 +1022,12 @@ impl Renderer {
             if line_vertices > 0 {
                 pass.set_vertex_buffer(0, self.line_buffer.slice(..));
                 if grid_vertices > 0 {
-                    pass.set_pipeline(&self.lines_depth);
+                    pass.set_pipeline(&pipelines.lines_depth);
                     pass.draw(0..grid_vertices, 0..1);
                     stats.draw_calls += 1;
                 }
                 if line_vertices as u32 > grid_vertices {
-                    pass.set_pipeline(&self.lines_on_top);
+                    pass.set_pipeline(&pipelines.lines_on_top);
                     pass.draw(grid_vertices..line_vertices as u32, 0..1);
                     stats.draw_calls += 1;
                 }
@@ -880,5 +1054,99 @@ impl Renderer {
                 mesh.vertex_count,
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Mat4, Vec3};
+    use keyrig_core::Camera;
+
+    use super::*;
+    use crate::{HeadlessRenderer, SkinnedVertex, HEADLESS_FORMAT};
+
+    fn headless() -> HeadlessRenderer {
+        HeadlessRenderer::new().unwrap_or_else(|e| panic!("GPU tests need a wgpu adapter: {e}"))
+    }
+
+    /// A lit triangle in front of the camera, so the image has edges that MSAA smooths.
+    fn triangle_frame(renderer: &mut Renderer) -> FrameInput {
+        let vertices = [
+            SkinnedVertex::new(Vec3::new(-0.6, -0.5, 0.0), Vec3::Z),
+            SkinnedVertex::new(Vec3::new(0.7, -0.4, 0.0), Vec3::Z),
+            SkinnedVertex::new(Vec3::new(0.1, 0.6, 0.0), Vec3::Z),
+        ];
+        renderer
+            .upload_mesh(7, &MeshData::Static { vertices: &vertices, indices: &[0, 1, 2] })
+            .expect("upload");
+        let camera =
+            Camera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 0.0, distance: 2.0, fov_y_deg: 60.0 };
+        let mut frame = FrameInput::new(camera);
+        frame.ambient = Vec3::splat(0.8);
+        frame.grid_spacing = None;
+        frame.items.push(DrawItem {
+            mesh: 7,
+            world_from_model: Mat4::IDENTITY,
+            deform: Deform::None,
+            colour: Vec3::new(0.9, 0.6, 0.3),
+            selected: false,
+        });
+        frame
+    }
+
+    #[test]
+    fn sample_counts_other_than_1_and_4_are_refused_with_a_typed_error() {
+        let h = headless();
+        let gpu = h.gpu();
+        for samples in [0, 2, 3, 8, 16] {
+            let renderer = Renderer::with_sample_count(&gpu.device, &gpu.queue, HEADLESS_FORMAT, samples);
+            assert!(matches!(renderer, Err(RenderError::UnsupportedSampleCount(n)) if n == samples));
+            let viewport = Viewport::with_sample_count(&gpu.device, 8, 8, HEADLESS_FORMAT, samples);
+            assert!(matches!(viewport, Err(RenderError::UnsupportedSampleCount(n)) if n == samples));
+        }
+        let mut renderer = Renderer::new(&gpu.device, &gpu.queue, HEADLESS_FORMAT);
+        assert_eq!(renderer.sample_count(), SAMPLE_COUNT);
+        assert!(matches!(renderer.set_sample_count(2), Err(RenderError::UnsupportedSampleCount(2))));
+        assert_eq!(renderer.sample_count(), SAMPLE_COUNT, "a refused count changes nothing");
+    }
+
+    #[test]
+    fn a_viewport_with_another_sample_count_is_an_error_not_a_panic() {
+        let mut h = headless();
+        let frame = triangle_frame(h.renderer_mut());
+        let single =
+            Viewport::with_sample_count(&h.gpu().device, 32, 32, HEADLESS_FORMAT, 1).expect("viewport");
+        assert_eq!(single.sample_count(), 1);
+        let err = h.renderer_mut().render(&frame, &single).expect_err("4× pipelines, 1× viewport");
+        assert!(err.to_string().contains("samples per pixel"), "{err}");
+    }
+
+    #[test]
+    fn one_sample_draws_the_same_image_except_along_edges() {
+        const SIZE: u32 = 96;
+        let mut h = headless();
+        let frame = triangle_frame(h.renderer_mut());
+        let (msaa, _) = h.render_image(&frame, SIZE, SIZE).expect("4× image");
+        h.renderer_mut().set_sample_count(1).expect("1 sample");
+        assert_eq!(h.renderer().sample_count(), 1);
+        let (single, _) = h.render_image(&frame, SIZE, SIZE).expect("1× image (new viewport)");
+        let differing: Vec<(u32, u32)> = msaa
+            .enumerate_pixels()
+            .filter(|(x, y, p)| p.0.iter().zip(single.get_pixel(*x, *y).0).any(|(a, b)| a.abs_diff(b) > 2))
+            .map(|(x, y, _)| (x, y))
+            .collect();
+        // Interior and background agree; only pixels that an edge crosses differ (the triangle's
+        // three edges cross about 150 of the 9216 pixels).
+        assert!(!differing.is_empty(), "MSAA should change the edge pixels");
+        assert!(differing.len() < 400, "{} of {} pixels differ", differing.len(), SIZE * SIZE);
+        // Near the centroid (0.07, −0.1, 0), which projects to about (51, 52).
+        let inside = (51, 52);
+        assert!(msaa.get_pixel(inside.0, inside.1) != msaa.get_pixel(2, 2), "the triangle is drawn");
+        assert!(!differing.contains(&inside), "the triangle's interior is the same");
+        assert!(!differing.contains(&(2, 2)), "the background is the same");
+        // Back to 4×: the same image as the first.
+        h.renderer_mut().set_sample_count(4).expect("4 samples");
+        let (again, _) = h.render_image(&frame, SIZE, SIZE).expect("4× again");
+        assert_eq!(again, msaa);
     }
 }
