@@ -325,7 +325,7 @@ impl BackgroundImport {
     /// Starts reading the model at `path` on a new thread.
     #[must_use]
     pub fn start(path: PathBuf, purpose: ImportPurpose) -> Self {
-        let progress = Arc::new(Mutex::new(ImportProgress { stage: "starting".to_owned(), fraction: None }));
+        let progress = Arc::new(Mutex::new(ImportProgress { stage: "reading".to_owned(), fraction: None }));
         let shared = Arc::clone(&progress);
         let file = path.clone();
         let handle = std::thread::spawn(move || {

@@ -39,12 +39,10 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     });
 }
 
-/// Frames of the text spinner, one per 100 ms.
-const SPINNER: [&str; 8] = ["⠋", "⠙", "⠹", "⠸", "⠼", "⠴", "⠦", "⠧"];
-
-/// One running import: "⠋ Importing sydney.md2: reading and parsing · 0.4 s", with a bar
-/// while meshes load. The spinner is drawn from the elapsed time; the editor repaints every
-/// 50 ms while an import runs (egui's own spinner would ask for a repaint every frame).
+/// One running import: a spinner, "Importing sydney.md2: reading", a progress bar where the
+/// fraction is known, and the elapsed time. The editor repaints every 50 ms while an import
+/// runs; the spinner turns with the elapsed time (egui's own spinner would ask for a repaint
+/// every frame).
 fn import_ui(ui: &mut Ui, import: &crate::files::BackgroundImport) {
     let progress = import.progress();
     let elapsed = import.elapsed().as_secs_f64();
@@ -56,11 +54,25 @@ fn import_ui(ui: &mut Ui, import: &crate::files::BackgroundImport) {
         crate::files::ImportPurpose::Open => "Opening",
         crate::files::ImportPurpose::Import => "Importing",
     };
-    let spinner = SPINNER[(elapsed * 10.0) as usize % SPINNER.len()];
-    ui.label(format!("{spinner} {verb} {name}: {}", progress.stage))
-        .on_hover_text(import.path.display().to_string());
+    spinner_ui(ui, elapsed);
+    ui.label(format!("{verb} {name}: {}", progress.stage)).on_hover_text(import.path.display().to_string());
     if let Some(fraction) = progress.fraction {
         ui.add(egui::ProgressBar::new(fraction).desired_width(80.0).show_percentage());
     }
     ui.weak(format!("{elapsed:.1} s"));
+}
+
+/// A three-quarter circle turning once a second, drawn for `elapsed` seconds.
+fn spinner_ui(ui: &mut Ui, elapsed: f64) {
+    let size = ui.text_style_height(&egui::TextStyle::Body);
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(size, size), egui::Sense::hover());
+    let radius = rect.height() * 0.4;
+    let start = (elapsed * std::f64::consts::TAU) as f32;
+    let points: Vec<egui::Pos2> = (0..=24)
+        .map(|i| {
+            let a = start + i as f32 / 24.0 * 1.5 * std::f32::consts::PI;
+            rect.center() + radius * egui::vec2(a.cos(), a.sin())
+        })
+        .collect();
+    ui.painter().add(egui::Shape::line(points, egui::Stroke::new(2.0, ui.visuals().strong_text_color())));
 }
