@@ -169,6 +169,13 @@ fn md2_ui(ui: &mut Ui, app: &mut EditorApp, o: usize) {
         })
         .inner;
     ui.ctx().accesskit_node_builder(drag.id, |node| node.set_label("Model fps"));
+    let frames = match clip.as_deref() {
+        None => clips.iter().map(|(_, n)| n).sum::<usize>(),
+        Some(name) => clips.iter().find(|(c, _)| c == name).map_or(0, |(_, n)| *n),
+    };
+    let seconds = frames as f64 / fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+    let timeline_frames = seconds * app.doc.scene().fps;
+    ui.weak(format!("One loop: {frames} model frames, {seconds:.2} s, {timeline_frames:.0} timeline frames"));
     let name = app.doc.scene().objects[o].name.clone();
     if chosen != clip {
         let label = format!("{name} clip {}", chosen.as_deref().unwrap_or("all frames"));
