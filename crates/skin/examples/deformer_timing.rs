@@ -3,12 +3,17 @@
 //! rounds is far less sensitive to other processes than criterion's mean; use it for the
 //! ratios, and criterion for the full statistics.
 //!
+//! Two plain copies run in the same rounds as the memory-bandwidth reference: `copy_50` moves as
+//! many bytes as rigid (50 per vertex, read + written), `copy_72` as many as linear blend and
+//! dual quaternion (72); in the all-cores pass they copy in parallel chunks on rayon's pool.
+//!
 //! cargo run --release -p keyrig-skin --example deformer_timing -- [VERTICES] [ROUNDS]
 
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use keyrig_skin::{BonesBlendJob, DualQuatJob, Execution, LinearBlendJob, RigidJob};
+use rayon::prelude::*;
 
 #[path = "../benches/support/mod.rs"]
 mod support;
@@ -20,9 +25,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let data = support::data(n);
     let mut op = vec![Vec3::ZERO; n];
     let mut on = vec![Vec3::ZERO; n];
-    let names = ["ozz_port", "rigid", "linear", "bones_blending", "dual_quaternion"];
+    let names = ["ozz_port", "rigid", "copy_50", "linear", "copy_72", "bones_blending", "dual_quaternion"];
+    // Bytes read + written per vertex (positions, normals, influences in; positions, normals out).
+    let bytes_per_vertex = [68, 50, 50, 72, 72, 56, 72];
+    let copy_source = vec![1.0f32; n * 72 / 8];
+    let mut copy_target = vec![0.0f32; n * 72 / 8];
     for execution in [Execution::SingleThreaded, Execution::Parallel] {
-        let mut best = [Duration::MAX; 5];
+        let mut best = [Duration::MAX; 7];
         for _ in 0..rounds {
             for (d, slot) in best.iter_mut().enumerate() {
                 let start = Instant::now();
@@ -37,7 +46,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         out_normals: &mut on,
                     }
                     .run_with(execution)?,
-                    2 => LinearBlendJob {
+                    2 | 4 => {
+                        // Half the bytes read, half written.
+                        let floats = n * bytes_per_vertex[d] / 8;
+                        let (from, to) = (&copy_source[..floats], &mut copy_target[..floats]);
+                        if execution == Execution::Parallel {
+                            to.par_chunks_mut(16 * 1024)
+                                .zip(from.par_chunks(16 * 1024))
+                                .for_each(|(t, f)| t.copy_from_slice(f));
+                        } else {
+                            to.copy_from_slice(from);
+                        }
+                        std::hint::black_box(&copy_target);
+                    }
+                    3 => LinearBlendJob {
                         palette: &data.palette,
                         joints: &data.joints,
                         weights: &data.weights,
@@ -47,7 +69,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         out_normals: &mut on,
                     }
                     .run_with(execution)?,
-                    3 => BonesBlendJob {
+                    5 => BonesBlendJob {
                         palette: &data.palette,
                         parents: data.skeleton.parents(),
                         bindings: &data.bindings,
@@ -73,14 +95,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         println!("{n} vertices, {execution:?}, minimum of {rounds} interleaved rounds:");
-        let lbs = best[2].as_secs_f64();
-        for (name, t) in names.iter().zip(best) {
+        let lbs = best[3].as_secs_f64();
+        for ((name, t), bytes) in names.iter().zip(best).zip(bytes_per_vertex) {
             let t = t.as_secs_f64();
             println!(
-                "  {name:16} {:9.3} ms  {:6.1} Mvertices/s  {:5.2}x linear",
+                "  {name:16} {:9.3} ms  {:6.1} Mvertices/s  {:5.2}x linear  {:5.1} GB/s",
                 t * 1e3,
                 n as f64 / t / 1e6,
-                t / lbs
+                t / lbs,
+                (n * bytes) as f64 / t / 1e9
             );
         }
         if execution == Execution::SingleThreaded {
