@@ -61,9 +61,12 @@ pub struct ViewSettings {
     pub bones: bool,
     /// Draw the selected object's or joint's motion path (GPU viewport).
     pub motion_path: bool,
-    /// Pixels of the GPU viewport per screen pixel: 1 (full) or 0.5 (half, four times fewer
-    /// pixels to rasterize; the default on a CPU rasterizer such as lavapipe).
+    /// Pixels of the GPU viewport per screen pixel: 1 (full, the default) or 0.5 (half, four
+    /// times fewer pixels to rasterize).
     pub resolution_scale: f32,
+    /// 4× MSAA in the GPU viewport (off by default on a CPU rasterizer, where it costs more
+    /// than the rest of the viewport).
+    pub antialiasing: bool,
     pub style: RenderStyle,
     /// Where the viewport was laid out in the last frame (screen points), for picking tools
     /// and tests that aim at what the viewport shows.
@@ -165,6 +168,7 @@ impl EditorApp {
                 bones: true,
                 motion_path: true,
                 resolution_scale: 1.0,
+                antialiasing: true,
                 style: RenderStyle::Solid,
                 viewport_rect: None,
             },
@@ -222,12 +226,10 @@ impl EditorApp {
     }
 
     /// Gives the editor keyrig-render on eframe's wgpu device; on a CPU rasterizer the viewport
-    /// renders at half resolution.
+    /// renders without anti-aliasing (see [`crate::gpu_view::GpuView::new`]).
     pub fn attach_gpu(&mut self, render_state: &egui_wgpu::RenderState) {
         let gpu = crate::gpu_view::GpuView::new(render_state);
-        if gpu.is_cpu_adapter() {
-            self.view.resolution_scale = 0.5;
-        }
+        self.view.antialiasing = gpu.antialiasing();
         self.gpu = Some(gpu);
     }
 

@@ -42,20 +42,82 @@ pub struct GpuView {
     rig: Option<((u64, u64), SceneRig)>,
     /// Statistics of the last rendered frame.
     pub last_stats: Option<FrameStats>,
+    /// Frame-rate log to stderr, when `KEYRIG_FRAME_LOG` is set.
+    frame_log: Option<FrameLog>,
+}
+
+/// Counts viewport frames and prints the frame rate every two seconds (`KEYRIG_FRAME_LOG=1`),
+/// to measure the running editor from outside (docs/benchmarks.md, "Editor").
+struct FrameLog {
+    since: std::time::Instant,
+    frames: u32,
+}
+
+impl FrameLog {
+    const PERIOD_S: f64 = 2.0;
+
+    fn from_env() -> Option<Self> {
+        std::env::var_os("KEYRIG_FRAME_LOG").map(|_| FrameLog { since: std::time::Instant::now(), frames: 0 })
+    }
+
+    fn tick(&mut self, size_px: [u32; 2], samples: u32) {
+        self.frames += 1;
+        let elapsed = self.since.elapsed().as_secs_f64();
+        if elapsed >= Self::PERIOD_S {
+            eprintln!(
+                "keyrig frames: {} in {elapsed:.2} s = {:.1} fps ({:.1} ms/frame), viewport {}x{} at {samples} sample(s)",
+                self.frames,
+                f64::from(self.frames) / elapsed,
+                elapsed * 1000.0 / f64::from(self.frames),
+                size_px[0],
+                size_px[1],
+            );
+            self.frames = 0;
+            self.since = std::time::Instant::now();
+        }
+    }
 }
 
 impl GpuView {
-    /// Creates the renderer on eframe's device.
+    /// Creates the renderer on eframe's device: with 4× MSAA on a GPU, without anti-aliasing
+    /// on a CPU rasterizer, where clearing and resolving four samples per pixel cost more than
+    /// the whole rest of the viewport (docs/benchmarks.md, "Editor").
     #[must_use]
     pub fn new(render_state: &RenderState) -> Self {
-        let renderer = Renderer::new(&render_state.device, &render_state.queue, FORMAT);
-        GpuView { render_state: render_state.clone(), renderer, target: None, rig: None, last_stats: None }
+        let samples = if is_cpu(render_state) { 1 } else { keyrig_render::SAMPLE_COUNT };
+        let (device, queue) = (&render_state.device, &render_state.queue);
+        let renderer = Renderer::with_sample_count(device, queue, FORMAT, samples)
+            .unwrap_or_else(|_| Renderer::new(device, queue, FORMAT));
+        GpuView {
+            render_state: render_state.clone(),
+            renderer,
+            target: None,
+            rig: None,
+            last_stats: None,
+            frame_log: FrameLog::from_env(),
+        }
     }
 
     /// Whether wgpu runs on a CPU rasterizer (lavapipe, llvmpipe, WARP).
     #[must_use]
     pub fn is_cpu_adapter(&self) -> bool {
-        self.render_state.adapter.get_info().device_type == wgpu::DeviceType::Cpu
+        is_cpu(&self.render_state)
+    }
+
+    /// Whether the viewport renders with 4× MSAA (otherwise one sample per pixel).
+    #[must_use]
+    pub fn antialiasing(&self) -> bool {
+        self.renderer.sample_count() > 1
+    }
+
+    /// Turns 4× MSAA on or off; the next frame rebuilds the draw pipelines and the viewport
+    /// texture when this changes anything (the uploaded meshes stay).
+    ///
+    /// # Errors
+    /// The renderer's error as text (it cannot refuse 1 or 4 samples).
+    pub fn set_antialiasing(&mut self, on: bool) -> Result<(), String> {
+        let samples = if on { keyrig_render::SAMPLE_COUNT } else { 1 };
+        self.renderer.set_sample_count(samples).map_err(|e| e.to_string())
     }
 
     /// The adapter's name and backend, for the status bar and benchmarks.
@@ -66,27 +128,31 @@ impl GpuView {
     }
 
     fn ensure_target(&mut self, width: u32, height: u32) -> Result<TextureId, String> {
+        let samples = self.renderer.sample_count();
         if let Some((viewport, id)) = &self.target {
-            if viewport.size() == (width, height) {
+            if viewport.size() == (width, height) && viewport.sample_count() == samples {
                 return Ok(*id);
             }
         }
         let device = &self.render_state.device;
-        let viewport = Viewport::new(device, width, height, FORMAT).map_err(|e| e.to_string())?;
+        let viewport =
+            Viewport::with_sample_count(device, width, height, FORMAT, samples).map_err(|e| e.to_string())?;
         let mut egui_renderer = self.render_state.renderer.write();
         let id = match &self.target {
             Some((_, id)) => {
                 egui_renderer.update_egui_texture_from_wgpu_texture(
                     device,
-                    viewport.color_view(),
+                    viewport.encoded_color_view(),
                     wgpu::FilterMode::Linear,
                     *id,
                 );
                 *id
             }
-            None => {
-                egui_renderer.register_native_texture(device, viewport.color_view(), wgpu::FilterMode::Linear)
-            }
+            None => egui_renderer.register_native_texture(
+                device,
+                viewport.encoded_color_view(),
+                wgpu::FilterMode::Linear,
+            ),
         };
         drop(egui_renderer);
         self.target = Some((viewport, id));
@@ -123,8 +189,33 @@ impl GpuView {
         }
         let Some((viewport, _)) = &self.target else { return Err("no viewport texture".to_owned()) };
         self.last_stats = Some(self.renderer.render(&input, viewport).map_err(|e| e.to_string())?);
+        if let Some(log) = &mut self.frame_log {
+            log.tick(size_px, self.renderer.sample_count());
+        }
         Ok(texture)
     }
+}
+
+/// Whether the adapter eframe will pick (wgpu's preferred one for eframe's default backends and
+/// power preference, the same request eframe makes) is a CPU rasterizer such as lavapipe. Asked
+/// before the window opens, because the present mode must be chosen then: on a CPU rasterizer
+/// the editor presents without waiting for vsync (docs/benchmarks.md, "Editor"). Opens a
+/// throw-away wgpu instance; false when there is no adapter at all.
+#[must_use]
+pub fn default_adapter_is_cpu() -> bool {
+    let setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    let power_preference = setup.power_preference;
+    let instance = pollster::block_on(egui_wgpu::WgpuSetup::CreateNew(setup).new_instance());
+    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference,
+        force_fallback_adapter: false,
+        compatible_surface: None,
+    }))
+    .is_ok_and(|adapter| adapter.get_info().device_type == wgpu::DeviceType::Cpu)
+}
+
+fn is_cpu(render_state: &RenderState) -> bool {
+    render_state.adapter.get_info().device_type == wgpu::DeviceType::Cpu
 }
 
 /// The renderer's selection for the editor's.

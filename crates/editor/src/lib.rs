@@ -61,7 +61,7 @@ pub fn editor_for(file: Option<PathBuf>, options: EditorOptions) -> EditorApp {
 pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
     let app = editor_for(file, EditorOptions::default());
     let title = app.doc.title();
-    let options = eframe::NativeOptions {
+    let mut options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title(title)
             .with_inner_size(WINDOW_SIZE)
@@ -70,6 +70,11 @@ pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
         renderer: eframe::Renderer::Wgpu,
         ..Default::default()
     };
+    // On a CPU rasterizer, waiting for vsync costs a quarter of the frames (docs/benchmarks.md,
+    // "Editor"); a GPU keeps vsync.
+    if gpu_view::default_adapter_is_cpu() {
+        options.wgpu_options.present_mode = egui_wgpu::wgpu::PresentMode::AutoNoVsync;
+    }
     let mut app = app;
     eframe::run_native(
         "keyrig",

@@ -108,6 +108,10 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                         ui.close();
                     }
                 }
+                ui.checkbox(&mut app.view.antialiasing, "Anti-aliasing (4× MSAA)").on_hover_text(
+                    "Smooth edges in the GPU viewport; off by default on a CPU rasterizer such as \
+                     lavapipe, where it costs more than drawing the scene",
+                );
             });
             ui.menu_button("Deformer", |ui| {
                 let current = app

@@ -23,7 +23,9 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         let painter = ui.painter_at(rect);
-        painter.rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46));
+        // Filled below only when the painter draws: under the GPU image it would double the
+        // pixels a CPU rasterizer shades (docs/benchmarks.md, "Editor").
+        let background = painter.add(egui::Shape::Noop);
 
         app.view.viewport_rect = Some(rect);
         let projection = Projection::new(&app.view.camera, rect);
@@ -102,6 +104,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         let gpu_drawn = gpu_ui(ui, app, rect, &poses, &mut errors);
         let scene = app.doc.scene();
         if !gpu_drawn {
+            painter.set(background, egui::Shape::rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46)));
             if app.view.grid {
                 draw_grid(&painter, &projection);
             }
@@ -302,6 +305,9 @@ fn gpu_ui(
     }
     let frame =
         crate::gpu_view::GpuFrame { scene, doc_key, states, lights, view, time, file_meshes, morph_meshes };
+    if let Err(e) = gpu.set_antialiasing(app.view.antialiasing) {
+        errors.push(format!("GPU viewport: {e}"));
+    }
     let drawn = match gpu.render(frame, size) {
         Ok(texture) => {
             let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
