@@ -60,20 +60,6 @@ fn vs_mesh(@location(0) position: vec4<f32>, @location(1) normal: vec4<f32>) -> 
     return out;
 }
 
-fn spot_cone(light: Light, to_surface: vec3<f32>) -> f32 {
-    let cos_theta = dot(normalize(to_surface), light.direction.xyz);
-    let cos_cut = light.spot.x;
-    let cos_inner = light.spot.y;
-    if cos_theta >= cos_inner {
-        return 1.0;
-    }
-    if cos_theta <= cos_cut {
-        return 0.0;
-    }
-    let s = (cos_theta - cos_cut) / max(cos_inner - cos_cut, 1e-6);
-    return pow(s, max(light.spot.z, 0.0));
-}
-
 @fragment
 fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     var n = normalize(in.normal);
@@ -86,27 +72,36 @@ fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f3
     var specular = vec3<f32>(0.0);
     let count = min(globals.counts.x, MAX_LIGHTS);
     for (var i = 0u; i < count; i = i + 1u) {
-        let light = globals.lights[i];
-        let kind = u32(light.position.w);
-        var l: vec3<f32>;
-        var radiance = light.radiance.rgb;
-        if kind == KIND_DIRECTIONAL {
-            l = -light.direction.xyz;
-        } else {
-            let offset = in.world_position - light.position.xyz;
-            let d2 = max(dot(offset, offset), 1e-8);
-            l = -offset / sqrt(d2);
-            radiance = radiance / d2;
-            if kind == KIND_SPOT {
-                radiance = radiance * spot_cone(light, offset);
-            }
+        // Fields are read in place (a copy of the whole Light costs a CPU rasterizer dearly).
+        let position = globals.lights[i].position;
+        let direction = globals.lights[i].direction.xyz;
+        let kind = u32(position.w);
+        let offset = in.world_position - position.xyz;
+        let inv_d = inverseSqrt(max(dot(offset, offset), 1e-8));
+        let is_directional = kind == KIND_DIRECTIONAL;
+        let l = select(-offset * inv_d, -direction, is_directional);
+        // 1/d² for point and spot lights.
+        var falloff = select(inv_d * inv_d, 1.0, is_directional);
+        if kind == KIND_SPOT {
+            let spot = globals.lights[i].spot;
+            let cos_theta = dot(offset * inv_d, direction);
+            let s = clamp((cos_theta - spot.x) / max(spot.y - spot.x, 1e-6), 0.0, 1.0);
+            var cone = select(pow(s, max(spot.z, 0.0)), 1.0, cos_theta >= spot.y);
+            cone = select(cone, 0.0, cos_theta <= spot.x);
+            falloff = falloff * cone;
         }
+        let radiance = globals.lights[i].radiance.rgb * falloff;
         let n_dot_l = max(dot(n, l), 0.0);
         diffuse = diffuse + radiance * n_dot_l;
-        if n_dot_l > 0.0 {
-            let h = normalize(l + to_eye);
-            specular = specular + radiance * 0.25 * pow(max(dot(n, h), 0.0), 32.0);
-        }
+        // Blinn-Phong (n·h)^32 by five squarings, only where the light reaches the surface.
+        let h = normalize(l + to_eye);
+        var s32 = max(dot(n, h), 0.0);
+        s32 = s32 * s32;
+        s32 = s32 * s32;
+        s32 = s32 * s32;
+        s32 = s32 * s32;
+        s32 = s32 * s32;
+        specular = specular + radiance * select(0.0, 0.25 * s32, n_dot_l > 0.0);
     }
     var colour = albedo * diffuse + specular;
     if object.flags.x > 0.5 {
