@@ -1,6 +1,10 @@
 //! Switching deformers from the keyboard and the menu while the twist plays: the skinned
 //! output changes, and the cross-section measure beside the viewport shows the candy wrapper.
 
+mod common;
+
+use common::{harness, press};
+
 use egui::accesskit::Role;
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
@@ -8,22 +12,7 @@ use egui_kittest::Harness;
 use glam::Vec3;
 use keyrig_core::DeformerKind;
 use keyrig_editor::state::Selected;
-use keyrig_editor::{editor_for, EditorApp, EditorOptions};
-
-fn harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
-    let app =
-        editor_for(None, EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(1e9) });
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
-    harness.run();
-    harness
-}
-
-fn press(h: &mut Harness<'_, EditorApp>, key: Key) {
-    h.key_press_modifiers(Modifiers::NONE, key);
-    h.run();
-}
+use keyrig_editor::EditorApp;
 
 /// The arm's deformed positions (object space) and the forearm's cross-section ratio.
 fn skinned(h: &Harness<'_, EditorApp>) -> (Vec<Vec3>, f32) {
@@ -36,25 +25,25 @@ fn skinned(h: &Harness<'_, EditorApp>) -> (Vec<Vec3>, f32) {
 #[test]
 fn switching_deformer_changes_the_skinned_arm_and_the_measure() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path());
+    let mut h = harness(dir.path(), None);
     h.get_by_label("forearm").click();
     h.run();
     assert_eq!(h.state().selection.item, Some(Selected::Joint { object: 0, joint: 2 }));
     // Frame 60: the forearm joint is twisted 180° in the demo.
-    press(&mut h, Key::Home);
+    press(&mut h, Modifiers::NONE, Key::Home);
     for _ in 0..60 {
-        press(&mut h, Key::ArrowRight);
+        press(&mut h, Modifiers::NONE, Key::ArrowRight);
     }
 
-    press(&mut h, Key::Num2);
+    press(&mut h, Modifiers::NONE, Key::Num2);
     assert_eq!(h.state().doc.scene().objects[0].deformer.kind, DeformerKind::LinearBlend);
     let (linear, linear_ratio) = skinned(&h);
-    press(&mut h, Key::Num3);
+    press(&mut h, Modifiers::NONE, Key::Num3);
     assert_eq!(h.state().doc.scene().objects[0].deformer.kind, DeformerKind::BonesBlending);
     let (bones, bones_ratio) = skinned(&h);
-    press(&mut h, Key::Num4);
+    press(&mut h, Modifiers::NONE, Key::Num4);
     let (dual, dual_ratio) = skinned(&h);
-    press(&mut h, Key::Num1);
+    press(&mut h, Modifiers::NONE, Key::Num1);
     let (rigid, _) = skinned(&h);
 
     let max_diff = |a: &[Vec3], b: &[Vec3]| a.iter().zip(b).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
@@ -77,7 +66,7 @@ fn switching_deformer_changes_the_skinned_arm_and_the_measure() {
 #[test]
 fn the_deformer_menu_switches_while_playing() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path());
+    let mut h = harness(dir.path(), None);
     h.key_press(Key::Space);
     h.step();
     assert!(h.state().playback.playing);

@@ -1,51 +1,18 @@
 //! The editor driven as a user would: clicks on labelled widgets, AccessKit value changes and
 //! key presses, through egui_kittest. Each test checks the document afterwards.
 
-use egui::accesskit::{Action, ActionData, ActionRequest, Role};
+mod common;
+
+use common::{go_to_frame, harness, press, set_value};
+
+use egui::accesskit::Role;
 use egui::{Event, Key, Modifiers};
-use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::{Interpolation, Scene};
 use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::state::Selected;
-use keyrig_editor::{editor_for, Command, EditorApp, EditorOptions};
-
-/// An editor on the demo scene whose recovery and recent files live in `dir`.
-fn harness(dir: &std::path::Path, file: Option<std::path::PathBuf>) -> Harness<'static, EditorApp> {
-    let app =
-        editor_for(file, EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(1e9) });
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
-    harness.run();
-    harness
-}
-
-/// Sets a drag value or slider found by its role and accessible label, as a screen reader
-/// would.
-fn set_value(harness: &mut Harness<'_, EditorApp>, role: Role, label: &str, value: f64) {
-    let (target_node, target_tree) = harness.get_by_role_and_label(role, label).accesskit_node().locate();
-    harness.event(Event::AccessKitActionRequest(ActionRequest {
-        action: Action::SetValue,
-        target_node,
-        target_tree,
-        data: Some(ActionData::NumericValue(value)),
-    }));
-    harness.run();
-}
-
-fn press(harness: &mut Harness<'_, EditorApp>, modifiers: Modifiers, key: Key) {
-    harness.key_press_modifiers(modifiers, key);
-    harness.run();
-}
-
-fn go_to_frame(harness: &mut Harness<'_, EditorApp>, frame: i32) {
-    press(harness, Modifiers::NONE, Key::Home);
-    for _ in 0..frame {
-        press(harness, Modifiers::NONE, Key::ArrowRight);
-    }
-    assert_eq!(harness.state().playback.whole_frame(), frame);
-}
+use keyrig_editor::{Command, EditorApp};
 
 const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
 

@@ -1,37 +1,18 @@
 //! Documents: autosave and the recovery offer, importing a glTF model, exporting glTF,
 //! dropping a file on the window, the confirmation before losing changes.
 
+mod common;
+
+use common::{corpus, harness_autosaving};
+
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
-use egui_kittest::Harness;
-use keyrig_editor::{editor_for, EditorApp, EditorOptions};
-
-/// `../shared/corpus` beside the repository (CI always has it).
-fn corpus(relative: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(relative)
-}
-
-fn harness(
-    dir: &std::path::Path,
-    file: Option<std::path::PathBuf>,
-    autosave: f64,
-) -> Harness<'static, EditorApp> {
-    let app = editor_for(
-        file,
-        EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(autosave) },
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
-    harness.run();
-    harness
-}
 
 #[test]
 fn autosave_is_offered_for_recovery_after_a_crash() {
     let dir = tempfile::tempdir().expect("temp dir");
     let edited = {
-        let mut h = harness(dir.path(), None, 0.0);
+        let mut h = harness_autosaving(dir.path(), None, 0.0);
         // A change makes the document dirty; the next frame autosaves it.
         h.key_press_modifiers(Modifiers::NONE, Key::Num1);
         h.run();
@@ -40,7 +21,7 @@ fn autosave_is_offered_for_recovery_after_a_crash() {
         h.state().doc.scene().clone()
         // Dropped without quitting: as if the editor had crashed.
     };
-    let mut h = harness(dir.path(), None, 1e9);
+    let mut h = harness_autosaving(dir.path(), None, 1e9);
     assert!(h.state().recovery_offer.is_some());
     h.get_by_label("Recover").click();
     h.run();
@@ -48,7 +29,7 @@ fn autosave_is_offered_for_recovery_after_a_crash() {
     assert!(h.state().doc.is_dirty(), "a recovered scene still needs saving");
 
     // Declining removes the autosave.
-    let mut again = harness(dir.path(), None, 1e9);
+    let mut again = harness_autosaving(dir.path(), None, 1e9);
     again.get_by_label("Discard autosave").click();
     again.run();
     assert!(again.state().recovery_offer.is_none());
@@ -58,7 +39,7 @@ fn autosave_is_offered_for_recovery_after_a_crash() {
 #[test]
 fn import_a_skinned_gltf_into_the_scene_and_undo_it() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path(), None, 1e9);
+    let mut h = harness_autosaving(dir.path(), None, 1e9);
     let before = h.state().doc.scene().objects.len();
     let model = corpus("gltf/RiggedSimple/RiggedSimple.glb");
     h.state_mut().import_path(model);
@@ -80,7 +61,7 @@ fn import_a_skinned_gltf_into_the_scene_and_undo_it() {
 #[test]
 fn export_gltf_writes_a_file_and_a_bad_file_reports_an_error() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path(), None, 1e9);
+    let mut h = harness_autosaving(dir.path(), None, 1e9);
     let out = dir.path().join("demo.glb");
     h.state_mut().export_to(out.clone());
     h.run();
@@ -104,7 +85,7 @@ fn dropping_a_scene_on_a_dirty_document_asks_first() {
     let mut other = keyrig_io::demo::demo_scene();
     other.fps = 24.0;
     keyrig_io::scene_file::save(&path, &other).expect("write a scene");
-    let mut h = harness(dir.path(), None, 1e9);
+    let mut h = harness_autosaving(dir.path(), None, 1e9);
     h.key_press_modifiers(Modifiers::NONE, Key::Num4);
     h.run();
     assert!(h.state().doc.is_dirty());

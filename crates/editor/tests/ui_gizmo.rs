@@ -5,6 +5,10 @@
 //! camera's view axis (transform-gizmo's view ring), which checks the whole path from pointer
 //! events through `joint_rotation_from_world` to the document.
 
+mod common;
+
+use common::{go_to_frame, harness, press};
+
 use egui::accesskit::Role;
 use egui::{Event, Key, Modifiers, PointerButton, Pos2};
 use egui_kittest::kittest::Queryable;
@@ -13,7 +17,7 @@ use glam::{Affine3A, Quat, Vec3};
 use keyrig_editor::camera::Projection;
 use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::state::Selected;
-use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+use keyrig_editor::EditorApp;
 
 /// The wrist of the demo arm: it has no keys in the demo scene.
 const WRIST_JOINT: usize = 3;
@@ -22,29 +26,6 @@ const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: WRIST_JOIN
 /// Screen radius of transform-gizmo's view-axis ring with its default visuals:
 /// gizmo_size 75 + stroke_width 4 + 5 points (`outer_circle_radius` in transform-gizmo 0.9).
 const VIEW_RING_RADIUS: f32 = 84.0;
-
-fn harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
-    let app =
-        editor_for(None, EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(1e9) });
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
-    harness.run();
-    harness
-}
-
-fn press(harness: &mut Harness<'_, EditorApp>, modifiers: Modifiers, key: Key) {
-    harness.key_press_modifiers(modifiers, key);
-    harness.run();
-}
-
-fn go_to_frame(harness: &mut Harness<'_, EditorApp>, frame: i32) {
-    press(harness, Modifiers::NONE, Key::Home);
-    for _ in 0..frame {
-        press(harness, Modifiers::NONE, Key::ArrowRight);
-    }
-    assert_eq!(harness.state().playback.whole_frame(), frame);
-}
 
 /// The wrist's world transform as the editor evaluates it now (keys plus pose overrides).
 fn wrist_world(app: &EditorApp) -> Affine3A {
@@ -137,7 +118,7 @@ fn assert_quarter_turn_about_view_axis(before: Quat, after: Quat, forward: Vec3)
 #[test]
 fn dragging_the_gizmo_in_record_mode_keys_the_joint_at_each_frame() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path());
+    let mut h = harness(dir.path(), None);
     select_wrist(&mut h);
     h.get_by_label("⏺ Record").click();
     h.run();
@@ -176,7 +157,7 @@ fn dragging_the_gizmo_in_record_mode_keys_the_joint_at_each_frame() {
 #[test]
 fn dragging_the_gizmo_without_record_mode_poses_until_i_keys_it() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path());
+    let mut h = harness(dir.path(), None);
     select_wrist(&mut h);
     assert!(!h.state().record);
     go_to_frame(&mut h, 15);
@@ -242,7 +223,7 @@ fn drag_selection_right(harness: &mut Harness<'_, EditorApp>, position: impl Fn(
 #[test]
 fn dragging_the_gizmo_translates_lights_and_objects_and_records_keys() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path());
+    let mut h = harness(dir.path(), None);
     h.get_by_label("⏺ Record").click();
     h.run();
     go_to_frame(&mut h, 12);
@@ -288,7 +269,7 @@ fn dragging_the_gizmo_translates_lights_and_objects_and_records_keys() {
 #[test]
 fn dragging_a_spot_lights_view_ring_turns_its_direction() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = harness(dir.path());
+    let mut h = harness(dir.path(), None);
     h.get_by_label("⏺ Record").click();
     h.run();
     go_to_frame(&mut h, 8);

@@ -3,57 +3,22 @@
 //! deformers. Each step checks the document. With `KEYRIG_WRITE_SCREENSHOTS=1` the test also
 //! writes the guide's screenshots to docs/screenshots/.
 
-use egui::accesskit::{Action, ActionData, ActionRequest, Role};
-use egui::{Event, Key, Modifiers};
-use egui_kittest::kittest::{NodeT, Queryable};
+mod common;
+
+use common::{go_to_frame, gpu_harness, press, set_value};
+
+use egui::accesskit::Role;
+use egui::{Key, Modifiers};
+use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::DeformerKind;
 use keyrig_editor::channels::{self, ChannelId};
-use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+use keyrig_editor::EditorApp;
 
 const SIZE: [f32; 2] = [1280.0, 800.0];
 /// Width of the screenshots in docs/ (scaled down from the window).
 const SHOT_WIDTH: u32 = 960;
 const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
-
-fn gpu_harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
-    let dir = dir.to_path_buf();
-    let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(SIZE)).build_eframe(move |cc| {
-        let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
-        if let Some(rs) = &cc.wgpu_render_state {
-            app.attach_gpu(rs);
-        }
-        // Full resolution for images, whatever the adapter.
-        app.view.resolution_scale = 1.0;
-        app
-    });
-    harness.run();
-    harness
-}
-
-fn press(h: &mut Harness<'_, EditorApp>, modifiers: Modifiers, key: Key) {
-    h.key_press_modifiers(modifiers, key);
-    h.run();
-}
-
-fn go_to_frame(h: &mut Harness<'_, EditorApp>, frame: i32) {
-    press(h, Modifiers::NONE, Key::Home);
-    for _ in 0..frame {
-        press(h, Modifiers::NONE, Key::ArrowRight);
-    }
-    assert_eq!(h.state().playback.whole_frame(), frame);
-}
-
-fn set_value(h: &mut Harness<'_, EditorApp>, role: Role, label: &str, value: f64) {
-    let (target_node, target_tree) = h.get_by_role_and_label(role, label).accesskit_node().locate();
-    h.event(Event::AccessKitActionRequest(ActionRequest {
-        action: Action::SetValue,
-        target_node,
-        target_tree,
-        data: Some(ActionData::NumericValue(value)),
-    }));
-    h.run();
-}
 
 /// Writes the window as docs/screenshots/<name>.png when asked to.
 fn screenshot(h: &mut Harness<'_, EditorApp>, name: &str) {
@@ -79,7 +44,7 @@ fn wrist_x_degrees_at(h: &Harness<'_, EditorApp>, frame: f64) -> f32 {
 #[test]
 fn guide_walkthrough_twist_with_record_mode_and_tcb() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = gpu_harness(dir.path());
+    let mut h = gpu_harness(dir.path(), SIZE);
     assert!(h.state().gpu.is_some());
 
     // The editor as it opens (README screenshot), at the demo's twist with bones blending.

@@ -3,6 +3,10 @@
 //! inspector and undone, saved and reopened, opened as a new scene; a malformed file is a
 //! status-bar error.
 
+mod common;
+
+use common::{corpus, harness};
+
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
@@ -10,21 +14,6 @@ use keyrig_core::MeshSource;
 use keyrig_editor::files::ImportPurpose;
 use keyrig_editor::state::Selected;
 use keyrig_editor::{editor_for, EditorApp, EditorOptions};
-
-/// `../shared/corpus` beside the repository (CI always has it; see its SOURCES.md).
-fn corpus(relative: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(relative)
-}
-
-fn harness(dir: &std::path::Path, file: Option<std::path::PathBuf>) -> Harness<'static, EditorApp> {
-    let app =
-        editor_for(file, EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(1e9) });
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
-    harness.run();
-    harness
-}
 
 /// Object-space positions the viewport morphed for object `o` at `frame`.
 fn positions_at(h: &mut Harness<'static, EditorApp>, o: usize, frame: i32) -> Vec<glam::Vec3> {

@@ -5,10 +5,13 @@
 //! pixels (0.5 % of the image). Update with `UPDATE_SNAPSHOTS=1 cargo test -p keyrig-editor
 //! --test ui_snapshots`.
 
+mod common;
+
+use common::{go_to_frame, gpu_harness};
+
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
-use egui_kittest::{Harness, SnapshotOptions};
-use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+use egui_kittest::SnapshotOptions;
 
 const SIZE: [f32; 2] = [960.0, 600.0];
 
@@ -17,36 +20,10 @@ fn options() -> SnapshotOptions {
     SnapshotOptions::new().threshold(1.5).failed_pixel_count_threshold(pixels / 200)
 }
 
-/// The editor on the demo scene with the GPU viewport, as `keyrig` opens it.
-fn gpu_harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
-    let dir = dir.to_path_buf();
-    let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(SIZE)).build_eframe(move |cc| {
-        let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
-        if let Some(rs) = &cc.wgpu_render_state {
-            app.attach_gpu(rs);
-        }
-        // Full resolution for images, whatever the adapter.
-        app.view.resolution_scale = 1.0;
-        app
-    });
-    harness.run();
-    assert!(harness.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
-    harness
-}
-
-fn go_to_frame(h: &mut Harness<'_, EditorApp>, frame: i32) {
-    h.key_press_modifiers(Modifiers::NONE, Key::Home);
-    h.run();
-    for _ in 0..frame {
-        h.key_press_modifiers(Modifiers::NONE, Key::ArrowRight);
-        h.run();
-    }
-}
-
 #[test]
 fn twist_at_frame_60_linear_blend_and_bones_blending() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = gpu_harness(dir.path());
+    let mut h = gpu_harness(dir.path(), SIZE);
     h.get_by_label("forearm").click();
     h.run();
     go_to_frame(&mut h, 60);
@@ -63,7 +40,7 @@ fn twist_at_frame_60_linear_blend_and_bones_blending() {
 #[test]
 fn an_imported_skinned_gltf_renders_on_the_gpu() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let mut h = gpu_harness(dir.path());
+    let mut h = gpu_harness(dir.path(), SIZE);
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     h.state_mut().import_path(model);

@@ -1,0 +1,86 @@
+//! What the editor's UI tests share: an editor in an egui_kittest harness (with or without the
+//! GPU viewport), key presses, frame steps, AccessKit value changes and corpus paths.
+
+// Each test binary uses its own subset of these helpers.
+#![allow(dead_code)]
+
+use egui::accesskit::{Action, ActionData, ActionRequest, Role};
+use egui::{Event, Key, Modifiers};
+use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::Harness;
+use keyrig_editor::{editor_for, EditorApp, EditorOptions};
+
+/// The window size of the painter-viewport tests.
+pub const WINDOW: [f32; 2] = [1280.0, 800.0];
+
+/// `../shared/corpus` beside the repository (CI always has it; see its SOURCES.md).
+pub fn corpus(relative: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(relative)
+}
+
+/// An editor on `file` (the demo scene when `None`) whose recovery and recent files live in
+/// `dir`, autosaving after `autosave_seconds`; the viewport is egui's painter (no GPU).
+pub fn harness_autosaving(
+    dir: &std::path::Path,
+    file: Option<std::path::PathBuf>,
+    autosave_seconds: f64,
+) -> Harness<'static, EditorApp> {
+    let options =
+        EditorOptions { data_dir: Some(dir.to_path_buf()), autosave_seconds: Some(autosave_seconds) };
+    let app = editor_for(file, options);
+    let mut harness = Harness::builder()
+        .with_size(egui::Vec2::from(WINDOW))
+        .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
+    harness.run();
+    harness
+}
+
+/// [`harness_autosaving`] that never autosaves during a test.
+pub fn harness(dir: &std::path::Path, file: Option<std::path::PathBuf>) -> Harness<'static, EditorApp> {
+    harness_autosaving(dir, file, 1e9)
+}
+
+/// The editor on the demo scene with the GPU viewport, as `keyrig` opens it, in a window of
+/// `size` points; the viewport renders at full resolution whatever the adapter.
+pub fn gpu_harness(dir: &std::path::Path, size: [f32; 2]) -> Harness<'static, EditorApp> {
+    let dir = dir.to_path_buf();
+    let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(size)).build_eframe(move |cc| {
+        let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
+        if let Some(rs) = &cc.wgpu_render_state {
+            app.attach_gpu(rs);
+        }
+        app.view.resolution_scale = 1.0;
+        app
+    });
+    harness.run();
+    assert!(harness.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
+    harness
+}
+
+/// Presses `key` with `modifiers` and runs the frame.
+pub fn press(h: &mut Harness<'_, EditorApp>, modifiers: Modifiers, key: Key) {
+    h.key_press_modifiers(modifiers, key);
+    h.run();
+}
+
+/// Goes to `frame` as a user would: Home, then the right arrow `frame` times.
+pub fn go_to_frame(h: &mut Harness<'_, EditorApp>, frame: i32) {
+    press(h, Modifiers::NONE, Key::Home);
+    for _ in 0..frame {
+        press(h, Modifiers::NONE, Key::ArrowRight);
+    }
+    assert_eq!(h.state().playback.whole_frame(), frame);
+}
+
+/// Sets a drag value or slider found by its role and accessible label, as a screen reader
+/// would.
+pub fn set_value(h: &mut Harness<'_, EditorApp>, role: Role, label: &str, value: f64) {
+    let (target_node, target_tree) = h.get_by_role_and_label(role, label).accesskit_node().locate();
+    h.event(Event::AccessKitActionRequest(ActionRequest {
+        action: Action::SetValue,
+        target_node,
+        target_tree,
+        data: Some(ActionData::NumericValue(value)),
+    }));
+    h.run();
+}
