@@ -211,22 +211,33 @@ pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh
 /// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame) and adds a
 /// sun when it has no light, as `keyrig render` does for models.
 fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
-    let mut bounds = (Vec3::MAX, Vec3::MIN);
+    let mut points = Vec::new();
     for object in &scene.objects {
         let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
         let Some((_, Ok(data))) = meshes.iter().find(|((p, m), _)| p == Path::new(path) && m == mesh) else {
             continue;
         };
-        let world = Mat4::from_scale_rotation_translation(
-            object.scale.value,
-            object.rotation.value.normalize(),
-            object.translation.value,
-        );
-        for p in data.rest_positions() {
-            let p = world.transform_point3(p);
-            bounds = (bounds.0.min(p), bounds.1.max(p));
-        }
+        let world = rest_world_from_object(object);
+        points.extend(data.rest_positions().into_iter().map(|p| world.transform_point3(p)));
     }
+    frame_model_scene(scene, points);
+}
+
+/// An object's world transform from its un-animated translation, rotation and scale.
+#[must_use]
+pub fn rest_world_from_object(object: &keyrig_core::Object) -> Mat4 {
+    Mat4::from_scale_rotation_translation(
+        object.scale.value,
+        object.rotation.value.normalize(),
+        object.translation.value,
+    )
+}
+
+/// What a model opened on its own needs (model files carry no keyrig camera, often no light):
+/// the camera looks at the bounds of `points` (world space) from above and to the side, and a
+/// sun is added when the scene has no light.
+pub fn frame_model_scene(scene: &mut Scene, points: impl IntoIterator<Item = Vec3>) {
+    let bounds = points.into_iter().fold((Vec3::MAX, Vec3::MIN), |b, p| (b.0.min(p), b.1.max(p)));
     if bounds.0.cmple(bounds.1).all() {
         let radius = ((bounds.1 - bounds.0).length() * 0.5).max(1e-3);
         scene.camera = keyrig_core::Camera {

@@ -275,41 +275,13 @@ fn rigid_mesh(mesh: &keyrig_io::model::ModelMesh) -> anyhow::Result<SkinnedMesh>
 
 /// Points the scene's camera at the models' rest bounds (glTF files carry no keyrig camera).
 fn frame_scene(scene: &mut keyrig_core::Scene, loaded: &HashMap<usize, SkinnedMesh>) {
-    let mut bounds = (Vec3::MAX, Vec3::MIN);
+    let mut points = Vec::new();
     for (&object, mesh) in loaded {
         let Some(o) = scene.objects.get(object) else { continue };
-        let world = Mat4::from_scale_rotation_translation(
-            o.scale.value,
-            o.rotation.value.normalize(),
-            o.translation.value,
-        );
-        for &p in &mesh.positions {
-            let p = world.transform_point3(p);
-            bounds = (bounds.0.min(p), bounds.1.max(p));
-        }
+        let world = keyrig_editor::files::rest_world_from_object(o);
+        points.extend(mesh.positions.iter().map(|&p| world.transform_point3(p)));
     }
-    if bounds.0.cmple(bounds.1).all() {
-        let radius = ((bounds.1 - bounds.0).length() * 0.5).max(1e-3);
-        scene.camera = Camera {
-            target: (bounds.0 + bounds.1) * 0.5,
-            yaw_deg: 30.0,
-            pitch_deg: 15.0,
-            distance: radius * 2.8,
-            fov_y_deg: 45.0,
-        };
-    }
-    if scene.lights.is_empty() {
-        scene.lights.push(keyrig_core::Light {
-            name: "Sun".into(),
-            kind: keyrig_core::LightKind::Directional,
-            enabled: true,
-            position: keyrig_core::Animated::constant(Vec3::ZERO),
-            direction: keyrig_core::Animated::constant(Vec3::new(-0.4, -1.0, -0.6)),
-            colour: keyrig_core::Animated::constant(Vec3::ONE),
-            intensity: keyrig_core::Animated::constant(0.9),
-        });
-        scene.ambient = Vec3::splat(0.15);
-    }
+    keyrig_editor::files::frame_model_scene(scene, points);
 }
 
 fn md2_source(path: &Path, headless: &mut HeadlessRenderer, args: &RenderArgs) -> anyhow::Result<Md2Source> {
