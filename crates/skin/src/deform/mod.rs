@@ -229,10 +229,9 @@ where
     let checked = AtomicUsize::new(0);
     run_chunks(checks + chunks, |ticket| {
         if ticket < checks {
-            if check.is_some_and(|check| !check(ticket * CHUNK..((ticket + 1) * CHUNK).min(n))) {
-                ok.store(false, Ordering::Relaxed);
-            }
-            checked.fetch_add(1, Ordering::Release);
+            // A check that panics counts as failed, so no kernel runs on unchecked input.
+            let mut done = CheckDone { ok: &ok, checked: &checked, passed: false };
+            done.passed = check.is_none_or(|check| check(ticket * CHUNK..((ticket + 1) * CHUNK).min(n)));
             return;
         }
         // Every check ticket is already claimed and running; wait for the last ones.
@@ -246,6 +245,33 @@ where
         }
     });
     ok.into_inner()
+}
+
+/// Adds one to a counter when dropped, also when the work it guards panics: the threads that
+/// wait for the count then finish, and rayon's scope passes the panic on instead of the wait
+/// spinning for ever.
+struct CountOnDrop<'a>(&'a AtomicUsize);
+
+impl Drop for CountOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_add(1, Ordering::Release);
+    }
+}
+
+/// Records one finished check when dropped (also when the check panicked, as a failure).
+struct CheckDone<'a> {
+    ok: &'a AtomicBool,
+    checked: &'a AtomicUsize,
+    passed: bool,
+}
+
+impl Drop for CheckDone<'_> {
+    fn drop(&mut self) {
+        if !self.passed {
+            self.ok.store(false, Ordering::Relaxed);
+        }
+        self.checked.fetch_add(1, Ordering::Release);
+    }
 }
 
 /// Spins until `done()` (another thread's short piece of work), yielding now and then in case
@@ -302,8 +328,8 @@ where
         if c >= count {
             break;
         }
+        let _count = CountOnDrop(&done);
         work(c);
-        done.fetch_add(1, Ordering::Release);
     };
     rayon::in_place_scope(|scope| {
         for _ in 1..rayon::current_num_threads().min(count) {
@@ -349,6 +375,18 @@ mod tests {
             validate_influences(&joints, &good[..1], 2),
             Err(SkinError::LengthMismatch { expected: 2, found: 1, .. })
         ));
+    }
+
+    #[test]
+    fn a_panicking_chunk_panics_the_caller_instead_of_hanging_it() {
+        let outcome = std::panic::catch_unwind(|| {
+            run_chunks(40, |c| {
+                if c == 39 {
+                    panic!("chunk {c}");
+                }
+            })
+        });
+        assert!(outcome.is_err());
     }
 
     #[test]
