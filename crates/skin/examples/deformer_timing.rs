@@ -9,7 +9,11 @@
 //! their own after the deformers' rounds, so that they do not evict the deformers' data between
 //! one deformer and the next.
 //!
-//! cargo run --release -p keyrig-skin --example deformer_timing -- [VERTICES] [ROUNDS]
+//! The optional third argument sets how long a pool thread lingers awake after a parallel job,
+//! in microseconds (`keyrig_skin::set_pool_linger`; default 1000, 0 turns it off), to compare
+//! both in one build.
+//!
+//! cargo run --release -p keyrig-skin --example deformer_timing -- [VERTICES] [ROUNDS] [LINGER_US]
 
 use std::time::{Duration, Instant};
 
@@ -24,6 +28,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let n: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(100_000);
     let rounds: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(40);
+    if let Some(us) = args.next().map(|a| a.parse::<u64>()).transpose()? {
+        keyrig_skin::set_pool_linger(Duration::from_micros(us));
+    }
     let data = support::data(n);
     let mut op = vec![Vec3::ZERO; n];
     let mut on = vec![Vec3::ZERO; n];
@@ -100,7 +107,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 *slot = (*slot).min(start.elapsed());
             }
         }
-        println!("{n} vertices, {execution:?}, minimum of {rounds} interleaved rounds:");
+        println!(
+            "{n} vertices, {execution:?}, minimum of {rounds} interleaved rounds (pool linger {} µs):",
+            keyrig_skin::pool_linger().as_micros()
+        );
         let lbs = best[2].as_secs_f64();
         for ((name, t), bytes) in names.iter().zip(best).zip(bytes_per_vertex) {
             let t = t.as_secs_f64();

@@ -20,8 +20,8 @@ pub mod skeleton;
 
 pub use binding::{bind_from_weights, bind_single_weights, smooth_weights, weights_from_bindings, BlendZone};
 pub use deform::{
-    normalize_weights, validate_influences, BonesBlendJob, BonesBlendVertex, DualQuatJob, Execution,
-    LinearBlendJob, RigidJob,
+    normalize_weights, pool_linger, set_pool_linger, validate_influences, BonesBlendJob, BonesBlendVertex,
+    DualQuatJob, Execution, LinearBlendJob, RigidJob, DEFAULT_POOL_LINGER, MAX_POOL_LINGER,
 };
 pub use deformer::{deform_mesh, deform_mesh_into, Deformed};
 pub use dual_quat::DualQuat;

@@ -8,8 +8,9 @@
 //! Output normals are unit length (zero stays zero).
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
@@ -339,6 +340,84 @@ where
         // Every chunk is claimed; wait for the helpers' last ones without sleeping.
         wait_until(|| done.load(Ordering::Acquire) == count);
     });
+    keep_pool_awake();
+}
+
+/// How long a pool thread stays awake after a parallel job unless [`set_pool_linger`] says
+/// otherwise: 1 ms. The order of GNU OpenMP's default spin before a worker sleeps
+/// (`GOMP_SPINCOUNT`, 300 000 spins); Intel's and LLVM's OpenMP runtimes spin far longer
+/// (`KMP_BLOCKTIME`, 200 ms). Long enough to cover a short stretch of single-threaded work
+/// between two jobs (a 100 000-vertex job is 0.1–0.7 ms), short enough that an idle program
+/// keeps no core busy: at most one core for 1 ms after the last job.
+pub const DEFAULT_POOL_LINGER: Duration = Duration::from_millis(1);
+
+/// Longest accepted linger (10 ms); longer requests are clamped to it.
+pub const MAX_POOL_LINGER: Duration = Duration::from_millis(10);
+
+/// The linger in nanoseconds (0: none).
+static LINGER_NS: AtomicU64 = AtomicU64::new(DEFAULT_POOL_LINGER.as_nanos() as u64);
+/// Parallel jobs finished so far: a lingering thread restarts its clock when this moves.
+static JOBS_DONE: AtomicU64 = AtomicU64::new(0);
+/// Whether a lingering task is in rayon's pool (running or queued); at most one is.
+static LINGERING: AtomicBool = AtomicBool::new(false);
+
+/// Sets how long one of rayon's pool threads stays awake, spinning, after a parallel skinning
+/// job (`Execution::Parallel`) in case the next one follows: a job that finds it awake gets its
+/// second core at once instead of after the 20–50 µs a sleeping thread takes to wake. The clock
+/// restarts with every parallel job; once it runs out the thread goes back to rayon and sleeps.
+/// `Duration::ZERO` turns lingering off; values above [`MAX_POOL_LINGER`] are clamped to it.
+/// Process-wide; the default is [`DEFAULT_POOL_LINGER`].
+pub fn set_pool_linger(linger: Duration) {
+    let ns = linger.min(MAX_POOL_LINGER).as_nanos() as u64;
+    LINGER_NS.store(ns, Ordering::Relaxed);
+}
+
+/// The current linger (see [`set_pool_linger`]).
+#[must_use]
+pub fn pool_linger() -> Duration {
+    Duration::from_nanos(LINGER_NS.load(Ordering::Relaxed))
+}
+
+/// After a parallel job: makes sure one pool thread lingers (see [`set_pool_linger`]).
+/// Nothing on a single-threaded pool, where lingering would take the caller's only core.
+fn keep_pool_awake() {
+    // SeqCst here and in `linger`'s exit: either this job's count is seen by a lingering task
+    // before it leaves, or its leaving (`LINGERING` false) is seen here and a new one is spawned.
+    JOBS_DONE.fetch_add(1, Ordering::SeqCst);
+    if LINGER_NS.load(Ordering::Relaxed) == 0 || rayon::current_num_threads() < 2 {
+        return;
+    }
+    if !LINGERING.swap(true, Ordering::SeqCst) {
+        rayon::spawn(linger);
+    }
+}
+
+/// The lingering task: runs whatever rayon work turns up (a new job's helper task among it,
+/// taken at once instead of through a wake-up) and spins in between, until the linger has
+/// passed since the last parallel job finished.
+fn linger() {
+    let mut seen = JOBS_DONE.load(Ordering::SeqCst);
+    let mut since = Instant::now();
+    loop {
+        if rayon::yield_now() == Some(rayon::Yield::Executed) {
+            continue;
+        }
+        let jobs = JOBS_DONE.load(Ordering::SeqCst);
+        let now = Instant::now();
+        if jobs != seen {
+            (seen, since) = (jobs, now);
+        } else if now.duration_since(since) >= pool_linger() {
+            LINGERING.store(false, Ordering::SeqCst);
+            // A job that finished meanwhile may have seen `LINGERING` still true and spawned
+            // no task: linger on for it, unless a new task has already taken over.
+            if JOBS_DONE.load(Ordering::SeqCst) == seen || LINGERING.swap(true, Ordering::SeqCst) {
+                return;
+            }
+        }
+        for _ in 0..32 {
+            std::hint::spin_loop();
+        }
+    }
 }
 
 #[cfg(test)]
@@ -533,6 +612,48 @@ mod tests {
         .run();
         assert_eq!(linear, Ok(()));
         assert!(op.iter().all(|p| (*p - Vec3::ONE).length() < 1e-5));
+    }
+
+    /// A job that arrives while a pool thread lingers is shared with it and gives the same
+    /// output; a panicking one still reaches the caller; and the lingering ends on its own.
+    #[test]
+    fn a_lingering_pool_thread_takes_the_next_job_then_sleeps() {
+        set_pool_linger(MAX_POOL_LINGER * 3);
+        assert_eq!(pool_linger(), MAX_POOL_LINGER);
+        set_pool_linger(DEFAULT_POOL_LINGER);
+        assert_eq!(pool_linger(), DEFAULT_POOL_LINGER);
+
+        let n = 7 * CHUNK + 3;
+        let (mut p, mut q) = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+        for round in 0..20 {
+            let ran = for_each_chunk(true, None, &mut p, &mut q, |start, p, q| {
+                for (i, (p, q)) in p.iter_mut().zip(q).enumerate() {
+                    *p = Vec3::new((start + i) as f32, round as f32, 0.0);
+                    *q = -*p;
+                }
+            });
+            assert!(ran);
+            assert!(
+                p.iter()
+                    .zip(&q)
+                    .enumerate()
+                    .all(|(i, (p, q))| *p == Vec3::new(i as f32, round as f32, 0.0) && *q == -*p),
+                "round {round}"
+            );
+            if round == 10 {
+                let outcome = std::panic::catch_unwind(|| run_chunks(8, |c| assert_ne!(c, 5, "chunk {c}")));
+                assert!(outcome.is_err());
+            }
+        }
+
+        // Once no job has finished for the linger, the lingering task leaves the pool (other
+        // tests' parallel jobs may restart its clock meanwhile, hence the generous bound, which
+        // only keeps a broken build from hanging).
+        let start = Instant::now();
+        while LINGERING.load(Ordering::SeqCst) {
+            assert!(start.elapsed() < Duration::from_secs(60), "a pool thread kept lingering");
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 
     #[test]
