@@ -343,12 +343,12 @@ where
     keep_pool_awake();
 }
 
-/// How long a pool thread stays awake after a parallel job unless [`set_pool_linger`] says
-/// otherwise: 1 ms. The order of GNU OpenMP's default spin before a worker sleeps
+/// How long rayon's pool threads stay awake after a parallel job unless [`set_pool_linger`]
+/// says otherwise: 1 ms. The order of GNU OpenMP's default spin before a worker sleeps
 /// (`GOMP_SPINCOUNT`, 300 000 spins); Intel's and LLVM's OpenMP runtimes spin far longer
 /// (`KMP_BLOCKTIME`, 200 ms). Long enough to cover a short stretch of single-threaded work
 /// between two jobs (a 100 000-vertex job is 0.1–0.7 ms), short enough that an idle program
-/// keeps no core busy: at most one core for 1 ms after the last job.
+/// keeps no core busy: the threads spin for 1 ms after the last job, then sleep.
 pub const DEFAULT_POOL_LINGER: Duration = Duration::from_millis(1);
 
 /// Longest accepted linger (10 ms); longer requests are clamped to it.
@@ -358,13 +358,15 @@ pub const MAX_POOL_LINGER: Duration = Duration::from_millis(10);
 static LINGER_NS: AtomicU64 = AtomicU64::new(DEFAULT_POOL_LINGER.as_nanos() as u64);
 /// Parallel jobs finished so far: a lingering thread restarts its clock when this moves.
 static JOBS_DONE: AtomicU64 = AtomicU64::new(0);
-/// Whether a lingering task is in rayon's pool (running or queued); at most one is.
-static LINGERING: AtomicBool = AtomicBool::new(false);
+/// Lingering tasks not yet finished (queued or running). A new round of them is spawned only
+/// when this is 0, so no thread ever runs two.
+static LINGERING: AtomicUsize = AtomicUsize::new(0);
 
-/// Sets how long one of rayon's pool threads stays awake, spinning, after a parallel skinning
-/// job (`Execution::Parallel`) in case the next one follows: a job that finds it awake gets its
-/// second core at once instead of after the 20–50 µs a sleeping thread takes to wake. The clock
-/// restarts with every parallel job; once it runs out the thread goes back to rayon and sleeps.
+/// Sets how long rayon's pool threads stay awake, spinning, after a parallel skinning job
+/// (`Execution::Parallel`) in case the next one follows: a job that finds them awake gets its
+/// other cores at once instead of after the 20–50 µs a sleeping thread takes to wake. All pool
+/// threads but one linger (the calling thread keeps a core for itself); the clock restarts with
+/// every parallel job, and once it runs out the threads go back to rayon and sleep.
 /// `Duration::ZERO` turns lingering off; values above [`MAX_POOL_LINGER`] are clamped to it.
 /// Process-wide; the default is [`DEFAULT_POOL_LINGER`].
 pub fn set_pool_linger(linger: Duration) {
@@ -378,24 +380,34 @@ pub fn pool_linger() -> Duration {
     Duration::from_nanos(LINGER_NS.load(Ordering::Relaxed))
 }
 
-/// After a parallel job: makes sure one pool thread lingers (see [`set_pool_linger`]).
-/// Nothing on a single-threaded pool, where lingering would take the caller's only core.
+/// After a parallel job: counts it, and unless pool threads are lingering already, sends
+/// every pool thread but the last a lingering task (see [`set_pool_linger`]). Nothing on a
+/// single-threaded pool, where a lingering thread would take the caller's only core.
 fn keep_pool_awake() {
-    // SeqCst here and in `linger`'s exit: either this job's count is seen by a lingering task
-    // before it leaves, or its leaving (`LINGERING` false) is seen here and a new one is spawned.
+    // SeqCst here and in `linger`: either this job's count is seen by the last lingering task
+    // before it leaves (it then starts a new round), or its leaving is seen here.
     JOBS_DONE.fetch_add(1, Ordering::SeqCst);
-    if LINGER_NS.load(Ordering::Relaxed) == 0 || rayon::current_num_threads() < 2 {
-        return;
-    }
-    if !LINGERING.swap(true, Ordering::SeqCst) {
-        rayon::spawn(linger);
+    let lingerers = rayon::current_num_threads() - 1;
+    if LINGER_NS.load(Ordering::Relaxed) > 0 && lingerers > 0 {
+        start_lingering(lingerers);
     }
 }
 
-/// The lingering task: runs whatever rayon work turns up (a new job's helper task among it,
+/// Spawns a round of `lingerers` lingering tasks, one per pool thread, if none is running.
+fn start_lingering(lingerers: usize) {
+    if LINGERING.compare_exchange(0, lingerers, Ordering::SeqCst, Ordering::SeqCst).is_ok() {
+        rayon::spawn_broadcast(move |ctx| {
+            if ctx.index() < lingerers {
+                linger(lingerers);
+            }
+        });
+    }
+}
+
+/// A lingering task: runs whatever rayon work turns up (a new job's helper task among it,
 /// taken at once instead of through a wake-up) and spins in between, until the linger has
 /// passed since the last parallel job finished.
-fn linger() {
+fn linger(lingerers: usize) {
     let mut seen = JOBS_DONE.load(Ordering::SeqCst);
     let mut since = Instant::now();
     loop {
@@ -407,12 +419,12 @@ fn linger() {
         if jobs != seen {
             (seen, since) = (jobs, now);
         } else if now.duration_since(since) >= pool_linger() {
-            LINGERING.store(false, Ordering::SeqCst);
-            // A job that finished meanwhile may have seen `LINGERING` still true and spawned
-            // no task: linger on for it, unless a new task has already taken over.
-            if JOBS_DONE.load(Ordering::SeqCst) == seen || LINGERING.swap(true, Ordering::SeqCst) {
-                return;
+            // The last one out starts a new round if a job finished meanwhile: that job may
+            // have found this round still running and started none.
+            if LINGERING.fetch_sub(1, Ordering::SeqCst) == 1 && JOBS_DONE.load(Ordering::SeqCst) != seen {
+                start_lingering(lingerers);
             }
+            return;
         }
         for _ in 0..32 {
             std::hint::spin_loop();
@@ -650,7 +662,7 @@ mod tests {
         // tests' parallel jobs may restart its clock meanwhile, hence the generous bound, which
         // only keeps a broken build from hanging).
         let start = Instant::now();
-        while LINGERING.load(Ordering::SeqCst) {
+        while LINGERING.load(Ordering::SeqCst) > 0 {
             assert!(start.elapsed() < Duration::from_secs(60), "a pool thread kept lingering");
             std::thread::sleep(Duration::from_millis(1));
         }
