@@ -351,8 +351,9 @@ where
 /// keeps no core busy: the threads spin for 1 ms after the last job, then sleep.
 pub const DEFAULT_POOL_LINGER: Duration = Duration::from_millis(1);
 
-/// Longest accepted linger (10 ms); longer requests are clamped to it.
-pub const MAX_POOL_LINGER: Duration = Duration::from_millis(10);
+/// Longest accepted linger (20 ms, a frame at 50–60 frames per second); longer requests are
+/// clamped to it, so a program that stops calling jobs has no busy core after at most 20 ms.
+pub const MAX_POOL_LINGER: Duration = Duration::from_millis(20);
 
 /// The linger in nanoseconds (0: none).
 static LINGER_NS: AtomicU64 = AtomicU64::new(DEFAULT_POOL_LINGER.as_nanos() as u64);
