@@ -35,7 +35,9 @@ pub enum Execution {
     Reference,
     /// The fast path on the calling thread.
     SingleThreaded,
-    /// The fast path on rayon's thread pool, in chunks of [`CHUNK`] vertices.
+    /// The fast path on the calling thread and rayon's thread pool together, in chunks of
+    /// [`CHUNK`] vertices; afterwards the pool threads linger awake for the next job
+    /// ([`set_pool_linger`]).
     #[default]
     Parallel,
     /// The fast path on the calling thread without the CPU-specific (AVX2 + FMA) kernels: what
