@@ -9,6 +9,10 @@
 //! their own after the deformers' rounds, so that they do not evict the deformers' data between
 //! one deformer and the next.
 //!
+//! A last pass runs each deformer after sleeping 16.7 ms (one job per frame at 60 fps), on one
+//! thread and then on all cores: jobs that start cold, with the pool asleep unless the linger
+//! covers the gap.
+//!
 //! The optional third argument sets how long a pool thread lingers awake after a parallel job,
 //! in microseconds (`keyrig_skin::set_pool_linger`; default 1000, 0 turns it off), to compare
 //! both in one build.
