@@ -318,8 +318,9 @@ where
 /// `par_chunks` puts to sleep until the pool is done — would have to be woken again at the end.
 /// Against a job of 0.1–0.5 ms (100 000 vertices) those two wake-ups ate most of the second
 /// core. Here the calling thread starts on the first chunk at once, the helpers join in when they
-/// wake, and at the end the calling thread spins for the helpers' last chunks (one chunk's time
-/// at most) instead of sleeping. See docs/benchmarks.md, skinning section.
+/// wake — at once when they are still lingering after the previous job ([`set_pool_linger`]) —
+/// and at the end the calling thread spins for the helpers' last chunks (one chunk's time at
+/// most) instead of sleeping. See docs/benchmarks.md, skinning section.
 pub(crate) fn run_chunks<W>(count: usize, work: W)
 where
     W: Fn(usize) + Sync,
