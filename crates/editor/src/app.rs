@@ -378,12 +378,11 @@ impl EditorApp {
     /// Sets the deformer of the selected object (or of every skinned object when none is
     /// selected).
     pub fn set_deformer(&mut self, kind: DeformerKind) {
-        let targets: Vec<usize> = match self.selected_object() {
-            Some(o) => vec![o],
-            None => (0..self.doc.scene().objects.len())
-                .filter(|&o| self.doc.scene().objects[o].skeleton.is_some())
-                .collect(),
-        };
+        let targets = self.deformer_targets();
+        if targets.is_empty() {
+            self.info("No skinned object to deform: deformers apply to objects with a skeleton");
+            return;
+        }
         self.doc.edit(&format!("deformer {}", kind.label()), |scene| {
             for o in targets {
                 if let Some(object) = scene.objects.get_mut(o) {
@@ -392,6 +391,27 @@ impl EditorApp {
             }
         });
         self.info(format!("Deformer: {}", kind.label()));
+    }
+
+    /// The objects the deformer commands act on: the selected object when it is skinned (has a
+    /// skeleton), otherwise every skinned object; empty when the scene has none (an MD2 or a
+    /// static model on its own).
+    #[must_use]
+    pub fn deformer_targets(&self) -> Vec<usize> {
+        let objects = &self.doc.scene().objects;
+        let skinned = |o: &usize| objects.get(*o).is_some_and(|object| object.skeleton.is_some());
+        match self.selected_object().filter(skinned) {
+            Some(o) => vec![o],
+            None => (0..objects.len()).filter(skinned).collect(),
+        }
+    }
+
+    /// The deformer the menu and toolbar show as chosen: that of the first of
+    /// [`EditorApp::deformer_targets`]; `None` without a skinned object.
+    #[must_use]
+    pub fn current_deformer(&self) -> Option<DeformerKind> {
+        let first = *self.deformer_targets().first()?;
+        Some(self.doc.scene().objects.get(first)?.deformer.kind)
     }
 
     /// Centres the orbit camera on the selected joint, object or light (keeping its angle

@@ -137,6 +137,18 @@ fn opening_an_md2_makes_a_scene_that_covers_it() {
     assert!(!scene.lights.is_empty(), "a model opens with a light");
     assert!(h.state().doc.path().is_none(), "a model is not the document's file");
 
+    // No skeleton, so no deformer: the toolbar shows none chosen and the number keys change
+    // nothing (no edit, no undo step, still clean) but say why in the status bar.
+    assert_eq!(h.state().current_deformer(), None);
+    let dirty = h.state().doc.is_dirty();
+    let undo = h.state().doc.undo_label().map(str::to_owned);
+    h.key_press_modifiers(Modifiers::NONE, Key::Num3);
+    h.run();
+    assert_eq!(h.state().doc.scene(), &scene);
+    assert_eq!((h.state().doc.is_dirty(), h.state().doc.undo_label()), (dirty, undo.as_deref()));
+    let status = h.state().status.clone().expect("a message");
+    assert!(status.text.contains("No skinned object"), "{status:?}");
+
     // File ▸ Open of a model runs in the background and gives the same scene.
     let mut h = harness(dir.path(), None);
     h.state_mut().open_path(model);

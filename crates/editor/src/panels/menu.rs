@@ -114,11 +114,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 );
             });
             ui.menu_button("Deformer", |ui| {
-                let current = app
-                    .selected_object()
-                    .or(Some(0))
-                    .and_then(|o| app.doc.scene().objects.get(o))
-                    .map(|o| o.deformer.kind);
+                let current = app.current_deformer();
                 for kind in DeformerKind::ALL {
                     command_button(ui, app, Command::SetDeformer(kind), Some(current == Some(kind)));
                 }
@@ -166,11 +162,7 @@ fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
         tool_button(ui, app, Command::ToggleBones, "Bones", bones);
         ui.separator();
         ui.label("Deformer:");
-        let current = app
-            .selected_object()
-            .or(Some(0))
-            .and_then(|o| app.doc.scene().objects.get(o))
-            .map(|o| o.deformer.kind);
+        let current = app.current_deformer();
         for (i, kind) in DeformerKind::ALL.into_iter().enumerate() {
             tool_button(
                 ui,
