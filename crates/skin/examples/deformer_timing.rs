@@ -18,6 +18,16 @@
 //! both in one build.
 //!
 //! cargo run --release -p keyrig-skin --example deformer_timing -- [VERTICES] [ROUNDS] [LINGER_US]
+//!
+//! `KEYRIG_SKIN_FORCE_AVX2=1` makes dual quaternion jobs run the AVX2 build of their kernel
+//! even on a CPU with AVX-512VL (what AVX2-only CPUs run), `KEYRIG_SKIN_FORCE_AVX2=unplaced`
+//! the same without the placed palette copy (the AVX2 build as it was before). This goes
+//! through `keyrig_skin::deform::force_avx2_dual_quaternion`, a hidden timing knob.
+//!
+//! `KEYRIG_SKIN_STACK_SWEEP=1` runs only a stack-offset sweep instead: linear blend and the
+//! AVX2 dual quaternion build with and without the placed palette (interleaved), one thread,
+//! each called under 0, 1, ..., 47 nested frames of 128 bytes of padding (the offsets modulo
+//! 4096 are printed), to show whether the kernel's time depends on where the stack lies.
 
 use std::time::{Duration, Instant};
 
@@ -35,7 +45,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(us) = args.next().map(|a| a.parse::<u64>()).transpose()? {
         keyrig_skin::set_pool_linger(Duration::from_micros(us));
     }
+    match std::env::var("KEYRIG_SKIN_FORCE_AVX2").as_deref() {
+        Ok("1") => keyrig_skin::deform::force_avx2_dual_quaternion(true, true),
+        Ok("unplaced") => keyrig_skin::deform::force_avx2_dual_quaternion(true, false),
+        Ok(other) => return Err(format!("KEYRIG_SKIN_FORCE_AVX2={other:?}: expected 1 or unplaced").into()),
+        Err(_) => {}
+    }
     let data = support::data(n);
+    if std::env::var_os("KEYRIG_SKIN_STACK_SWEEP").is_some() {
+        return stack_sweep(&data, n, rounds);
+    }
     let mut op = vec![Vec3::ZERO; n];
     let mut on = vec![Vec3::ZERO; n];
     let names = ["ozz_port", "rigid", "linear", "bones_blending", "dual_quaternion", "copy_50", "copy_72"];
@@ -177,4 +196,64 @@ fn deform(
         .run_with(execution)?,
     }
     Ok(())
+}
+
+/// Times linear blend and the AVX2 dual quaternion build (placed palette and unplaced,
+/// interleaved) on one thread at stack depths 0..48 × (128 bytes + a frame's overhead).
+fn stack_sweep(data: &support::Data, n: usize, rounds: usize) -> Result<(), Box<dyn std::error::Error>> {
+    let mut op = vec![Vec3::ZERO; n];
+    let mut on = vec![Vec3::ZERO; n];
+    let top = 0u8;
+    let top = std::hint::black_box(&top) as *const u8 as usize;
+    println!(
+        "{n} vertices, 1 thread, minimum of {rounds} rounds per depth; AVX2 dual quaternion build forced"
+    );
+    println!("depth  stack offset  mod 4096   linear ms  dq placed ms  dq unplaced ms  placed/linear  unplaced/linear");
+    for depth in 0..48 {
+        let mut best = [Duration::MAX; 3];
+        let mut offset = 0;
+        for _ in 0..rounds {
+            for (k, slot) in best.iter_mut().enumerate() {
+                let mut run = |at: usize| -> Result<(), Box<dyn std::error::Error>> {
+                    offset = top - at;
+                    let d = if k == 0 { 2 } else { 4 };
+                    keyrig_skin::deform::force_avx2_dual_quaternion(true, k == 1);
+                    let start = Instant::now();
+                    deform(d, data, Execution::SingleThreaded, &mut op, &mut on)?;
+                    std::hint::black_box(&op);
+                    *slot = (*slot).min(start.elapsed());
+                    Ok(())
+                };
+                padded(depth, &mut run)?;
+            }
+        }
+        let [lb, placed, unplaced] = best.map(|t| t.as_secs_f64());
+        println!(
+            "{depth:5}  {offset:12}  {:8}  {:10.3}  {:12.3}  {:14.3}  {:13.2}  {:15.2}",
+            (top - offset) % 4096,
+            lb * 1e3,
+            placed * 1e3,
+            unplaced * 1e3,
+            placed / lb,
+            unplaced / lb
+        );
+    }
+    Ok(())
+}
+
+/// Calls `f` with the address of a local `depth` frames of 128 padding bytes below this one.
+#[inline(never)]
+fn padded(
+    depth: usize,
+    f: &mut dyn FnMut(usize) -> Result<(), Box<dyn std::error::Error>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let pad = [depth as u8; 128];
+    let pad = std::hint::black_box(pad);
+    if depth == 0 {
+        f(pad.as_ptr() as usize)
+    } else {
+        padded(depth - 1, f)?;
+        std::hint::black_box(&pad);
+        Ok(())
+    }
 }

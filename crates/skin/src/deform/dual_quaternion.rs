@@ -111,7 +111,8 @@ impl<const N: usize> DualQuatJob<'_, N> {
             // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
             // index against the palette.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
-            let avx512 = super::simd::avx512_available();
+            let avx512 = super::simd::avx512_available()
+                && !super::simd::FORCE_AVX2.load(std::sync::atomic::Ordering::Relaxed);
             return for_each_chunk(
                 parallel,
                 check,
@@ -128,7 +129,9 @@ impl<const N: usize> DualQuatJob<'_, N> {
                                 &packed, js, ws, ps, ns, out_p, out_n,
                             )
                         } else {
-                            super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
+                            super::simd::dual_quaternion_chunk_soa_placed(
+                                &packed, js, ws, ps, ns, out_p, out_n,
+                            )
                         }
                     }
                 },

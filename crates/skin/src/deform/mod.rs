@@ -57,6 +57,22 @@ impl Execution {
     }
 }
 
+/// Timing and test knob, not part of the supported API: with `force`, dual quaternion jobs
+/// run the AVX2 build of their kernel even on CPUs with AVX-512VL (what AVX2-only CPUs run);
+/// `place_palette` turns the placed palette copy of that build on (the default) or off (the
+/// kernel reads the packed palette where it was allocated). Used by
+/// `examples/deformer_timing.rs` through `KEYRIG_SKIN_FORCE_AVX2`; see docs/skinning.md.
+#[doc(hidden)]
+pub fn force_avx2_dual_quaternion(force: bool, place_palette: bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        simd::FORCE_AVX2.store(force, Ordering::Relaxed);
+        simd::PLACE_PALETTE.store(place_palette, Ordering::Relaxed);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (force, place_palette);
+}
+
 /// Vertices per rayon task: large enough to amortize scheduling, small enough to balance.
 pub const CHUNK: usize = 4096;
 

@@ -4,6 +4,8 @@
 //! blending one influence is two FMAs instead of eight SSE multiplies and adds.
 
 use std::arch::x86_64::*;
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Affine3A, Vec3, Vec3A, Vec4};
 
@@ -653,6 +655,74 @@ dual_quaternion_kernel!(
     dual_quaternion_chunk_soa_avx512
 );
 
+/// Test and timing knobs (see [`super::force_avx2_dual_quaternion`]): run the AVX2 build of the
+/// dual quaternion kernel even where AVX-512VL exists, and whether that build gets the placed
+/// palette copy ([`dual_quaternion_chunk_soa_placed`]).
+pub(crate) static FORCE_AVX2: AtomicBool = AtomicBool::new(false);
+pub(crate) static PLACE_PALETTE: AtomicBool = AtomicBool::new(true);
+
+/// Largest palette (bytes) that is copied beside the stack: the spill area takes ~1.5 KiB of a
+/// 4 KiB window, so a palette of up to 2 KiB (64 joints) fits in the rest.
+pub(crate) const PLACED_PALETTE_MAX_BYTES: usize = 2048;
+
+thread_local! {
+    /// Per-thread scratch for the placed palette: one 4 KiB window of slack plus the palette,
+    /// allocated on first use and grown only if a larger palette comes (at most 2 KiB).
+    static PLACED: RefCell<Vec<PackedDualQuat>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The AVX2 build of the dual quaternion kernel with its palette at a deterministic place
+/// relative to the stack. The kernel spills ~25 `ymm` values and ~20 pointers per group of 8
+/// vertices into its frame (within ~1.5 KiB below the stack pointer at entry); when a spill
+/// slot and a palette entry share address bits 11..0 the palette load waits for the spill
+/// store (4K aliasing), and since the stack lies at a random place modulo 4096 in each process
+/// the kernel ran at one of two speeds. Here a palette of at most
+/// [`PLACED_PALETTE_MAX_BYTES`] is copied into a thread-local buffer so that, modulo 4096, it
+/// starts at this function's own frame and extends *upwards* (away from the spill area below
+/// it); larger palettes are used in place, as before. The copy is 32 bytes per joint per call
+/// (2 KiB for 64 joints, against ~60 µs of work for a chunk of 4096 vertices).
+///
+/// # Safety
+/// As [`dual_quaternion_chunk_soa`].
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn dual_quaternion_chunk_soa_placed<const N: usize>(
+    dqs: &[PackedDualQuat],
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+) {
+    let bytes = std::mem::size_of_val(dqs);
+    if bytes > PLACED_PALETTE_MAX_BYTES || !PLACE_PALETTE.load(Ordering::Relaxed) {
+        // SAFETY: the caller's contract.
+        return unsafe {
+            dual_quaternion_chunk_soa(dqs, joints, weights, positions, normals, out_positions, out_normals)
+        };
+    }
+    // The stack pointer, approximately: a local of this frame; the kernel's frame lies below.
+    let marker = 0u8;
+    let stack = std::hint::black_box(&marker) as *const u8 as usize;
+    PLACED.with_borrow_mut(|buffer| {
+        let entry = std::mem::size_of::<PackedDualQuat>();
+        let slack = 4096 / entry;
+        if buffer.len() < slack + dqs.len() {
+            buffer.resize(slack + dqs.len(), _mm256_setzero_ps());
+        }
+        // First entry k with (buffer + k·32) ≡ stack rounded up to 32 (mod 4096).
+        let target = stack.div_ceil(entry) * entry % 4096;
+        let k = (target + 4096 - buffer.as_ptr() as usize % 4096) % 4096 / entry;
+        let placed = &mut buffer[k..k + dqs.len()];
+        placed.copy_from_slice(dqs);
+        // SAFETY: the caller's contract; `placed` holds the same entries as `dqs`.
+        unsafe {
+            dual_quaternion_chunk_soa(placed, joints, weights, positions, normals, out_positions, out_normals)
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use glam::{Quat, Vec3};
@@ -677,11 +747,19 @@ mod tests {
     /// against the job's reference path, with ties and zero weights, and a remainder of 3
     /// vertices after the groups of 8.
     fn both_builds_match_the_reference<const N: usize>() {
+        // 37 joints: the AVX2 build's palette is copied beside the stack; 100 joints (3 200
+        // bytes, over PLACED_PALETTE_MAX_BYTES): it is used in place.
+        for joint_count in [37, 100] {
+            builds_match_the_reference::<N>(joint_count);
+        }
+    }
+
+    fn builds_match_the_reference<const N: usize>(joint_count: usize) {
         if !available() {
             return;
         }
         let mut rng = Lcg(0x5EED + N as u64);
-        let dqs: Vec<DualQuat> = (0..37)
+        let dqs: Vec<DualQuat> = (0..joint_count)
             .map(|_| {
                 let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
                 let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
@@ -691,7 +769,11 @@ mod tests {
         let n = 8 * 125 + 3;
         let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
         let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
-        let joints: Vec<[u16; N]> = (0..n).map(|_| [0; N].map(|_| (rng.next_f32() * 36.99) as u16)).collect();
+        let joints: Vec<[u16; N]> = (0..n)
+            .map(|_| {
+                [0; N].map(|_| ((rng.next_f32() * joint_count as f32) as usize).min(joint_count - 1) as u16)
+            })
+            .collect();
         let weights: Vec<[f32; N]> = (0..n)
             .map(|v| {
                 let mut ws = [0.0f32; N].map(|_| rng.next_f32() + 0.01);
@@ -719,7 +801,9 @@ mod tests {
         .unwrap();
         // SAFETY: available() checked above.
         let packed = unsafe { pack_dual_quaternions(&dqs) };
-        let mut builds = vec!["avx2"];
+        // The placed build at several stack depths, so the copy lands at different places in
+        // its buffer (and, for the second depth on, the thread's buffer is reused).
+        let mut builds = vec!["avx2", "avx2_placed_0", "avx2_placed_1", "avx2_placed_7", "avx2_placed_40"];
         if avx512_available() {
             builds.push("avx512");
         }
@@ -732,11 +816,20 @@ mod tests {
                     "avx2" => {
                         dual_quaternion_chunk_soa(&packed, &joints, &weights, &positions, &normals, op, on)
                     }
+                    placed if placed.starts_with("avx2_placed_") => {
+                        let depth = placed["avx2_placed_".len()..].parse().unwrap();
+                        under_stack_pad(depth, &mut || {
+                            dual_quaternion_chunk_soa_placed(
+                                &packed, &joints, &weights, &positions, &normals, op, on,
+                            )
+                        })
+                    }
                     _ => dual_quaternion_chunk_soa_avx512(
                         &packed, &joints, &weights, &positions, &normals, op, on,
                     ),
                 }
             }
+            let build = format!("{build} ({joint_count} joints)");
             for (got, want, what) in [(&out.0, &expected.0, "position"), (&out.1, &expected.1, "normal")] {
                 for (v, (g, w)) in got.iter().zip(want).enumerate() {
                     let diff = (*g - *w).abs().max_element();
@@ -747,6 +840,18 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Calls `f` `depth` frames of 104 padding bytes further down the stack.
+    #[inline(never)]
+    fn under_stack_pad(depth: usize, f: &mut dyn FnMut()) {
+        let pad = std::hint::black_box([depth as u8; 104]);
+        if depth == 0 {
+            f();
+        } else {
+            under_stack_pad(depth - 1, f);
+        }
+        std::hint::black_box(&pad);
     }
 
     #[test]
