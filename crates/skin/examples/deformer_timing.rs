@@ -208,7 +208,12 @@ fn stack_sweep(data: &support::Data, n: usize, rounds: usize) -> Result<(), Box<
     println!(
         "{n} vertices, 1 thread, minimum of {rounds} rounds per depth; AVX2 dual quaternion build forced"
     );
-    println!("depth  stack offset  mod 4096   linear ms  dq placed ms  dq unplaced ms  placed/linear  unplaced/linear");
+    // "stack offset": bytes between this frame and the deepest pad; "mod 4096": the deepest
+    // pad's address modulo 4096 (the jobs' frames lie just below it).
+    println!(
+        "depth  stack offset  mod 4096   linear ms  dq placed ms  dq unplaced ms  placed/linear  \
+         unplaced/linear"
+    );
     for depth in 0..48 {
         let mut best = [Duration::MAX; 3];
         let mut offset = 0;

@@ -661,7 +661,7 @@ dual_quaternion_kernel!(
 pub(crate) static FORCE_AVX2: AtomicBool = AtomicBool::new(false);
 pub(crate) static PLACE_PALETTE: AtomicBool = AtomicBool::new(true);
 
-/// Largest palette (bytes) that is copied beside the stack: the spill area takes ~1.5 KiB of a
+/// Largest palette (bytes) that is copied beside the stack: the spill area takes ~1.2 KiB of a
 /// 4 KiB window, so a palette of up to 2 KiB (64 joints) fits in the rest.
 pub(crate) const PLACED_PALETTE_MAX_BYTES: usize = 2048;
 
@@ -673,7 +673,7 @@ thread_local! {
 
 /// The AVX2 build of the dual quaternion kernel with its palette at a deterministic place
 /// relative to the stack. The kernel spills ~25 `ymm` values and ~20 pointers per group of 8
-/// vertices into its frame (within ~1.5 KiB below the stack pointer at entry); when a spill
+/// vertices into its frame (1 112 bytes in the release build, below the stack pointer at entry); when a spill
 /// slot and a palette entry share address bits 11..0 the palette load waits for the spill
 /// store (4K aliasing), and since the stack lies at a random place modulo 4096 in each process
 /// the kernel ran at one of two speeds. Here a palette of at most
