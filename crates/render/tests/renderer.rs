@@ -175,16 +175,16 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(r.render_image(&frame, SIZE, SIZE), Err(RenderError::NonFinite { .. })));
 }
 
-#[test]
-fn skinned_item_moves_with_its_joints() {
-    let mut r = headless();
+/// Uploads the floor as mesh 1, skinned to one joint with full weight (bones-blending
+/// parameter `t`); returns its rest positions.
+fn upload_floor_skin(r: &mut HeadlessRenderer, t: f32) -> Vec<Vec3> {
     let (vertices, indices) = floor();
     let positions: Vec<Vec3> = vertices.iter().map(SkinnedVertex::position).collect();
     let normals = vec![Vec3::Y; 4];
     let joints = vec![[0u32, 0, 0, 0]; 4];
     let weights = vec![[1.0f32, 0.0, 0.0, 0.0]; 4];
     let rigid = vec![0u32; 4];
-    let blend = vec![keyrig_render::BlendBinding { joint: 0, t: 1.0 }; 4];
+    let blend = vec![keyrig_render::BlendBinding { joint: 0, t }; 4];
     let binds = vec![Mat4::IDENTITY];
     let skin = keyrig_render::SkinMeshInput {
         positions: &positions,
@@ -196,6 +196,13 @@ fn skinned_item_moves_with_its_joints() {
         bind_from_model: &binds,
     };
     r.upload_mesh(1, &MeshData::Skinned { skin, indices: &indices }).expect("upload");
+    positions
+}
+
+#[test]
+fn skinned_item_moves_with_its_joints() {
+    let mut r = headless();
+    let positions = upload_floor_skin(&mut r, 1.0);
     let shift = Vec3::new(0.25, 0.0, 0.0);
     for deformer in DeformerKind::ALL {
         let mut frame = floor_frame(vec![]);
@@ -222,27 +229,11 @@ fn skinned_item_moves_with_its_joints() {
 #[test]
 fn an_uploaded_skin_draws_its_rest_pose_before_any_deformation() {
     let mut r = headless();
-    let (vertices, indices) = floor();
-    let positions: Vec<Vec3> = vertices.iter().map(SkinnedVertex::position).collect();
-    let normals = vec![Vec3::Y; 4];
-    let joints = vec![[0u32, 0, 0, 0]; 4];
-    let weights = vec![[1.0f32, 0.0, 0.0, 0.0]; 4];
-    let rigid = vec![0u32; 4];
-    let blend = vec![keyrig_render::BlendBinding { joint: 0, t: 0.0 }; 4];
-    let binds = vec![Mat4::IDENTITY];
-    let skin = keyrig_render::SkinMeshInput {
-        positions: &positions,
-        normals: &normals,
-        joints: &joints,
-        weights: &weights,
-        rigid_joints: &rigid,
-        blend: &blend,
-        bind_from_model: &binds,
-    };
-    r.upload_mesh(1, &MeshData::Skinned { skin, indices: &indices }).expect("upload");
+    let positions = upload_floor_skin(&mut r, 0.0);
     let out = r.renderer().read_vertices(1).expect("readback");
     assert_eq!(out.iter().map(SkinnedVertex::position).collect::<Vec<_>>(), positions);
 
+    let (vertices, indices) = floor();
     let frames = vec![
         vertices.clone(),
         vertices.iter().map(|v| SkinnedVertex::new(v.position() * 2.0, Vec3::Y)).collect(),
