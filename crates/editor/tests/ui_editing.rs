@@ -3,10 +3,10 @@
 
 mod common;
 
-use common::{go_to_frame, harness, press, set_value};
+use common::{drag, go_to_frame, harness, press, set_value};
 
 use egui::accesskit::Role;
-use egui::{Event, Key, Modifiers};
+use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::{Interpolation, Scene};
@@ -253,25 +253,7 @@ fn copy_paste_and_box_select_keys() {
     let last = h.get_by_label("key Key intensity frame 90").rect();
     let start = first.left_top() - egui::vec2(4.0, 4.0);
     let end = last.right_bottom() + egui::vec2(4.0, 4.0);
-    h.event(Event::PointerMoved(start));
-    h.event(Event::PointerButton {
-        pos: start,
-        button: egui::PointerButton::Primary,
-        pressed: true,
-        modifiers: Modifiers::NONE,
-    });
-    h.step();
-    for i in 1..=10 {
-        h.event(Event::PointerMoved(start + (end - start) * (i as f32 / 10.0)));
-        h.step();
-    }
-    h.event(Event::PointerButton {
-        pos: end,
-        button: egui::PointerButton::Primary,
-        pressed: false,
-        modifiers: Modifiers::NONE,
-    });
-    h.run();
+    drag(&mut h, start, end);
     let scene = h.state().doc.scene();
     let all: Vec<(ChannelId, usize)> = ChannelId::all(scene)
         .into_iter()
@@ -296,25 +278,7 @@ fn dragging_a_key_diamond_moves_it_in_time_as_one_undo_step() {
     let at_30 = h.get_by_label("key elbow rotation frame 30").rect().center();
     let per_frame = (at_30.x - at_15.x) / 15.0;
     let target = at_15 + egui::vec2(per_frame * 5.0, 0.0);
-    h.event(Event::PointerMoved(at_15));
-    h.event(Event::PointerButton {
-        pos: at_15,
-        button: egui::PointerButton::Primary,
-        pressed: true,
-        modifiers: Modifiers::NONE,
-    });
-    h.step();
-    for i in 1..=10 {
-        h.event(Event::PointerMoved(at_15 + (target - at_15) * (i as f32 / 10.0)));
-        h.step();
-    }
-    h.event(Event::PointerButton {
-        pos: target,
-        button: egui::PointerButton::Primary,
-        pressed: false,
-        modifiers: Modifiers::NONE,
-    });
-    h.run();
+    drag(&mut h, at_15, target);
     let scene = h.state().doc.scene();
     let frames: Vec<i64> =
         channels::key_times(scene, elbow).iter().map(|t| (t * scene.fps).round() as i64).collect();

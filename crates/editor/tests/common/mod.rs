@@ -84,3 +84,23 @@ pub fn set_value(h: &mut Harness<'_, EditorApp>, role: Role, label: &str, value:
     }));
     h.run();
 }
+
+/// Drags with the primary button from `from` to `to` in ten moves, one frame each, as a
+/// hand would across the dope sheet.
+pub fn drag(h: &mut Harness<'_, EditorApp>, from: egui::Pos2, to: egui::Pos2) {
+    let button = |pos, pressed| Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: Modifiers::NONE,
+    };
+    h.event(Event::PointerMoved(from));
+    h.event(button(from, true));
+    h.step();
+    for i in 1..=10 {
+        h.event(Event::PointerMoved(from + (to - from) * (i as f32 / 10.0)));
+        h.step();
+    }
+    h.event(button(to, false));
+    h.run();
+}
