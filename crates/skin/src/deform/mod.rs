@@ -2,7 +2,7 @@
 //! inputs and `&mut` output slices, `validate()` that returns a typed error, and `run()` that
 //! validates and then deforms. Each job has a plain reference implementation written formula
 //! by formula ([`Execution::Reference`]) and a fast one (tightly packed data, no allocation,
-//! rayon across chunks of [`CHUNK`] vertices); the tests keep them equal.
+//! rayon across chunks of [`chunk_len`] vertices); the tests keep them equal.
 //!
 //! All jobs deform positions and normals from bind model space to posed model space.
 //! Output normals are unit length (zero stays zero).
@@ -36,7 +36,7 @@ pub enum Execution {
     /// The fast path on the calling thread.
     SingleThreaded,
     /// The fast path on the calling thread and rayon's thread pool together, in chunks of
-    /// [`CHUNK`] vertices; afterwards the pool threads linger awake for the next job
+    /// [`chunk_len`] vertices; afterwards the pool threads linger awake for the next job
     /// ([`set_pool_linger`]).
     #[default]
     Parallel,
@@ -73,8 +73,21 @@ pub fn force_avx2_dual_quaternion(force: bool, place_palette: bool) {
     let _ = (force, place_palette);
 }
 
-/// Vertices per rayon task: large enough to amortize scheduling, small enough to balance.
+/// Fewest vertices per parallel task: enough to amortize claiming a chunk. Jobs of up to
+/// 16 · `CHUNK` vertices are cut into chunks of exactly this size.
 pub const CHUNK: usize = 4096;
+
+/// Most vertices per parallel task.
+pub const MAX_CHUNK: usize = 32768;
+
+/// Vertices per parallel task for a job of `n` vertices: about a sixteenth of the job, within
+/// [`CHUNK`]..=[`MAX_CHUNK`]. Sixteen chunks keep two to eight threads balanced; longer chunks
+/// than `CHUNK` pay at a million vertices, where every chunk a thread claims starts its input
+/// and output streams afresh in DRAM (rigid on 2 cores: 1.46 ms with chunks of 4096 vertices,
+/// 1.31–1.35 ms with 32768; docs/benchmarks.md).
+pub fn chunk_len(n: usize) -> usize {
+    (n / 16).clamp(CHUNK, MAX_CHUNK)
+}
 
 /// Largest allowed |Σw − 1| for a vertex's weights.
 pub const WEIGHT_SUM_TOLERANCE: f32 = 1e-3;
@@ -211,7 +224,7 @@ pub fn normalize_weights<const N: usize>(weights: &mut [[f32; N]]) -> Result<(),
 pub(crate) type Check<'a> = &'a (dyn Fn(Range<usize>) -> bool + Sync);
 
 /// Runs `kernel(first_vertex, out_positions_chunk, out_normals_chunk)` over the outputs, on
-/// the calling thread or in chunks of [`CHUNK`] vertices shared out by [`run_chunks`].
+/// the calling thread or in chunks of [`chunk_len`] vertices shared out by [`run_chunks`].
 ///
 /// With a `check`, every chunk's inputs are checked first and the kernel runs only if all pass;
 /// the result says whether it ran (on `false` no output was touched). In parallel the checks
@@ -228,7 +241,8 @@ where
     F: Fn(usize, &mut [Vec3], &mut [Vec3]) + Sync + Send,
 {
     let n = out_positions.len();
-    if !(parallel && n > CHUNK) {
+    let chunk_len = chunk_len(n);
+    if !(parallel && n > chunk_len) {
         if check.is_some_and(|check| !check(0..n)) {
             return false;
         }
@@ -238,8 +252,8 @@ where
     // Each chunk's output slices, taken by whichever thread claims the chunk.
     type Slot<'a> = Mutex<Option<(&'a mut [Vec3], &'a mut [Vec3])>>;
     let slots: Vec<Slot> = out_positions
-        .chunks_mut(CHUNK)
-        .zip(out_normals.chunks_mut(CHUNK))
+        .chunks_mut(chunk_len)
+        .zip(out_normals.chunks_mut(chunk_len))
         .map(|c| Mutex::new(Some(c)))
         .collect();
     let chunks = slots.len();
@@ -250,7 +264,8 @@ where
         if ticket < checks {
             // A check that panics counts as failed, so no kernel runs on unchecked input.
             let mut done = CheckDone { ok: &ok, checked: &checked, passed: false };
-            done.passed = check.is_none_or(|check| check(ticket * CHUNK..((ticket + 1) * CHUNK).min(n)));
+            done.passed =
+                check.is_none_or(|check| check(ticket * chunk_len..((ticket + 1) * chunk_len).min(n)));
             return;
         }
         // Every check ticket is already claimed and running; wait for the last ones.
@@ -259,7 +274,7 @@ where
             let c = ticket - checks;
             let taken = slots[c].lock().map(|mut slot| slot.take());
             if let Ok(Some((p, q))) = taken {
-                kernel(c * CHUNK, p, q);
+                kernel(c * chunk_len, p, q);
             }
         }
     });
@@ -307,16 +322,17 @@ fn wait_until(done: impl Fn() -> bool) {
     }
 }
 
-/// Whether `pass(range)` holds for every chunk of `0..len` ([`CHUNK`] vertices each), on the
+/// Whether `pass(range)` holds for every chunk of `0..len` ([`chunk_len`] vertices each), on the
 /// calling thread or shared out by [`run_chunks`]. Every chunk is checked (no early exit).
 pub(crate) fn all_chunks<P>(parallel: bool, len: usize, pass: P) -> bool
 where
     P: Fn(Range<usize>) -> bool + Sync,
 {
-    if parallel && len > CHUNK {
+    let chunk = chunk_len(len);
+    if parallel && len > chunk {
         let ok = AtomicBool::new(true);
-        run_chunks(len.div_ceil(CHUNK), |c| {
-            if !pass(c * CHUNK..((c + 1) * CHUNK).min(len)) {
+        run_chunks(len.div_ceil(chunk), |c| {
+            if !pass(c * chunk..((c + 1) * chunk).min(len)) {
                 ok.store(false, Ordering::Relaxed);
             }
         });

@@ -110,6 +110,32 @@ impl RigidJob<'_> {
         let normals = self.normals;
         let quick_check = Self::quick_check(self.joints, self.palette.len());
         let check: Option<Check> = check.then_some(&quick_check);
+        #[cfg(target_arch = "x86_64")]
+        if execution.simd() {
+            return for_each_chunk(
+                parallel,
+                check,
+                self.out_positions,
+                self.out_normals,
+                |start, out_p, out_n| {
+                    let end = start + out_p.len();
+                    // SAFETY: the CPU has AVX2 and FMA (`Execution::simd`); every joint index was
+                    // checked against the palette (validate, or this chunk's quick check); the
+                    // slices are one chunk of buffers whose lengths were checked equal.
+                    unsafe {
+                        super::simd::rigid_chunk(
+                            palette,
+                            normal_palette,
+                            &joints[start..end],
+                            &positions[start..end],
+                            &normals[start..end],
+                            out_p,
+                            out_n,
+                        )
+                    }
+                },
+            );
+        }
         for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end].iter().zip(&positions[start..end]).zip(&normals[start..end]);
