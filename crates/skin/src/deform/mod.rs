@@ -518,7 +518,7 @@ mod tests {
 
     #[test]
     fn chunks_are_each_run_once_and_cover_the_outputs() {
-        for n in [0, 1, CHUNK, CHUNK + 1, 5 * CHUNK + 17] {
+        for n in [0, 1, CHUNK, CHUNK + 1, 5 * CHUNK + 17, 40 * CHUNK + 3] {
             let runs: Vec<AtomicUsize> = (0..n.div_ceil(CHUNK) + 1).map(|_| AtomicUsize::new(0)).collect();
             run_chunks(n.div_ceil(CHUNK), |c| {
                 runs[c].fetch_add(1, Ordering::Relaxed);
@@ -562,6 +562,30 @@ mod tests {
                     "{n} {parallel}"
                 );
             }
+        }
+    }
+
+    /// Chunks are a sixteenth of the job within CHUNK..=MAX_CHUNK, and the parallel kernel
+    /// sees exactly those: consecutive, each `chunk_len` long but the last.
+    #[test]
+    fn chunk_length_grows_with_the_job() {
+        assert_eq!(chunk_len(0), CHUNK);
+        assert_eq!(chunk_len(16 * CHUNK), CHUNK);
+        assert_eq!(chunk_len(16 * CHUNK + 16), CHUNK + 1);
+        assert_eq!(chunk_len(100_000), 6_250);
+        assert_eq!(chunk_len(16 * MAX_CHUNK), MAX_CHUNK);
+        assert_eq!(chunk_len(1_000_000), MAX_CHUNK);
+        for n in [100_000, 16 * MAX_CHUNK + 7] {
+            let seen = Mutex::new(Vec::new());
+            let (mut p, mut q) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+            assert!(for_each_chunk(true, None, &mut p, &mut q, |start, p, _| {
+                seen.lock().unwrap().push((start, p.len()));
+            }));
+            let mut seen = seen.into_inner().unwrap();
+            seen.sort_unstable();
+            let len = chunk_len(n);
+            let expected: Vec<(usize, usize)> = (0..n).step_by(len).map(|s| (s, len.min(n - s))).collect();
+            assert_eq!(seen, expected, "{n} vertices");
         }
     }
 
