@@ -24,6 +24,9 @@
 //! the same without the placed palette copy (the AVX2 build as it was before). This goes
 //! through `keyrig_skin::deform::force_avx2_dual_quaternion`, a hidden timing knob.
 //!
+//! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64 (for the AVX2
+//! dual quaternion build's paged palette copy, which matters above 64 joints).
+//!
 //! `KEYRIG_SKIN_STACK_SWEEP=1` runs only a stack-offset sweep instead: linear blend and the
 //! AVX2 dual quaternion build with and without the placed palette (interleaved), one thread,
 //! each called under 0, 1, ..., 47 nested frames of 128 bytes of padding (the offsets modulo
@@ -51,7 +54,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(other) => return Err(format!("KEYRIG_SKIN_FORCE_AVX2={other:?}: expected 1 or unplaced").into()),
         Err(_) => {}
     }
-    let data = support::data(n);
+    let data = match std::env::var("KEYRIG_SKIN_JOINTS") {
+        Ok(joints) => match joints.parse::<usize>() {
+            Ok(count) if (4..=u16::MAX as usize).contains(&count) => support::data_with_joints(n, count),
+            _ => {
+                return Err(
+                    format!("KEYRIG_SKIN_JOINTS={joints:?}: expected a joint count from 4 to 65535").into()
+                )
+            }
+        },
+        Err(_) => support::data(n),
+    };
     if std::env::var_os("KEYRIG_SKIN_STACK_SWEEP").is_some() {
         return stack_sweep(&data, n, rounds);
     }

@@ -46,8 +46,13 @@ pub struct Data {
 }
 
 pub fn data(n: usize) -> Data {
+    data_with_joints(n, JOINTS)
+}
+
+/// [`data`] with a skeleton of `joint_count` joints (at least 4).
+pub fn data_with_joints(n: usize, joint_count: usize) -> Data {
     let mut rng = Lcg(42);
-    let joints: Vec<RestJoint> = (0..JOINTS)
+    let joints: Vec<RestJoint> = (0..joint_count)
         .map(|j| {
             RestJoint::new(
                 format!("j{j}"),
@@ -58,8 +63,10 @@ pub fn data(n: usize) -> Data {
         })
         .collect();
     let skeleton = RestSkeleton::new(&joints).unwrap();
-    let pose =
-        Pose { local_rotations: (0..JOINTS).map(|_| rng.quat()).collect(), root_translation: rng.vec3(1.0) };
+    let pose = Pose {
+        local_rotations: (0..joint_count).map(|_| rng.quat()).collect(),
+        root_translation: rng.vec3(1.0),
+    };
     let palette = JointPalette::new(&skeleton, &pose).unwrap();
     let dual_quaternions = palette.dual_quaternions().unwrap();
     let mut d = Data {
@@ -80,7 +87,7 @@ pub fn data(n: usize) -> Data {
         d.positions.push(rng.vec3(10.0));
         d.normals.push(rng.vec3(1.0).try_normalize().unwrap_or(Vec3::Y));
         // Neighbouring joints, as in real meshes (a vertex near one place in the skeleton).
-        let base = rng.index(JOINTS - 3);
+        let base = rng.index(joint_count - 3);
         let js = [base as u16, base as u16 + 1, base as u16 + 2, base as u16 + 3];
         let ws = [0.0f32; 4].map(|_| rng.next_f32() + 0.01);
         let sum: f32 = ws.iter().sum();
