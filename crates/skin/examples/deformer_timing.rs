@@ -24,8 +24,9 @@
 //! the same without the placed palette copy (the AVX2 build as it was before). This goes
 //! through `keyrig_skin::deform::force_avx2_dual_quaternion`, a hidden timing knob.
 //!
-//! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64 (for the AVX2
-//! dual quaternion build's paged palette copy, which matters above 64 joints).
+//! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64 (the AVX2 dual
+//! quaternion build copies palettes of up to 64 joints beside the stack and reads larger ones
+//! in place, so its speed above 64 joints is measured with this).
 //!
 //! `KEYRIG_SKIN_STACK_SWEEP=1` runs only a stack-offset sweep instead: linear blend and the
 //! AVX2 dual quaternion build with and without the placed palette (interleaved), one thread,
