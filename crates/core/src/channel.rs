@@ -6,7 +6,9 @@
 //! object/<object>/rotation           Quat   the object's rotation
 //! object/<object>/scale              Vec3   the object's scale
 //! object/<object>/root_translation   Vec3   translation of the skeleton's root joint
-//! object/<object>/joint/<joint>/rotation  Quat   a joint's animated local rotation T(j)
+//! object/<object>/joint/<joint>/rotation     Quat   the rotation of a joint's local transform T(j)
+//! object/<object>/joint/<joint>/translation  Vec3   the translation of T(j) (imported characters)
+//! object/<object>/joint/<joint>/scale        Vec3   the scale of T(j)
 //! light/<light>/position             Vec3
 //! light/<light>/direction            Vec3
 //! light/<light>/colour               Vec3   linear RGB
@@ -28,6 +30,8 @@ use crate::validate::track_error_path;
 
 /// Properties of an object.
 pub const OBJECT_PROPERTIES: [&str; 5] = ["translation", "rotation", "scale", "root_translation", "joint"];
+/// Properties of a joint.
+pub const JOINT_PROPERTIES: [&str; 3] = ["translation", "rotation", "scale"];
 /// Properties of a light.
 pub const LIGHT_PROPERTIES: [&str; 4] = ["position", "direction", "colour", "intensity"];
 
@@ -48,6 +52,25 @@ impl ObjectProperty {
             ObjectProperty::Rotation => "rotation",
             ObjectProperty::Scale => "scale",
             ObjectProperty::RootTranslation => "root_translation",
+        }
+    }
+}
+
+/// One animated part of a joint's local transform T(j).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum JointProperty {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+impl JointProperty {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            JointProperty::Translation => "translation",
+            JointProperty::Rotation => "rotation",
+            JointProperty::Scale => "scale",
         }
     }
 }
@@ -77,7 +100,7 @@ impl LightProperty {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum ChannelPath {
     Object { object: String, property: ObjectProperty },
-    Joint { object: String, joint: String },
+    Joint { object: String, joint: String, property: JointProperty },
     Light { light: String, property: LightProperty },
 }
 
@@ -85,7 +108,9 @@ impl fmt::Display for ChannelPath {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ChannelPath::Object { object, property } => write!(f, "object/{object}/{}", property.name()),
-            ChannelPath::Joint { object, joint } => write!(f, "object/{object}/joint/{joint}/rotation"),
+            ChannelPath::Joint { object, joint, property } => {
+                write!(f, "object/{object}/joint/{joint}/{}", property.name())
+            }
             ChannelPath::Light { light, property } => write!(f, "light/{light}/{}", property.name()),
         }
     }
@@ -96,7 +121,7 @@ impl fmt::Display for ChannelPath {
 pub enum ChannelError {
     #[error(
         "channel path {path:?}: {problem}; expected object/<name>/<property>, \
-         object/<name>/joint/<joint>/rotation or light/<name>/<property>"
+         object/<name>/joint/<joint>/<property> or light/<name>/<property>"
     )]
     Syntax { path: String, problem: String },
 
@@ -135,7 +160,7 @@ fn listing(what: &str, names: &[String]) -> String {
 }
 
 impl ChannelPath {
-    /// Parses `object/<name>/<property>`, `object/<name>/joint/<joint>/rotation` or
+    /// Parses `object/<name>/<property>`, `object/<name>/joint/<joint>/<property>` or
     /// `light/<name>/<property>`. Names cannot contain `/`.
     ///
     /// # Errors
@@ -149,19 +174,27 @@ impl ChannelPath {
         }
         match parts.as_slice() {
             ["object", object, "joint", joint, property] => {
-                if *property == "rotation" {
-                    Ok(ChannelPath::Joint { object: (*object).to_string(), joint: (*joint).to_string() })
-                } else {
-                    Err(ChannelError::UnknownProperty {
-                        path: path.to_string(),
-                        owner: "joint",
-                        property: (*property).to_string(),
-                        expected: vec!["rotation"],
-                    })
-                }
+                let property = match *property {
+                    "translation" => JointProperty::Translation,
+                    "rotation" => JointProperty::Rotation,
+                    "scale" => JointProperty::Scale,
+                    other => {
+                        return Err(ChannelError::UnknownProperty {
+                            path: path.to_string(),
+                            owner: "joint",
+                            property: other.to_string(),
+                            expected: JOINT_PROPERTIES.to_vec(),
+                        })
+                    }
+                };
+                Ok(ChannelPath::Joint {
+                    object: (*object).to_string(),
+                    joint: (*joint).to_string(),
+                    property,
+                })
             }
             ["object", _, "joint", ..] => {
-                Err(syntax("a joint channel is object/<name>/joint/<joint>/rotation"))
+                Err(syntax("a joint channel is object/<name>/joint/<joint>/<property>"))
             }
             ["object", object, property] => {
                 let property = match *property {
@@ -247,7 +280,7 @@ impl ChannelPath {
                     }
                 }
             }
-            ChannelPath::Joint { object, joint } => {
+            ChannelPath::Joint { object, joint, property } => {
                 let (i, o) = find_object(object)?;
                 let skeleton = o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
                 let (j, found) =
@@ -259,8 +292,16 @@ impl ChannelPath {
                             available: skeleton.joints.iter().map(|j| j.name.clone()).collect(),
                         }
                     })?;
-                let field = format!("objects[{i}].skeleton.joints[{j}].rotation");
-                Channel::build(path, field, &found.rotation, ValueKind::Rotation)
+                let field = format!("objects[{i}].skeleton.joints[{j}].{}", property.name());
+                match property {
+                    JointProperty::Translation => {
+                        Channel::build(path, field, &found.translation, ValueKind::Position)
+                    }
+                    JointProperty::Rotation => {
+                        Channel::build(path, field, &found.rotation, ValueKind::Rotation)
+                    }
+                    JointProperty::Scale => Channel::build(path, field, &found.scale, ValueKind::Position),
+                }
             }
             ChannelPath::Light { light, property } => {
                 let (i, l) =
@@ -300,7 +341,15 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
                 property: ObjectProperty::RootTranslation,
             });
             for j in &skeleton.joints {
-                out.push(ChannelPath::Joint { object: o.name.clone(), joint: j.name.clone() });
+                let joint =
+                    |property| ChannelPath::Joint { object: o.name.clone(), joint: j.name.clone(), property };
+                if j.translation.is_animated() || j.translation.value != Vec3::ZERO {
+                    out.push(joint(JointProperty::Translation));
+                }
+                out.push(joint(JointProperty::Rotation));
+                if j.scale.is_animated() || j.scale.value != Vec3::ONE {
+                    out.push(joint(JointProperty::Scale));
+                }
             }
         }
     }
@@ -469,10 +518,6 @@ mod tests {
             RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(1.0, Vec3::new(2.0, 0.0, 0.0))]);
         arm.skeleton = Some(Skeleton {
             joints: vec![Joint {
-                name: "elbow".into(),
-                parent: None,
-                rest_translation: Vec3::ZERO,
-                rest_rotation: Quat::IDENTITY,
                 rotation: Animated {
                     value: Quat::IDENTITY,
                     track: RawTrack::new(vec![
@@ -480,6 +525,7 @@ mod tests {
                         Key::new(1.0, Quat::from_rotation_x(90f32.to_radians())),
                     ]),
                 },
+                ..Joint::new("elbow", None, Vec3::ZERO, Quat::IDENTITY)
             }],
             root_translation: Animated::constant(Vec3::ZERO),
         });
@@ -526,11 +572,11 @@ mod tests {
             .contains("unknown object property \"size\"; object properties are: translation"));
         assert!(err("light/Key/rotation")
             .contains("light properties are: position, direction, colour, intensity"));
-        assert!(err("object/Arm/joint/elbow/translation").contains("unknown joint property \"translation\""));
+        assert!(err("object/Arm/joint/elbow/size").contains("unknown joint property \"size\""));
         assert!(err("camera/x/y").contains("unknown kind \"camera\""));
         assert!(err("object/Arm").contains("missing property"));
         assert!(err("object//rotation").contains("empty part"));
-        assert!(err("object/Arm/joint/elbow").contains("object/<name>/joint/<joint>/rotation"));
+        assert!(err("object/Arm/joint/elbow").contains("object/<name>/joint/<joint>/<property>"));
         assert!(err("").contains("empty part"));
     }
 

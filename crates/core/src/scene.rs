@@ -148,7 +148,13 @@ fn zero_translation() -> Animated<Vec3> {
     Animated::constant(Vec3::ZERO)
 }
 
-/// One joint: rest transform R(j) relative to its parent and its animated local rotation T(j).
+/// One joint: rest transform R(j) relative to its parent and its animated local transform
+/// T(j) = translate(translation) · rotate(rotation) · scale(scale), applied after R(j):
+/// `F(j) = F(p(j)) · R(j) · T(j)` (DESIGN.md §4).
+///
+/// keyrig's own rigs key `rotation` only; imported characters key all three, exactly as their
+/// file does. `translation` and `scale` are left out of a scene file while they are the
+/// identity (no keys, value zero / one).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Joint {
@@ -159,8 +165,48 @@ pub struct Joint {
     pub rest_translation: Vec3,
     /// Rest rotation relative to the parent joint (R(j)'s rotation).
     pub rest_rotation: Quat,
-    /// Animated local rotation T(j), applied after the rest transform; identity at rest.
+    /// Animated local translation of T(j), in the joint's rest frame (the parent's frame
+    /// rotated by `rest_rotation`); zero at rest.
+    #[serde(default = "zero_translation", skip_serializing_if = "is_zero_translation")]
+    pub translation: Animated<Vec3>,
+    /// Animated local rotation of T(j), applied after the rest transform; identity at rest.
     pub rotation: Animated<Quat>,
+    /// Animated local scale of T(j) (applied first); one at rest.
+    #[serde(default = "unit_scale", skip_serializing_if = "is_unit_scale")]
+    pub scale: Animated<Vec3>,
+}
+
+impl Joint {
+    /// A joint with the given rest transform and no animation.
+    #[must_use]
+    pub fn new(
+        name: impl Into<String>,
+        parent: Option<usize>,
+        rest_translation: Vec3,
+        rest_rotation: Quat,
+    ) -> Self {
+        Joint {
+            name: name.into(),
+            parent,
+            rest_translation,
+            rest_rotation,
+            translation: zero_translation(),
+            rotation: Animated::constant(Quat::IDENTITY),
+            scale: unit_scale(),
+        }
+    }
+}
+
+fn unit_scale() -> Animated<Vec3> {
+    Animated::constant(Vec3::ONE)
+}
+
+fn is_zero_translation(a: &Animated<Vec3>) -> bool {
+    !a.is_animated() && a.value == Vec3::ZERO
+}
+
+fn is_unit_scale(a: &Animated<Vec3>) -> bool {
+    !a.is_animated() && a.value == Vec3::ONE
 }
 
 /// Which skin deformer an object uses, and the deformers' parameters.

@@ -326,7 +326,9 @@ impl Checker {
             }
             self.value(&join(&jp(i), "rest_translation"), &joint.rest_translation);
             self.rotation(&join(&jp(i), "rest_rotation"), &joint.rest_rotation);
+            self.animated(&join(&jp(i), "translation"), &joint.translation);
             self.animated(&join(&jp(i), "rotation"), &joint.rotation);
+            self.animated(&join(&jp(i), "scale"), &joint.scale);
         }
         self.unique_names(
             "joint",
@@ -470,13 +472,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn joint(name: &str, parent: Option<usize>) -> Joint {
-        Joint {
-            name: name.to_string(),
-            parent,
-            rest_translation: Vec3::X,
-            rest_rotation: Quat::IDENTITY,
-            rotation: Animated::constant(Quat::IDENTITY),
-        }
+        Joint::new(name, parent, Vec3::X, Quat::IDENTITY)
     }
 
     fn paths(scene: &Scene) -> Vec<String> {

@@ -15,7 +15,17 @@ pub enum ChannelId {
     ObjectScale(usize),
     /// Translation of a skeleton's root joint (object index).
     RootTranslation(usize),
+    /// A joint's animated local translation (imported characters; keyrig's rigs key rotations).
+    JointTranslation {
+        object: usize,
+        joint: usize,
+    },
     JointRotation {
+        object: usize,
+        joint: usize,
+    },
+    /// A joint's animated local scale.
+    JointScale {
         object: usize,
         joint: usize,
     },
@@ -47,9 +57,9 @@ impl ChannelId {
     #[must_use]
     pub fn channel_name(self) -> &'static str {
         match self {
-            ChannelId::ObjectTranslation(_) => "translation",
+            ChannelId::ObjectTranslation(_) | ChannelId::JointTranslation { .. } => "translation",
             ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } => "rotation",
-            ChannelId::ObjectScale(_) => "scale",
+            ChannelId::ObjectScale(_) | ChannelId::JointScale { .. } => "scale",
             ChannelId::RootTranslation(_) => "root translation",
             ChannelId::LightPosition(_) => "position",
             ChannelId::LightDirection(_) => "direction",
@@ -65,6 +75,9 @@ impl ChannelId {
     }
 
     /// The channels of an object (its transform, skeleton root and joints), in display order.
+    /// Every joint has its rotation; its translation and scale are listed only where they are
+    /// keyed or not the identity (imported characters), so keyrig's own rigs show one row per
+    /// joint.
     #[must_use]
     pub fn of_object(scene: &Scene, object: usize) -> Vec<ChannelId> {
         let mut out = vec![
@@ -74,7 +87,15 @@ impl ChannelId {
         ];
         if let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) {
             out.push(ChannelId::RootTranslation(object));
-            out.extend((0..skeleton.joints.len()).map(|joint| ChannelId::JointRotation { object, joint }));
+            for (joint, j) in skeleton.joints.iter().enumerate() {
+                if j.translation.is_animated() || j.translation.value != Vec3::ZERO {
+                    out.push(ChannelId::JointTranslation { object, joint });
+                }
+                out.push(ChannelId::JointRotation { object, joint });
+                if j.scale.is_animated() || j.scale.value != Vec3::ONE {
+                    out.push(ChannelId::JointScale { object, joint });
+                }
+            }
         }
         out
     }
@@ -110,7 +131,9 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
         | ChannelId::ObjectRotation(o)
         | ChannelId::ObjectScale(o)
         | ChannelId::RootTranslation(o) => scene.objects.get(o)?.name.clone(),
-        ChannelId::JointRotation { object, joint } => {
+        ChannelId::JointTranslation { object, joint }
+        | ChannelId::JointRotation { object, joint }
+        | ChannelId::JointScale { object, joint } => {
             scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone()
         }
         ChannelId::LightPosition(l)
@@ -164,8 +187,14 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::RootTranslation(o) => {
             ChannelRef::Vec3(&scene.objects.get(o)?.skeleton.as_ref()?.root_translation)
         }
+        ChannelId::JointTranslation { object, joint } => {
+            ChannelRef::Vec3(&scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.translation)
+        }
         ChannelId::JointRotation { object, joint } => {
             ChannelRef::Rotation(&scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation)
+        }
+        ChannelId::JointScale { object, joint } => {
+            ChannelRef::Vec3(&scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.scale)
         }
         ChannelId::LightPosition(l) => ChannelRef::Vec3(&scene.lights.get(l)?.position),
         ChannelId::LightDirection(l) => ChannelRef::Vec3(&scene.lights.get(l)?.direction),
@@ -184,8 +213,14 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::RootTranslation(o) => {
             ChannelMut::Vec3(&mut scene.objects.get_mut(o)?.skeleton.as_mut()?.root_translation)
         }
+        ChannelId::JointTranslation { object, joint } => ChannelMut::Vec3(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?.translation,
+        ),
         ChannelId::JointRotation { object, joint } => ChannelMut::Rotation(
             &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?.rotation,
+        ),
+        ChannelId::JointScale { object, joint } => ChannelMut::Vec3(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?.scale,
         ),
         ChannelId::LightPosition(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.position),
         ChannelId::LightDirection(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.direction),

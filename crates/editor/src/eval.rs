@@ -128,17 +128,30 @@ impl Tracks {
         let rotation = self.quat(ChannelId::ObjectRotation(index), time, overrides);
         let scale = self.vec3(ChannelId::ObjectScale(index), time, overrides, Vec3::ONE);
         let world_from_object = Affine3A::from_scale_rotation_translation(scale, rotation, translation);
-        let mut joint_rotations = Vec::new();
+        let mut pose = keyrig_skin::Pose::rest(0);
         let mut object_from_joint: Vec<Affine3A> = Vec::new();
-        let mut root_translation = Vec3::ZERO;
         if let Some(skeleton) = &object.skeleton {
-            root_translation = self.vec3(ChannelId::RootTranslation(index), time, overrides, Vec3::ZERO);
+            pose.root_translation = self.vec3(ChannelId::RootTranslation(index), time, overrides, Vec3::ZERO);
             for (j, joint) in skeleton.joints.iter().enumerate() {
                 let t = self.quat(ChannelId::JointRotation { object: index, joint: j }, time, overrides);
-                joint_rotations.push(t);
+                let translation = self.vec3(
+                    ChannelId::JointTranslation { object: index, joint: j },
+                    time,
+                    overrides,
+                    joint.translation.value,
+                );
+                let scale = self.vec3(
+                    ChannelId::JointScale { object: index, joint: j },
+                    time,
+                    overrides,
+                    joint.scale.value,
+                );
+                pose.local_translations.push(translation);
+                pose.local_rotations.push(t);
+                pose.local_scales.push(scale);
                 let parent = joint.parent.filter(|&p| p < j).map(|p| object_from_joint[p]);
                 let rest_translation = if parent.is_none() {
-                    joint.rest_translation + root_translation
+                    joint.rest_translation + pose.root_translation
                 } else {
                     joint.rest_translation
                 };
@@ -148,17 +161,16 @@ impl Tracks {
                     Quat::IDENTITY
                 };
                 let parent_from_joint = Affine3A::from_rotation_translation(rest_rotation, rest_translation)
-                    * Affine3A::from_quat(t);
+                    * Affine3A::from_scale_rotation_translation(scale, t, translation);
                 object_from_joint.push(match parent {
                     Some(p) => p * parent_from_joint,
                     None => parent_from_joint,
                 });
             }
         }
-        Some(ObjectPose { world_from_object, joint_rotations, root_translation, object_from_joint })
+        Some(ObjectPose { world_from_object, pose, object_from_joint })
     }
 }
-
 /// Samples one channel of `scene` at `time` seconds (validating just that channel); an
 /// override wins. `None` when the channel does not exist. The editor itself samples through a
 /// cached [`Tracks`]; this is for one-off queries and tests.
@@ -182,10 +194,8 @@ pub fn channel_value(
 pub struct ObjectPose {
     /// World from object: T·R·S.
     pub world_from_object: Affine3A,
-    /// Animated local joint rotations T(j), one per joint.
-    pub joint_rotations: Vec<Quat>,
-    /// Root translation added to the root joint's rest translation.
-    pub root_translation: Vec3,
+    /// The skeleton's local joint transforms T(j) and root translation (empty without one).
+    pub pose: keyrig_skin::Pose,
     /// Model (object) space transform F(j) of each joint.
     pub object_from_joint: Vec<Affine3A>,
 }
@@ -212,13 +222,7 @@ mod tests {
     fn joint_transforms_chain_rest_and_rotation() {
         let mut scene = Scene::default();
         let mut arm = Object::new("Arm");
-        let joint = |name: &str, parent, x| Joint {
-            name: name.to_owned(),
-            parent,
-            rest_translation: Vec3::new(x, 0.0, 0.0),
-            rest_rotation: Quat::IDENTITY,
-            rotation: Animated::constant(Quat::IDENTITY),
-        };
+        let joint = |name: &str, parent, x| Joint::new(name, parent, Vec3::new(x, 0.0, 0.0), Quat::IDENTITY);
         let mut skeleton = Skeleton {
             joints: vec![joint("a", None, 0.0), joint("b", Some(0), 1.0)],
             root_translation: Animated::constant(Vec3::ZERO),

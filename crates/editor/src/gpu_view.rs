@@ -235,9 +235,6 @@ pub fn selection_for(item: Option<crate::state::Selected>) -> Selection {
 pub fn object_state(pose: &crate::eval::ObjectPose, has_skeleton: bool) -> ObjectState {
     ObjectState {
         world_from_model: Mat4::from(pose.world_from_object),
-        pose: has_skeleton.then(|| keyrig_skin::Pose {
-            local_rotations: pose.joint_rotations.clone(),
-            root_translation: pose.root_translation,
-        }),
+        pose: has_skeleton.then(|| pose.pose.clone()),
     }
 }

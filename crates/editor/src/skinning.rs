@@ -17,7 +17,7 @@ use glam::{Affine3A, Vec3};
 use keyrig_core::{DeformerKind, DeformerSettings, ProceduralMesh, Skeleton};
 use keyrig_skin::{
     deform_mesh_into, joint_cross_section, mesh_for, BlendZone, CrossSection, Deformed, Execution,
-    JointPalette, MeshBindings, Pose, RestSkeleton, SkinnedMesh,
+    JointPalette, MeshBindings, RestSkeleton, SkinnedMesh,
 };
 
 use crate::eval::ObjectPose;
@@ -130,9 +130,7 @@ impl SkinCache {
             }
         }
         let Some(entry) = self.entries.get_mut(&index) else { return Ok(None) };
-        let skin_pose =
-            Pose { local_rotations: pose.joint_rotations.clone(), root_translation: pose.root_translation };
-        entry.palette.update(&entry.mesh.skeleton, &skin_pose).map_err(|e| format!("pose: {e}"))?;
+        entry.palette.update(&entry.mesh.skeleton, &pose.pose).map_err(|e| format!("pose: {e}"))?;
         deform_mesh_into(
             &entry.mesh,
             &entry.bindings,

@@ -233,7 +233,14 @@ impl Selection {
                     .and_then(|o| o.skeleton.as_ref())
                     .is_some_and(|s| joint < s.joints.len());
                 if exists {
-                    vec![ChannelId::JointRotation { object, joint }]
+                    ChannelId::of_object(scene, object)
+                        .into_iter()
+                        .filter(|id| {
+                            matches!(id, ChannelId::JointTranslation { joint: j, .. }
+                                | ChannelId::JointRotation { joint: j, .. }
+                                | ChannelId::JointScale { joint: j, .. } if *j == joint)
+                        })
+                        .collect()
                 } else {
                     Vec::new()
                 }

@@ -48,12 +48,9 @@ pub fn arm_rest_skeleton() -> Skeleton {
     let joints = ARM_JOINT_NAMES
         .iter()
         .enumerate()
-        .map(|(i, name)| Joint {
-            name: (*name).to_string(),
-            parent: i.checked_sub(1),
-            rest_translation: if i == 0 { Vec3::ZERO } else { Vec3::new(bone, 0.0, 0.0) },
-            rest_rotation: Quat::IDENTITY,
-            rotation: Animated::constant(Quat::IDENTITY),
+        .map(|(i, name)| {
+            let rest_translation = if i == 0 { Vec3::ZERO } else { Vec3::new(bone, 0.0, 0.0) };
+            Joint::new(*name, i.checked_sub(1), rest_translation, Quat::IDENTITY)
         })
         .collect();
     Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }

@@ -10,5 +10,6 @@ mod scene_fast;
 pub mod scene_file;
 mod scene_locate;
 mod scene_ser;
+mod scene_v1;
 
 pub use scene_file::{load, save, LocatedProblem, SceneFileError};

@@ -1,6 +1,5 @@
 //! An imported glTF model, kept whole: what the keyrig scene can hold and what it cannot
-//! (scale tracks, translation tracks of non-root joints, morph weights, several skins and
-//! animations). [`crate::gltf_import`] fills it; [`ImportedModel::to_scene`] maps what fits
+//! (morph weights, several skins and animations). [`crate::gltf_import`] fills it; [`ImportedModel::to_scene`] maps what fits
 //! onto a [`keyrig_core::Scene`].
 //!
 //! Keys keep the curve of the file exactly: glTF STEP → [`Interpolation::Step`], LINEAR →
@@ -525,19 +524,20 @@ pub enum MappingError {
     Skin { skin: usize, source: keyrig_skin::SkinError },
 }
 
-/// How a skin's joints map onto a keyrig skeleton: joints reordered parents first, the
-/// frame P that the skeleton lives in, and each joint's rest transform relative to its
-/// nearest joint ancestor (intermediate nodes folded in, scale dropped).
+/// How a skin maps onto a keyrig skeleton: the skin's joints and every ancestor node of them
+/// up to the scene root, parents first, so that the keyrig skeleton's F(j) is exactly the
+/// file's global transform of joint j's node (DESIGN.md §4; glTF 2.0 §3.7.3). When the nodes
+/// have several scene roots, a synthetic identity root joint holds them together.
 struct SkeletonMap {
-    /// glTF node of keyrig joint k.
-    nodes: Vec<usize>,
-    /// Index in the glTF skin's joint list of keyrig joint k.
-    skin_slot: Vec<usize>,
+    /// glTF node of keyrig joint k (`None` for the synthetic root).
+    nodes: Vec<Option<usize>>,
+    /// Index in the glTF skin's joint list of keyrig joint k, for the skin's own joints.
+    skin_slot: Vec<Option<usize>>,
     parents: Vec<Option<usize>>,
-    rest: Vec<(Vec3, Quat)>,
-    /// `world_from_skeleton`: rest world transform of the root joint's parent node.
-    frame: Mat4,
 }
+
+/// The name of the synthetic root joint of a skin whose joints hang under several scene roots.
+pub const SYNTHETIC_ROOT_NAME: &str = "(root)";
 
 impl ImportedModel {
     /// `model_from_node` at rest for every node.
@@ -547,58 +547,75 @@ impl ImportedModel {
 
     fn skeleton_map(&self, skin: usize) -> Option<SkeletonMap> {
         let s = self.skins.get(skin)?;
-        let world = self.rest_world();
-        // Nearest joint ancestor and joint depth of every node, parents first (the importer
-        // guarantees a forest), in time linear in the node count.
-        let mut is_joint = vec![false; self.nodes.len()];
+        let count = self.nodes.len();
+        // Every joint and its ancestors (the importer guarantees a forest; the walk up stops at
+        // the first node already taken, so the whole pass is linear in the node count).
+        let mut taken = vec![false; count];
         for &j in &s.joints {
-            if let Some(flag) = is_joint.get_mut(j) {
-                *flag = true;
+            let mut cur = Some(j);
+            let mut steps = 0;
+            while let Some(n) = cur.filter(|&n| n < count && !taken[n]) {
+                taken[n] = true;
+                cur = self.nodes[n].parent;
+                steps += 1;
+                if steps > count {
+                    break;
+                }
             }
         }
-        let mut nearest: Vec<Option<usize>> = vec![None; self.nodes.len()];
-        let mut depth_of = vec![0usize; self.nodes.len()];
+        // Parents first: breadth-first from the scene roots, keeping the taken nodes.
+        let mut order = Vec::new();
         let mut queue: std::collections::VecDeque<usize> =
-            (0..self.nodes.len()).filter(|&n| self.nodes[n].parent.is_none()).collect();
+            (0..count).filter(|&n| self.nodes[n].parent.is_none()).collect();
         while let Some(n) = queue.pop_front() {
-            if let Some(p) = self.nodes[n].parent {
-                nearest[n] = if is_joint[p] { Some(p) } else { nearest[p] };
-                depth_of[n] = nearest[n].map_or(0, |a| depth_of[a] + 1);
+            if !taken[n] {
+                continue;
             }
-            queue.extend(self.nodes[n].children.iter().copied().filter(|&c| c < self.nodes.len()));
+            order.push(n);
+            queue.extend(self.nodes[n].children.iter().copied().filter(|&c| c < count));
         }
-        let joint_parent = |n: usize| nearest[n];
-        let mut order: Vec<usize> = (0..s.joints.len()).collect();
-        order.sort_by_key(|&slot| depth_of[s.joints[slot]]);
-        let nodes: Vec<usize> = order.iter().map(|&slot| s.joints[slot]).collect();
-        let mut keyrig_index = std::collections::HashMap::new();
-        for (k, &n) in nodes.iter().enumerate() {
-            keyrig_index.entry(n).or_insert(k);
+        let roots = order.iter().filter(|&&n| self.nodes[n].parent.is_none()).count();
+        let synthetic = roots > 1;
+        let mut nodes: Vec<Option<usize>> = Vec::with_capacity(order.len() + usize::from(synthetic));
+        if synthetic {
+            nodes.push(None);
         }
-        let roots: Vec<usize> = nodes.iter().copied().filter(|&n| joint_parent(n).is_none()).collect();
-        let frame = match roots.as_slice() {
-            [root] => self.nodes[*root].parent.map_or(Mat4::IDENTITY, |p| world[p]),
-            _ => Mat4::IDENTITY,
-        };
-        let frame_inv = frame.inverse();
-        let mut parents = Vec::with_capacity(nodes.len());
-        let mut rest = Vec::with_capacity(nodes.len());
-        for &n in &nodes {
-            let parent = joint_parent(n).and_then(|p| keyrig_index.get(&p).copied());
-            let parent_world = parent.map_or(frame, |p| world[nodes[p]]);
-            let rel = if parent.is_none() { frame_inv * world[n] } else { parent_world.inverse() * world[n] };
-            let (_, rotation, translation) = rel.to_scale_rotation_translation();
-            parents.push(parent);
-            rest.push((translation, rotation.normalize()));
+        nodes.extend(order.iter().map(|&n| Some(n)));
+        let mut keyrig_index = vec![usize::MAX; count];
+        for (k, n) in nodes.iter().enumerate() {
+            if let Some(n) = *n {
+                keyrig_index[n] = k;
+            }
         }
-        Some(SkeletonMap { nodes, skin_slot: order, parents, rest, frame })
+        let mut slot_of = vec![None; count];
+        for (slot, &n) in s.joints.iter().enumerate() {
+            if n < count && slot_of[n].is_none() {
+                slot_of[n] = Some(slot);
+            }
+        }
+        let parents = nodes
+            .iter()
+            .map(|n| match n {
+                None => None,
+                Some(n) => match self.nodes[*n].parent {
+                    Some(p) => Some(keyrig_index[p]),
+                    None if synthetic => Some(0),
+                    None => None,
+                },
+            })
+            .collect();
+        let skin_slot = nodes.iter().map(|n| n.and_then(|n| slot_of[n])).collect();
+        Some(SkeletonMap { nodes, skin_slot, parents })
     }
 
-    /// The keyrig skeleton of skin `skin` with the rotation (and root translation) tracks of
-    /// `animation`: joints parents first, rest R(j) from the file's node transforms, and
-    /// `T(j) = q_rest(j)⁻¹ · q(t)` per key (tangents mapped the same way, which is exact
-    /// because left-multiplying by a fixed unit quaternion is linear and norm-preserving).
-    /// Joint scale and translation tracks of non-root joints stay in this model only.
+    /// The keyrig skeleton of skin `skin` with every channel of `animation` on its nodes: the
+    /// skin's joints and their ancestors up to the scene root, parents first, named as the
+    /// nodes. Each joint's rest R(j) is its node's rest translation and rotation; its local
+    /// transform T(j) = translate(t′)·rotate(q′)·scale(s) with `t′ = q_rest⁻¹·(t − t_rest)`
+    /// and `q′ = q_rest⁻¹·q`, so that R(j)·T(j) is the node's animated `T·R·S` exactly. Keys
+    /// are mapped one to one with their interpolation (tangents through the same linear maps,
+    /// which is exact for glTF's STEP, LINEAR and CUBICSPLINE): the skeleton's F(j) is the
+    /// file's global transform of the node at every time.
     ///
     /// # Errors
     /// No such skin.
@@ -611,62 +628,50 @@ impl ImportedModel {
             .skeleton_map(skin)
             .ok_or(MappingError::Node { node: usize::MAX, message: format!("no skin {skin}") })?;
         let anim = animation.and_then(|a| self.animations.get(a));
+        let mut channels_of: Vec<Vec<&ChannelTarget>> = vec![Vec::new(); self.nodes.len()];
+        for channel in anim.iter().flat_map(|a| &a.channels) {
+            if let Some(list) = channels_of.get_mut(channel.node) {
+                list.push(&channel.target);
+            }
+        }
         let mut joints = Vec::with_capacity(map.nodes.len());
-        let mut root_translation = keyrig_core::Animated::constant(Vec3::ZERO);
-        for (k, &n) in map.nodes.iter().enumerate() {
+        for (k, n) in map.nodes.iter().enumerate() {
+            let Some(n) = *n else {
+                joints.push(keyrig_core::Joint::new(SYNTHETIC_ROOT_NAME, None, Vec3::ZERO, Quat::IDENTITY));
+                continue;
+            };
             let node = &self.nodes[n];
-            let q_rest_inv = node.rotation.inverse();
-            let mut rotation = keyrig_core::Animated::constant(Quat::IDENTITY);
-            for channel in anim.iter().flat_map(|a| &a.channels).filter(|c| c.node == n) {
-                match &channel.target {
+            let q_rest = node.rotation.normalize();
+            let q_rest_inv = q_rest.inverse();
+            let mut joint =
+                keyrig_core::Joint::new(node.name.clone(), map.parents[k], node.translation, q_rest);
+            joint.scale = keyrig_core::Animated::constant(node.scale);
+            for target in &channels_of[n] {
+                match target {
                     ChannelTarget::Rotation(track) => {
-                        rotation.track = RawTrack::new(
-                            track
-                                .keys
-                                .iter()
-                                .map(|key| Key {
-                                    time: key.time,
-                                    value: (q_rest_inv * key.value).normalize(),
-                                    interpolation: key.interpolation,
-                                    tcb: key.tcb,
-                                    in_tangent: key.in_tangent.map(|t| q_rest_inv * t),
-                                    out_tangent: key.out_tangent.map(|t| q_rest_inv * t),
-                                })
-                                .collect(),
+                        joint.rotation = animated(
+                            joint.rotation,
+                            track,
+                            |q| (q_rest_inv * q).normalize(),
+                            |t| q_rest_inv * t,
                         );
-                        if let Some(first) = rotation.track.keys.first() {
-                            rotation.value = first.value;
-                        }
                     }
-                    ChannelTarget::Translation(track) if map.parents[k].is_none() => {
+                    ChannelTarget::Translation(track) => {
                         let rest = node.translation;
-                        root_translation = keyrig_core::Animated {
-                            value: track.keys.first().map_or(Vec3::ZERO, |key| key.value - rest),
-                            track: RawTrack::new(
-                                track
-                                    .keys
-                                    .iter()
-                                    .map(|key| {
-                                        let mut key = key.clone();
-                                        key.value -= rest;
-                                        key
-                                    })
-                                    .collect(),
-                            ),
-                        };
+                        joint.translation = animated(
+                            joint.translation,
+                            track,
+                            |v| q_rest_inv * (v - rest),
+                            |t| q_rest_inv * t,
+                        );
                     }
-                    _ => {}
+                    ChannelTarget::Scale(track) => joint.scale = animated(joint.scale, track, |v| v, |t| t),
+                    ChannelTarget::Weights(_) => {}
                 }
             }
-            joints.push(keyrig_core::Joint {
-                name: node.name.clone(),
-                parent: map.parents[k],
-                rest_translation: map.rest[k].0,
-                rest_rotation: map.rest[k].1,
-                rotation,
-            });
+            joints.push(joint);
         }
-        Ok(keyrig_core::Skeleton { joints, root_translation })
+        Ok(keyrig_core::Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) })
     }
 
     /// The mesh on `node` as a keyrig-skin [`keyrig_skin::SkinnedMesh`] bound to the skeleton
@@ -685,10 +690,22 @@ impl ImportedModel {
             (n.mesh.ok_or_else(|| bad("has no mesh"))?, n.skin.ok_or_else(|| bad("has no skin"))?);
         let map = self.skeleton_map(skin).ok_or_else(|| bad("skin missing"))?;
         let s = &self.skins[skin];
-        let mut renumber = vec![0u16; s.joints.len()];
-        for (k, &slot) in map.skin_slot.iter().enumerate() {
-            renumber[slot] = k as u16;
+        if map.nodes.len() > keyrig_skin::MAX_JOINTS {
+            return Err(bad(&format!(
+                "its skin and the nodes above it make {} joints; keyrig supports {}",
+                map.nodes.len(),
+                keyrig_skin::MAX_JOINTS
+            )));
         }
+        // Vertex joint indices point into the skin's joint list; keyrig's into the skeleton.
+        let mut keyrig_of_node = vec![0u16; self.nodes.len()];
+        for (k, n) in map.nodes.iter().enumerate() {
+            if let Some(n) = *n {
+                keyrig_of_node[n] = k as u16;
+            }
+        }
+        let renumber: Vec<u16> =
+            s.joints.iter().map(|&n| keyrig_of_node.get(n).copied().unwrap_or(0)).collect();
         let (mut positions, mut normals, mut indices, mut joints, mut weights) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for prim in self.meshes[mesh].primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
@@ -726,94 +743,52 @@ impl ImportedModel {
                 weights.push(wv);
             }
         }
-        let rest_joints: Vec<keyrig_skin::RestJoint> = map
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(k, &nd)| {
-                keyrig_skin::RestJoint::new(
-                    &self.nodes[nd].name,
-                    map.parents[k],
-                    map.rest[k].0,
-                    map.rest[k].1,
-                )
-            })
-            .collect();
-        let ibms: Vec<Mat4> = map.skin_slot.iter().map(|&slot| s.inverse_bind_matrices[slot]).collect();
+        let world = self.rest_world();
+        let mut rest_joints = Vec::with_capacity(map.nodes.len());
+        let mut ibms = Vec::with_capacity(map.nodes.len());
+        for (k, (n, slot)) in map.nodes.iter().zip(&map.skin_slot).enumerate() {
+            let (name, translation, rotation) = match n {
+                Some(n) => (
+                    self.nodes[*n].name.as_str(),
+                    self.nodes[*n].translation,
+                    self.nodes[*n].rotation.normalize(),
+                ),
+                None => (SYNTHETIC_ROOT_NAME, Vec3::ZERO, Quat::IDENTITY),
+            };
+            rest_joints.push(keyrig_skin::RestJoint::new(name, map.parents[k], translation, rotation));
+            // The skin's joints bind with the file's matrices; the nodes above them (which no
+            // vertex is weighted to) with the inverse of their rest world transform.
+            ibms.push(match (slot, n) {
+                (Some(slot), _) => s.inverse_bind_matrices[*slot],
+                (None, Some(n)) => {
+                    let inverse = world[*n].inverse();
+                    if inverse.is_finite() {
+                        inverse
+                    } else {
+                        Mat4::IDENTITY
+                    }
+                }
+                (None, None) => Mat4::IDENTITY,
+            });
+        }
         let skeleton = keyrig_skin::RestSkeleton::with_inverse_bind_matrices(&rest_joints, &ibms)
             .map_err(|source| MappingError::Skin { skin, source })?;
         keyrig_skin::SkinnedMesh::new(positions, normals, indices, joints, weights, None, skeleton)
             .map_err(|source| MappingError::Skin { skin, source })
     }
 
-    /// A keyrig-skin joint palette for the skinned mesh on `node` at `time` of `animation`
-    /// that follows the file exactly: `F(j) = P⁻¹ · globalTransform(joint_j)` with every
-    /// channel of the animation (translations of any joint and scales included) and
-    /// `M(j) = F(j) · IBM(j)`, so rigid, linear blend and dual quaternion through keyrig-skin
-    /// reproduce glTF's joint matrices. Bones blending's per-joint rotations come from the
-    /// keyrig pose ([`ImportedModel::scene_skeleton`]), which holds rotations and the root
-    /// translation only. `skeleton` is the rest skeleton of [`ImportedModel::skinned_mesh`].
-    ///
-    /// # Errors
-    /// The node has no skin, or its tracks or skeleton are rejected by keyrig.
-    pub fn exact_joint_palette(
-        &self,
-        node: usize,
-        skeleton: &keyrig_skin::RestSkeleton,
-        animation: Option<usize>,
-        time: f64,
-    ) -> Result<keyrig_skin::JointPalette, MappingError> {
-        let bad = |message: String| MappingError::Node { node, message };
-        let skin = self.nodes.get(node).and_then(|n| n.skin).ok_or_else(|| bad("has no skin".into()))?;
-        let map = self.skeleton_map(skin).ok_or_else(|| bad("skin missing".into()))?;
-        let scene_skeleton = self.scene_skeleton(skin, animation)?;
-        let sampler = keyrig_skin::ScenePoseSampler::new(&scene_skeleton)
-            .map_err(|source| MappingError::Skin { skin, source })?;
-        let mut palette = keyrig_skin::JointPalette::new(skeleton, &sampler.sample(time))
-            .map_err(|source| MappingError::Skin { skin, source })?;
-        let world = self.world_matrices(&self.pose_at(animation, time));
-        let frame_inv = map.frame.inverse();
-        let s = &self.skins[skin];
-        for (k, (&n, &slot)) in map.nodes.iter().zip(&map.skin_slot).enumerate().take(palette.len()) {
-            let f = glam::Affine3A::from_mat4(frame_inv * world[n]);
-            palette.model_from_joint[k] = f;
-            palette.skinning[k] = f * glam::Affine3A::from_mat4(s.inverse_bind_matrices[slot]);
-        }
-        let uniform = palette.skinning.iter().all(|m| {
-            let l = [
-                m.matrix3.x_axis.length_squared(),
-                m.matrix3.y_axis.length_squared(),
-                m.matrix3.z_axis.length_squared(),
-            ];
-            let max = l[0].max(l[1]).max(l[2]);
-            max > 0.0 && l.iter().all(|x| (x - max).abs() <= 1e-4 * max)
-        });
-        palette.normal_skinning = if uniform {
-            None
-        } else {
-            Some(palette.skinning.iter().map(|m| m.matrix3.inverse().transpose()).collect())
-        };
-        Ok(palette)
-    }
-
-    /// `world_from_skeleton` (P) of skin `skin`: where the keyrig skeleton's model space sits
-    /// in the file's world. keyrig-skin's deformed positions times P are glTF world positions.
-    #[must_use]
-    pub fn skeleton_frame(&self, skin: usize) -> Option<Mat4> {
-        self.skeleton_map(skin).map(|m| m.frame)
-    }
-
     /// The model as a keyrig scene, with the tracks of `animation`:
-    /// - each skinned mesh node → an object (transform P, the skeleton's frame) with the
-    ///   skeleton of [`ImportedModel::scene_skeleton`] and its mesh as
+    /// - each skinned mesh node → an object at the origin (glTF ignores a skinned mesh node's
+    ///   own transform) with the skeleton of [`ImportedModel::scene_skeleton`], which holds
+    ///   every channel of the skin's joints and of the nodes above them, and its mesh as
     ///   `MeshSource::File { path: file_name, mesh }`;
     /// - each unskinned mesh node → an object at its rest world transform, with its own
     ///   translation/rotation/scale tracks when it is a root node;
     /// - each KHR_lights_punctual light → a light at its node's rest world position and
     ///   direction (−Z), spot cone angles in degrees.
     ///
-    /// What a scene cannot hold stays here: translation tracks of non-root joints, scale
-    /// tracks of joints, morph weights, animated lights, the other animations.
+    /// What the scene does not take from the file: morph weights, animated lights, the
+    /// animation of unskinned nodes below other nodes, and the other animations.
     ///
     /// # Errors
     /// A skin that cannot be mapped.
@@ -833,10 +808,11 @@ impl ImportedModel {
             let Some(mesh) = node.mesh else { continue };
             let mut object = keyrig_core::Object::new(node.name.clone());
             object.mesh = Some(keyrig_core::MeshSource::file(file_name, Some(mesh)));
+            // A skeleton reaches up to the scene root, so a skinned object sits at the origin.
             let placement = match node.skin {
                 Some(skin) => {
                     object.skeleton = Some(self.scene_skeleton(skin, animation)?);
-                    self.skeleton_frame(skin).unwrap_or(Mat4::IDENTITY)
+                    Mat4::IDENTITY
                 }
                 None => world[i],
             };
@@ -879,5 +855,32 @@ impl ImportedModel {
             });
         }
         Ok(scene)
+    }
+}
+
+/// A track mapped key by key: values through `value`, tangents through `tangent` (the linear
+/// part of the same map); the static value is the first key's. `fallback` stays when the
+/// track has no keys.
+fn animated<T: Copy>(
+    fallback: keyrig_core::Animated<T>,
+    track: &RawTrack<T>,
+    value: impl Fn(T) -> T,
+    tangent: impl Fn(T) -> T,
+) -> keyrig_core::Animated<T> {
+    let keys: Vec<Key<T>> = track
+        .keys
+        .iter()
+        .map(|key| Key {
+            time: key.time,
+            value: value(key.value),
+            interpolation: key.interpolation,
+            tcb: key.tcb,
+            in_tangent: key.in_tangent.map(&tangent),
+            out_tangent: key.out_tangent.map(&tangent),
+        })
+        .collect();
+    match keys.first() {
+        Some(first) => keyrig_core::Animated { value: first.value, track: RawTrack::new(keys) },
+        None => fallback,
     }
 }

@@ -4,7 +4,7 @@
 //!
 //! ```ron
 //! (
-//!     version: 1,
+//!     version: 2,
 //!     scene: (
 //!         fps: 30.0,
 //!         frame_range: (start: 0, end: 60),
@@ -40,7 +40,7 @@ use crate::scene_locate::{locate, TextPosition};
 use crate::scene_ser::to_ron;
 
 /// The scene format version this keyrig writes and reads without migration.
-pub const CURRENT_VERSION: u32 = 1;
+pub const CURRENT_VERSION: u32 = 2;
 
 /// Oldest version [`migrate`] can bring up to [`CURRENT_VERSION`].
 pub const OLDEST_SUPPORTED_VERSION: u32 = 1;
@@ -156,7 +156,7 @@ struct SceneFileOut<'a> {
 /// The current version's document as read, strictly.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SceneFileV1 {
+struct SceneFileCurrent {
     #[allow(dead_code, reason = "checked before this struct is read")]
     version: u32,
     scene: Scene,
@@ -357,7 +357,13 @@ pub enum MigrationError {
 pub fn migrate(version: u32, text: &str, origin: &Path) -> Result<Scene, MigrationError> {
     match version {
         1 => {
-            let doc: SceneFileV1 = ron::Options::default()
+            let doc: crate::scene_v1::SceneFileV1 = ron::Options::default()
+                .from_str(text)
+                .map_err(|e| MigrationError::File(syntax_error(origin, &e)))?;
+            Ok(doc.into_current())
+        }
+        CURRENT_VERSION => {
+            let doc: SceneFileCurrent = ron::Options::default()
                 .from_str(text)
                 .map_err(|e| MigrationError::File(syntax_error(origin, &e)))?;
             Ok(doc.scene)
@@ -601,27 +607,27 @@ mod tests {
     fn fast_path_never_disagrees_with_ron() {
         let base = "fps: 30.0, frame_range: (start: 0, end: 1)";
         let texts = [
-            format!("(version: 1, scene: ({base}))"),
-            format!("(version: 1, scene: ({base},),)"),
-            format!("(version: 1, scene: ({base}, ambient: (1, 2e3, -0.0)))"),
-            format!("(version: 1, scene: ({base}, ambient: (3.4028235e+38, 1e-45, -2.5E-3)))"),
-            format!("// c\n(/* a /* nested */ */ version: 1, scene: ({base}))\n// end"),
-            format!("SceneFile(version: 1, scene: Scene({base}))"),
-            format!("(version: 1, scene: ({base}, ambient: (1.0f32, 2.0, 3.0)))"),
-            format!("(version: 1, scene: ({base}, ambient: (1_0.0, 2.0, 3.0)))"),
-            format!("(version: 1, scene: ({base}, ambient: (-NaN, +inf, NaN)))"),
-            format!("(version: 1, scene: ({base}, objects: [(name: \"\\u{{41}}\", translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
-            format!("(version: 1, scene: ({base}, objects: [(name: r#\"raw\"#, translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
-            format!("(version: 1, scene: ({base}, ambient: (1.0, 2.0)))"),
-            format!("(version: 1, scene: ({base}, ambient: (1.0, 2.0, 3.0, 4.0)))"),
-            format!("(version: 1, scene: ({base}) extra)"),
-            format!("(version: 1, scene: ({base}))) "),
-            format!("(version: 1 scene: ({base}))"),
-            "(version: 1, scene: (fps: 30, frame_range: (start: 0.0, end: 1)))".to_string(),
-            format!("(version: 1, scene: ({base}, lights: [(name: \"L\", kind: Spot(cutoff_deg: 1.0, inner_angle_deg: 1.0, dropoff: 1.0), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
-            format!("(version: 1, scene: ({base}, lights: [(name: \"L\", kind: Point(), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
-            "(version: 1, scene: (fps: 30.0, frame_range: (start: 0, end: 1), unknown: 3))".to_string(),
-            "(version: 1, scene: (fps: 1e400, frame_range: (start: 0, end: 4294967296)))".to_string(),
+            format!("(version: 2, scene: ({base}))"),
+            format!("(version: 2, scene: ({base},),)"),
+            format!("(version: 2, scene: ({base}, ambient: (1, 2e3, -0.0)))"),
+            format!("(version: 2, scene: ({base}, ambient: (3.4028235e+38, 1e-45, -2.5E-3)))"),
+            format!("// c\n(/* a /* nested */ */ version: 2, scene: ({base}))\n// end"),
+            format!("SceneFile(version: 2, scene: Scene({base}))"),
+            format!("(version: 2, scene: ({base}, ambient: (1.0f32, 2.0, 3.0)))"),
+            format!("(version: 2, scene: ({base}, ambient: (1_0.0, 2.0, 3.0)))"),
+            format!("(version: 2, scene: ({base}, ambient: (-NaN, +inf, NaN)))"),
+            format!("(version: 2, scene: ({base}, objects: [(name: \"\\u{{41}}\", translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
+            format!("(version: 2, scene: ({base}, objects: [(name: r#\"raw\"#, translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
+            format!("(version: 2, scene: ({base}, ambient: (1.0, 2.0)))"),
+            format!("(version: 2, scene: ({base}, ambient: (1.0, 2.0, 3.0, 4.0)))"),
+            format!("(version: 2, scene: ({base}) extra)"),
+            format!("(version: 2, scene: ({base}))) "),
+            format!("(version: 2 scene: ({base}))"),
+            "(version: 2, scene: (fps: 30, frame_range: (start: 0.0, end: 1)))".to_string(),
+            format!("(version: 2, scene: ({base}, lights: [(name: \"L\", kind: Spot(cutoff_deg: 1.0, inner_angle_deg: 1.0, dropoff: 1.0), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
+            format!("(version: 2, scene: ({base}, lights: [(name: \"L\", kind: Point(), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
+            "(version: 2, scene: (fps: 30.0, frame_range: (start: 0, end: 1), unknown: 3))".to_string(),
+            "(version: 2, scene: (fps: 1e400, frame_range: (start: 0, end: 4294967296)))".to_string(),
             // Model file meshes with and without the MD2 clip and rate (texts[21..]).
             md2_object_text(base, "path: \"a.md2\""),
             md2_object_text(base, "path: \"a.md2\", clip: Some(\"run\"), fps: Some(10.0)"),
@@ -663,7 +669,7 @@ mod tests {
     /// A scene (`base` fields) with one object whose mesh is `File(<fields>)`.
     fn md2_object_text(base: &str, fields: &str) -> String {
         format!(
-            "(version: 1, scene: ({base}, objects: [(name: \"M\", translation: (value: (0.0, 0.0, 0.0)), \
+            "(version: 2, scene: ({base}, objects: [(name: \"M\", translation: (value: (0.0, 0.0, 0.0)), \
              rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)), mesh: Some(File({fields})))]))"
         )
     }

@@ -30,7 +30,7 @@ fn parse_err(text: &str) -> (SceneFileError, String) {
 
 /// A minimal valid document around `scene_fields`.
 fn doc(scene_fields: &str) -> String {
-    format!("(\n    version: 1,\n    scene: (\n{scene_fields}\n    ),\n)\n")
+    format!("(\n    version: 2,\n    scene: (\n{scene_fields}\n    ),\n)\n")
 }
 
 const TIMING: &str = "        fps: 30.0,\n        frame_range: (start: 0, end: 10),";
@@ -47,29 +47,34 @@ fn minimal_document_loads_with_defaults() {
 #[test]
 fn newer_version_is_refused_with_its_place() {
     // Fields this keyrig does not know: "too new" must win over "unknown field".
-    let (err, shown) = parse_err("(\n  version: 2,\n  scene: (fps: 30.0, hologram: true),\n)");
+    let (err, shown) = parse_err("(\n  version: 3,\n  scene: (fps: 30.0, hologram: true),\n)");
     assert!(matches!(
         err,
-        SceneFileError::TooNew { found: 2, supported: CURRENT_VERSION, line: 2, column: 12, .. }
+        SceneFileError::TooNew { found: 3, supported: CURRENT_VERSION, line: 2, column: 12, .. }
     ));
-    assert!(shown.starts_with("test.ron:2:12: scene format version 2 is newer"), "{shown}");
+    assert!(shown.starts_with("test.ron:2:12: scene format version 3 is newer"), "{shown}");
 }
 
 #[test]
 fn version_after_the_scene_is_read_too() {
     // Hand-edited files may put `version` last: the slower two-pass path reads them.
-    let text = format!("(\n    scene: (\n{TIMING}\n    ),\n    version: 1,\n)\n");
+    let text = format!("(\n    scene: (\n{TIMING}\n    ),\n    version: 2,\n)\n");
     assert_eq!(scene_file::from_str(&text, origin()).unwrap().frame_range.end, 10);
-    let (err, _) = parse_err(&text.replace("version: 1", "version: 4"));
+    // A version-1 file with its version last is migrated the same way.
+    assert_eq!(
+        scene_file::from_str(&text.replace("version: 2", "version: 1"), origin()).unwrap().frame_range.end,
+        10
+    );
+    let (err, _) = parse_err(&text.replace("version: 2", "version: 4"));
     assert!(matches!(err, SceneFileError::TooNew { found: 4, line: 6, column: 14, .. }), "{err:?}");
-    let (err, shown) = parse_err(&text.replace("version: 1,", "version: 1,\n    version: 1,"));
+    let (err, shown) = parse_err(&text.replace("version: 2,", "version: 2,\n    version: 2,"));
     assert!(matches!(err, SceneFileError::Syntax { .. }), "{err:?}");
     assert!(shown.contains("version"), "{shown}");
 }
 
 #[test]
 fn older_versions_without_migration_are_refused() {
-    let (err, shown) = parse_err(&doc(TIMING).replace("version: 1", "version: 0"));
+    let (err, shown) = parse_err(&doc(TIMING).replace("version: 2", "version: 0"));
     assert!(matches!(err, SceneFileError::TooOld { found: 0, line: 2, column: 14, .. }), "{err:?}");
     assert!(shown.contains("version 0 is not supported"), "{shown}");
 }
@@ -276,9 +281,9 @@ fn save_refuses_to_overwrite_newer_files() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("future.ron");
     for text in [
-        "(version: 2, scene: (fps: 30.0))\n",
+        "(version: 3, scene: (fps: 30.0))\n",
         // A newer file in syntax this keyrig cannot parse at all is still recognized.
-        "(version: 3, scene: <<binary-ish future syntax>>)\n",
+        "(version: 4, scene: <<binary-ish future syntax>>)\n",
     ] {
         fs::write(&path, text).unwrap();
         let err = scene_file::save(&path, &demo_scene()).expect_err("newer file");
@@ -391,11 +396,17 @@ fn object() -> impl Strategy<Value = Object> {
                 o.skeleton = Some(Skeleton {
                     joints: (0..joints)
                         .map(|i| Joint {
-                            name: format!("j{i}"),
-                            parent: i.checked_sub(1),
-                            rest_translation: Vec3::new(0.1 * i as f32, 0.0, 0.0),
-                            rest_rotation: Quat::IDENTITY,
+                            // Zero translation and unit scale (left out of the file) on some
+                            // joints, other values on the rest.
+                            translation: Animated::constant(Vec3::new(0.0, 0.01 * i as f32, 0.0)),
                             rotation: Animated::constant(Quat::from_rotation_x(i as f32)),
+                            scale: Animated::constant(Vec3::splat(1.0 + 0.5 * (i % 2) as f32)),
+                            ..Joint::new(
+                                format!("j{i}"),
+                                i.checked_sub(1),
+                                Vec3::new(0.1 * i as f32, 0.0, 0.0),
+                                Quat::IDENTITY,
+                            )
                         })
                         .collect(),
                     root_translation: Animated::constant(Vec3::ZERO),
@@ -471,4 +482,58 @@ fn generated_files_round_trip_through_disk() {
         assert_eq!(fs::read(&a).unwrap(), fs::read(&b).unwrap());
     }
     assert!(saved >= 8, "only {saved} of 16 generated scenes were valid");
+}
+
+/// Version 1 (joints with rotations only) is migrated: the demo as version 1 wrote it opens as
+/// today's demo, and saving it writes the current version.
+#[test]
+fn version_1_files_are_migrated() {
+    let v1 = include_str!("fixtures/demo-v1.ron");
+    assert!(v1.contains("version: 1,"));
+    let scene = scene_file::from_str(v1, Path::new("demo-v1.ron")).expect("a version-1 file opens");
+    assert_eq!(scene, demo_scene());
+    let joint = &scene.objects[0].skeleton.as_ref().expect("arm").joints[1];
+    assert_eq!((joint.translation.value, joint.scale.value), (glam::Vec3::ZERO, glam::Vec3::ONE));
+    assert!(!joint.translation.is_animated() && !joint.scale.is_animated());
+    assert_eq!(scene_file::to_string(&scene).unwrap(), DEMO_RON);
+    assert!(DEMO_RON.contains("version: 2,"));
+    // A version-1 file may not use the version-2 joint fields.
+    let bad = v1.replacen("rest_rotation:", "translation: (value: (1.0, 0.0, 0.0)),\n rest_rotation:", 1);
+    let (err, shown) = parse_err(&bad);
+    assert!(matches!(err, SceneFileError::Syntax { .. }), "{err:?}");
+    assert!(shown.contains("translation"), "{shown}");
+}
+
+/// Every scene file that ships (assets/) and every complete scene document in the docs
+/// (```ron blocks that start with `(` and hold a `version`, outlines with `…` aside) opens,
+/// whatever its version.
+#[test]
+fn every_shipped_and_documented_scene_opens() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut opened = 0;
+    for dir in ["assets", "crates/io/tests/fixtures"] {
+        for entry in fs::read_dir(root.join(dir)).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "ron") {
+                scene_file::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                opened += 1;
+            }
+        }
+    }
+    for entry in fs::read_dir(root.join("docs")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "md") {
+            continue;
+        }
+        let text = fs::read_to_string(&path).unwrap();
+        for block in text.split("```ron\n").skip(1) {
+            let block = &block[..block.find("```").expect("closed block")];
+            // Outlines with `…` in place of fields are not documents.
+            if block.starts_with('(') && block.contains("version:") && !block.contains('…') {
+                scene_file::from_str(block, &path).unwrap_or_else(|e| panic!("{e}"));
+                opened += 1;
+            }
+        }
+    }
+    assert!(opened >= 3, "found only {opened} scene documents");
 }

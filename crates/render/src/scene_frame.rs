@@ -19,7 +19,8 @@ use std::ops::Range;
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{AnimatedTrack, Camera, DeformerKind, MeshSource, Scene, TrackError};
 use keyrig_skin::{
-    mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
+    mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, ScenePoseSampler, SkinError,
+    SkinnedMesh,
 };
 use thiserror::Error;
 
@@ -290,11 +291,6 @@ impl Default for ViewOptions {
     }
 }
 
-struct SkeletonRig {
-    rotations: Vec<AnimatedTrack<Quat>>,
-    root_translation: AnimatedTrack<Vec3>,
-}
-
 struct MeshRig {
     mesh: SkinnedMesh,
     bindings: MeshBindings,
@@ -313,7 +309,7 @@ struct ObjectRig {
     scale: AnimatedTrack<Vec3>,
     mesh: Option<MeshRig>,
     morph: Option<MorphRig>,
-    skeleton: Option<SkeletonRig>,
+    skeleton: Option<ScenePoseSampler>,
     rest: Option<RestSkeleton>,
     deformer: DeformerKind,
     colour: Vec3,
@@ -396,19 +392,17 @@ impl SceneRig {
             let scale = AnimatedTrack::new(&object.scale).map_err(track_err(at("scale")))?;
             let (skeleton, rest) = match &object.skeleton {
                 Some(skeleton) => {
-                    let rotations = skeleton
-                        .joints
-                        .iter()
-                        .enumerate()
-                        .map(|(j, joint)| {
-                            AnimatedTrack::new(&joint.rotation)
-                                .map_err(track_err(at(&format!("skeleton.joints[{j}].rotation"))))
-                        })
-                        .collect::<Result<Vec<_>, _>>()?;
-                    let root_translation = AnimatedTrack::new(&skeleton.root_translation)
-                        .map_err(track_err(at("skeleton.root_translation")))?;
+                    let sampler = ScenePoseSampler::new(skeleton).map_err(|e| match e {
+                        SkinError::JointTrack { joint, property, source, .. } => {
+                            track_err(at(&format!("skeleton.joints[{joint}].{property}")))(source)
+                        }
+                        SkinError::RootTranslationTrack(source) => {
+                            track_err(at("skeleton.root_translation"))(source)
+                        }
+                        other => skin_err(at("skeleton"))(other),
+                    })?;
                     let rest = RestSkeleton::from_scene(skeleton).map_err(skin_err(at("skeleton")))?;
-                    (Some(SkeletonRig { rotations, root_translation }), Some(rest))
+                    (Some(sampler), Some(rest))
                 }
                 None => (None, None),
             };
@@ -745,7 +739,16 @@ impl SceneRig {
                 .skeleton
                 .as_ref()
                 .and_then(|s| s.joints.get(j))
-                .map(|joint| joint.rotation.track.keys.iter().map(|k| k.time).collect())
+                .map(|joint| {
+                    let times =
+                        |keys: &[keyrig_core::Key<Vec3>]| keys.iter().map(|k| k.time).collect::<Vec<_>>();
+                    [
+                        times(&joint.translation.track.keys),
+                        joint.rotation.track.keys.iter().map(|k| k.time).collect(),
+                        times(&joint.scale.track.keys),
+                    ]
+                    .concat()
+                })
                 .unwrap_or_default(),
         };
         key_times.sort_by(f64::total_cmp);
@@ -767,10 +770,7 @@ impl SceneRig {
                 object.rotation.sample(time).normalize(),
                 object.translation.sample(time),
             ),
-            pose: object.skeleton.as_ref().map(|s| Pose {
-                local_rotations: s.rotations.iter().map(|r| r.sample(time)).collect(),
-                root_translation: s.root_translation.sample(time),
-            }),
+            pose: object.skeleton.as_ref().map(|s| s.sample(time)),
         }
     }
 }

@@ -28,6 +28,8 @@ pub enum SkinError {
     LengthMismatch { what: &'static str, expected: usize, found: usize },
     #[error("pose: joint {joint} has a non-finite or zero-length rotation")]
     BadPoseRotation { joint: usize },
+    #[error("pose: joint {joint}'s translation or scale is not finite")]
+    BadPoseTransform { joint: usize },
     #[error("pose: the root translation is not finite")]
     BadRootTranslation,
     #[error("vertex {vertex}: the {what} is not finite")]
@@ -60,8 +62,8 @@ pub enum SkinError {
     NoSuchJoint { joint: usize, joint_count: usize },
     #[error("triangle {triangle}: vertex index {index} is out of range ({vertex_count} vertices)")]
     TriangleIndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
-    #[error("joint {joint} (`{name}`), rotation track: {source}")]
-    RotationTrack { joint: usize, name: String, source: keyrig_core::TrackError },
+    #[error("joint {joint} (`{name}`), {property} track: {source}")]
+    JointTrack { joint: usize, name: String, property: &'static str, source: keyrig_core::TrackError },
     #[error("skeleton root translation track: {0}")]
     RootTranslationTrack(keyrig_core::TrackError),
 }

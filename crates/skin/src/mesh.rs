@@ -265,12 +265,9 @@ fn ellipse(sides: usize, extent_y: f32, extent_z: f32) -> impl Fn(usize) -> (f32
 pub fn arm_scene_skeleton() -> Skeleton {
     let bone = ARM_LENGTH_CM / ARM_BONES as f32;
     let joints = (0..ARM_BONES)
-        .map(|j| Joint {
-            name: ARM_JOINT_NAMES[j].to_owned(),
-            parent: j.checked_sub(1),
-            rest_translation: if j == 0 { Vec3::ZERO } else { Vec3::new(bone, 0.0, 0.0) },
-            rest_rotation: Quat::IDENTITY,
-            rotation: Animated::constant(Quat::IDENTITY),
+        .map(|j| {
+            let rest_translation = if j == 0 { Vec3::ZERO } else { Vec3::new(bone, 0.0, 0.0) };
+            Joint::new(ARM_JOINT_NAMES[j], j.checked_sub(1), rest_translation, Quat::IDENTITY)
         })
         .collect();
     Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
@@ -285,29 +282,21 @@ const PHALANX_LENGTH: f32 = 4.0;
 /// palm's end is a joint with three children.
 #[must_use]
 pub fn hand_scene_skeleton() -> Skeleton {
-    let mut joints = vec![Joint {
-        name: "palm".into(),
-        parent: None,
-        rest_translation: Vec3::ZERO,
-        rest_rotation: Quat::IDENTITY,
-        rotation: Animated::constant(Quat::IDENTITY),
-    }];
+    let mut joints = vec![Joint::new("palm", None, Vec3::ZERO, Quat::IDENTITY)];
     for (f, z) in FINGER_OFFSETS_Z.iter().enumerate() {
         let base = joints.len();
-        joints.push(Joint {
-            name: format!("finger{f}.0"),
-            parent: Some(0),
-            rest_translation: Vec3::new(PALM_LENGTH, 0.0, *z),
-            rest_rotation: Quat::IDENTITY,
-            rotation: Animated::constant(Quat::IDENTITY),
-        });
-        joints.push(Joint {
-            name: format!("finger{f}.1"),
-            parent: Some(base),
-            rest_translation: Vec3::new(PHALANX_LENGTH, 0.0, 0.0),
-            rest_rotation: Quat::IDENTITY,
-            rotation: Animated::constant(Quat::IDENTITY),
-        });
+        joints.push(Joint::new(
+            format!("finger{f}.0"),
+            Some(0),
+            Vec3::new(PALM_LENGTH, 0.0, *z),
+            Quat::IDENTITY,
+        ));
+        joints.push(Joint::new(
+            format!("finger{f}.1"),
+            Some(base),
+            Vec3::new(PHALANX_LENGTH, 0.0, 0.0),
+            Quat::IDENTITY,
+        ));
     }
     Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
 }

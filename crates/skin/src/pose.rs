@@ -1,5 +1,6 @@
-//! Pose evaluation: from local joint rotations T(j) to the joint palette (DESIGN.md §4).
+//! Pose evaluation: from local joint transforms T(j) to the joint palette (DESIGN.md §4).
 //!
+//! T(j) = translate(t_j) · rotate(q_j) · scale(s_j) (identity at rest);
 //! F(j) = F(p(j))·R(j)·T(j) with F(root) = Tr·R(root)·T(root), where Tr is the pose's root
 //! translation; M(j) = F(j)·A(j)⁻¹ is the skinning matrix ("joint palette").
 
@@ -10,11 +11,16 @@ use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
 use crate::skeleton::RestSkeleton;
 
-/// Local joint rotations T(j) (identity at rest) and the translation of the root joint(s).
+/// Local joint transforms T(j) (identity at rest) and the translation of the root joint(s).
+/// The three per-joint lists have one entry per joint of the skeleton, in its joint order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pose {
-    /// T(j) for every joint, in the skeleton's joint order.
+    /// Translation part of T(j), in the joint's rest frame.
+    pub local_translations: Vec<Vec3>,
+    /// Rotation part of T(j).
     pub local_rotations: Vec<Quat>,
+    /// Scale part of T(j) (applied first).
+    pub local_scales: Vec<Vec3>,
     /// Added to the rest translation of every root joint, in the object's (model) space.
     pub root_translation: Vec3,
 }
@@ -23,7 +29,24 @@ impl Pose {
     /// The rest pose of a skeleton with `joint_count` joints.
     #[must_use]
     pub fn rest(joint_count: usize) -> Self {
-        Pose { local_rotations: vec![Quat::IDENTITY; joint_count], root_translation: Vec3::ZERO }
+        Pose {
+            local_translations: vec![Vec3::ZERO; joint_count],
+            local_rotations: vec![Quat::IDENTITY; joint_count],
+            local_scales: vec![Vec3::ONE; joint_count],
+            root_translation: Vec3::ZERO,
+        }
+    }
+
+    /// A pose that only rotates joints: T(j) = rotate(`rotations[j]`).
+    #[must_use]
+    pub fn from_rotations(rotations: Vec<Quat>, root_translation: Vec3) -> Self {
+        let n = rotations.len();
+        Pose {
+            local_translations: vec![Vec3::ZERO; n],
+            local_rotations: rotations,
+            local_scales: vec![Vec3::ONE; n],
+            root_translation,
+        }
     }
 
     /// The rest pose with one joint rotated.
@@ -34,34 +57,49 @@ impl Pose {
         }
         self
     }
+
+    /// Number of joints the pose is for.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.local_rotations.len()
+    }
+
+    /// True for a pose of no joints.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.local_rotations.is_empty()
+    }
 }
 
-/// Samples a scene skeleton's joint rotation tracks and root translation into [`Pose`]s. The
-/// tracks are validated once here (tangents cached by keyrig-core), not per frame.
+/// Samples a scene skeleton's joint tracks (translation, rotation, scale) and root translation
+/// into [`Pose`]s. The tracks are validated once here (tangents cached by keyrig-core), not
+/// per frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScenePoseSampler {
+    translations: Vec<AnimatedTrack<Vec3>>,
     rotations: Vec<AnimatedTrack<Quat>>,
+    scales: Vec<AnimatedTrack<Vec3>>,
     root_translation: AnimatedTrack<Vec3>,
 }
 
 impl ScenePoseSampler {
-    /// Validates every joint's rotation track and the root translation track.
+    /// Validates every joint's tracks and the root translation track.
     pub fn new(skeleton: &keyrig_core::Skeleton) -> Result<Self, SkinError> {
-        let rotations = skeleton
-            .joints
-            .iter()
-            .enumerate()
-            .map(|(joint, j)| {
-                AnimatedTrack::new(&j.rotation).map_err(|source| SkinError::RotationTrack {
-                    joint,
-                    name: j.name.clone(),
-                    source,
-                })
-            })
-            .collect::<Result<_, _>>()?;
+        let n = skeleton.joints.len();
+        let (mut translations, mut rotations, mut scales) =
+            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        for (joint, j) in skeleton.joints.iter().enumerate() {
+            let err = |property: &'static str| {
+                let name = j.name.clone();
+                move |source| SkinError::JointTrack { joint, name, property, source }
+            };
+            translations.push(AnimatedTrack::new(&j.translation).map_err(err("translation"))?);
+            rotations.push(AnimatedTrack::new(&j.rotation).map_err(err("rotation"))?);
+            scales.push(AnimatedTrack::new(&j.scale).map_err(err("scale"))?);
+        }
         let root_translation =
             AnimatedTrack::new(&skeleton.root_translation).map_err(SkinError::RootTranslationTrack)?;
-        Ok(ScenePoseSampler { rotations, root_translation })
+        Ok(ScenePoseSampler { translations, rotations, scales, root_translation })
     }
 
     /// The pose at time `t` (seconds).
@@ -74,8 +112,12 @@ impl ScenePoseSampler {
 
     /// The pose at time `t` (seconds), reusing `pose`'s allocation.
     pub fn sample_into(&self, t: f64, pose: &mut Pose) {
+        pose.local_translations.clear();
+        pose.local_translations.extend(self.translations.iter().map(|track| track.sample(t)));
         pose.local_rotations.clear();
         pose.local_rotations.extend(self.rotations.iter().map(|track| track.sample(t)));
+        pose.local_scales.clear();
+        pose.local_scales.extend(self.scales.iter().map(|track| track.sample(t)));
         pose.root_translation = self.root_translation.sample(t);
     }
 }
@@ -132,12 +174,14 @@ impl JointPalette {
     /// Re-evaluates in place, reusing the allocations.
     pub fn update(&mut self, skeleton: &RestSkeleton, pose: &Pose) -> Result<(), SkinError> {
         let n = skeleton.len();
-        if pose.local_rotations.len() != n {
-            return Err(SkinError::LengthMismatch {
-                what: "pose rotations",
-                expected: n,
-                found: pose.local_rotations.len(),
-            });
+        for (what, found) in [
+            ("pose rotations", pose.local_rotations.len()),
+            ("pose translations", pose.local_translations.len()),
+            ("pose scales", pose.local_scales.len()),
+        ] {
+            if found != n {
+                return Err(SkinError::LengthMismatch { what, expected: n, found });
+            }
         }
         if !pose.root_translation.is_finite() {
             return Err(SkinError::BadRootTranslation);
@@ -157,12 +201,23 @@ impl JointPalette {
             if t.w < 0.0 {
                 t = -t;
             }
+            let (translation, scale) = (pose.local_translations[j], pose.local_scales[j]);
+            if !translation.is_finite() || !scale.is_finite() {
+                return Err(SkinError::BadPoseTransform { joint: j });
+            }
             let r = skeleton.parent_from_joint()[j];
+            // Bones blending turns the vertex by part of T(j)'s rotation only; the joint's own
+            // translation and scale are applied in full (exact for uniform scales, which
+            // commute with the rotation).
             let posed_from_joint_rest = match skeleton.parents()[j] {
                 Some(p) => self.model_from_joint[p] * r,
                 None => root_shift * r,
-            };
-            let f = posed_from_joint_rest * Affine3A::from_quat(t);
+            } * Affine3A::from_translation(translation)
+                * Affine3A::from_scale(scale);
+            let f = match skeleton.parents()[j] {
+                Some(p) => self.model_from_joint[p] * r,
+                None => root_shift * r,
+            } * Affine3A::from_scale_rotation_translation(scale, t, translation);
             let a_inv = skeleton.joint_from_bind_model()[j];
             let m = f * a_inv;
             uniform &= is_uniform_scale(&m.matrix3);
@@ -300,7 +355,10 @@ mod tests {
         assert_eq!(pose.local_rotations[1], Quat::IDENTITY);
         skeleton.joints[1].rotation.track =
             RawTrack::new(vec![Key::new(1.0, quarter), Key::new(0.0, quarter)]);
-        assert!(matches!(ScenePoseSampler::new(&skeleton), Err(SkinError::RotationTrack { joint: 1, .. })));
+        assert!(matches!(
+            ScenePoseSampler::new(&skeleton),
+            Err(SkinError::JointTrack { joint: 1, property: "rotation", .. })
+        ));
     }
 
     #[test]

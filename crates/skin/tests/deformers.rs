@@ -44,7 +44,8 @@ fn random_skeleton(rng: &mut Lcg, n: usize) -> RestSkeleton {
 }
 
 fn random_pose(rng: &mut Lcg, n: usize) -> Pose {
-    Pose { local_rotations: (0..n).map(|_| rng.quat()).collect(), root_translation: rng.vec3(1.0) }
+    let rotations = (0..n).map(|_| rng.quat()).collect();
+    Pose::from_rotations(rotations, rng.vec3(1.0))
 }
 
 struct Data {

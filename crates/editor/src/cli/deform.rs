@@ -109,34 +109,19 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         None => Pose::rest(target.mesh.skeleton.len()),
     };
     let at = || format!("{}: object `{}`", file.display(), target.object);
-    // A skinned glTF node is posed exactly as the glTF specification defines it (every
-    // channel of the animation, M(j) = world(j)·IBM(j)) and the result is put back into the
-    // file's world axes; everything else is posed from the scene's tracks.
-    let gltf_skin = gltf.as_ref().and_then(|g| {
-        let node = *g.nodes.get(target.index)?;
-        Some((g, node, g.model.nodes[node].skin?))
-    });
-    let palette = match gltf_skin {
-        Some((g, node, _)) => {
-            g.model.exact_joint_palette(node, &target.mesh.skeleton, g.animation, time).with_context(at)?
-        }
-        None => JointPalette::new(&target.mesh.skeleton, &pose).with_context(at)?,
-    };
+    let palette = JointPalette::new(&target.mesh.skeleton, &pose).with_context(at)?;
     let bindings = target.mesh.bindings(target.zone).with_context(at)?;
     let mut out = Deformed::default();
     deform_mesh_into(&target.mesh, &bindings, &palette, args.deformer, Execution::Reference, &mut out)
         .with_context(|| format!("{}: {} deformer", at(), args.deformer.cli_name()))?;
-    if let Some((g, _, skin)) = gltf_skin {
-        if let Some(world_from_skeleton) = g.model.skeleton_frame(skin) {
-            target.space = "gltf-world";
-            let normal_matrix = glam::Mat3::from_mat4(world_from_skeleton).inverse().transpose();
-            for p in &mut out.positions {
-                *p = world_from_skeleton.transform_point3(*p);
-            }
-            for n in &mut out.normals {
-                *n = normal_matrix * *n;
-            }
-        }
+    // A skinned glTF node's skeleton reaches up to the file's scene root, so its model space
+    // is the file's world space, where the glTF specification skins.
+    let skinned_gltf = gltf
+        .as_ref()
+        .and_then(|g| g.nodes.get(target.index))
+        .is_some_and(|&node| gltf.as_ref().is_some_and(|g| g.model.nodes[node].skin.is_some()));
+    if skinned_gltf {
+        target.space = "gltf-world";
     }
     let text = match format {
         OutputFormat::Obj => obj_text(&target, &args, time, &out),
@@ -229,14 +214,13 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, G
             None => None,
         });
     }
-    Ok((scene, loaded, GltfSource { model, animation, nodes }))
+    Ok((scene, loaded, GltfSource { model, nodes }))
 }
 
 /// The glTF model behind a scene made by [`gltf_scene`]: the model, the animation used and the
 /// node of each scene object (by object index).
 struct GltfSource {
     model: keyrig_io::model::ImportedModel,
-    animation: Option<usize>,
     nodes: Vec<usize>,
 }
 

@@ -213,13 +213,17 @@ fn channel_keys(scene: &Scene, channel: &ChannelPath) -> (usize, Option<(f64, f6
                 }
             }
         }
-        ChannelPath::Joint { object, joint } => scene
+        ChannelPath::Joint { object, joint, property } => scene
             .objects
             .iter()
             .find(|o| &o.name == object)
             .and_then(|o| o.skeleton.as_ref())
             .and_then(|s| s.joints.iter().find(|j| &j.name == joint))
-            .map_or((0, None), |j| span(&j.rotation.track.keys)),
+            .map_or((0, None), |j| match property {
+                keyrig_core::channel::JointProperty::Translation => span(&j.translation.track.keys),
+                keyrig_core::channel::JointProperty::Rotation => span(&j.rotation.track.keys),
+                keyrig_core::channel::JointProperty::Scale => span(&j.scale.track.keys),
+            }),
         ChannelPath::Light { light, property } => {
             let Some(l) = scene.lights.iter().find(|l| &l.name == light) else { return (0, None) };
             match property {

@@ -117,7 +117,24 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
                 .map(|j| j.name.clone())
                 .unwrap_or_default();
             ui.strong(format!("Joint: {name}"));
+            let (moves, scales) = scene
+                .objects
+                .get(object)
+                .and_then(|x| x.skeleton.as_ref())
+                .and_then(|s| s.joints.get(joint))
+                .map_or((false, false), |j| {
+                    (
+                        j.translation.is_animated() || j.translation.value != glam::Vec3::ZERO,
+                        j.scale.is_animated() || j.scale.value != glam::Vec3::ONE,
+                    )
+                });
+            if moves {
+                channel_editor(ui, app, ChannelId::JointTranslation { object, joint }, "Translation");
+            }
             channel_editor(ui, app, ChannelId::JointRotation { object, joint }, "Rotation (°)");
+            if scales {
+                channel_editor(ui, app, ChannelId::JointScale { object, joint }, "Scale");
+            }
         }
         Some(Selected::Light(l)) => {
             let name = scene.lights.get(l).map(|x| x.name.clone()).unwrap_or_default();

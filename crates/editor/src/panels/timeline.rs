@@ -74,14 +74,26 @@ fn rows(app: &EditorApp) -> Vec<Row> {
                 });
             }
             for (j, joint) in skeleton.joints.iter().enumerate() {
-                let id = ChannelId::JointRotation { object: o, joint: j };
-                out.push(Row {
-                    label: format!("{} rotation", joint.name),
-                    indent: 1,
-                    channel: Some(id),
-                    shows: vec![id],
-                    item: Some(Selected::Joint { object: o, joint: j }),
-                });
+                let rows = [
+                    (
+                        ChannelId::JointTranslation { object: o, joint: j },
+                        "translation",
+                        joint.translation.is_animated(),
+                    ),
+                    (ChannelId::JointRotation { object: o, joint: j }, "rotation", true),
+                    (ChannelId::JointScale { object: o, joint: j }, "scale", joint.scale.is_animated()),
+                ];
+                for (id, what, shown) in rows {
+                    if shown {
+                        out.push(Row {
+                            label: format!("{} {what}", joint.name),
+                            indent: 1,
+                            channel: Some(id),
+                            shows: vec![id],
+                            item: Some(Selected::Joint { object: o, joint: j }),
+                        });
+                    }
+                }
             }
         }
     }
@@ -392,7 +404,9 @@ fn select_owner(app: &mut EditorApp, channel: ChannelId) {
         | ChannelId::ObjectRotation(o)
         | ChannelId::ObjectScale(o)
         | ChannelId::RootTranslation(o) => Selected::Object(o),
-        ChannelId::JointRotation { object, joint } => Selected::Joint { object, joint },
+        ChannelId::JointTranslation { object, joint }
+        | ChannelId::JointRotation { object, joint }
+        | ChannelId::JointScale { object, joint } => Selected::Joint { object, joint },
         ChannelId::LightPosition(l)
         | ChannelId::LightDirection(l)
         | ChannelId::LightColour(l)

@@ -63,10 +63,8 @@ pub fn data_with_joints(n: usize, joint_count: usize) -> Data {
         })
         .collect();
     let skeleton = RestSkeleton::new(&joints).unwrap();
-    let pose = Pose {
-        local_rotations: (0..joint_count).map(|_| rng.quat()).collect(),
-        root_translation: rng.vec3(1.0),
-    };
+    let rotations = (0..joint_count).map(|_| rng.quat()).collect();
+    let pose = Pose::from_rotations(rotations, rng.vec3(1.0));
     let palette = JointPalette::new(&skeleton, &pose).unwrap();
     let dual_quaternions = palette.dual_quaternions().unwrap();
     let mut d = Data {
