@@ -1,7 +1,7 @@
 //! The whole glTF import path (GLB container, JSON, validation, accessors, buffers, skins,
 //! animations) on arbitrary bytes; an accepted model is also posed and skinned (the glTF
-//! reference and, for skinned nodes, keyrig-skin with the exact palette and all four
-//! deformers) and mapped onto a scene.
+//! reference and, for skinned nodes, keyrig-skin posed by the mapped scene skeleton with all
+//! four deformers) and mapped onto a scene.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -11,13 +11,18 @@ fuzz_target!(|data: &[u8]| {
         let animation = if model.animations.is_empty() { None } else { Some(0) };
         for node in 0..model.nodes.len().min(8) {
             let _ = model.deformed_positions(node, animation, 0.5);
-            if let Ok(mesh) = model.skinned_mesh(node) {
-                if let Ok(palette) = model.exact_joint_palette(node, &mesh.skeleton, animation, 0.5) {
-                    if let Ok(zone) = keyrig_skin::BlendZone::new(0.25, 0.25) {
-                        if let Ok(bindings) = mesh.bindings(zone) {
-                            for kind in keyrig_core::DeformerKind::ALL {
-                                let _ = keyrig_skin::deform_mesh(&mesh, &bindings, &palette, kind);
-                            }
+            let skin = model.nodes[node].skin;
+            if let (Ok(mesh), Some(skin)) = (model.skinned_mesh(node), skin) {
+                let pose = model
+                    .scene_skeleton(skin, animation)
+                    .ok()
+                    .and_then(|s| keyrig_skin::ScenePoseSampler::new(&s).ok())
+                    .map(|sampler| sampler.sample(0.5));
+                let palette = pose.and_then(|p| keyrig_skin::JointPalette::new(&mesh.skeleton, &p).ok());
+                if let (Some(palette), Ok(zone)) = (palette, keyrig_skin::BlendZone::new(0.25, 0.25)) {
+                    if let Ok(bindings) = mesh.bindings(zone) {
+                        for kind in keyrig_core::DeformerKind::ALL {
+                            let _ = keyrig_skin::deform_mesh(&mesh, &bindings, &palette, kind);
                         }
                     }
                 }
