@@ -11,6 +11,8 @@
 //! `p(t) = h00·v_k + h10·t_d·b_k + h01·v_{k+1} + h11·t_d·a_{k+1}`, `t_d = t_{k+1} − t_k`,
 //! and cubic rotations are normalized after the component-wise Hermite.
 
+use std::sync::Arc;
+
 use glam::{Mat4, Quat, Vec2, Vec3};
 use keyrig_core::{Interpolation, Key, RawTrack};
 
@@ -50,8 +52,8 @@ pub enum PrimitiveMode {
 /// One morph target: displacements added to the base attributes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MorphTarget {
-    pub positions: Option<Vec<Vec3>>,
-    pub normals: Option<Vec<Vec3>>,
+    pub positions: Option<Arc<[Vec3]>>,
+    pub normals: Option<Arc<[Vec3]>>,
 }
 
 /// A reference to the base-colour texture of a primitive's material.
@@ -73,19 +75,22 @@ pub enum ImageSource {
 }
 
 /// One primitive of a mesh, attributes in accessor order.
+///
+/// Attribute and index arrays are shared (`Arc`): the importer decodes each accessor once,
+/// and primitives that use the same accessor hold the same array.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ModelPrimitive {
     pub mode: PrimitiveMode,
-    pub positions: Vec<Vec3>,
-    pub normals: Option<Vec<Vec3>>,
+    pub positions: Arc<[Vec3]>,
+    pub normals: Option<Arc<[Vec3]>>,
     /// TEXCOORD_0.
-    pub texcoords: Option<Vec<Vec2>>,
+    pub texcoords: Option<Arc<[Vec2]>>,
     /// Vertex indices (generated 0..n when the file has none; strips/fans as lists).
-    pub indices: Vec<u32>,
+    pub indices: Arc<[u32]>,
     /// JOINTS_0, JOINTS_1, …: per vertex four indices into the skin's joint list.
-    pub joint_sets: Vec<Vec<[u16; 4]>>,
+    pub joint_sets: Vec<Arc<[[u16; 4]]>>,
     /// WEIGHTS_0, WEIGHTS_1, …: per vertex four weights, as stored (not renormalized).
-    pub weight_sets: Vec<Vec<[f32; 4]>>,
+    pub weight_sets: Vec<Arc<[[f32; 4]]>>,
     pub morph_targets: Vec<MorphTarget>,
     pub base_colour_factor: [f32; 4],
     pub base_colour_texture: Option<TextureRef>,
@@ -310,10 +315,10 @@ impl ImportedModel {
     /// Base positions of a primitive with morph targets applied: `p + Σ w_t · Δp_t`.
     #[must_use]
     pub fn morphed_positions(primitive: &ModelPrimitive, weights: &[f32]) -> Vec<Vec3> {
-        let mut out = primitive.positions.clone();
+        let mut out = primitive.positions.to_vec();
         for (target, &w) in primitive.morph_targets.iter().zip(weights) {
             if let Some(d) = &target.positions {
-                for (p, d) in out.iter_mut().zip(d) {
+                for (p, d) in out.iter_mut().zip(d.iter()) {
                     *p += w * *d;
                 }
             }
