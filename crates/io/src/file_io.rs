@@ -410,7 +410,8 @@ mod tests {
         .expect_err("the injected error");
         assert!(err.to_string().contains("injected"), "{err}");
         assert_eq!(fs::read(&path).expect("read"), b"previous content");
-        let left: Vec<_> = fs::read_dir(dir.path()).expect("dir").map(|e| e.expect("entry").file_name()).collect();
+        let left: Vec<_> =
+            fs::read_dir(dir.path()).expect("dir").map(|e| e.expect("entry").file_name()).collect();
         assert_eq!(left, vec![std::ffi::OsString::from("out.glb")], "temporary file left behind");
     }
 

@@ -17,8 +17,8 @@ use std::borrow::Cow;
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::fmt;
-use std::sync::Arc;
 use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -661,8 +661,9 @@ fn shared_vec3s(
     what: &str,
 ) -> Result<Arc<[Vec3]>, GltfError> {
     shared(&cx.cache.vec3, acc.index(), || {
-        let values: Vec<[f32; 3]> =
-            gltf::accessor::Iter::<[f32; 3]>::new(acc.clone(), cx.get()).map(Iterator::collect).unwrap_or_default();
+        let values: Vec<[f32; 3]> = gltf::accessor::Iter::<[f32; 3]>::new(acc.clone(), cx.get())
+            .map(Iterator::collect)
+            .unwrap_or_default();
         let v = finite_vec3s(values, here, what)?;
         count_matches(v.len(), acc.count(), here)?;
         Ok(v)
@@ -670,7 +671,11 @@ fn shared_vec3s(
 }
 
 /// A checked TEXCOORD accessor (float or normalized integers), decoded once.
-fn shared_texcoords(cx: &Reader<'_, '_>, acc: &gltf::Accessor<'_>, here: &str) -> Result<Arc<[Vec2]>, GltfError> {
+fn shared_texcoords(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+) -> Result<Arc<[Vec2]>, GltfError> {
     use gltf::mesh::util::ReadTexCoords;
     shared(&cx.cache.vec2, acc.index(), || {
         let (a, get) = (acc.clone(), cx.get());
@@ -731,7 +736,11 @@ fn shared_weights(
 }
 
 /// A checked index accessor, decoded once (as read; primitive modes are converted later).
-fn shared_indices(cx: &Reader<'_, '_>, acc: &gltf::Accessor<'_>, here: &str) -> Result<Arc<[u32]>, GltfError> {
+fn shared_indices(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+) -> Result<Arc<[u32]>, GltfError> {
     use gltf::mesh::util::ReadIndices;
     shared(&cx.cache.indices, acc.index(), || {
         let (a, get) = (acc.clone(), cx.get());
@@ -898,7 +907,7 @@ fn check_same_count(
 fn convert_mode(mode: gltf::mesh::Mode, idx: Arc<[u32]>) -> (PrimitiveMode, Arc<[u32]>) {
     use gltf::mesh::Mode;
     let whole = |idx: Arc<[u32]>, per: usize| {
-        if idx.len() % per == 0 {
+        if idx.len().is_multiple_of(per) {
             idx
         } else {
             idx[..idx.len() / per * per].into()

@@ -297,7 +297,14 @@ fn gltf_morph(file: &Path, object: &str, g: &GltfSource, node: usize, time: f64)
     if positions.is_empty() {
         bail!("{}: node {node} (`{object}`) has no triangles", file.display());
     }
-    Ok(Output { object: object.to_owned(), space: "gltf-world", animation: "morph", positions, normals, indices })
+    Ok(Output {
+        object: object.to_owned(),
+        space: "gltf-world",
+        animation: "morph",
+        positions,
+        normals,
+        indices,
+    })
 }
 
 /// The object to deform and its mesh. Scene objects with a procedural mesh get it generated

@@ -410,7 +410,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         keyrig_io::file_io::write_atomic_with(out, |w| {
             use keyrig_render::image::ImageEncoder as _;
             keyrig_render::image::codecs::png::PngEncoder::new(w)
-                .write_image(image.as_raw(), image.width(), image.height(), keyrig_render::image::ExtendedColorType::Rgba8)
+                .write_image(
+                    image.as_raw(),
+                    image.width(),
+                    image.height(),
+                    keyrig_render::image::ExtendedColorType::Rgba8,
+                )
                 .map_err(std::io::Error::other)
         })
         .with_context(|| format!("writing {}", out.display()))?;
@@ -432,7 +437,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                     .progress_chars("=> "),
             );
             for end in [a, b] {
-                source.check(end as f64, &format!("--frames {}: frame {end}", args.frames.as_deref().unwrap_or("")))?;
+                source.check(
+                    end as f64,
+                    &format!("--frames {}: frame {end}", args.frames.as_deref().unwrap_or("")),
+                )?;
             }
             bar.set_message("rendering");
             for frame in a..=b {
