@@ -6,9 +6,9 @@ use std::borrow::Cow;
 pub const MAX_QUOTED_CHARS: usize = 80;
 
 /// `text` with every token longer than [`MAX_QUOTED_CHARS`] characters cut to its first
-/// [`MAX_QUOTED_CHARS`] characters, an ellipsis and its length in bytes, e.g.
-/// `aaaa…aaaa… (52428800 bytes)`. Parsers quote the token they stumbled on, and a hostile
-/// file's token can be megabytes long.
+/// [`MAX_QUOTED_CHARS`] − 1 characters and an ellipsis, followed by its length in bytes, e.g.
+/// `` `aaaa…aaaa… (52428802 bytes) ``. Parsers quote the token they stumbled on, and a
+/// hostile file's token can be megabytes long. Clipping clipped text changes nothing.
 #[must_use]
 pub fn clip_long_tokens(text: &str) -> Cow<'_, str> {
     let long = |t: &str| t.chars().nth(MAX_QUOTED_CHARS).is_some();
@@ -24,7 +24,7 @@ pub fn clip_long_tokens(text: &str) -> Cow<'_, str> {
         let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
         let token = &rest[..end];
         if long(token) {
-            let cut = token.char_indices().nth(MAX_QUOTED_CHARS).map_or(token.len(), |(i, _)| i);
+            let cut = token.char_indices().nth(MAX_QUOTED_CHARS - 1).map_or(token.len(), |(i, _)| i);
             out.push_str(&token[..cut]);
             out.push_str(&format!("… ({} bytes)", token.len()));
         } else {
@@ -50,5 +50,6 @@ mod tests {
         assert!(clipped.ends_with("… (1000002 bytes) here"), "{clipped}");
         let wide = "é".repeat(100);
         assert!(clip_long_tokens(&wide).contains("(200 bytes)"));
+        assert_eq!(clip_long_tokens(&clipped), clipped, "idempotent");
     }
 }

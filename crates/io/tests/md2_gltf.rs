@@ -1,5 +1,6 @@
 //! MD2 → glTF morph-target animation: every corpus model converts, passes the Khronos
-//! glTF-Validator with zero errors and zero warnings, is wound counter-clockwise (outwards), and the re-imported animation plays like the MD2 clip.
+//! glTF-Validator with zero errors and zero warnings, is wound counter-clockwise (outwards),
+//! and the re-imported animation plays like the MD2 clip.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
