@@ -471,3 +471,14 @@ fn generated_files_round_trip_through_disk() {
     }
     assert!(saved >= 8, "only {saved} of 16 generated scenes were valid");
 }
+
+#[test]
+fn a_byte_order_mark_is_not_part_of_the_document() {
+    let text = format!("\u{FEFF}{DEMO_RON}");
+    let scene = scene_file::from_str(&text, Path::new("bom.ron")).expect("a BOM is accepted");
+    assert_eq!(scene, demo_scene());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bom.ron");
+    fs::write(&path, text.as_bytes()).unwrap();
+    assert_eq!(scene_file::load(&path).expect("from a file"), demo_scene());
+}
