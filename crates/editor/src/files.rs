@@ -156,10 +156,11 @@ const READ_CHUNK: usize = 256 * 1024;
 fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<u8>, String> {
     use std::io::Read as _;
     let cannot = |e: std::io::Error| format!("{}: cannot read: {e}", path.display());
-    let mut file = fs::File::open(path).map_err(cannot)?;
-    let len = file.metadata().map_err(cannot)?.len();
-    // The length is a hint for the capacity only; what is read decides the size.
-    let mut data = Vec::with_capacity(usize::try_from(len).unwrap_or(0).min(1 << 30));
+    // A regular file within the MD2 size limit (never a FIFO or a device), checked before
+    // reading; the reads below stop at the limit too.
+    let limit = keyrig_io::file_io::MAX_MD2_BYTES;
+    let (mut file, len) = keyrig_io::file_io::open_regular_file(path, limit).map_err(cannot)?;
+    let mut data = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
     let mut chunk = vec![0u8; READ_CHUNK];
     loop {
         let n = file.read(&mut chunk).map_err(cannot)?;
@@ -167,6 +168,12 @@ fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<
             break;
         }
         data.extend_from_slice(&chunk[..n]);
+        if data.len() as u64 > limit {
+            return Err(cannot(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!("the file grew past the limit of {limit} bytes while it was read"),
+            )));
+        }
         progress(if len > 0 { (data.len() as f64 / len as f64).min(1.0) as f32 } else { 1.0 });
     }
     Ok(data)
@@ -520,7 +527,8 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {}
         Some("md2") => {
-            let data = fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+            let data = keyrig_io::file_io::read_regular_file(path, keyrig_io::file_io::MAX_MD2_BYTES)
+                .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
             return md2_morph_mesh(path, &data).map(|m| FileMesh::Morph(Box::new(m)));
         }
         _ => return Err(format!("{}: the editor shows meshes of glTF and MD2 files only", path.display())),
@@ -616,7 +624,7 @@ impl Recovery {
         fs::create_dir_all(dir).map_err(|e| format!("{}: cannot create folder: {e}", dir.display()))?;
         save_scene(&file, scene)?;
         let origin_text = origin.map(|p| p.to_string_lossy().into_owned()).unwrap_or_default();
-        fs::write(&origin_file, origin_text)
+        keyrig_io::file_io::write_atomic(&origin_file, origin_text.as_bytes())
             .map_err(|e| format!("{}: cannot write: {e}", origin_file.display()))
     }
 
@@ -678,7 +686,7 @@ impl Recent {
             let text: String = self.paths.iter().map(|p| format!("{}\n", p.display())).collect();
             // The list is a convenience: failing to write it must not disturb the editing.
             if fs::create_dir_all(dir).is_ok() {
-                let _ = fs::write(dir.join("recent.txt"), text);
+                let _ = keyrig_io::file_io::write_atomic(&dir.join("recent.txt"), text.as_bytes());
             }
         }
     }

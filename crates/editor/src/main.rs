@@ -48,7 +48,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("keyrig: error: {}", error_text(&err));
+            // A hostile file's token can be megabytes long: never echo it whole.
+            eprintln!("keyrig: error: {}", keyrig_io::message::clip_long_tokens(&error_text(&err)));
             ExitCode::FAILURE
         }
     }

@@ -282,3 +282,76 @@ fn bad_weights_in_a_model_are_clear_errors() {
         assert!(!out.exists());
     }
 }
+
+fn corpus(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(rel)
+}
+
+#[test]
+fn md2_models_deform_by_morphing_between_frames_as_the_editor_plays_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = corpus("md2/sydney/sydney.md2");
+    let md2 = keyrig_io::md2::load_md2_file(&file).unwrap();
+    // The editor plays every frame at MD2_DEFAULT_FPS on a 30 fps timeline: frame 5 is
+    // 1/6 s, i.e. MD2 frame position 5/30 · 10 ⅔ between frames 1 and 2.
+    for frame in ["0", "5", "7.5"] {
+        let json = deform_json(&file, &["--frame", frame], "linear", dir.path());
+        assert_eq!(json["animation"], "morph");
+        assert_eq!(json["space"], "md2");
+        let got = positions(&json, "positions");
+        let time = frame.parse::<f64>().unwrap() / 30.0;
+        let f = time * keyrig_core::MD2_DEFAULT_FPS;
+        let (a, u) = (f.floor() as usize, (f - f.floor()) as f32);
+        let (pa, pb) = (md2.frame_pose(a).unwrap(), md2.frame_pose(a + 1).unwrap());
+        assert_eq!(got.len(), md2.vertex_count());
+        for (i, g) in got.iter().enumerate() {
+            let want = pa.positions[i].lerp(pb.positions[i], u);
+            assert!((*g - want).length() < 1e-4, "frame {frame} vertex {i}: {g} vs {want}");
+        }
+        let indices: Vec<u32> =
+            json["indices"].as_array().unwrap().iter().map(|i| i.as_u64().unwrap() as u32).collect();
+        assert_eq!(indices, md2.indices, "triangles as keyrig-io reads them (counter-clockwise)");
+    }
+    // Outside the editor's frame range (one loop) is an error that states the range.
+    let out = dir.path().join("x.json");
+    assert_fails_with(
+        &keyrig(&[
+            "deform",
+            file.to_str().unwrap(),
+            "--frame",
+            "100000",
+            "--deformer",
+            "linear",
+            "-o",
+            out.to_str().unwrap(),
+        ]),
+        &["--frame 100000 is outside the scene's frame range 0..="],
+    );
+}
+
+#[test]
+fn gltf_morph_target_models_deform_as_base_plus_weighted_targets() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = corpus("gltf/AnimatedMorphCube/AnimatedMorphCube.glb");
+    let model = keyrig_io::gltf_import::import_gltf_file(&file).unwrap();
+    let node = model.nodes.iter().position(|n| n.mesh.is_some()).unwrap();
+    let mut moved = false;
+    for time in [0.0, 0.4, 1.0, 1.7] {
+        let json = deform_json(&file, &["--time", &time.to_string()], "linear", dir.path());
+        assert_eq!(json["animation"], "morph");
+        assert_eq!(json["space"], "gltf-world");
+        let got = positions(&json, "positions");
+        // The glTF reference: p + Σ wᵢ·Δpᵢ with the animation's weights, by the node's world
+        // transform.
+        let want: Vec<Vec3> = model.deformed_positions(node, Some(0), time).unwrap().concat();
+        assert_eq!(got.len(), want.len());
+        for (g, w) in got.iter().zip(&want) {
+            assert!((*g - *w).length() < 1e-5, "t {time}: {g} vs {w}");
+        }
+        moved |= got
+            .iter()
+            .zip(&model.meshes[0].primitives[0].positions[..])
+            .any(|(g, p)| (*g - *p).length() > 1e-3);
+    }
+    assert!(moved, "the targets move the cube at some time");
+}

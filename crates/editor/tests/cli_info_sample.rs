@@ -382,3 +382,133 @@ fn info_summarizes_md2_models() {
     }
     assert!(seen > 0, "no .md2 in {}", dir.display());
 }
+
+fn corpus(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(rel)
+}
+
+#[test]
+fn info_does_not_panic_on_a_node_name_of_65505_characters() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(corpus("gltf/SimpleSkin/glTF-Embedded/SimpleSkin.gltf")).unwrap(),
+    )
+    .unwrap();
+    // Node 2 is the animated joint: its name ends up in a channel path of the track table.
+    for len in [65_505usize, 70_000] {
+        doc["nodes"][2]["name"] = serde_json::json!("x".repeat(len));
+        let path = dir.path().join("huge.gltf");
+        std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+        let o = keyrig(&["info", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stdout(&o).contains("problems: none"));
+    }
+}
+
+#[test]
+fn frames_outside_the_range_and_bad_numbers_are_clear_errors() {
+    let demo = demo();
+    let d = demo.to_str().unwrap();
+    let channel = ["--channel", "object/Arm/rotation"];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["sample", d];
+        args.extend_from_slice(&channel);
+        args.extend_from_slice(extra);
+        keyrig(&args)
+    };
+    assert_fails_with(&run(&["--frame", "91"]), &["--frame 91 is outside the scene's frame range 0..=90"]);
+    // `-10` is a negative number, not a flag.
+    assert_fails_with(&run(&["--frame", "-10"]), &["--frame -10 is outside the scene's frame range 0..=90"]);
+    assert_fails_with(&run(&["--frames", "-10..5"]), &["frame -10 is outside the scene's frame range"]);
+    assert_fails_with(&run(&["--time", "3.5"]), &["--time 3.5 is outside the scene's frame range 0..=90"]);
+    assert_fails_with(
+        &run(&["--frames", "0..10", "--step", "-1"]),
+        &["--step -1: must be a positive number"],
+    );
+    assert!(run(&["--frame", "90"]).status.success());
+}
+
+#[test]
+fn a_scene_file_with_a_byte_order_mark_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = b"\xEF\xBB\xBF".to_vec();
+    bytes.extend(std::fs::read(demo()).unwrap());
+    let path = dir.path().join("bom.ron");
+    std::fs::write(&path, bytes).unwrap();
+    let o = keyrig(&["info", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("problems: none"));
+}
+
+#[test]
+fn error_messages_do_not_echo_huge_tokens() {
+    let dir = tempfile::tempdir().unwrap();
+    let token = "y".repeat(5_000_000);
+    let path = write_temp(&dir, "huge.ron", &format!("(version: 1, scene: ({token}: 1))"));
+    let o = keyrig(&["info", path.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert!(!o.status.success());
+    assert!(err.len() < 2_000, "{} bytes of error", err.len());
+    assert!(err.contains("yyyy… (5000002 bytes)"), "{err}");
+    // serde_json quotes the string it did not expect.
+    let text = format!("{{\"asset\": {{\"version\": \"2.0\"}}, \"nodes\": [{{\"mesh\": \"{token}\"}}]}}");
+    let gltf = write_temp(&dir, "huge.gltf", &text);
+    let o = keyrig(&["info", gltf.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.len() < 2_000, "{} bytes of error", err.len());
+    assert!(err.contains("yyyy… (500000"), "{err}");
+}
+
+#[test]
+fn an_md2_model_opened_by_a_bare_file_name_keeps_its_skin() {
+    let folder = corpus("md2/faerie");
+    let o = Command::new(KEYRIG).args(["info", "faerie.md2"]).current_dir(&folder).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("image ./faerie2.bmp"), "{}", stdout(&o));
+}
+
+#[test]
+fn info_reports_a_skinned_mesh_needing_more_joints_than_its_skeleton_has() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut scene = keyrig_io::scene_file::load(&demo()).unwrap();
+    let skeleton = scene.objects[0].skeleton.as_mut().unwrap();
+    skeleton.joints.pop();
+    let path = dir.path().join("fewer.ron");
+    keyrig_io::scene_file::save(&path, &scene).unwrap();
+    let o = keyrig(&["info", path.to_str().unwrap()]);
+    assert!(stdout(&o).contains("problems: 1"), "{}", stdout(&o));
+    assert!(
+        stdout(&o).contains("objects[0].skeleton: the procedural ArmHighPoly mesh does not fit"),
+        "{}",
+        stdout(&o)
+    );
+    assert_fails_with(&o, &["1 validation problem"]);
+}
+
+#[test]
+fn non_regular_files_are_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let zero = dir.path().join("zero.glb");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    assert_fails_with(
+        &keyrig(&["info", zero.to_str().unwrap()]),
+        &["zero.glb", "a character device is not a regular file"],
+    );
+    let folder = dir.path().join("folder.ron");
+    std::fs::create_dir(&folder).unwrap();
+    assert_fails_with(
+        &keyrig(&["info", folder.to_str().unwrap()]),
+        &["folder.ron", "a folder is not a regular file"],
+    );
+    let fifo = dir.path().join("pipe.md2");
+    let made = Command::new("mkfifo").arg(&fifo).status().map(|s| s.success()).unwrap_or(false);
+    if made {
+        // Without a writer, a read would wait forever; keyrig refuses before opening it.
+        let start = std::time::Instant::now();
+        assert_fails_with(
+            &keyrig(&["info", fifo.to_str().unwrap()]),
+            &["pipe.md2", "a FIFO (named pipe) is not a regular file"],
+        );
+        assert!(start.elapsed() < std::time::Duration::from_secs(10));
+    }
+}

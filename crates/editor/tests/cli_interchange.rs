@@ -125,3 +125,123 @@ fn bad_inputs_fail_with_the_file_and_the_place() {
         &["broken.ron"],
     );
 }
+
+#[test]
+fn outputs_never_replace_an_input_or_a_model_the_scene_uses() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // A scene whose cube is a glTF model beside it.
+    let model = dir.path().join("rigged.glb");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb"),
+        &model,
+    )
+    .expect("copy model");
+    let before = std::fs::read(&model).expect("read model");
+    let text = std::fs::read_to_string(demo())
+        .expect("demo")
+        .replace("mesh: Some(Procedural(Cube)),", "mesh: Some(File(path: \"rigged.glb\")),");
+    let scene = dir.path().join("scene.ron");
+    std::fs::write(&scene, text).expect("scene");
+    assert_fails_with(
+        &keyrig(&[os("export"), scene.as_os_str(), os("-o"), model.as_os_str()]),
+        &["rigged.glb", "refusing to overwrite the model file that objects[1] (`Cube`) uses"],
+    );
+    // The same file through another path.
+    let dotted = dir.path().join(".").join("rigged.glb");
+    assert_fails_with(
+        &keyrig(&[os("export"), scene.as_os_str(), os("-o"), dotted.as_os_str()]),
+        &["refusing to overwrite the model file"],
+    );
+    assert_eq!(std::fs::read(&model).expect("read model"), before, "the model is untouched");
+    // convert never replaces its model or the model's skin.
+    let folder = dir.path().join("sydney");
+    std::fs::create_dir(&folder).expect("mkdir");
+    for name in ["sydney.md2", "sydney.bmp"] {
+        std::fs::copy(md2("sydney").join(name), folder.join(name)).expect("copy");
+    }
+    let skin = folder.join("sydney.bmp");
+    let o = keyrig(&[
+        os("convert"),
+        folder.join("sydney.md2").as_os_str(),
+        os("-o"),
+        folder.join("sydney.gltf").as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // deform refuses its own input.
+    let o = keyrig(&[
+        os("deform"),
+        scene.as_os_str(),
+        os("--frame"),
+        os("1"),
+        os("--deformer"),
+        os("linear"),
+        os("-o"),
+        scene.as_os_str(),
+    ]);
+    assert!(!o.status.success());
+    assert!(skin.exists());
+}
+
+#[test]
+fn frame_rates_far_out_of_range_are_refused_with_a_short_message() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.glb");
+    for fps in ["1e300", "-10", "1e-300"] {
+        let o = keyrig(&[
+            os("convert"),
+            md2("dolphin/dolphin.md2").as_os_str(),
+            os("-o"),
+            out.as_os_str(),
+            os("--fps"),
+            os(fps),
+        ]);
+        assert_fails_with(&o, &["--fps", "must be between 0.01 and 1000 frames per second"]);
+        assert!(stderr(&o).len() < 300, "{}", stderr(&o));
+    }
+    assert!(!out.exists());
+}
+
+/// Kills `keyrig export` at times spread over its run while it replaces an existing file:
+/// the file must always be the old one or the complete new one, never a truncated mix.
+#[test]
+fn an_export_killed_during_the_write_leaves_the_old_or_the_new_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("demo.gltf");
+    let run = |tolerance: &str| {
+        let mut command = Command::new(KEYRIG);
+        command.args([
+            os("export"),
+            demo().as_os_str(),
+            os("-o"),
+            out.as_os_str(),
+            os("--rotation-tolerance"),
+            os(tolerance),
+        ]);
+        command
+    };
+    // The old file (coarse rotation tolerance) and the new one (fine): different bytes.
+    assert!(run("1").status().expect("run").success());
+    let old = std::fs::read(&out).expect("old");
+    let start = std::time::Instant::now();
+    assert!(run("0.001").status().expect("run").success());
+    let whole = start.elapsed();
+    let new = std::fs::read(&out).expect("new");
+    assert_ne!(old, new);
+    let mut outcomes = [0usize; 2];
+    for trial in 0..20u32 {
+        std::fs::write(&out, &old).expect("reset");
+        let mut child = run("0.001").spawn().expect("spawn");
+        std::thread::sleep(whole * trial / 20);
+        let _ = child.kill();
+        let _ = child.wait();
+        let now = std::fs::read(&out).expect("the target is never removed");
+        assert!(
+            now == old || now == new,
+            "trial {trial}: {} bytes, neither the old nor the new file",
+            now.len()
+        );
+        outcomes[usize::from(now == new)] += 1;
+    }
+    eprintln!("killed exports: {} left the old file, {} the new one", outcomes[0], outcomes[1]);
+}

@@ -115,7 +115,9 @@ impl ExportedGltf {
         serde_json::to_string_pretty(&json).unwrap_or_default()
     }
 
-    /// Writes .glb or .gltf by the extension of `path` (.gltf → embedded text, else GLB).
+    /// Writes .glb or .gltf by the extension of `path` (.gltf → embedded text, else GLB),
+    /// atomically ([`crate::file_io::write_atomic`]): `path` holds either its previous
+    /// content or the whole new file, whatever happens during the write.
     ///
     /// # Errors
     /// The file cannot be written.
@@ -123,7 +125,8 @@ impl ExportedGltf {
         let is_text =
             path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
         let bytes = if is_text { self.to_gltf_embedded().into_bytes() } else { self.to_glb() };
-        std::fs::write(path, bytes).map_err(|source| ExportError::Write { path: path.to_path_buf(), source })
+        crate::file_io::write_atomic(path, &bytes)
+            .map_err(|source| ExportError::Write { path: path.to_path_buf(), source })
     }
 }
 
@@ -388,7 +391,14 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
                             ),
                         ));
                     }
-                    attributes.insert("JOINTS_0".into(), json!(b.joints(joints)));
+                    // glTF: a joint with zero weight should be joint 0 (the validator warns
+                    // ACCESSOR_JOINTS_USED_ZERO_WEIGHT otherwise); it has no effect either way.
+                    let joints: Vec<[u16; 4]> = joints
+                        .iter()
+                        .zip(weights)
+                        .map(|(j, w)| std::array::from_fn(|i| if w[i] == 0.0 { 0 } else { j[i] }))
+                        .collect();
+                    attributes.insert("JOINTS_0".into(), json!(b.joints(&joints)));
                     let w: Vec<f32> = weights.iter().flatten().copied().collect();
                     attributes.insert(
                         "WEIGHTS_0".into(),
@@ -817,6 +827,11 @@ fn static_mesh(model: &ImportedModel, index: usize) -> Option<MeshData> {
     (!data.positions.is_empty()).then_some(data)
 }
 
+/// Frame rates [`export_md2`] accepts. Key times are `k / fps` in f32 seconds: far above
+/// 1000 fps consecutive keys of a long clip would no longer be distinct, far below 0.01
+/// they would leave f32's exact integer range.
+pub const MD2_FPS_RANGE: std::ops::RangeInclusive<f64> = 0.01..=1000.0;
+
 /// Options of [`export_md2`].
 #[derive(Clone, Copy, Debug)]
 pub struct Md2ExportOptions {
@@ -845,8 +860,16 @@ pub fn export_md2(
     model: &crate::md2::Md2Model,
     options: Md2ExportOptions,
 ) -> Result<ExportedGltf, ExportError> {
-    if !(options.fps.is_finite() && options.fps > 0.0) {
-        return Err(scene_err("fps", format!("{} is not a positive frame rate", options.fps)));
+    if !(options.fps.is_finite() && MD2_FPS_RANGE.contains(&options.fps)) {
+        return Err(scene_err(
+            "fps",
+            format!(
+                "{} is not a frame rate between {} and {} frames per second",
+                options.fps,
+                MD2_FPS_RANGE.start(),
+                MD2_FPS_RANGE.end()
+            ),
+        ));
     }
     let mut b = Builder::default();
     let base = model.frame_pose(0).ok_or_else(|| scene_err("frames", "the model has no frames"))?;

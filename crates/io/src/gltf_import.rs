@@ -14,8 +14,11 @@
 //! paths, no schemes other than `data:`) naming regular files.
 
 use std::borrow::Cow;
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
 
 use glam::{Mat4, Quat, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -197,16 +200,19 @@ pub fn import_gltf_slice(data: &[u8]) -> Result<ImportedModel, GltfError> {
 }
 
 /// Reads and imports the .glb or .gltf at `path`; external buffers resolve next to it.
+/// The file and its external buffers must be regular files of at most
+/// [`crate::file_io::MAX_MODEL_BYTES`] bytes (checked before reading).
 ///
 /// # Errors
-/// The file cannot be read, or is malformed ([`GltfError`] with the file and location).
+/// The file cannot be read, is not a regular file or is too large, or is malformed ([`GltfError`] with the file and location).
 pub fn import_gltf_file(path: &Path) -> Result<ImportedModel, GltfError> {
     let with_file = |mut e: GltfError| {
         e.file = Some(path.to_path_buf());
         e
     };
-    let data = std::fs::read(path).map_err(|e| with_file(at(Location::File, GltfErrorKind::Io(e))))?;
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+    let data = crate::file_io::read_regular_file(path, crate::file_io::MAX_MODEL_BYTES)
+        .map_err(|e| with_file(at(Location::File, GltfErrorKind::Io(e))))?;
+    let base = crate::file_io::parent_or_dot(path);
     import(&data, Some(&base)).map_err(with_file)
 }
 
@@ -219,7 +225,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     let root: gltf::json::Root = gltf::json::deserialize::from_slice(json_bytes).map_err(|e| {
         at(
             Location::LineColumn { line: e.line(), column: e.column(), chunk_offset },
-            GltfErrorKind::Json(e.to_string()),
+            GltfErrorKind::Json(crate::message::clip_long_tokens(&e.to_string()).into_owned()),
         )
     })?;
     check_position_indices(&root)?;
@@ -228,7 +234,10 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
         Err(gltf::Error::Validation(errors)) => {
             let (path, error) = errors.into_iter().next().map_or_else(
                 || (String::new(), "validation failed".to_owned()),
-                |(p, e)| (json_pointer_from_path(p.as_str()), e.to_string()),
+                |(p, e)| {
+                    let path = crate::message::clip_long_tokens(p.as_str()).into_owned();
+                    (json_pointer_from_path(&path), e.to_string())
+                },
             );
             return Err(ptr(path, GltfErrorKind::Invalid(error)));
         }
@@ -244,7 +253,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     }
     let buffers = load_buffers(&doc, base, bin)?;
     let budget = data.len() + buffers.iter().map(|b| b.len()).sum::<usize>();
-    let cx = Reader { buffers: &buffers, budget };
+    let cx = Reader { buffers: &buffers, budget, unbacked: RefCell::default(), cache: Decoded::default() };
 
     let nodes = read_nodes(&doc)?;
     let mut model = ImportedModel { nodes, ..ImportedModel::default() };
@@ -330,16 +339,44 @@ fn read_relative(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, String> {
         return Err(format!("URI {uri:?} must stay inside the model's folder"));
     }
     let path = base.join(rel);
-    if !path.is_file() {
-        return Err(format!("{} is not a readable file", path.display()));
-    }
-    std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))
+    crate::file_io::read_regular_file(&path, crate::file_io::MAX_MODEL_BYTES)
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// Borrowed buffers and the byte budget that bounds accessors without a buffer view.
+/// Borrowed buffers, the byte budget that bounds accessors without a buffer view, and the
+/// accessors decoded so far.
 struct Reader<'a, 'b> {
     buffers: &'a [Cow<'b, [u8]>],
     budget: usize,
+    /// Bytes of accessors without a buffer view (all-zero sparse bases) accepted so far:
+    /// they have no bytes of their own in the file, so together they must fit the budget.
+    unbacked: RefCell<(usize, HashSet<usize>)>,
+    cache: Decoded,
+}
+
+/// Accessors decoded once and shared (by accessor index): a file whose primitives use one
+/// accessor many times holds its values once.
+#[derive(Default)]
+struct Decoded {
+    vec3: RefCell<HashMap<usize, Arc<[Vec3]>>>,
+    vec2: RefCell<HashMap<usize, Arc<[Vec2]>>>,
+    joints: RefCell<HashMap<usize, Arc<[[u16; 4]]>>>,
+    weights: RefCell<HashMap<usize, Arc<[[f32; 4]]>>>,
+    indices: RefCell<HashMap<usize, Arc<[u32]>>>,
+}
+
+/// The cached value of accessor `index` in `cache`, decoding it with `decode` the first time.
+fn shared<T>(
+    cache: &RefCell<HashMap<usize, Arc<[T]>>>,
+    index: usize,
+    decode: impl FnOnce() -> Result<Vec<T>, GltfError>,
+) -> Result<Arc<[T]>, GltfError> {
+    if let Some(v) = cache.borrow().get(&index) {
+        return Ok(Arc::clone(v));
+    }
+    let v: Arc<[T]> = decode()?.into();
+    cache.borrow_mut().insert(index, Arc::clone(&v));
+    Ok(v)
 }
 
 impl Reader<'_, '_> {
@@ -398,7 +435,21 @@ fn check_accessor(
         None if acc.sparse().is_none() => {
             return Err(bad("has neither a bufferView nor sparse values".into()));
         }
-        None => {}
+        None => {
+            // Counted once per accessor, however often it is used.
+            let mut unbacked = cx.unbacked.borrow_mut();
+            if unbacked.1.insert(acc.index()) {
+                match count.checked_mul(elem).and_then(|n| n.checked_add(unbacked.0)) {
+                    Some(total) if total <= cx.budget => unbacked.0 = total,
+                    _ => {
+                        return Err(bad(format!(
+                            "accessors without a bufferView would decode to more than the file's {} bytes",
+                            cx.budget
+                        )))
+                    }
+                }
+            }
+        }
     }
     if count.checked_mul(elem).is_none_or(|n| n > cx.budget) {
         return Err(bad(format!("{count} elements of {elem} bytes are more than the file holds")));
@@ -602,34 +653,124 @@ fn count_matches(got: usize, expected: usize, here: &str) -> Result<(), GltfErro
 
 const F32: &[DataType] = &[DataType::F32];
 
+/// A checked float VEC3 accessor (positions, normals, morph displacements), decoded once.
+fn shared_vec3s(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+    what: &str,
+) -> Result<Arc<[Vec3]>, GltfError> {
+    shared(&cx.cache.vec3, acc.index(), || {
+        let values: Vec<[f32; 3]> = gltf::accessor::Iter::<[f32; 3]>::new(acc.clone(), cx.get())
+            .map(Iterator::collect)
+            .unwrap_or_default();
+        let v = finite_vec3s(values, here, what)?;
+        count_matches(v.len(), acc.count(), here)?;
+        Ok(v)
+    })
+}
+
+/// A checked TEXCOORD accessor (float or normalized integers), decoded once.
+fn shared_texcoords(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+) -> Result<Arc<[Vec2]>, GltfError> {
+    use gltf::mesh::util::ReadTexCoords;
+    shared(&cx.cache.vec2, acc.index(), || {
+        let (a, get) = (acc.clone(), cx.get());
+        let read = match acc.data_type() {
+            DataType::U8 => gltf::accessor::Iter::new(a, get).map(ReadTexCoords::U8),
+            DataType::U16 => gltf::accessor::Iter::new(a, get).map(ReadTexCoords::U16),
+            _ => gltf::accessor::Iter::new(a, get).map(ReadTexCoords::F32),
+        };
+        let v: Vec<Vec2> = read.map(|t| t.into_f32().map(Vec2::from_array).collect()).unwrap_or_default();
+        count_matches(v.len(), acc.count(), here)?;
+        if v.iter().any(|t| !t.is_finite()) {
+            return Err(ptr(here, GltfErrorKind::NonFinite("texture coordinate".into())));
+        }
+        Ok(v)
+    })
+}
+
+/// A checked JOINTS accessor, decoded once.
+fn shared_joints(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+) -> Result<Arc<[[u16; 4]]>, GltfError> {
+    use gltf::mesh::util::ReadJoints;
+    shared(&cx.cache.joints, acc.index(), || {
+        let (a, get) = (acc.clone(), cx.get());
+        let read = match acc.data_type() {
+            DataType::U8 => gltf::accessor::Iter::new(a, get).map(ReadJoints::U8),
+            _ => gltf::accessor::Iter::new(a, get).map(ReadJoints::U16),
+        };
+        let v: Vec<[u16; 4]> = read.map(|j| j.into_u16().collect()).unwrap_or_default();
+        count_matches(v.len(), acc.count(), here)?;
+        Ok(v)
+    })
+}
+
+/// A checked WEIGHTS accessor (float or normalized integers), decoded once.
+fn shared_weights(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+) -> Result<Arc<[[f32; 4]]>, GltfError> {
+    use gltf::mesh::util::ReadWeights;
+    shared(&cx.cache.weights, acc.index(), || {
+        let (a, get) = (acc.clone(), cx.get());
+        let read = match acc.data_type() {
+            DataType::U8 => gltf::accessor::Iter::new(a, get).map(ReadWeights::U8),
+            DataType::U16 => gltf::accessor::Iter::new(a, get).map(ReadWeights::U16),
+            _ => gltf::accessor::Iter::new(a, get).map(ReadWeights::F32),
+        };
+        let v: Vec<[f32; 4]> = read.map(|w| w.into_f32().collect()).unwrap_or_default();
+        count_matches(v.len(), acc.count(), here)?;
+        if v.iter().flatten().any(|w| !w.is_finite()) {
+            return Err(ptr(here, GltfErrorKind::NonFinite("weight".into())));
+        }
+        Ok(v)
+    })
+}
+
+/// A checked index accessor, decoded once (as read; primitive modes are converted later).
+fn shared_indices(
+    cx: &Reader<'_, '_>,
+    acc: &gltf::Accessor<'_>,
+    here: &str,
+) -> Result<Arc<[u32]>, GltfError> {
+    use gltf::mesh::util::ReadIndices;
+    shared(&cx.cache.indices, acc.index(), || {
+        let (a, get) = (acc.clone(), cx.get());
+        let read = match acc.data_type() {
+            DataType::U8 => gltf::accessor::Iter::new(a, get).map(ReadIndices::U8),
+            DataType::U16 => gltf::accessor::Iter::new(a, get).map(ReadIndices::U16),
+            _ => gltf::accessor::Iter::new(a, get).map(ReadIndices::U32),
+        };
+        let v: Vec<u32> = read.map(|i| i.into_u32().collect()).unwrap_or_default();
+        count_matches(v.len(), acc.count(), here)?;
+        Ok(v)
+    })
+}
+
 fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, GltfError> {
     let mut primitives = Vec::new();
     for prim in mesh.primitives() {
         let here = format!("/meshes/{}/primitives/{}", mesh.index(), prim.index());
-        let reader = prim.reader(cx.get());
         let attr = |name: &str| format!("{here}/attributes/{name}");
 
         let pos_acc = prim.get(&gltf::Semantic::Positions).ok_or_else(|| {
             ptr(format!("{here}/attributes"), GltfErrorKind::Invalid("primitive has no POSITION".into()))
         })?;
         let n = check_accessor(cx, &pos_acc, "POSITION", &[Dimensions::Vec3], F32)?;
-        let positions = finite_vec3s(
-            reader.read_positions().map(Iterator::collect).unwrap_or_default(),
-            &attr("POSITION"),
-            "position",
-        )?;
-        count_matches(positions.len(), n, &attr("POSITION"))?;
+        let positions = shared_vec3s(cx, &pos_acc, &attr("POSITION"), "position")?;
 
         let normals = match prim.get(&gltf::Semantic::Normals) {
             Some(acc) => {
                 check_same_count(cx, &acc, "NORMAL", &[Dimensions::Vec3], F32, n, &attr("NORMAL"))?;
-                let v = finite_vec3s(
-                    reader.read_normals().map(Iterator::collect).unwrap_or_default(),
-                    &attr("NORMAL"),
-                    "normal",
-                )?;
-                count_matches(v.len(), n, &attr("NORMAL"))?;
-                Some(v)
+                Some(shared_vec3s(cx, &acc, &attr("NORMAL"), "normal")?)
             }
             None => None,
         };
@@ -645,18 +786,7 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
                     n,
                     &attr("TEXCOORD_0"),
                 )?;
-                let v: Vec<Vec2> = reader
-                    .read_tex_coords(0)
-                    .map(|t| t.into_f32().map(Vec2::from_array).collect())
-                    .unwrap_or_default();
-                count_matches(v.len(), n, &attr("TEXCOORD_0"))?;
-                if v.iter().any(|t| !t.is_finite()) {
-                    return Err(ptr(
-                        attr("TEXCOORD_0"),
-                        GltfErrorKind::NonFinite("texture coordinate".into()),
-                    ));
-                }
-                Some(v)
+                Some(shared_texcoords(cx, &acc, &attr("TEXCOORD_0"))?)
             }
             None => None,
         };
@@ -680,44 +810,29 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
             )?;
             let wt = [DataType::F32, DataType::U8, DataType::U16];
             check_same_count(cx, &w_acc, &wn, &[Dimensions::Vec4], &wt, n, &attr(&wn))?;
-            let joints: Vec<[u16; 4]> =
-                reader.read_joints(set).map(|j| j.into_u16().collect()).unwrap_or_default();
-            let weights: Vec<[f32; 4]> =
-                reader.read_weights(set).map(|w| w.into_f32().collect()).unwrap_or_default();
-            count_matches(joints.len(), n, &attr(&jn))?;
-            count_matches(weights.len(), n, &attr(&wn))?;
-            if weights.iter().flatten().any(|w| !w.is_finite()) {
-                return Err(ptr(attr(&wn), GltfErrorKind::NonFinite("weight".into())));
-            }
-            joint_sets.push(joints);
-            weight_sets.push(weights);
+            joint_sets.push(shared_joints(cx, &j_acc, &attr(&jn))?);
+            weight_sets.push(shared_weights(cx, &w_acc, &attr(&wn))?);
         }
 
         let mut targets = Vec::new();
         for (t, target) in prim.morph_targets().enumerate() {
             let there = format!("{here}/targets/{t}");
             let read =
-                |acc: Option<gltf::Accessor<'_>>, what: &str| -> Result<Option<Vec<Vec3>>, GltfError> {
+                |acc: Option<gltf::Accessor<'_>>, what: &str| -> Result<Option<Arc<[Vec3]>>, GltfError> {
                     let Some(acc) = acc else { return Ok(None) };
                     check_same_count(cx, &acc, what, &[Dimensions::Vec3], F32, n, &there)?;
-                    let values: Vec<[f32; 3]> = gltf::accessor::Iter::<[f32; 3]>::new(acc, cx.get())
-                        .map(Iterator::collect)
-                        .unwrap_or_default();
-                    let v = finite_vec3s(values, &there, what)?;
-                    count_matches(v.len(), n, &there)?;
-                    Ok(Some(v))
+                    Ok(Some(shared_vec3s(cx, &acc, &there, what)?))
                 };
             let positions = read(target.positions(), "morph POSITION")?;
             let normals = read(target.normals(), "morph NORMAL")?;
             targets.push(MorphTarget { positions, normals });
         }
 
-        let raw_indices: Vec<u32> = match prim.indices() {
+        let raw_indices: Arc<[u32]> = match prim.indices() {
             Some(acc) => {
                 let types = [DataType::U8, DataType::U16, DataType::U32];
-                let count = check_accessor(cx, &acc, "indices", &[Dimensions::Scalar], &types)?;
-                let v: Vec<u32> = reader.read_indices().map(|i| i.into_u32().collect()).unwrap_or_default();
-                count_matches(v.len(), count, &format!("{here}/indices"))?;
+                check_accessor(cx, &acc, "indices", &[Dimensions::Scalar], &types)?;
+                let v = shared_indices(cx, &acc, &format!("{here}/indices"))?;
                 if let Some(&bad) = v.iter().find(|&&i| i as usize >= n) {
                     return Err(ptr(
                         format!("{here}/indices"),
@@ -787,16 +902,19 @@ fn check_same_count(
     Ok(())
 }
 
-/// Triangle strips and fans become lists; line strips and loops become line lists.
-fn convert_mode(mode: gltf::mesh::Mode, idx: Vec<u32>) -> (PrimitiveMode, Vec<u32>) {
+/// Triangle strips and fans become lists; line strips and loops become line lists. Lists
+/// keep the decoded (shared) indices; a triangle list's incomplete last triangle is dropped.
+fn convert_mode(mode: gltf::mesh::Mode, idx: Arc<[u32]>) -> (PrimitiveMode, Arc<[u32]>) {
     use gltf::mesh::Mode;
-    match mode {
-        Mode::Triangles => {
-            let whole = idx.len() / 3 * 3;
-            let mut idx = idx;
-            idx.truncate(whole);
-            (PrimitiveMode::Triangles, idx)
+    let whole = |idx: Arc<[u32]>, per: usize| {
+        if idx.len().is_multiple_of(per) {
+            idx
+        } else {
+            idx[..idx.len() / per * per].into()
         }
+    };
+    match mode {
+        Mode::Triangles => (PrimitiveMode::Triangles, whole(idx, 3)),
         Mode::TriangleStrip => (
             PrimitiveMode::Triangles,
             (0..idx.len().saturating_sub(2))
@@ -813,7 +931,7 @@ fn convert_mode(mode: gltf::mesh::Mode, idx: Vec<u32>) -> (PrimitiveMode, Vec<u3
             PrimitiveMode::Triangles,
             (1..idx.len().saturating_sub(1)).flat_map(|i| [idx[0], idx[i], idx[i + 1]]).collect(),
         ),
-        Mode::Lines => (PrimitiveMode::Lines, idx[..idx.len() / 2 * 2].to_vec()),
+        Mode::Lines => (PrimitiveMode::Lines, whole(idx, 2)),
         Mode::LineStrip => (PrimitiveMode::Lines, idx.windows(2).flat_map(|w| [w[0], w[1]]).collect()),
         Mode::LineLoop => {
             let mut out: Vec<u32> = idx.windows(2).flat_map(|w| [w[0], w[1]]).collect();
@@ -822,7 +940,7 @@ fn convert_mode(mode: gltf::mesh::Mode, idx: Vec<u32>) -> (PrimitiveMode, Vec<u3
                     out.extend([last, first]);
                 }
             }
-            (PrimitiveMode::Lines, out)
+            (PrimitiveMode::Lines, out.into())
         }
         Mode::Points => (PrimitiveMode::Points, idx),
     }
@@ -869,8 +987,14 @@ fn read_skin(cx: &Reader<'_, '_>, skin: &gltf::Skin<'_>) -> Result<ModelSkin, Gl
 
 /// Every joint index of a skinned mesh must name one of its skin's joints.
 fn check_skinned_meshes(model: &ImportedModel) -> Result<(), GltfError> {
+    // Each (mesh, skin) pair once: many nodes may show one skinned mesh, and checking it per
+    // node would take time proportional to nodes × vertices.
+    let mut checked = HashSet::new();
     for (i, node) in model.nodes.iter().enumerate() {
         let (Some(m), Some(s)) = (node.mesh, node.skin) else { continue };
+        if !checked.insert((m, s)) {
+            continue;
+        }
         let (Some(mesh), Some(skin)) = (model.meshes.get(m), model.skins.get(s)) else { continue };
         for (p, prim) in mesh.primitives.iter().enumerate() {
             for (set, joints) in prim.joint_sets.iter().enumerate() {

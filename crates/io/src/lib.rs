@@ -2,9 +2,11 @@
 //! atomically), the built-in demo scene, glTF import/export and MD2 import.
 
 pub mod demo;
+pub mod file_io;
 pub mod gltf_export;
 pub mod gltf_import;
 pub mod md2;
+pub mod message;
 pub mod model;
 mod scene_fast;
 pub mod scene_file;

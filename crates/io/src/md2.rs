@@ -155,7 +155,9 @@ pub struct Md2Model {
     pub vertex_xyz: Vec<u32>,
     /// Normalized texture coordinate of each render vertex (s / width, t / height).
     pub texcoords: Vec<Vec2>,
-    /// Triangles as render-vertex indices, three per triangle, in file order.
+    /// Triangles as render-vertex indices, three per triangle, in file order, wound
+    /// counter-clockwise seen from the front (as glTF and OBJ expect): MD2 stores its
+    /// triangles clockwise, so the reader swaps each triangle's second and third corners.
     pub indices: Vec<u32>,
     pub frames: Vec<Md2Frame>,
     pub clips: Vec<Md2Clip>,
@@ -351,6 +353,10 @@ pub fn parse_md2(data: &[u8]) -> Result<Md2Model, Md2Error> {
             });
             indices.push(index);
         }
+        // MD2 front faces are clockwise (Quake 2 culls with glFrontFace(GL_CW)); keyrig,
+        // glTF and OBJ take counter-clockwise ones.
+        let n = indices.len();
+        indices.swap(n - 2, n - 1);
     }
     let (width, height) = (skin_width as f32, skin_height as f32);
     let texcoords = vertex_st
@@ -547,7 +553,8 @@ const SKIN_EXTENSIONS: [&str; 4] = ["png", "bmp", "jpg", "jpeg"];
 /// 3. the only image in the folder (or in `skins/`), when there is exactly one.
 #[must_use]
 pub fn find_skin(md2_path: &Path, skin_names: &[String]) -> Option<PathBuf> {
-    let dir = md2_path.parent().unwrap_or(Path::new("."));
+    // A bare file name's parent is the empty path, which `read_dir` refuses: use `.`.
+    let dir = crate::file_io::parent_or_dot(md2_path);
     let folders = [dir.to_path_buf(), dir.join("skins")];
     let mut stems: Vec<String> = Vec::new();
     for name in skin_names {
@@ -590,6 +597,15 @@ pub fn find_skin(md2_path: &Path, skin_names: &[String]) -> Option<PathBuf> {
     None
 }
 
+/// The skin image [`load_md2_file`] would load for the MD2 file at `path` (without decoding
+/// it); `None` when the file cannot be read or parsed or has no skin beside it.
+#[must_use]
+pub fn skin_of_file(path: &Path) -> Option<PathBuf> {
+    let data = crate::file_io::read_regular_file(path, crate::file_io::MAX_MD2_BYTES).ok()?;
+    let model = parse_md2(&data).ok()?;
+    find_skin(path, &model.skin_names)
+}
+
 fn has_image_extension(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
@@ -603,7 +619,8 @@ fn has_image_extension(path: &Path) -> bool {
 /// The file cannot be read, is malformed ([`Md2Error`] with the byte offset), or its skin
 /// image exists but cannot be decoded.
 pub fn load_md2_file(path: &Path) -> Result<Md2Model, Md2LoadError> {
-    let data = std::fs::read(path).map_err(|source| Md2LoadError::Io { path: path.to_path_buf(), source })?;
+    let data = crate::file_io::read_regular_file(path, crate::file_io::MAX_MD2_BYTES)
+        .map_err(|source| Md2LoadError::Io { path: path.to_path_buf(), source })?;
     let mut model =
         parse_md2(&data).map_err(|source| Md2LoadError::Format { path: path.to_path_buf(), source })?;
     if let Some(skin_path) = find_skin(path, &model.skin_names) {

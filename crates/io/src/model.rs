@@ -10,6 +10,8 @@
 //! `p(t) = h00·v_k + h10·t_d·b_k + h01·v_{k+1} + h11·t_d·a_{k+1}`, `t_d = t_{k+1} − t_k`,
 //! and cubic rotations are normalized after the component-wise Hermite.
 
+use std::sync::Arc;
+
 use glam::{Mat4, Quat, Vec2, Vec3};
 use keyrig_core::{Interpolation, Key, RawTrack};
 
@@ -49,8 +51,8 @@ pub enum PrimitiveMode {
 /// One morph target: displacements added to the base attributes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MorphTarget {
-    pub positions: Option<Vec<Vec3>>,
-    pub normals: Option<Vec<Vec3>>,
+    pub positions: Option<Arc<[Vec3]>>,
+    pub normals: Option<Arc<[Vec3]>>,
 }
 
 /// A reference to the base-colour texture of a primitive's material.
@@ -72,19 +74,22 @@ pub enum ImageSource {
 }
 
 /// One primitive of a mesh, attributes in accessor order.
+///
+/// Attribute and index arrays are shared (`Arc`): the importer decodes each accessor once,
+/// and primitives that use the same accessor hold the same array.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ModelPrimitive {
     pub mode: PrimitiveMode,
-    pub positions: Vec<Vec3>,
-    pub normals: Option<Vec<Vec3>>,
+    pub positions: Arc<[Vec3]>,
+    pub normals: Option<Arc<[Vec3]>>,
     /// TEXCOORD_0.
-    pub texcoords: Option<Vec<Vec2>>,
+    pub texcoords: Option<Arc<[Vec2]>>,
     /// Vertex indices (generated 0..n when the file has none; strips/fans as lists).
-    pub indices: Vec<u32>,
+    pub indices: Arc<[u32]>,
     /// JOINTS_0, JOINTS_1, …: per vertex four indices into the skin's joint list.
-    pub joint_sets: Vec<Vec<[u16; 4]>>,
+    pub joint_sets: Vec<Arc<[[u16; 4]]>>,
     /// WEIGHTS_0, WEIGHTS_1, …: per vertex four weights, as stored (not renormalized).
-    pub weight_sets: Vec<Vec<[f32; 4]>>,
+    pub weight_sets: Vec<Arc<[[f32; 4]]>>,
     pub morph_targets: Vec<MorphTarget>,
     pub base_colour_factor: [f32; 4],
     pub base_colour_texture: Option<TextureRef>,
@@ -309,10 +314,10 @@ impl ImportedModel {
     /// Base positions of a primitive with morph targets applied: `p + Σ w_t · Δp_t`.
     #[must_use]
     pub fn morphed_positions(primitive: &ModelPrimitive, weights: &[f32]) -> Vec<Vec3> {
-        let mut out = primitive.positions.clone();
+        let mut out = primitive.positions.to_vec();
         for (target, &w) in primitive.morph_targets.iter().zip(weights) {
             if let Some(d) = &target.positions {
-                for (p, d) in out.iter_mut().zip(d) {
+                for (p, d) in out.iter_mut().zip(d.iter()) {
                     *p += w * *d;
                 }
             }
@@ -627,13 +632,26 @@ impl ImportedModel {
         let map = self
             .skeleton_map(skin)
             .ok_or(MappingError::Node { node: usize::MAX, message: format!("no skin {skin}") })?;
-        let anim = animation.and_then(|a| self.animations.get(a));
+        Ok(self.skeleton_from_map(&map, &self.channels_by_node(animation)))
+    }
+
+    /// The channels of `animation`, by the node they drive.
+    fn channels_by_node(&self, animation: Option<usize>) -> Vec<Vec<&ChannelTarget>> {
         let mut channels_of: Vec<Vec<&ChannelTarget>> = vec![Vec::new(); self.nodes.len()];
-        for channel in anim.iter().flat_map(|a| &a.channels) {
+        for channel in animation.and_then(|a| self.animations.get(a)).iter().flat_map(|a| &a.channels) {
             if let Some(list) = channels_of.get_mut(channel.node) {
                 list.push(&channel.target);
             }
         }
+        channels_of
+    }
+
+    /// See [`ImportedModel::scene_skeleton`].
+    fn skeleton_from_map(
+        &self,
+        map: &SkeletonMap,
+        channels_of: &[Vec<&ChannelTarget>],
+    ) -> keyrig_core::Skeleton {
         let mut joints = Vec::with_capacity(map.nodes.len());
         for (k, n) in map.nodes.iter().enumerate() {
             let Some(n) = *n else {
@@ -671,15 +689,15 @@ impl ImportedModel {
             }
             joints.push(joint);
         }
-        Ok(keyrig_core::Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) })
+        keyrig_core::Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) }
     }
 
     /// The mesh on `node` as a keyrig-skin [`keyrig_skin::SkinnedMesh`] bound to the skeleton
     /// of [`ImportedModel::scene_skeleton`]: triangle primitives merged, joint indices
-    /// renumbered to the parents-first order, the four largest influences kept (of JOINTS_0/1)
-    /// and normalized, the file's inverse bind matrices. The palette `F(j)·IBM(j)` then lives
-    /// in the skeleton's frame P (see [`ImportedModel::skeleton_frame`]): glTF's world
-    /// positions are `P · Σ wᵢ F(jᵢ)·IBM(jᵢ)·v`. Positions are bind-space, as in the file.
+    /// renumbered to the skeleton's order, the four largest influences kept (of JOINTS_0/1)
+    /// and normalized, the file's inverse bind matrices. The skeleton reaches up to the scene
+    /// root, so the palette `F(j)·IBM(j)` is glTF's joint matrix and the skinned positions are
+    /// glTF's world positions. Positions are bind-space, as in the file.
     ///
     /// # Errors
     /// The node has no mesh or skin, a primitive has no weights, or keyrig-skin rejects it.
@@ -800,6 +818,10 @@ impl ImportedModel {
         let mut scene = keyrig_core::Scene::default();
         let world = self.rest_world();
         let anim = animation.and_then(|a| self.animations.get(a));
+        // One skeleton per skin, however many mesh nodes share it: linear in the node count.
+        let channels_of = self.channels_by_node(animation);
+        let mut skeletons: std::collections::HashMap<usize, keyrig_core::Skeleton> =
+            std::collections::HashMap::new();
         if let Some(a) = anim {
             let end = (a.duration() * scene.fps).ceil();
             scene.frame_range.end = if end.is_finite() { end.clamp(1.0, 1e6) as i32 } else { 60 };
@@ -811,7 +833,16 @@ impl ImportedModel {
             // A skeleton reaches up to the scene root, so a skinned object sits at the origin.
             let placement = match node.skin {
                 Some(skin) => {
-                    object.skeleton = Some(self.scene_skeleton(skin, animation)?);
+                    let skeleton = match skeletons.entry(skin) {
+                        std::collections::hash_map::Entry::Occupied(e) => e.get().clone(),
+                        std::collections::hash_map::Entry::Vacant(e) => {
+                            let map = self
+                                .skeleton_map(skin)
+                                .ok_or(MappingError::Node { node: i, message: format!("no skin {skin}") })?;
+                            e.insert(self.skeleton_from_map(&map, &channels_of)).clone()
+                        }
+                    };
+                    object.skeleton = Some(skeleton);
                     Mat4::IDENTITY
                 }
                 None => world[i],
@@ -821,8 +852,8 @@ impl ImportedModel {
             object.rotation = keyrig_core::Animated::constant(r.normalize());
             object.scale = keyrig_core::Animated::constant(s);
             if node.skin.is_none() && node.parent.is_none() {
-                for channel in anim.iter().flat_map(|a| &a.channels).filter(|c| c.node == i) {
-                    match &channel.target {
+                for target in &channels_of[i] {
+                    match target {
                         ChannelTarget::Translation(t) => object.translation.track = t.clone(),
                         ChannelTarget::Rotation(t) => object.rotation.track = t.clone(),
                         ChannelTarget::Scale(t) => object.scale.track = t.clone(),

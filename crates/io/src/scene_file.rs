@@ -36,6 +36,7 @@ use std::path::{Path, PathBuf};
 use keyrig_core::{Problem, Scene};
 use serde::{Deserialize, Serialize};
 
+use crate::file_io::{read_regular_file, AtomicFile, MAX_SCENE_BYTES};
 use crate::scene_locate::{locate, TextPosition};
 use crate::scene_ser::to_ron;
 
@@ -261,6 +262,9 @@ pub fn from_str(text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
 /// problems (they are returned beside it, located in the text). Syntax, type and version
 /// errors are still errors. `keyrig info` uses this to show what is wrong.
 pub fn from_str_lenient(text: &str, origin: &Path) -> Result<(Scene, Vec<LocatedProblem>), SceneFileError> {
+    // A byte-order mark (some Windows editors start UTF-8 files with one) is not part of the
+    // document; without it, lines and columns are unchanged.
+    let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
     let scene = match read_current(text) {
         Some(scene) => scene,
         None => read_general(text, origin)?,
@@ -375,7 +379,7 @@ pub fn migrate(version: u32, text: &str, origin: &Path) -> Result<Scene, Migrati
 fn syntax_error(origin: &Path, err: &ron::error::SpannedError) -> SceneFileError {
     let message = match &err.code {
         ron::Error::Eof => "unexpected end of file (is the file truncated?)".to_string(),
-        code => code.to_string(),
+        code => crate::message::clip_long_tokens(&code.to_string()).into_owned(),
     };
     SceneFileError::Syntax {
         path: origin.to_path_buf(),
@@ -399,7 +403,8 @@ pub fn load_lenient(path: &Path) -> Result<(Scene, Vec<LocatedProblem>), SceneFi
 }
 
 fn read_text(path: &Path) -> Result<String, SceneFileError> {
-    let bytes = fs::read(path).map_err(|source| SceneFileError::Read { path: path.to_path_buf(), source })?;
+    let bytes = read_regular_file(path, MAX_SCENE_BYTES)
+        .map_err(|source| SceneFileError::Read { path: path.to_path_buf(), source })?;
     String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let prefix = String::from_utf8_lossy(valid);
@@ -417,9 +422,7 @@ fn read_text(path: &Path) -> Result<String, SceneFileError> {
 /// The backup path of a scene file: `<name>.ron.bak` beside it.
 #[must_use]
 pub fn backup_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(".bak");
-    path.with_file_name(name)
+    crate::file_io::backup_path(path)
 }
 
 /// Saves `scene` to `path` atomically, keeping the previous file as `<name>.ron.bak`.
@@ -451,7 +454,7 @@ fn refuse_newer(path: &Path) -> Result<(), SceneFileError> {
         Ok(meta) if !meta.is_file() => return Ok(()),
         _ => {}
     }
-    let text = match fs::read(path) {
+    let text = match read_regular_file(path, MAX_SCENE_BYTES) {
         Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
         Err(source) => return Err(SceneFileError::Read { path: path.to_path_buf(), source }),
     };
@@ -506,79 +509,13 @@ fn version_by_scan(text: &str) -> Option<u32> {
     digits.parse().ok()
 }
 
-/// Writes `bytes` to a fresh temporary file beside `path`, syncs it, keeps the old `path`
-/// as its backup and renames the temporary file to `path`.
+/// Writes `bytes` through keyrig-io's one atomic writer ([`crate::file_io::AtomicFile`]),
+/// keeping the previous `path` as its backup.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SceneFileError> {
     let write_err = |source| SceneFileError::Write { path: path.to_path_buf(), source };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| write_err(io::Error::new(io::ErrorKind::InvalidInput, "the path has no file name")))?;
-
-    let (tmp_path, mut file) = create_temp(&dir, &name.to_string_lossy()).map_err(write_err)?;
-    let result = (|| {
-        file.write_all(bytes)?;
-        file.flush()?;
-        file.sync_all()?;
-        drop(file);
-        if fs::symlink_metadata(path).is_ok() {
-            keep_backup(path).map_err(|e| {
-                let bak = backup_path(path);
-                io::Error::new(e.kind(), format!("cannot keep the previous file as {}: {e}", bak.display()))
-            })?;
-        }
-        fs::rename(&tmp_path, path)?;
-        sync_dir(&dir);
-        Ok(())
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp_path);
-    }
-    result.map_err(write_err)
-}
-
-/// Creates `.<name>.tmp-<pid>-<n>` in `dir` with `create_new`, so that it never replaces
-/// anything.
-fn create_temp(dir: &Path, name: &str) -> io::Result<(PathBuf, fs::File)> {
-    let pid = std::process::id();
-    for n in 0..1000u32 {
-        let candidate = dir.join(format!(".{name}.tmp-{pid}-{n}"));
-        match fs::OpenOptions::new().write(true).create_new(true).open(&candidate) {
-            Ok(file) => return Ok((candidate, file)),
-            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(e),
-        }
-    }
-    Err(io::Error::new(io::ErrorKind::AlreadyExists, "no free temporary file name"))
-}
-
-/// Makes `<name>.bak` hold the current content of `path` (a hard link when the file system
-/// allows it, a copy otherwise). The old backup is replaced.
-fn keep_backup(path: &Path) -> io::Result<()> {
-    let bak = backup_path(path);
-    match fs::remove_file(&bak) {
-        Ok(()) => {}
-        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-        Err(e) => return Err(e),
-    }
-    if fs::hard_link(path, &bak).is_err() {
-        fs::copy(path, &bak)?;
-    }
-    Ok(())
-}
-
-/// Syncs the directory so that the rename survives a crash (where the platform allows).
-fn sync_dir(dir: &Path) {
-    #[cfg(unix)]
-    if let Ok(d) = fs::File::open(dir) {
-        // A failure here does not undo the save; the data itself is already synced.
-        let _ = d.sync_all();
-    }
-    #[cfg(not(unix))]
-    let _ = dir;
+    let mut file = AtomicFile::create(path).map_err(write_err)?.keep_backup(true);
+    file.write_all(bytes).map_err(write_err)?;
+    file.commit().map_err(write_err)
 }
 
 #[cfg(test)]

@@ -152,7 +152,7 @@ fn morph_weights_animate() {
         assert_eq!(weights.len(), 2);
         assert!(weights.iter().all(|w| (-1e-4..=1.0001).contains(w)), "t {t}: {weights:?}");
         let positions = m.deformed_positions(0, Some(0), t).expect("mesh")[0].clone();
-        moved |= positions != prim.positions;
+        moved |= positions[..] != prim.positions[..];
     }
     assert!(moved, "the morph animation never moves a vertex");
 }

@@ -3,6 +3,8 @@
 //! location (byte offset, line:column or JSON pointer) or imported, never a panic, and never
 //! with more memory than the file can justify.
 
+#[path = "support/big_gltf.rs"]
+mod big_gltf;
 mod malformed_support;
 
 use std::path::{Path, PathBuf};
@@ -339,4 +341,71 @@ fn hostile_fields_get_specific_errors() {
     assert!(cyc.to_string().contains("cycle") || cyc.to_string().contains("parent"), "{cyc}");
     let short = import_gltf_slice(&data[..data.len() - 4]).expect_err("truncated");
     assert_eq!(short.location, Location::Byte(8), "{short}");
+}
+
+/// Valid but hostile files (issue 16): huge names, shared accessors, deep and wide node
+/// trees and many skinned nodes import within the same memory bound as the malformed ones,
+/// never a panic, and map onto a scene.
+#[test]
+fn hostile_valid_files_import_within_the_memory_bound() {
+    let (json, bin) = split_glb(&std::fs::read(corpus("RiggedSimple/RiggedSimple.glb")).expect("read"));
+    let mut cases: Vec<(String, Vec<u8>)> = Vec::new();
+    for len in [65_505usize, 1 << 20] {
+        let mut j = json.clone();
+        let huge = "n".repeat(len);
+        for pointer in ["/nodes/0/name", "/nodes/2/name", "/meshes/0/name", "/animations/0/name"] {
+            if let Some(v) = set(&j, pointer, json!(huge)) {
+                j = v;
+            }
+        }
+        cases.push((format!("names of {len} characters"), pack_glb(&j, &bin)));
+    }
+    cases.push(("100 primitives sharing accessors".into(), big_gltf::shared_accessors(3_000, 100)));
+    cases.push(("10,000 primitives sharing accessors".into(), big_gltf::shared_accessors(30, 10_000)));
+    cases.push(("deep tree of 20,000 joints".into(), big_gltf::skeleton(20_000, big_gltf::Shape::Deep)));
+    cases.push(("wide tree of 20,000 joints".into(), big_gltf::skeleton(20_000, big_gltf::Shape::Wide)));
+    cases.push(("2,000 skinned mesh nodes".into(), big_gltf::many_skinned_nodes(2_000)));
+    for (label, bytes) in cases {
+        // The import is measured; the mapping onto a scene (one object per skinned node, each
+        // with its own skeleton: output, not input) only has to work.
+        let (result, peak) =
+            malformed_support::measure_peak(|| std::panic::catch_unwind(|| import_gltf_slice(&bytes)));
+        let model =
+            result.unwrap_or_else(|_| panic!("{label}: panic")).unwrap_or_else(|e| panic!("{label}: {e}"));
+        assert!(model.to_scene("x.glb", None).is_ok(), "{label}: mapping");
+        eprintln!(
+            "{label}: {} bytes, peak {peak} bytes ({:.1}×)",
+            bytes.len(),
+            peak as f64 / bytes.len() as f64
+        );
+        // A file that is almost all JSON (10,000 primitives of ~53 bytes of JSON each) costs
+        // what gltf-json's parsed structures take, about 700 bytes a primitive (a BTreeMap of
+        // attributes each): allowed twice the bound. Decoded data is shared either way.
+        let bound =
+            if label.starts_with("10,000") { 2 * max_alloc(bytes.len()) } else { max_alloc(bytes.len()) };
+        assert!(peak <= bound, "{label}: peak {peak} bytes for a {}-byte file", bytes.len());
+    }
+}
+
+/// Files that are not regular files are refused before a byte is read, with the file named.
+#[test]
+fn non_regular_files_are_refused_before_reading() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut paths = vec![(dir.path().to_path_buf(), "a folder")];
+    #[cfg(unix)]
+    {
+        paths.push((PathBuf::from("/dev/zero"), "a character device"));
+        let fifo = dir.path().join("pipe.glb");
+        if std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+            paths.push((fifo, "a FIFO"));
+        }
+    }
+    for (path, what) in paths {
+        let err = import_gltf_file(&path).expect_err("refused");
+        assert!(err.to_string().contains(what), "{}: {err}", path.display());
+        let err = keyrig_io::md2::load_md2_file(&path).expect_err("refused");
+        assert!(err.to_string().contains(what), "{}: {err}", path.display());
+        let err = keyrig_io::scene_file::load(&path).expect_err("refused");
+        assert!(err.to_string().contains(what), "{}: {err}", path.display());
+    }
 }

@@ -1,5 +1,6 @@
 //! MD2 → glTF morph-target animation: every corpus model converts, passes the Khronos
-//! glTF-Validator with zero errors, and the re-imported animation plays like the MD2 clip.
+//! glTF-Validator with zero errors and zero warnings, is wound counter-clockwise (outwards),
+//! and the re-imported animation plays like the MD2 clip.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -14,7 +15,7 @@ fn corpus(rel: &str) -> PathBuf {
 }
 
 /// Runs the Khronos glTF-Validator; fails with instructions when it is not installed.
-fn validator_errors(file: &Path) -> (u64, String) {
+fn validator_errors(file: &Path) -> (u64, u64, String) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/validate-gltf");
     assert!(
         dir.join("node_modules/gltf-validator").is_dir(),
@@ -28,7 +29,7 @@ fn validator_errors(file: &Path) -> (u64, String) {
     let report: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap_or_else(|e| {
         panic!("validator output ({e}): {stdout} {}", String::from_utf8_lossy(&out.stderr))
     });
-    (report["errors"].as_u64().expect("errors"), stdout)
+    (report["errors"].as_u64().expect("errors"), report["warnings"].as_u64().expect("warnings"), stdout)
 }
 
 const FILES: [&str; 5] = [
@@ -49,8 +50,27 @@ fn every_corpus_md2_converts_validates_and_plays_like_the_original() {
         let exported = export_md2(&md2, options).expect("convert");
         let out = dir.path().join(Path::new(file).with_extension("glb").file_name().expect("name"));
         exported.write(&out).expect("write");
-        let (errors, report) = validator_errors(&out);
+        let (errors, warnings, report) = validator_errors(&out);
         assert_eq!(errors, 0, "{file}: {report}");
+        assert_eq!(warnings, 0, "{file}: {report}");
+
+        // Front faces wind counter-clockwise (glTF), so the face normal of the winding points
+        // the way the file's vertex normals do on nearly every triangle.
+        let base = md2.frame_pose(0).expect("frame 0");
+        let agree = md2
+            .indices
+            .chunks_exact(3)
+            .filter(|t| {
+                let [a, b, c] = [0, 1, 2].map(|i| base.positions[t[i] as usize]);
+                let face = (b - a).cross(c - a);
+                let normal: glam::Vec3 = t.iter().map(|&i| base.normals[i as usize]).sum();
+                face.dot(normal) > 0.0
+            })
+            .count();
+        let triangles = md2.indices.len() / 3;
+        assert!(agree * 10 > triangles * 9, "{file}: only {agree} of {triangles} triangles face outwards");
+        let prim = &import_gltf_file(&out).expect("re-import").meshes[0].primitives[0];
+        assert_eq!(prim.indices[..], md2.indices[..], "{file}: the converted file keeps the winding");
 
         let model = import_gltf_file(&out).expect("re-import");
         assert_eq!(model.animations.len(), md2.clips.len(), "{file}");

@@ -252,13 +252,12 @@ fn save_is_atomic_and_keeps_a_backup() {
 #[test]
 fn failed_saves_leave_no_partial_file() {
     let dir = tempfile::tempdir().unwrap();
-    // The target is a directory: the save fails after writing its temporary file, which must be
-    // removed again.
+    // The target is a directory: the save is refused before a temporary file is made.
     let target = dir.path().join("taken.ron");
     fs::create_dir(&target).unwrap();
     let err = scene_file::save(&target, &demo_scene()).expect_err("cannot replace a directory");
     assert!(matches!(err, SceneFileError::Write { .. }), "{err:?}");
-    assert!(err.to_string().contains("taken.ron: cannot write: cannot keep the previous file as"), "{err}");
+    assert!(err.to_string().contains("taken.ron: cannot write: the path is a folder"), "{err}");
     assert_eq!(entries(dir.path()), ["taken.ron"]);
 
     // A folder that does not exist.
@@ -536,4 +535,15 @@ fn every_shipped_and_documented_scene_opens() {
         }
     }
     assert!(opened >= 3, "found only {opened} scene documents");
+}
+
+#[test]
+fn a_byte_order_mark_is_not_part_of_the_document() {
+    let text = format!("\u{FEFF}{DEMO_RON}");
+    let scene = scene_file::from_str(&text, Path::new("bom.ron")).expect("a BOM is accepted");
+    assert_eq!(scene, demo_scene());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bom.ron");
+    fs::write(&path, text.as_bytes()).unwrap();
+    assert_eq!(scene_file::load(&path).expect("from a file"), demo_scene());
 }

@@ -1,7 +1,7 @@
 //! `keyrig convert IN.md2 -o OUT.glb|OUT.gltf`: an MD2 model's frames as glTF morph targets,
 //! one animation per clip (stand, run, …) at `--fps` frames per second, the skin image found
-//! next to the model as the base-colour texture (see docs/interchange.md). The written file
-//! is imported again as a check.
+//! next to the model as the base-colour texture (see docs/interchange.md). The file is
+//! written atomically, never over the model or its skin, and imported again as a check.
 
 use std::path::PathBuf;
 
@@ -16,7 +16,7 @@ pub struct ConvertArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Playback rate of the clips, frames per second (Quake 2 used 10).
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub fps: f64,
 }
 
@@ -26,7 +26,16 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     if ext.as_deref() != Some("md2") {
         bail!("{}: only .md2 models can be converted (glTF files are already glTF)", args.input.display());
     }
+    let range = keyrig_io::gltf_export::MD2_FPS_RANGE;
+    if !(args.fps.is_finite() && range.contains(&args.fps)) {
+        bail!("--fps {}: must be between {} and {} frames per second", args.fps, range.start(), range.end());
+    }
     let model = keyrig_io::md2::load_md2_file(&args.input)?;
+    let mut inputs = vec![(args.input.clone(), "the input model".to_owned())];
+    if let Some(skin) = &model.skin {
+        inputs.push((skin.path.clone(), "the model's skin image".to_owned()));
+    }
+    keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
     let exported = export_md2(&model, Md2ExportOptions { fps: args.fps })
         .with_context(|| format!("{}: cannot convert", args.input.display()))?;
     exported.write(&args.output)?;

@@ -3,12 +3,20 @@
 //! the object's model (skeleton) space and the mesh's own vertex order, computed on the CPU by
 //! keyrig-skin's reference implementation of the chosen deformer.
 //!
-//! FILE is a scene (.ron) or a glTF model (.glb/.gltf, its first animation, through
-//! keyrig-io's scene mapping). A skinned glTF node is posed exactly as the glTF specification
+//! FILE is a scene (.ron), a glTF model (.glb/.gltf, its first animation, through
+//! keyrig-io's scene mapping) or an MD2 model. A skinned glTF node is posed exactly as the glTF specification
 //! defines it (every channel, M(j) = world(j)·IBM(j), weights as stored) and written in the
 //! file's world axes and accessor order, so linear blend reproduces glTF's skinning; the other
-//! deformers use the same joints and weights. OBJ gets `v`, `vn` and `f` lines; JSON gets
-//! positions and unit normals as arrays of [x, y, z].
+//! deformers use the same joints and weights.
+//!
+//! Vertex-animated meshes have no skin, so the deformer does not apply to them: an MD2 model
+//! (on its own, or an MD2 object of a scene) is morphed between its frames as the editor
+//! plays it (every frame, or the object's clip, at the object's rate —
+//! [`keyrig_core::MD2_DEFAULT_FPS`] for a model opened on its own — looping), in the file's
+//! Quake units and axes (`md2` space); an unskinned glTF mesh node is morphed as glTF
+//! defines it (`base + Σ wᵢ·Δᵢ` with the animation's weights, normals likewise) and placed by
+//! its node's world transform (`gltf-world` space). OBJ gets `v`, `vn` and `f` lines; JSON
+//! gets positions and unit normals as arrays of [x, y, z].
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -23,7 +31,7 @@ use keyrig_skin::{
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("when").required(true).args(["frame", "time"])))]
 pub struct DeformArgs {
-    /// Scene (.ron) or glTF model (.glb, .gltf).
+    /// Scene (.ron), glTF model (.glb, .gltf) or MD2 model (.md2).
     pub file: PathBuf,
     /// Frame (may be fractional), at the scene's frames per second.
     #[arg(long, allow_hyphen_values = true)]
@@ -62,8 +70,6 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
 /// What `keyrig deform` deforms: a mesh bound to its rest skeleton, the pose sampler of the
 /// object's scene skeleton (none: rest pose), and the object's blend zone.
 struct Target {
-    /// Index of the object in the scene.
-    index: usize,
     object: String,
     /// The space of the output: `model` (the object's skeleton space) or `gltf-world` (a
     /// skinned glTF node: the file's world axes, as the glTF specification skins).
@@ -71,6 +77,18 @@ struct Target {
     mesh: SkinnedMesh,
     poser: Option<ScenePoseSampler>,
     zone: BlendZone,
+}
+
+/// What `keyrig deform` writes: one object's vertices at one time.
+struct Output {
+    object: String,
+    /// `model`, `gltf-world` or `md2` (see the module documentation).
+    space: &'static str,
+    /// `skin` (the deformer ran) or `morph` (vertex animation; the deformer does not apply).
+    animation: &'static str,
+    positions: Vec<glam::Vec3>,
+    normals: Vec<glam::Vec3>,
+    indices: Vec<u32>,
 }
 
 pub fn run(args: DeformArgs) -> anyhow::Result<()> {
@@ -82,28 +100,83 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         bail!("{}: the output must end in .obj or .json", args.output.display());
     };
     let file = &args.file;
-    let (scene, loaded, gltf) = if has_extension(file, &["ron"]) {
-        (keyrig_io::scene_file::load(file)?, Vec::new(), None)
-    } else if has_extension(file, &["glb", "gltf"]) {
-        let (scene, loaded, gltf) = gltf_scene(file)?;
-        (scene, loaded, Some(gltf))
-    } else if has_extension(file, &["md2"]) {
-        bail!("{}: MD2 models have no skeleton to deform (they animate by vertex morphing)", file.display());
+    let mut inputs = vec![(file.clone(), "the input file".to_owned())];
+    let (time, out) = if has_extension(file, &["md2"]) {
+        let scene = keyrig_editor::files::open_any(file).map_err(anyhow::Error::msg)?;
+        let time = super::time_in_range(&scene, args.frame, args.time)?;
+        inputs.extend(keyrig_io::file_io::scene_inputs(&scene, None));
+        (time, morph_object(file, &scene, None, args.object.as_deref(), time)?)
     } else {
-        bail!("{}: unknown file type; expected a scene (.ron) or a glTF model (.glb, .gltf)", file.display());
-    };
-    let time = match (args.frame, args.time) {
-        (Some(frame), None) => {
-            if !frame.is_finite() {
-                bail!("--frame {frame}: not a finite number");
-            }
-            frame / scene.fps
+        let (scene, loaded, gltf) = if has_extension(file, &["ron"]) {
+            (keyrig_io::scene_file::load(file)?, Vec::new(), None)
+        } else if has_extension(file, &["glb", "gltf"]) {
+            let (scene, loaded, gltf) = gltf_scene(file)?;
+            (scene, loaded, Some(gltf))
+        } else {
+            bail!(
+                "{}: unknown file type; expected a scene (.ron), a glTF model (.glb, .gltf) or an MD2 model (.md2)",
+                file.display()
+            );
+        };
+        let time = super::time_in_range(&scene, args.frame, args.time)?;
+        let base_dir = if gltf.is_some() { None } else { Some(keyrig_io::file_io::parent_or_dot(file)) };
+        if gltf.is_none() {
+            inputs.extend(keyrig_io::file_io::scene_inputs(&scene, base_dir.as_deref()));
         }
-        (None, Some(time)) if time.is_finite() => time,
-        (None, Some(time)) => bail!("--time {time}: not a finite number"),
-        _ => bail!("give exactly one of --frame and --time"),
+        let index = object_index(file, &scene, args.object.as_deref())?;
+        let is_md2_object = matches!(
+            &scene.objects[index].mesh,
+            Some(MeshSource::File { path, .. }) if has_extension(Path::new(path), &["md2"])
+        );
+        let unskinned_gltf = gltf.as_ref().and_then(|g| {
+            let node = *g.nodes.get(index)?;
+            g.model.nodes[node].skin.is_none().then_some((g, node))
+        });
+        let out = if is_md2_object {
+            morph_object(file, &scene, base_dir.as_deref(), args.object.as_deref(), time)?
+        } else if let Some((g, node)) = unskinned_gltf {
+            gltf_morph(file, &scene.objects[index].name, g, node, time)?
+        } else {
+            skinned_output(&args, &scene, loaded, gltf.as_ref(), index, time)?
+        };
+        (time, out)
     };
-    let mut target = pick_target(file, &scene, loaded, args.object.as_deref())?;
+    keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
+    let text = match format {
+        OutputFormat::Obj => obj_text(&out, &args, time),
+        OutputFormat::Json => json_text(&out, &args, time)?,
+    };
+    keyrig_io::file_io::write_atomic(&args.output, text.as_bytes())
+        .with_context(|| format!("{}: cannot write", args.output.display()))?;
+    Ok(())
+}
+
+/// The index of the object named `name`, or of the first object with a mesh.
+fn object_index(file: &Path, scene: &Scene, name: Option<&str>) -> anyhow::Result<usize> {
+    match name {
+        Some(name) => scene.objects.iter().position(|o| o.name == name).with_context(|| {
+            let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+            format!("{}: no object named `{name}` (objects: {})", file.display(), names.join(", "))
+        }),
+        None => scene
+            .objects
+            .iter()
+            .position(|o| o.mesh.is_some())
+            .with_context(|| format!("{}: no object has a mesh", file.display())),
+    }
+}
+
+/// A skinned object through keyrig-skin's reference deformer (see the module documentation).
+fn skinned_output(
+    args: &DeformArgs,
+    scene: &Scene,
+    loaded: Vec<Option<SkinnedMesh>>,
+    gltf: Option<&GltfSource>,
+    index: usize,
+    time: f64,
+) -> anyhow::Result<Output> {
+    let file = &args.file;
+    let target = pick_target(file, scene, loaded, index)?;
     let pose = match &target.poser {
         Some(poser) => poser.sample(time),
         None => Pose::rest(target.mesh.skeleton.len()),
@@ -116,19 +189,104 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: {} deformer", at(), args.deformer.cli_name()))?;
     // A skinned glTF node's skeleton reaches up to the file's scene root, so its model space
     // is the file's world space, where the glTF specification skins.
-    let skinned_gltf = gltf
-        .as_ref()
-        .and_then(|g| g.nodes.get(target.index))
-        .is_some_and(|&node| gltf.as_ref().is_some_and(|g| g.model.nodes[node].skin.is_some()));
-    if skinned_gltf {
-        target.space = "gltf-world";
+    let mut space = target.space;
+    if gltf
+        .and_then(|g| g.nodes.get(index))
+        .is_some_and(|&node| gltf.is_some_and(|g| g.model.nodes[node].skin.is_some()))
+    {
+        space = "gltf-world";
     }
-    let text = match format {
-        OutputFormat::Obj => obj_text(&target, &args, time, &out),
-        OutputFormat::Json => json_text(&target, &args, time, &out)?,
+    Ok(Output {
+        object: target.object,
+        space,
+        animation: "skin",
+        positions: out.positions,
+        normals: out.normals,
+        indices: target.mesh.indices,
+    })
+}
+
+/// An MD2 object (of a scene, or the object a model opened on its own becomes) morphed to
+/// `time`, as the editor plays it.
+fn morph_object(
+    file: &Path,
+    scene: &Scene,
+    base_dir: Option<&Path>,
+    name: Option<&str>,
+    time: f64,
+) -> anyhow::Result<Output> {
+    let index = object_index(file, scene, name)?;
+    let object = &scene.objects[index];
+    let Some(MeshSource::File { path, mesh, clip, fps }) = &object.mesh else {
+        bail!("{}: object `{}` has no model file mesh", file.display(), object.name);
     };
-    std::fs::write(&args.output, text).with_context(|| format!("{}: cannot write", args.output.display()))?;
-    Ok(())
+    let mut store = keyrig_editor::files::MeshStore::default();
+    let loaded = store.get(base_dir, path, *mesh).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let keyrig_editor::files::FileMesh::Morph(morph) = loaded else {
+        bail!("{}: object `{}`: `{path}` is not a vertex-animated model", file.display(), object.name);
+    };
+    let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+    let blend = morph
+        .blend_at(clip.as_deref(), fps, time)
+        .with_context(|| format!("{}: object `{}`", file.display(), object.name))?;
+    let (positions, normals) = morph.blended(blend);
+    Ok(Output {
+        object: object.name.clone(),
+        space: "md2",
+        animation: "morph",
+        positions,
+        normals,
+        indices: morph.indices().to_vec(),
+    })
+}
+
+/// An unskinned glTF mesh node at `time` of the model's first animation: every triangle
+/// primitive morphed (`base + Σ wᵢ·Δᵢ`, normals likewise, or computed from the morphed
+/// triangles when the file has none) and placed by the node's world transform.
+fn gltf_morph(file: &Path, object: &str, g: &GltfSource, node: usize, time: f64) -> anyhow::Result<Output> {
+    use keyrig_io::model::{ImportedModel, PrimitiveMode};
+    let model = &g.model;
+    let mesh = model.nodes[node]
+        .mesh
+        .and_then(|m| model.meshes.get(m))
+        .with_context(|| format!("{}: node {node} has no mesh", file.display()))?;
+    let pose = model.pose_at(g.animation, time);
+    let world = model.world_matrices(&pose)[node];
+    let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
+    let weights = &pose.weights[node];
+    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    for prim in mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
+        let base = positions.len() as u32;
+        let morphed = ImportedModel::morphed_positions(prim, weights);
+        let prim_normals = match &prim.normals {
+            Some(n) => {
+                let mut n = n.to_vec();
+                for (target, &w) in prim.morph_targets.iter().zip(weights) {
+                    if let Some(d) = &target.normals {
+                        for (n, d) in n.iter_mut().zip(d.iter()) {
+                            *n += w * *d;
+                        }
+                    }
+                }
+                n
+            }
+            None => keyrig_skin::mesh::vertex_normals(&morphed, &prim.indices),
+        };
+        positions.extend(morphed.iter().map(|&p| world.transform_point3(p)));
+        normals.extend(prim_normals.iter().map(|&n| normal_matrix * n));
+        indices.extend(prim.indices.iter().map(|&i| base + i));
+    }
+    if positions.is_empty() {
+        bail!("{}: node {node} (`{object}`) has no triangles", file.display());
+    }
+    Ok(Output {
+        object: object.to_owned(),
+        space: "gltf-world",
+        animation: "morph",
+        positions,
+        normals,
+        indices,
+    })
 }
 
 /// The object to deform and its mesh. Scene objects with a procedural mesh get it generated
@@ -138,19 +296,8 @@ fn pick_target(
     file: &Path,
     scene: &Scene,
     mut loaded: Vec<Option<SkinnedMesh>>,
-    name: Option<&str>,
+    index: usize,
 ) -> anyhow::Result<Target> {
-    let index = match name {
-        Some(name) => scene.objects.iter().position(|o| o.name == name).with_context(|| {
-            let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
-            format!("{}: no object named `{name}` (objects: {})", file.display(), names.join(", "))
-        })?,
-        None => scene
-            .objects
-            .iter()
-            .position(|o| o.mesh.is_some())
-            .with_context(|| format!("{}: no object has a mesh", file.display()))?,
-    };
     let object = &scene.objects[index];
     let at = |field: &str| format!("{}: objects[{index}] (`{}`).{field}", file.display(), object.name);
     let rest = match &object.skeleton {
@@ -188,7 +335,7 @@ fn pick_target(
         None => None,
     };
     let zone = BlendZone::from_settings(&object.deformer).with_context(|| at("deformer"))?;
-    Ok(Target { index, object: object.name.clone(), space: "model", mesh, poser, zone })
+    Ok(Target { object: object.name.clone(), space: "model", mesh, poser, zone })
 }
 
 /// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
@@ -214,13 +361,14 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, G
             None => None,
         });
     }
-    Ok((scene, loaded, GltfSource { model, nodes }))
+    Ok((scene, loaded, GltfSource { model, animation, nodes }))
 }
 
 /// The glTF model behind a scene made by [`gltf_scene`]: the model, the animation used and the
 /// node of each scene object (by object index).
 struct GltfSource {
     model: keyrig_io::model::ImportedModel,
+    animation: Option<usize>,
     nodes: Vec<usize>,
 }
 
@@ -252,20 +400,23 @@ fn check_weights(model: &keyrig_io::model::ImportedModel, node: usize) -> anyhow
     Ok(())
 }
 
-fn header(target: &Target, args: &DeformArgs, time: f64) -> String {
+fn header(out: &Output, args: &DeformArgs, time: f64) -> String {
+    let deformer = match out.animation {
+        "morph" => "no deformer (vertex morphing)".to_owned(),
+        _ => format!("{} deformer", args.deformer.cli_name()),
+    };
     format!(
-        "keyrig deform: {} object `{}`, {} deformer, t = {time} s, {} vertices, {} space",
+        "keyrig deform: {} object `{}`, {deformer}, t = {time} s, {} vertices, {} space",
         args.file.display(),
-        target.object,
-        args.deformer.cli_name(),
-        target.mesh.vertex_count(),
-        target.space
+        out.object,
+        out.positions.len(),
+        out.space
     )
 }
 
-fn obj_text(target: &Target, args: &DeformArgs, time: f64, out: &Deformed) -> String {
+fn obj_text(out: &Output, args: &DeformArgs, time: f64) -> String {
     let mut text = String::with_capacity(out.positions.len() * 64);
-    let _ = writeln!(text, "# {}", header(target, args, time));
+    let _ = writeln!(text, "# {}", header(out, args, time));
     for p in &out.positions {
         let _ = writeln!(text, "v {} {} {}", p.x, p.y, p.z);
     }
@@ -273,25 +424,26 @@ fn obj_text(target: &Target, args: &DeformArgs, time: f64, out: &Deformed) -> St
         let n = n.normalize_or_zero();
         let _ = writeln!(text, "vn {} {} {}", n.x, n.y, n.z);
     }
-    for t in target.mesh.indices.chunks_exact(3) {
+    for t in out.indices.chunks_exact(3) {
         let [a, b, c] = [t[0] + 1, t[1] + 1, t[2] + 1];
         let _ = writeln!(text, "f {a}//{a} {b}//{b} {c}//{c}");
     }
     text
 }
 
-fn json_text(target: &Target, args: &DeformArgs, time: f64, out: &Deformed) -> anyhow::Result<String> {
+fn json_text(out: &Output, args: &DeformArgs, time: f64) -> anyhow::Result<String> {
     let triple = |v: glam::Vec3| [v.x, v.y, v.z];
     let value = serde_json::json!({
         "file": args.file.display().to_string(),
-        "object": target.object,
+        "object": out.object,
         "deformer": args.deformer.cli_name(),
+        "animation": out.animation,
         "time": time,
         "vertex_count": out.positions.len(),
-        "space": target.space,
+        "space": out.space,
         "positions": out.positions.iter().map(|&p| triple(p)).collect::<Vec<_>>(),
         "normals": out.normals.iter().map(|n| triple(n.normalize_or_zero())).collect::<Vec<_>>(),
-        "indices": target.mesh.indices,
+        "indices": out.indices,
     });
     Ok(serde_json::to_string(&value)?)
 }

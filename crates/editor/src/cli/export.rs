@@ -2,8 +2,9 @@
 //! object/joint/light animation and lights as glTF 2.0 (see docs/interchange.md).
 //!
 //! Position tracks are written exactly (CUBICSPLINE); rotation tracks are resampled as
-//! LINEAR within `--rotation-tolerance` degrees. The written file is imported again as a
-//! check before the command reports success.
+//! LINEAR within `--rotation-tolerance` degrees. The file is written atomically (temporary
+//! file, sync, rename), never over the scene or a model file the scene uses, and imported
+//! again as a check before the command reports success.
 
 use std::path::PathBuf;
 
@@ -18,7 +19,7 @@ pub struct ExportArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Largest angle in degrees between an exported rotation and the scene's curve.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub rotation_tolerance: f64,
 }
 
@@ -29,10 +30,11 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
     check_output_extension(&args.output)?;
     let scene =
         keyrig_io::scene_file::load(&args.scene).with_context(|| format!("{}", args.scene.display()))?;
-    let options = ExportOptions {
-        rotation_tolerance_deg: args.rotation_tolerance,
-        base_dir: args.scene.parent().map(PathBuf::from),
-    };
+    let base_dir = keyrig_io::file_io::parent_or_dot(&args.scene);
+    let mut inputs = vec![(args.scene.clone(), "the input scene".to_owned())];
+    inputs.extend(keyrig_io::file_io::scene_inputs(&scene, Some(&base_dir)));
+    keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
+    let options = ExportOptions { rotation_tolerance_deg: args.rotation_tolerance, base_dir: Some(base_dir) };
     let exported =
         export_scene(&scene, &options).with_context(|| format!("{}: cannot export", args.scene.display()))?;
     exported.write(&args.output)?;

@@ -65,6 +65,71 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
     }
 }
 
+fn is_scene(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("ron"))
+}
+
+/// What `deform`, `render` and `export` need of each object's mesh beyond the scene's own
+/// checks ([`Scene::problems`]), so that "problems: none" means they work: a skeleton that
+/// builds; a procedural mesh that fits it (its joints all exist); a model file that loads
+/// (relative to `base_dir`, the scene's folder), whose skinned mesh is bound to as many
+/// joints as the object's skeleton has and which is skinned or vertex-animated (the
+/// renderer draws file meshes no other way).
+fn mesh_problems(scene: &Scene, base_dir: &Path) -> Vec<keyrig_core::Problem> {
+    use keyrig_editor::files::{FileMesh, MeshStore};
+    let mut problems = Vec::new();
+    let mut store = MeshStore::default();
+    for (i, object) in scene.objects.iter().enumerate() {
+        let mut problem = |field: &str, message: String| {
+            problems.push(keyrig_core::Problem { path: format!("objects[{i}].{field}"), message });
+        };
+        let rest = match object.skeleton.as_ref().map(keyrig_skin::RestSkeleton::from_scene) {
+            Some(Ok(rest)) => Some(rest),
+            Some(Err(e)) => {
+                problem("skeleton", e.to_string());
+                continue;
+            }
+            None => None,
+        };
+        match &object.mesh {
+            None => {}
+            Some(MeshSource::Procedural(kind)) => {
+                if let Some(rest) = rest {
+                    let joints = rest.len();
+                    if let Err(e) = keyrig_skin::mesh_for(*kind).fit_to_skeleton(rest) {
+                        problem(
+                            "skeleton",
+                            format!("the procedural {kind:?} mesh does not fit the skeleton's {joints} joints: {e}"),
+                        );
+                    }
+                }
+            }
+            Some(MeshSource::File { path, mesh, .. }) => match store.get(Some(base_dir), path, *mesh) {
+                Err(e) => problem("mesh", e),
+                Ok(FileMesh::Skinned(m)) => match &rest {
+                    Some(rest) if rest.len() != m.skeleton.len() => problem(
+                        "skeleton",
+                        format!(
+                            "{} joints, but the mesh from `{path}` is bound to {} joints",
+                            rest.len(),
+                            m.skeleton.len()
+                        ),
+                    ),
+                    _ => {}
+                },
+                Ok(FileMesh::Static { .. }) => problem(
+                    "mesh",
+                    format!(
+                        "`{path}` has no skin; keyrig draws model meshes only skinned or vertex-animated"
+                    ),
+                ),
+                Ok(FileMesh::Morph(_)) => {}
+            },
+        }
+    }
+    problems
+}
+
 fn format_line(path: &Path) -> String {
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("glb" | "gltf") => "glTF model, mapped to a scene (first animation)".to_string(),
@@ -78,7 +143,14 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     if is_md2 {
         return md2_info(&args);
     }
-    let (scene, problems) = load_scene_lenient(&args.file, "info")?;
+    let (scene, mut problems) = load_scene_lenient(&args.file, "info")?;
+    if is_scene(&args.file) {
+        problems.extend(
+            mesh_problems(&scene, &keyrig_io::file_io::parent_or_dot(&args.file))
+                .into_iter()
+                .map(|problem| LocatedProblem { problem, position: None }),
+        );
+    }
     let text = match args.format {
         InfoFormat::Text => summary_text(&args.file, &scene, &problems),
         InfoFormat::Json => {
@@ -243,6 +315,9 @@ fn duration_s(scene: &Scene) -> f64 {
     f64::from(scene.frame_range.end - scene.frame_range.start) / scene.fps
 }
 
+/// Channel names up to this many characters are padded into a column.
+const MAX_PAD: usize = 120;
+
 fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> String {
     use std::fmt::Write as _;
     let mut out = String::new();
@@ -314,10 +389,13 @@ fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> Stri
     let total: usize = animated.iter().map(|a| a.1).sum();
     let _ =
         writeln!(w, "tracks:   {} animated of {} channels, {} keys", animated.len(), channels.len(), total);
-    let width = animated.iter().map(|a| a.0.len()).max().unwrap_or(0);
+    // Pad by hand: a format width above u16::MAX (a 65,505-character name makes one) panics
+    // in `format!`. Names longer than the column limit are not padded at all.
+    let width = animated.iter().map(|a| a.0.chars().count()).filter(|&n| n <= MAX_PAD).max().unwrap_or(0);
     for (name, n, span) in &animated {
         let span = span.map_or(String::new(), |(a, b)| format!(", {a:.3}..{b:.3} s"));
-        let _ = writeln!(w, "  {name:<width$}  {n} key{}{span}", if *n == 1 { "" } else { "s" });
+        let pad = width.saturating_sub(name.chars().count());
+        let _ = writeln!(w, "  {name}{}  {n} key{}{span}", " ".repeat(pad), if *n == 1 { "" } else { "s" });
     }
     if problems.is_empty() {
         let _ = writeln!(w, "problems: none");

@@ -28,7 +28,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
     pub frame: Option<f64>,
     /// Inclusive range of frames `A..B`, one numbered PNG each.
-    #[arg(long, value_name = "A..B", allow_negative_numbers = true)]
+    #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Deformer for every skinned object: rigid, linear, bones-blending, dual-quaternion
     /// (default: each object's own).
@@ -113,6 +113,8 @@ fn numbered_output(output: &Path, frame: i64) -> PathBuf {
 trait FrameSource {
     fn frame(&self, frame: f64) -> anyhow::Result<FrameInput>;
     fn default_frame(&self) -> f64;
+    /// Errors when `frame` is outside what the source plays (`what` names the argument).
+    fn check(&self, frame: f64, what: &str) -> anyhow::Result<()>;
 }
 
 struct SceneSource {
@@ -127,6 +129,10 @@ impl FrameSource for SceneSource {
 
     fn default_frame(&self) -> f64 {
         f64::from(self.rig.scene().frame_range.start)
+    }
+
+    fn check(&self, frame: f64, what: &str) -> anyhow::Result<()> {
+        super::check_frame(self.rig.scene(), frame, what)
     }
 }
 
@@ -172,6 +178,18 @@ impl FrameSource for Md2Source {
 
     fn default_frame(&self) -> f64 {
         0.0
+    }
+
+    fn check(&self, frame: f64, what: &str) -> anyhow::Result<()> {
+        let last = (self.frame_count - 1) as f64 / MD2_FRAMES_PER_TIMELINE_FRAME;
+        if !(0.0..=last + 1e-9).contains(&frame) {
+            bail!(
+                "{what} is outside the model's frame range 0..={last} ({} MD2 frames at {} per timeline frame)",
+                self.frame_count,
+                MD2_FRAMES_PER_TIMELINE_FRAME
+            );
+        }
+        Ok(())
     }
 }
 
@@ -331,6 +349,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let range = args.frames.as_deref().map(parse_range).transpose()?;
 
+    // What a PNG must never replace: the file rendered, the models a scene uses, an MD2 skin.
+    let mut inputs = vec![(args.file.clone(), "the input file".to_owned())];
+    if has_extension(&args.file, &["md2"]) {
+        if let Some(skin) = keyrig_io::md2::skin_of_file(&args.file) {
+            inputs.push((skin, "the model's skin image".to_owned()));
+        }
+    }
     let mut headless = HeadlessRenderer::new().context("opening a GPU device for offscreen rendering")?;
     let source: Box<dyn FrameSource> = if has_extension(&args.file, &["md2"]) {
         if deformer.is_some() {
@@ -347,6 +372,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         } else {
             // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
             let scene = keyrig_io::scene_file::load(&args.file)?;
+            inputs.extend(keyrig_io::file_io::scene_inputs(&scene, args.file.parent()));
             let meshes = keyrig_editor::files::render_meshes(&scene, args.file.parent())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
             (scene, meshes.skinned, meshes.morphs)
@@ -379,15 +405,27 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             std::fs::create_dir_all(parent)
                 .with_context(|| format!("creating folder {}", parent.display()))?;
         }
-        image
-            .save_with_format(out, keyrig_render::image::ImageFormat::Png)
-            .with_context(|| format!("writing {}", out.display()))?;
+        keyrig_io::file_io::refuse_overwriting(out, &inputs)?;
+        // Encoded straight into the temporary file; renamed over `out` only when complete.
+        keyrig_io::file_io::write_atomic_with(out, |w| {
+            use keyrig_render::image::ImageEncoder as _;
+            keyrig_render::image::codecs::png::PngEncoder::new(w)
+                .write_image(
+                    image.as_raw(),
+                    image.width(),
+                    image.height(),
+                    keyrig_render::image::ExtendedColorType::Rgba8,
+                )
+                .map_err(std::io::Error::other)
+        })
+        .with_context(|| format!("writing {}", out.display()))?;
         Ok(())
     };
 
     match range {
         None => {
             let frame = args.frame.unwrap_or_else(|| source.default_frame());
+            source.check(frame, &format!("--frame {frame}"))?;
             render_to(&mut headless, frame, &args.output)?;
             eprintln!("keyrig: wrote {} ({width}×{height}, frame {frame})", args.output.display());
         }
@@ -398,6 +436,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                     .map_err(|e| anyhow::anyhow!("progress bar template: {e}"))?
                     .progress_chars("=> "),
             );
+            for end in [a, b] {
+                source.check(
+                    end as f64,
+                    &format!("--frames {}: frame {end}", args.frames.as_deref().unwrap_or("")),
+                )?;
+            }
             bar.set_message("rendering");
             for frame in a..=b {
                 let out = numbered_output(&args.output, frame);

@@ -51,7 +51,7 @@ pub struct SampleArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub time: Option<f64>,
     /// Step between samples: frames for --frames, seconds for --times.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = SampleFormat::Csv)]
@@ -59,6 +59,9 @@ pub struct SampleArgs {
     /// How rotations are printed.
     #[arg(long, value_enum, default_value_t = RotationFormatArg::Quat)]
     pub rotation_format: RotationFormatArg,
+    /// Write to this file (atomically) instead of standard output.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
 }
 
 /// Parses `A..B` (also `A..=B`; both inclusive) into two finite numbers with A ≤ B.
@@ -176,6 +179,16 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
         );
     }
     let instants = instants(&args, scene.fps)?;
+    // Every instant lies in the scene's frame range (the range ends suffice: they are sorted).
+    let flag = |v: f64| match (&args.frames, &args.times, args.frame) {
+        (Some(r), _, _) => format!("--frames {r}: frame {v}"),
+        (None, Some(r), _) => format!("--times {r}: time {}", v / scene.fps),
+        (None, None, Some(f)) => format!("--frame {f}"),
+        _ => format!("--time {}", v / scene.fps),
+    };
+    for &(frame, _) in instants.first().into_iter().chain(instants.last()) {
+        super::check_frame(&scene, frame, &flag(frame))?;
+    }
     let rotation = match args.rotation_format {
         RotationFormatArg::Quat => RotationFormat::Quat,
         RotationFormatArg::Euler => RotationFormat::EulerDegrees,
@@ -225,7 +238,16 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
             serde_json::to_string_pretty(&doc).context("writing JSON")? + "\n"
         }
     };
-    write_stdout(text.as_bytes())
+    match &args.output {
+        None => write_stdout(text.as_bytes()),
+        Some(out) => {
+            let mut inputs = vec![(args.file.clone(), "the input file".to_owned())];
+            inputs.extend(keyrig_io::file_io::scene_inputs(&scene, args.file.parent()));
+            keyrig_io::file_io::refuse_overwriting(out, &inputs)?;
+            keyrig_io::file_io::write_atomic(out, text.as_bytes())
+                .with_context(|| format!("{}: cannot write", out.display()))
+        }
+    }
 }
 
 #[cfg(test)]

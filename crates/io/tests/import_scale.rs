@@ -1,0 +1,97 @@
+//! Import scales linearly and memory stays bounded: generated files with 100,000 nodes (a
+//! wide and a deep skeleton with a channel on every joint, and 100,000 skinned mesh nodes)
+//! import in seconds, and primitives that share an accessor share its decoded values.
+
+#[path = "support/big_gltf.rs"]
+mod big_gltf;
+#[path = "malformed_support/mod.rs"]
+mod malformed_support;
+
+use std::time::{Duration, Instant};
+
+use big_gltf::Shape;
+use keyrig_io::gltf_import::import_gltf_slice;
+use malformed_support::{measure_peak, CountingAlloc};
+
+#[global_allocator]
+static ALLOC: CountingAlloc = CountingAlloc;
+
+/// Generous for a debug build on a loaded 2-core machine; the release benchmark
+/// (`cargo bench -p keyrig-io --bench import`) records the real figures.
+const LIMIT: Duration = Duration::from_secs(20);
+
+fn timed<R>(what: &str, f: impl FnOnce() -> R) -> (R, Duration) {
+    let start = Instant::now();
+    let r = f();
+    let took = start.elapsed();
+    eprintln!("{what}: {took:.2?}");
+    (r, took)
+}
+
+#[test]
+fn a_hundred_thousand_node_skeletons_import_in_seconds() {
+    for shape in [Shape::Wide, Shape::Deep] {
+        let bytes = big_gltf::skeleton(100_000, shape);
+        let (model, took) =
+            timed(&format!("{shape:?} 100k import"), || import_gltf_slice(&bytes).expect("import"));
+        assert_eq!(model.nodes.len(), 100_001);
+        assert_eq!(model.animations[0].channels.len(), 100_000);
+        assert!(took < LIMIT, "{shape:?}: {took:?}");
+        // The reference pose and world matrices (used by deform, render, export) are linear too.
+        let (world, took) = timed(&format!("{shape:?} 100k world matrices"), || {
+            model.world_matrices(&model.pose_at(Some(0), 0.5))
+        });
+        assert_eq!(world.len(), 100_001);
+        assert!(took < LIMIT, "{shape:?} world matrices: {took:?}");
+    }
+}
+
+#[test]
+fn a_hundred_thousand_skinned_mesh_nodes_import_in_seconds() {
+    let bytes = big_gltf::many_skinned_nodes(100_000);
+    let (model, took) = timed("100k skinned nodes import", || import_gltf_slice(&bytes).expect("import"));
+    assert_eq!(model.nodes.len(), 100_003);
+    assert!(took < LIMIT, "{took:?}");
+}
+
+#[test]
+fn import_time_grows_linearly() {
+    // Doubling the node count must not come near quadrupling the time (quadratic growth).
+    let time = |n: usize| {
+        let bytes = big_gltf::skeleton(n, Shape::Wide);
+        let start = Instant::now();
+        import_gltf_slice(&bytes).expect("import");
+        start.elapsed().as_secs_f64()
+    };
+    let _warm = time(5_000);
+    let (small, large) = (time(20_000), time(80_000));
+    eprintln!("20k: {small:.3} s, 80k: {large:.3} s, ratio {:.1} (linear: 4, quadratic: 16)", large / small);
+    assert!(large / small < 9.0, "20k nodes {small:.3} s, 80k {large:.3} s");
+}
+
+#[test]
+fn shared_accessors_are_decoded_once() {
+    let (vertices, primitives) = (30_000, 100);
+    let bytes = big_gltf::shared_accessors(vertices, primitives);
+    let (model, peak) = measure_peak(|| import_gltf_slice(&bytes).expect("import"));
+    let prims = &model.meshes[0].primitives;
+    assert_eq!(prims.len(), primitives);
+    assert!(prims.iter().all(|p| std::sync::Arc::ptr_eq(&p.positions, &prims[0].positions)));
+    assert!(prims.iter().all(|p| std::sync::Arc::ptr_eq(&p.indices, &prims[0].indices)));
+    // Decoded once: positions, normals (12 bytes a vertex each) and indices (4 a vertex).
+    let decoded = vertices * (12 + 12 + 4);
+    eprintln!("file {} bytes, decoded {decoded} bytes, peak {peak} bytes", bytes.len());
+    assert!(peak < 4 * decoded + (1 << 20), "peak {peak} bytes for {decoded} bytes of decoded data");
+}
+
+/// The mapping onto a scene of 100,000 skinned mesh nodes sharing one skin: one skeleton is
+/// built per skin and the animation's channels are indexed by node once, so this is linear.
+#[test]
+fn a_hundred_thousand_skinned_mesh_nodes_map_onto_a_scene_in_seconds() {
+    let bytes = big_gltf::many_skinned_nodes(100_000);
+    let model = import_gltf_slice(&bytes).expect("import");
+    let (scene, took) =
+        timed("100k skinned nodes to_scene", || model.to_scene("many.glb", None).expect("scene"));
+    assert_eq!(scene.objects.len(), 100_000);
+    assert!(took < LIMIT, "{took:?}");
+}
