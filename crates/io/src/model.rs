@@ -631,6 +631,7 @@ impl ImportedModel {
                                     tcb: key.tcb,
                                     in_tangent: key.in_tangent.map(|t| q_rest_inv * t),
                                     out_tangent: key.out_tangent.map(|t| q_rest_inv * t),
+                                    spin: None,
                                 })
                                 .collect(),
                         );
