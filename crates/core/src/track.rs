@@ -891,8 +891,10 @@ impl TrackValue for Quat {
                 values[i] = -values[i];
                 flipped[i] = true;
             }
+            // A spin's residual joins its chord here, so that the tangents (and A, B below) are
+            // those of the whole segment rotation and C = 0 keys stay C¹ also with a residual.
             logs.push(match &spin {
-                Some(spin) => spin.chord,
+                Some(spin) => spin.chord + spin.residual,
                 None => quat::log_between(values[i - 1], values[i]),
             });
             spins.push(spin);
@@ -907,7 +909,7 @@ impl TrackValue for Quat {
                     let spin = spins[i].as_ref();
                     QuatShape::Spin(SpinSegment {
                         start: q0,
-                        chord: logs[i],
+                        chord: spin.map_or(logs[i], |s| s.chord),
                         a,
                         b,
                         residual: spin.map_or(DVec3::ZERO, |s| s.residual),
