@@ -29,11 +29,11 @@
 //! §3; docs/interpolation.md). `L` enters the Kochanek–Bartels tangents like any chord, and
 //! * Linear: `q(u) = q_i·exp(u·L)·exp(u·e)`,
 //! * Tcb: `q(u) = q_i·exp(u·L)·exp(s·((1−u)·A + u·B) + u·e)`, `s = 2u(1−u)`,
-//!   `A = (T_i^out − L)/2`, `B = (L − T_{i+1}^in)/2`,
+//!   `A = (T_i^out − (L+e))/2`, `B = ((L+e) − T_{i+1}^in)/2`,
 //!
 //! where `e` is the tiny residual (at most [`SPIN_ANGLE_TOLERANCE_DEG`]) between the rotation
 //! an [`Spin::Angle`] arrives at and the key's value (zero for [`Spin::Turns`]), so that the
-//! segment ends exactly on the key. The Tcb form has Squad's values and tangents at both ends
+//! segment ends exactly on the key (the tangents use the chord `L + e`). The Tcb form has Squad's values and tangents at both ends
 //! (`q_i`, `q_{i+1}`, `T_i^out`, `T_{i+1}^in`) and equals Squad exactly when all rotations share
 //! one axis (a twist); Squad's own short-way slerps cannot follow a chord beyond half a turn.
 //! A TCB segment next to a spin segment (whose tangents carry that chord) uses the same form,

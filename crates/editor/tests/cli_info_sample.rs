@@ -429,6 +429,13 @@ fn sample_prints_the_unwrapped_angle_of_spin_segments() {
     assert_eq!(v["samples"][4]["spin_deg"], 360.0);
 
     // A channel without spins (the shoulder here, or any demo channel) prints as before.
-    let o = keyrig(&["sample", twist.to_str().unwrap(), "--channel", "object/Arm/joint/elbow/rotation", "--frame", "30"]);
+    let o = keyrig(&[
+        "sample",
+        twist.to_str().unwrap(),
+        "--channel",
+        "object/Arm/joint/elbow/rotation",
+        "--frame",
+        "30",
+    ]);
     assert_eq!(stdout(&o), "frame,time,x,y,z,w\n30,1,0,0,0,1\n");
 }
