@@ -3,6 +3,8 @@
 //! For 4, 100, 10 000 and 100 000 keys (uneven spacing, random T/C/B):
 //! * `vec3_tcb`: Vec3 Kochanek–Bartels track;
 //! * `quat_squad`: rotation track, Squad with TCB;
+//! * `quat_spin`: the same rotation keys, each reached with one extra whole turn
+//!   (`Spin::Turns(1)`), so every segment is a spin segment (unwrapped Squad with TCB);
 //! * `quat_slerp_track`: the same rotation keys as a Linear (slerp) keyrig track;
 //! * `glam_slerp`: the same keys with a plain `partition_point` + glam `Quat::slerp` (f32), the
 //!   cost of "plain slerp between the same keys";
@@ -18,7 +20,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Quat, Vec3};
-use keyrig_core::{Interpolation, Key, RawTrack, Tcb, Track};
+use keyrig_core::{Interpolation, Key, RawTrack, Spin, Tcb, Track};
 
 const SAMPLES: usize = 4096;
 const KEY_COUNTS: [usize; 4] = [4, 100, 10_000, 100_000];
@@ -75,6 +77,24 @@ fn track<T: keyrig_core::TrackValue>(keys: &Keys, values: &[T], mode: Interpolat
     Track::new(&RawTrack::new(raw)).expect("bench keys are valid")
 }
 
+/// The rotation keys with one extra turn on every key whose short way from the previous key
+/// defines an axis (all but a few of the random keys).
+fn spin_track(keys: &Keys) -> Track<Quat> {
+    let raw = (0..keys.rotations.len())
+        .map(|i| {
+            let key = Key::new(keys.times[i], keys.rotations[i]).with_tcb(keys.tcbs[i]);
+            let chord =
+                if i > 0 { keys.rotations[i - 1].angle_between(keys.rotations[i]).to_degrees() } else { 0.0 };
+            if (1.0..179.0).contains(&chord) {
+                key.with_spin(Spin::Turns(1))
+            } else {
+                key
+            }
+        })
+        .collect();
+    Track::new(&RawTrack::new(raw)).expect("bench keys are valid")
+}
+
 /// Sample times: sequential playback (4 per key, looping) and uniformly random.
 fn sample_times(keys: &Keys) -> (Vec<f64>, Vec<f64>) {
     let n = keys.times.len();
@@ -100,6 +120,7 @@ fn bench_tracks(c: &mut Criterion) {
         let vec3_tcb = track(&keys, &keys.positions, Interpolation::Tcb);
         let quat_squad = track(&keys, &keys.rotations, Interpolation::Tcb);
         let quat_slerp = track(&keys, &keys.rotations, Interpolation::Linear);
+        let quat_spin = spin_track(&keys);
         // glam's slerp takes the short way itself; give it the sign-consistent keys keyrig uses.
         let consistent: Vec<Quat> = quat_slerp.key_values().to_vec();
         let spline = splines::Spline::from_vec(
@@ -139,6 +160,18 @@ fn bench_tracks(c: &mut Criterion) {
                         times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
                     } else {
                         times.iter().for_each(|&t| acc += quat_squad.sample(black_box(t)));
+                    }
+                    acc
+                })
+            });
+            group.bench_with_input(BenchmarkId::new("quat_spin", pattern), times, |b, times| {
+                b.iter(|| {
+                    let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+                    if cursor_or_sample {
+                        let mut cursor = quat_spin.cursor();
+                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
+                    } else {
+                        times.iter().for_each(|&t| acc += quat_spin.sample(black_box(t)));
                     }
                     acc
                 })

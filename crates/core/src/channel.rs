@@ -493,6 +493,25 @@ impl Channel {
         }
     }
 
+    /// Whether this is a rotation channel with spin keys (segments beyond the short way).
+    #[must_use]
+    pub fn has_spin(&self) -> bool {
+        match &self.sampler {
+            Sampler::Quat(s) => s.track().is_some_and(crate::track::Track::has_spin),
+            _ => false,
+        }
+    }
+
+    /// The unwrapped angle (degrees) turned since the start of the spin segment at `t`, `None`
+    /// outside spin segments and for other channels ([`crate::Track::spin_degrees`]).
+    #[must_use]
+    pub fn spin_degrees(&self, t: f64) -> Option<f64> {
+        match &self.sampler {
+            Sampler::Quat(s) => s.track().and_then(|track| track.spin_degrees(t)),
+            _ => None,
+        }
+    }
+
     /// Column names of [`ChannelValue::components`] for this channel.
     #[must_use]
     pub fn column_names(&self, rotation: RotationFormat) -> &'static [&'static str] {

@@ -3,6 +3,7 @@
 //! A [`RawTrack`] is a plain list of [`Key`]s with no invariants. It is checked once into an
 //! evaluable track (see [`crate::track`]) whose constructor returns a typed error.
 
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 /// How the segment that *starts* at a key is interpolated (the mode of key i governs
@@ -41,6 +42,78 @@ impl Tcb {
     }
 }
 
+/// Most whole turns a [`Spin`] may add or describe (1000 turns, 360 000°). Beyond that a
+/// spin is refused as absurd: a segment of a second would turn faster than 60 000 rpm, and
+/// `sin`/`cos` of the half-angle would start to lose digits.
+pub const MAX_SPIN_TURNS: i32 = 1000;
+
+/// How a rotation key is reached from the previous key when that is not the short way
+/// (3ds Max's TCB rotation controller stores every key this way: an axis and an angle
+/// relative to the previous key). Only rotation keys may carry one, and never the first key.
+///
+/// The segment from key i to key i+1 then turns by the *unwrapped* angle-axis `L` below
+/// (half the angle times the unit axis, of any size) instead of the short-way logarithm
+/// `log(q_i⁻¹·q_{i+1})`; DESIGN.md §3 and docs/interpolation.md give the formulas.
+///
+/// ```text
+/// (time: 1.0, value: (0.0, 0.0, 0.0, 1.0), spin: Some(Angle(axis: (1.0, 0.0, 0.0), degrees: 360.0)))
+/// (time: 2.0, value: (0.0, 0.0, 0.70710677, 0.70710677), spin: Some(Turns(1)))
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Spin {
+    /// The short way from the previous key plus `n` whole turns (360° each) about the short
+    /// way's axis: `n > 0` keeps turning in the short way's direction (`Turns(1)` from 0° to
+    /// 90° about X turns 450°), `n < 0` turns against it (`Turns(-1)` is the long way round,
+    /// −270°). `Turns(0)` is the short way, as if there were no spin. The short way must be
+    /// between [`SPIN_TURNS_MIN_CHORD_DEG`] and 180° − that (else its axis or direction is
+    /// not defined by the two keys: use [`Spin::Angle`]), and |n| ≤ [`MAX_SPIN_TURNS`].
+    Turns(i32),
+    /// Exactly `degrees` (any size, sign by the right-hand rule) about `axis`, a direction
+    /// in the previous key's frame (for a joint: the joint's own axes at the previous key, so
+    /// `(1, 0, 0)` is the bone axis of keyrig's arms). The key's `value` must be the rotation
+    /// this arrives at, `q_i·(axis, degrees)`, within [`SPIN_ANGLE_TOLERANCE_DEG`]; the track
+    /// passes through `value` exactly. The axis must be finite and not zero (it is
+    /// normalized) and |degrees| ≤ 360 · [`MAX_SPIN_TURNS`].
+    Angle { axis: Vec3, degrees: f64 },
+}
+
+/// [`Spin::Turns`] needs the short way between the keys to be at least this many degrees
+/// (and at most 180° minus this), so that its axis and direction are defined by the keys'
+/// values despite their f32 rounding (about 1e-5° of axis error at this angle).
+pub const SPIN_TURNS_MIN_CHORD_DEG: f64 = 0.01;
+
+/// Largest angle between the rotation a [`Spin::Angle`] arrives at and the key's `value`.
+pub const SPIN_ANGLE_TOLERANCE_DEG: f64 = 0.01;
+
+/// [`Spin::Angle`] axes shorter than this cannot be normalized and are refused.
+pub const MIN_SPIN_AXIS_LENGTH: f32 = 1e-6;
+
+impl Spin {
+    /// `Turns(0)`: the short way, interpolated exactly as a key without a spin.
+    #[must_use]
+    pub fn is_short_way(self) -> bool {
+        self == Spin::Turns(0)
+    }
+
+    /// Whether the numbers are usable on their own: |turns| ≤ [`MAX_SPIN_TURNS`]; for an
+    /// angle, finite numbers, an axis at least [`MIN_SPIN_AXIS_LENGTH`] long and
+    /// |degrees| ≤ 360 · [`MAX_SPIN_TURNS`].
+    #[must_use]
+    pub fn is_in_range(self) -> bool {
+        let max_degrees = 360.0 * f64::from(MAX_SPIN_TURNS);
+        match self {
+            Spin::Turns(n) => n.unsigned_abs() <= MAX_SPIN_TURNS.unsigned_abs(),
+            Spin::Angle { axis, degrees } => {
+                axis.is_finite()
+                    && axis.length() >= MIN_SPIN_AXIS_LENGTH
+                    && degrees.is_finite()
+                    && degrees.abs() <= max_degrees
+            }
+        }
+    }
+}
+
 /// One key of a track: a value at a time (seconds) and how to leave it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, bound(deserialize = "T: Deserialize<'de>"))]
@@ -60,6 +133,11 @@ pub struct Key<T> {
     /// segment that starts at this key.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub out_tangent: Option<T>,
+    /// Rotation keys only: how this key is reached from the previous key when not the short
+    /// way (whole extra turns or an explicit angle about an axis). `None`, the default and
+    /// what files without the field load as, is the short way.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spin: Option<Spin>,
 }
 
 impl<T> Key<T> {
@@ -73,6 +151,7 @@ impl<T> Key<T> {
             tcb: Tcb::ZERO,
             in_tangent: None,
             out_tangent: None,
+            spin: None,
         }
     }
 
@@ -85,6 +164,13 @@ impl<T> Key<T> {
     #[must_use]
     pub fn with_tcb(mut self, tcb: Tcb) -> Self {
         self.tcb = tcb;
+        self
+    }
+
+    /// Sets how the key is reached from the previous one (rotation keys only).
+    #[must_use]
+    pub fn with_spin(mut self, spin: Spin) -> Self {
+        self.spin = Some(spin);
         self
     }
 }

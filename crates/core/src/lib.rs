@@ -8,9 +8,11 @@ pub mod scene;
 pub mod track;
 pub mod validate;
 
-pub use key::{Animated, Interpolation, Key, RawTrack, Tcb};
+pub use key::{Animated, Interpolation, Key, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
     ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
 };
-pub use track::{AnimatedCursor, AnimatedTrack, Cursor, TangentSide, Track, TrackError, TrackValue};
+pub use track::{
+    AnimatedCursor, AnimatedTrack, Cursor, SpinProblem, TangentSide, Track, TrackError, TrackValue,
+};

@@ -178,6 +178,23 @@ pub fn exp(v: DVec3) -> DQuat {
     DQuat::from_xyzw(xyz.x, xyz.y, xyz.z, cos_phi)
 }
 
+/// [`exp`] with keyrig's [`sin_cos`] (one square root and one polynomial `sin_cos` for
+/// `|v| < 1e6`): the per-sample exponential of spin segments. Same result as [`exp`] to about
+/// one ulp, and the same series near 0.
+#[must_use]
+#[inline]
+pub fn exp_fast(v: DVec3) -> DQuat {
+    let phi = v.length();
+    if phi < EXP_SERIES_BELOW {
+        let p2 = phi * phi;
+        let xyz = v * (1.0 - p2 / 6.0 + p2 * p2 / 120.0);
+        return DQuat::from_xyzw(xyz.x, xyz.y, xyz.z, 1.0 - p2 / 2.0 + p2 * p2 / 24.0);
+    }
+    let (sin_phi, cos_phi) = sin_cos(phi);
+    let xyz = v * (sin_phi / phi);
+    DQuat::from_xyzw(xyz.x, xyz.y, xyz.z, cos_phi)
+}
+
 /// `log(a⁻¹ · b)`: the half-angle vector that turns `a` into `b` in `a`'s frame
 /// (DESIGN.md §3 writes it `L(a, b)`).
 #[must_use]
@@ -326,6 +343,20 @@ mod tests {
         assert_eq!(log(-DQuat::IDENTITY), DVec3::ZERO);
         let e = exp(DVec3::ZERO);
         assert_eq!(e, DQuat::IDENTITY);
+    }
+
+    #[test]
+    fn exp_fast_matches_exp() {
+        for v in [
+            DVec3::ZERO,
+            DVec3::new(1e-9, 0.0, 0.0),
+            DVec3::new(3e-5, -2e-5, 1e-5),
+            DVec3::new(0.3, 0.4, -0.5),
+            DVec3::X * std::f64::consts::PI,
+            DVec3::new(1.0, 2.0, 2.0) * 700.0,
+        ] {
+            assert!(close(exp_fast(v), exp(v), 1e-13), "{v:?}: {:?} vs {:?}", exp_fast(v), exp(v));
+        }
     }
 
     #[test]

@@ -23,6 +23,22 @@
 //! mirrored spacing (`Δ_{−1} := Δ_0`, `Δ_n := Δ_{n−1}`), so the spacing factor at an end key is 1.
 //! With T = C = B = 0 the end tangent is half the chord: `S_0 = (P_1 − P_0)/2`.
 //!
+//! # Spin keys
+//! A rotation key with a [`Spin`] is reached from the previous key by an *unwrapped* chord
+//! `L` (half the angle times the axis, any size) instead of the short-way logarithm (DESIGN.md
+//! §3; docs/interpolation.md). `L` enters the Kochanek–Bartels tangents like any chord, and
+//! * Linear: `q(u) = q_i·exp(u·L)·exp(u·e)`,
+//! * Tcb: `q(u) = q_i·exp(u·L)·exp(s·((1−u)·A + u·B) + u·e)`, `s = 2u(1−u)`,
+//!   `A = (T_i^out − (L+e))/2`, `B = ((L+e) − T_{i+1}^in)/2`,
+//!
+//! where `e` is the tiny residual (at most [`SPIN_ANGLE_TOLERANCE_DEG`]) between the rotation
+//! an [`Spin::Angle`] arrives at and the key's value (zero for [`Spin::Turns`]), so that the
+//! segment ends exactly on the key (the tangents use the chord `L + e`). The Tcb form has Squad's values and tangents at both ends
+//! (`q_i`, `q_{i+1}`, `T_i^out`, `T_{i+1}^in`) and equals Squad exactly when all rotations share
+//! one axis (a twist); Squad's own short-way slerps cannot follow a chord beyond half a turn.
+//! A TCB segment next to a spin segment (whose tangents carry that chord) uses the same form,
+//! so C = 0 keys stay C¹. Tracks without spins are interpolated exactly as before.
+//!
 //! All arithmetic is done in f64 (values are widened from f32 once, at validation) and the
 //! result is rounded to the value type at the end; [`Track::sample_wide`] returns the f64
 //! value before rounding.
@@ -32,7 +48,10 @@ use std::ops::{Add, Mul, Sub};
 
 use glam::{DQuat, DVec3, DVec4, Quat, Vec3};
 
-use crate::key::{Animated, Interpolation, Key, RawTrack, Tcb};
+use crate::key::{
+    Animated, Interpolation, Key, RawTrack, Spin, Tcb, MAX_SPIN_TURNS, SPIN_ANGLE_TOLERANCE_DEG,
+    SPIN_TURNS_MIN_CHORD_DEG,
+};
 use crate::quat::{self, Arc};
 
 /// Quaternion keys shorter than this (before normalization) are rejected as zero.
@@ -78,10 +97,108 @@ pub enum TrackError {
     MissingTangent { index: usize, side: TangentSide },
     #[error("key {index}: tension, continuity and bias must be finite and within [-1, 1]")]
     TcbOutOfRange { index: usize },
+    #[error("key {index}: {problem}")]
+    Spin { index: usize, problem: SpinProblem },
     #[error("static value is not finite (NaN or infinity)")]
     NonFiniteStaticValue,
     #[error("static rotation quaternion has (nearly) zero length")]
     ZeroStaticQuaternion,
+}
+
+/// Why a key's [`Spin`] is refused ([`TrackError::Spin`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SpinProblem {
+    #[error("spin is only meaningful on rotation keys")]
+    NotARotation,
+    #[error("the first key has no previous key to be reached from, so it cannot have a spin")]
+    FirstKey,
+    #[error(
+        "spin out of range: it must be finite, with a non-zero axis, and at most {MAX_SPIN_TURNS} turns ({} degrees)",
+        360 * MAX_SPIN_TURNS
+    )]
+    OutOfRange,
+    #[error(
+        "a spin cannot end a Hermite segment (glTF's cubic rotation is component-wise and never \
+         turns past half a turn); make the previous key Linear or TCB"
+    )]
+    AfterHermite,
+    #[error(
+        "Turns takes its axis and direction from the short way from the previous key, which must \
+         be between {SPIN_TURNS_MIN_CHORD_DEG}° and 180° − {SPIN_TURNS_MIN_CHORD_DEG}°; give them \
+         with Angle(axis: …, degrees: …)"
+    )]
+    AmbiguousAxis,
+    #[error(
+        "Angle arrives at a rotation more than {SPIN_ANGLE_TOLERANCE_DEG}° away from the key's value \
+         (value must be the previous key's rotation turned by the angle about the axis)"
+    )]
+    Disagrees,
+}
+
+/// The unwrapped chord of a spin segment from `q_i` to `q_{i+1}`.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpinChord {
+    /// Unit axis in `q_i`'s frame (the given axis for [`Spin::Angle`], the short way's for
+    /// [`Spin::Turns`]).
+    pub axis: DVec3,
+    /// Signed angle about `axis`, degrees.
+    pub degrees: f64,
+    /// `L = axis · radians(degrees) / 2`.
+    pub chord: DVec3,
+    /// `e`, with `q_i·exp(L)·exp(e) = ±q_{i+1}`; zero for [`Spin::Turns`].
+    pub residual: DVec3,
+}
+
+/// The chord of a spin from the unit quaternion `prev` to the unit quaternion `next` (either
+/// sign; the result does not depend on the signs). `None` for the short way (`Turns(0)`).
+/// The one place the rules of [`Spin`] are computed: the track builder and
+/// [`crate::Scene::problems`] both call it.
+///
+/// # Errors
+/// [`SpinProblem::OutOfRange`], [`SpinProblem::AmbiguousAxis`] or [`SpinProblem::Disagrees`].
+#[doc(hidden)]
+pub fn spin_chord(prev: DQuat, next: DQuat, spin: Spin) -> Result<Option<SpinChord>, SpinProblem> {
+    if !spin.is_in_range() {
+        return Err(SpinProblem::OutOfRange);
+    }
+    match spin {
+        Spin::Turns(0) => Ok(None),
+        Spin::Turns(turns) => {
+            // The short way: r = q_i⁻¹·q_{i+1} with w ≥ 0 (w is the dot product of the keys).
+            let mut r = prev.conjugate() * next;
+            if r.w < 0.0 {
+                r = -r;
+            }
+            let short = quat::log(r);
+            let half = short.length();
+            let degrees = 2.0 * half.to_degrees();
+            if !(SPIN_TURNS_MIN_CHORD_DEG..=180.0 - SPIN_TURNS_MIN_CHORD_DEG).contains(&degrees) {
+                return Err(SpinProblem::AmbiguousAxis);
+            }
+            let axis = short / half;
+            let degrees = degrees + 360.0 * f64::from(turns);
+            Ok(Some(SpinChord {
+                axis,
+                degrees,
+                chord: axis * (degrees.to_radians() / 2.0),
+                residual: DVec3::ZERO,
+            }))
+        }
+        Spin::Angle { axis, degrees } => {
+            let axis = axis.as_dvec3().normalize();
+            let chord = axis * (degrees.to_radians() / 2.0);
+            let mut m = (prev * quat::exp(chord)).conjugate() * next;
+            if m.w < 0.0 {
+                m = -m;
+            }
+            let residual = quat::log(m);
+            if 2.0 * residual.length().to_degrees() > SPIN_ANGLE_TOLERANCE_DEG {
+                return Err(SpinProblem::Disagrees);
+            }
+            Ok(Some(SpinChord { axis, degrees, chord, residual }))
+        }
+    }
 }
 
 /// What is wrong with one value (before an index is attached).
@@ -106,6 +223,9 @@ pub trait TrackValue: Copy + Debug + PartialEq + sealed::Sealed {
     type Wide: Copy + Debug + PartialEq;
     #[doc(hidden)]
     type Shape: Clone + Debug + PartialEq;
+    /// Whether keys of this type may carry a [`Spin`].
+    #[doc(hidden)]
+    const ROTATION: bool;
 
     /// Widens to f64 (exact).
     fn widen(self) -> Self::Wide;
@@ -118,9 +238,13 @@ pub trait TrackValue: Copy + Debug + PartialEq + sealed::Sealed {
     #[doc(hidden)]
     fn is_finite_tangent(self) -> bool;
     /// Builds the n−1 segment shapes; `values` are the checked values, in/out may be adjusted
-    /// (sign consistency). Times are validated (finite, strictly increasing).
+    /// (sign consistency). Times, values, tangents and the spins' ranges are validated.
     #[doc(hidden)]
-    fn build(times: &[f64], keys: &[Key<Self>], values: &mut [Self::Wide]) -> Vec<Self::Shape>;
+    fn build(
+        times: &[f64],
+        keys: &[Key<Self>],
+        values: &mut [Self::Wide],
+    ) -> Result<Vec<Self::Shape>, TrackError>;
     #[doc(hidden)]
     fn eval(shape: &Self::Shape, u: f64) -> Self::Wide;
 }
@@ -172,7 +296,9 @@ impl<T: TrackValue> Track<T> {
     /// # Errors
     /// [`TrackError`] naming the first offending key: no keys, a non-finite time, a time not
     /// after the previous key's, a non-finite value or tangent, a zero quaternion, T/C/B outside
-    /// [-1, 1], or a Hermite segment whose keys lack the tangents it needs.
+    /// [-1, 1], a Hermite segment whose keys lack the tangents it needs, or a [`Spin`] that
+    /// is refused ([`SpinProblem`]: on a non-rotation or the first key, out of range, ending a
+    /// Hermite segment, Turns without a defined short way, Angle disagreeing with the value).
     pub fn new(raw: &RawTrack<T>) -> Result<Self, TrackError> {
         Self::from_keys(&raw.keys)
     }
@@ -211,6 +337,20 @@ impl<T: TrackValue> Track<T> {
             if tangents.iter().flatten().any(|tangent| !tangent.is_finite_tangent()) {
                 return Err(TrackError::NonFiniteTangent { index });
             }
+            if let Some(spin) = key.spin {
+                let problem = if !T::ROTATION {
+                    Some(SpinProblem::NotARotation)
+                } else if index == 0 {
+                    Some(SpinProblem::FirstKey)
+                } else if !spin.is_in_range() {
+                    Some(SpinProblem::OutOfRange)
+                } else {
+                    None
+                };
+                if let Some(problem) = problem {
+                    return Err(TrackError::Spin { index, problem });
+                }
+            }
         }
         for (index, pair) in keys.windows(2).enumerate() {
             if pair[0].interpolation == Interpolation::Hermite {
@@ -222,7 +362,7 @@ impl<T: TrackValue> Track<T> {
                 }
             }
         }
-        let shapes = T::build(&times, keys, &mut wide);
+        let shapes = T::build(&times, keys, &mut wide)?;
         let segments = shapes
             .into_iter()
             .enumerate()
@@ -255,7 +395,8 @@ impl<T: TrackValue> Track<T> {
     }
 
     /// Key values as the track interpolates them: as given for scalars and vectors; for
-    /// rotations normalized and made sign-consistent (`q_{i+1}` negated where `q_i·q_{i+1} < 0`).
+    /// rotations normalized and made sign-consistent (`q_{i+1}` negated where `q_i·q_{i+1} < 0`;
+    /// for a key with a [`Spin`], negated where it disagrees in sign with `q_i·exp(L)`).
     #[must_use]
     pub fn key_values(&self) -> &[T] {
         &self.values
@@ -495,6 +636,7 @@ where
 impl TrackValue for f32 {
     type Wide = f64;
     type Shape = Cubic<f64>;
+    const ROTATION: bool = false;
 
     fn widen(self) -> f64 {
         f64::from(self)
@@ -516,8 +658,8 @@ impl TrackValue for f32 {
         self.is_finite()
     }
 
-    fn build(times: &[f64], keys: &[Key<f32>], values: &mut [f64]) -> Vec<Cubic<f64>> {
-        build_cubics(times, keys, values)
+    fn build(times: &[f64], keys: &[Key<f32>], values: &mut [f64]) -> Result<Vec<Cubic<f64>>, TrackError> {
+        Ok(build_cubics(times, keys, values))
     }
 
     #[inline]
@@ -529,6 +671,7 @@ impl TrackValue for f32 {
 impl TrackValue for Vec3 {
     type Wide = DVec3;
     type Shape = Cubic<DVec3>;
+    const ROTATION: bool = false;
 
     fn widen(self) -> DVec3 {
         self.as_dvec3()
@@ -550,8 +693,12 @@ impl TrackValue for Vec3 {
         self.is_finite()
     }
 
-    fn build(times: &[f64], keys: &[Key<Vec3>], values: &mut [DVec3]) -> Vec<Cubic<DVec3>> {
-        build_cubics(times, keys, values)
+    fn build(
+        times: &[f64],
+        keys: &[Key<Vec3>],
+        values: &mut [DVec3],
+    ) -> Result<Vec<Cubic<DVec3>>, TrackError> {
+        Ok(build_cubics(times, keys, values))
     }
 
     #[inline]
@@ -643,11 +790,56 @@ pub enum QuatShape {
     },
     /// glTF CUBICSPLINE rotation: component-wise Hermite, then normalized.
     Hermite(Cubic<DVec4>),
+    /// A spin segment, or a TCB segment next to one (module documentation, "Spin keys").
+    Spin(SpinSegment),
+}
+
+/// `q(u) = q_i·exp(u·L)·exp(2u(1−u)·((1−u)·A + u·B) + u·e)`: Linear spin segments have
+/// `A = B = 0`.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpinSegment {
+    start: DQuat,
+    chord: DVec3,
+    a: DVec3,
+    b: DVec3,
+    residual: DVec3,
+    /// The segment's own spin (axis, degrees) when it ends at a key with a spin; `None` for a
+    /// short TCB segment that only borrows the form from a spin neighbour.
+    spin: Option<(DVec3, f64)>,
+}
+
+impl SpinSegment {
+    /// `exp(s·((1−u)·A + u·B) + u·e)`, the offset from the unwrapped arc.
+    #[inline]
+    fn offset(&self, u: f64) -> DVec3 {
+        let s = 2.0 * u * (1.0 - u);
+        self.a * (s * (1.0 - u)) + self.b * (s * u) + self.residual * u
+    }
+
+    #[inline]
+    fn eval(&self, u: f64) -> DQuat {
+        let arc = self.start * quat::exp_fast(self.chord * u);
+        let offset = self.offset(u);
+        if offset == DVec3::ZERO {
+            arc
+        } else {
+            arc * quat::exp_fast(offset)
+        }
+    }
+
+    /// Degrees turned about the spin's axis since the segment's first key: `u·θ` plus twice
+    /// the offset's component along the axis (exact when every rotation shares the axis).
+    fn degrees_at(&self, u: f64) -> Option<f64> {
+        let (axis, degrees) = self.spin?;
+        Some(u * degrees + 2.0 * self.offset(u).dot(axis).to_degrees())
+    }
 }
 
 impl TrackValue for Quat {
     type Wide = DQuat;
     type Shape = QuatShape;
+    const ROTATION: bool = true;
 
     fn widen(self) -> DQuat {
         self.as_dquat()
@@ -673,22 +865,70 @@ impl TrackValue for Quat {
         self.is_finite()
     }
 
-    fn build(times: &[f64], keys: &[Key<Quat>], values: &mut [DQuat]) -> Vec<QuatShape> {
-        let flipped = quat::make_sign_consistent(values);
-        let logs: Vec<DVec3> = values.windows(2).map(|w| quat::log_between(w[0], w[1])).collect();
+    fn build(times: &[f64], keys: &[Key<Quat>], values: &mut [DQuat]) -> Result<Vec<QuatShape>, TrackError> {
+        // Sign consistency and the chords L(q_i, q_{i+1}): the short-way log, or a spin's
+        // unwrapped chord with q_{i+1} given the sign of q_i·exp(L).
+        let n = values.len();
+        let mut flipped = vec![false; n];
+        let mut logs: Vec<DVec3> = Vec::with_capacity(n.saturating_sub(1));
+        let mut spins: Vec<Option<SpinChord>> = Vec::with_capacity(n.saturating_sub(1));
+        for i in 1..n {
+            let spin = match keys[i].spin {
+                Some(spin) => {
+                    if keys[i - 1].interpolation == Interpolation::Hermite {
+                        return Err(TrackError::Spin { index: i, problem: SpinProblem::AfterHermite });
+                    }
+                    spin_chord(values[i - 1], values[i], spin)
+                        .map_err(|problem| TrackError::Spin { index: i, problem })?
+                }
+                None => None,
+            };
+            let reference = match &spin {
+                Some(spin) => values[i - 1] * quat::exp(spin.chord),
+                None => values[i - 1],
+            };
+            if reference.dot(values[i]) < 0.0 {
+                values[i] = -values[i];
+                flipped[i] = true;
+            }
+            // A spin's residual joins its chord here, so that the tangents (and A, B below) are
+            // those of the whole segment rotation and C = 0 keys stay C¹ also with a residual.
+            logs.push(match &spin {
+                Some(spin) => spin.chord + spin.residual,
+                None => quat::log_between(values[i - 1], values[i]),
+            });
+            spins.push(spin);
+        }
         let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &logs);
         let sign = |i: usize| if flipped[i] { -1.0 } else { 1.0 };
-        (0..values.len().saturating_sub(1))
+        let is_spin = |i: usize| spins.get(i).is_some_and(Option::is_some);
+        Ok((0..n.saturating_sub(1))
             .map(|i| {
                 let (q0, q1) = (values[i], values[i + 1]);
+                let spin_segment = |a: DVec3, b: DVec3| {
+                    let spin = spins[i].as_ref();
+                    QuatShape::Spin(SpinSegment {
+                        start: q0,
+                        chord: spin.map_or(logs[i], |s| s.chord),
+                        a,
+                        b,
+                        residual: spin.map_or(DVec3::ZERO, |s| s.residual),
+                        spin: spin.map(|s| (s.axis, s.degrees)),
+                    })
+                };
                 match keys[i].interpolation {
                     Interpolation::Step => QuatShape::Step(q0),
+                    Interpolation::Linear if is_spin(i) => spin_segment(DVec3::ZERO, DVec3::ZERO),
                     Interpolation::Linear => QuatShape::Slerp(Arc::new(q0, q1)),
                     Interpolation::Tcb => {
                         let (out_tangent, in_tangent) = (tangents[i].1, tangents[i + 1].0);
-                        let a = q0 * quat::exp((out_tangent - logs[i]) * 0.5);
-                        let b = q1 * quat::exp((logs[i] - in_tangent) * 0.5);
-                        QuatShape::Squad { keys: Arc::new(q0, q1), controls: Arc::new(a, b) }
+                        if is_spin(i) || (i > 0 && is_spin(i - 1)) || is_spin(i + 1) {
+                            spin_segment((out_tangent - logs[i]) * 0.5, (logs[i] - in_tangent) * 0.5)
+                        } else {
+                            let a = q0 * quat::exp((out_tangent - logs[i]) * 0.5);
+                            let b = q1 * quat::exp((logs[i] - in_tangent) * 0.5);
+                            QuatShape::Squad { keys: Arc::new(q0, q1), controls: Arc::new(a, b) }
+                        }
                     }
                     Interpolation::Hermite => {
                         let duration = times[i + 1] - times[i];
@@ -699,7 +939,7 @@ impl TrackValue for Quat {
                     }
                 }
             })
-            .collect()
+            .collect())
     }
 
     #[inline]
@@ -718,6 +958,58 @@ impl TrackValue for Quat {
                 } else {
                     // The tangents cancel the keys: fall back to the segment's first key.
                     DQuat::from_vec4(cubic.c0)
+                }
+            }
+            QuatShape::Spin(segment) => segment.eval(u),
+        }
+    }
+}
+
+/// Spin segments of rotation tracks.
+impl Track<Quat> {
+    /// Whether any segment ends at a key with a (non-zero) [`Spin`].
+    #[must_use]
+    pub fn has_spin(&self) -> bool {
+        (0..self.segments.len()).any(|i| self.segment_spin(i).is_some())
+    }
+
+    /// The spin of segment `i` (from key i to key i+1) when key i+1 has one: the unit axis in
+    /// key i's frame and the signed, unwrapped angle about it in degrees (e.g. 360 for a full
+    /// turn). `None` for short-way segments and past the end.
+    #[must_use]
+    pub fn segment_spin(&self, i: usize) -> Option<(DVec3, f64)> {
+        match &self.segments.get(i)?.shape {
+            QuatShape::Spin(segment) => segment.spin,
+            _ => None,
+        }
+    }
+
+    /// The unwrapped angle (degrees) turned about the spin's axis since the first key of the
+    /// spin segment that `t` falls in; `None` outside spin segments. At a key that ends a spin
+    /// segment (and after the last key) it is that segment's whole angle, e.g. 360; at a key
+    /// that only starts one (and before the first key) 0. Inside a segment it is `u·θ` plus
+    /// the TCB offset's component along the axis, the exact angle when every rotation shares
+    /// the axis (a twist).
+    #[must_use]
+    pub fn spin_degrees(&self, t: f64) -> Option<f64> {
+        let last = self.times.len() - 1;
+        let at_start = |i: usize| self.segment_spin(i).map(|_| 0.0);
+        let at_end = |i: usize| self.segment_spin(i).map(|(_, degrees)| degrees);
+        match self.clamp(t) {
+            Clamped::Key(0) => at_start(0),
+            Clamped::Key(i) if i == last => at_end(last - 1),
+            Clamped::Key(_) => None,
+            Clamped::Inside => {
+                let i = self.times.partition_point(|&x| x <= t) - 1;
+                if t == self.times[i] {
+                    return if i > 0 { at_end(i - 1).or_else(|| at_start(i)) } else { at_start(i) };
+                }
+                match &self.segments[i].shape {
+                    QuatShape::Spin(segment) => {
+                        let u = ((t - self.segments[i].start) * self.segments[i].inv_duration).min(1.0);
+                        segment.degrees_at(u)
+                    }
+                    _ => None,
                 }
             }
         }

@@ -14,7 +14,9 @@
 //!    [-1, 1], a Hermite segment has its start key's out-tangent and its end key's in-tangent:
 //!    the rules of [`crate::track`]'s validator, but every offending key is reported, not only
 //!    the first. A property test keeps the rules equal to the validator's, so a scene without
-//!    problems always gives valid tracks.
+//!    problems always gives valid tracks. A key's `spin` ([`crate::Spin`]) is on a rotation
+//!    key other than the first, in range, not ending a Hermite segment, and agrees with the
+//!    key values (Turns: a defined short way; Angle: arrives at the key's value).
 //! 7. Lights: non-negative intensity and colour, a non-zero direction for directional and spot
 //!    lights, spot angles with 0 < inner ≤ cutoff ≤ 90 and dropoff ≥ 0.
 //! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
@@ -25,13 +27,13 @@ use std::collections::HashMap;
 
 use glam::{Quat, Vec3};
 
-use crate::key::{Animated, Interpolation, RawTrack};
+use crate::key::{Animated, Interpolation, RawTrack, Spin};
 use crate::scene::{
     Camera, DeformerSettings, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
 };
 #[cfg(doc)]
 use crate::track::AnimatedTrack;
-use crate::track::{TangentSide, TrackError, MIN_QUATERNION_NORM};
+use crate::track::{spin_chord, SpinProblem, TangentSide, TrackError, TrackValue, MIN_QUATERNION_NORM};
 
 /// The path of the field a [`TrackError`] of the `Animated` value at `animated_path` concerns,
 /// e.g. `objects[0].rotation` + `Unsorted { index: 4 }` → `objects[0].rotation.track[4].time`.
@@ -48,6 +50,7 @@ pub fn track_error_path(animated_path: &str, err: &TrackError) -> String {
         TrackError::MissingTangent { index, side: TangentSide::In } => key(index, "in_tangent"),
         TrackError::MissingTangent { index, side: TangentSide::Out } => key(index, "out_tangent"),
         TrackError::TcbOutOfRange { index } => key(index, "tcb"),
+        TrackError::Spin { index, .. } => key(index, "spin"),
         TrackError::NonFiniteStaticValue | TrackError::ZeroStaticQuaternion => join(animated_path, "value"),
     }
 }
@@ -61,6 +64,13 @@ pub trait KeyValue: Copy {
     /// For rotations: true when the value cannot be normalized. Always false otherwise.
     fn is_degenerate(&self) -> bool {
         false
+    }
+    /// Whether keys of this type may carry a [`Spin`].
+    const ROTATION: bool = false;
+    /// For rotations: what is wrong with `spin` on the key `next` after the key `prev` (both
+    /// valid values, `spin` in range); the track validator's rule ([`spin_chord`]).
+    fn spin_pair_problem(_prev: &Self, _next: &Self, _spin: Spin) -> Option<SpinProblem> {
+        None
     }
 }
 
@@ -109,6 +119,15 @@ impl KeyValue for Quat {
 
     fn is_degenerate(&self) -> bool {
         self.as_dquat().length() < MIN_QUATERNION_NORM
+    }
+
+    const ROTATION: bool = true;
+
+    fn spin_pair_problem(prev: &Self, next: &Self, spin: Spin) -> Option<SpinProblem> {
+        let (Ok(prev), Ok(next)) = (TrackValue::check(*prev), TrackValue::check(*next)) else {
+            return None;
+        };
+        spin_chord(prev, next, spin).err()
     }
 }
 
@@ -192,7 +211,8 @@ impl Checker {
                 && !key.value.is_degenerate()
                 && tcb.iter().all(|v| (-1.0..=1.0).contains(v))
                 && key.in_tangent.is_none_or(|t| t.is_all_finite())
-                && key.out_tangent.is_none_or(|t| t.is_all_finite());
+                && key.out_tangent.is_none_or(|t| t.is_all_finite())
+                && key.spin.is_none();
             if valid {
                 previous = Some(key.time);
                 continue;
@@ -234,6 +254,20 @@ impl Checker {
                     self.value(&join(&kp, name), t);
                 }
             }
+            if let Some(spin) = key.spin {
+                let problem = if !T::ROTATION {
+                    Some(SpinProblem::NotARotation)
+                } else if i == 0 {
+                    Some(SpinProblem::FirstKey)
+                } else if !spin.is_in_range() {
+                    Some(SpinProblem::OutOfRange)
+                } else {
+                    None
+                };
+                if let Some(problem) = problem {
+                    self.push(join(&kp, "spin"), problem.to_string());
+                }
+            }
         }
         // A Hermite segment i needs key i's out-tangent and key i+1's in-tangent.
         for (i, pair) in track.keys.windows(2).enumerate() {
@@ -249,6 +283,20 @@ impl Checker {
                         format!("{path}[{}].in_tangent", i + 1),
                         "a Hermite segment needs its end key's in_tangent",
                     );
+                }
+            }
+            // A spin on key i+1 (in range, on a rotation) against the key values.
+            if let Some(spin) = pair[1].spin.filter(|s| T::ROTATION && s.is_in_range()) {
+                let at = format!("{path}[{}].spin", i + 1);
+                if pair[0].interpolation == Interpolation::Hermite {
+                    self.push(at, SpinProblem::AfterHermite.to_string());
+                } else if [&pair[0].value, &pair[1].value]
+                    .iter()
+                    .all(|v| v.is_all_finite() && !v.is_degenerate())
+                {
+                    if let Some(problem) = T::spin_pair_problem(&pair[0].value, &pair[1].value, spin) {
+                        self.push(at, problem.to_string());
+                    }
                 }
             }
         }
@@ -668,11 +716,12 @@ mod tests {
             0..4u8,
             prop::option::of(value.clone()),
             prop::option::of(value),
+            prop::option::weighted(0.3, spin()),
         );
         prop::collection::vec(key, 0..6).prop_map(|raw| {
             let mut t = 0.0;
             raw.into_iter()
-                .map(|(dt, value, (tension, continuity, bias), mode, in_tangent, out_tangent)| {
+                .map(|(dt, value, (tension, continuity, bias), mode, in_tangent, out_tangent, spin)| {
                     t += dt;
                     Key {
                         time: t,
@@ -686,10 +735,28 @@ mod tests {
                         tcb: Tcb { tension, continuity, bias },
                         in_tangent,
                         out_tangent,
+                        spin,
                     }
                 })
                 .collect()
         })
+    }
+
+    /// Spins that hit every rule: ordinary and extreme turns, angles that may or may not agree
+    /// with the (random) values, zero and non-finite axes and angles.
+    fn spin() -> impl Strategy<Value = Spin> + Clone {
+        prop_oneof![
+            3 => (-3..=3i32).prop_map(Spin::Turns),
+            1 => prop_oneof![Just(1000i32), Just(-1000), Just(1001), Just(i32::MIN)].prop_map(Spin::Turns),
+            3 => (number(), number(), number(), prop_oneof![
+                3 => -720.0..720.0f64,
+                1 => Just(360.0f64),
+                1 => Just(360_000.0f64),
+                1 => Just(360_000.5f64),
+                1 => Just(f64::NAN),
+            ])
+                .prop_map(|(x, y, z, degrees)| Spin::Angle { axis: Vec3::new(x, y, z), degrees }),
+        ]
     }
 
     fn vec3() -> impl Strategy<Value = Vec3> + Clone {

@@ -512,3 +512,60 @@ fn non_regular_files_are_refused_before_reading() {
         assert!(start.elapsed() < std::time::Duration::from_secs(10));
     }
 }
+
+/// Spin keys (issue 14): `assets/twist.ron` turns the forearm 360° with two keys; `sample`
+/// prints the unwrapped angle beside the quaternion, and channels without spins keep their
+/// columns.
+#[test]
+fn sample_prints_the_unwrapped_angle_of_spin_segments() {
+    let twist = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/twist.ron");
+    let args = |format: &str| {
+        keyrig(&[
+            "sample",
+            twist.to_str().unwrap(),
+            "--channel",
+            "object/Arm/joint/forearm/rotation",
+            "--frames",
+            "0..60",
+            "--step",
+            "15",
+            "--format",
+            format,
+        ])
+    };
+    let o = args("csv");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "frame,time,x,y,z,w,spin_deg");
+    assert_eq!(lines.len(), 1 + 5, "{out}");
+    assert_eq!(lines[1], "0,0,0,0,0,1,0");
+    // Frame 30 (1 s, mid-time): half a turn about X; frame 60: the whole turn, 360° unwrapped.
+    let row = |i: usize| -> Vec<f64> { lines[i].split(',').map(|c| c.parse().unwrap()).collect() };
+    let mid = row(3);
+    assert_eq!(mid[0], 30.0);
+    assert!((mid[2].abs() - 1.0).abs() < 1e-6 && mid[5].abs() < 1e-6, "{}", lines[3]);
+    assert_eq!(mid[6], 180.0, "{}", lines[3]);
+    let end = row(5);
+    assert_eq!(end[6], 360.0, "{}", lines[5]);
+    assert!((end[5].abs() - 1.0).abs() < 1e-6, "{}", lines[5]);
+    // TCB eases in: a quarter of the time is less than a quarter of the turn.
+    assert!(row(2)[6] > 0.0 && row(2)[6] < 90.0, "{}", lines[2]);
+
+    let o = args("json");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["columns"], serde_json::json!(["x", "y", "z", "w"]));
+    assert_eq!(v["samples"][2]["spin_deg"], 180.0);
+    assert_eq!(v["samples"][4]["spin_deg"], 360.0);
+
+    // A channel without spins (the shoulder here, or any demo channel) prints as before.
+    let o = keyrig(&[
+        "sample",
+        twist.to_str().unwrap(),
+        "--channel",
+        "object/Arm/joint/elbow/rotation",
+        "--frame",
+        "30",
+    ]);
+    assert_eq!(stdout(&o), "frame,time,x,y,z,w\n30,1,0,0,0,1\n");
+}

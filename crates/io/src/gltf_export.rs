@@ -16,7 +16,11 @@
 //!   export as LINEAR (slerp). All-Linear tracks export key for key (exact); others are
 //!   resampled: each segment is split in half until slerp between the emitted keys stays
 //!   within [`ExportOptions::rotation_tolerance_deg`] of the keyrig curve (checked at 15 interior points against half the tolerance).
-//!   All-Step rotation tracks export as STEP.
+//!   All-Step rotation tracks export as STEP. Every resampled step turns at most
+//!   [`MAX_ROTATION_STEP_DEG`] (90°), so glTF's shortest-path slerp between consecutive keys
+//!   is unambiguous; spin segments (keys beyond half a turn, [`keyrig_core::Spin`]) are first
+//!   cut into pieces of at most [`SPIN_PIECE_DEG`] of their unwrapped angle, so a 720° twist
+//!   exports as at least 16 steps and a glTF viewer turns it the whole way, turns included.
 //! - light colour and intensity are written at the start of the frame range (core glTF
 //!   cannot animate them).
 
@@ -30,6 +34,15 @@ use crate::model::{ImportedModel, PrimitiveMode};
 
 /// Duration of the jump that stands in for a Step segment inside a spline track (seconds).
 pub const STEP_JUMP: f64 = 1e-3;
+
+/// Largest rotation (degrees) between two consecutive resampled rotation keys: well below the
+/// 180° at which glTF's shortest-path slerp would turn the other way or be undefined.
+pub const MAX_ROTATION_STEP_DEG: f64 = 90.0;
+
+/// Spin segments are cut into pieces of at most this much of their unwrapped angle (degrees,
+/// uniformly in time) before resampling, so that no piece hides a whole turn between the
+/// points the resampler checks.
+pub const SPIN_PIECE_DEG: f64 = 45.0;
 
 /// Export settings.
 #[derive(Clone, Debug)]
@@ -636,7 +649,10 @@ fn quat_channel(
     let modes: Vec<Interpolation> =
         (0..times.len() - 1).filter_map(|i| track.segment_interpolation(i)).collect();
     let values: Vec<Quat> = track.key_values().iter().map(|q| (rest * *q).normalize()).collect();
-    if modes.iter().all(|&m| m == Interpolation::Step) || modes.iter().all(|&m| m == Interpolation::Linear) {
+    let spin = track.has_spin();
+    if modes.iter().all(|&m| m == Interpolation::Step)
+        || (!spin && modes.iter().all(|&m| m == Interpolation::Linear))
+    {
         let interpolation = if modes.iter().all(|&m| m == Interpolation::Linear) && !modes.is_empty() {
             "LINEAR"
         } else {
@@ -657,6 +673,14 @@ fn quat_channel(
     for (i, m) in modes.iter().enumerate() {
         if *m == Interpolation::Step {
             breaks.push(times[i + 1] - STEP_JUMP.min((times[i + 1] - times[i]) / 2.0));
+        }
+    }
+    // Spin segments: pieces of at most SPIN_PIECE_DEG of the unwrapped angle.
+    for i in 0..modes.len() {
+        if let (Some((_, degrees)), true) = (track.segment_spin(i), modes[i] != Interpolation::Step) {
+            let pieces = (degrees.abs() / SPIN_PIECE_DEG).ceil().max(1.0) as usize;
+            let (t0, t1) = (times[i], times[i + 1]);
+            breaks.extend((1..pieces).map(|k| t0 + (t1 - t0) * k as f64 / pieces as f64));
         }
     }
     breaks.sort_by(f64::total_cmp);
@@ -697,8 +721,9 @@ pub fn rotation_angle(a: Quat, b: Quat) -> f64 {
 /// Minimum duration of a resampled segment (seconds); stops runaway subdivision.
 const MIN_SEGMENT: f64 = 1e-4;
 
-/// Resamples `f` on `[breaks]` into LINEAR keys: each interval is halved until slerp between
-/// its end keys stays within `tol / 2` radians of `f` at 15 interior points.
+/// Resamples `f` on `[breaks]` into LINEAR keys: each interval is halved until its end keys
+/// are at most [`MAX_ROTATION_STEP_DEG`] apart and slerp between them stays within `tol / 2`
+/// radians of `f` at 15 interior points.
 fn resample_rotation(f: &dyn Fn(f64) -> Quat, breaks: &[f64], tol: f64) -> (Vec<f64>, Vec<Quat>) {
     let mut times = vec![breaks[0]];
     let mut values = vec![f(breaks[0])];
@@ -720,11 +745,12 @@ fn subdivide(
     let (q0, q1) = (f(t0), f(t1));
     // Check at 15 interior points against half the tolerance, so that the curve between
     // the checked points (and f32 key times) stays within the full tolerance.
-    let within = (1..16).all(|i| {
-        let u = f64::from(i) / 16.0;
-        let lin = crate::model::slerp_short(q0, q1, u as f32);
-        rotation_angle(lin, f(t0 + u * (t1 - t0))) <= 0.5 * tol
-    });
+    let within = rotation_angle(q0, q1) <= MAX_ROTATION_STEP_DEG.to_radians()
+        && (1..16).all(|i| {
+            let u = f64::from(i) / 16.0;
+            let lin = crate::model::slerp_short(q0, q1, u as f32);
+            rotation_angle(lin, f(t0 + u * (t1 - t0))) <= 0.5 * tol
+        });
     if within || t1 - t0 < MIN_SEGMENT || depth > 24 {
         times.push(t1);
         values.push(q1);

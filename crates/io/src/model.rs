@@ -908,6 +908,7 @@ fn animated<T: Copy>(
             tcb: key.tcb,
             in_tangent: key.in_tangent.map(&tangent),
             out_tangent: key.out_tangent.map(&tangent),
+            spin: None,
         })
         .collect();
     match keys.first() {

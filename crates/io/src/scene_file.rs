@@ -536,6 +536,14 @@ mod tests {
         scene.objects[0].name = "tab\there \"quoted\" back\\slash\nnew line ünïcode".into();
         let text = to_string(&scene).unwrap();
         assert_eq!(read_current(&text), Some(scene));
+        // Spin keys (Turns(-n), Angle(axis, degrees)) are inside the fast subset as well.
+        let twist = crate::demo::TWIST_RON;
+        assert_eq!(read_current(twist), Some(crate::demo::twist_scene()));
+        let turns = twist
+            .replace("spin: Some(Angle(axis: (1.0, 0.0, 0.0), degrees: 360.0))", "spin: Some(Turns(-3))");
+        assert!(turns.contains("Turns(-3)"));
+        assert_eq!(read_current(&turns), with_ron(&turns));
+        assert!(read_current(&turns).is_some());
     }
 
     /// Texts in and outside the fast subset: whenever the fast path accepts, `ron` reads the

@@ -322,6 +322,7 @@ fn hermite_keys_and_comments_round_trip() {
             tcb: Tcb::ZERO,
             in_tangent: Some(Vec3::X),
             out_tangent: Some(Vec3::new(1e-30, -0.0, 3.4e38)),
+            spin: None,
         },
         Key { in_tangent: Some(Vec3::Y), ..Key::new(1.0 / 3.0, Vec3::ONE) },
     ]);

@@ -1,6 +1,8 @@
 //! `keyrig sample FILE --channel PATH (--frames A..B | --times A..B | --frame F | --time T)
 //! [--step S] [--format csv|json] [--rotation-format quat|euler]`: the values of one channel
-//! over time, one row per sample (channel paths: docs/channels.md).
+//! over time, one row per sample (channel paths: docs/channels.md). A rotation channel with
+//! spin keys gets one more column, `spin_deg`: the unwrapped angle turned since the start of
+//! the spin segment (empty outside spin segments); channels without spins print as before.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -149,6 +151,12 @@ fn tidy(v: f64) -> f32 {
     v as f32 + 0.0
 }
 
+/// An unwrapped angle as printed: rounded to 1e-9° (hiding the f64 noise of `u·θ`, far
+/// below the f32 precision of the keys), with −0 shown as 0.
+fn tidy_degrees(degrees: f64) -> f64 {
+    (degrees * 1e9).round() / 1e9 + 0.0
+}
+
 /// Writes to stdout; a closed pipe (`keyrig sample … | head`) is not an error.
 pub fn write_stdout(bytes: &[u8]) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
@@ -194,6 +202,9 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
         RotationFormatArg::Euler => RotationFormat::EulerDegrees,
     };
     let columns = channel.column_names(rotation);
+    // Spin segments turn beyond what a quaternion (or Euler angles) can show: print the
+    // unwrapped angle beside it, in f64 degrees to keep many turns exact.
+    let spin = channel.has_spin();
     let text = match args.format {
         SampleFormat::Csv => {
             let mut out = String::with_capacity(instants.len() * 48);
@@ -202,12 +213,21 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
                 out.push(',');
                 out.push_str(c);
             }
+            if spin {
+                out.push_str(",spin_deg");
+            }
             out.push('\n');
             for &(frame, time) in &instants {
                 use std::fmt::Write as _;
                 let _ = write!(out, "{frame},{time}");
                 for v in channel.sample(time).components(rotation) {
                     let _ = write!(out, ",{}", tidy(v));
+                }
+                if spin {
+                    out.push(',');
+                    if let Some(degrees) = channel.spin_degrees(time) {
+                        let _ = write!(out, "{}", tidy_degrees(degrees));
+                    }
                 }
                 out.push('\n');
             }
@@ -224,7 +244,11 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
                     } else {
                         serde_json::json!(values)
                     };
-                    serde_json::json!({ "frame": frame, "time": time, "value": value })
+                    let mut sample = serde_json::json!({ "frame": frame, "time": time, "value": value });
+                    if spin {
+                        sample["spin_deg"] = serde_json::json!(channel.spin_degrees(time).map(tidy_degrees));
+                    }
+                    sample
                 })
                 .collect();
             let doc = serde_json::json!({
