@@ -21,8 +21,9 @@
 
 use std::fmt;
 
-use glam::{EulerRot, Quat, Vec3};
+use glam::{Quat, Vec3};
 
+use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef};
 use crate::key::Animated;
 use crate::scene::{Object, Scene};
 use crate::track::{AnimatedTrack, TrackError};
@@ -237,12 +238,11 @@ impl ChannelPath {
         }
     }
 
-    /// Looks the channel up in `scene` and validates its track.
+    /// The channel's index-based id in `scene`.
     ///
     /// # Errors
-    /// [`ChannelError`] naming the unknown object, joint or light and listing those that
-    /// exist, or [`ChannelError::InvalidTrack`] with the field path of the bad key.
-    pub fn resolve(&self, scene: &Scene) -> Result<Channel, ChannelError> {
+    /// [`ChannelError`] naming the unknown object, joint or light and listing those that exist.
+    pub fn id(&self, scene: &Scene) -> Result<ChannelId, ChannelError> {
         let path = self.to_string();
         let find_object = |name: &str| -> Result<(usize, &Object), ChannelError> {
             scene.objects.iter().enumerate().find(|(_, o)| o.name == name).ok_or_else(|| {
@@ -255,73 +255,74 @@ impl ChannelPath {
         };
         let no_skeleton =
             |object: &Object| ChannelError::NoSkeleton { path: path.clone(), object: object.name.clone() };
-        match self {
+        Ok(match self {
             ChannelPath::Object { object, property } => {
                 let (i, o) = find_object(object)?;
-                let field = format!("objects[{i}]");
                 match property {
-                    ObjectProperty::Translation => {
-                        Channel::build(path, field + ".translation", &o.translation, ValueKind::Position)
-                    }
-                    ObjectProperty::Rotation => {
-                        Channel::build(path, field + ".rotation", &o.rotation, ValueKind::Rotation)
-                    }
-                    ObjectProperty::Scale => {
-                        Channel::build(path, field + ".scale", &o.scale, ValueKind::Position)
-                    }
+                    ObjectProperty::Translation => ChannelId::ObjectTranslation(i),
+                    ObjectProperty::Rotation => ChannelId::ObjectRotation(i),
+                    ObjectProperty::Scale => ChannelId::ObjectScale(i),
                     ObjectProperty::RootTranslation => {
-                        let skeleton = o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
-                        Channel::build(
-                            path,
-                            field + ".skeleton.root_translation",
-                            &skeleton.root_translation,
-                            ValueKind::Position,
-                        )
+                        o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
+                        ChannelId::RootTranslation(i)
                     }
                 }
             }
             ChannelPath::Joint { object, joint, property } => {
                 let (i, o) = find_object(object)?;
                 let skeleton = o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
-                let (j, found) =
-                    skeleton.joints.iter().enumerate().find(|(_, j)| j.name == *joint).ok_or_else(|| {
-                        ChannelError::UnknownJoint {
-                            path: path.clone(),
-                            object: o.name.clone(),
-                            name: joint.clone(),
-                            available: skeleton.joints.iter().map(|j| j.name.clone()).collect(),
-                        }
-                    })?;
-                let field = format!("objects[{i}].skeleton.joints[{j}].{}", property.name());
+                let j = skeleton.joints.iter().position(|j| j.name == *joint).ok_or_else(|| {
+                    ChannelError::UnknownJoint {
+                        path: path.clone(),
+                        object: o.name.clone(),
+                        name: joint.clone(),
+                        available: skeleton.joints.iter().map(|j| j.name.clone()).collect(),
+                    }
+                })?;
                 match property {
-                    JointProperty::Translation => {
-                        Channel::build(path, field, &found.translation, ValueKind::Position)
-                    }
-                    JointProperty::Rotation => {
-                        Channel::build(path, field, &found.rotation, ValueKind::Rotation)
-                    }
-                    JointProperty::Scale => Channel::build(path, field, &found.scale, ValueKind::Position),
+                    JointProperty::Translation => ChannelId::JointTranslation { object: i, joint: j },
+                    JointProperty::Rotation => ChannelId::JointRotation { object: i, joint: j },
+                    JointProperty::Scale => ChannelId::JointScale { object: i, joint: j },
                 }
             }
             ChannelPath::Light { light, property } => {
-                let (i, l) =
-                    scene.lights.iter().enumerate().find(|(_, l)| l.name == *light).ok_or_else(|| {
-                        ChannelError::UnknownLight {
-                            path: path.clone(),
-                            name: light.clone(),
-                            available: scene.lights.iter().map(|l| l.name.clone()).collect(),
-                        }
-                    })?;
-                let field = format!("lights[{i}].{}", property.name());
-                match property {
-                    LightProperty::Position => Channel::build(path, field, &l.position, ValueKind::Position),
-                    LightProperty::Direction => {
-                        Channel::build(path, field, &l.direction, ValueKind::Position)
+                let i = scene.lights.iter().position(|l| l.name == *light).ok_or_else(|| {
+                    ChannelError::UnknownLight {
+                        path: path.clone(),
+                        name: light.clone(),
+                        available: scene.lights.iter().map(|l| l.name.clone()).collect(),
                     }
-                    LightProperty::Colour => Channel::build(path, field, &l.colour, ValueKind::Colour),
-                    LightProperty::Intensity => Channel::build(path, field, &l.intensity, ValueKind::Scalar),
+                })?;
+                match property {
+                    LightProperty::Position => ChannelId::LightPosition(i),
+                    LightProperty::Direction => ChannelId::LightDirection(i),
+                    LightProperty::Colour => ChannelId::LightColour(i),
+                    LightProperty::Intensity => ChannelId::LightIntensity(i),
                 }
             }
+        })
+    }
+
+    /// Looks the channel up in `scene` and validates its track.
+    ///
+    /// # Errors
+    /// [`ChannelError`] naming the unknown object, joint or light and listing those that
+    /// exist, or [`ChannelError::InvalidTrack`] with the field path of the bad key.
+    pub fn resolve(&self, scene: &Scene) -> Result<Channel, ChannelError> {
+        let id = self.id(scene)?;
+        let (path, field) = (self.to_string(), id.field_path());
+        let kind = match id {
+            ChannelId::LightColour(_) => ValueKind::Colour,
+            _ => match id.kind() {
+                ChannelKind::Vec3 => ValueKind::Position,
+                ChannelKind::Rotation => ValueKind::Rotation,
+                ChannelKind::Scalar => ValueKind::Scalar,
+            },
+        };
+        match channel(scene, id).expect("the id was just looked up") {
+            ChannelRef::Vec3(a) => Channel::build(path, field, a, kind),
+            ChannelRef::Rotation(a) => Channel::build(path, field, a, kind),
+            ChannelRef::Scalar(a) => Channel::build(path, field, a, kind),
         }
     }
 }
@@ -389,31 +390,7 @@ pub enum RotationFormat {
     EulerDegrees,
 }
 
-/// A sampled value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ChannelValue {
-    Scalar(f32),
-    Vec3(Vec3),
-    Quat(Quat),
-}
-
-impl ChannelValue {
-    /// The value as numbers in the order of [`Channel::column_names`].
-    #[must_use]
-    pub fn components(self, rotation: RotationFormat) -> Vec<f64> {
-        match self {
-            ChannelValue::Scalar(v) => vec![f64::from(v)],
-            ChannelValue::Vec3(v) => v.to_array().map(f64::from).to_vec(),
-            ChannelValue::Quat(q) => match rotation {
-                RotationFormat::Quat => q.to_array().map(f64::from).to_vec(),
-                RotationFormat::EulerDegrees => {
-                    let (x, y, z) = q.as_dquat().to_euler(EulerRot::XYZEx);
-                    vec![x.to_degrees(), y.to_degrees(), z.to_degrees()]
-                }
-            },
-        }
-    }
-}
+pub use crate::channel_id::ChannelValue;
 
 #[derive(Clone, Debug, PartialEq)]
 enum Sampler {
@@ -479,7 +456,7 @@ impl Channel {
         match &self.sampler {
             Sampler::Scalar(s) => ChannelValue::Scalar(s.sample(t)),
             Sampler::Vec3(s) => ChannelValue::Vec3(s.sample(t)),
-            Sampler::Quat(s) => ChannelValue::Quat(s.sample(t)),
+            Sampler::Quat(s) => ChannelValue::Rotation(s.sample(t)),
         }
     }
 

@@ -2,6 +2,7 @@
 //! document. Pure: no file I/O, no GPU, no UI.
 
 pub mod channel;
+pub mod channel_id;
 pub mod key;
 pub mod quat;
 pub mod scene;

@@ -1,0 +1,277 @@
+//! Channel ids: the animated values of a scene addressed by index (object, joint, light), as
+//! the editor, the scene evaluator and its pose overrides name them, with their values.
+//!
+//! [`crate::channel::ChannelPath`] names the same values by name for the command line;
+//! [`crate::channel::ChannelPath::id`] turns one into the other.
+
+use glam::{EulerRot, Quat, Vec3};
+
+use crate::channel::RotationFormat;
+use crate::key::Animated;
+use crate::scene::Scene;
+
+/// One animated value of the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ChannelId {
+    ObjectTranslation(usize),
+    ObjectRotation(usize),
+    ObjectScale(usize),
+    /// Translation of a skeleton's root joint (object index).
+    RootTranslation(usize),
+    /// A joint's animated local translation (imported characters; keyrig's rigs key rotations).
+    JointTranslation {
+        object: usize,
+        joint: usize,
+    },
+    JointRotation {
+        object: usize,
+        joint: usize,
+    },
+    /// A joint's animated local scale.
+    JointScale {
+        object: usize,
+        joint: usize,
+    },
+    LightPosition(usize),
+    LightDirection(usize),
+    LightColour(usize),
+    LightIntensity(usize),
+}
+
+/// What kind of value a channel holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChannelKind {
+    Vec3,
+    Rotation,
+    Scalar,
+}
+
+impl ChannelId {
+    #[must_use]
+    pub fn kind(self) -> ChannelKind {
+        match self {
+            ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } => ChannelKind::Rotation,
+            ChannelId::LightIntensity(_) => ChannelKind::Scalar,
+            _ => ChannelKind::Vec3,
+        }
+    }
+
+    /// Short name of the channel ("rotation", "translation", ...).
+    #[must_use]
+    pub fn channel_name(self) -> &'static str {
+        match self {
+            ChannelId::ObjectTranslation(_) | ChannelId::JointTranslation { .. } => "translation",
+            ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } => "rotation",
+            ChannelId::ObjectScale(_) | ChannelId::JointScale { .. } => "scale",
+            ChannelId::RootTranslation(_) => "root translation",
+            ChannelId::LightPosition(_) => "position",
+            ChannelId::LightDirection(_) => "direction",
+            ChannelId::LightColour(_) => "colour",
+            ChannelId::LightIntensity(_) => "intensity",
+        }
+    }
+
+    /// The field path of the channel's `Animated` value in the scene, e.g.
+    /// `objects[0].skeleton.joints[2].rotation` (the paths of [`Scene::problems`]).
+    #[must_use]
+    pub fn field_path(self) -> String {
+        match self {
+            ChannelId::ObjectTranslation(o) => format!("objects[{o}].translation"),
+            ChannelId::ObjectRotation(o) => format!("objects[{o}].rotation"),
+            ChannelId::ObjectScale(o) => format!("objects[{o}].scale"),
+            ChannelId::RootTranslation(o) => format!("objects[{o}].skeleton.root_translation"),
+            ChannelId::JointTranslation { object, joint } => {
+                format!("objects[{object}].skeleton.joints[{joint}].translation")
+            }
+            ChannelId::JointRotation { object, joint } => {
+                format!("objects[{object}].skeleton.joints[{joint}].rotation")
+            }
+            ChannelId::JointScale { object, joint } => {
+                format!("objects[{object}].skeleton.joints[{joint}].scale")
+            }
+            ChannelId::LightPosition(l) => format!("lights[{l}].position"),
+            ChannelId::LightDirection(l) => format!("lights[{l}].direction"),
+            ChannelId::LightColour(l) => format!("lights[{l}].colour"),
+            ChannelId::LightIntensity(l) => format!("lights[{l}].intensity"),
+        }
+    }
+
+    /// "Arm / Elbow rotation": the owner's name and the channel name, for labels.
+    #[must_use]
+    pub fn label(self, scene: &Scene) -> String {
+        format!("{} {}", owner_name(scene, self).unwrap_or_else(|| "?".to_owned()), self.channel_name())
+    }
+
+    /// The channels of an object (its transform, skeleton root and joints), in display order.
+    /// Every joint has its rotation; its translation and scale are listed only where they are
+    /// keyed or not the identity (imported characters), so keyrig's own rigs show one row per
+    /// joint.
+    #[must_use]
+    pub fn of_object(scene: &Scene, object: usize) -> Vec<ChannelId> {
+        let mut out = vec![
+            ChannelId::ObjectTranslation(object),
+            ChannelId::ObjectRotation(object),
+            ChannelId::ObjectScale(object),
+        ];
+        if let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) {
+            out.push(ChannelId::RootTranslation(object));
+            for (joint, j) in skeleton.joints.iter().enumerate() {
+                if j.translation.is_animated() || j.translation.value != Vec3::ZERO {
+                    out.push(ChannelId::JointTranslation { object, joint });
+                }
+                out.push(ChannelId::JointRotation { object, joint });
+                if j.scale.is_animated() || j.scale.value != Vec3::ONE {
+                    out.push(ChannelId::JointScale { object, joint });
+                }
+            }
+        }
+        out
+    }
+
+    /// The channels of a light.
+    #[must_use]
+    pub fn of_light(light: usize) -> [ChannelId; 4] {
+        [
+            ChannelId::LightPosition(light),
+            ChannelId::LightDirection(light),
+            ChannelId::LightColour(light),
+            ChannelId::LightIntensity(light),
+        ]
+    }
+
+    /// Every channel of the scene.
+    #[must_use]
+    pub fn all(scene: &Scene) -> Vec<ChannelId> {
+        let mut out = Vec::new();
+        for o in 0..scene.objects.len() {
+            out.extend(ChannelId::of_object(scene, o));
+        }
+        for l in 0..scene.lights.len() {
+            out.extend(ChannelId::of_light(l));
+        }
+        out
+    }
+}
+
+fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
+    Some(match id {
+        ChannelId::ObjectTranslation(o)
+        | ChannelId::ObjectRotation(o)
+        | ChannelId::ObjectScale(o)
+        | ChannelId::RootTranslation(o) => scene.objects.get(o)?.name.clone(),
+        ChannelId::JointTranslation { object, joint }
+        | ChannelId::JointRotation { object, joint }
+        | ChannelId::JointScale { object, joint } => {
+            scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone()
+        }
+        ChannelId::LightPosition(l)
+        | ChannelId::LightDirection(l)
+        | ChannelId::LightColour(l)
+        | ChannelId::LightIntensity(l) => scene.lights.get(l)?.name.clone(),
+    })
+}
+
+/// A borrowed channel of one of the three value types.
+pub enum ChannelRef<'a> {
+    Vec3(&'a Animated<Vec3>),
+    Rotation(&'a Animated<Quat>),
+    Scalar(&'a Animated<f32>),
+}
+
+impl<'a> ChannelRef<'a> {
+    /// Another borrow of the same channel.
+    #[must_use]
+    pub fn clone_ref(&self) -> ChannelRef<'a> {
+        match self {
+            ChannelRef::Vec3(a) => ChannelRef::Vec3(a),
+            ChannelRef::Rotation(a) => ChannelRef::Rotation(a),
+            ChannelRef::Scalar(a) => ChannelRef::Scalar(a),
+        }
+    }
+}
+
+/// A mutably borrowed channel.
+pub enum ChannelMut<'a> {
+    Vec3(&'a mut Animated<Vec3>),
+    Rotation(&'a mut Animated<Quat>),
+    Scalar(&'a mut Animated<f32>),
+}
+
+/// A value of any channel type (a sample, the clipboard, pose overrides).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ChannelValue {
+    Vec3(Vec3),
+    Rotation(Quat),
+    Scalar(f32),
+}
+
+impl ChannelValue {
+    /// The value as numbers: x, y, z (or r, g, b); a rotation as the unit quaternion x, y, z, w
+    /// or as Euler angles in degrees; a scalar alone.
+    #[must_use]
+    pub fn components(self, rotation: RotationFormat) -> Vec<f64> {
+        match self {
+            ChannelValue::Scalar(v) => vec![f64::from(v)],
+            ChannelValue::Vec3(v) => v.to_array().map(f64::from).to_vec(),
+            ChannelValue::Rotation(q) => match rotation {
+                RotationFormat::Quat => q.to_array().map(f64::from).to_vec(),
+                RotationFormat::EulerDegrees => {
+                    let (x, y, z) = q.as_dquat().to_euler(EulerRot::XYZEx);
+                    vec![x.to_degrees(), y.to_degrees(), z.to_degrees()]
+                }
+            },
+        }
+    }
+}
+
+/// Borrows a channel; `None` when the id does not name anything in `scene`.
+#[must_use]
+pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
+    Some(match id {
+        ChannelId::ObjectTranslation(o) => ChannelRef::Vec3(&scene.objects.get(o)?.translation),
+        ChannelId::ObjectRotation(o) => ChannelRef::Rotation(&scene.objects.get(o)?.rotation),
+        ChannelId::ObjectScale(o) => ChannelRef::Vec3(&scene.objects.get(o)?.scale),
+        ChannelId::RootTranslation(o) => {
+            ChannelRef::Vec3(&scene.objects.get(o)?.skeleton.as_ref()?.root_translation)
+        }
+        ChannelId::JointTranslation { object, joint } => {
+            ChannelRef::Vec3(&scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.translation)
+        }
+        ChannelId::JointRotation { object, joint } => {
+            ChannelRef::Rotation(&scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation)
+        }
+        ChannelId::JointScale { object, joint } => {
+            ChannelRef::Vec3(&scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.scale)
+        }
+        ChannelId::LightPosition(l) => ChannelRef::Vec3(&scene.lights.get(l)?.position),
+        ChannelId::LightDirection(l) => ChannelRef::Vec3(&scene.lights.get(l)?.direction),
+        ChannelId::LightColour(l) => ChannelRef::Vec3(&scene.lights.get(l)?.colour),
+        ChannelId::LightIntensity(l) => ChannelRef::Scalar(&scene.lights.get(l)?.intensity),
+    })
+}
+
+/// Mutably borrows a channel; `None` when the id does not name anything in `scene`.
+#[must_use]
+pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
+    Some(match id {
+        ChannelId::ObjectTranslation(o) => ChannelMut::Vec3(&mut scene.objects.get_mut(o)?.translation),
+        ChannelId::ObjectRotation(o) => ChannelMut::Rotation(&mut scene.objects.get_mut(o)?.rotation),
+        ChannelId::ObjectScale(o) => ChannelMut::Vec3(&mut scene.objects.get_mut(o)?.scale),
+        ChannelId::RootTranslation(o) => {
+            ChannelMut::Vec3(&mut scene.objects.get_mut(o)?.skeleton.as_mut()?.root_translation)
+        }
+        ChannelId::JointTranslation { object, joint } => ChannelMut::Vec3(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?.translation,
+        ),
+        ChannelId::JointRotation { object, joint } => ChannelMut::Rotation(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?.rotation,
+        ),
+        ChannelId::JointScale { object, joint } => ChannelMut::Vec3(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?.scale,
+        ),
+        ChannelId::LightPosition(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.position),
+        ChannelId::LightDirection(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.direction),
+        ChannelId::LightColour(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.colour),
+        ChannelId::LightIntensity(l) => ChannelMut::Scalar(&mut scene.lights.get_mut(l)?.intensity),
+    })
+}
