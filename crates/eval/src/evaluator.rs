@@ -1,0 +1,499 @@
+//! [`SceneEvaluator`]: the validated runtime form of a scene, answering "the scene at time t".
+
+use std::collections::HashMap;
+use std::fmt;
+use std::sync::Arc;
+
+use glam::{Affine3A, Quat, Vec3};
+use keyrig_core::channel_id::{ChannelId, ChannelValue};
+use keyrig_core::track::TrackValue;
+use keyrig_core::{Animated, AnimatedTrack, DeformerKind, LightKind, MeshSource, Scene};
+use keyrig_skin::{
+    mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
+};
+
+use crate::morph::{MorphBlend, MorphClips, MorphError};
+
+/// Values set on channels without keys being written (a gizmo drag, a slider), keyed by the
+/// channel they replace: the evaluator shows them instead of the channel's track.
+pub type Overrides = HashMap<ChannelId, ChannelValue>;
+
+/// What a model file gave for an object whose mesh is `MeshSource::File` (keyrig-io loads it;
+/// the evaluator reads no files).
+#[derive(Clone, Debug)]
+pub enum LoadedMesh {
+    /// A skinned mesh bound to its skin's skeleton (a glTF skin's inverse bind matrices).
+    Skinned(Arc<SkinnedMesh>),
+    /// Vertex animation (MD2): its frames and clips.
+    Morph(Arc<MorphClips>),
+    /// A mesh that neither skins nor morphs.
+    Static,
+}
+
+/// Something the evaluator could not take from the scene, with the field path it concerns
+/// (`objects[0].skeleton.joints[2].rotation.track[1].time`). The scene still evaluates: a
+/// channel whose keys are invalid holds its static value, an object whose skeleton or mesh is
+/// invalid is drawn without skinning.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EvalProblem {
+    pub path: String,
+    pub message: String,
+}
+
+impl fmt::Display for EvalProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path, self.message)
+    }
+}
+
+/// A channel's validated track, or its static value when its keys are invalid.
+#[derive(Clone, Debug)]
+enum Slot<T: TrackValue> {
+    Track(AnimatedTrack<T>),
+    Fallback(T),
+}
+
+impl<T: TrackValue> Slot<T> {
+    fn new(animated: &Animated<T>, id: ChannelId, problems: &mut Vec<EvalProblem>) -> Self {
+        match AnimatedTrack::new(animated) {
+            Ok(track) => Slot::Track(track),
+            Err(e) => {
+                problems.push(EvalProblem {
+                    path: keyrig_core::validate::track_error_path(&id.field_path(), &e),
+                    message: e.to_string(),
+                });
+                Slot::Fallback(animated.value)
+            }
+        }
+    }
+
+    #[inline]
+    fn sample(&self, t: f64) -> T {
+        match self {
+            Slot::Track(track) => track.sample(t),
+            Slot::Fallback(v) => *v,
+        }
+    }
+}
+
+/// A skinned mesh with its deformer bindings, shared by everything that draws or deforms it.
+#[derive(Clone, Debug)]
+pub struct SkinRig {
+    pub mesh: Arc<SkinnedMesh>,
+    pub bindings: Arc<MeshBindings>,
+}
+
+/// What of a vertex-animated mesh plays.
+#[derive(Clone, Debug)]
+pub struct MorphRig {
+    pub clips: Arc<MorphClips>,
+    pub clip: Option<String>,
+    pub fps: f64,
+}
+
+#[derive(Clone, Debug)]
+struct JointSlots {
+    translation: Slot<Vec3>,
+    rotation: Slot<Quat>,
+    scale: Slot<Vec3>,
+}
+
+#[derive(Clone, Debug)]
+struct SkeletonRig {
+    root_translation: Slot<Vec3>,
+    joints: Vec<JointSlots>,
+    /// The skeleton the palette is evaluated on: the skinned mesh's (a glTF file's inverse bind
+    /// matrices) or the scene's rest skeleton; `None` when neither is valid.
+    rest: Option<RestSkeleton>,
+}
+
+#[derive(Clone, Debug)]
+struct ObjectRig {
+    translation: Slot<Vec3>,
+    rotation: Slot<Quat>,
+    scale: Slot<Vec3>,
+    skeleton: Option<SkeletonRig>,
+    skin: Option<SkinRig>,
+    /// The palette of a skinned mesh without a scene skeleton (its rest pose), computed once.
+    rest_palette: Option<JointPalette>,
+    morph: Option<MorphRig>,
+    deformer: DeformerKind,
+}
+
+#[derive(Clone, Debug)]
+struct LightRig {
+    kind: LightKind,
+    enabled: bool,
+    position: Slot<Vec3>,
+    direction: Slot<Vec3>,
+    colour: Slot<Vec3>,
+    intensity: Slot<f32>,
+}
+
+/// The state of one object at a time.
+#[derive(Clone, Debug)]
+pub struct ObjectState {
+    /// World from object: T·R·S of the object's channels.
+    pub world_from_object: Affine3A,
+    /// The skeleton's local joint transforms and root translation (`None` without a skeleton).
+    pub pose: Option<Pose>,
+    /// The joint palette of the object's skin (its skinned mesh's skeleton, or the scene
+    /// skeleton for an object without a mesh); a skinned mesh without a skeleton gets its rest
+    /// palette. `F(j)` is `palette.model_from_joint[j]`, composed once per evaluation.
+    pub palette: Option<JointPalette>,
+    /// Why the pose has no palette (a zero quaternion set as an override, a non-finite value).
+    pub palette_error: Option<SkinError>,
+    /// The frames a vertex-animated mesh shows.
+    pub morph: Option<Result<MorphBlend, MorphError>>,
+}
+
+/// The state of one light at a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightState {
+    pub kind: LightKind,
+    pub enabled: bool,
+    pub position: Vec3,
+    /// As keyed (not normalized).
+    pub direction: Vec3,
+    pub colour: Vec3,
+    pub intensity: f32,
+}
+
+/// The scene at one time.
+#[derive(Clone, Debug)]
+pub struct SceneState {
+    pub time: f64,
+    pub objects: Vec<ObjectState>,
+    pub lights: Vec<LightState>,
+}
+
+/// The validated runtime form of a [`Scene`]: every channel's track (tangents and Squad
+/// controls precomputed), each skeleton's rest data, each skinned mesh with its deformer
+/// bindings, each morph mesh's clips. It answers "the scene at time t" —
+/// object world transforms, light states, each skeleton's joint palette, morph frames — for the
+/// viewport, motion paths, the curve view, `sample`, `deform`, `render` and glTF export alike.
+///
+/// Building it is lenient: what cannot be evaluated is listed in
+/// [`SceneEvaluator::problems`] and evaluates to its static value (or without skinning);
+/// strict consumers (the command line) refuse a scene with problems.
+#[derive(Clone, Debug)]
+pub struct SceneEvaluator {
+    fps: f64,
+    objects: Vec<ObjectRig>,
+    lights: Vec<LightRig>,
+    problems: Vec<EvalProblem>,
+}
+
+impl SceneEvaluator {
+    /// Validates `scene`. `meshes` gives, by object index, what keyrig-io loaded for objects
+    /// whose mesh is a model file; procedural meshes are generated here, bound to the object's
+    /// skeleton.
+    #[must_use]
+    pub fn new(scene: &Scene, meshes: &HashMap<usize, LoadedMesh>) -> Self {
+        let mut problems = Vec::new();
+        let objects = (0..scene.objects.len())
+            .map(|o| ObjectRig::new(scene, o, meshes.get(&o), &mut problems))
+            .collect();
+        let lights = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(l, light)| LightRig {
+                kind: light.kind,
+                enabled: light.enabled,
+                position: Slot::new(&light.position, ChannelId::LightPosition(l), &mut problems),
+                direction: Slot::new(&light.direction, ChannelId::LightDirection(l), &mut problems),
+                colour: Slot::new(&light.colour, ChannelId::LightColour(l), &mut problems),
+                intensity: Slot::new(&light.intensity, ChannelId::LightIntensity(l), &mut problems),
+            })
+            .collect();
+        SceneEvaluator { fps: scene.fps, objects, lights, problems }
+    }
+
+    /// What could not be evaluated, with field paths; empty for a valid scene.
+    #[must_use]
+    pub fn problems(&self) -> &[EvalProblem] {
+        &self.problems
+    }
+
+    /// Frames per second of the scene's timeline.
+    #[must_use]
+    pub fn fps(&self) -> f64 {
+        self.fps
+    }
+
+    /// Number of objects.
+    #[must_use]
+    pub fn object_count(&self) -> usize {
+        self.objects.len()
+    }
+
+    /// The skinned mesh of object `o` with its bindings (procedural meshes and loaded skinned
+    /// meshes).
+    #[must_use]
+    pub fn skin(&self, o: usize) -> Option<&SkinRig> {
+        self.objects.get(o)?.skin.as_ref()
+    }
+
+    /// What of object `o`'s vertex-animated mesh plays.
+    #[must_use]
+    pub fn morph(&self, o: usize) -> Option<&MorphRig> {
+        self.objects.get(o)?.morph.as_ref()
+    }
+
+    /// The deformer object `o` uses.
+    #[must_use]
+    pub fn deformer(&self, o: usize) -> Option<DeformerKind> {
+        self.objects.get(o).map(|r| r.deformer)
+    }
+
+    /// The skeleton object `o`'s palette is evaluated on.
+    #[must_use]
+    pub fn rest_skeleton(&self, o: usize) -> Option<&RestSkeleton> {
+        self.objects.get(o)?.skeleton.as_ref()?.rest.as_ref()
+    }
+
+    /// The value of channel `id` at `time` seconds; an override wins. `None` when the channel
+    /// does not exist.
+    #[must_use]
+    pub fn value(&self, id: ChannelId, time: f64, overrides: &Overrides) -> Option<ChannelValue> {
+        if let Some(v) = overrides.get(&id) {
+            return Some(*v);
+        }
+        let vec3 = |slot: &Slot<Vec3>| Some(ChannelValue::Vec3(slot.sample(time)));
+        let joint =
+            |object: usize, joint: usize| self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint);
+        match id {
+            ChannelId::ObjectTranslation(o) => vec3(&self.objects.get(o)?.translation),
+            ChannelId::ObjectRotation(o) => {
+                Some(ChannelValue::Rotation(self.objects.get(o)?.rotation.sample(time)))
+            }
+            ChannelId::ObjectScale(o) => vec3(&self.objects.get(o)?.scale),
+            ChannelId::RootTranslation(o) => vec3(&self.objects.get(o)?.skeleton.as_ref()?.root_translation),
+            ChannelId::JointTranslation { object, joint: j } => vec3(&joint(object, j)?.translation),
+            ChannelId::JointRotation { object, joint: j } => {
+                Some(ChannelValue::Rotation(joint(object, j)?.rotation.sample(time)))
+            }
+            ChannelId::JointScale { object, joint: j } => vec3(&joint(object, j)?.scale),
+            ChannelId::LightPosition(l) => vec3(&self.lights.get(l)?.position),
+            ChannelId::LightDirection(l) => vec3(&self.lights.get(l)?.direction),
+            ChannelId::LightColour(l) => vec3(&self.lights.get(l)?.colour),
+            ChannelId::LightIntensity(l) => {
+                Some(ChannelValue::Scalar(self.lights.get(l)?.intensity.sample(time)))
+            }
+        }
+    }
+
+    /// The whole scene at `time` seconds.
+    #[must_use]
+    pub fn evaluate(&self, time: f64, overrides: &Overrides) -> SceneState {
+        SceneState {
+            time,
+            objects: (0..self.objects.len()).filter_map(|o| self.object_at(o, time, overrides)).collect(),
+            lights: (0..self.lights.len()).filter_map(|l| self.light_at(l, time, overrides)).collect(),
+        }
+    }
+
+    /// Object `o` at `time` seconds; `None` when there is no such object.
+    #[must_use]
+    pub fn object_at(&self, o: usize, time: f64, overrides: &Overrides) -> Option<ObjectState> {
+        let rig = self.objects.get(o)?;
+        let vec3 = |id: ChannelId, slot: &Slot<Vec3>| match overrides.get(&id) {
+            Some(ChannelValue::Vec3(v)) => *v,
+            _ => slot.sample(time),
+        };
+        let quat = |id: ChannelId, slot: &Slot<Quat>| {
+            let q = match overrides.get(&id) {
+                Some(ChannelValue::Rotation(q)) => *q,
+                _ => slot.sample(time),
+            };
+            if q.is_finite() && q.length_squared() > 1e-12 {
+                q.normalize()
+            } else {
+                Quat::IDENTITY
+            }
+        };
+        let world_from_object = Affine3A::from_scale_rotation_translation(
+            vec3(ChannelId::ObjectScale(o), &rig.scale),
+            quat(ChannelId::ObjectRotation(o), &rig.rotation),
+            vec3(ChannelId::ObjectTranslation(o), &rig.translation),
+        );
+        let mut state =
+            ObjectState { world_from_object, pose: None, palette: None, palette_error: None, morph: None };
+        if let Some(skeleton) = &rig.skeleton {
+            let n = skeleton.joints.len();
+            let mut pose = Pose::rest(0);
+            pose.local_translations.reserve(n);
+            pose.local_rotations.reserve(n);
+            pose.local_scales.reserve(n);
+            pose.root_translation = vec3(ChannelId::RootTranslation(o), &skeleton.root_translation);
+            for (j, slots) in skeleton.joints.iter().enumerate() {
+                let (object, joint) = (o, j);
+                pose.local_translations
+                    .push(vec3(ChannelId::JointTranslation { object, joint }, &slots.translation));
+                pose.local_rotations.push(quat(ChannelId::JointRotation { object, joint }, &slots.rotation));
+                pose.local_scales.push(vec3(ChannelId::JointScale { object, joint }, &slots.scale));
+            }
+            if let Some(rest) = &skeleton.rest {
+                match JointPalette::new(rest, &pose) {
+                    Ok(palette) => state.palette = Some(palette),
+                    Err(e) => state.palette_error = Some(e),
+                }
+            }
+            state.pose = Some(pose);
+        } else if let Some(palette) = &rig.rest_palette {
+            state.palette = Some(palette.clone());
+        }
+        if let Some(morph) = &rig.morph {
+            state.morph = Some(morph.clips.blend_at(morph.clip.as_deref(), morph.fps, time));
+        }
+        Some(state)
+    }
+
+    /// Light `l` at `time` seconds; `None` when there is no such light.
+    #[must_use]
+    pub fn light_at(&self, l: usize, time: f64, overrides: &Overrides) -> Option<LightState> {
+        let rig = self.lights.get(l)?;
+        let vec3 = |id: ChannelId, slot: &Slot<Vec3>| match overrides.get(&id) {
+            Some(ChannelValue::Vec3(v)) => *v,
+            _ => slot.sample(time),
+        };
+        let intensity = match overrides.get(&ChannelId::LightIntensity(l)) {
+            Some(ChannelValue::Scalar(s)) => *s,
+            _ => rig.intensity.sample(time),
+        };
+        Some(LightState {
+            kind: rig.kind,
+            enabled: rig.enabled,
+            position: vec3(ChannelId::LightPosition(l), &rig.position),
+            direction: vec3(ChannelId::LightDirection(l), &rig.direction),
+            colour: vec3(ChannelId::LightColour(l), &rig.colour),
+            intensity,
+        })
+    }
+}
+
+impl ObjectRig {
+    fn new(scene: &Scene, o: usize, loaded: Option<&LoadedMesh>, problems: &mut Vec<EvalProblem>) -> Self {
+        let object = &scene.objects[o];
+        let at = |field: &str| format!("objects[{o}].{field}");
+        let mut problem = |path: String, message: String| problems.push(EvalProblem { path, message });
+        let mut slot_problems = Vec::new();
+        let translation = Slot::new(&object.translation, ChannelId::ObjectTranslation(o), &mut slot_problems);
+        let rotation = Slot::new(&object.rotation, ChannelId::ObjectRotation(o), &mut slot_problems);
+        let scale = Slot::new(&object.scale, ChannelId::ObjectScale(o), &mut slot_problems);
+        let scene_rest = object.skeleton.as_ref().and_then(|s| match RestSkeleton::from_scene(s) {
+            Ok(rest) => Some(rest),
+            Err(e) => {
+                problem(at("skeleton"), e.to_string());
+                None
+            }
+        });
+        let mut skeleton = object.skeleton.as_ref().map(|s| SkeletonRig {
+            root_translation: Slot::new(
+                &s.root_translation,
+                ChannelId::RootTranslation(o),
+                &mut slot_problems,
+            ),
+            joints: s
+                .joints
+                .iter()
+                .enumerate()
+                .map(|(joint, j)| JointSlots {
+                    translation: Slot::new(
+                        &j.translation,
+                        ChannelId::JointTranslation { object: o, joint },
+                        &mut slot_problems,
+                    ),
+                    rotation: Slot::new(
+                        &j.rotation,
+                        ChannelId::JointRotation { object: o, joint },
+                        &mut slot_problems,
+                    ),
+                    scale: Slot::new(
+                        &j.scale,
+                        ChannelId::JointScale { object: o, joint },
+                        &mut slot_problems,
+                    ),
+                })
+                .collect(),
+            rest: scene_rest.clone(),
+        });
+        // The skinned mesh: procedural meshes are generated and bound to the object's skeleton
+        // (scaled to its length); loaded ones keep their own skeleton, which must list the
+        // scene skeleton's joints in the same order.
+        let mesh: Option<SkinnedMesh> = match (&object.mesh, loaded) {
+            (Some(MeshSource::Procedural(kind)), _) => match &scene_rest {
+                Some(rest) => match mesh_for(*kind).fit_to_skeleton(rest.clone()) {
+                    Ok(mesh) => Some(mesh),
+                    Err(e) => {
+                        problem(at("mesh (bound to the object's skeleton)"), e.to_string());
+                        None
+                    }
+                },
+                None if object.skeleton.is_some() => None,
+                None => Some(mesh_for(*kind)),
+            },
+            (Some(MeshSource::File { path, .. }), Some(LoadedMesh::Skinned(mesh))) => match &skeleton {
+                Some(s) if s.joints.len() != mesh.skeleton.len() => {
+                    problem(
+                        at("skeleton"),
+                        format!(
+                            "{} joints, but the mesh from `{path}` is bound to {}",
+                            s.joints.len(),
+                            mesh.skeleton.len()
+                        ),
+                    );
+                    None
+                }
+                _ => Some((**mesh).clone()),
+            },
+            _ => None,
+        };
+        let skin = mesh.and_then(|mesh| {
+            let bindings = BlendZone::from_settings(&object.deformer).and_then(|zone| mesh.bindings(zone));
+            match bindings {
+                Ok(bindings) => Some(SkinRig { mesh: Arc::new(mesh), bindings: Arc::new(bindings) }),
+                Err(e) => {
+                    problem(at("mesh"), e.to_string());
+                    None
+                }
+            }
+        });
+        if let (Some(skeleton), Some(skin)) = (&mut skeleton, &skin) {
+            skeleton.rest = Some(skin.mesh.skeleton.clone());
+        }
+        let rest_palette = match (&skeleton, &skin) {
+            (None, Some(skin)) => {
+                JointPalette::new(&skin.mesh.skeleton, &Pose::rest(skin.mesh.skeleton.len())).ok()
+            }
+            _ => None,
+        };
+        let morph = match (&object.mesh, loaded) {
+            (Some(MeshSource::File { clip, fps, .. }), Some(LoadedMesh::Morph(clips))) => {
+                let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+                if !(fps.is_finite() && fps > 0.0) {
+                    problem(at("mesh.fps"), MorphError::BadFps(fps).to_string());
+                    None
+                } else if let Err(e) = clips.clip_frames(clip.as_deref()) {
+                    problem(at("mesh.clip"), e.to_string());
+                    None
+                } else {
+                    Some(MorphRig { clips: Arc::clone(clips), clip: clip.clone(), fps })
+                }
+            }
+            _ => None,
+        };
+        problems.extend(slot_problems);
+        ObjectRig {
+            translation,
+            rotation,
+            scale,
+            skeleton,
+            skin,
+            rest_palette,
+            morph,
+            deformer: object.deformer.kind,
+        }
+    }
+}

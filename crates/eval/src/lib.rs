@@ -1,0 +1,21 @@
+//! keyrig-eval: the scene evaluator — the one path from a scene's keys to what is drawn,
+//! deformed, sampled and exported at a time (DESIGN.md §2).
+//!
+//! [`SceneEvaluator::new`] validates a [`keyrig_core::Scene`] once: every channel's track
+//! (keyrig-core), each skeleton's rest data and each skinned mesh with its deformer bindings
+//! (keyrig-skin), each vertex-animated mesh's clips ([`morph`]). [`SceneEvaluator::evaluate`]
+//! then answers "the scene at time t": object world transforms, light states, each skeleton's
+//! local joint transforms and joint palette (F(j) composed once), morph frames. Pose overrides
+//! (values being dragged but not keyed) take part in the same evaluation, so the viewport, the
+//! motion path and the curve view all see them.
+//!
+//! Pure: no files, GPU or UI. Model files are loaded by keyrig-io and handed in as
+//! [`LoadedMesh`]es.
+
+mod evaluator;
+pub mod morph;
+
+pub use evaluator::{
+    EvalProblem, LightState, LoadedMesh, MorphRig, ObjectState, Overrides, SceneEvaluator, SceneState,
+    SkinRig,
+};

@@ -1,0 +1,200 @@
+//! The scene evaluator against the pieces it is made of: keyrig-core's tracks for every
+//! channel, keyrig-skin's pose sampler and joint palette for skeletons, the morph clips for
+//! vertex animation; overrides win; invalid data is listed with its path and still evaluates.
+
+use std::collections::HashMap;
+use std::f32::consts::FRAC_PI_2;
+use std::sync::Arc;
+
+use glam::{Affine3A, Quat, Vec3};
+use keyrig_core::channel_id::{ChannelId, ChannelValue};
+use keyrig_core::{
+    Animated, AnimatedTrack, Interpolation, Key, Light, LightKind, MeshSource, Object, ProceduralMesh,
+    RawTrack, Scene,
+};
+use keyrig_eval::morph::{MorphClip, MorphClips};
+use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator};
+use keyrig_skin::{JointPalette, RestSkeleton, ScenePoseSampler};
+
+/// An arm with keyed elbow rotation, forearm translation and wrist scale; a moving cube
+/// without a skeleton; a light whose intensity is keyed.
+fn scene() -> Scene {
+    let mut scene = Scene::default();
+    let mut arm = Object::new("Arm");
+    arm.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmLowPoly));
+    let mut skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly).expect("arm");
+    skeleton.joints[1].rotation.track = RawTrack::new(vec![
+        Key::new(0.0, Quat::IDENTITY),
+        Key::new(1.0, Quat::from_rotation_z(FRAC_PI_2)),
+        Key::new(2.0, Quat::from_rotation_x(1.0)),
+    ]);
+    skeleton.joints[2].translation.track =
+        RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(2.0, Vec3::new(0.0, 5.0, 0.0))]);
+    skeleton.joints[3].scale.track = RawTrack::new(vec![
+        Key::new(0.0, Vec3::ONE).with_interpolation(Interpolation::Linear),
+        Key::new(2.0, Vec3::splat(2.0)),
+    ]);
+    arm.skeleton = Some(skeleton);
+    arm.translation.track = RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(2.0, Vec3::X)]);
+    scene.objects.push(arm);
+    let mut cube = Object::new("Cube");
+    cube.mesh = Some(MeshSource::Procedural(ProceduralMesh::Cube));
+    cube.rotation.track =
+        RawTrack::new(vec![Key::new(0.0, Quat::IDENTITY), Key::new(1.0, Quat::from_rotation_y(1.0))]);
+    scene.objects.push(cube);
+    scene.lights.push(Light {
+        name: "Key".into(),
+        kind: LightKind::Point,
+        enabled: true,
+        position: Animated::constant(Vec3::Y),
+        direction: Animated::constant(Vec3::NEG_Y),
+        colour: Animated::constant(Vec3::ONE),
+        intensity: Animated {
+            value: 1.0,
+            track: RawTrack::new(vec![Key::new(0.0, 1.0), Key::new(1.0, 3.0)]),
+        },
+    });
+    scene
+}
+
+#[test]
+fn the_scene_at_a_time_is_what_its_tracks_and_skeletons_say() {
+    let scene = scene();
+    let eval = SceneEvaluator::new(&scene, &HashMap::new());
+    assert!(eval.problems().is_empty(), "{:?}", eval.problems());
+    let skeleton = scene.objects[0].skeleton.as_ref().unwrap();
+    let sampler = ScenePoseSampler::new(skeleton).unwrap();
+    let skin = eval.skin(0).expect("the arm is skinned");
+    for t in [-1.0, 0.0, 0.3, 1.0, 1.7, 2.0, 5.0] {
+        let state = eval.evaluate(t, &Overrides::new());
+        assert_eq!(state.objects.len(), 2);
+        let arm = &state.objects[0];
+        let expected_pose = sampler.sample(t);
+        let pose = arm.pose.as_ref().expect("pose");
+        assert_eq!(pose.local_translations, expected_pose.local_translations, "t = {t}");
+        assert_eq!(pose.local_scales, expected_pose.local_scales, "t = {t}");
+        // The evaluator hands out unit quaternions (the tracks round to f32 first).
+        for (q, e) in pose.local_rotations.iter().zip(&expected_pose.local_rotations) {
+            assert!(q.abs_diff_eq(*e, 1e-6) && (q.length() - 1.0).abs() < 1e-6, "t = {t}: {q} vs {e}");
+        }
+        let expected = JointPalette::new(&skin.mesh.skeleton, &expected_pose).unwrap();
+        let palette = arm.palette.as_ref().expect("palette");
+        for (m, e) in palette.skinning.iter().zip(&expected.skinning) {
+            assert!(m.abs_diff_eq(*e, 1e-5), "t = {t}");
+        }
+        let translation = AnimatedTrack::new(&scene.objects[0].translation).unwrap().sample(t);
+        assert!(arm.world_from_object.abs_diff_eq(Affine3A::from_translation(translation), 1e-6));
+        // The cube: no skeleton, its rest palette, its rotation track.
+        let cube = &state.objects[1];
+        assert!(cube.pose.is_none());
+        assert!(cube.palette.is_some(), "a skinned mesh without a skeleton gets its rest palette");
+        let q = AnimatedTrack::new(&scene.objects[1].rotation).unwrap().sample(t).normalize();
+        assert!(cube.world_from_object.abs_diff_eq(Affine3A::from_quat(q), 1e-6));
+        let light = state.lights[0];
+        let intensity = AnimatedTrack::new(&scene.lights[0].intensity).unwrap().sample(t);
+        assert_eq!(light.intensity, intensity);
+        assert_eq!(light.position, Vec3::Y);
+        // Single channels agree with the whole evaluation.
+        let id = ChannelId::JointRotation { object: 0, joint: 1 };
+        assert_eq!(
+            eval.value(id, t, &Overrides::new()),
+            Some(ChannelValue::Rotation(expected_pose.local_rotations[1]))
+        );
+    }
+    // Full joint poses: the forearm moves up, the wrist scales.
+    let end = eval.evaluate(2.0, &Overrides::new());
+    let pose = end.objects[0].pose.as_ref().unwrap();
+    assert_eq!(pose.local_translations[2], Vec3::new(0.0, 5.0, 0.0));
+    assert_eq!(pose.local_scales[3], Vec3::splat(2.0));
+    assert_eq!(eval.value(ChannelId::JointScale { object: 9, joint: 0 }, 0.0, &Overrides::new()), None);
+}
+
+#[test]
+fn overrides_take_part_in_the_same_evaluation() {
+    let scene = scene();
+    let eval = SceneEvaluator::new(&scene, &HashMap::new());
+    let id = ChannelId::JointRotation { object: 0, joint: 0 };
+    let turn = Quat::from_rotation_y(0.7);
+    let overrides: Overrides =
+        [(id, ChannelValue::Rotation(turn)), (ChannelId::LightIntensity(0), ChannelValue::Scalar(9.0))]
+            .into();
+    let state = eval.evaluate(0.5, &overrides);
+    let arm = &state.objects[0];
+    assert_eq!(arm.pose.as_ref().unwrap().local_rotations[0], turn);
+    // F(0) carries the override, and so does every joint below it.
+    let (_, rotation, _) = arm.palette.as_ref().unwrap().model_from_joint[0].to_scale_rotation_translation();
+    assert!(rotation.abs_diff_eq(turn, 1e-6));
+    assert_eq!(state.lights[0].intensity, 9.0);
+    assert_eq!(eval.value(id, 0.5, &overrides), Some(ChannelValue::Rotation(turn)));
+    // A zero quaternion as an override is not a rotation: the identity is shown instead.
+    let zero: Overrides = [(id, ChannelValue::Rotation(Quat::from_xyzw(0.0, 0.0, 0.0, 0.0)))].into();
+    let state = eval.evaluate(0.5, &zero);
+    assert_eq!(state.objects[0].pose.as_ref().unwrap().local_rotations[0], Quat::IDENTITY);
+}
+
+#[test]
+fn invalid_data_is_listed_with_its_path_and_still_evaluates() {
+    let mut scene = scene();
+    let elbow = &mut scene.objects[0].skeleton.as_mut().unwrap().joints[1].rotation;
+    elbow.value = Quat::from_rotation_z(0.25);
+    elbow.track.keys[2].time = 0.5; // out of order
+    scene.lights[0].intensity.track.keys[1].value = f32::NAN;
+    let eval = SceneEvaluator::new(&scene, &HashMap::new());
+    let paths: Vec<&str> = eval.problems().iter().map(|p| p.path.as_str()).collect();
+    assert!(paths.contains(&"objects[0].skeleton.joints[1].rotation.track[2].time"), "{paths:?}");
+    assert!(paths.contains(&"lights[0].intensity.track[1].value"), "{paths:?}");
+    // The invalid channels hold their static values; the rest still animates.
+    let state = eval.evaluate(1.0, &Overrides::new());
+    let pose = state.objects[0].pose.as_ref().unwrap();
+    assert_eq!(pose.local_rotations[1], Quat::from_rotation_z(0.25));
+    assert_eq!(state.lights[0].intensity, 1.0);
+    assert!(state.objects[0].palette.is_some());
+    assert_eq!(
+        eval.problems()[0].to_string(),
+        format!("{}: {}", eval.problems()[0].path, eval.problems()[0].message)
+    );
+}
+
+#[test]
+fn loaded_meshes_skin_and_morph() {
+    let mut scene = Scene::default();
+    let mut model = Object::new("Model");
+    model.mesh = Some(MeshSource::File {
+        path: "m.md2".into(),
+        mesh: None,
+        clip: Some("run".into()),
+        fps: Some(10.0),
+    });
+    scene.objects.push(model);
+    let mut character = Object::new("Character");
+    character.mesh = Some(MeshSource::file("c.glb", Some(0)));
+    character.skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly);
+    scene.objects.push(character);
+    let clips = MorphClips::new(12, vec![MorphClip { name: "run".into(), frames: 4..8 }]).unwrap();
+    let arm_rest = RestSkeleton::from_scene(scene.objects[1].skeleton.as_ref().unwrap()).unwrap();
+    let arm_mesh = keyrig_skin::mesh_for(ProceduralMesh::ArmLowPoly).fit_to_skeleton(arm_rest).unwrap();
+    let meshes: HashMap<usize, LoadedMesh> =
+        [(0, LoadedMesh::Morph(Arc::new(clips))), (1, LoadedMesh::Skinned(Arc::new(arm_mesh)))].into();
+    let eval = SceneEvaluator::new(&scene, &meshes);
+    assert!(eval.problems().is_empty(), "{:?}", eval.problems());
+    let state = eval.evaluate(0.25, &Overrides::new());
+    let blend = state.objects[0].morph.clone().expect("morph").expect("blend");
+    assert_eq!((blend.frame_a, blend.frame_b), (6, 7));
+    assert!(eval.skin(1).is_some() && state.objects[1].palette.is_some());
+
+    // A clip the model does not have, and a skinned mesh bound to another skeleton.
+    scene.objects[0].mesh =
+        Some(MeshSource::File { path: "m.md2".into(), mesh: None, clip: Some("fly".into()), fps: None });
+    scene.objects[1].skeleton.as_mut().unwrap().joints.pop();
+    let eval = SceneEvaluator::new(&scene, &meshes);
+    let problems: Vec<String> = eval.problems().iter().map(ToString::to_string).collect();
+    assert!(
+        problems.iter().any(|p| p.starts_with("objects[0].mesh.clip: no clip named `fly`")),
+        "{problems:?}"
+    );
+    assert!(
+        problems.iter().any(|p| p.starts_with("objects[1].skeleton: 3 joints, but the mesh")),
+        "{problems:?}"
+    );
+    assert!(eval.skin(1).is_none() && eval.morph(0).is_none());
+}
