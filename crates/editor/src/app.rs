@@ -2,22 +2,24 @@
 
 use std::cell::RefCell;
 use std::path::PathBuf;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use egui::{Context, Key, Modifiers};
 use glam::Quat;
 use keyrig_core::{DeformerKind, Scene};
+use keyrig_eval::SceneEvaluator;
 
 use crate::camera::OrbitCamera;
 use crate::channels::{self, ChannelId, ChannelValue, KeyCopy};
 use crate::commands::{pressed_commands, Command};
-use crate::eval::{ObjectPose, PoseOverrides, Tracks};
+use crate::eval::{ObjectPose, PoseOverrides};
 use crate::files::{self, Recent, Recovery};
 use crate::panels;
 use crate::state::{Document, KeyRef, Playback, Selected, Selection};
 
-/// Validated tracks and the document key (document, revision) they were built for.
-type CachedTracks = ((u64, u64), Rc<Tracks>);
+/// The scene evaluator and what it was built from: the document key (document, revision) and
+/// the mesh store's generation.
+type CachedEvaluator = ((u64, u64, u64), Arc<SceneEvaluator>);
 
 /// How the viewport draws meshes (seed text 002's render styles).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,7 +140,7 @@ pub struct EditorApp {
     pub frame_time: Option<f32>,
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
     pub gpu: Option<crate::gpu_view::GpuView>,
-    tracks: RefCell<Option<CachedTracks>>,
+    evaluator: RefCell<Option<CachedEvaluator>>,
     window_title: String,
     close_sent: bool,
     last_autosave: f64,
@@ -189,7 +191,7 @@ impl EditorApp {
             viewport_errors: Vec::new(),
             frame_time: None,
             gpu: None,
-            tracks: RefCell::new(None),
+            evaluator: RefCell::new(None),
             window_title: String::new(),
             close_sent: false,
             last_autosave: 0.0,
@@ -198,31 +200,41 @@ impl EditorApp {
         }
     }
 
-    /// The document's validated tracks, rebuilt when the document changes.
+    /// The document's scene evaluator, rebuilt when the document or its loaded meshes change.
     #[must_use]
-    pub fn tracks(&self) -> Rc<Tracks> {
-        let key = self.doc.cache_key();
-        let mut cache = self.tracks.borrow_mut();
+    pub fn evaluator(&self) -> Arc<SceneEvaluator> {
+        let (document, revision) = self.doc.cache_key();
+        let key = (document, revision, self.meshes.generation());
+        let mut cache = self.evaluator.borrow_mut();
         match &*cache {
-            Some((k, tracks)) if *k == key => Rc::clone(tracks),
+            Some((k, eval)) if *k == key => Arc::clone(eval),
             _ => {
-                let tracks = Rc::new(Tracks::new(self.doc.scene()));
-                *cache = Some((key, Rc::clone(&tracks)));
-                tracks
+                let base_dir = self.doc.path().and_then(std::path::Path::parent);
+                let loaded = self.meshes.loaded_for(base_dir, self.doc.scene());
+                let eval = Arc::new(SceneEvaluator::new(self.doc.scene(), &loaded));
+                *cache = Some((key, Arc::clone(&eval)));
+                eval
             }
         }
+    }
+
+    /// The key the evaluator was built for: the GPU view rebuilds its rig when it changes.
+    #[must_use]
+    pub fn evaluator_key(&self) -> (u64, u64, u64) {
+        let (document, revision) = self.doc.cache_key();
+        (document, revision, self.meshes.generation())
     }
 
     /// The value of a channel now (sampled, or its pose override).
     #[must_use]
     pub fn value_now(&self, id: ChannelId) -> Option<ChannelValue> {
-        self.tracks().value(id, self.time(), &self.overrides)
+        self.evaluator().value(id, self.time(), &self.overrides)
     }
 
     /// Object `o` evaluated now.
     #[must_use]
     pub fn object_pose_now(&self, o: usize) -> Option<ObjectPose> {
-        self.tracks().object_pose(self.doc.scene(), o, self.time(), &self.overrides)
+        self.evaluator().object_at(o, self.time(), &self.overrides).map(|s| ObjectPose::from_state(&s))
     }
 
     /// Gives the editor keyrig-render on eframe's wgpu device; on a CPU rasterizer the viewport

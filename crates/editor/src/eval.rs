@@ -1,179 +1,23 @@
-//! Evaluating the scene at a time for display: channel values (with the editor's transient
-//! pose overrides), object transforms and the skeleton's joint transforms.
+//! The editor's view of the scene evaluator (keyrig-eval): pose overrides, an object's state
+//! as the panels read it, and the Euler angles the inspector and curve view show.
 //!
-//! Values come from keyrig-core's validated tracks ([`AnimatedTrack`]), built once per
-//! document revision in [`Tracks`] (tangents are computed when keys change, never per frame).
-//! Joint transforms follow DESIGN.md §4: `F(j) = F(p(j))·R(j)·T(j)`, with the root's rest
-//! translation plus the skeleton's animated root translation.
-
-use std::collections::HashMap;
+//! Every panel evaluates through the one [`keyrig_eval::SceneEvaluator`] that
+//! [`crate::app::EditorApp::evaluator`] keeps for the document (rebuilt when the document or its
+//! loaded meshes change): the viewport, the GPU view, the motion path and the curve view see
+//! the same values, overrides included.
 
 use glam::{Affine3A, Quat, Vec3};
-use keyrig_core::{AnimatedTrack, Scene, TrackError};
+use keyrig_core::Scene;
 
-use crate::channels::{channel, ChannelId, ChannelRef, ChannelValue};
+use crate::channels::{ChannelId, ChannelValue};
 
 /// Values set by a gizmo or the inspector on a keyed channel without record mode: shown until
 /// the frame changes or the pose is keyed with I.
-pub type PoseOverrides = HashMap<ChannelId, ChannelValue>;
+pub type PoseOverrides = keyrig_eval::Overrides;
 
-/// One validated channel.
-#[derive(Clone, Debug)]
-enum ChannelTrack {
-    Vec3(AnimatedTrack<Vec3>),
-    Rotation(AnimatedTrack<Quat>),
-    Scalar(AnimatedTrack<f32>),
-}
-
-impl ChannelTrack {
-    fn new(c: ChannelRef<'_>) -> Result<Self, TrackError> {
-        Ok(match c {
-            ChannelRef::Vec3(a) => ChannelTrack::Vec3(AnimatedTrack::new(a)?),
-            ChannelRef::Rotation(a) => ChannelTrack::Rotation(AnimatedTrack::new(a)?),
-            ChannelRef::Scalar(a) => ChannelTrack::Scalar(AnimatedTrack::new(a)?),
-        })
-    }
-
-    fn sample(&self, t: f64) -> ChannelValue {
-        match self {
-            ChannelTrack::Vec3(track) => ChannelValue::Vec3(track.sample(t)),
-            ChannelTrack::Rotation(track) => ChannelValue::Rotation(track.sample(t)),
-            ChannelTrack::Scalar(track) => ChannelValue::Scalar(track.sample(t)),
-        }
-    }
-}
-
-fn static_value(c: ChannelRef<'_>) -> ChannelValue {
-    match c {
-        ChannelRef::Vec3(a) => ChannelValue::Vec3(a.value),
-        ChannelRef::Rotation(a) => ChannelValue::Rotation(a.value),
-        ChannelRef::Scalar(a) => ChannelValue::Scalar(a.value),
-    }
-}
-
-/// The validated tracks of every channel of a scene. A channel whose keys are invalid (e.g.
-/// two keys at one time) shows its static value and is listed in [`Tracks::errors`].
-#[derive(Clone, Debug, Default)]
-pub struct Tracks {
-    tracks: HashMap<ChannelId, ChannelTrack>,
-    fallbacks: HashMap<ChannelId, ChannelValue>,
-    errors: Vec<(ChannelId, TrackError)>,
-}
-
-impl Tracks {
-    /// Validates every channel of `scene`.
-    #[must_use]
-    pub fn new(scene: &Scene) -> Self {
-        let mut out = Tracks::default();
-        for id in ChannelId::all(scene) {
-            let Some(c) = channel(scene, id) else { continue };
-            let fallback = static_value(ChannelRef::clone_ref(&c));
-            match ChannelTrack::new(c) {
-                Ok(track) => {
-                    out.tracks.insert(id, track);
-                }
-                Err(e) => {
-                    out.fallbacks.insert(id, fallback);
-                    out.errors.push((id, e));
-                }
-            }
-        }
-        out
-    }
-
-    /// Channels whose tracks could not be validated, with the reason.
-    #[must_use]
-    pub fn errors(&self) -> &[(ChannelId, TrackError)] {
-        &self.errors
-    }
-
-    /// The value of `id` at `time` seconds; an override wins. `None` when the channel does not
-    /// exist.
-    #[must_use]
-    pub fn value(&self, id: ChannelId, time: f64, overrides: &PoseOverrides) -> Option<ChannelValue> {
-        if let Some(v) = overrides.get(&id) {
-            return Some(*v);
-        }
-        match self.tracks.get(&id) {
-            Some(track) => Some(track.sample(time)),
-            None => self.fallbacks.get(&id).copied(),
-        }
-    }
-
-    fn vec3(&self, id: ChannelId, time: f64, o: &PoseOverrides, default: Vec3) -> Vec3 {
-        match self.value(id, time, o) {
-            Some(ChannelValue::Vec3(v)) => v,
-            _ => default,
-        }
-    }
-
-    fn quat(&self, id: ChannelId, time: f64, o: &PoseOverrides) -> Quat {
-        match self.value(id, time, o) {
-            Some(ChannelValue::Rotation(q)) if q.is_finite() && q.length_squared() > 1e-12 => q.normalize(),
-            _ => Quat::IDENTITY,
-        }
-    }
-
-    /// Evaluates object `index` of `scene` (the scene these tracks were built from).
-    #[must_use]
-    pub fn object_pose(
-        &self,
-        scene: &Scene,
-        index: usize,
-        time: f64,
-        overrides: &PoseOverrides,
-    ) -> Option<ObjectPose> {
-        let object = scene.objects.get(index)?;
-        let translation = self.vec3(ChannelId::ObjectTranslation(index), time, overrides, Vec3::ZERO);
-        let rotation = self.quat(ChannelId::ObjectRotation(index), time, overrides);
-        let scale = self.vec3(ChannelId::ObjectScale(index), time, overrides, Vec3::ONE);
-        let world_from_object = Affine3A::from_scale_rotation_translation(scale, rotation, translation);
-        let mut pose = keyrig_skin::Pose::rest(0);
-        let mut object_from_joint: Vec<Affine3A> = Vec::new();
-        if let Some(skeleton) = &object.skeleton {
-            pose.root_translation = self.vec3(ChannelId::RootTranslation(index), time, overrides, Vec3::ZERO);
-            for (j, joint) in skeleton.joints.iter().enumerate() {
-                let t = self.quat(ChannelId::JointRotation { object: index, joint: j }, time, overrides);
-                let translation = self.vec3(
-                    ChannelId::JointTranslation { object: index, joint: j },
-                    time,
-                    overrides,
-                    joint.translation.value,
-                );
-                let scale = self.vec3(
-                    ChannelId::JointScale { object: index, joint: j },
-                    time,
-                    overrides,
-                    joint.scale.value,
-                );
-                pose.local_translations.push(translation);
-                pose.local_rotations.push(t);
-                pose.local_scales.push(scale);
-                let parent = joint.parent.filter(|&p| p < j).map(|p| object_from_joint[p]);
-                let rest_translation = if parent.is_none() {
-                    joint.rest_translation + pose.root_translation
-                } else {
-                    joint.rest_translation
-                };
-                let rest_rotation = if joint.rest_rotation.length_squared() > 1e-12 {
-                    joint.rest_rotation.normalize()
-                } else {
-                    Quat::IDENTITY
-                };
-                let parent_from_joint = Affine3A::from_rotation_translation(rest_rotation, rest_translation)
-                    * Affine3A::from_scale_rotation_translation(scale, t, translation);
-                object_from_joint.push(match parent {
-                    Some(p) => p * parent_from_joint,
-                    None => parent_from_joint,
-                });
-            }
-        }
-        Some(ObjectPose { world_from_object, pose, object_from_joint })
-    }
-}
-/// Samples one channel of `scene` at `time` seconds (validating just that channel); an
-/// override wins. `None` when the channel does not exist. The editor itself samples through a
-/// cached [`Tracks`]; this is for one-off queries and tests.
+/// Samples one channel of `scene` at `time` seconds (validating the scene's procedural data
+/// once); an override wins. `None` when the channel does not exist. The editor itself samples
+/// through its cached evaluator; this is for one-off queries and tests.
 #[must_use]
 pub fn channel_value(
     scene: &Scene,
@@ -181,23 +25,32 @@ pub fn channel_value(
     time: f64,
     overrides: &PoseOverrides,
 ) -> Option<ChannelValue> {
-    if let Some(v) = overrides.get(&id) {
-        return Some(*v);
-    }
-    let c = channel(scene, id)?;
-    let fallback = static_value(ChannelRef::clone_ref(&c));
-    Some(ChannelTrack::new(c).map_or(fallback, |t| t.sample(time)))
+    keyrig_eval::SceneEvaluator::new(scene, &std::collections::HashMap::new()).value(id, time, overrides)
 }
 
-/// An object's evaluated state at one time.
-#[derive(Clone, Debug, PartialEq)]
+/// An object's evaluated state at one time, as the panels read it.
+#[derive(Clone, Debug)]
 pub struct ObjectPose {
     /// World from object: T·R·S.
     pub world_from_object: Affine3A,
     /// The skeleton's local joint transforms T(j) and root translation (empty without one).
     pub pose: keyrig_skin::Pose,
-    /// Model (object) space transform F(j) of each joint.
+    /// Model (object) space transform F(j) of each joint (the palette's, composed once by the
+    /// evaluator); empty without a skeleton.
     pub object_from_joint: Vec<Affine3A>,
+}
+
+impl ObjectPose {
+    /// The panels' view of an evaluated object.
+    #[must_use]
+    pub fn from_state(state: &keyrig_eval::ObjectState) -> Self {
+        let pose = state.pose.clone().unwrap_or_else(|| keyrig_skin::Pose::rest(0));
+        let object_from_joint = match (&state.pose, &state.palette) {
+            (Some(_), Some(palette)) => palette.model_from_joint.clone(),
+            _ => Vec::new(),
+        };
+        ObjectPose { world_from_object: state.world_from_object, pose, object_from_joint }
+    }
 }
 
 /// A rotation as XYZ Euler angles in degrees (what the curve view and inspector show).
@@ -216,24 +69,6 @@ pub fn quat_from_euler_degrees(e: Vec3) -> Quat {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use keyrig_core::{Animated, Joint, Object, Skeleton};
-
-    #[test]
-    fn joint_transforms_chain_rest_and_rotation() {
-        let mut scene = Scene::default();
-        let mut arm = Object::new("Arm");
-        let joint = |name: &str, parent, x| Joint::new(name, parent, Vec3::new(x, 0.0, 0.0), Quat::IDENTITY);
-        let mut skeleton = Skeleton {
-            joints: vec![joint("a", None, 0.0), joint("b", Some(0), 1.0)],
-            root_translation: Animated::constant(Vec3::ZERO),
-        };
-        skeleton.joints[0].rotation.value = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
-        arm.skeleton = Some(skeleton);
-        scene.objects.push(arm);
-        let pose = Tracks::new(&scene).object_pose(&scene, 0, 0.0, &PoseOverrides::new()).expect("object 0");
-        let b = pose.object_from_joint[1].translation;
-        assert!((Vec3::from(b) - Vec3::Y).length() < 1e-6, "{b:?}");
-    }
 
     #[test]
     fn euler_round_trip() {

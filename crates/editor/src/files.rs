@@ -139,7 +139,7 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
             let seconds =
                 mesh.clip_duration(None, keyrig_core::MD2_DEFAULT_FPS).map_err(|e| e.to_string())?;
             scene.frame_range.end = frame_range_end(seconds, scene.fps);
-            Ok((scene, vec![((PathBuf::from(file), None), Ok(FileMesh::Morph(Box::new(mesh))))]))
+            Ok((scene, vec![((PathBuf::from(file), None), Ok(FileMesh::Morph(std::sync::Arc::new(mesh))))]))
         }
         Some(other) => Err(format!(
             "{}: unknown file type .{other} (expected .ron, .glb, .gltf or .md2)",
@@ -472,11 +472,11 @@ pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Resul
 #[derive(Clone, Debug)]
 pub enum FileMesh {
     /// A skinned mesh, bound to its skin's skeleton.
-    Skinned(Box<keyrig_skin::SkinnedMesh>),
+    Skinned(std::sync::Arc<keyrig_skin::SkinnedMesh>),
     /// A mesh without a skin: positions and triangles in its node's space.
     Static { positions: Vec<glam::Vec3>, indices: Vec<u32> },
     /// A vertex-animated mesh (MD2): every frame, its triangles and clips.
-    Morph(Box<MorphMesh>),
+    Morph(std::sync::Arc<MorphMesh>),
 }
 
 impl FileMesh {
@@ -495,6 +495,9 @@ impl FileMesh {
 #[derive(Default)]
 pub struct MeshStore {
     meshes: HashMap<(PathBuf, Option<usize>), Result<FileMesh, String>>,
+    /// Counts loads and inserts, so that whatever was built from the store (the scene
+    /// evaluator) knows when to be rebuilt.
+    generation: u64,
 }
 
 impl MeshStore {
@@ -506,20 +509,66 @@ impl MeshStore {
         path: &str,
         mesh: Option<usize>,
     ) -> Result<&FileMesh, String> {
-        let full = match base_dir {
-            Some(dir) => dir.join(path),
-            None => PathBuf::from(path),
-        };
+        let full = full_path(base_dir, path);
+        let generation = &mut self.generation;
         self.meshes
             .entry((full.clone(), mesh))
-            .or_insert_with(|| load_file_mesh(&full, mesh))
+            .or_insert_with(|| {
+                *generation += 1;
+                load_file_mesh(&full, mesh)
+            })
             .as_ref()
             .map_err(Clone::clone)
     }
 
+    /// The mesh if it was loaded already (nothing is read).
+    #[must_use]
+    pub fn peek(&self, base_dir: Option<&Path>, path: &str, mesh: Option<usize>) -> Option<&FileMesh> {
+        self.meshes.get(&(full_path(base_dir, path), mesh))?.as_ref().ok()
+    }
+
     /// Stores a mesh loaded elsewhere (by a background import) under its full path.
     pub fn insert(&mut self, path: PathBuf, mesh: Option<usize>, loaded: Result<FileMesh, String>) {
+        self.generation += 1;
         self.meshes.insert((path, mesh), loaded);
+    }
+
+    /// How many meshes were loaded or stored so far.
+    #[must_use]
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// What the scene evaluator needs of the loaded meshes of `scene`'s model-file objects,
+    /// by object index (meshes not loaded yet are left out).
+    #[must_use]
+    pub fn loaded_for(
+        &self,
+        base_dir: Option<&Path>,
+        scene: &keyrig_core::Scene,
+    ) -> HashMap<usize, keyrig_eval::LoadedMesh> {
+        let mut out = HashMap::new();
+        for (o, object) in scene.objects.iter().enumerate() {
+            if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+                let loaded = match self.peek(base_dir, path, *mesh) {
+                    Some(FileMesh::Skinned(m)) => keyrig_eval::LoadedMesh::Skinned(std::sync::Arc::clone(m)),
+                    Some(FileMesh::Morph(m)) => {
+                        keyrig_eval::LoadedMesh::Morph(std::sync::Arc::clone(m.playback()))
+                    }
+                    Some(FileMesh::Static { .. }) => keyrig_eval::LoadedMesh::Static,
+                    None => continue,
+                };
+                out.insert(o, loaded);
+            }
+        }
+        out
+    }
+}
+
+fn full_path(base_dir: Option<&Path>, path: &str) -> PathBuf {
+    match base_dir {
+        Some(dir) => dir.join(path),
+        None => PathBuf::from(path),
     }
 }
 
@@ -529,7 +578,7 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
         Some("md2") => {
             let data = keyrig_io::file_io::read_regular_file(path, keyrig_io::file_io::MAX_MD2_BYTES)
                 .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-            return md2_morph_mesh(path, &data).map(|m| FileMesh::Morph(Box::new(m)));
+            return md2_morph_mesh(path, &data).map(|m| FileMesh::Morph(std::sync::Arc::new(m)));
         }
         _ => return Err(format!("{}: the editor shows meshes of glTF and MD2 files only", path.display())),
     }
@@ -541,7 +590,7 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
     if model.nodes[node].skin.is_some() {
         return model
             .skinned_mesh(node)
-            .map(|m| FileMesh::Skinned(Box::new(m)))
+            .map(|m| FileMesh::Skinned(std::sync::Arc::new(m)))
             .map_err(|e| format!("{}: {e}", path.display()));
     }
     let mut positions = Vec::new();

@@ -1,18 +1,17 @@
 //! The viewport drawn by keyrig-render on eframe's wgpu device: GPU skinning with the object's
 //! deformer, lights, grid, skeletons and the selection's motion path, rendered into an
 //! offscreen texture that the viewport panel shows as an egui image (docs/rendering.md,
-//! "Embedding in the editor"). The editor's own evaluation (with pose overrides) provides
-//! the object states; the [`SceneRig`] is rebuilt when the document changes.
+//! "Embedding in the editor"). The editor's scene evaluator (with pose overrides) provides the
+//! state of the frame; the [`SceneRig`] shares that evaluator and is rebuilt, with its vertex
+//! buffers uploaded, only when the evaluator is (the document or its loaded meshes changed).
+//! A frame uploads joint palettes, morph frames and uniforms only.
 //!
 //! Without a wgpu render state (the UI tests, or a failure here) the viewport panel falls back
 //! to drawing the CPU-skinned mesh with egui's painter.
 
 use egui::TextureId;
 use egui_wgpu::{wgpu, RenderState};
-use glam::Mat4;
-use keyrig_render::{
-    FrameStats, LightInput, ObjectState, Renderer, SceneRig, Selection, ViewOptions, Viewport,
-};
+use keyrig_render::{FrameStats, Renderer, SceneRig, Selection, ViewOptions, Viewport};
 
 /// The colour format of the offscreen viewport (sRGB: the shaders write linear colour).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -20,17 +19,16 @@ const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// What the viewport panel hands over each frame.
 pub struct GpuFrame<'a> {
     pub scene: &'a keyrig_core::Scene,
-    /// (document, revision): the rig is rebuilt when it changes.
-    pub doc_key: (u64, u64),
-    pub states: Vec<ObjectState>,
-    pub lights: Vec<LightInput>,
+    /// [`crate::app::EditorApp::evaluator_key`]: the rig is rebuilt when it changes.
+    pub rig_key: (u64, u64, u64),
+    /// The document's evaluator, shared with the rig when it is rebuilt.
+    pub evaluator: std::sync::Arc<keyrig_eval::SceneEvaluator>,
+    /// The frame, evaluated with the editor's pose overrides.
+    pub state: &'a keyrig_eval::SceneState,
+    pub overrides: &'a keyrig_eval::Overrides,
     pub view: ViewOptions,
-    pub time: f64,
-    /// Skinned meshes of objects whose mesh is a file, by object index; only read when the
-    /// rig is rebuilt (see [`GpuView::needs_rig`]).
-    pub file_meshes: std::collections::HashMap<usize, keyrig_skin::SkinnedMesh>,
-    /// Vertex-animated meshes (MD2) of objects whose mesh is a file, by object index; read
-    /// like `file_meshes`.
+    /// Vertex-animated meshes (MD2) of objects whose mesh is a file, by object index; only
+    /// read when the rig is rebuilt (see [`GpuView::needs_rig`]).
     pub morph_meshes: std::collections::HashMap<usize, keyrig_render::MorphMesh>,
 }
 
@@ -39,7 +37,7 @@ pub struct GpuView {
     render_state: RenderState,
     renderer: Renderer,
     target: Option<(Viewport, TextureId)>,
-    rig: Option<((u64, u64), SceneRig)>,
+    rig: Option<((u64, u64, u64), SceneRig)>,
     /// Statistics of the last rendered frame.
     pub last_stats: Option<FrameStats>,
     /// Frame-rate log to stderr, when `KEYRIG_FRAME_LOG` is set.
@@ -159,30 +157,28 @@ impl GpuView {
         Ok(id)
     }
 
-    /// Whether the next [`GpuView::render`] for `doc_key` rebuilds the scene rig (and so reads
-    /// [`GpuFrame::file_meshes`]).
+    /// Whether the next [`GpuView::render`] for `rig_key` rebuilds the scene rig (and so reads
+    /// [`GpuFrame::morph_meshes`]).
     #[must_use]
-    pub fn needs_rig(&self, doc_key: (u64, u64)) -> bool {
-        self.rig.as_ref().is_none_or(|(key, _)| *key != doc_key)
+    pub fn needs_rig(&self, rig_key: (u64, u64, u64)) -> bool {
+        self.rig.as_ref().is_none_or(|(key, _)| *key != rig_key)
     }
 
     /// Renders the frame into a texture of `size_px` pixels and returns its egui texture id.
     pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
-        if self.needs_rig(frame.doc_key) {
+        if self.needs_rig(frame.rig_key) {
             self.rig = None;
-            let rig = SceneRig::with_loaded(frame.scene, &frame.file_meshes, &frame.morph_meshes)
-                .map_err(|e| e.to_string())?;
+            let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes);
             rig.upload(&mut self.renderer).map_err(|e| e.to_string())?;
-            self.rig = Some((frame.doc_key, rig));
+            self.rig = Some((frame.rig_key, rig));
         }
         let Some((_, rig)) = &self.rig else { return Err("no scene prepared for rendering".to_owned()) };
-        let mut input = rig
-            .frame_from_states(&frame.states, frame.lights, &frame.view, frame.time)
-            .map_err(|e| e.to_string())?;
+        let mut input = rig.frame_from_state(frame.state, &frame.view).map_err(|e| e.to_string())?;
         if frame.view.motion_path {
-            if let Some(path) =
-                rig.motion_path(frame.view.selection, frame.time).map_err(|e| e.to_string())?
+            if let Some(path) = rig
+                .motion_path(frame.view.selection, frame.state.time, frame.overrides)
+                .map_err(|e| e.to_string())?
             {
                 input.motion_paths.push(path);
             }
@@ -227,14 +223,5 @@ pub fn selection_for(item: Option<crate::state::Selected>) -> Selection {
         Some(Selected::Object(o)) => Selection::Object(o),
         Some(Selected::Joint { object, joint }) => Selection::Joint { object, joint },
         Some(Selected::Light(l)) => Selection::Light(l),
-    }
-}
-
-/// An object state for the renderer from the editor's evaluation.
-#[must_use]
-pub fn object_state(pose: &crate::eval::ObjectPose, has_skeleton: bool) -> ObjectState {
-    ObjectState {
-        world_from_model: Mat4::from(pose.world_from_object),
-        pose: has_skeleton.then(|| pose.pose.clone()),
     }
 }

@@ -45,8 +45,7 @@ pub use renderer::{
     SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
 };
 pub use scene_frame::{
-    MorphBlend, MorphClip, MorphError, MorphMesh, ObjectState, SceneFrameError, SceneRig, Selection,
-    ViewOptions,
+    MorphBlend, MorphClip, MorphError, MorphMesh, SceneFrameError, SceneRig, Selection, ViewOptions,
 };
 pub use skinning::{
     joint_poses, BlendBinding, GpuSkinner, JointPose, OwnedSkinInput, SkinMeshInput, SkinnedVertex,

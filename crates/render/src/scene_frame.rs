@@ -1,27 +1,29 @@
 //! From a keyrig `Scene` and a time to a [`FrameInput`]: the glue the `keyrig render` command
 //! and the editor share.
 //!
-//! [`SceneRig::new`] does the once-per-scene work (validates every track, builds the meshes,
-//! skeletons and bones-blending bindings); [`SceneRig::frame`] samples the tracks at a time,
-//! evaluates each skeleton's joint palette and fills in lights, overlays and draw items.
-//! The editor, which has its own transient pose overrides, can evaluate the objects itself and
-//! call [`SceneRig::frame_from_states`] instead.
+//! [`SceneRig`] holds the scene's [`SceneEvaluator`] (keyrig-eval: validated tracks, skeletons,
+//! skinned meshes with their bindings, morph clips) and what only drawing needs (colours, the
+//! vertices of morph meshes). [`SceneRig::upload`] sends vertex and index buffers once;
+//! [`SceneRig::frame_from_state`] turns an evaluated [`SceneState`] into draw items — joint
+//! palettes, morph frames, lights, overlays — without evaluating anything again. The editor
+//! evaluates with its pose overrides and hands the state in; [`SceneRig::frame`] evaluates the
+//! scene's own tracks.
 //!
 //! Vertex-animated meshes (Quake 2 MD2) come in as a [`MorphMesh`] (every frame's vertices
 //! and the named clips) through [`SceneRig::with_loaded`]; an object's `MeshSource::File`
 //! `clip` and `fps` choose what plays: scene time `t` shows clip frame `f = t · fps`, looping
 //! (the last frame morphs back into the first), drawn by the GPU morph pass as the blend of
-//! frames `⌊f⌋` and `⌊f⌋ + 1` with weight `f − ⌊f⌋` ([`MorphMesh::blend_at`]).
+//! frames `⌊f⌋` and `⌊f⌋ + 1` with weight `f − ⌊f⌋` ([`MorphClips::blend_at`]).
 
 use std::collections::HashMap;
-use std::ops::Range;
+use std::sync::Arc;
 
-use glam::{Mat4, Quat, Vec3};
-use keyrig_core::{AnimatedTrack, Camera, DeformerKind, MeshSource, Scene, TrackError};
-use keyrig_skin::{
-    mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, ScenePoseSampler, SkinError,
-    SkinnedMesh,
-};
+use glam::{Mat4, Vec3};
+use keyrig_core::{Camera, DeformerKind, MeshSource, Scene, TrackError};
+use keyrig_eval::morph::MorphClips;
+pub use keyrig_eval::morph::{MorphBlend, MorphClip, MorphError};
+use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator, SceneState};
+use keyrig_skin::{SkinError, SkinnedMesh};
 use thiserror::Error;
 
 use crate::overlay::{grid_spacing_for, LightGizmo, MotionPath, SkeletonOverlay};
@@ -60,43 +62,6 @@ pub enum SceneFrameError {
     Morph { path: String, source: MorphError },
 }
 
-/// What is wrong with a [`MorphMesh`] or a request to play it.
-#[derive(Debug, Clone, PartialEq, Error)]
-pub enum MorphError {
-    #[error("the mesh has no frames")]
-    NoFrames,
-    #[error("frame {frame} has {len} vertices, frame 0 has {expected}")]
-    FrameLength { frame: usize, len: usize, expected: usize },
-    #[error("{count} triangle indices is not a multiple of 3")]
-    IndexCount { count: usize },
-    #[error("triangle index {index} is out of range (the mesh has {vertices} vertices)")]
-    Index { index: u32, vertices: usize },
-    #[error("clip `{name}` covers frames {start}..{end}, outside the {frames} frames (or empty)")]
-    ClipRange { name: String, start: usize, end: usize, frames: usize },
-    #[error("no clip named `{name}` (clips: {available})")]
-    NoSuchClip { name: String, available: String },
-    #[error("playback rate must be finite and > 0 frames per second, got {0}")]
-    BadFps(f64),
-    #[error("time must be finite, got {0}")]
-    BadTime(f64),
-}
-
-/// A named run of consecutive frames of a [`MorphMesh`] (an MD2 clip: `stand`, `run`, …).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct MorphClip {
-    pub name: String,
-    /// Indices into [`MorphMesh::frames`].
-    pub frames: Range<usize>,
-}
-
-/// Which two frames of a morph mesh are blended, and with what weight of the second.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MorphBlend {
-    pub frame_a: u32,
-    pub frame_b: u32,
-    pub t: f32,
-}
-
 /// A vertex-animated mesh (vertex morphing, as MD2 stores it): the same triangles over
 /// frames of positions and normals, grouped into named clips.
 ///
@@ -108,7 +73,7 @@ pub struct MorphBlend {
 pub struct MorphMesh {
     frames: Vec<Vec<SkinnedVertex>>,
     indices: Vec<u32>,
-    clips: Vec<MorphClip>,
+    clips: Arc<MorphClips>,
 }
 
 impl MorphMesh {
@@ -132,14 +97,7 @@ impl MorphMesh {
         if let Some(&index) = indices.iter().find(|&&i| i as usize >= expected) {
             return Err(MorphError::Index { index, vertices: expected });
         }
-        if let Some(clip) = clips.iter().find(|c| c.frames.is_empty() || c.frames.end > frames.len()) {
-            return Err(MorphError::ClipRange {
-                name: clip.name.clone(),
-                start: clip.frames.start,
-                end: clip.frames.end,
-                frames: frames.len(),
-            });
-        }
+        let clips = Arc::new(MorphClips::new(frames.len(), clips)?);
         Ok(MorphMesh { frames, indices, clips })
     }
 
@@ -158,6 +116,12 @@ impl MorphMesh {
     /// The named clips, in frame order.
     #[must_use]
     pub fn clips(&self) -> &[MorphClip] {
+        self.clips.clips()
+    }
+
+    /// The clips with the frame count: what the scene evaluator plays.
+    #[must_use]
+    pub fn playback(&self) -> &Arc<MorphClips> {
         &self.clips
     }
 
@@ -167,58 +131,28 @@ impl MorphMesh {
         self.frames[0].len()
     }
 
-    /// The frames clip `clip` plays; every frame for `None`.
+    /// See [`MorphClips::clip_frames`].
     ///
     /// # Errors
-    /// [`MorphError::NoSuchClip`] listing the clips there are.
-    pub fn clip_frames(&self, clip: Option<&str>) -> Result<Range<usize>, MorphError> {
-        match clip {
-            None => Ok(0..self.frames.len()),
-            Some(name) => {
-                self.clips.iter().find(|c| c.name == name).map(|c| c.frames.clone()).ok_or_else(|| {
-                    MorphError::NoSuchClip {
-                        name: name.to_owned(),
-                        available: self.clips.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "),
-                    }
-                })
-            }
-        }
+    /// An unknown clip.
+    pub fn clip_frames(&self, clip: Option<&str>) -> Result<std::ops::Range<usize>, MorphError> {
+        self.clips.clip_frames(clip)
     }
 
-    /// Seconds one loop of `clip` lasts at `fps`: frames / fps (looping, the last frame morphs
-    /// back into the first).
+    /// See [`MorphClips::clip_duration`].
     ///
     /// # Errors
-    /// An unknown clip or a rate that is not finite and > 0.
+    /// An unknown clip or a bad rate.
     pub fn clip_duration(&self, clip: Option<&str>, fps: f64) -> Result<f64, MorphError> {
-        let frames = self.clip_frames(clip)?;
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(MorphError::BadFps(fps));
-        }
-        Ok(frames.len() as f64 / fps)
+        self.clips.clip_duration(clip, fps)
     }
 
-    /// The frames to blend at `time` seconds when `clip` plays at `fps`, looping:
-    /// f = (time · fps) mod n over the clip's n frames; frames ⌊f⌋ and ⌊f⌋ + 1 (the clip's
-    /// first after its last) with weight t = f − ⌊f⌋. A pure function of its inputs.
+    /// See [`MorphClips::blend_at`].
     ///
     /// # Errors
-    /// An unknown clip, a rate that is not finite and > 0, a time that is not finite.
+    /// An unknown clip, a bad rate or time.
     pub fn blend_at(&self, clip: Option<&str>, fps: f64, time: f64) -> Result<MorphBlend, MorphError> {
-        let frames = self.clip_frames(clip)?;
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(MorphError::BadFps(fps));
-        }
-        let f = time * fps;
-        if !f.is_finite() {
-            return Err(MorphError::BadTime(time));
-        }
-        let n = frames.len();
-        let f = f.rem_euclid(n as f64);
-        let a = (f.floor() as usize).min(n - 1);
-        let b = (a + 1) % n;
-        let t = ((f - a as f64) as f32).clamp(0.0, 1.0);
-        Ok(MorphBlend { frame_a: (frames.start + a) as u32, frame_b: (frames.start + b) as u32, t })
+        self.clips.blend_at(clip, fps, time)
     }
 
     /// Positions and normals of `blend` computed on the CPU (the same linear blend as the GPU
@@ -236,14 +170,6 @@ impl MorphMesh {
             })
             .unzip()
     }
-}
-
-fn track_err(path: String) -> impl FnOnce(TrackError) -> SceneFrameError {
-    move |source| SceneFrameError::Track { path, source }
-}
-
-fn skin_err(path: String) -> impl FnOnce(SkinError) -> SceneFrameError {
-    move |source| SceneFrameError::Skin { path, source }
 }
 
 /// What is selected in the viewport (highlighted; its motion path is drawn).
@@ -291,62 +217,25 @@ impl Default for ViewOptions {
     }
 }
 
-struct MeshRig {
-    mesh: SkinnedMesh,
-    bindings: MeshBindings,
-}
-
-/// A morph mesh and what of it plays.
-struct MorphRig {
-    mesh: MorphMesh,
-    clip: Option<String>,
-    fps: f64,
-}
-
-struct ObjectRig {
-    translation: AnimatedTrack<Vec3>,
-    rotation: AnimatedTrack<Quat>,
-    scale: AnimatedTrack<Vec3>,
-    mesh: Option<MeshRig>,
-    morph: Option<MorphRig>,
-    skeleton: Option<ScenePoseSampler>,
-    rest: Option<RestSkeleton>,
-    deformer: DeformerKind,
+/// Drawing data of one object beside its evaluation.
+struct ObjectDraw {
     colour: Vec3,
+    /// The vertices of a vertex-animated mesh (its clips play through the evaluator).
+    morph: Option<MorphMesh>,
 }
 
-struct LightRig {
-    kind: keyrig_core::LightKind,
-    enabled: bool,
-    position: AnimatedTrack<Vec3>,
-    direction: AnimatedTrack<Vec3>,
-    colour: AnimatedTrack<Vec3>,
-    intensity: AnimatedTrack<f32>,
-}
-
-/// The evaluated state of one object at a time, as [`SceneRig::frame_from_states`] takes it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ObjectState {
-    /// World from object (T·R·S).
-    pub world_from_model: Mat4,
-    /// The skeleton's pose (one rotation per joint, root translation); `None` when the object
-    /// has no skeleton.
-    pub pose: Option<Pose>,
-}
-
-/// A scene prepared for rendering frames.
+/// A scene prepared for rendering frames: its [`SceneEvaluator`] and what drawing needs.
 pub struct SceneRig {
     scene: Scene,
-    objects: Vec<ObjectRig>,
-    lights: Vec<LightRig>,
+    eval: Arc<SceneEvaluator>,
+    objects: Vec<ObjectDraw>,
 }
 
 impl SceneRig {
     /// Prepares a scene whose meshes are all procedural.
     ///
     /// # Errors
-    /// An invalid track, skeleton or mesh binding (with its path in the scene), or a mesh file
-    /// (see [`SceneRig::with_meshes`]).
+    /// See [`SceneRig::with_loaded`].
     pub fn new(scene: &Scene) -> Result<Self, SceneFrameError> {
         Self::with_meshes(scene, &HashMap::new())
     }
@@ -357,20 +246,20 @@ impl SceneRig {
     /// same joints in the same order.
     ///
     /// # Errors
-    /// As [`SceneRig::new`]; [`SceneFrameError::MeshNotLoaded`] for a file mesh missing from
-    /// `loaded`.
+    /// See [`SceneRig::with_loaded`].
     pub fn with_meshes(scene: &Scene, loaded: &HashMap<usize, SkinnedMesh>) -> Result<Self, SceneFrameError> {
         Self::with_loaded(scene, loaded, &HashMap::new())
     }
 
     /// Prepares a scene whose file meshes are skinned (`loaded`) or vertex-animated
-    /// (`morphs`, e.g. MD2 models), by object index. A morph object plays its
-    /// `MeshSource::File` `clip` (every frame when `None`) at its `fps`
-    /// ([`keyrig_core::MD2_DEFAULT_FPS`] when `None`).
+    /// (`morphs`, e.g. MD2 models), by object index, and refuses anything it cannot evaluate.
+    /// A morph object plays its `MeshSource::File` `clip` (every frame when `None`) at its
+    /// `fps` ([`keyrig_core::MD2_DEFAULT_FPS`] when `None`).
     ///
     /// # Errors
-    /// As [`SceneRig::with_meshes`]; [`SceneFrameError::Morph`] for a clip the mesh does not
-    /// have or a bad rate, with the field's path.
+    /// `fps` not > 0; [`SceneFrameError::MeshNotLoaded`] for a file mesh missing from both
+    /// maps; otherwise the first of the evaluator's problems (an invalid track, skeleton, mesh
+    /// binding, clip or rate), with its path in the scene.
     pub fn with_loaded(
         scene: &Scene,
         loaded: &HashMap<usize, SkinnedMesh>,
@@ -382,120 +271,62 @@ impl SceneRig {
                 message: format!("{} is not > 0", scene.fps),
             });
         }
-        let mut objects = Vec::with_capacity(scene.objects.len());
-        let mut mesh_count = 0usize;
         for (i, object) in scene.objects.iter().enumerate() {
-            let at = |field: &str| format!("objects[{i}].{field}");
-            let translation =
-                AnimatedTrack::new(&object.translation).map_err(track_err(at("translation")))?;
-            let rotation = AnimatedTrack::new(&object.rotation).map_err(track_err(at("rotation")))?;
-            let scale = AnimatedTrack::new(&object.scale).map_err(track_err(at("scale")))?;
-            let (skeleton, rest) = match &object.skeleton {
-                Some(skeleton) => {
-                    let sampler = ScenePoseSampler::new(skeleton).map_err(|e| match e {
-                        SkinError::JointTrack { joint, property, source, .. } => {
-                            track_err(at(&format!("skeleton.joints[{joint}].{property}")))(source)
-                        }
-                        SkinError::RootTranslationTrack(source) => {
-                            track_err(at("skeleton.root_translation"))(source)
-                        }
-                        other => skin_err(at("skeleton"))(other),
-                    })?;
-                    let rest = RestSkeleton::from_scene(skeleton).map_err(skin_err(at("skeleton")))?;
-                    (Some(sampler), Some(rest))
+            if let Some(MeshSource::File { path, .. }) = &object.mesh {
+                if !loaded.contains_key(&i) && !morphs.contains_key(&i) {
+                    return Err(SceneFrameError::MeshNotLoaded {
+                        object: i,
+                        name: object.name.clone(),
+                        file: path.clone(),
+                    });
                 }
-                None => (None, None),
-            };
-            let morph = match (&object.mesh, morphs.get(&i)) {
-                (Some(MeshSource::File { clip, fps, .. }), Some(mesh)) => {
-                    let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
-                    if !(fps.is_finite() && fps > 0.0) {
-                        return Err(SceneFrameError::Morph {
-                            path: at("mesh.fps"),
-                            source: MorphError::BadFps(fps),
-                        });
-                    }
-                    mesh.clip_frames(clip.as_deref())
-                        .map_err(|source| SceneFrameError::Morph { path: at("mesh.clip"), source })?;
-                    mesh_count += 1;
-                    Some(MorphRig { mesh: mesh.clone(), clip: clip.clone(), fps })
-                }
-                _ => None,
-            };
-            let mesh = match &object.mesh {
-                None => None,
-                Some(_) if morph.is_some() => None,
-                Some(source) => {
-                    let mesh = match source {
-                        MeshSource::Procedural(kind) => match &rest {
-                            Some(rest) => mesh_for(*kind)
-                                .fit_to_skeleton(rest.clone())
-                                .map_err(skin_err(at("mesh (bound to the object's skeleton)")))?,
-                            None => mesh_for(*kind),
-                        },
-                        // A loaded mesh keeps its own skeleton (a glTF file's inverse bind
-                        // matrices); the scene skeleton must have its joints in the same order.
-                        MeshSource::File { path, .. } => match loaded.get(&i) {
-                            Some(mesh) => {
-                                if let Some(rest) = &rest {
-                                    if rest.len() != mesh.skeleton.len() {
-                                        return Err(SceneFrameError::Invalid {
-                                            path: at("skeleton"),
-                                            message: format!(
-                                                "{} joints, but the mesh from `{path}` is bound to {}",
-                                                rest.len(),
-                                                mesh.skeleton.len()
-                                            ),
-                                        });
-                                    }
-                                }
-                                mesh.clone()
-                            }
-                            None => {
-                                return Err(SceneFrameError::MeshNotLoaded {
-                                    object: i,
-                                    name: object.name.clone(),
-                                    file: path.clone(),
-                                })
-                            }
-                        },
-                    };
-                    let zone =
-                        BlendZone::from_settings(&object.deformer).map_err(skin_err(at("deformer")))?;
-                    let bindings = mesh.bindings(zone).map_err(skin_err(at("mesh")))?;
-                    mesh_count += 1;
-                    Some(MeshRig { mesh, bindings })
-                }
-            };
-            objects.push(ObjectRig {
-                translation,
-                rotation,
-                scale,
-                mesh,
-                morph,
-                skeleton,
-                rest,
-                deformer: object.deformer.kind,
-                colour: OBJECT_COLOURS[(mesh_count.max(1) - 1) % OBJECT_COLOURS.len()],
+            }
+        }
+        let rig = Self::lenient(scene, loaded, morphs);
+        if let Some(problem) = rig.eval.problems().first() {
+            return Err(SceneFrameError::Invalid {
+                path: problem.path.clone(),
+                message: problem.message.clone(),
             });
         }
-        let lights = scene
-            .lights
-            .iter()
-            .enumerate()
-            .map(|(i, light)| {
-                let at = |field: &str| format!("lights[{i}].{field}");
-                Ok(LightRig {
-                    kind: light.kind,
-                    enabled: light.enabled,
-                    position: AnimatedTrack::new(&light.position).map_err(track_err(at("position")))?,
-                    direction: AnimatedTrack::new(&light.direction).map_err(track_err(at("direction")))?,
-                    colour: AnimatedTrack::new(&light.colour).map_err(track_err(at("colour")))?,
-                    intensity: AnimatedTrack::new(&light.intensity).map_err(track_err(at("intensity")))?,
-                })
+        Ok(rig)
+    }
+
+    /// Prepares a scene as [`SceneRig::with_loaded`] does, but draws what it can: a channel
+    /// whose keys are invalid holds its static value, an object whose mesh cannot be bound is
+    /// not skinned, and a file mesh that is missing is not drawn ([`SceneRig::evaluator`]
+    /// lists the problems). The editor draws scenes while they are being fixed.
+    #[must_use]
+    pub fn lenient(
+        scene: &Scene,
+        loaded: &HashMap<usize, SkinnedMesh>,
+        morphs: &HashMap<usize, MorphMesh>,
+    ) -> Self {
+        let mut meshes: HashMap<usize, LoadedMesh> =
+            loaded.iter().map(|(&o, m)| (o, LoadedMesh::Skinned(Arc::new(m.clone())))).collect();
+        meshes.extend(morphs.iter().map(|(&o, m)| (o, LoadedMesh::Morph(Arc::clone(m.playback())))));
+        Self::with_evaluator(scene, Arc::new(SceneEvaluator::new(scene, &meshes)), morphs)
+    }
+
+    /// A rig around an evaluator built elsewhere (the editor shares its own) for `scene`;
+    /// `morphs` gives the vertices of the morph meshes the evaluator plays.
+    #[must_use]
+    pub fn with_evaluator(
+        scene: &Scene,
+        eval: Arc<SceneEvaluator>,
+        morphs: &HashMap<usize, MorphMesh>,
+    ) -> Self {
+        let mut drawn = 0usize;
+        let objects = (0..scene.objects.len())
+            .map(|o| {
+                let morph = eval.morph(o).and_then(|_| morphs.get(&o).cloned());
+                if morph.is_some() || eval.skin(o).is_some() {
+                    drawn += 1;
+                }
+                ObjectDraw { colour: OBJECT_COLOURS[(drawn.max(1) - 1) % OBJECT_COLOURS.len()], morph }
             })
-            .collect::<Result<Vec<_>, SceneFrameError>>()?;
-        Ok(SceneRig { scene: scene.clone(), objects, lights })
+            .collect();
+        SceneRig { scene: scene.clone(), eval, objects }
     }
 
     /// The scene this rig was built from.
@@ -504,62 +335,47 @@ impl SceneRig {
         &self.scene
     }
 
+    /// The scene's evaluator: evaluate it (with overrides) and hand the state to
+    /// [`SceneRig::frame_from_state`].
+    #[must_use]
+    pub fn evaluator(&self) -> &SceneEvaluator {
+        &self.eval
+    }
+
     /// Seconds at a frame number.
     #[must_use]
     pub fn time_of_frame(&self, frame: f64) -> f64 {
         frame / self.scene.fps
     }
 
-    /// Uploads every object's mesh to `renderer`, with the object's index as its [`MeshId`].
+    /// Uploads every object's mesh to `renderer`, with the object's index as its [`MeshId`]:
+    /// vertex and index buffers go to the GPU here, once, and frames send only palettes,
+    /// morph frames and uniforms.
     ///
     /// # Errors
     /// [`SceneFrameError::Render`] naming the object.
     pub fn upload(&self, renderer: &mut Renderer) -> Result<(), SceneFrameError> {
+        let at =
+            |i: usize| move |source| SceneFrameError::Render { path: format!("objects[{i}].mesh"), source };
         for (i, object) in self.objects.iter().enumerate() {
             if let Some(morph) = &object.morph {
                 renderer
                     .upload_mesh(
                         i as MeshId,
-                        &MeshData::Morph { frames: &morph.mesh.frames, indices: &morph.mesh.indices },
+                        &MeshData::Morph { frames: &morph.frames, indices: &morph.indices },
                     )
-                    .map_err(|source| SceneFrameError::Render {
-                        path: format!("objects[{i}].mesh"),
-                        source,
-                    })?;
-                continue;
+                    .map_err(at(i))?;
+            } else if let Some(skin) = self.eval.skin(i) {
+                let input = OwnedSkinInput::from_skinned_mesh(&skin.mesh, &skin.bindings);
+                renderer
+                    .upload_mesh(
+                        i as MeshId,
+                        &MeshData::Skinned { skin: input.as_input(), indices: &skin.mesh.indices },
+                    )
+                    .map_err(at(i))?;
             }
-            let Some(rig) = &object.mesh else { continue };
-            let input = OwnedSkinInput::from_skinned_mesh(&rig.mesh, &rig.bindings);
-            renderer
-                .upload_mesh(
-                    i as MeshId,
-                    &MeshData::Skinned { skin: input.as_input(), indices: &rig.mesh.indices },
-                )
-                .map_err(|source| SceneFrameError::Render { path: format!("objects[{i}].mesh"), source })?;
         }
         Ok(())
-    }
-
-    /// Every object's state at `time` seconds, from the scene's tracks.
-    #[must_use]
-    pub fn object_states(&self, time: f64) -> Vec<ObjectState> {
-        (0..self.objects.len()).map(|i| self.object_states_one(i, time)).collect()
-    }
-
-    /// The enabled lights at `time` seconds.
-    #[must_use]
-    pub fn lights_at(&self, time: f64) -> Vec<LightInput> {
-        self.lights
-            .iter()
-            .filter(|l| l.enabled)
-            .map(|l| LightInput {
-                kind: l.kind,
-                position: l.position.sample(time),
-                direction: l.direction.sample(time),
-                colour: l.colour.sample(time),
-                intensity: l.intensity.sample(time),
-            })
-            .collect()
     }
 
     /// The frame at `time` seconds, from the scene's tracks.
@@ -567,108 +383,112 @@ impl SceneRig {
     /// # Errors
     /// A pose that cannot be evaluated (e.g. a zero quaternion), with the object's path.
     pub fn frame(&self, time: f64, view: &ViewOptions) -> Result<FrameInput, SceneFrameError> {
-        let states = self.object_states(time);
-        let mut frame = self.frame_from_states(&states, self.lights_at(time), view, time)?;
+        let state = self.eval.evaluate(time, &Overrides::new());
+        let mut frame = self.frame_from_state(&state, view)?;
         if view.motion_path {
-            if let Some(path) = self.motion_path(view.selection, time)? {
+            if let Some(path) = self.motion_path(view.selection, time, &Overrides::new())? {
                 frame.motion_paths.push(path);
             }
         }
         if view.lights {
-            frame.light_gizmos = self.light_gizmos(view.selection, time);
+            frame.light_gizmos = self.light_gizmos(view.selection, &state);
         }
         Ok(frame)
     }
 
-    /// Gizmos of the enabled lights at `time` seconds (the selected one highlighted).
+    /// Gizmos of the enabled lights of `state` (the selected one highlighted).
     #[must_use]
-    pub fn light_gizmos(&self, selection: Selection, time: f64) -> Vec<LightGizmo> {
-        self.lights
+    pub fn light_gizmos(&self, selection: Selection, state: &SceneState) -> Vec<LightGizmo> {
+        state
+            .lights
             .iter()
             .enumerate()
             .filter(|(_, l)| l.enabled)
             .map(|(i, l)| LightGizmo {
                 kind: l.kind,
-                position: l.position.sample(time),
-                direction: l.direction.sample(time),
+                position: l.position,
+                direction: l.direction,
                 selected: selection == Selection::Light(i),
             })
             .collect()
     }
 
-    /// The frame for object states evaluated elsewhere (the editor's, with its pose overrides);
-    /// `time` (seconds) places vertex-animated objects in their clips. Motion paths and light
-    /// gizmos are not added here; see [`SceneRig::motion_path`] and
-    /// [`SceneRig::light_gizmos`].
+    /// The frame for a state the evaluator produced (the editor's, with its pose overrides):
+    /// draw items with the state's joint palettes and morph frames, its enabled lights and the
+    /// skeleton overlays. Motion paths and light gizmos are not added here; see
+    /// [`SceneRig::motion_path`] and [`SceneRig::light_gizmos`].
     ///
     /// # Errors
-    /// A state list of the wrong length, a pose that cannot be evaluated or a time that is not
-    /// finite while a morph mesh plays.
-    pub fn frame_from_states(
+    /// A state of another scene (wrong object count), a pose the palette could not be built
+    /// for, or a morph frame that could not be found (a time that is not finite).
+    pub fn frame_from_state(
         &self,
-        states: &[ObjectState],
-        lights: Vec<LightInput>,
+        state: &SceneState,
         view: &ViewOptions,
-        time: f64,
     ) -> Result<FrameInput, SceneFrameError> {
-        if states.len() != self.objects.len() {
+        if state.objects.len() != self.objects.len() {
             return Err(SceneFrameError::Invalid {
                 path: "objects".into(),
-                message: format!("{} object states for {} objects", states.len(), self.objects.len()),
+                message: format!("{} object states for {} objects", state.objects.len(), self.objects.len()),
             });
         }
         let camera = view.camera.unwrap_or(self.scene.camera);
         let mut frame = FrameInput::new(camera);
         frame.style = view.style;
         frame.ambient = self.scene.ambient;
-        frame.lights = lights;
+        frame.lights = state
+            .lights
+            .iter()
+            .filter(|l| l.enabled)
+            .map(|l| LightInput {
+                kind: l.kind,
+                position: l.position,
+                direction: l.direction,
+                colour: l.colour,
+                intensity: l.intensity,
+            })
+            .collect();
         frame.grid_spacing = view.grid.then(|| grid_spacing_for(camera.distance));
-        for (i, (object, state)) in self.objects.iter().zip(states).enumerate() {
-            // Drawing uses the mesh's skeleton (for loaded meshes: the file's inverse bind
-            // matrices); without a mesh, the scene skeleton alone gives the overlay.
-            let skeleton = object.mesh.as_ref().map(|rig| &rig.mesh.skeleton).or(object.rest.as_ref());
-            let palette = match (skeleton, &state.pose) {
-                (Some(skeleton), Some(pose)) => Some(
-                    JointPalette::new(skeleton, pose)
-                        .map_err(skin_err(format!("objects[{i}].skeleton (pose)")))?,
-                ),
-                _ => None,
-            };
-            let object_selected = matches!(view.selection, Selection::Object(o) if o == i);
-            if let Some(morph) = &object.morph {
-                let blend =
-                    morph.mesh.blend_at(morph.clip.as_deref(), morph.fps, time).map_err(|source| {
-                        SceneFrameError::Morph { path: format!("objects[{i}].mesh"), source }
-                    })?;
+        for (i, (object, state)) in self.objects.iter().zip(&state.objects).enumerate() {
+            let world_from_model = Mat4::from(state.world_from_object);
+            let selected = matches!(view.selection, Selection::Object(o) if o == i);
+            if let (Some(_), Some(blend)) = (&object.morph, &state.morph) {
+                let blend = blend.clone().map_err(|source| SceneFrameError::Morph {
+                    path: format!("objects[{i}].mesh"),
+                    source,
+                })?;
                 frame.items.push(DrawItem {
                     mesh: i as MeshId,
-                    world_from_model: state.world_from_model,
+                    world_from_model,
                     deform: Deform::Morph { frame_a: blend.frame_a, frame_b: blend.frame_b, t: blend.t },
                     colour: object.colour,
-                    selected: object_selected,
+                    selected,
                 });
             }
-            if let Some(rig) = &object.mesh {
-                let palette = match &palette {
-                    Some(p) => p.clone(),
-                    None => JointPalette::new(&rig.mesh.skeleton, &Pose::rest(rig.mesh.skeleton.len()))
-                        .map_err(skin_err(format!("objects[{i}].mesh (rest pose)")))?,
-                };
+            if let Some(error) = &state.palette_error {
+                return Err(SceneFrameError::Skin {
+                    path: format!("objects[{i}].skeleton (pose)"),
+                    source: error.clone(),
+                });
+            }
+            if let (Some(_), Some(palette)) = (self.eval.skin(i), &state.palette) {
                 frame.items.push(DrawItem {
                     mesh: i as MeshId,
-                    world_from_model: state.world_from_model,
+                    world_from_model,
                     deform: Deform::Skin {
-                        deformer: view.deformer.unwrap_or(object.deformer),
-                        joints: joint_poses(&palette),
+                        deformer: view.deformer.unwrap_or(self.eval.deformer(i).unwrap_or_default()),
+                        joints: joint_poses(palette),
                     },
                     colour: object.colour,
-                    selected: object_selected,
+                    selected,
                 });
             }
             if view.skeletons {
-                if let (Some(rest), Some(palette)) = (&object.rest, &palette) {
+                if let (Some(_), Some(palette), Some(rest)) =
+                    (&state.pose, &state.palette, self.eval.rest_skeleton(i))
+                {
                     let joints = (0..rest.len())
-                        .map(|j| state.world_from_model.transform_point3(palette.joint_position(j)))
+                        .map(|j| world_from_model.transform_point3(palette.joint_position(j)))
                         .collect();
                     let selected = match view.selection {
                         Selection::Joint { object, joint } if object == i => Some(joint),
@@ -686,7 +506,8 @@ impl SceneRig {
     }
 
     /// The motion path of the selected object (its origin) or joint over the frame range, with
-    /// markers at its keys and at `time`; `None` when nothing path-worthy is selected.
+    /// markers at its keys and at `time`, evaluated with `overrides` (a value being dragged
+    /// moves the path with it); `None` when nothing path-worthy is selected.
     ///
     /// # Errors
     /// A pose that cannot be evaluated.
@@ -694,26 +515,31 @@ impl SceneRig {
         &self,
         selection: Selection,
         time: f64,
+        overrides: &Overrides,
     ) -> Result<Option<MotionPath>, SceneFrameError> {
         let (object, joint) = match selection {
             Selection::Object(o) => (o, None),
             Selection::Joint { object, joint } => (object, Some(joint)),
             Selection::None | Selection::Light(_) => return Ok(None),
         };
-        let Some(rig) = self.objects.get(object) else { return Ok(None) };
-        let scene_object = &self.scene.objects[object];
+        let Some(scene_object) = self.scene.objects.get(object) else { return Ok(None) };
         let position_at = |t: f64| -> Result<Option<Vec3>, SceneFrameError> {
-            let state = &self.object_states_one(object, t);
+            let Some(state) = self.eval.object_at(object, t, overrides) else { return Ok(None) };
             match joint {
-                None => Ok(Some(state.world_from_model.transform_point3(Vec3::ZERO))),
+                None => Ok(Some(state.world_from_object.translation.into())),
                 Some(j) => {
-                    let (Some(rest), Some(pose)) = (&rig.rest, &state.pose) else { return Ok(None) };
-                    if j >= rest.len() {
-                        return Ok(None);
+                    if let Some(error) = state.palette_error {
+                        return Err(SceneFrameError::Skin {
+                            path: format!("objects[{object}].skeleton (pose)"),
+                            source: error,
+                        });
                     }
-                    let palette = JointPalette::new(rest, pose)
-                        .map_err(skin_err(format!("objects[{object}].skeleton (pose)")))?;
-                    Ok(Some(state.world_from_model.transform_point3(palette.joint_position(j))))
+                    match (&state.pose, &state.palette) {
+                        (Some(_), Some(palette)) if j < palette.len() => {
+                            Ok(Some(state.world_from_object.transform_point3(palette.joint_position(j))))
+                        }
+                        _ => Ok(None),
+                    }
                 }
             }
         };
@@ -729,9 +555,10 @@ impl SceneRig {
             }
             f += step;
         }
+        let times = |keys: &[keyrig_core::Key<Vec3>]| keys.iter().map(|k| k.time).collect::<Vec<_>>();
         let mut key_times: Vec<f64> = match joint {
             None => [
-                scene_object.translation.track.keys.iter().map(|k| k.time).collect::<Vec<_>>(),
+                times(&scene_object.translation.track.keys),
                 scene_object.rotation.track.keys.iter().map(|k| k.time).collect(),
             ]
             .concat(),
@@ -740,8 +567,6 @@ impl SceneRig {
                 .as_ref()
                 .and_then(|s| s.joints.get(j))
                 .map(|joint| {
-                    let times =
-                        |keys: &[keyrig_core::Key<Vec3>]| keys.iter().map(|k| k.time).collect::<Vec<_>>();
                     [
                         times(&joint.translation.track.keys),
                         joint.rotation.track.keys.iter().map(|k| k.time).collect(),
@@ -760,17 +585,5 @@ impl SceneRig {
             }
         }
         Ok(Some(MotionPath { points, keys, current: position_at(time)? }))
-    }
-
-    fn object_states_one(&self, index: usize, time: f64) -> ObjectState {
-        let object = &self.objects[index];
-        ObjectState {
-            world_from_model: Mat4::from_scale_rotation_translation(
-                object.scale.sample(time),
-                object.rotation.sample(time).normalize(),
-                object.translation.sample(time),
-            ),
-            pose: object.skeleton.as_ref().map(|s| s.sample(time)),
-        }
     }
 }

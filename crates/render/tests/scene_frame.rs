@@ -3,7 +3,8 @@
 
 use glam::{Quat, Vec3};
 use keyrig_core::{Animated, DeformerKind, Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene};
-use keyrig_render::{Deform, ObjectState, RenderStyle, SceneFrameError, SceneRig, Selection, ViewOptions};
+use keyrig_eval::Overrides;
+use keyrig_render::{Deform, RenderStyle, SceneFrameError, SceneRig, Selection, ViewOptions};
 
 fn arm_scene() -> Scene {
     let mut arm = Object::new("Arm");
@@ -65,7 +66,7 @@ fn frame_has_the_skinned_arm_its_skeleton_and_the_selected_path() {
 #[test]
 fn object_path_has_a_marker_per_key() {
     let rig = SceneRig::new(&arm_scene()).expect("rig");
-    let path = rig.motion_path(Selection::Object(0), 0.5).expect("path").expect("a path");
+    let path = rig.motion_path(Selection::Object(0), 0.5, &Overrides::new()).expect("path").expect("a path");
     assert_eq!(path.keys.len(), 2);
     assert!((path.keys[1] - Vec3::new(0.0, 100.0, 0.0)).length() < 1e-4);
 }
@@ -73,13 +74,21 @@ fn object_path_has_a_marker_per_key() {
 #[test]
 fn editor_states_replace_the_tracks() {
     let rig = SceneRig::new(&arm_scene()).expect("rig");
-    let mut states = rig.object_states(0.0);
-    states[0].world_from_model = glam::Mat4::from_translation(Vec3::new(7.0, 0.0, 0.0));
-    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default(), 0.0).expect("frame");
+    // An override (a value being dragged) moves the drawn object and its motion path alike.
+    let overrides: Overrides = [(
+        keyrig_core::channel_id::ChannelId::ObjectTranslation(0),
+        keyrig_core::channel_id::ChannelValue::Vec3(Vec3::new(7.0, 0.0, 0.0)),
+    )]
+    .into();
+    let state = rig.evaluator().evaluate(0.0, &overrides);
+    let frame = rig.frame_from_state(&state, &ViewOptions::default()).expect("frame");
     assert_eq!(frame.items[0].world_from_model.w_axis.x, 7.0);
+    let path = rig.motion_path(Selection::Object(0), 0.0, &overrides).expect("path").expect("a path");
+    assert_eq!(path.current, Some(Vec3::new(7.0, 0.0, 0.0)));
 
-    let err =
-        rig.frame_from_states(&[] as &[ObjectState], Vec::new(), &ViewOptions::default(), 0.0).unwrap_err();
+    let mut other = state.clone();
+    other.objects.clear();
+    let err = rig.frame_from_state(&other, &ViewOptions::default()).unwrap_err();
     assert!(err.to_string().contains("0 object states for 1 objects"), "{err}");
 }
 
@@ -115,9 +124,8 @@ fn a_procedural_arm_is_fitted_to_a_skeleton_in_metres() {
     }
     let rig = SceneRig::new(&scene).expect("rig");
     // The skeleton overlay's last joint sits at 3 bones × 0.400395 m along X at rest.
-    let states =
-        vec![ObjectState { world_from_model: glam::Mat4::IDENTITY, pose: Some(keyrig_skin::Pose::rest(4)) }];
-    let frame = rig.frame_from_states(&states, Vec::new(), &ViewOptions::default(), 0.0).expect("frame");
+    let state = rig.evaluator().evaluate(0.0, &Overrides::new());
+    let frame = rig.frame_from_state(&state, &ViewOptions::default()).expect("frame");
     assert!((frame.skeletons[0].joints[3].x - 1.201_185).abs() < 1e-4, "{}", frame.skeletons[0].joints[3]);
 
     // The mesh, skinned on the GPU at rest, spans the arm's 1.60158 m.

@@ -41,7 +41,7 @@ pub fn sample_curves(
     let scene = app.doc.scene();
     let fps = scene.fps.max(1e-9);
     let none = PoseOverrides::new();
-    let tracks = app.tracks();
+    let tracks = app.evaluator();
     let n = samples.max(2);
     let mut curves: Vec<Curve> = Vec::new();
     for i in 0..n {

@@ -12,7 +12,6 @@ use crate::app::{EditorApp, RenderStyle};
 use crate::camera::Projection;
 use crate::channels::{ChannelId, ChannelValue};
 use crate::eval::ObjectPose;
-use crate::skinning::MeshInput;
 use crate::state::Selected;
 
 /// Pick radius around joints and lights, points.
@@ -30,78 +29,70 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         app.view.viewport_rect = Some(rect);
         let projection = Projection::new(&app.view.camera, rect);
         let time = app.time();
-        let tracks = app.tracks();
-        let poses: Vec<Option<ObjectPose>> = (0..app.doc.scene().objects.len())
-            .map(|o| tracks.object_pose(app.doc.scene(), o, time, &app.overrides))
-            .collect();
-
+        // Model files are loaded before the evaluator is asked for (it reads no files).
+        let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
         let mut errors: Vec<String> = Vec::new();
+        for object in &app.doc.scene().objects {
+            if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+                if let Err(e) = app.meshes.get(base_dir.as_deref(), path, *mesh) {
+                    errors.push(format!("{}: {e}", object.name));
+                }
+            }
+        }
+        let eval = app.evaluator();
+        let state = eval.evaluate(time, &app.overrides);
+        let poses: Vec<Option<ObjectPose>> =
+            state.objects.iter().map(|s| Some(ObjectPose::from_state(s))).collect();
+
         // CPU skinning runs every frame: it feeds the cross-section measure and, without a
         // GPU viewport, the painter.
         let mut cpu_meshes: Vec<(usize, Vec<Vec3>, Vec<u32>)> = Vec::new();
-        let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
-        for (o, pose) in poses.iter().enumerate() {
-            let Some(pose) = pose else { continue };
+        for (o, object_state) in state.objects.iter().enumerate() {
             let object = &app.doc.scene().objects[o];
-            let file_mesh = match &object.mesh {
-                Some(keyrig_core::MeshSource::File { path, mesh, .. }) => {
-                    match app.meshes.get(base_dir.as_deref(), path, *mesh) {
-                        Ok(data) => Some((path.as_str(), *mesh, data)),
-                        Err(e) => {
-                            errors.push(format!("{}: {e}", object.name));
-                            None
-                        }
-                    }
+            let world_from_object = object_state.world_from_object;
+            if let (Some(skin), Some(palette)) = (eval.skin(o), &object_state.palette) {
+                match app.skin.skin(o, skin, palette, object.deformer.kind) {
+                    Ok(view) => cpu_meshes.push((
+                        o,
+                        crate::skinning::to_world(world_from_object, view.positions),
+                        view.indices.to_vec(),
+                    )),
+                    Err(e) => errors.push(format!("{}: {e}", object.name)),
                 }
-                _ => None,
-            };
-            let input = match (&object.mesh, &file_mesh) {
-                (Some(keyrig_core::MeshSource::Procedural(kind)), _) => Some(MeshInput::Procedural(*kind)),
-                (_, Some((path, mesh, data))) => Some(MeshInput::File { path, mesh: *mesh, data }),
-                _ => None,
-            };
-            match app.skin.skin(o, object, input, pose, object.deformer.kind) {
-                Ok(Some(view)) => cpu_meshes.push((
-                    o,
-                    crate::skinning::to_world(pose.world_from_object, view.positions),
-                    view.indices.to_vec(),
-                )),
-                Ok(None) => match (&object.mesh, file_mesh) {
-                    (Some(keyrig_core::MeshSource::Procedural(kind)), _) => {
-                        let (positions, indices) = app.skin.static_mesh(*kind);
-                        cpu_meshes.push((
-                            o,
-                            crate::skinning::to_world(pose.world_from_object, positions),
-                            indices.to_vec(),
-                        ));
-                    }
-                    (_, Some((_, _, crate::files::FileMesh::Static { positions, indices }))) => cpu_meshes
-                        .push((
-                            o,
-                            crate::skinning::to_world(pose.world_from_object, positions),
-                            indices.clone(),
-                        )),
-                    (
-                        Some(keyrig_core::MeshSource::File { clip, fps, .. }),
-                        Some((_, _, crate::files::FileMesh::Morph(morph))),
-                    ) => {
-                        let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
-                        match app.skin.morph(o, morph, clip.as_deref(), fps, time) {
-                            Ok(positions) => cpu_meshes.push((
-                                o,
-                                crate::skinning::to_world(pose.world_from_object, positions),
-                                morph.indices().to_vec(),
-                            )),
-                            Err(e) => errors.push(format!("{}: {e}", object.name)),
-                        }
-                    }
-                    _ => {}
-                },
-                Err(e) => errors.push(format!("{}: {e}", object.name)),
+                continue;
+            }
+            app.skin.forget(o);
+            if let Some(e) = &object_state.palette_error {
+                errors.push(format!("{}: pose: {e}", object.name));
+            }
+            let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
+            match (app.meshes.peek(base_dir.as_deref(), path, *mesh), &object_state.morph) {
+                (Some(crate::files::FileMesh::Morph(morph)), Some(Ok(blend))) => {
+                    let positions = app.skin.morph(o, morph, *blend);
+                    cpu_meshes.push((
+                        o,
+                        crate::skinning::to_world(world_from_object, positions),
+                        morph.indices().to_vec(),
+                    ));
+                }
+                (Some(crate::files::FileMesh::Morph(_)), Some(Err(e))) => {
+                    errors.push(format!("{}: {e}", object.name))
+                }
+                (Some(crate::files::FileMesh::Static { positions, indices }), _) => {
+                    cpu_meshes.push((
+                        o,
+                        crate::skinning::to_world(world_from_object, positions),
+                        indices.clone(),
+                    ));
+                }
+                _ => {}
             }
         }
+        for problem in eval.problems().iter().take(3) {
+            errors.push(problem.to_string());
+        }
 
-        let gpu_drawn = gpu_ui(ui, app, rect, &poses, &mut errors);
+        let gpu_drawn = gpu_ui(ui, app, rect, &eval, &state, &mut errors);
         let scene = app.doc.scene();
         if !gpu_drawn {
             painter.set(background, egui::Shape::rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46)));
@@ -154,12 +145,8 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 }
             }
         }
-        for (l, light) in scene.lights.iter().enumerate() {
-            let Some(ChannelValue::Vec3(pos)) =
-                tracks.value(ChannelId::LightPosition(l), time, &app.overrides)
-            else {
-                continue;
-            };
+        for ((l, light), light_state) in scene.lights.iter().enumerate().zip(&state.lights) {
+            let pos = light_state.position;
             let Some(p) = projection.project(pos) else { continue };
             let selected = app.selection.item == Some(Selected::Light(l));
             let colour = if selected {
@@ -175,12 +162,9 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 let d = egui::vec2(a.cos(), a.sin());
                 painter.line_segment([p + d * 9.0, p + d * 13.0], Stroke::new(1.5, colour));
             }
-            if let Some(ChannelValue::Vec3(dir)) =
-                tracks.value(ChannelId::LightDirection(l), time, &app.overrides)
-            {
-                if let Some(seg) = projection.project_segment(pos, pos + dir.normalize_or_zero() * 0.5) {
-                    painter.arrow(seg[0], seg[1] - seg[0], Stroke::new(1.0, colour));
-                }
+            let dir = light_state.direction;
+            if let Some(seg) = projection.project_segment(pos, pos + dir.normalize_or_zero() * 0.5) {
+                painter.arrow(seg[0], seg[1] - seg[0], Stroke::new(1.0, colour));
             }
             pick_targets.push((p, Selected::Light(l)));
         }
@@ -228,43 +212,12 @@ fn gpu_ui(
     ui: &Ui,
     app: &mut EditorApp,
     rect: Rect,
-    poses: &[Option<ObjectPose>],
+    eval: &std::sync::Arc<keyrig_eval::SceneEvaluator>,
+    state: &keyrig_eval::SceneState,
     errors: &mut Vec<String>,
 ) -> bool {
     let Some(mut gpu) = app.gpu.take() else { return false };
     let scene = app.doc.scene();
-    let time = app.time();
-    let tracks = app.tracks();
-    let states: Vec<_> = poses
-        .iter()
-        .zip(&scene.objects)
-        .map(|(pose, object)| match pose {
-            Some(p) => crate::gpu_view::object_state(p, object.skeleton.is_some()),
-            None => keyrig_render::ObjectState { world_from_model: glam::Mat4::IDENTITY, pose: None },
-        })
-        .collect();
-    let lights = scene
-        .lights
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| l.enabled)
-        .map(|(l, light)| {
-            let v3 = |id, d| match tracks.value(id, time, &app.overrides) {
-                Some(ChannelValue::Vec3(v)) => v,
-                _ => d,
-            };
-            keyrig_render::LightInput {
-                kind: light.kind,
-                position: v3(ChannelId::LightPosition(l), light.position.value),
-                direction: v3(ChannelId::LightDirection(l), light.direction.value),
-                colour: v3(ChannelId::LightColour(l), light.colour.value),
-                intensity: match tracks.value(ChannelId::LightIntensity(l), time, &app.overrides) {
-                    Some(ChannelValue::Scalar(s)) => s,
-                    _ => light.intensity.value,
-                },
-            }
-        })
-        .collect();
     let c = app.view.camera;
     let view = keyrig_render::ViewOptions {
         style: app.view.style.to_render(),
@@ -284,27 +237,29 @@ fn gpu_ui(
     };
     let ppp = ui.ctx().pixels_per_point() * app.view.resolution_scale.clamp(0.25, 1.0);
     let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
-    let doc_key = app.doc.cache_key();
-    let mut file_meshes = std::collections::HashMap::new();
+    let rig_key = app.evaluator_key();
     let mut morph_meshes = std::collections::HashMap::new();
-    if gpu.needs_rig(doc_key) {
+    if gpu.needs_rig(rig_key) {
         let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
         for (o, object) in scene.objects.iter().enumerate() {
             if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
-                match app.meshes.get(base_dir.as_deref(), path, *mesh) {
-                    Ok(crate::files::FileMesh::Skinned(m)) => {
-                        file_meshes.insert(o, (**m).clone());
-                    }
-                    Ok(crate::files::FileMesh::Morph(m)) => {
-                        morph_meshes.insert(o, (**m).clone());
-                    }
-                    _ => {}
+                if let Some(crate::files::FileMesh::Morph(m)) =
+                    app.meshes.peek(base_dir.as_deref(), path, *mesh)
+                {
+                    morph_meshes.insert(o, (**m).clone());
                 }
             }
         }
     }
-    let frame =
-        crate::gpu_view::GpuFrame { scene, doc_key, states, lights, view, time, file_meshes, morph_meshes };
+    let frame = crate::gpu_view::GpuFrame {
+        scene,
+        rig_key,
+        evaluator: std::sync::Arc::clone(eval),
+        state,
+        overrides: &app.overrides,
+        view,
+        morph_meshes,
+    };
     if let Err(e) = gpu.set_antialiasing(app.view.antialiasing) {
         errors.push(format!("GPU viewport: {e}"));
     }
