@@ -20,14 +20,15 @@ use keyrig_render::{MorphClip, MorphMesh, SkinnedVertex};
 /// MD2 models are Z-up in Quake units; keyrig scenes are Y-up in metres. An MD2 object gets
 /// this rotation (−90° about X: Quake's +Z becomes +Y, its +X stays +X and its +Y becomes −Z)
 /// and [`MD2_SCALE`] as its own (editable) transform; the file's vertices are not changed.
+/// (keyrig-io's [`keyrig_io::md2::md2_rotation`], which `keyrig_io::md2::md2_scene` uses.)
 #[must_use]
 pub fn md2_rotation() -> Quat {
-    Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2)
+    keyrig_io::md2::md2_rotation()
 }
 
 /// Metres per Quake unit. Quake 2 player models are about 56 units tall, so one unit as an
 /// inch (0.0254 m) makes them about 1.4 m tall, next to a 1.6 m demo arm.
-pub const MD2_SCALE: f32 = 0.0254;
+pub const MD2_SCALE: f32 = keyrig_io::md2::MD2_SCALE;
 
 /// How many recent files are remembered.
 const RECENT_LIMIT: usize = 10;
@@ -190,12 +191,7 @@ fn md2_morph_mesh(path: &Path, data: &[u8]) -> Result<MorphMesh, String> {
 /// `fps` timeline frames per second (the frame after it is the loop's first again).
 #[must_use]
 pub fn frame_range_end(seconds: f64, fps: f64) -> i32 {
-    let frames = (seconds * fps).round() - 1.0;
-    if frames.is_finite() {
-        frames.clamp(1.0, 1e6) as i32
-    } else {
-        60
-    }
+    keyrig_io::md2::frame_range_end(seconds, fps)
 }
 
 /// A keyrig morph mesh from an MD2 model: every frame's positions and normals per render

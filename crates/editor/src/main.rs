@@ -19,10 +19,12 @@ struct Cli {
 enum Command {
     /// Open the editor on a scene (.ron) or a model (.glb, .gltf, .md2).
     Edit(cli::edit::EditArgs),
-    /// Export a scene (.ron) as glTF 2.0 (.glb or .gltf) with skins, animation and lights.
+    /// Export a scene (.ron) or a model (.glb, .gltf, .md2) as glTF 2.0 (.glb or .gltf): meshes, skins, morph targets, materials, animation and lights; --bake for Blender.
     Export(cli::export::ExportArgs),
-    /// Convert an MD2 model to glTF 2.0 morph-target animation (.glb or .gltf).
+    /// Convert a model to glTF 2.0: MD2 clips as morph-target animation, glTF through keyrig's mapping.
     Convert(cli::convert::ConvertArgs),
+    /// Make a scene file (.ron) from a model (.glb, .gltf, .md2), as the editor opens it.
+    Import(cli::import::ImportArgs),
     /// Render a frame or a frame range of a scene (.ron) or MD2 model to PNG, offscreen.
     Render(cli::render::RenderArgs),
     /// Summarize a scene: timing, objects, joints, lights, tracks, keys and validation problems.
@@ -40,6 +42,7 @@ fn main() -> ExitCode {
         Some(Command::Edit(args)) => cli::edit::run(args),
         Some(Command::Export(args)) => cli::export::run(args),
         Some(Command::Convert(args)) => cli::convert::run(args),
+        Some(Command::Import(args)) => cli::import::run(args),
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Info(args)) => cli::info::run(args),
         Some(Command::Sample(args)) => cli::sample::run(args),

@@ -65,6 +65,69 @@ fn export_writes_a_valid_glb_and_gltf_of_the_demo_scene() {
     }
 }
 
+fn gltf(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+}
+
+#[test]
+fn models_export_and_import_directly() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // export and convert take a model file directly (export used to fail with "not UTF-8 text").
+    let fox = gltf("Fox/Fox.glb");
+    for (command, name, extra) in [
+        ("export", "fox.glb", None),
+        ("export", "fox-baked.gltf", Some("--bake")),
+        ("convert", "fox-converted.glb", None),
+    ] {
+        let out = dir.path().join(name);
+        let mut args = vec![os(command), fox.as_os_str(), os("-o"), out.as_os_str()];
+        args.extend(extra.map(os));
+        let o = keyrig(&args);
+        assert!(o.status.success(), "{command} {name}: {}", stderr(&o));
+        assert_valid(&out);
+        let model = keyrig_io::gltf_import::import_gltf_file(&out).expect("imports");
+        assert_eq!(model.skins.len(), 1, "{name}: the fox's skin");
+        assert_eq!(model.skins[0].joints.len(), 24 + 1, "{name}: its 24 joints and the root node above them");
+        assert_eq!(model.images.len(), 1, "{name}: its texture");
+    }
+    let o = keyrig(&[
+        os("export"),
+        md2("dolphin/dolphin.md2").as_os_str(),
+        os("-o"),
+        dir.path().join("d.glb").as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_valid(&dir.path().join("d.glb"));
+
+    // import makes a scene file that refers to the model relative to the scene's folder.
+    let model = dir.path().join("Fox.glb");
+    std::fs::copy(&fox, &model).expect("copy");
+    let scene = dir.path().join("fox.ron");
+    let o =
+        keyrig(&[os("import"), model.as_os_str(), os("-o"), scene.as_os_str(), os("--animation"), os("1")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let loaded = keyrig_io::scene_file::load(&scene).expect("scene loads");
+    assert!(
+        matches!(&loaded.objects[0].mesh, Some(keyrig_core::MeshSource::File { path, .. }) if path == "Fox.glb"),
+        "{:?}",
+        loaded.objects[0].mesh
+    );
+    assert_eq!(loaded.frame_range.end, 22, "the Walk animation (23 frames at 30 fps)");
+    let out = dir.path().join("fox-from-scene.glb");
+    let o = keyrig(&[os("export"), scene.as_os_str(), os("-o"), out.as_os_str()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_valid(&out);
+    // import never writes over its model, and wants a .ron output.
+    assert_fails_with(
+        &keyrig(&[os("import"), model.as_os_str(), os("-o"), model.as_os_str()]),
+        &["Fox.glb", ".ron"],
+    );
+    assert_fails_with(
+        &keyrig(&[os("import"), model.as_os_str(), os("-o"), scene.as_os_str(), os("--animation"), os("9")]),
+        &["--animation 9", "3 animation"],
+    );
+}
+
 #[test]
 fn convert_writes_valid_morph_animation_of_an_md2() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -24,13 +24,14 @@
 //! - light colour and intensity are written at the start of the frame range (core glTF
 //!   cannot animate them).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{Affine3A, Mat4, Quat, Vec3};
+use glam::{Affine3A, Mat4, Quat, Vec2, Vec3};
 use keyrig_core::{Animated, AnimatedTrack, Interpolation, LightKind, MeshSource, Scene, Track};
 use serde_json::{json, Value};
 
-use crate::model::{ImportedModel, PrimitiveMode};
+use crate::model::{ChannelTarget, ImportedModel, ModelPrimitive, PrimitiveMode, WeightsTrack};
 
 /// Duration of the jump that stands in for a Step segment inside a spline track (seconds).
 pub const STEP_JUMP: f64 = 1e-3;
@@ -51,11 +52,48 @@ pub struct ExportOptions {
     pub rotation_tolerance_deg: f64,
     /// Folder that relative `MeshSource::File` paths resolve against (the scene's folder).
     pub base_dir: Option<PathBuf>,
+    /// Blender mode: bake every animated channel into LINEAR keys (see [`BakeOptions`]).
+    pub bake: Option<BakeOptions>,
 }
 
 impl Default for ExportOptions {
     fn default() -> Self {
-        ExportOptions { rotation_tolerance_deg: 0.05, base_dir: None }
+        ExportOptions { rotation_tolerance_deg: 0.05, base_dir: None, bake: None }
+    }
+}
+
+/// Blender mode ("bake"): for importers that ignore CUBICSPLINE tangents and blend LINEAR
+/// rotation keys component-wise (normalized lerp, not slerp), as Blender 3.4 does.
+///
+/// Every animated channel that is not all Step is written as LINEAR keys, placed adaptively:
+/// each interval between the track's keys is halved until the importer's interpolation
+/// between the written keys — linear for translations, scales and morph weights, normalized
+/// component-wise lerp for rotations — stays within half the tolerance of keyrig's curve at 15
+/// interior points (so within the tolerance between them in practice). All-Step channels stay
+/// STEP (Blender reads them as constant keys); a Step segment inside another track holds and
+/// jumps within [`STEP_JUMP`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeOptions {
+    /// Largest distance (scene units, in the node's parent space) between the importer's
+    /// translation or scale and keyrig's.
+    pub position_tolerance: f64,
+    /// Largest angle (degrees) between the importer's rotation and keyrig's; `None` uses
+    /// [`ExportOptions::rotation_tolerance_deg`].
+    pub rotation_tolerance_deg: Option<f64>,
+    /// Largest difference of one morph weight.
+    pub weight_tolerance: f64,
+}
+
+impl Default for BakeOptions {
+    fn default() -> Self {
+        BakeOptions { position_tolerance: 1e-4, rotation_tolerance_deg: None, weight_tolerance: 1e-3 }
+    }
+}
+
+impl BakeOptions {
+    /// The rotation tolerance in radians.
+    fn rotation_tolerance(&self, options: &ExportOptions) -> f64 {
+        self.rotation_tolerance_deg.unwrap_or(options.rotation_tolerance_deg).to_radians()
     }
 }
 
@@ -258,192 +296,320 @@ struct Channel {
     times: Vec<f32>,
     /// Flattened outputs (3 per key for CUBICSPLINE: in-tangent, value, out-tangent).
     values: Vec<f32>,
+    /// Components per output element: 3 (VEC3), 4 (VEC4) or 1 (SCALAR: morph weights).
     width: usize,
 }
 
-/// Geometry of one exported mesh.
-struct MeshData {
+/// The material of one exported primitive: base colour factor and texture.
+#[derive(Clone, Debug, PartialEq)]
+struct MaterialData {
+    base_colour: [f32; 4],
+    /// Index into the document's textures.
+    texture: Option<usize>,
+}
+
+/// One exported primitive (triangles).
+struct PrimitiveData {
     positions: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
+    texcoords: Option<Vec<Vec2>>,
     indices: Vec<u32>,
     skin: Option<Influences>,
+    /// Morph targets: position and (optional) normal displacements.
+    targets: Vec<(Vec<Vec3>, Option<Vec<Vec3>>)>,
+    material: Option<MaterialData>,
 }
 
 /// JOINTS_0 and WEIGHTS_0 of a mesh.
 type Influences = (Vec<[u16; 4]>, Vec<[f32; 4]>);
 
+/// A model file an object's mesh comes from, loaded once per export.
+enum LoadedFile {
+    Gltf(Box<ImportedModel>),
+    Md2(Box<crate::md2::Md2Model>),
+}
+
+/// Loads the model file at `path` (glTF by default, MD2 by its extension), through the same
+/// readers as the editor: [`crate::gltf_import::import_gltf_file`] and
+/// [`crate::md2::load_md2_file`] (which also finds the skin image).
+fn load_file(path: &Path) -> Result<LoadedFile, String> {
+    let is_md2 = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
+    if is_md2 {
+        crate::md2::load_md2_file(path).map(|m| LoadedFile::Md2(Box::new(m))).map_err(|e| e.to_string())
+    } else {
+        crate::gltf_import::import_gltf_file(path)
+            .map(|m| LoadedFile::Gltf(Box::new(m)))
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// Everything a document accumulates besides the buffer.
+#[derive(Default)]
+struct Document {
+    b: Builder,
+    nodes: Vec<Value>,
+    roots: Vec<usize>,
+    meshes: Vec<Value>,
+    skins: Vec<Value>,
+    channels: Vec<Channel>,
+    images: Vec<Value>,
+    textures: Vec<Value>,
+    materials: Vec<Value>,
+    /// (source file, image index) → texture index, so that a shared image is written once.
+    texture_of: HashMap<(PathBuf, usize), usize>,
+}
+
+impl Document {
+    /// A texture of the image bytes (PNG or JPEG), with a linear, repeating sampler.
+    fn texture(&mut self, key: (PathBuf, usize), bytes: &[u8], mime_type: &str) -> usize {
+        if let Some(&t) = self.texture_of.get(&key) {
+            return t;
+        }
+        let view = self.b.view(bytes, None);
+        self.images.push(json!({"bufferView": view, "mimeType": mime_type}));
+        self.textures.push(json!({"sampler": 0, "source": self.images.len() - 1}));
+        let t = self.textures.len() - 1;
+        self.texture_of.insert(key, t);
+        t
+    }
+
+    fn material(&mut self, m: &MaterialData) -> usize {
+        let mut pbr = json!({"metallicFactor": 0.0, "roughnessFactor": 1.0});
+        if m.base_colour != [1.0; 4] {
+            pbr["baseColorFactor"] = json!(m.base_colour);
+        }
+        if let Some(t) = m.texture {
+            pbr["baseColorTexture"] = json!({"index": t});
+        }
+        let value = json!({"pbrMetallicRoughness": pbr});
+        if let Some(i) = self.materials.iter().position(|x| *x == value) {
+            return i;
+        }
+        self.materials.push(value);
+        self.materials.len() - 1
+    }
+
+    /// Writes a mesh of `primitives` and returns its index.
+    fn mesh(&mut self, name: &str, primitives: &[PrimitiveData], weights: Option<&[f32]>) -> usize {
+        let mut prims = Vec::with_capacity(primitives.len());
+        for p in primitives {
+            let b = &mut self.b;
+            let mut attributes = serde_json::Map::new();
+            attributes.insert("POSITION".into(), json!(b.vec3s(&p.positions, Some(ARRAY_BUFFER), true)));
+            if let Some(n) = &p.normals {
+                let n: Vec<Vec3> = n.iter().map(|v| v.normalize_or(Vec3::Z)).collect();
+                attributes.insert("NORMAL".into(), json!(b.vec3s(&n, Some(ARRAY_BUFFER), false)));
+            }
+            if let Some(uv) = &p.texcoords {
+                let flat: Vec<f32> = uv.iter().flat_map(|t| t.to_array()).collect();
+                attributes.insert(
+                    "TEXCOORD_0".into(),
+                    json!(b.floats(&flat, 2, "VEC2", Some(ARRAY_BUFFER), false)),
+                );
+            }
+            if let Some((joints, weights)) = &p.skin {
+                // glTF: a joint with zero weight should be joint 0 (the validator warns
+                // ACCESSOR_JOINTS_USED_ZERO_WEIGHT otherwise); it has no effect either way.
+                let joints: Vec<[u16; 4]> = joints
+                    .iter()
+                    .zip(weights)
+                    .map(|(j, w)| std::array::from_fn(|i| if w[i] == 0.0 { 0 } else { j[i] }))
+                    .collect();
+                attributes.insert("JOINTS_0".into(), json!(b.joints(&joints)));
+                let w: Vec<f32> = weights.iter().flatten().copied().collect();
+                attributes
+                    .insert("WEIGHTS_0".into(), json!(b.floats(&w, 4, "VEC4", Some(ARRAY_BUFFER), false)));
+            }
+            let indices = b.indices(&p.indices);
+            let mut prim = json!({"attributes": attributes, "indices": indices, "mode": 4});
+            if !p.targets.is_empty() {
+                let targets: Vec<Value> = p
+                    .targets
+                    .iter()
+                    .map(|(dp, dn)| {
+                        let mut t = json!({"POSITION": b.vec3s(dp, Some(ARRAY_BUFFER), true)});
+                        if let (Some(dn), true) = (dn, p.normals.is_some()) {
+                            t["NORMAL"] = json!(b.vec3s(dn, Some(ARRAY_BUFFER), false));
+                        }
+                        t
+                    })
+                    .collect();
+                prim["targets"] = json!(targets);
+            }
+            if let Some(m) = &p.material {
+                prim["material"] = json!(self.material(m));
+            }
+            prims.push(prim);
+        }
+        let mut mesh = json!({"name": name, "primitives": prims});
+        if let Some(w) = weights {
+            mesh["weights"] = json!(w);
+        }
+        self.meshes.push(mesh);
+        self.meshes.len() - 1
+    }
+}
+
 /// Exports `scene`.
+///
+/// Every object is written with its transform and animation, its skeleton (joint nodes with
+/// every channel: translation, rotation, scale), and its mesh:
+/// - procedural meshes from keyrig-skin, fitted to the object's skeleton, with their skin;
+/// - glTF model meshes (`MeshSource::File` of a .glb/.gltf) loaded from the file: a skinned
+///   mesh as keyrig deforms it ([`ImportedModel::skinned_mesh`]: the four largest influences,
+///   normalized, joints renumbered to the object's skeleton, the file's inverse bind matrices
+///   as `RestSkeleton::joint_from_bind_model`), one glTF primitive per triangle primitive of
+///   the file with its texture coordinates and material (base colour factor and texture); an
+///   unskinned mesh with its morph targets and the morph weights of the file's first
+///   animation (as `keyrig deform` plays them);
+/// - MD2 meshes as morph-target animation: the object's clip (or every frame), one target per
+///   frame, weights keyed at every frame boundary over the scene's frame range so that the
+///   LINEAR weights reproduce keyrig's looping playback, the skin image as base-colour texture.
 ///
 /// # Errors
 /// A track that does not validate, a skeleton that does not fit its mesh, a mesh file that
 /// cannot be loaded: each with the path of the scene field.
 pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGltf, ExportError> {
-    let mut b = Builder::default();
-    let mut nodes: Vec<Value> = Vec::new();
-    let mut roots: Vec<usize> = Vec::new();
-    let mut meshes: Vec<Value> = Vec::new();
-    let mut skins: Vec<Value> = Vec::new();
-    let mut channels: Vec<Channel> = Vec::new();
+    let mut doc = Document::default();
     let mut lights: Vec<Value> = Vec::new();
-    let tol = options.rotation_tolerance_deg.to_radians();
+    let mut files: HashMap<PathBuf, LoadedFile> = HashMap::new();
 
     for (oi, object) in scene.objects.iter().enumerate() {
         let here = format!("objects[{oi}]");
-        let node = nodes.len();
-        nodes.push(json!({"name": object.name}));
-        roots.push(node);
+        let node = doc.nodes.len();
+        doc.nodes.push(json!({"name": object.name}));
+        doc.roots.push(node);
+        let identity = (Quat::IDENTITY, Vec3::ZERO);
         set_vec3(
-            &mut nodes[node],
+            &mut doc.nodes[node],
             "translation",
             &object.translation,
+            identity,
             Vec3::ZERO,
             &format!("{here}.translation"),
         )?;
-        set_vec3(&mut nodes[node], "scale", &object.scale, Vec3::ONE, &format!("{here}.scale"))?;
-        set_quat(&mut nodes[node], &object.rotation, Quat::IDENTITY, &format!("{here}.rotation"))?;
-        channels.extend(vec3_channel(
+        set_vec3(
+            &mut doc.nodes[node],
+            "scale",
+            &object.scale,
+            identity,
+            Vec3::ONE,
+            &format!("{here}.scale"),
+        )?;
+        set_quat(&mut doc.nodes[node], &object.rotation, Quat::IDENTITY, &format!("{here}.rotation"))?;
+        doc.channels.extend(vec3_channel(
             node,
             "translation",
             &object.translation,
+            identity,
+            options,
             &format!("{here}.translation"),
         )?);
-        channels.extend(vec3_channel(node, "scale", &object.scale, &format!("{here}.scale"))?);
-        channels.extend(quat_channel(
+        doc.channels.extend(vec3_channel(
+            node,
+            "scale",
+            &object.scale,
+            identity,
+            options,
+            &format!("{here}.scale"),
+        )?);
+        doc.channels.extend(quat_channel(
             node,
             &object.rotation,
             Quat::IDENTITY,
-            tol,
+            options,
             &format!("{here}.rotation"),
         )?);
 
-        // Joints as children of the object node.
-        let mut joint_nodes = Vec::new();
-        if let Some(skeleton) = &object.skeleton {
-            for (ji, joint) in skeleton.joints.iter().enumerate() {
-                let jhere = format!("{here}.skeleton.joints[{ji}]");
-                let jn = nodes.len();
-                let parent = match joint.parent {
-                    None => node,
-                    Some(p) if p < ji => joint_nodes[p],
-                    Some(p) => {
-                        return Err(scene_err(
-                            format!("{jhere}.parent"),
-                            format!("parent {p} is not before the joint"),
-                        ))
-                    }
-                };
-                add_child(&mut nodes[parent], jn);
-                let rest_rotation = joint.rest_rotation.normalize();
-                if !joint.rest_translation.is_finite() || !rest_rotation.is_finite() {
-                    return Err(scene_err(&jhere, "rest transform is not finite"));
-                }
-                let rotation_at_rest =
-                    rest_rotation * sample_static(&joint.rotation, &format!("{jhere}.rotation"))?;
-                nodes.push(json!({
-                    "name": joint.name,
-                    "translation": joint.rest_translation.to_array(),
-                    "rotation": rotation_at_rest.to_array(),
-                }));
-                joint_nodes.push(jn);
-                channels.extend(quat_channel(
-                    jn,
-                    &joint.rotation,
-                    rest_rotation,
-                    tol,
-                    &format!("{jhere}.rotation"),
-                )?);
-                if joint.parent.is_none() {
-                    let rt = &skeleton.root_translation;
-                    let offset = Animated {
-                        value: joint.rest_translation + rt.value,
-                        track: keyrig_core::RawTrack::new(
-                            rt.track
-                                .keys
-                                .iter()
-                                .map(|k| {
-                                    let mut k = k.clone();
-                                    k.value += joint.rest_translation;
-                                    k
-                                })
-                                .collect(),
-                        ),
-                    };
-                    if !rt.track.is_empty() || rt.value != Vec3::ZERO {
-                        nodes[jn]["translation"] = json!(offset.value.to_array());
-                    }
-                    channels.extend(vec3_channel(
-                        jn,
-                        "translation",
-                        &offset,
-                        &format!("{here}.skeleton.root_translation"),
-                    )?);
-                }
-            }
-        }
+        let joint_nodes = match &object.skeleton {
+            Some(skeleton) => export_joints(&mut doc, node, skeleton, options, &here)?,
+            None => Vec::new(),
+        };
 
-        // The mesh.
-        if let Some(source) = &object.mesh {
-            let data = mesh_data(source, object.skeleton.as_ref(), options, &here)?;
-            let mesh_index = meshes.len();
-            let mut attributes = serde_json::Map::new();
-            attributes.insert("POSITION".into(), json!(b.vec3s(&data.positions, Some(ARRAY_BUFFER), true)));
-            if let Some(n) = &data.normals {
-                let n: Vec<Vec3> = n.iter().map(|v| v.normalize_or(Vec3::Z)).collect();
-                attributes.insert("NORMAL".into(), json!(b.vec3s(&n, Some(ARRAY_BUFFER), false)));
-            }
-            let skinned = match (&data.skin, &object.skeleton) {
-                (Some((joints, weights)), Some(skeleton)) if !skeleton.joints.is_empty() => {
-                    if let Some(bad) =
-                        joints.iter().flatten().find(|&&j| usize::from(j) >= skeleton.joints.len())
-                    {
-                        return Err(scene_err(
-                            format!("{here}.skeleton"),
-                            format!(
-                                "the mesh uses joint {bad} but the skeleton has {}",
-                                skeleton.joints.len()
-                            ),
-                        ));
+        let Some(source) = &object.mesh else { continue };
+        let mesh_here = format!("{here}.mesh");
+        match source {
+            MeshSource::Procedural(kind) => {
+                let mut mesh = keyrig_skin::mesh_for(*kind);
+                // Procedural meshes are built in centimetres on their own skeleton; fit them to
+                // the object's skeleton as the editor and renderer do. A skeleton that does not
+                // build is reported by the skeleton's own export; the mesh then keeps its
+                // native size.
+                let rest =
+                    object.skeleton.as_ref().and_then(|s| keyrig_skin::RestSkeleton::from_scene(s).ok());
+                if let Some(rest) = rest {
+                    if let Ok(fitted) = mesh.clone().fit_to_skeleton(rest) {
+                        mesh = fitted;
                     }
-                    // glTF: a joint with zero weight should be joint 0 (the validator warns
-                    // ACCESSOR_JOINTS_USED_ZERO_WEIGHT otherwise); it has no effect either way.
-                    let joints: Vec<[u16; 4]> = joints
-                        .iter()
-                        .zip(weights)
-                        .map(|(j, w)| std::array::from_fn(|i| if w[i] == 0.0 { 0 } else { j[i] }))
-                        .collect();
-                    attributes.insert("JOINTS_0".into(), json!(b.joints(&joints)));
-                    let w: Vec<f32> = weights.iter().flatten().copied().collect();
-                    attributes.insert(
-                        "WEIGHTS_0".into(),
-                        json!(b.floats(&w, 4, "VEC4", Some(ARRAY_BUFFER), false)),
-                    );
-                    Some(skeleton)
                 }
-                _ => None,
-            };
-            let indices = b.indices(&data.indices);
-            meshes.push(json!({
-                "name": object.name,
-                "primitives": [{"attributes": attributes, "indices": indices, "mode": 4}],
-            }));
-            match skinned {
-                Some(skeleton) => {
-                    let ibms = inverse_bind_matrices(skeleton, &here)?;
-                    let flat: Vec<f32> = ibms.iter().flat_map(|m| m.to_cols_array()).collect();
-                    let acc = b.floats(&flat, 16, "MAT4", None, false);
-                    let skin = skins.len();
-                    skins.push(json!({"name": object.name, "joints": joint_nodes, "inverseBindMatrices": acc, "skeleton": joint_nodes[0]}));
-                    let mesh_node = nodes.len();
-                    nodes.push(
-                        json!({"name": format!("{}.mesh", object.name), "mesh": mesh_index, "skin": skin}),
-                    );
-                    roots.push(mesh_node);
+                let skinned = !joint_nodes.is_empty();
+                let prim = PrimitiveData {
+                    positions: mesh.positions.clone(),
+                    normals: Some(mesh.normals.clone()),
+                    texcoords: None,
+                    indices: mesh.indices.clone(),
+                    skin: skinned.then(|| (mesh.joints.clone(), mesh.weights.clone())),
+                    targets: Vec::new(),
+                    material: None,
+                };
+                if skinned {
+                    check_joints(&prim, joint_nodes.len(), &format!("{here}.skeleton"))?;
+                    if mesh.skeleton.len() != joint_nodes.len() {
+                        // The fit failed (a skeleton that does not build): bind to the scene's rest.
+                        let ibms = inverse_bind_matrices(object.skeleton.as_ref().expect("skeleton"), &here)?;
+                        skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
+                    } else {
+                        let ibms = ibms_of(&mesh.skeleton);
+                        skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
+                    }
+                } else {
+                    let m = doc.mesh(&object.name, &[prim], None);
+                    doc.nodes[node]["mesh"] = json!(m);
                 }
-                None => nodes[node]["mesh"] = json!(mesh_index),
+            }
+            MeshSource::File { path, mesh, clip, fps } => {
+                let file = options.base_dir.as_deref().unwrap_or(Path::new(".")).join(path);
+                let err = |message: String| ExportError::MeshFile {
+                    path: mesh_here.clone(),
+                    file: file.clone(),
+                    message,
+                };
+                if !files.contains_key(&file) {
+                    let loaded = load_file(&file).map_err(err)?;
+                    files.insert(file.clone(), loaded);
+                }
+                match &files[&file] {
+                    LoadedFile::Md2(model) => {
+                        let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+                        md2_object(&mut doc, scene, model, &file, clip.as_deref(), fps, node, &object.name)
+                            .map_err(err)?;
+                    }
+                    LoadedFile::Gltf(model) => {
+                        let index = mesh.unwrap_or(0);
+                        gltf_object(
+                            &mut doc,
+                            model,
+                            &file,
+                            index,
+                            node,
+                            object,
+                            &joint_nodes,
+                            options,
+                            &here,
+                        )
+                        .map_err(|e| match e {
+                            ExportError::Scene { message, .. } if message.starts_with('!') => {
+                                err(message[1..].to_owned())
+                            }
+                            other => other,
+                        })?;
+                    }
+                }
             }
         }
     }
 
+    let tol = options.rotation_tolerance_deg.to_radians();
     for (li, light) in scene.lights.iter().enumerate() {
         let here = format!("lights[{li}]");
         let t0 = f64::from(scene.frame_range.start) / scene.fps;
@@ -465,25 +631,46 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
         }
         let light_index = lights.len();
         lights.push(l);
-        let node = nodes.len();
-        nodes
+        let node = doc.nodes.len();
+        doc.nodes
             .push(json!({"name": light.name, "extensions": {"KHR_lights_punctual": {"light": light_index}}}));
-        roots.push(node);
-        set_vec3(&mut nodes[node], "translation", &light.position, Vec3::ZERO, &format!("{here}.position"))?;
-        channels.extend(vec3_channel(node, "translation", &light.position, &format!("{here}.position"))?);
+        doc.roots.push(node);
+        let identity = (Quat::IDENTITY, Vec3::ZERO);
+        set_vec3(
+            &mut doc.nodes[node],
+            "translation",
+            &light.position,
+            identity,
+            Vec3::ZERO,
+            &format!("{here}.position"),
+        )?;
+        doc.channels.extend(vec3_channel(
+            node,
+            "translation",
+            &light.position,
+            identity,
+            options,
+            &format!("{here}.position"),
+        )?);
         // Direction → rotation taking the light's −Z to the direction.
         let dir_here = format!("{here}.direction");
         let dir = AnimatedTrack::new(&light.direction).map_err(|e| scene_err(&dir_here, e.to_string()))?;
         let rest = look_rotation(dir.sample(t0));
-        nodes[node]["rotation"] = json!(rest.to_array());
+        doc.nodes[node]["rotation"] = json!(rest.to_array());
         if let Some(track) = dir.track() {
             let (start, end) = track.domain();
             let sampler = |t: f64| look_rotation(track.sample(t));
-            let (times, values) = resample_rotation(&sampler, &[start, end], tol);
-            channels.push(linear_quat_channel(node, times, values));
+            let (times, values) = match &options.bake {
+                Some(bake) => {
+                    resample_rotation(&sampler, &[start, end], bake.rotation_tolerance(options), nlerp)
+                }
+                None => resample_rotation(&sampler, &[start, end], tol, crate::model::slerp_short),
+            };
+            doc.channels.push(linear_quat_channel(node, times, values));
         }
     }
 
+    let Document { mut b, nodes, roots, meshes, skins, channels, images, textures, materials, .. } = doc;
     let mut root = json!({
         "asset": {"version": "2.0", "generator": concat!("keyrig ", env!("CARGO_PKG_VERSION"))},
         "scene": 0,
@@ -496,6 +683,14 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
     if !skins.is_empty() {
         root["skins"] = json!(skins);
     }
+    if !materials.is_empty() {
+        root["materials"] = json!(materials);
+    }
+    if !images.is_empty() {
+        root["images"] = json!(images);
+        root["textures"] = json!(textures);
+        root["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+    }
     if !lights.is_empty() {
         root["extensionsUsed"] = json!(["KHR_lights_punctual"]);
         root["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
@@ -505,8 +700,13 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
         let mut chans = Vec::new();
         for (i, c) in channels.iter().enumerate() {
             let input = b.floats(&c.times, 1, "SCALAR", None, true);
-            let type_ = if c.width == 3 { "VEC3" } else { "VEC4" };
-            let output = b.floats(&c.values, c.width, type_, None, false);
+            let type_ = match c.width {
+                3 => "VEC3",
+                4 => "VEC4",
+                _ => "SCALAR",
+            };
+            let width = if c.width == 3 || c.width == 4 { c.width } else { 1 };
+            let output = b.floats(&c.values, width, type_, None, false);
             samplers.push(json!({"input": input, "output": output, "interpolation": c.interpolation}));
             chans.push(json!({"sampler": i, "target": {"node": c.node, "path": c.path}}));
         }
@@ -521,6 +721,424 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
         root["accessors"] = json!(b.accessors);
     }
     Ok(ExportedGltf { json: root, bin: b.bin })
+}
+
+/// Writes the joints of `skeleton` as nodes below the object node `object_node` and their
+/// channels, returning the node of each joint.
+///
+/// A joint's node carries R(j)·T(j) as glTF's `T·R·S`: translation `t_rest + q_rest·t(t)`,
+/// rotation `q_rest·q(t)`, scale `s(t)` — exact, as `translate(t_rest)·rotate(q_rest)·
+/// translate(t)·rotate(q)·scale(s)` is that TRS. A root joint adds the skeleton's root
+/// translation: folded into its translation when at most one of the two is animated, else
+/// written on a node of its own between the object and the joint.
+fn export_joints(
+    doc: &mut Document,
+    object_node: usize,
+    skeleton: &keyrig_core::Skeleton,
+    options: &ExportOptions,
+    here: &str,
+) -> Result<Vec<usize>, ExportError> {
+    let mut joint_nodes: Vec<usize> = Vec::with_capacity(skeleton.joints.len());
+    let rt = &skeleton.root_translation;
+    let rt_here = format!("{here}.skeleton.root_translation");
+    let rt_value = sample_static(rt, &rt_here)?;
+    for (ji, joint) in skeleton.joints.iter().enumerate() {
+        let jhere = format!("{here}.skeleton.joints[{ji}]");
+        let mut parent = match joint.parent {
+            None => object_node,
+            Some(p) if p < ji => joint_nodes[p],
+            Some(p) => {
+                return Err(scene_err(
+                    format!("{jhere}.parent"),
+                    format!("parent {p} is not before the joint"),
+                ))
+            }
+        };
+        let rest_rotation = joint.rest_rotation.normalize();
+        if !joint.rest_translation.is_finite() || !rest_rotation.is_finite() {
+            return Err(scene_err(&jhere, "rest transform is not finite"));
+        }
+        let is_root = joint.parent.is_none();
+        let both_animated = is_root && rt.is_animated() && joint.translation.is_animated();
+        if both_animated {
+            let helper = doc.nodes.len();
+            doc.nodes.push(json!({"name": format!("{}.root_translation", joint.name)}));
+            add_child(&mut doc.nodes[parent], helper);
+            let identity = (Quat::IDENTITY, Vec3::ZERO);
+            set_vec3(&mut doc.nodes[helper], "translation", rt, identity, Vec3::ZERO, &rt_here)?;
+            doc.channels.extend(vec3_channel(helper, "translation", rt, identity, options, &rt_here)?);
+            parent = helper;
+        }
+        let jn = doc.nodes.len();
+        add_child(&mut doc.nodes[parent], jn);
+        doc.nodes.push(json!({"name": joint.name}));
+        joint_nodes.push(jn);
+        let rotation_at_rest = rest_rotation * sample_static(&joint.rotation, &format!("{jhere}.rotation"))?;
+        doc.nodes[jn]["rotation"] = json!(rotation_at_rest.normalize().to_array());
+        doc.channels.extend(quat_channel(
+            jn,
+            &joint.rotation,
+            rest_rotation,
+            options,
+            &format!("{jhere}.rotation"),
+        )?);
+        set_vec3(
+            &mut doc.nodes[jn],
+            "scale",
+            &joint.scale,
+            (Quat::IDENTITY, Vec3::ZERO),
+            Vec3::ONE,
+            &format!("{jhere}.scale"),
+        )?;
+        doc.channels.extend(vec3_channel(
+            jn,
+            "scale",
+            &joint.scale,
+            (Quat::IDENTITY, Vec3::ZERO),
+            options,
+            &format!("{jhere}.scale"),
+        )?);
+        // Translation: t_rest + q_rest·t(t) (+ the root translation).
+        let t_here = format!("{jhere}.translation");
+        let t_value = sample_static(&joint.translation, &t_here)?;
+        let root_shift = if is_root && !both_animated { rt_value } else { Vec3::ZERO };
+        let static_translation = joint.rest_translation + rest_rotation * t_value + root_shift;
+        if static_translation != Vec3::ZERO {
+            doc.nodes[jn]["translation"] = json!(static_translation.to_array());
+        }
+        if joint.translation.is_animated() {
+            let map = (rest_rotation, joint.rest_translation + root_shift);
+            doc.channels.extend(vec3_channel(jn, "translation", &joint.translation, map, options, &t_here)?);
+        } else if is_root && rt.is_animated() {
+            let map = (Quat::IDENTITY, joint.rest_translation + rest_rotation * t_value);
+            doc.channels.extend(vec3_channel(jn, "translation", rt, map, options, &rt_here)?);
+        }
+    }
+    Ok(joint_nodes)
+}
+
+/// A(j)⁻¹ of a rest skeleton as matrices.
+fn ibms_of(skeleton: &keyrig_skin::RestSkeleton) -> Vec<Mat4> {
+    skeleton.joint_from_bind_model().iter().map(|a| Mat4::from(*a)).collect()
+}
+
+/// Refuses vertex joints the skeleton does not have.
+fn check_joints(prim: &PrimitiveData, joint_count: usize, here: &str) -> Result<(), ExportError> {
+    if let Some((joints, weights)) = &prim.skin {
+        for (j, w) in joints.iter().zip(weights) {
+            for i in 0..4 {
+                if w[i] != 0.0 && usize::from(j[i]) >= joint_count {
+                    return Err(scene_err(
+                        here,
+                        format!("the mesh uses joint {} but the skeleton has {joint_count}", j[i]),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Writes a skinned mesh: the mesh on a root node of its own (glTF ignores a skinned mesh
+/// node's transform, and the validator warns when it is not a root) with a skin of
+/// `joint_nodes` and `ibms`.
+fn skinned_mesh_node(
+    doc: &mut Document,
+    name: &str,
+    primitives: &[PrimitiveData],
+    ibms: &[Mat4],
+    joint_nodes: &[usize],
+    object_node: usize,
+) {
+    let mesh_index = doc.mesh(name, primitives, None);
+    let flat: Vec<f32> = ibms.iter().flat_map(|m| m.to_cols_array()).collect();
+    let acc = doc.b.floats(&flat, 16, "MAT4", None, false);
+    let skin = doc.skins.len();
+    let mut s = json!({"name": name, "joints": joint_nodes, "inverseBindMatrices": acc});
+    // `skeleton`: the common root of the joints (the only root joint, else the object node).
+    let roots: Vec<usize> = joint_nodes
+        .iter()
+        .copied()
+        .filter(|&n| !joint_nodes.iter().any(|&p| has_child(&doc.nodes[p], n)))
+        .collect();
+    s["skeleton"] = json!(if roots.len() == 1 && has_child(&doc.nodes[object_node], roots[0]) {
+        roots[0]
+    } else {
+        object_node
+    });
+    doc.skins.push(s);
+    let mesh_node = doc.nodes.len();
+    doc.nodes.push(json!({"name": format!("{name}.mesh"), "mesh": mesh_index, "skin": skin}));
+    doc.roots.push(mesh_node);
+}
+
+fn has_child(node: &Value, child: usize) -> bool {
+    node.get("children")
+        .and_then(Value::as_array)
+        .is_some_and(|c| c.iter().any(|x| x.as_u64() == Some(child as u64)))
+}
+
+/// The material of a glTF primitive, with its base-colour texture written to `doc` when the
+/// image's bytes are known and it uses TEXCOORD_0.
+fn gltf_material(doc: &mut Document, model: &ImportedModel, file: &Path, p: &ModelPrimitive) -> MaterialData {
+    let texture = p.base_colour_texture.as_ref().and_then(|t| {
+        if t.texcoord_set != 0 || p.texcoords.is_none() {
+            return None;
+        }
+        let data = model.image_data.get(t.image)?.as_ref()?;
+        Some(doc.texture((file.to_path_buf(), t.image), &data.bytes, &data.mime_type))
+    });
+    MaterialData { base_colour: p.base_colour_factor, texture }
+}
+
+/// An object whose mesh is mesh `index` of the glTF model `model` (see [`export_scene`]).
+#[allow(clippy::too_many_arguments)]
+fn gltf_object(
+    doc: &mut Document,
+    model: &ImportedModel,
+    file: &Path,
+    index: usize,
+    node: usize,
+    object: &keyrig_core::Object,
+    joint_nodes: &[usize],
+    options: &ExportOptions,
+    here: &str,
+) -> Result<(), ExportError> {
+    // Errors about the file itself start with '!' (turned into MeshFile by the caller).
+    let file_err = |m: String| scene_err(here, format!("!{m}"));
+    let Some(source_mesh) = model.meshes.get(index) else {
+        return Err(file_err(format!("has no mesh {index}")));
+    };
+    let Some(model_node) = model.nodes.iter().position(|n| n.mesh == Some(index)) else {
+        return Err(file_err(format!("no node shows mesh {index}")));
+    };
+    let triangles: Vec<&ModelPrimitive> =
+        source_mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles).collect();
+    if triangles.is_empty() {
+        return Err(file_err(format!("mesh {index} has no triangles")));
+    }
+    if model.nodes[model_node].skin.is_some() && !joint_nodes.is_empty() {
+        // As keyrig deforms it: keyrig-skin's mesh, split back into the file's primitives.
+        let skinned = model.skinned_mesh(model_node).map_err(|e| file_err(e.to_string()))?;
+        if skinned.skeleton.len() != joint_nodes.len() {
+            return Err(scene_err(
+                format!("{here}.skeleton"),
+                format!(
+                    "{} joints, but the mesh from the model file is bound to {}",
+                    joint_nodes.len(),
+                    skinned.skeleton.len()
+                ),
+            ));
+        }
+        let mut prims = Vec::with_capacity(triangles.len());
+        let (mut vbase, mut ibase) = (0usize, 0usize);
+        for p in &triangles {
+            let (nv, ni) = (p.positions.len(), p.indices.len());
+            let material = gltf_material(doc, model, file, p);
+            prims.push(PrimitiveData {
+                positions: skinned.positions[vbase..vbase + nv].to_vec(),
+                normals: Some(skinned.normals[vbase..vbase + nv].to_vec()),
+                texcoords: p.texcoords.as_ref().map(|t| t.to_vec()),
+                indices: skinned.indices[ibase..ibase + ni].iter().map(|&i| i - vbase as u32).collect(),
+                skin: Some((
+                    skinned.joints[vbase..vbase + nv].to_vec(),
+                    skinned.weights[vbase..vbase + nv].to_vec(),
+                )),
+                targets: Vec::new(),
+                material: Some(material),
+            });
+            vbase += nv;
+            ibase += ni;
+        }
+        let ibms = ibms_of(&skinned.skeleton);
+        skinned_mesh_node(doc, &object.name, &prims, &ibms, joint_nodes, node);
+        return Ok(());
+    }
+    // Unskinned (or an object without a skeleton): the mesh on the object node, in the node's
+    // own space, with its morph targets.
+    let mut prims = Vec::with_capacity(triangles.len());
+    let targets = triangles.iter().map(|p| p.morph_targets.len()).max().unwrap_or(0);
+    for p in &triangles {
+        let material = gltf_material(doc, model, file, p);
+        let n = p.positions.len();
+        let morph: Vec<(Vec<Vec3>, Option<Vec<Vec3>>)> = (0..targets)
+            .map(|t| {
+                let target = p.morph_targets.get(t);
+                let dp = target
+                    .and_then(|t| t.positions.as_ref())
+                    .map_or_else(|| vec![Vec3::ZERO; n], |d| d.to_vec());
+                let dn = p.normals.as_ref().map(|_| {
+                    target
+                        .and_then(|t| t.normals.as_ref())
+                        .map_or_else(|| vec![Vec3::ZERO; n], |d| d.to_vec())
+                });
+                (dp, dn)
+            })
+            .collect();
+        prims.push(PrimitiveData {
+            positions: p.positions.to_vec(),
+            normals: p.normals.as_ref().map(|n| n.to_vec()),
+            texcoords: p.texcoords.as_ref().map(|t| t.to_vec()),
+            indices: p.indices.to_vec(),
+            skin: None,
+            targets: morph,
+            material: Some(material),
+        });
+    }
+    let default_weights = (targets > 0).then(|| {
+        let w = model.nodes[model_node].weights.clone().unwrap_or_else(|| source_mesh.weights.clone());
+        (0..targets).map(|i| w.get(i).copied().unwrap_or(0.0)).collect::<Vec<f32>>()
+    });
+    let m = doc.mesh(&object.name, &prims, default_weights.as_deref());
+    doc.nodes[node]["mesh"] = json!(m);
+    if targets > 0 {
+        // The morph weights of the file's first animation, as `keyrig deform` plays them.
+        let weights =
+            model.animations.first().into_iter().flat_map(|a| &a.channels).find_map(|c| match &c.target {
+                ChannelTarget::Weights(w)
+                    if c.node == model_node && w.targets == targets && !w.keys.is_empty() =>
+                {
+                    Some(w)
+                }
+                _ => None,
+            });
+        if let Some(w) = weights {
+            doc.channels.push(weights_channel(node, w, options));
+        }
+    }
+    Ok(())
+}
+
+/// A morph-weight channel of a glTF weights track: STEP, LINEAR or CUBICSPLINE as in the file
+/// (exact), or in Blender mode LINEAR keys within the weight tolerance.
+fn weights_channel(node: usize, w: &WeightsTrack, options: &ExportOptions) -> Channel {
+    let interpolation = w.keys[0].interpolation;
+    let times: Vec<f32> = w.keys.iter().map(|k| k.time as f32).collect();
+    let channel = |interpolation: &'static str, times: Vec<f32>, values: Vec<f32>| Channel {
+        node,
+        path: "weights",
+        interpolation,
+        times,
+        values,
+        width: 1,
+    };
+    match (interpolation, &options.bake) {
+        (Interpolation::Step, _) => {
+            channel("STEP", times, w.keys.iter().flat_map(|k| k.value.clone()).collect())
+        }
+        (Interpolation::Linear | Interpolation::Tcb, _) => {
+            channel("LINEAR", times, w.keys.iter().flat_map(|k| k.value.clone()).collect())
+        }
+        (Interpolation::Hermite, None) => {
+            let zero = vec![0.0f32; w.targets];
+            let mut values = Vec::with_capacity(w.keys.len() * 3 * w.targets);
+            for k in &w.keys {
+                values.extend_from_slice(k.in_tangent.as_ref().unwrap_or(&zero));
+                values.extend_from_slice(&k.value);
+                values.extend_from_slice(k.out_tangent.as_ref().unwrap_or(&zero));
+            }
+            channel("CUBICSPLINE", times, values)
+        }
+        (Interpolation::Hermite, Some(bake)) => {
+            let f = |t: f64| -> Vec<f64> {
+                crate::model::sample_weights(w, t).unwrap_or_default().iter().map(|&x| f64::from(x)).collect()
+            };
+            let breaks: Vec<f64> = w.keys.iter().map(|k| k.time).collect();
+            let (t, v) = resample_linear(&f, &breaks, bake.weight_tolerance, max_abs);
+            channel(
+                "LINEAR",
+                t.iter().map(|&t| t as f32).collect(),
+                v.iter().flatten().map(|&x| x as f32).collect(),
+            )
+        }
+    }
+}
+
+/// An MD2 object: frames of `clip` as morph targets of the object node's mesh, the weights
+/// keyed so that glTF's LINEAR weights are keyrig's looping playback at `fps` over the
+/// scene's frame range, the skin image as base-colour texture.
+#[allow(clippy::too_many_arguments)]
+fn md2_object(
+    doc: &mut Document,
+    scene: &Scene,
+    model: &crate::md2::Md2Model,
+    file: &Path,
+    clip: Option<&str>,
+    fps: f64,
+    node: usize,
+    name: &str,
+) -> Result<(), String> {
+    let frames = model.clip_frames(clip).ok_or_else(|| {
+        let names: Vec<&str> = model.clips.iter().map(|c| c.name.as_str()).collect();
+        format!("no clip `{}` (clips: {})", clip.unwrap_or_default(), names.join(", "))
+    })?;
+    if frames.is_empty() {
+        return Err("the model has no frames".into());
+    }
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(format!("{fps} is not a frame rate"));
+    }
+    let base = model.frame_pose(frames.start).ok_or("frame missing")?;
+    let mut targets = Vec::with_capacity(frames.len());
+    for f in frames.clone() {
+        let pose = model.frame_pose(f).ok_or("frame missing")?;
+        let dp: Vec<Vec3> = pose.positions.iter().zip(&base.positions).map(|(p, q)| *p - *q).collect();
+        let dn: Vec<Vec3> = pose.normals.iter().zip(&base.normals).map(|(p, q)| *p - *q).collect();
+        targets.push((dp, Some(dn)));
+    }
+    let texture = match &model.skin {
+        Some(skin) => {
+            let mut png = Vec::new();
+            image::RgbaImage::from_raw(skin.width, skin.height, skin.rgba.clone())
+                .ok_or("skin image size does not match its pixels")?
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .map_err(|e| format!("skin image: {e}"))?;
+            Some(doc.texture((file.to_path_buf(), 0), &png, "image/png"))
+        }
+        None => None,
+    };
+    let prim = PrimitiveData {
+        positions: base.positions,
+        normals: Some(base.normals),
+        texcoords: Some(model.texcoords.clone()),
+        indices: model.indices.clone(),
+        skin: None,
+        targets,
+        material: Some(MaterialData { base_colour: [1.0; 4], texture }),
+    };
+    let n = frames.len();
+    let m = doc.mesh(name, &[prim], Some(&vec![0.0; n]));
+    doc.nodes[node]["mesh"] = json!(m);
+    // Keys at the scene range's ends and at every frame boundary between them.
+    let (t0, t1) =
+        (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
+    if !(t0.is_finite() && t1.is_finite()) {
+        return Err("the scene's frame range is not finite".into());
+    }
+    let mut times = vec![t0];
+    let (k0, k1) = ((t0 * fps).floor() as i64 + 1, (t1 * fps).ceil() as i64 - 1);
+    if k1 - k0 > 10_000_000 {
+        return Err("the scene's frame range holds more than 10 million model frames".into());
+    }
+    times.extend((k0..=k1).map(|k| k as f64 / fps).filter(|&t| t > t0 && t < t1));
+    if t1 > t0 {
+        times.push(t1);
+    }
+    let mut weights = vec![0.0f32; times.len() * n];
+    for (i, &t) in times.iter().enumerate() {
+        let (a, b, u) = crate::md2::Md2Model::loop_blend(&frames, fps, t).ok_or("bad time")?;
+        weights[i * n + (a - frames.start)] += 1.0 - u;
+        weights[i * n + (b - frames.start)] += u;
+    }
+    doc.channels.push(Channel {
+        node,
+        path: "weights",
+        interpolation: "LINEAR",
+        times: times.iter().map(|&t| t as f32).collect(),
+        values: weights,
+        width: 1,
+    });
+    Ok(())
 }
 
 fn add_child(node: &mut Value, child: usize) {
@@ -548,14 +1166,18 @@ fn sample_at<T: keyrig_core::TrackValue>(a: &Animated<T>, t: f64, here: &str) ->
     Ok(AnimatedTrack::new(a).map_err(|e| scene_err(here, e.to_string()))?.sample(t))
 }
 
+/// A rigid map `v ↦ rotation·v + offset` applied to a Vec3 track (tangents: `rotation·v`).
+type Vec3Map = (Quat, Vec3);
+
 fn set_vec3(
     node: &mut Value,
     field: &str,
     a: &Animated<Vec3>,
+    map: Vec3Map,
     default: Vec3,
     here: &str,
 ) -> Result<(), ExportError> {
-    let v = sample_static(a, here)?;
+    let v = map.0 * sample_static(a, here)? + map.1;
     if v != default {
         node[field] = json!(v.to_array());
     }
@@ -570,18 +1192,113 @@ fn set_quat(node: &mut Value, a: &Animated<Quat>, rest: Quat, here: &str) -> Res
     Ok(())
 }
 
-/// A translation/scale channel: exact (STEP, LINEAR or CUBICSPLINE with the track's tangents).
+/// A translation/scale channel of `map(track)`: exact (STEP, LINEAR or CUBICSPLINE with the
+/// track's tangents), or in Blender mode LINEAR keys within the position tolerance.
 fn vec3_channel(
     node: usize,
     path: &'static str,
     a: &Animated<Vec3>,
+    map: Vec3Map,
+    options: &ExportOptions,
     here: &str,
 ) -> Result<Option<Channel>, ExportError> {
     if a.track.is_empty() {
         return Ok(None);
     }
     let track = Track::new(&a.track).map_err(|e| scene_err(format!("{here}.track"), e.to_string()))?;
-    Ok(Some(cubic_or_simple_channel(node, path, &track)))
+    let (rotation, offset) = map;
+    if let Some(bake) = &options.bake {
+        let n = track.key_count();
+        let all_step = (0..n - 1).all(|i| track.segment_interpolation(i) == Some(Interpolation::Step));
+        if !all_step {
+            let f = |t: f64| -> Vec<f64> {
+                (rotation * track.sample(t) + offset).to_array().iter().map(|&x| f64::from(x)).collect()
+            };
+            let breaks = step_breaks(track.key_times(), |i| track.segment_interpolation(i));
+            let (t, v) = resample_linear(&f, &breaks, bake.position_tolerance, euclidean);
+            return Ok(Some(Channel {
+                node,
+                path,
+                interpolation: "LINEAR",
+                times: t.iter().map(|&t| t as f32).collect(),
+                values: v.iter().flatten().map(|&x| x as f32).collect(),
+                width: 3,
+            }));
+        }
+    }
+    let mut channel = cubic_or_simple_channel(node, path, &track);
+    let cubic = channel.interpolation == "CUBICSPLINE";
+    for (i, v) in channel.values.chunks_exact_mut(3).enumerate() {
+        let x = Vec3::from_slice(v);
+        // CUBICSPLINE elements are (in-tangent, value, out-tangent): tangents only rotate.
+        let y = if cubic && i % 3 != 1 { rotation * x } else { rotation * x + offset };
+        v.copy_from_slice(&y.to_array());
+    }
+    Ok(Some(channel))
+}
+
+/// Key times plus, for every Step segment, a break just before its end key (hold, then jump
+/// within [`STEP_JUMP`]).
+fn step_breaks(times: &[f64], mode: impl Fn(usize) -> Option<Interpolation>) -> Vec<f64> {
+    let mut breaks: Vec<f64> = times.to_vec();
+    for i in 0..times.len().saturating_sub(1) {
+        if mode(i) == Some(Interpolation::Step) {
+            breaks.push(times[i + 1] - STEP_JUMP.min((times[i + 1] - times[i]) / 2.0));
+        }
+    }
+    breaks.sort_by(f64::total_cmp);
+    breaks.dedup();
+    breaks
+}
+
+fn euclidean(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+}
+
+fn max_abs(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+/// Resamples `f` on `[breaks]` into LINEAR keys: each interval is halved until linear
+/// interpolation between its end keys stays within `tol / 2` (by `distance`) of `f` at 15
+/// interior points.
+fn resample_linear(
+    f: &dyn Fn(f64) -> Vec<f64>,
+    breaks: &[f64],
+    tol: f64,
+    distance: fn(&[f64], &[f64]) -> f64,
+) -> (Vec<f64>, Vec<Vec<f64>>) {
+    fn go(
+        f: &dyn Fn(f64) -> Vec<f64>,
+        (t0, t1): (f64, f64),
+        (v0, v1): (&[f64], Vec<f64>),
+        tol: f64,
+        distance: fn(&[f64], &[f64]) -> f64,
+        out: &mut (Vec<f64>, Vec<Vec<f64>>),
+        depth: u32,
+    ) {
+        let within = (1..16).all(|i| {
+            let u = f64::from(i) / 16.0;
+            let lin: Vec<f64> = v0.iter().zip(&v1).map(|(a, b)| a + u * (b - a)).collect();
+            distance(&lin, &f(t0 + u * (t1 - t0))) <= 0.5 * tol
+        });
+        if within || t1 - t0 < MIN_SEGMENT || depth > 24 {
+            out.0.push(t1);
+            out.1.push(v1);
+        } else {
+            let mid = 0.5 * (t0 + t1);
+            let vm = f(mid);
+            go(f, (t0, mid), (v0, vm.clone()), tol, distance, out, depth + 1);
+            let v_mid = out.1.last().cloned().unwrap_or(vm);
+            go(f, (mid, t1), (&v_mid, v1), tol, distance, out, depth + 1);
+        }
+    }
+    let mut out = (vec![breaks[0]], vec![f(breaks[0])]);
+    for w in breaks.windows(2) {
+        let v0 = out.1.last().cloned().unwrap_or_default();
+        go(f, (w[0], w[1]), (&v0, f(w[1])), tol, distance, &mut out, 0);
+    }
+    out
 }
 
 fn cubic_or_simple_channel(node: usize, path: &'static str, track: &Track<Vec3>) -> Channel {
@@ -632,13 +1349,21 @@ fn cubic_or_simple_channel(node: usize, path: &'static str, track: &Track<Vec3>)
     }
 }
 
-/// A rotation channel of `rest · T(t)`: key for key when every segment is Linear (or Step),
-/// else resampled within `tol` radians.
+/// A rotation channel of `rest · T(t)`:
+/// - all Step: STEP; all Linear without spins: LINEAR key for key (exact);
+/// - all Hermite (glTF CUBICSPLINE keys, e.g. of an imported model): CUBICSPLINE with the
+///   keys' tangents (exact: keyrig's Hermite rotation is glTF's component-wise Hermite, and
+///   left-multiplying by `rest` is linear; keys and tangents are written with the signs
+///   keyrig's sign-consistent track uses);
+/// - otherwise resampled as LINEAR keys within the rotation tolerance.
+///
+/// In Blender mode every channel that is not all Step is resampled, checked against the
+/// component-wise interpolation (nlerp) Blender uses.
 fn quat_channel(
     node: usize,
     a: &Animated<Quat>,
     rest: Quat,
-    tol: f64,
+    options: &ExportOptions,
     here: &str,
 ) -> Result<Option<Channel>, ExportError> {
     if a.track.is_empty() {
@@ -650,31 +1375,47 @@ fn quat_channel(
         (0..times.len() - 1).filter_map(|i| track.segment_interpolation(i)).collect();
     let values: Vec<Quat> = track.key_values().iter().map(|q| (rest * *q).normalize()).collect();
     let spin = track.has_spin();
-    if modes.iter().all(|&m| m == Interpolation::Step)
-        || (!spin && modes.iter().all(|&m| m == Interpolation::Linear))
-    {
-        let interpolation = if modes.iter().all(|&m| m == Interpolation::Linear) && !modes.is_empty() {
-            "LINEAR"
-        } else {
-            "STEP"
-        };
+    let all = |m: Interpolation| modes.iter().all(|&x| x == m);
+    let simple = |interpolation: &'static str| Channel {
+        node,
+        path: "rotation",
+        interpolation,
+        times: times.iter().map(|&t| t as f32).collect(),
+        values: values.iter().flat_map(|q| q.to_array()).collect(),
+        width: 4,
+    };
+    if all(Interpolation::Step) {
+        return Ok(Some(simple("STEP")));
+    }
+    if options.bake.is_none() && !spin && all(Interpolation::Linear) {
+        return Ok(Some(simple("LINEAR")));
+    }
+    if options.bake.is_none() && !spin && all(Interpolation::Hermite) && a.track.keys.len() == times.len() {
+        let mut flat = Vec::with_capacity(values.len() * 12);
+        let zero = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+        for (k, key) in a.track.keys.iter().enumerate() {
+            // The track flipped this key when its stored value points the other way.
+            let sign = if track.key_values()[k].dot(key.value) < 0.0 { -1.0 } else { 1.0 };
+            let tangent = |t: Option<Quat>| -> Quat {
+                let t = t.unwrap_or(zero);
+                rest * Quat::from_vec4(glam::Vec4::from(t) * sign)
+            };
+            let (in_t, out_t) = (tangent(key.in_tangent), tangent(key.out_tangent));
+            flat.extend_from_slice(&in_t.to_array());
+            flat.extend_from_slice(&values[k].to_array());
+            flat.extend_from_slice(&out_t.to_array());
+        }
         return Ok(Some(Channel {
             node,
             path: "rotation",
-            interpolation,
+            interpolation: "CUBICSPLINE",
             times: times.iter().map(|&t| t as f32).collect(),
-            values: values.iter().flat_map(|q| q.to_array()).collect(),
+            values: flat,
             width: 4,
         }));
     }
     let sampler = |t: f64| (rest * track.sample(t)).normalize();
-    let mut breaks: Vec<f64> = times.to_vec();
-    // Step segments: hold, then jump just before the next key.
-    for (i, m) in modes.iter().enumerate() {
-        if *m == Interpolation::Step {
-            breaks.push(times[i + 1] - STEP_JUMP.min((times[i + 1] - times[i]) / 2.0));
-        }
-    }
+    let mut breaks = step_breaks(times, |i| track.segment_interpolation(i));
     // Spin segments: pieces of at most SPIN_PIECE_DEG of the unwrapped angle.
     for i in 0..modes.len() {
         if let (Some((_, degrees)), true) = (track.segment_spin(i), modes[i] != Interpolation::Step) {
@@ -685,12 +1426,21 @@ fn quat_channel(
     }
     breaks.sort_by(f64::total_cmp);
     breaks.dedup();
-    let (t, v) = resample_rotation(&sampler, &breaks, tol);
+    let (t, v) = match &options.bake {
+        Some(bake) => resample_rotation(&sampler, &breaks, bake.rotation_tolerance(options), nlerp),
+        None => resample_rotation(
+            &sampler,
+            &breaks,
+            options.rotation_tolerance_deg.to_radians(),
+            crate::model::slerp_short,
+        ),
+    };
     Ok(Some(linear_quat_channel(node, t, v)))
 }
 
 fn linear_quat_channel(node: usize, times: Vec<f64>, values: Vec<Quat>) -> Channel {
-    // Keep consecutive keys sign-consistent so slerp takes the short way, as keyrig does.
+    // Keep consecutive keys sign-consistent so slerp takes the short way, as keyrig does (and
+    // so that component-wise blending, as Blender does, does not pass through zero).
     let mut flat = Vec::with_capacity(values.len() * 4);
     let mut prev = Quat::IDENTITY;
     for (i, q) in values.iter().enumerate() {
@@ -708,6 +1458,14 @@ fn linear_quat_channel(node: usize, times: Vec<f64>, values: Vec<Quat>) -> Chann
     }
 }
 
+/// Component-wise interpolation of two quaternions (the second sign-aligned to the first),
+/// then normalized: how importers that do not slerp (Blender 3.4) blend LINEAR rotation keys.
+#[must_use]
+pub fn nlerp(a: Quat, b: Quat, u: f32) -> Quat {
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    Quat::from_vec4(glam::Vec4::from(a).lerp(glam::Vec4::from(b), u)).normalize()
+}
+
 /// Angle between two rotations (radians), computed in f64 as `2·atan2(|v|, |w|)` of the
 /// relative rotation `a⁻¹·b`, which stays accurate for tiny angles (unlike `acos` of a dot).
 #[must_use]
@@ -721,23 +1479,33 @@ pub fn rotation_angle(a: Quat, b: Quat) -> f64 {
 /// Minimum duration of a resampled segment (seconds); stops runaway subdivision.
 const MIN_SEGMENT: f64 = 1e-4;
 
+/// How an importer blends two LINEAR rotation keys: slerp (the glTF specification) or nlerp.
+type QuatLerp = fn(Quat, Quat, f32) -> Quat;
+
 /// Resamples `f` on `[breaks]` into LINEAR keys: each interval is halved until its end keys
-/// are at most [`MAX_ROTATION_STEP_DEG`] apart and slerp between them stays within `tol / 2`
+/// are at most [`MAX_ROTATION_STEP_DEG`] apart and `lerp` between them stays within `tol / 2`
 /// radians of `f` at 15 interior points.
-fn resample_rotation(f: &dyn Fn(f64) -> Quat, breaks: &[f64], tol: f64) -> (Vec<f64>, Vec<Quat>) {
+fn resample_rotation(
+    f: &dyn Fn(f64) -> Quat,
+    breaks: &[f64],
+    tol: f64,
+    lerp: QuatLerp,
+) -> (Vec<f64>, Vec<Quat>) {
     let mut times = vec![breaks[0]];
     let mut values = vec![f(breaks[0])];
     for w in breaks.windows(2) {
-        subdivide(f, w[0], w[1], tol, &mut times, &mut values, 0);
+        subdivide(f, w[0], w[1], tol, lerp, &mut times, &mut values, 0);
     }
     (times, values)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn subdivide(
     f: &dyn Fn(f64) -> Quat,
     t0: f64,
     t1: f64,
     tol: f64,
+    lerp: QuatLerp,
     times: &mut Vec<f64>,
     values: &mut Vec<Quat>,
     depth: u32,
@@ -748,7 +1516,7 @@ fn subdivide(
     let within = rotation_angle(q0, q1) <= MAX_ROTATION_STEP_DEG.to_radians()
         && (1..16).all(|i| {
             let u = f64::from(i) / 16.0;
-            let lin = crate::model::slerp_short(q0, q1, u as f32);
+            let lin = lerp(q0, q1, u as f32);
             rotation_angle(lin, f(t0 + u * (t1 - t0))) <= 0.5 * tol
         });
     if within || t1 - t0 < MIN_SEGMENT || depth > 24 {
@@ -756,8 +1524,8 @@ fn subdivide(
         values.push(q1);
     } else {
         let mid = 0.5 * (t0 + t1);
-        subdivide(f, t0, mid, tol, times, values, depth + 1);
-        subdivide(f, mid, t1, tol, times, values, depth + 1);
+        subdivide(f, t0, mid, tol, lerp, times, values, depth + 1);
+        subdivide(f, mid, t1, tol, lerp, times, values, depth + 1);
     }
 }
 
@@ -780,77 +1548,6 @@ fn inverse_bind_matrices(skeleton: &keyrig_core::Skeleton, here: &str) -> Result
         model_from_joint.push(a);
     }
     Ok(model_from_joint.iter().map(|a| Mat4::from(a.inverse())).collect())
-}
-
-/// The geometry of an object's mesh: procedural meshes from keyrig-skin (with their
-/// weights), glTF files (first mesh or the chosen one; static, no skin) and MD2 files
-/// (first frame).
-fn mesh_data(
-    source: &MeshSource,
-    skeleton: Option<&keyrig_core::Skeleton>,
-    options: &ExportOptions,
-    here: &str,
-) -> Result<MeshData, ExportError> {
-    match source {
-        MeshSource::Procedural(kind) => {
-            let mut mesh = keyrig_skin::mesh_for(*kind);
-            // Procedural meshes are built in centimetres on their own skeleton; fit them to the
-            // object's skeleton as the editor and renderer do. A skeleton that does not build is
-            // reported by the skeleton's own export; the mesh then keeps its native size.
-            if let Some(rest) = skeleton.and_then(|s| keyrig_skin::RestSkeleton::from_scene(s).ok()) {
-                if let Ok(fitted) = mesh.clone().fit_to_skeleton(rest) {
-                    mesh = fitted;
-                }
-            }
-            Ok(MeshData {
-                positions: mesh.positions,
-                normals: Some(mesh.normals),
-                indices: mesh.indices,
-                skin: Some((mesh.joints, mesh.weights)),
-            })
-        }
-        MeshSource::File { path, mesh, .. } => {
-            let file = options.base_dir.as_deref().unwrap_or(Path::new(".")).join(path);
-            let err = |message: String| ExportError::MeshFile {
-                path: format!("{here}.mesh"),
-                file: file.clone(),
-                message,
-            };
-            let is_md2 =
-                file.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
-            if is_md2 {
-                let model = crate::md2::load_md2_file(&file).map_err(|e| err(e.to_string()))?;
-                let pose = model.frame_pose(0).ok_or_else(|| err("no frames".into()))?;
-                return Ok(MeshData {
-                    positions: pose.positions,
-                    normals: Some(pose.normals),
-                    indices: model.indices,
-                    skin: None,
-                });
-            }
-            let model = crate::gltf_import::import_gltf_file(&file).map_err(|e| err(e.to_string()))?;
-            static_mesh(&model, mesh.unwrap_or(0))
-                .ok_or_else(|| err(format!("has no triangle mesh {}", mesh.unwrap_or(0))))
-        }
-    }
-}
-
-/// Sum of the rest offsets of non-root joints: the skeleton's "length".
-/// All triangle primitives of mesh `index` merged into one (no skin).
-fn static_mesh(model: &ImportedModel, index: usize) -> Option<MeshData> {
-    let mesh = model.meshes.get(index)?;
-    let mut data =
-        MeshData { positions: Vec::new(), normals: Some(Vec::new()), indices: Vec::new(), skin: None };
-    for p in mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
-        let base = data.positions.len() as u32;
-        data.positions.extend_from_slice(&p.positions);
-        match (&mut data.normals, &p.normals) {
-            (Some(n), Some(pn)) => n.extend_from_slice(pn),
-            (n, _) => *n = None,
-        }
-        data.indices.extend(p.indices.iter().map(|i| i + base));
-    }
-    (!data.positions.is_empty()).then_some(data)
 }
 
 /// Frame rates [`export_md2`] accepts. Key times are `k / fps` in f32 seconds: far above

@@ -26,8 +26,9 @@ use gltf::animation::util::ReadOutputs;
 use keyrig_core::{Interpolation, Key, RawTrack};
 
 use crate::model::{
-    ChannelTarget, ImageSource, ImportedModel, ModelAnimation, ModelChannel, ModelLight, ModelLightKind,
-    ModelMesh, ModelNode, ModelPrimitive, ModelSkin, MorphTarget, PrimitiveMode, TextureRef, WeightsTrack,
+    ChannelTarget, ImageData, ImageSource, ImportedModel, ModelAnimation, ModelChannel, ModelLight,
+    ModelLightKind, ModelMesh, ModelNode, ModelPrimitive, ModelSkin, MorphTarget, PrimitiveMode, TextureRef,
+    WeightsTrack,
 };
 
 /// Where in the file a problem is.
@@ -262,6 +263,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
         None => (0..model.nodes.len()).filter(|&i| model.nodes[i].parent.is_none()).collect(),
     };
     model.images = read_images(&doc);
+    model.image_data = read_image_data(&doc, &buffers, base);
     model.meshes = doc.meshes().map(|m| read_mesh(&cx, &m)).collect::<Result<_, _>>()?;
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
@@ -584,6 +586,40 @@ fn read_images(doc: &gltf::Document) -> Vec<ImageSource> {
                 mime_type: img.mime_type.as_ref().map_or_else(String::new, |m| m.0.clone()),
             },
             (None, None) => ImageSource::Uri(String::new()),
+        })
+        .collect()
+}
+
+/// The bytes of every image, where they can be read (see [`ImageData`]); an image that cannot
+/// be read is `None`, never an error: images are not needed to pose or deform a model.
+fn read_image_data(
+    doc: &gltf::Document,
+    buffers: &[Cow<'_, [u8]>],
+    base: Option<&Path>,
+) -> Vec<Option<ImageData>> {
+    let sniff = |bytes: &[u8]| {
+        if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+            Some("image/png")
+        } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+            Some("image/jpeg")
+        } else {
+            None
+        }
+    };
+    doc.images()
+        .map(|image| {
+            let bytes: Vec<u8> = match image.source() {
+                gltf::image::Source::View { view, .. } => {
+                    let data = buffers.get(view.buffer().index())?;
+                    data.get(view.offset()..view.offset().checked_add(view.length())?)?.to_vec()
+                }
+                gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                    gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None).ok()?.0
+                }
+                gltf::image::Source::Uri { uri, .. } => read_relative(base, uri).ok()?,
+            };
+            let mime_type = sniff(&bytes)?.to_owned();
+            Some(ImageData { bytes: bytes.into(), mime_type })
         })
         .collect()
 }

@@ -542,6 +542,109 @@ impl Md2Model {
     }
 }
 
+impl Md2Model {
+    /// Frames of `clip` (every frame of the file for `None`), as a scene's
+    /// `MeshSource::File { clip, .. }` names them. `None` for an unknown clip name.
+    #[must_use]
+    pub fn clip_frames(&self, clip: Option<&str>) -> Option<Range<usize>> {
+        match clip {
+            None => Some(0..self.frames.len()),
+            Some(name) => self.clips.iter().find(|c| c.name == name).map(|c| c.frames.clone()),
+        }
+    }
+
+    /// The two frames (indices into [`Md2Model::frames`]) and the blend weight of the second
+    /// that a scene shows at `time` seconds when it plays `frames` at `fps`, looping: frame
+    /// position `f = (time · fps) mod n`, frames `⌊f⌋` and `⌊f⌋ + 1 (mod n)`, weight `f − ⌊f⌋`.
+    /// This is the editor's and renderer's morph playback (`MorphMesh::blend_at`).
+    /// `None` for an empty range, a rate that is not finite and positive, or a time whose
+    /// frame position is not finite.
+    #[must_use]
+    pub fn loop_blend(frames: &Range<usize>, fps: f64, time: f64) -> Option<(usize, usize, f32)> {
+        let n = frames.len();
+        if n == 0 || !(fps.is_finite() && fps > 0.0) {
+            return None;
+        }
+        let f = time * fps;
+        if !f.is_finite() {
+            return None;
+        }
+        let f = f.rem_euclid(n as f64);
+        let a = (f.floor() as usize).min(n - 1);
+        let b = (a + 1) % n;
+        let t = ((f - a as f64) as f32).clamp(0.0, 1.0);
+        Some((frames.start + a, frames.start + b, t))
+    }
+
+    /// Positions of every render vertex blended between frames `a` and `b` with weight `t` of
+    /// `b` (as the renderer's CPU morph: `lerp(a, b, t)`).
+    #[must_use]
+    pub fn blended_positions(&self, a: usize, b: usize, t: f32) -> Option<Vec<Vec3>> {
+        let (fa, fb) = (self.frames.get(a)?, self.frames.get(b)?);
+        self.vertex_xyz
+            .iter()
+            .map(|&x| Some(fa.positions.get(x as usize)?.lerp(*fb.positions.get(x as usize)?, t)))
+            .collect()
+    }
+}
+
+/// MD2 models are Z-up in Quake units; keyrig scenes are Y-up in metres. An MD2 object gets
+/// this rotation (−90° about X: Quake's +Z becomes +Y, its +X stays +X and its +Y becomes −Z)
+/// and [`MD2_SCALE`] as its own (editable) transform; the file's vertices are not changed.
+#[must_use]
+pub fn md2_rotation() -> glam::Quat {
+    glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2)
+}
+
+/// Metres per Quake unit. Quake 2 player models are about 56 units tall, so one unit as an
+/// inch (0.0254 m) makes them about 1.4 m tall, next to a 1.6 m demo arm.
+pub const MD2_SCALE: f32 = 0.0254;
+
+/// The last frame of a range starting at 0 that shows `seconds` of looping animation at
+/// `fps` timeline frames per second (the frame after it is the loop's first again).
+#[must_use]
+pub fn frame_range_end(seconds: f64, fps: f64) -> i32 {
+    let frames = (seconds * fps).round() - 1.0;
+    if frames.is_finite() {
+        frames.clamp(1.0, 1e6) as i32
+    } else {
+        60
+    }
+}
+
+/// An MD2 model as a scene of its own, as the editor opens it: one object named `name` whose
+/// mesh is `MeshSource::File { path: file }` playing every frame at
+/// [`keyrig_core::MD2_DEFAULT_FPS`], turned Y-up and scaled to metres ([`md2_rotation`],
+/// [`MD2_SCALE`]) and raised so that its first frame stands on the ground; the frame range
+/// covers one loop of it. (No camera framing and no light: the editor adds those.)
+#[must_use]
+pub fn md2_scene(model: &Md2Model, file: &str, name: &str) -> keyrig_core::Scene {
+    let mut scene = keyrig_core::Scene::default();
+    let mut object = keyrig_core::Object::new(name);
+    object.mesh = Some(keyrig_core::MeshSource::File {
+        path: file.to_owned(),
+        mesh: None,
+        clip: None,
+        fps: Some(keyrig_core::MD2_DEFAULT_FPS),
+    });
+    object.rotation = keyrig_core::Animated::constant(md2_rotation());
+    object.scale = keyrig_core::Animated::constant(Vec3::splat(MD2_SCALE));
+    // Quake models have their origin near the waist: stand the first frame on the ground (its
+    // lowest Quake Z at world height 0).
+    let lowest = model
+        .frames
+        .first()
+        .map(|f| model.vertex_xyz.iter().map(|&x| f.positions[x as usize].z).fold(f32::INFINITY, f32::min))
+        .unwrap_or(f32::INFINITY);
+    if lowest.is_finite() {
+        object.translation = keyrig_core::Animated::constant(Vec3::Y * (-lowest * MD2_SCALE));
+    }
+    scene.objects.push(object);
+    let seconds = model.frames.len() as f64 / keyrig_core::MD2_DEFAULT_FPS;
+    scene.frame_range.end = frame_range_end(seconds, scene.fps);
+    scene
+}
+
 /// Image extensions looked for as skins, in order of preference.
 const SKIN_EXTENSIONS: [&str; 4] = ["png", "bmp", "jpg", "jpeg"];
 

@@ -73,6 +73,14 @@ pub enum ImageSource {
     BufferView { view: usize, mime_type: String },
 }
 
+/// The bytes of an image the file holds or references, as stored (PNG or JPEG; not decoded).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageData {
+    pub bytes: Arc<[u8]>,
+    /// `image/png` or `image/jpeg` (from the file, a `data:` URI or the file name).
+    pub mime_type: String,
+}
+
 /// One primitive of a mesh, attributes in accessor order.
 ///
 /// Attribute and index arrays are shared (`Arc`): the importer decodes each accessor once,
@@ -188,6 +196,10 @@ pub struct ImportedModel {
     pub animations: Vec<ModelAnimation>,
     pub lights: Vec<ModelLight>,
     pub images: Vec<ImageSource>,
+    /// The bytes of each image (same order as `images`) where they could be read: from a
+    /// buffer view, a `data:` URI or a file next to the model. `None` for an image that
+    /// cannot be read or whose type is neither PNG nor JPEG (export then leaves it out).
+    pub image_data: Vec<Option<ImageData>>,
 }
 
 /// Local transforms and morph weights of every node at one time.

@@ -1,7 +1,9 @@
-//! `keyrig convert IN.md2 -o OUT.glb|OUT.gltf`: an MD2 model's frames as glTF morph targets,
-//! one animation per clip (stand, run, …) at `--fps` frames per second, the skin image found
-//! next to the model as the base-colour texture (see docs/interchange.md). The file is
-//! written atomically, never over the model or its skin, and imported again as a check.
+//! `keyrig convert IN.md2|IN.glb|IN.gltf -o OUT.glb|OUT.gltf`: an MD2 model's frames as glTF
+//! morph targets, one animation per clip (stand, run, …) at `--fps` frames per second, the
+//! skin image found next to the model as the base-colour texture; a glTF model through
+//! keyrig's scene mapping and export (its first animation, as `keyrig export MODEL` does; with
+//! `--bake`, Blender mode). See docs/interchange.md. The file is written atomically, never
+//! over the model or its skin, and imported again as a check.
 
 use std::path::PathBuf;
 
@@ -10,7 +12,7 @@ use keyrig_io::gltf_export::{export_md2, Md2ExportOptions};
 
 #[derive(clap::Args, Debug)]
 pub struct ConvertArgs {
-    /// Input model (.md2).
+    /// Input model (.md2, .glb, .gltf).
     pub input: PathBuf,
     /// Output file: .glb (binary) or .gltf (JSON with the buffer embedded).
     #[arg(short, long)]
@@ -18,13 +20,29 @@ pub struct ConvertArgs {
     /// Playback rate of the clips, frames per second (Quake 2 used 10).
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub fps: f64,
+    /// glTF input: Blender mode (LINEAR keys only; see `keyrig export --bake`).
+    #[arg(long)]
+    pub bake: bool,
 }
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     crate::cli::export::check_output_extension(&args.output)?;
     let ext = args.input.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if ext.as_deref() != Some("md2") {
-        bail!("{}: only .md2 models can be converted (glTF files are already glTF)", args.input.display());
+    match ext.as_deref() {
+        Some("md2") => {}
+        Some("glb" | "gltf") => {
+            return crate::cli::export::run(crate::cli::export::ExportArgs {
+                scene: args.input,
+                output: args.output,
+                rotation_tolerance: 0.05,
+                bake: args.bake,
+                position_tolerance: 1e-4,
+            });
+        }
+        _ => bail!(
+            "{}: only .md2, .glb and .gltf models can be converted (export a scene with `keyrig export`)",
+            args.input.display()
+        ),
     }
     let range = keyrig_io::gltf_export::MD2_FPS_RANGE;
     if !(args.fps.is_finite() && range.contains(&args.fps)) {

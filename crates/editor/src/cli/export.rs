@@ -1,19 +1,22 @@
-//! `keyrig export SCENE.ron -o OUT.glb|OUT.gltf`: the scene's meshes, skeletons, skins,
-//! object/joint/light animation and lights as glTF 2.0 (see docs/interchange.md).
+//! `keyrig export FILE -o OUT.glb|OUT.gltf [--bake]`: a scene (.ron) — or a model (.glb,
+//! .gltf, .md2) mapped onto a scene as the editor opens it — as glTF 2.0: every object's mesh,
+//! skin, morph targets, material, animation and the lights (see docs/interchange.md).
 //!
-//! Position tracks are written exactly (CUBICSPLINE); rotation tracks are resampled as
-//! LINEAR within `--rotation-tolerance` degrees. The file is written atomically (temporary
-//! file, sync, rename), never over the scene or a model file the scene uses, and imported
-//! again as a check before the command reports success.
+//! Position tracks are written exactly (CUBICSPLINE); rotation tracks key for key where glTF
+//! can express them (LINEAR slerp, CUBICSPLINE Hermite), else resampled as LINEAR within
+//! `--rotation-tolerance` degrees. `--bake` (Blender mode) writes LINEAR keys only, dense
+//! enough for importers that ignore tangents and blend quaternions component-wise. The file is
+//! written atomically (temporary file, sync, rename), never over the input or a model file the
+//! scene uses, and imported again as a check before the command reports success.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
-use keyrig_io::gltf_export::{export_scene, ExportOptions};
+use keyrig_io::gltf_export::{export_scene, BakeOptions, ExportOptions};
 
 #[derive(clap::Args, Debug)]
 pub struct ExportArgs {
-    /// Scene file (.ron).
+    /// Scene file (.ron) or model (.glb, .gltf, .md2).
     pub scene: PathBuf,
     /// Output file: .glb (binary) or .gltf (JSON with the buffer embedded).
     #[arg(short, long)]
@@ -21,32 +24,68 @@ pub struct ExportArgs {
     /// Largest angle in degrees between an exported rotation and the scene's curve.
     #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub rotation_tolerance: f64,
+    /// Blender mode: LINEAR keys only, placed so that importers which ignore CUBICSPLINE
+    /// tangents and blend quaternions component-wise (Blender 3.4) show the same motion
+    /// within the tolerances.
+    #[arg(long)]
+    pub bake: bool,
+    /// With --bake: largest translation or scale difference, in scene units.
+    #[arg(long, default_value_t = 1e-4, allow_negative_numbers = true, requires = "bake")]
+    pub position_tolerance: f64,
 }
 
 pub fn run(args: ExportArgs) -> anyhow::Result<()> {
     if !(args.rotation_tolerance.is_finite() && args.rotation_tolerance > 0.0) {
         bail!("--rotation-tolerance must be a positive number of degrees, got {}", args.rotation_tolerance);
     }
+    if !(args.position_tolerance.is_finite() && args.position_tolerance > 0.0) {
+        bail!(
+            "--position-tolerance must be a positive number of scene units, got {}",
+            args.position_tolerance
+        );
+    }
     check_output_extension(&args.output)?;
-    let scene =
-        keyrig_io::scene_file::load(&args.scene).with_context(|| format!("{}", args.scene.display()))?;
-    let base_dir = keyrig_io::file_io::parent_or_dot(&args.scene);
-    let mut inputs = vec![(args.scene.clone(), "the input scene".to_owned())];
-    inputs.extend(keyrig_io::file_io::scene_inputs(&scene, Some(&base_dir)));
+    let (scene, base_dir) = load_scene_or_model(&args.scene)?;
+    let mut inputs = vec![(args.scene.clone(), "the input file".to_owned())];
+    inputs.extend(keyrig_io::file_io::scene_inputs(&scene, base_dir.as_deref()));
     keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
-    let options = ExportOptions { rotation_tolerance_deg: args.rotation_tolerance, base_dir: Some(base_dir) };
+    let options = ExportOptions {
+        rotation_tolerance_deg: args.rotation_tolerance,
+        base_dir,
+        bake: args
+            .bake
+            .then(|| BakeOptions { position_tolerance: args.position_tolerance, ..BakeOptions::default() }),
+    };
     let exported =
         export_scene(&scene, &options).with_context(|| format!("{}: cannot export", args.scene.display()))?;
     exported.write(&args.output)?;
     keyrig_io::gltf_import::import_gltf_file(&args.output)
         .with_context(|| format!("{}: the written file does not import again", args.output.display()))?;
     eprintln!(
-        "keyrig: wrote {} ({} objects, {} lights)",
+        "keyrig: wrote {} ({} objects, {} lights{})",
         args.output.display(),
         scene.objects.len(),
-        scene.lights.len()
+        scene.lights.len(),
+        if args.bake { ", baked" } else { "" }
     );
     Ok(())
+}
+
+/// A scene file with the folder its model paths resolve against, or a model (.glb, .gltf,
+/// .md2) mapped onto a scene as the editor opens it (its first animation; an MD2 plays every
+/// frame), with absolute model paths.
+pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, Option<PathBuf>)> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("glb" | "gltf" | "md2") => {
+            let scene = keyrig_editor::files::import_model(path).map_err(anyhow::Error::msg)?;
+            Ok((scene, None))
+        }
+        _ => {
+            let scene = keyrig_io::scene_file::load(path).with_context(|| format!("{}", path.display()))?;
+            Ok((scene, Some(keyrig_io::file_io::parent_or_dot(path))))
+        }
+    }
 }
 
 /// `.glb` or `.gltf`, case-insensitive.

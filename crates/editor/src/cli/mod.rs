@@ -5,6 +5,7 @@ pub mod convert;
 pub mod deform;
 pub mod edit;
 pub mod export;
+pub mod import;
 pub mod info;
 pub mod render;
 pub mod sample;

@@ -1,0 +1,90 @@
+//! `keyrig import MODEL.glb|MODEL.gltf|MODEL.md2 -o SCENE.ron [--animation N]`: a scene file
+//! made from a model, as the editor opens it (File ▸ Open): glTF through keyrig-io's mapping
+//! (skinned meshes with their skeleton and every channel of animation N, by default the
+//! first; other meshes as objects; KHR lights), an MD2 model as one object playing every frame
+//! at 10 fps, turned Y-up and scaled to metres; the camera framed on the model and a sun added
+//! when the model has no light. The model stays in its file: the scene refers to it by a path
+//! relative to the scene's folder when the model lies in that folder or below it, else by its
+//! absolute path. The scene is written atomically and never over the model.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+
+#[derive(clap::Args, Debug)]
+pub struct ImportArgs {
+    /// Model file (.glb, .gltf, .md2).
+    pub model: PathBuf,
+    /// Output scene file (.ron).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// glTF: the animation whose channels the scene takes (0 = the first).
+    #[arg(long)]
+    pub animation: Option<usize>,
+}
+
+pub fn run(args: ImportArgs) -> anyhow::Result<()> {
+    let ext = args.model.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "md2")) {
+        bail!("{}: the model must be a .glb, .gltf or .md2 file", args.model.display());
+    }
+    if !keyrig_editor::files::is_scene_file(&args.output) {
+        bail!("{}: the output must end in .ron", args.output.display());
+    }
+    keyrig_io::file_io::refuse_overwriting(
+        &args.output,
+        &[(args.model.clone(), "the input model".to_owned())],
+    )?;
+    let mut scene = keyrig_editor::files::open_any(&args.model).map_err(anyhow::Error::msg)?;
+    let absolute = std::fs::canonicalize(&args.model)
+        .with_context(|| format!("{}: cannot resolve the path", args.model.display()))?;
+    if let Some(animation) = args.animation {
+        if ext.as_deref() == Some("md2") {
+            bail!("--animation is for glTF models; an MD2 model plays all its frames");
+        }
+        let model = keyrig_io::gltf_import::import_gltf_file(&args.model)?;
+        if animation >= model.animations.len() {
+            bail!(
+                "{}: --animation {animation}: the model has {} animation(s)",
+                args.model.display(),
+                model.animations.len()
+            );
+        }
+        let mapped = model
+            .to_scene(&absolute.to_string_lossy(), Some(animation))
+            .with_context(|| format!("{}: mapping to a scene", args.model.display()))?;
+        scene.objects = mapped.objects;
+        scene.frame_range = mapped.frame_range;
+    }
+    // Model paths relative to the scene's folder where the model lies below it.
+    let folder = keyrig_io::file_io::parent_or_dot(&args.output);
+    let folder = std::fs::canonicalize(&folder)
+        .with_context(|| format!("{}: cannot resolve the output folder", folder.display()))?;
+    let relative = relative_below(&absolute, &folder);
+    for object in &mut scene.objects {
+        if let Some(keyrig_core::MeshSource::File { path, .. }) = &mut object.mesh {
+            if Path::new(path.as_str()) == absolute {
+                if let Some(rel) = &relative {
+                    *path = rel.clone();
+                }
+            }
+        }
+    }
+    keyrig_io::scene_file::save(&args.output, &scene)?;
+    eprintln!(
+        "keyrig: wrote {} ({} objects, {} lights, frames {}..={})",
+        args.output.display(),
+        scene.objects.len(),
+        scene.lights.len(),
+        scene.frame_range.start,
+        scene.frame_range.end
+    );
+    Ok(())
+}
+
+/// `path` relative to `folder` (with `/` separators) when it lies in it or below it.
+fn relative_below(path: &Path, folder: &Path) -> Option<String> {
+    let rel = path.strip_prefix(folder).ok()?;
+    let parts: Option<Vec<&str>> = rel.components().map(|c| c.as_os_str().to_str()).collect();
+    Some(parts?.join("/"))
+}
