@@ -10,7 +10,7 @@
 //!   `ImportedModel::skinned_mesh` → linear blend → the object's transform;
 //! - unskinned glTF objects: the mesh morphed with the file's first animation's weights (as
 //!   `keyrig deform` does), placed by the object's transform tracks;
-//! - MD2 objects: the looping morph blend between frames (`Md2Model::loop_blend`, the editor's
+//! - MD2 objects: the looping morph blend between frames (keyrig-eval's `MorphClips::blend_at`, the editor's
 //!   `MorphMesh::blend_at`), placed by the object's transform.
 //!
 //! The Khronos glTF-Validator must report 0 errors and 0 warnings on every exported file.
@@ -68,7 +68,7 @@ enum Shown {
     },
     Md2 {
         model: Box<keyrig_io::md2::Md2Model>,
-        frames: std::ops::Range<usize>,
+        clip: Option<String>,
         fps: f64,
     },
 }
@@ -80,10 +80,9 @@ impl Shown {
         };
         if path.ends_with(".md2") {
             let model = keyrig_io::md2::load_md2_file(Path::new(path)).expect("md2");
-            let frames = model.clip_frames(clip.as_deref()).expect("clip");
             return Shown::Md2 {
                 model: Box::new(model),
-                frames,
+                clip: clip.clone(),
                 fps: fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS),
             };
         }
@@ -132,9 +131,12 @@ impl Shown {
                     .flat_map(|p| ImportedModel::morphed_positions(p, &weights))
                     .collect()
             }
-            Shown::Md2 { model, frames, fps } => {
-                let (a, b, u) = keyrig_io::md2::Md2Model::loop_blend(frames, *fps, t).expect("blend");
-                model.blended_positions(a, b, u).expect("frames")
+            Shown::Md2 { model, clip, fps } => {
+                let blend =
+                    model.playback().expect("clips").blend_at(clip.as_deref(), *fps, t).expect("blend");
+                model
+                    .blended_positions(blend.frame_a as usize, blend.frame_b as usize, blend.t)
+                    .expect("frames")
             }
         };
         let world = object_world(object, t);

@@ -1124,11 +1124,13 @@ fn md2_object(
     if t1 > t0 {
         times.push(t1);
     }
+    let playback = model.playback().map_err(|e| e.to_string())?;
     let mut weights = vec![0.0f32; times.len() * n];
     for (i, &t) in times.iter().enumerate() {
-        let (a, b, u) = crate::md2::Md2Model::loop_blend(&frames, fps, t).ok_or("bad time")?;
-        weights[i * n + (a - frames.start)] += 1.0 - u;
-        weights[i * n + (b - frames.start)] += u;
+        let blend = playback.blend_at(clip, fps, t).map_err(|e| e.to_string())?;
+        let (a, b) = (blend.frame_a as usize, blend.frame_b as usize);
+        weights[i * n + (a - frames.start)] += 1.0 - blend.t;
+        weights[i * n + (b - frames.start)] += blend.t;
     }
     doc.channels.push(Channel {
         node,

@@ -553,27 +553,21 @@ impl Md2Model {
         }
     }
 
-    /// The two frames (indices into [`Md2Model::frames`]) and the blend weight of the second
-    /// that a scene shows at `time` seconds when it plays `frames` at `fps`, looping: frame
-    /// position `f = (time · fps) mod n`, frames `⌊f⌋` and `⌊f⌋ + 1 (mod n)`, weight `f − ⌊f⌋`.
-    /// This is the editor's and renderer's morph playback (`MorphMesh::blend_at`).
-    /// `None` for an empty range, a rate that is not finite and positive, or a time whose
-    /// frame position is not finite.
-    #[must_use]
-    pub fn loop_blend(frames: &Range<usize>, fps: f64, time: f64) -> Option<(usize, usize, f32)> {
-        let n = frames.len();
-        if n == 0 || !(fps.is_finite() && fps > 0.0) {
-            return None;
-        }
-        let f = time * fps;
-        if !f.is_finite() {
-            return None;
-        }
-        let f = f.rem_euclid(n as f64);
-        let a = (f.floor() as usize).min(n - 1);
-        let b = (a + 1) % n;
-        let t = ((f - a as f64) as f32).clamp(0.0, 1.0);
-        Some((frames.start + a, frames.start + b, t))
+    /// The model's frames and clips as the scene evaluator plays them (keyrig-eval's
+    /// [`keyrig_eval::morph::MorphClips`]: looping, `f = (time · fps) mod n`, frames `⌊f⌋` and
+    /// `⌊f⌋ + 1`, weight `f − ⌊f⌋`) — the one playback rule of the editor, `render`, `deform`
+    /// and export.
+    ///
+    /// # Errors
+    /// A model without frames, or a clip outside them.
+    pub fn playback(&self) -> Result<keyrig_eval::morph::MorphClips, keyrig_eval::morph::MorphError> {
+        keyrig_eval::morph::MorphClips::new(
+            self.frames.len(),
+            self.clips
+                .iter()
+                .map(|c| keyrig_eval::morph::MorphClip { name: c.name.clone(), frames: c.frames.clone() })
+                .collect(),
+        )
     }
 
     /// Positions of every render vertex blended between frames `a` and `b` with weight `t` of
