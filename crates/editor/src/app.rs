@@ -89,7 +89,7 @@ pub enum PendingAction {
 }
 
 /// Why the file dialog is open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DialogPurpose {
     Open,
     SaveAs,
@@ -121,11 +121,15 @@ pub struct EditorApp {
     pub pending: Option<PendingAction>,
     pub recent: Recent,
     pub recovery: Recovery,
+    /// The autosave timer (a thread of its own: it writes while the window is idle).
+    pub autosave: crate::autosave::Autosave,
     /// A recovered scene the user has been offered, not yet accepted or declined.
     pub recovery_offer: Option<Scene>,
     pub(crate) file_dialog: egui_file_dialog::FileDialog,
     pub(crate) dialog_purpose: Option<DialogPurpose>,
     pub(crate) gizmo: transform_gizmo_egui::Gizmo,
+    /// The primary button went down on a gizmo handle: the gizmo owns the drag until release.
+    pub(crate) gizmo_drag: bool,
     pub(crate) timeline: panels::timeline::TimelineState,
     pub skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
@@ -141,8 +145,6 @@ pub struct EditorApp {
     tracks: RefCell<Option<CachedTracks>>,
     window_title: String,
     close_sent: bool,
-    last_autosave: f64,
-    autosave_seconds: f64,
     quit_confirmed: bool,
 }
 
@@ -177,11 +179,18 @@ impl EditorApp {
             show_help: false,
             pending: None,
             recent: Recent::load(data_dir.as_deref()),
+            autosave: crate::autosave::Autosave::new(
+                recovery.clone(),
+                std::time::Duration::from_secs_f64(
+                    options.autosave_seconds.unwrap_or(30.0).clamp(0.001, 1e9),
+                ),
+            ),
             recovery,
             recovery_offer,
             file_dialog: egui_file_dialog::FileDialog::new(),
             dialog_purpose: None,
             gizmo: transform_gizmo_egui::Gizmo::default(),
+            gizmo_drag: false,
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
@@ -192,8 +201,6 @@ impl EditorApp {
             tracks: RefCell::new(None),
             window_title: String::new(),
             close_sent: false,
-            last_autosave: 0.0,
-            autosave_seconds: options.autosave_seconds.unwrap_or(30.0),
             quit_confirmed: false,
         }
     }
@@ -497,7 +504,12 @@ impl EditorApp {
             Command::ToggleRecord => self.record = !self.record,
             Command::InsertKey => self.insert_key(),
             Command::DeleteKeys => self.delete_selected_keys(),
-            Command::CopyKeys => self.copy_selected_keys(),
+            Command::CopyKeys => {
+                self.copy_selected_keys();
+                if !self.clipboard.is_empty() {
+                    ctx.copy_text(self.clipboard_text());
+                }
+            }
             Command::PasteKeys => self.paste_keys(),
             Command::PlayPause => {
                 self.playback.playing = !self.playback.playing;
@@ -542,7 +554,7 @@ impl EditorApp {
             PendingAction::Open(Some(path)) => self.open_path(path),
             PendingAction::Open(None) => self.open_dialog(DialogPurpose::Open),
             PendingAction::Quit => {
-                self.recovery.clear();
+                self.autosave.clear();
                 self.quit_confirmed = true;
             }
         }
@@ -579,7 +591,7 @@ impl EditorApp {
         match files::save_scene(&path, scene) {
             Ok(()) => {
                 self.doc.mark_saved(path.clone());
-                self.recovery.clear();
+                self.autosave.clear();
                 self.recent.add(&path);
                 self.info(format!("Saved {}", path.display()));
             }
@@ -589,10 +601,24 @@ impl EditorApp {
 
     fn open_dialog(&mut self, purpose: DialogPurpose) {
         self.dialog_purpose = Some(purpose);
+        let folder = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        let stem = self
+            .doc
+            .path()
+            .and_then(std::path::Path::file_stem)
+            .map_or_else(|| "Untitled".to_owned(), |s| s.to_string_lossy().into_owned());
+        let storage = std::mem::take(self.file_dialog.storage_mut());
+        self.file_dialog = files::file_dialog(purpose, &stem, folder, storage);
         match purpose {
             DialogPurpose::Open | DialogPurpose::Import => self.file_dialog.pick_file(),
             DialogPurpose::SaveAs | DialogPurpose::Export => self.file_dialog.save_file(),
         }
+    }
+
+    /// Which file dialog is open, if any (tests).
+    #[must_use]
+    pub fn dialog_purpose(&self) -> Option<DialogPurpose> {
+        self.dialog_purpose
     }
 
     fn dialog_ui(&mut self, ctx: &Context) {
@@ -641,14 +667,61 @@ impl EditorApp {
         }
     }
 
-    fn autosave(&mut self, ctx: &Context) {
-        let now = ctx.input(|i| i.time);
-        if self.doc.is_dirty() && now - self.last_autosave >= self.autosave_seconds {
-            self.last_autosave = now;
-            if let Err(e) = self.recovery.write(self.doc.scene(), self.doc.path()) {
-                self.error(format!("Autosave failed: {e}"));
+    /// Hands the document to the autosave timer (a copy only when it changed); the timer's
+    /// thread writes it when due, drawing or not.
+    fn autosave(&mut self) {
+        let doc = &self.doc;
+        self.autosave.note(doc.cache_key(), doc.is_dirty(), || {
+            (doc.scene().clone(), doc.path().map(std::path::Path::to_path_buf))
+        });
+        if let Some(e) = self.autosave.take_error() {
+            self.error(format!("Autosave failed: {e}"));
+        }
+    }
+
+    /// Copy, cut and paste as the window system delivers them: egui-winit turns Ctrl+C,
+    /// Ctrl+X and Ctrl+V (and the Copy/Cut/Paste keys) into [`egui::Event::Copy`],
+    /// [`egui::Event::Cut`] and [`egui::Event::Paste`] with the system clipboard's text, not
+    /// into key presses. Left to a text field that has the keyboard.
+    fn clipboard_events(&mut self, ctx: &Context) {
+        if ctx.text_edit_focused() {
+            return;
+        }
+        let events: Vec<egui::Event> = ctx.input(|i| {
+            i.events
+                .iter()
+                .filter(|e| matches!(e, egui::Event::Copy | egui::Event::Cut | egui::Event::Paste(_)))
+                .cloned()
+                .collect()
+        });
+        for event in events {
+            match event {
+                egui::Event::Copy => self.run_command(ctx, Command::CopyKeys),
+                egui::Event::Cut => {
+                    self.run_command(ctx, Command::CopyKeys);
+                    if !self.clipboard.is_empty() {
+                        self.delete_selected_keys();
+                    }
+                }
+                egui::Event::Paste(text) => self.paste_text(&text),
+                _ => {}
             }
         }
+    }
+
+    /// Pastes keys from system clipboard text (written by this or another keyrig window);
+    /// other text pastes the editor's own clipboard.
+    pub fn paste_text(&mut self, text: &str) {
+        if let Some(keys) = channels::keys_from_clipboard_text(text) {
+            self.clipboard = keys;
+        }
+        self.paste_keys();
+    }
+
+    /// The copied keys as system clipboard text.
+    #[must_use]
+    pub fn clipboard_text(&self) -> String {
+        channels::keys_to_clipboard_text(&self.clipboard)
     }
 
     /// One frame of the editor, drawn into `ui` (the whole window).
@@ -669,6 +742,7 @@ impl EditorApp {
             self.frame_time = None;
         }
 
+        self.clipboard_events(&ctx);
         for command in pressed_commands(&ctx) {
             self.run_command(&ctx, command);
         }
@@ -696,7 +770,7 @@ impl EditorApp {
             self.doc.close_group();
         }
         self.selection.retain_valid(self.doc.scene());
-        self.autosave(&ctx);
+        self.autosave();
 
         // Viewport commands request a repaint: send the title only when it changes.
         let title = self.doc.title();
@@ -738,7 +812,7 @@ impl eframe::App for EditorApp {
     fn on_exit(&mut self) {
         // A clean exit leaves no recovery file; a dirty one keeps the last autosave.
         if !self.doc.is_dirty() {
-            self.recovery.clear();
+            self.autosave.clear();
         }
     }
 }
