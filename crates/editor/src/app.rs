@@ -71,6 +71,29 @@ pub struct ViewSettings {
     /// Where the viewport was laid out in the last frame (screen points), for picking tools
     /// and tests that aim at what the viewport shows.
     pub viewport_rect: Option<egui::Rect>,
+    /// World bounds of each object as drawn in the last frame (deformed mesh, or joints and
+    /// origin), by object index: framing (F, imports) and the clip planes use them.
+    pub object_bounds: Vec<Option<crate::camera::Bounds>>,
+    /// Objects to frame once their bounds are known (after an import or opening a model).
+    pub frame_request: Option<Vec<usize>>,
+    /// Draw textures (glTF base colour, MD2 skins); off shows the plain lit surfaces.
+    pub textures: bool,
+}
+
+impl ViewSettings {
+    /// The union of the bounds of `objects` (all when `None`).
+    #[must_use]
+    pub fn bounds_of(&self, objects: Option<&[usize]>) -> Option<crate::camera::Bounds> {
+        let pick = |o: usize| self.object_bounds.get(o).copied().flatten();
+        let all: Vec<usize> = (0..self.object_bounds.len()).collect();
+        objects.unwrap_or(&all).iter().filter_map(|&o| pick(o)).reduce(crate::camera::Bounds::union)
+    }
+
+    /// Width / height of the viewport (16:10 before the first frame).
+    #[must_use]
+    pub fn aspect(&self) -> f32 {
+        self.viewport_rect.map_or(1.6, |r| r.width() / r.height().max(1.0))
+    }
 }
 
 /// A status-bar message.
@@ -173,6 +196,9 @@ impl EditorApp {
                 antialiasing: true,
                 style: RenderStyle::Solid,
                 viewport_rect: None,
+                object_bounds: Vec::new(),
+                frame_request: None,
+                textures: true,
             },
             clipboard: Vec::new(),
             status: None,
@@ -421,25 +447,64 @@ impl EditorApp {
         Some(self.doc.scene().objects.get(first)?.deformer.kind)
     }
 
-    /// Centres the orbit camera on the selected joint, object or light (keeping its angle
-    /// and distance).
+    /// Frames the selection as Blender's View Selected does (keeping the view's angles): an
+    /// object's deformed bounds fill the view; a joint is centred with its bone (the segment
+    /// to its parent and children) in view; a light is centred at the current distance;
+    /// with nothing selected the whole scene is framed.
     pub fn frame_selection(&mut self) {
-        let at: Option<glam::Vec3> = match self.selection.item {
-            Some(Selected::Joint { object, joint }) => self.object_pose_now(object).and_then(|pose| {
-                pose.object_from_joint.get(joint).map(|f| (pose.world_from_object * *f).translation.into())
-            }),
-            Some(Selected::Object(o)) => {
-                self.object_pose_now(o).map(|p| p.world_from_object.translation.into())
+        let aspect = self.view.aspect();
+        match self.selection.item {
+            Some(Selected::Joint { object, joint }) => {
+                let Some(pose) = self.object_pose_now(object) else { return };
+                let Some(skeleton) = self.doc.scene().objects.get(object).and_then(|o| o.skeleton.as_ref())
+                else {
+                    return;
+                };
+                let world = |j: usize| -> glam::Vec3 {
+                    (pose.world_from_object * pose.object_from_joint[j]).translation.into()
+                };
+                if joint >= pose.object_from_joint.len() {
+                    return;
+                }
+                let at = world(joint);
+                let neighbours = skeleton
+                    .joints
+                    .iter()
+                    .enumerate()
+                    .filter(|(c, j)| j.parent == Some(joint) && *c < pose.object_from_joint.len())
+                    .map(|(c, _)| world(c))
+                    .chain(skeleton.joints[joint].parent.filter(|&p| p < joint).map(world));
+                let reach = neighbours.map(|p| p.distance(at)).fold(0.0f32, f32::max);
+                let object_radius = self.view.bounds_of(Some(&[object])).map_or(0.5, |b| b.radius());
+                let radius = if reach > 0.0 { reach } else { object_radius * 0.2 };
+                self.view.camera.target = at;
+                self.view.camera.distance = self.view.camera.distance_to_fit(radius, aspect);
             }
-            Some(Selected::Light(l)) => match self.value_now(ChannelId::LightPosition(l)) {
-                Some(ChannelValue::Vec3(p)) => Some(p),
-                _ => None,
+            Some(Selected::Object(o)) => match self.view.bounds_of(Some(&[o])) {
+                Some(bounds) => self.view.camera.frame(bounds, aspect),
+                None => {
+                    if let Some(pose) = self.object_pose_now(o) {
+                        self.view.camera.target = pose.world_from_object.translation.into();
+                    }
+                }
             },
-            None => None,
-        };
-        match at {
-            Some(at) => self.view.camera.target = at,
-            None => self.info("Select a joint, object or light to frame"),
+            Some(Selected::Light(l)) => {
+                if let Some(ChannelValue::Vec3(p)) = self.value_now(ChannelId::LightPosition(l)) {
+                    self.view.camera.target = p;
+                }
+            }
+            None => match self.view.bounds_of(None) {
+                Some(bounds) => self.view.camera.frame(bounds, aspect),
+                None => self.info("Nothing to frame: the scene is empty"),
+            },
+        }
+    }
+
+    /// Frames `objects` (their deformed bounds from the last frame), as after an import.
+    pub fn frame_objects(&mut self, objects: &[usize]) {
+        if let Some(bounds) = self.view.bounds_of(Some(objects)) {
+            let aspect = self.view.aspect();
+            self.view.camera.frame(bounds, aspect);
         }
     }
 
@@ -465,12 +530,19 @@ impl EditorApp {
                     return;
                 };
                 let world = pose.world_from_object * *f;
+                let target: glam::Vec3 = world.translation.into();
+                let aspect = self.view.aspect();
+                let bounds = self.view.bounds_of(Some(&[o]));
                 let c = &mut self.view.camera;
-                c.target = world.translation.into();
+                c.target = target;
                 // Look along the bone (+X of the joint frame) from the child side, slightly above.
                 c.yaw_deg = 90.0;
                 c.pitch_deg = 10.0;
-                c.distance = 0.9;
+                // From outside the mesh: past where the view ray leaves the object's bounds,
+                // and far enough to see a fifth of the object around the joint.
+                let radius = bounds.map_or(0.2, |b| b.radius() * 0.2);
+                let outside = bounds.map_or(0.0, |b| b.exit_distance(target, (c.eye() - target).normalize()));
+                c.distance = (outside * 1.15 + radius * 0.5).max(c.distance_to_fit(radius, aspect));
             }
             _ => {}
         }

@@ -513,13 +513,18 @@ impl crate::EditorApp {
         let seconds = elapsed.as_secs_f64();
         match purpose {
             ImportPurpose::Open => {
+                let n = imported.scene.objects.len();
                 self.replace_document(imported.scene, None);
+                // Frame what the viewport draws (deformed, in its own units) once it has.
+                self.view.frame_request = Some((0..n).collect());
                 self.recent.add(&path);
                 self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
             }
             ImportPurpose::Import => {
                 let scene = imported.scene;
                 let n = scene.objects.len();
+                let first = self.doc.scene().objects.len();
+                self.view.frame_request = Some((first..first + n).collect());
                 self.doc.edit(&format!("import {}", path.display()), |doc| {
                     doc.objects.extend(scene.objects);
                     doc.lights.extend(scene.lights);

@@ -101,6 +101,16 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             }
         }
 
+        record_bounds(app, &poses, &cpu_meshes);
+        // Framing after an import moves the camera before anything is drawn this frame.
+        let projection = match app.view.frame_request.take() {
+            Some(objects) => {
+                app.frame_objects(&objects);
+                Projection::new(&app.view.camera, rect)
+            }
+            None => projection,
+        };
+
         let gpu_drawn = gpu_ui(ui, app, rect, &poses, &mut errors);
         let scene = app.doc.scene();
         if !gpu_drawn {
@@ -281,6 +291,7 @@ fn gpu_ui(
             distance: c.distance,
             fov_y_deg: c.fov_y_deg,
         }),
+        depth_range: Some(c.depth_range(app.view.bounds_of(None))),
         ..keyrig_render::ViewOptions::default()
     };
     let ppp = ui.ctx().pixels_per_point() * app.view.resolution_scale.clamp(0.25, 1.0);
@@ -322,6 +333,29 @@ fn gpu_ui(
     };
     app.gpu = Some(gpu);
     drawn
+}
+
+/// Keeps each object's world bounds as drawn this frame (the deformed mesh; joints and origin
+/// for an object without one) for framing and the clip planes.
+fn record_bounds(app: &mut EditorApp, poses: &[Option<ObjectPose>], meshes: &[(usize, Vec<Vec3>, Vec<u32>)]) {
+    use crate::camera::Bounds;
+    let mut bounds: Vec<Option<Bounds>> = poses
+        .iter()
+        .map(|pose| {
+            let pose = pose.as_ref()?;
+            let origin: Vec3 = pose.world_from_object.translation.into();
+            Bounds::of(std::iter::once(origin).chain(
+                pose.object_from_joint.iter().map(|f| (pose.world_from_object * *f).translation.into()),
+            ))
+        })
+        .collect();
+    for (o, world, _) in meshes {
+        if let (Some(slot), Some(mesh)) = (bounds.get_mut(*o), Bounds::of(world.iter().copied())) {
+            // A mesh's own box: its joints may sit outside it (a root far below the feet).
+            *slot = Some(mesh);
+        }
+    }
+    app.view.object_bounds = bounds;
 }
 
 fn draw_grid(painter: &egui::Painter, projection: &Projection) {
