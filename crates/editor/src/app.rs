@@ -76,8 +76,6 @@ pub struct ViewSettings {
     pub object_bounds: Vec<Option<crate::camera::Bounds>>,
     /// Objects to frame once their bounds are known (after an import or opening a model).
     pub frame_request: Option<Vec<usize>>,
-    /// Draw textures (glTF base colour, MD2 skins); off shows the plain lit surfaces.
-    pub textures: bool,
 }
 
 impl ViewSettings {
@@ -198,7 +196,6 @@ impl EditorApp {
                 viewport_rect: None,
                 object_bounds: Vec::new(),
                 frame_request: None,
-                textures: true,
             },
             clipboard: Vec::new(),
             status: None,
