@@ -11,7 +11,7 @@ use crate::key::Animated;
 use crate::scene::Scene;
 
 /// One animated value of the scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub enum ChannelId {
     ObjectTranslation(usize),
     ObjectRotation(usize),
@@ -198,7 +198,7 @@ pub enum ChannelMut<'a> {
 }
 
 /// A value of any channel type (a sample, the clipboard, pose overrides).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ChannelValue {
     Vec3(Vec3),
     Rotation(Quat),

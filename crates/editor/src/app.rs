@@ -73,6 +73,27 @@ pub struct ViewSettings {
     /// Where the viewport was laid out in the last frame (screen points), for picking tools
     /// and tests that aim at what the viewport shows.
     pub viewport_rect: Option<egui::Rect>,
+    /// World bounds of each object as drawn in the last frame (deformed mesh, or joints and
+    /// origin), by object index: framing (F, imports) and the clip planes use them.
+    pub object_bounds: Vec<Option<crate::camera::Bounds>>,
+    /// Objects to frame once their bounds are known (after an import or opening a model).
+    pub frame_request: Option<Vec<usize>>,
+}
+
+impl ViewSettings {
+    /// The union of the bounds of `objects` (all when `None`).
+    #[must_use]
+    pub fn bounds_of(&self, objects: Option<&[usize]>) -> Option<crate::camera::Bounds> {
+        let pick = |o: usize| self.object_bounds.get(o).copied().flatten();
+        let all: Vec<usize> = (0..self.object_bounds.len()).collect();
+        objects.unwrap_or(&all).iter().filter_map(|&o| pick(o)).reduce(crate::camera::Bounds::union)
+    }
+
+    /// Width / height of the viewport (16:10 before the first frame).
+    #[must_use]
+    pub fn aspect(&self) -> f32 {
+        self.viewport_rect.map_or(1.6, |r| r.width() / r.height().max(1.0))
+    }
 }
 
 /// A status-bar message.
@@ -91,7 +112,7 @@ pub enum PendingAction {
 }
 
 /// Why the file dialog is open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DialogPurpose {
     Open,
     SaveAs,
@@ -123,11 +144,15 @@ pub struct EditorApp {
     pub pending: Option<PendingAction>,
     pub recent: Recent,
     pub recovery: Recovery,
+    /// The autosave timer (a thread of its own: it writes while the window is idle).
+    pub autosave: crate::autosave::Autosave,
     /// A recovered scene the user has been offered, not yet accepted or declined.
     pub recovery_offer: Option<Scene>,
     pub(crate) file_dialog: egui_file_dialog::FileDialog,
     pub(crate) dialog_purpose: Option<DialogPurpose>,
     pub(crate) gizmo: transform_gizmo_egui::Gizmo,
+    /// The primary button went down on a gizmo handle: the gizmo owns the drag until release.
+    pub(crate) gizmo_drag: bool,
     pub(crate) timeline: panels::timeline::TimelineState,
     pub skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
@@ -143,8 +168,6 @@ pub struct EditorApp {
     evaluator: RefCell<Option<CachedEvaluator>>,
     window_title: String,
     close_sent: bool,
-    last_autosave: f64,
-    autosave_seconds: f64,
     quit_confirmed: bool,
 }
 
@@ -173,17 +196,26 @@ impl EditorApp {
                 antialiasing: true,
                 style: RenderStyle::Solid,
                 viewport_rect: None,
+                object_bounds: Vec::new(),
+                frame_request: None,
             },
             clipboard: Vec::new(),
             status: None,
             show_help: false,
             pending: None,
             recent: Recent::load(data_dir.as_deref()),
+            autosave: crate::autosave::Autosave::new(
+                recovery.clone(),
+                std::time::Duration::from_secs_f64(
+                    options.autosave_seconds.unwrap_or(30.0).clamp(0.001, 1e9),
+                ),
+            ),
             recovery,
             recovery_offer,
             file_dialog: egui_file_dialog::FileDialog::new(),
             dialog_purpose: None,
             gizmo: transform_gizmo_egui::Gizmo::default(),
+            gizmo_drag: false,
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
@@ -194,8 +226,6 @@ impl EditorApp {
             evaluator: RefCell::new(None),
             window_title: String::new(),
             close_sent: false,
-            last_autosave: 0.0,
-            autosave_seconds: options.autosave_seconds.unwrap_or(30.0),
             quit_confirmed: false,
         }
     }
@@ -426,25 +456,64 @@ impl EditorApp {
         Some(self.doc.scene().objects.get(first)?.deformer.kind)
     }
 
-    /// Centres the orbit camera on the selected joint, object or light (keeping its angle
-    /// and distance).
+    /// Frames the selection as Blender's View Selected does (keeping the view's angles): an
+    /// object's deformed bounds fill the view; a joint is centred with its bone (the segment
+    /// to its parent and children) in view; a light is centred at the current distance;
+    /// with nothing selected the whole scene is framed.
     pub fn frame_selection(&mut self) {
-        let at: Option<glam::Vec3> = match self.selection.item {
-            Some(Selected::Joint { object, joint }) => self.object_pose_now(object).and_then(|pose| {
-                pose.object_from_joint.get(joint).map(|f| (pose.world_from_object * *f).translation.into())
-            }),
-            Some(Selected::Object(o)) => {
-                self.object_pose_now(o).map(|p| p.world_from_object.translation.into())
+        let aspect = self.view.aspect();
+        match self.selection.item {
+            Some(Selected::Joint { object, joint }) => {
+                let Some(pose) = self.object_pose_now(object) else { return };
+                let Some(skeleton) = self.doc.scene().objects.get(object).and_then(|o| o.skeleton.as_ref())
+                else {
+                    return;
+                };
+                let world = |j: usize| -> glam::Vec3 {
+                    (pose.world_from_object * pose.object_from_joint[j]).translation.into()
+                };
+                if joint >= pose.object_from_joint.len() {
+                    return;
+                }
+                let at = world(joint);
+                let neighbours = skeleton
+                    .joints
+                    .iter()
+                    .enumerate()
+                    .filter(|(c, j)| j.parent == Some(joint) && *c < pose.object_from_joint.len())
+                    .map(|(c, _)| world(c))
+                    .chain(skeleton.joints[joint].parent.filter(|&p| p < joint).map(world));
+                let reach = neighbours.map(|p| p.distance(at)).fold(0.0f32, f32::max);
+                let object_radius = self.view.bounds_of(Some(&[object])).map_or(0.5, |b| b.radius());
+                let radius = if reach > 0.0 { reach } else { object_radius * 0.2 };
+                self.view.camera.target = at;
+                self.view.camera.distance = self.view.camera.distance_to_fit(radius, aspect);
             }
-            Some(Selected::Light(l)) => match self.value_now(ChannelId::LightPosition(l)) {
-                Some(ChannelValue::Vec3(p)) => Some(p),
-                _ => None,
+            Some(Selected::Object(o)) => match self.view.bounds_of(Some(&[o])) {
+                Some(bounds) => self.view.camera.frame(bounds, aspect),
+                None => {
+                    if let Some(pose) = self.object_pose_now(o) {
+                        self.view.camera.target = pose.world_from_object.translation.into();
+                    }
+                }
             },
-            None => None,
-        };
-        match at {
-            Some(at) => self.view.camera.target = at,
-            None => self.info("Select a joint, object or light to frame"),
+            Some(Selected::Light(l)) => {
+                if let Some(ChannelValue::Vec3(p)) = self.value_now(ChannelId::LightPosition(l)) {
+                    self.view.camera.target = p;
+                }
+            }
+            None => match self.view.bounds_of(None) {
+                Some(bounds) => self.view.camera.frame(bounds, aspect),
+                None => self.info("Nothing to frame: the scene is empty"),
+            },
+        }
+    }
+
+    /// Frames `objects` (their deformed bounds from the last frame), as after an import.
+    pub fn frame_objects(&mut self, objects: &[usize]) {
+        if let Some(bounds) = self.view.bounds_of(Some(objects)) {
+            let aspect = self.view.aspect();
+            self.view.camera.frame(bounds, aspect);
         }
     }
 
@@ -470,12 +539,19 @@ impl EditorApp {
                     return;
                 };
                 let world = pose.world_from_object * *f;
+                let target: glam::Vec3 = world.translation.into();
+                let aspect = self.view.aspect();
+                let bounds = self.view.bounds_of(Some(&[o]));
                 let c = &mut self.view.camera;
-                c.target = world.translation.into();
+                c.target = target;
                 // Look along the bone (+X of the joint frame) from the child side, slightly above.
                 c.yaw_deg = 90.0;
                 c.pitch_deg = 10.0;
-                c.distance = 0.9;
+                // From outside the mesh: past where the view ray leaves the object's bounds,
+                // and far enough to see a fifth of the object around the joint.
+                let radius = bounds.map_or(0.2, |b| b.radius() * 0.2);
+                let outside = bounds.map_or(0.0, |b| b.exit_distance(target, (c.eye() - target).normalize()));
+                c.distance = (outside * 1.15 + radius * 0.5).max(c.distance_to_fit(radius, aspect));
             }
             _ => {}
         }
@@ -509,7 +585,12 @@ impl EditorApp {
             Command::ToggleRecord => self.record = !self.record,
             Command::InsertKey => self.insert_key(),
             Command::DeleteKeys => self.delete_selected_keys(),
-            Command::CopyKeys => self.copy_selected_keys(),
+            Command::CopyKeys => {
+                self.copy_selected_keys();
+                if !self.clipboard.is_empty() {
+                    ctx.copy_text(self.clipboard_text());
+                }
+            }
             Command::PasteKeys => self.paste_keys(),
             Command::PlayPause => {
                 self.playback.playing = !self.playback.playing;
@@ -554,7 +635,7 @@ impl EditorApp {
             PendingAction::Open(Some(path)) => self.open_path(path),
             PendingAction::Open(None) => self.open_dialog(DialogPurpose::Open),
             PendingAction::Quit => {
-                self.recovery.clear();
+                self.autosave.clear();
                 self.quit_confirmed = true;
             }
         }
@@ -591,7 +672,7 @@ impl EditorApp {
         match files::save_scene(&path, scene) {
             Ok(()) => {
                 self.doc.mark_saved(path.clone());
-                self.recovery.clear();
+                self.autosave.clear();
                 self.recent.add(&path);
                 self.info(format!("Saved {}", path.display()));
             }
@@ -601,10 +682,24 @@ impl EditorApp {
 
     fn open_dialog(&mut self, purpose: DialogPurpose) {
         self.dialog_purpose = Some(purpose);
+        let folder = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        let stem = self
+            .doc
+            .path()
+            .and_then(std::path::Path::file_stem)
+            .map_or_else(|| "Untitled".to_owned(), |s| s.to_string_lossy().into_owned());
+        let storage = std::mem::take(self.file_dialog.storage_mut());
+        self.file_dialog = files::file_dialog(purpose, &stem, folder, storage);
         match purpose {
             DialogPurpose::Open | DialogPurpose::Import => self.file_dialog.pick_file(),
             DialogPurpose::SaveAs | DialogPurpose::Export => self.file_dialog.save_file(),
         }
+    }
+
+    /// Which file dialog is open, if any (tests).
+    #[must_use]
+    pub fn dialog_purpose(&self) -> Option<DialogPurpose> {
+        self.dialog_purpose
     }
 
     fn dialog_ui(&mut self, ctx: &Context) {
@@ -653,14 +748,61 @@ impl EditorApp {
         }
     }
 
-    fn autosave(&mut self, ctx: &Context) {
-        let now = ctx.input(|i| i.time);
-        if self.doc.is_dirty() && now - self.last_autosave >= self.autosave_seconds {
-            self.last_autosave = now;
-            if let Err(e) = self.recovery.write(self.doc.scene(), self.doc.path()) {
-                self.error(format!("Autosave failed: {e}"));
+    /// Hands the document to the autosave timer (a copy only when it changed); the timer's
+    /// thread writes it when due, drawing or not.
+    fn autosave(&mut self) {
+        let doc = &self.doc;
+        self.autosave.note(doc.cache_key(), doc.is_dirty(), || {
+            (doc.scene().clone(), doc.path().map(std::path::Path::to_path_buf))
+        });
+        if let Some(e) = self.autosave.take_error() {
+            self.error(format!("Autosave failed: {e}"));
+        }
+    }
+
+    /// Copy, cut and paste as the window system delivers them: egui-winit turns Ctrl+C,
+    /// Ctrl+X and Ctrl+V (and the Copy/Cut/Paste keys) into [`egui::Event::Copy`],
+    /// [`egui::Event::Cut`] and [`egui::Event::Paste`] with the system clipboard's text, not
+    /// into key presses. Left to a text field that has the keyboard.
+    fn clipboard_events(&mut self, ctx: &Context) {
+        if ctx.text_edit_focused() {
+            return;
+        }
+        let events: Vec<egui::Event> = ctx.input(|i| {
+            i.events
+                .iter()
+                .filter(|e| matches!(e, egui::Event::Copy | egui::Event::Cut | egui::Event::Paste(_)))
+                .cloned()
+                .collect()
+        });
+        for event in events {
+            match event {
+                egui::Event::Copy => self.run_command(ctx, Command::CopyKeys),
+                egui::Event::Cut => {
+                    self.run_command(ctx, Command::CopyKeys);
+                    if !self.clipboard.is_empty() {
+                        self.delete_selected_keys();
+                    }
+                }
+                egui::Event::Paste(text) => self.paste_text(&text),
+                _ => {}
             }
         }
+    }
+
+    /// Pastes keys from system clipboard text (written by this or another keyrig window);
+    /// other text pastes the editor's own clipboard.
+    pub fn paste_text(&mut self, text: &str) {
+        if let Some(keys) = channels::keys_from_clipboard_text(text) {
+            self.clipboard = keys;
+        }
+        self.paste_keys();
+    }
+
+    /// The copied keys as system clipboard text.
+    #[must_use]
+    pub fn clipboard_text(&self) -> String {
+        channels::keys_to_clipboard_text(&self.clipboard)
     }
 
     /// One frame of the editor, drawn into `ui` (the whole window).
@@ -681,6 +823,7 @@ impl EditorApp {
             self.frame_time = None;
         }
 
+        self.clipboard_events(&ctx);
         for command in pressed_commands(&ctx) {
             self.run_command(&ctx, command);
         }
@@ -708,7 +851,7 @@ impl EditorApp {
             self.doc.close_group();
         }
         self.selection.retain_valid(self.doc.scene());
-        self.autosave(&ctx);
+        self.autosave();
 
         // Viewport commands request a repaint: send the title only when it changes.
         let title = self.doc.title();
@@ -750,7 +893,7 @@ impl eframe::App for EditorApp {
     fn on_exit(&mut self) {
         // A clean exit leaves no recovery file; a dirty one keeps the last autosave.
         if !self.doc.is_dirty() {
-            self.recovery.clear();
+            self.autosave.clear();
         }
     }
 }

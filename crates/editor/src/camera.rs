@@ -18,6 +18,76 @@ pub struct OrbitCamera {
 const PITCH_LIMIT: f32 = 89.9;
 const NEAR: f32 = 0.01;
 const FAR: f32 = 1000.0;
+/// Orbit distances the zoom and framing keep to (a 1 mm part to a 10 km scene).
+const MIN_DISTANCE: f32 = 0.001;
+const MAX_DISTANCE: f32 = 10_000.0;
+
+/// An axis-aligned world box (deformed meshes, joints), for framing and clip planes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Bounds {
+    /// The box of `points` (`None` when there are none or none is finite).
+    #[must_use]
+    pub fn of(points: impl IntoIterator<Item = Vec3>) -> Option<Bounds> {
+        let mut b = Bounds { min: Vec3::MAX, max: Vec3::MIN };
+        for p in points.into_iter().filter(|p| p.is_finite()) {
+            b.min = b.min.min(p);
+            b.max = b.max.max(p);
+        }
+        b.is_valid().then_some(b)
+    }
+
+    /// The box holding both.
+    #[must_use]
+    pub fn union(self, other: Bounds) -> Bounds {
+        Bounds { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    #[must_use]
+    pub fn is_valid(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite() && self.min.cmple(self.max).all()
+    }
+
+    #[must_use]
+    pub fn centre(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Half the diagonal.
+    #[must_use]
+    pub fn radius(&self) -> f32 {
+        (self.max - self.min).length() * 0.5
+    }
+
+    /// How far from `from` (inside or outside the box) along the unit direction `dir` the
+    /// ray leaves the box; 0 when it misses or leaves behind `from`.
+    #[must_use]
+    pub fn exit_distance(&self, from: Vec3, dir: Vec3) -> f32 {
+        let mut t_exit = f32::INFINITY;
+        let mut t_enter = f32::NEG_INFINITY;
+        for axis in 0..3 {
+            let (o, d) = (from[axis], dir[axis]);
+            if d.abs() < 1e-12 {
+                if o < self.min[axis] || o > self.max[axis] {
+                    return 0.0;
+                }
+                continue;
+            }
+            let (a, b) = ((self.min[axis] - o) / d, (self.max[axis] - o) / d);
+            t_enter = t_enter.max(a.min(b));
+            t_exit = t_exit.min(a.max(b));
+        }
+        if t_exit < t_enter.max(0.0) || !t_exit.is_finite() {
+            0.0
+        } else {
+            t_exit
+        }
+    }
+}
 
 impl From<keyrig_core::Camera> for OrbitCamera {
     fn from(c: keyrig_core::Camera) -> Self {
@@ -47,10 +117,46 @@ impl OrbitCamera {
         Mat4::look_at_rh(self.eye(), self.target, Vec3::Y)
     }
 
-    /// Projection matrix (clip from camera) for a viewport of the given aspect ratio.
+    /// Projection matrix (clip from camera) for a viewport of the given aspect ratio (for
+    /// the overlay and the gizmo: planes wide enough for any zoom).
     #[must_use]
     pub fn clip_from_camera(&self, aspect: f32) -> Mat4 {
-        Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect.max(1e-3), NEAR, FAR)
+        let near = NEAR.min(self.distance * 1e-3).max(1e-6);
+        let far = FAR.max(self.distance * 1e3);
+        Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect.max(1e-3), near, far)
+    }
+
+    /// Near and far planes (view-space distances) for the orbit distance d: near = d / 100,
+    /// far = 100·d, with the far plane pushed out to hold the world box `bounds` (the
+    /// scene's deformed meshes) when the scene is larger than that, as when a 100 m model
+    /// is looked at from a metre; the ratio far / near stays within 10⁶ for depth
+    /// precision.
+    #[must_use]
+    pub fn depth_range(&self, bounds: Option<Bounds>) -> [f32; 2] {
+        let d = self.distance.max(1e-6);
+        let near = d * 0.01;
+        let far = match bounds.filter(Bounds::is_valid) {
+            Some(b) => (d * 100.0).max((self.eye().distance(b.centre()) + b.radius()) * 1.5),
+            None => d * 100.0,
+        };
+        [near.max(far * 1e-6), far]
+    }
+
+    /// The orbit distance at which a sphere of `radius` fills the view (with a margin), for
+    /// framing.
+    #[must_use]
+    pub fn distance_to_fit(&self, radius: f32, aspect: f32) -> f32 {
+        let half_y = (self.fov_y_deg.to_radians() * 0.5).clamp(0.01, 1.5);
+        let half_x = (half_y.tan() * aspect.max(0.1)).atan();
+        (radius.max(1e-3) / half_y.min(half_x).sin() * 1.1).clamp(MIN_DISTANCE, MAX_DISTANCE)
+    }
+
+    /// Centres on `bounds` and moves back until they fill the view (keeps the angles).
+    pub fn frame(&mut self, bounds: Bounds, aspect: f32) {
+        if bounds.is_valid() {
+            self.target = bounds.centre();
+            self.distance = self.distance_to_fit(bounds.radius(), aspect);
+        }
     }
 
     /// Rotates the view by a mouse drag (degrees per point).
@@ -71,7 +177,7 @@ impl OrbitCamera {
 
     /// Zooms by a scroll amount (positive moves closer).
     pub fn zoom(&mut self, scroll: f32) {
-        self.distance = (self.distance * (-scroll * 0.002).exp()).clamp(0.05, 500.0);
+        self.distance = (self.distance * (-scroll * 0.002).exp()).clamp(MIN_DISTANCE, MAX_DISTANCE);
     }
 }
 
@@ -150,6 +256,37 @@ mod tests {
         let rect = Rect::from_min_size(Pos2::new(10.0, 20.0), egui::vec2(400.0, 300.0));
         let p = Projection::new(&camera, rect).project(camera.target).expect("in front");
         assert!((p - rect.center()).length() < 1e-3, "{p:?}");
+    }
+
+    /// The planes hold a 200 m model seen from 1 m and a 1 cm one seen from 5 cm.
+    #[test]
+    fn depth_range_holds_the_scene() {
+        let big = Bounds { min: Vec3::splat(-100.0), max: Vec3::splat(100.0) };
+        let camera =
+            OrbitCamera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 0.0, distance: 1.0, fov_y_deg: 45.0 };
+        let [near, far] = camera.depth_range(Some(big));
+        assert!(far > 1.0 + big.radius() && near < 1.0 && near > 0.0, "{near} {far}");
+        let small = Bounds { min: Vec3::splat(-0.005), max: Vec3::splat(0.005) };
+        let camera = OrbitCamera { distance: 0.05, ..camera };
+        let [near, far] = camera.depth_range(Some(small));
+        assert!(near > 0.0 && near < 0.05 - small.radius() && far > 0.05 + small.radius() && far < 10.0);
+    }
+
+    #[test]
+    fn framing_fits_the_box_and_exit_distance_leaves_it() {
+        let b = Bounds { min: Vec3::new(-1.0, 0.0, -1.0), max: Vec3::new(1.0, 2.0, 1.0) };
+        let mut camera = OrbitCamera {
+            target: Vec3::ZERO,
+            yaw_deg: 30.0,
+            pitch_deg: 10.0,
+            distance: 1.0,
+            fov_y_deg: 45.0,
+        };
+        camera.frame(b, 1.5);
+        assert_eq!(camera.target, Vec3::Y);
+        assert!(camera.distance > b.radius() / (22.5f32.to_radians().sin()));
+        assert!((b.exit_distance(Vec3::ZERO + Vec3::Y, Vec3::X) - 1.0).abs() < 1e-6);
+        assert_eq!(b.exit_distance(Vec3::new(5.0, 1.0, 0.0), Vec3::X), 0.0);
     }
 
     #[test]

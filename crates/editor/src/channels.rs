@@ -11,13 +11,45 @@ pub use keyrig_core::channel_id::{
 };
 
 /// A copy of one key with its value type erased (clipboard).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct KeyCopy {
     pub channel: ChannelId,
     pub time: f64,
     pub value: ChannelValue,
     pub interpolation: Interpolation,
     pub tcb: Tcb,
+}
+
+/// The first line of keys copied to the system clipboard; JSON of the keys follows.
+pub const CLIPBOARD_HEADER: &str = "keyrig keys 1";
+
+/// Copied keys as text for the system clipboard: [`CLIPBOARD_HEADER`], a newline, then the
+/// keys as JSON (another keyrig window pastes them with [`keys_from_clipboard_text`]).
+#[must_use]
+pub fn keys_to_clipboard_text(keys: &[KeyCopy]) -> String {
+    // Serializing plain numbers and enums cannot fail; an empty list is the fallback.
+    let json = serde_json::to_string(keys).unwrap_or_else(|_| "[]".to_owned());
+    format!("{CLIPBOARD_HEADER}\n{json}")
+}
+
+/// Keys from system clipboard text written by [`keys_to_clipboard_text`]; `None` for any
+/// other text (or keys with non-finite times or values).
+#[must_use]
+pub fn keys_from_clipboard_text(text: &str) -> Option<Vec<KeyCopy>> {
+    let (header, json) = text.trim_start().split_once('\n')?;
+    if header.trim() != CLIPBOARD_HEADER {
+        return None;
+    }
+    let keys: Vec<KeyCopy> = serde_json::from_str(json).ok()?;
+    let finite = |k: &KeyCopy| {
+        k.time.is_finite()
+            && match k.value {
+                ChannelValue::Vec3(v) => v.is_finite(),
+                ChannelValue::Rotation(q) => q.is_finite() && q.length_squared() > 0.0,
+                ChannelValue::Scalar(s) => s.is_finite(),
+            }
+    };
+    keys.iter().all(finite).then_some(keys)
 }
 
 /// Calls `$body` with `$track` bound to the `&RawTrack<_>` of a [`ChannelRef`].
@@ -226,7 +258,24 @@ fn move_in_track<T>(track: &mut RawTrack<T>, indices: &[usize], delta: f64) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
+    use glam::{Quat, Vec3};
+
+    #[test]
+    fn clipboard_text_round_trips_and_refuses_other_text() {
+        let keys = vec![KeyCopy {
+            channel: ChannelId::JointRotation { object: 0, joint: 2 },
+            time: 0.5,
+            value: ChannelValue::Rotation(Quat::from_rotation_z(0.3)),
+            interpolation: Interpolation::Linear,
+            tcb: Tcb::new(0.1, -0.2, 0.3),
+        }];
+        let text = keys_to_clipboard_text(&keys);
+        assert!(text.starts_with(CLIPBOARD_HEADER), "{text}");
+        assert_eq!(keys_from_clipboard_text(&text), Some(keys));
+        assert_eq!(keys_from_clipboard_text("hello"), None);
+        assert_eq!(keys_from_clipboard_text("keyrig keys 1\n[{\"bad\": 1}]"), None);
+    }
+
     use keyrig_core::Object;
 
     fn scene_with_keys(times: &[f64]) -> Scene {

@@ -250,6 +250,12 @@ pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
                 if typing && Command::yields_to_text_fields(shortcut) {
                     continue;
                 }
+                // egui-winit delivers Ctrl+C / Ctrl+V as `Event::Copy` / `Event::Paste`, not as
+                // key presses; the editor handles those events (`EditorApp::ui`). Their
+                // shortcuts are listed for the menus and the help window only.
+                if matches!(command, Command::CopyKeys | Command::PasteKeys) {
+                    continue;
+                }
                 if input.consume_shortcut(shortcut) {
                     out.push(command);
                 }

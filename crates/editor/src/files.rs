@@ -59,6 +59,81 @@ pub fn with_extension_if_missing(path: PathBuf, ext: &str) -> PathBuf {
     }
 }
 
+/// What each file dialog lists: (filter name, extensions) in the order the drop-down shows
+/// them; the first is chosen when the dialog opens.
+#[must_use]
+pub fn dialog_filters(purpose: crate::app::DialogPurpose) -> Vec<(&'static str, &'static [&'static str])> {
+    use crate::app::DialogPurpose;
+    const SCENES: (&str, &[&str]) = ("keyrig scenes (.ron)", &["ron"]);
+    const MODELS: (&str, &[&str]) = ("Models (.glb, .gltf, .md2)", &["glb", "gltf", "md2"]);
+    match purpose {
+        DialogPurpose::Open => {
+            vec![SCENES, MODELS, ("Scenes and models", &["ron", "glb", "gltf", "md2"])]
+        }
+        DialogPurpose::Import => {
+            vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"])]
+        }
+        DialogPurpose::SaveAs => vec![SCENES],
+        DialogPurpose::Export => vec![("glTF binary (.glb)", &["glb"]), ("glTF (.gltf)", &["gltf"])],
+    }
+}
+
+/// The file dialog for `purpose`: filtered to the files that action reads or writes (case
+/// does not matter), opening in `folder` when given; save dialogs propose `stem` with the
+/// action's extension ("Untitled.ron", "arm.glb"). Enter confirms (egui-file-dialog's
+/// submit key and file-name field); a path typed into the file-name field, absolute or
+/// relative to the folder shown, or into the path bar (`/` or the ✏ button), is taken as
+/// it is.
+#[must_use]
+pub fn file_dialog(
+    purpose: crate::app::DialogPurpose,
+    stem: &str,
+    folder: Option<PathBuf>,
+    storage: egui_file_dialog::FileDialogStorage,
+) -> egui_file_dialog::FileDialog {
+    use crate::app::DialogPurpose;
+    let title = match purpose {
+        DialogPurpose::Open => "Open scene or model",
+        DialogPurpose::SaveAs => "Save scene as",
+        DialogPurpose::Import => "Import model",
+        DialogPurpose::Export => "Export glTF",
+    };
+    let mut dialog = egui_file_dialog::FileDialog::new()
+        .id(egui::Id::new(("keyrig_file_dialog", title)))
+        .title(title)
+        .storage(storage)
+        .default_size([760.0, 460.0])
+        .show_path_edit_button(true);
+    if let Some(folder) = folder {
+        dialog = dialog.initial_directory(folder);
+    }
+    let filters = dialog_filters(purpose);
+    match purpose {
+        DialogPurpose::Open | DialogPurpose::Import => {
+            for &(name, extensions) in &filters {
+                let filter = egui_file_dialog::Filter::new(move |path: &Path| {
+                    extension(path).is_some_and(|e| extensions.contains(&e.as_str()))
+                });
+                dialog = dialog.add_file_filter(name, filter);
+            }
+            if let Some((first, _)) = filters.first() {
+                dialog = dialog.default_file_filter(first);
+            }
+        }
+        DialogPurpose::SaveAs | DialogPurpose::Export => {
+            for (name, extensions) in &filters {
+                dialog = dialog.add_save_extension(name, extensions[0]);
+            }
+            if let Some((first, extensions)) = filters.first() {
+                dialog = dialog
+                    .default_save_extension(first)
+                    .default_file_name(&format!("{stem}.{}", extensions[0]));
+            }
+        }
+    }
+    dialog
+}
+
 /// Loads a scene file.
 pub fn load_scene(path: &Path) -> Result<Scene, String> {
     keyrig_io::scene_file::load(path).map_err(|e| e.to_string())
@@ -434,13 +509,18 @@ impl crate::EditorApp {
         let seconds = elapsed.as_secs_f64();
         match purpose {
             ImportPurpose::Open => {
+                let n = imported.scene.objects.len();
                 self.replace_document(imported.scene, None);
+                // Frame what the viewport draws (deformed, in its own units) once it has.
+                self.view.frame_request = Some((0..n).collect());
                 self.recent.add(&path);
                 self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
             }
             ImportPurpose::Import => {
                 let scene = imported.scene;
                 let n = scene.objects.len();
+                let first = self.doc.scene().objects.len();
+                self.view.frame_request = Some((first..first + n).collect());
                 self.doc.edit(&format!("import {}", path.display()), |doc| {
                     doc.objects.extend(scene.objects);
                     doc.lights.extend(scene.lights);

@@ -11,6 +11,7 @@
 use std::path::PathBuf;
 
 pub mod app;
+pub mod autosave;
 pub mod camera;
 pub mod channels;
 pub mod commands;

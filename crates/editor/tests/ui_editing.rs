@@ -78,6 +78,14 @@ fn without_record_mode_a_change_is_a_pose_that_i_keys() {
 }
 
 /// Selects the elbow key at frame 15 by clicking its diamond in the dope sheet.
+/// The text the last frame put on the system clipboard (`ctx.copy_text`).
+fn copied_text(h: &Harness<'_, EditorApp>) -> Option<String> {
+    h.output().platform_output.commands.iter().find_map(|c| match c {
+        egui::OutputCommand::CopyText(text) => Some(text.clone()),
+        _ => None,
+    })
+}
+
 fn select_elbow_key_15(h: &mut Harness<'_, EditorApp>) {
     h.get_by_label("key elbow rotation frame 15").click();
     h.run();
@@ -240,9 +248,15 @@ fn copy_paste_and_box_select_keys() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
     select_elbow_key_15(&mut h);
-    press(&mut h, Modifiers::COMMAND, Key::C);
+    // Ctrl+C and Ctrl+V as egui-winit delivers them: copy and paste events, the paste
+    // carrying the system clipboard's text (what the copy put there).
+    h.event(egui::Event::Copy);
+    h.step();
+    let text = copied_text(&h).expect("the copy puts the keys on the system clipboard");
+    h.run();
     go_to_frame(&mut h, 40);
-    press(&mut h, Modifiers::COMMAND, Key::V);
+    h.event(egui::Event::Paste(text));
+    h.run();
     let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
     let scene = h.state().doc.scene();
     assert!(channels::key_at(scene, elbow, 40.0 / scene.fps).is_some(), "pasted at frame 40");

@@ -12,12 +12,19 @@ use egui_kittest::kittest::Queryable;
 fn autosave_is_offered_for_recovery_after_a_crash() {
     let dir = tempfile::tempdir().expect("temp dir");
     let edited = {
-        let mut h = harness_autosaving(dir.path(), None, 0.0);
-        // A change makes the document dirty; the next frame autosaves it.
+        let mut h = harness_autosaving(dir.path(), None, 0.2);
+        // A change makes the document dirty. No frame runs after it: the autosave timer
+        // writes on its own thread while the editor sits idle.
         h.key_press_modifiers(Modifiers::NONE, Key::Num1);
         h.run();
         assert!(h.state().doc.is_dirty());
-        assert!(dir.path().join("recovery.ron").exists(), "autosaved");
+        let recovery = dir.path().join("recovery.ron");
+        assert!(!recovery.exists(), "not before the autosave interval");
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+        while !recovery.exists() && std::time::Instant::now() < deadline {
+            std::thread::sleep(std::time::Duration::from_millis(25));
+        }
+        assert!(recovery.exists(), "an idle editor autosaves its unsaved changes");
         h.state().doc.scene().clone()
         // Dropped without quitting: as if the editor had crashed.
     };

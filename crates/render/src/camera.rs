@@ -42,6 +42,20 @@ pub fn clip_from_world(camera: &Camera, aspect: f32) -> Mat4 {
     clip_from_view(camera, aspect) * view_from_world(camera)
 }
 
+/// Clip space from world space with explicit near and far planes (view-space distances, as
+/// an editor fits them to the scene's size); the orbit distance's defaults where `depth` is
+/// `None` or unusable.
+#[must_use]
+pub fn clip_from_world_in(camera: &Camera, aspect: f32, depth: Option<[f32; 2]>) -> Mat4 {
+    match depth {
+        Some([near, far]) if near.is_finite() && far.is_finite() && near > 0.0 && far > near => {
+            let fov = camera.fov_y_deg.clamp(1.0, 170.0).to_radians();
+            Mat4::perspective_rh(fov, aspect.max(1e-4), near, far) * view_from_world(camera)
+        }
+        _ => clip_from_world(camera, aspect),
+    }
+}
+
 /// Checks that a camera has finite numbers and a positive distance.
 #[must_use]
 pub fn is_usable(camera: &Camera) -> bool {

@@ -112,6 +112,8 @@ pub struct LightInput {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameInput {
     pub camera: Camera,
+    /// Near and far planes (view-space distances); `None`: from the orbit distance.
+    pub depth_range: Option<[f32; 2]>,
     pub style: RenderStyle,
     /// Linear RGB ambient light.
     pub ambient: Vec3,
@@ -133,6 +135,7 @@ impl FrameInput {
     pub fn new(camera: Camera) -> Self {
         FrameInput {
             camera,
+            depth_range: None,
             style: RenderStyle::Solid,
             ambient: Vec3::splat(0.1),
             lights: Vec::new(),
@@ -883,7 +886,8 @@ impl Renderer {
             light_count += 1;
         }
         let globals = GpuGlobals {
-            clip_from_world: camera::clip_from_world(&frame.camera, aspect).to_cols_array_2d(),
+            clip_from_world: camera::clip_from_world_in(&frame.camera, aspect, frame.depth_range)
+                .to_cols_array_2d(),
             camera_position: camera::eye_position(&frame.camera).extend(1.0).to_array(),
             ambient: frame.ambient.extend(0.0).to_array(),
             counts: [light_count as u32, 0, 0, 0],

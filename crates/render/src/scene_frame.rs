@@ -200,6 +200,9 @@ pub struct ViewOptions {
     pub selection: Selection,
     /// Replaces the scene's camera when set (the editor's orbit camera).
     pub camera: Option<Camera>,
+    /// Near and far planes fitted to the scene (view-space distances); `None`: from the
+    /// camera's orbit distance.
+    pub depth_range: Option<[f32; 2]>,
 }
 
 impl Default for ViewOptions {
@@ -213,6 +216,7 @@ impl Default for ViewOptions {
             lights: true,
             selection: Selection::None,
             camera: None,
+            depth_range: None,
         }
     }
 }
@@ -434,6 +438,7 @@ impl SceneRig {
         }
         let camera = view.camera.unwrap_or(self.scene.camera);
         let mut frame = FrameInput::new(camera);
+        frame.depth_range = view.depth_range;
         frame.style = view.style;
         frame.ambient = self.scene.ambient;
         frame.lights = state

@@ -99,7 +99,7 @@ pub fn recovery_ui(ctx: &Context, app: &mut EditorApp) {
         }
         Some(false) => {
             app.recovery_offer = None;
-            app.recovery.clear();
+            app.autosave.clear();
         }
         None => {}
     }

@@ -6,7 +6,7 @@ use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};
 use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
 use keyrig_core::LightKind;
 use transform_gizmo_egui::math::Transform;
-use transform_gizmo_egui::{GizmoConfig, GizmoExt, GizmoMode, GizmoOrientation, GizmoResult};
+use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrientation, GizmoResult};
 
 use crate::app::{EditorApp, RenderStyle};
 use crate::camera::Projection;
@@ -92,6 +92,16 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             errors.push(problem.to_string());
         }
 
+        record_bounds(app, &poses, &cpu_meshes);
+        // Framing after an import moves the camera before anything is drawn this frame.
+        let projection = match app.view.frame_request.take() {
+            Some(objects) => {
+                app.frame_objects(&objects);
+                Projection::new(&app.view.camera, rect)
+            }
+            None => projection,
+        };
+
         let gpu_drawn = gpu_ui(ui, app, rect, &eval, &state, &mut errors);
         let scene = app.doc.scene();
         if !gpu_drawn {
@@ -169,33 +179,34 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             pick_targets.push((p, Selected::Light(l)));
         }
 
-        // Gizmo for the selection (drawn last, on top).
-        let gizmo_active = gizmo_ui(ui, app, &projection, rect, &poses);
+        // Gizmo for the selection (drawn last, on top). It owns the primary button only on
+        // one of its handles; scroll, right/middle drags and drags that start elsewhere stay
+        // with the camera, as in Blender's viewport.
+        let gizmo_owns_primary = gizmo_ui(ui, app, &projection, rect, &response, &poses);
 
         // Camera navigation and picking.
-        if !gizmo_active {
-            let shift = ui.input(|i| i.modifiers.shift);
-            if response.dragged_by(egui::PointerButton::Primary) && !shift {
-                let d = response.drag_delta();
-                app.view.camera.orbit(d.x, d.y);
-            } else if response.dragged_by(egui::PointerButton::Secondary)
-                || response.dragged_by(egui::PointerButton::Middle)
-                || (response.dragged_by(egui::PointerButton::Primary) && shift)
-            {
-                let d = response.drag_delta();
-                app.view.camera.pan(d.x, d.y, rect.height());
-            }
-            if response.clicked() {
-                if let Some(pos) = response.interact_pointer_pos() {
-                    let hit = pick_targets
-                        .iter()
-                        .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
-                        .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)));
-                    app.selection.item = hit.map(|(_, s)| *s);
-                }
+        let shift = ui.input(|i| i.modifiers.shift);
+        let primary = response.dragged_by(egui::PointerButton::Primary) && !gizmo_owns_primary;
+        if primary && !shift {
+            let d = response.drag_delta();
+            app.view.camera.orbit(d.x, d.y);
+        } else if response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+            || (primary && shift)
+        {
+            let d = response.drag_delta();
+            app.view.camera.pan(d.x, d.y, rect.height());
+        }
+        if response.clicked() && !gizmo_owns_primary {
+            if let Some(pos) = response.interact_pointer_pos() {
+                let hit = pick_targets
+                    .iter()
+                    .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
+                    .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)));
+                app.selection.item = hit.map(|(_, s)| *s);
             }
         }
-        if response.hovered() {
+        if response.contains_pointer() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
                 app.view.camera.zoom(scroll);
@@ -233,6 +244,7 @@ fn gpu_ui(
             distance: c.distance,
             fov_y_deg: c.fov_y_deg,
         }),
+        depth_range: Some(c.depth_range(app.view.bounds_of(None))),
         ..keyrig_render::ViewOptions::default()
     };
     let ppp = ui.ctx().pixels_per_point() * app.view.resolution_scale.clamp(0.25, 1.0);
@@ -276,6 +288,29 @@ fn gpu_ui(
     };
     app.gpu = Some(gpu);
     drawn
+}
+
+/// Keeps each object's world bounds as drawn this frame (the deformed mesh; joints and origin
+/// for an object without one) for framing and the clip planes.
+fn record_bounds(app: &mut EditorApp, poses: &[Option<ObjectPose>], meshes: &[(usize, Vec<Vec3>, Vec<u32>)]) {
+    use crate::camera::Bounds;
+    let mut bounds: Vec<Option<Bounds>> = poses
+        .iter()
+        .map(|pose| {
+            let pose = pose.as_ref()?;
+            let origin: Vec3 = pose.world_from_object.translation.into();
+            Bounds::of(std::iter::once(origin).chain(
+                pose.object_from_joint.iter().map(|f| (pose.world_from_object * *f).translation.into()),
+            ))
+        })
+        .collect();
+    for (o, world, _) in meshes {
+        if let (Some(slot), Some(mesh)) = (bounds.get_mut(*o), Bounds::of(world.iter().copied())) {
+            // A mesh's own box: its joints may sit outside it (a root far below the feet).
+            *slot = Some(mesh);
+        }
+    }
+    app.view.object_bounds = bounds;
 }
 
 fn draw_grid(painter: &egui::Painter, projection: &Projection) {
@@ -417,15 +452,26 @@ fn to_transform(a: Affine3A) -> Transform {
     Transform::from_scale_rotation_translation(s.as_dvec3(), r.as_dquat(), t.as_dvec3())
 }
 
-/// Shows the gizmo; returns true while it is hovered or dragged (so the camera stays put).
+/// Shows the gizmo and lets it take the primary button when the pointer is on one of its
+/// handles (transform-gizmo's pick test); returns true while it owns the primary button (a
+/// press on a handle, until release), so the camera neither orbits nor picks then.
+///
+/// transform-gizmo-egui's `interact` puts a click-and-drag widget under the pointer wherever
+/// it is, which takes hover, scroll and every drag from the viewport while anything is
+/// selected; this drives the gizmo with [`Gizmo::update`] instead, from the viewport's own
+/// response.
 fn gizmo_ui(
     ui: &mut Ui,
     app: &mut EditorApp,
     projection: &Projection,
     rect: Rect,
+    response: &egui::Response,
     poses: &[Option<ObjectPose>],
 ) -> bool {
-    let Some((world, kind)) = gizmo_target(app, poses) else { return false };
+    let Some((world, kind)) = gizmo_target(app, poses) else {
+        app.gizmo_drag = false;
+        return false;
+    };
     let modes = match kind {
         GizmoKind::Joint { .. } => GizmoMode::all_rotate(),
         GizmoKind::Object(_) => GizmoMode::all_rotate() | GizmoMode::all_translate(),
@@ -445,11 +491,42 @@ fn gizmo_ui(
         ),
         modes,
         orientation: GizmoOrientation::Local,
+        pixels_per_point: ui.ctx().pixels_per_point(),
         ..Default::default()
     });
-    let result = app.gizmo.interact(ui, &[to_transform(world)]);
-    let Some((result, transforms)) = result else { return app.gizmo.is_focused() };
-    let Some(new) = transforms.first() else { return true };
+    let targets = [to_transform(world)];
+    let (hover, pressed, down, any_down) = ui.input(|i| {
+        (i.pointer.hover_pos(), i.pointer.primary_pressed(), i.pointer.primary_down(), i.pointer.any_down())
+    });
+    let cursor = hover.unwrap_or_default();
+    let interaction = |hovered: bool, drag_started: bool, dragging: bool| GizmoInteraction {
+        cursor_pos: (cursor.x, cursor.y),
+        hovered,
+        drag_started,
+        dragging,
+    };
+    if !app.gizmo_drag {
+        // Place the handles for this frame's target and camera (no input) so that the pick
+        // test below sees what is drawn.
+        let _ = app.gizmo.update(interaction(false, false, false), &targets);
+    }
+    // No other drag (orbit, pan) under way, or one starting now.
+    let free = !any_down || pressed;
+    let on_handle = free
+        && response.contains_pointer()
+        && hover.is_some_and(|p| rect.contains(p) && app.gizmo.pick_preview((p.x, p.y)));
+    if pressed && on_handle {
+        app.gizmo_drag = true;
+    }
+    let owns = app.gizmo_drag || on_handle;
+    let result =
+        app.gizmo.update(interaction(owns, pressed && app.gizmo_drag, down && app.gizmo_drag), &targets);
+    if !down {
+        app.gizmo_drag = false;
+    }
+    paint_gizmo(ui, &app.gizmo, rect);
+    let Some((result, transforms)) = result else { return owns };
+    let Some(new) = transforms.first() else { return owns };
     let new_rotation: Quat = DQuat::from(new.rotation).as_quat().normalize();
     let new_translation: Vec3 = DVec3::from(new.translation).as_vec3();
     let group = "gizmo";
@@ -458,9 +535,9 @@ fn gizmo_ui(
             // F(j) = F(p)·R(j)·T(j): T = (world_from_parent·R(j))⁻¹ · new world rotation.
             let scene = app.doc.scene();
             let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else {
-                return true;
+                return owns;
             };
-            let Some(pose) = poses.get(object).and_then(|p| p.as_ref()) else { return true };
+            let Some(pose) = poses.get(object).and_then(|p| p.as_ref()) else { return owns };
             let j = &skeleton.joints[joint];
             let parent_world = match j.parent.filter(|&p| p < joint) {
                 Some(p) => pose.world_from_object * pose.object_from_joint[p],
@@ -493,7 +570,27 @@ fn gizmo_ui(
             }
         }
     }
-    true
+    owns
+}
+
+/// Draws the gizmo's triangles (transform-gizmo's draw data, in screen points).
+fn paint_gizmo(ui: &Ui, gizmo: &transform_gizmo_egui::Gizmo, rect: Rect) {
+    let draw = gizmo.draw();
+    let vertices = draw
+        .vertices
+        .into_iter()
+        .zip(draw.colors)
+        .map(|(pos, [r, g, b, a])| egui::epaint::Vertex {
+            pos: pos.into(),
+            uv: Pos2::default(),
+            color: egui::Rgba::from_rgba_premultiplied(r, g, b, a).into(),
+        })
+        .collect();
+    ui.painter().with_clip_rect(rect).add(egui::Mesh {
+        indices: draw.indices,
+        vertices,
+        ..Default::default()
+    });
 }
 
 /// "Cross-section at elbow: 0.98 × rest" for the selected joint, from the last skinned frame.

@@ -1,0 +1,381 @@
+//! The real `keyrig` binary in a real X window (Xvfb), driven by real X input events from
+//! `xdotool` (XTEST: the same path a mouse and keyboard take through winit and egui-winit):
+//! select the wrist, orbit with the mouse, turn on record mode (R), key a rotation with a
+//! gizmo drag, copy the key and paste it at the last frame (Ctrl+C, End, Ctrl+V through the
+//! X clipboard), save with
+//! Ctrl+S into the save dialog (typed path, Enter); then the saved RON file must hold the keys,
+//! and a screenshot of the screen is taken (`import -window root`).
+//!
+//! Where to click comes from the same editor in an egui_kittest harness of the window's size
+//! that receives the same actions (its layout is the window's: same code, same fonts, one
+//! pixel per point under Xvfb), so the test aims at the wrist, its gizmo ring and the new key
+//! diamond wherever the layout puts them.
+//!
+//! With `KEYRIG_UPDATE_SCREENSHOTS=1` the screenshots are copied into `docs/screenshots/`
+//! for docs/guide.md (also an imported glTF character and an MD2 model opened in the editor).
+//!
+//! Needs `Xvfb`, `xdotool` and ImageMagick's `import` (`.ci/run` installs them); it fails,
+//! saying what to install, without them.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use egui::{Event, Modifiers, PointerButton, Pos2};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use keyrig_editor::camera::Projection;
+use keyrig_editor::channels::{self, ChannelId};
+use keyrig_editor::EditorApp;
+
+const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
+/// transform-gizmo's view ring radius with default visuals (see ui_gizmo.rs).
+const VIEW_RING_RADIUS: f32 = 84.0;
+/// How long an X event is given to reach the editor and be drawn (lavapipe draws a frame in
+/// tens of milliseconds).
+const SETTLE: Duration = Duration::from_millis(60);
+
+/// A child process killed (and reaped) when dropped.
+struct Guard(Child);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn require(tool: &str, package: &str) {
+    let found = Command::new("sh")
+        .args(["-c", &format!("command -v {tool}")])
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(found, "`{tool}` is not installed: install the Debian package `{package}` (.ci/run does)");
+}
+
+/// Starts Xvfb on a free display number with a fixed 1280×800 screen.
+fn start_xvfb() -> (Guard, String) {
+    for n in 0..40 {
+        let display = 140 + (std::process::id() as usize + n * 7) % 400;
+        if Path::new(&format!("/tmp/.X11-unix/X{display}")).exists()
+            || Path::new(&format!("/tmp/.X{display}-lock")).exists()
+        {
+            continue;
+        }
+        let child = Command::new("Xvfb")
+            .args([&format!(":{display}"), "-screen", "0", "1280x800x24", "-nolisten", "tcp"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start Xvfb");
+        let guard = Guard(child);
+        let socket = format!("/tmp/.X11-unix/X{display}");
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while Instant::now() < deadline {
+            if Path::new(&socket).exists() {
+                return (guard, format!(":{display}"));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+    panic!("Xvfb did not start on any display number");
+}
+
+/// An X session: Xvfb plus a home folder for the editor's data (recovery, recent files).
+struct Session {
+    _turn: std::sync::MutexGuard<'static, ()>,
+    display: String,
+    home: tempfile::TempDir,
+    _xvfb: Guard,
+}
+
+/// One X session at a time: two editors on lavapipe at once slow each other past the
+/// input timings.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+impl Session {
+    fn new() -> Self {
+        require("Xvfb", "xvfb");
+        require("xdotool", "xdotool");
+        require("import", "imagemagick");
+        let turn = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let (xvfb, display) = start_xvfb();
+        Session { _turn: turn, display, home: tempfile::tempdir().expect("temp dir"), _xvfb: xvfb }
+    }
+
+    /// Runs a command on the display and returns its standard output; panics with its error
+    /// output when it fails.
+    fn run(&self, program: &str, args: &[&str]) -> String {
+        let out = Command::new("timeout")
+            .arg("20")
+            .arg(program)
+            .args(args)
+            .env("DISPLAY", &self.display)
+            .output()
+            .unwrap_or_else(|e| panic!("{program}: {e}"));
+        assert!(out.status.success(), "{program} {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    }
+
+    fn xdo(&self, args: &[&str]) {
+        self.run("xdotool", args);
+        std::thread::sleep(SETTLE);
+    }
+
+    /// Starts `keyrig` with `args` and waits (30 s at most) for its window; returns the
+    /// process and the window id.
+    fn start_keyrig(&self, args: &[&str]) -> (Guard, String) {
+        let log = self.home.path().join(format!("keyrig-{}.log", args.len()));
+        let child = Command::new(env!("CARGO_BIN_EXE_keyrig"))
+            .args(args)
+            .env("DISPLAY", &self.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("HOME", self.home.path())
+            .env("XDG_DATA_HOME", self.home.path().join("data"))
+            .env("XDG_CONFIG_HOME", self.home.path().join("config"))
+            .stdout(Stdio::null())
+            .stderr(std::fs::File::create(&log).expect("log file"))
+            .spawn()
+            .expect("start keyrig");
+        let mut keyrig = Guard(child);
+        let deadline = Instant::now() + Duration::from_secs(30);
+        loop {
+            // `search --sync` waits for the window; a short timeout per try lets a crashed
+            // editor be noticed.
+            let out = Command::new("timeout")
+                .args(["3", "xdotool", "search", "--sync", "--onlyvisible", "--name", "keyrig"])
+                .env("DISPLAY", &self.display)
+                .output()
+                .expect("xdotool");
+            let text = String::from_utf8_lossy(&out.stdout);
+            if let Some(id) = text.lines().find(|l| !l.trim().is_empty()) {
+                let id = id.trim().to_owned();
+                self.run("xdotool", &["windowmove", "--sync", &id, "0", "0"]);
+                self.run("xdotool", &["windowsize", "--sync", &id, "1280", "800"]);
+                self.run("xdotool", &["windowfocus", "--sync", &id]);
+                // The first frames: fonts, the GPU viewport, the demo's meshes.
+                std::thread::sleep(Duration::from_secs(2));
+                return (keyrig, id);
+            }
+            let exited = keyrig.0.try_wait().ok().flatten();
+            if exited.is_some() || Instant::now() > deadline {
+                let log = std::fs::read_to_string(&log).unwrap_or_default();
+                panic!(
+                    "the keyrig window did not appear on DISPLAY {} within 30 s (exit: {exited:?}); \
+                     keyrig's error output:\n{log}",
+                    self.display
+                );
+            }
+        }
+    }
+
+    fn screenshot(&self, name: &str) -> PathBuf {
+        let path = self.home.path().join(format!("{name}.png"));
+        self.run("import", &["-window", "root", path.to_str().expect("utf-8 path")]);
+        let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+        assert!(size > 10_000, "{name}: the screenshot is {size} bytes");
+        if std::env::var_os("KEYRIG_UPDATE_SCREENSHOTS").is_some() && !name.starts_with("probe") {
+            let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/screenshots");
+            std::fs::create_dir_all(&docs).expect("docs/screenshots");
+            std::fs::copy(&path, docs.join(format!("{name}.png"))).expect("copy screenshot");
+        }
+        path
+    }
+
+    fn mouse_to(&self, p: Pos2) {
+        self.xdo(&["mousemove", &format!("{}", p.x.round()), &format!("{}", p.y.round())]);
+    }
+
+    /// Press and release in separate frames, as a hand clicks.
+    fn click(&self, p: Pos2) {
+        self.mouse_to(p);
+        self.xdo(&["mousedown", "1"]);
+        self.xdo(&["mouseup", "1"]);
+    }
+
+    /// Presses the left button at `path[0]`, moves along `path`, releases at its end.
+    fn drag(&self, path: &[Pos2]) {
+        self.mouse_to(path[0]);
+        self.xdo(&["mousedown", "1"]);
+        for &p in &path[1..] {
+            self.mouse_to(p);
+        }
+        self.xdo(&["mouseup", "1"]);
+    }
+
+    fn key(&self, keys: &str) {
+        self.xdo(&["key", "--clearmodifiers", keys]);
+    }
+}
+
+/// The same drag in the model harness, one frame per event.
+fn model_drag(h: &mut Harness<'_, EditorApp>, path: &[Pos2]) {
+    let button = |pos, pressed| Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed,
+        modifiers: Modifiers::NONE,
+    };
+    h.event(Event::PointerMoved(path[0]));
+    h.run();
+    h.event(button(path[0], true));
+    h.run();
+    for &p in &path[1..] {
+        h.event(Event::PointerMoved(p));
+        h.run();
+    }
+    h.event(button(path[path.len() - 1], false));
+    h.run();
+}
+
+/// The centre of the light grey pixels (a key diamond) within `radius` of `around` in a
+/// screenshot; `None` when there are none.
+fn bright_centroid(png: &Path, around: Pos2, radius: f32) -> Option<Pos2> {
+    let image = image::open(png).ok()?.to_rgb8();
+    let (mut sum, mut n) = (egui::Vec2::ZERO, 0.0f32);
+    let (x0, y0) = ((around.x - radius).max(0.0) as u32, (around.y - radius).max(0.0) as u32);
+    for y in y0..((around.y + radius) as u32).min(image.height()) {
+        for x in x0..((around.x + radius) as u32).min(image.width()) {
+            let [r, g, b] = image.get_pixel(x, y).0;
+            let grey = r.abs_diff(g) < 16 && g.abs_diff(b) < 16;
+            if grey && r > 170 {
+                sum += egui::vec2(x as f32, y as f32);
+                n += 1.0;
+            }
+        }
+    }
+    (n > 0.0).then(|| Pos2::new(sum.x / n + 0.5, sum.y / n + 0.5))
+}
+
+fn wrist_on_screen(app: &EditorApp) -> Pos2 {
+    let rect = app.view.viewport_rect.expect("laid out");
+    let pose = app.object_pose_now(0).expect("the arm");
+    let at: glam::Vec3 = (pose.world_from_object * pose.object_from_joint[3]).translation.into();
+    Projection::new(&app.view.camera, rect).project(at).expect("the wrist is in view")
+}
+
+fn frame_of(scene: &keyrig_core::Scene, id: ChannelId) -> Vec<i64> {
+    channels::key_times(scene, id).iter().map(|t| (t * scene.fps).round() as i64).collect()
+}
+
+#[test]
+fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
+    let session = Session::new();
+    let (_keyrig, window) = session.start_keyrig(&[]);
+
+    // The model: the same editor, the same window size, receiving the same actions.
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+
+    // 1. Select the wrist in the outliner.
+    let wrist_label = h.get_by_label("wrist").rect().center();
+    session.click(wrist_label);
+    h.get_by_label("wrist").click();
+    h.run();
+
+    // 2. Orbit: a left drag on empty viewport space, 80 points to the right.
+    let rect = h.state().view.viewport_rect.expect("laid out");
+    let start = rect.left_bottom() + egui::vec2(rect.width() * 0.15, -rect.height() * 0.12);
+    let orbit: Vec<Pos2> = (0..=8).map(|i| start + egui::vec2(10.0 * i as f32, 0.0)).collect();
+    session.drag(&orbit);
+    model_drag(&mut h, &orbit);
+
+    // 3. Record mode (R) and frame 10 (Right arrow ten times).
+    session.key("r");
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "10", "Right"]);
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    common::go_to_frame(&mut h, 10);
+    assert!(h.state().record);
+
+    // 4. Key a rotation: drag a quarter turn along the gizmo's view ring.
+    let centre = wrist_on_screen(h.state());
+    let ring: Vec<Pos2> = (0..=18)
+        .map(|step| {
+            let a = (step as f32 * 5.0).to_radians();
+            centre + egui::vec2(a.cos(), -a.sin()) * VIEW_RING_RADIUS
+        })
+        .collect();
+    session.drag(&ring);
+    model_drag(&mut h, &ring);
+    h.event(Event::PointerMoved(ring[ring.len() - 1] + egui::vec2(0.0, -200.0)));
+    h.run();
+    session.mouse_to(ring[ring.len() - 1] + egui::vec2(0.0, -200.0));
+    assert_eq!(frame_of(h.state().doc.scene(), WRIST), vec![10], "the model keyed the wrist");
+    let keyed_screenshot = session.screenshot("e2e-keyed-wrist");
+
+    // 5. Copy the new key (click its diamond, Ctrl+C) and paste it at the last frame, 90
+    // (End, Ctrl+V).
+    let diamond = h.get_by_label("key wrist rotation frame 10").rect().center();
+    // The real window's dope sheet can sit a few points from the model's (panel sizes settle
+    // differently): aim at the light grey diamond found in a screenshot near the model's spot.
+    let diamond = bright_centroid(&session.screenshot("probe-before-copy"), diamond, 16.0).unwrap_or(diamond);
+    session.click(diamond);
+    session.key("ctrl+c");
+    session.key("End");
+    session.key("ctrl+v");
+
+    // 6. Save with Ctrl+S: the dialog proposes "Untitled.ron" with "Untitled" selected; the
+    // typed path replaces it and Enter confirms.
+    let saved = session.home.path().join("e2e-walk.ron");
+    session.key("ctrl+s");
+    std::thread::sleep(Duration::from_millis(500));
+    let typed = session.home.path().join("e2e-walk");
+    session.xdo(&["type", "--delay", "15", typed.to_str().expect("utf-8 path")]);
+    session.screenshot("e2e-save-dialog");
+    session.key("Return");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !saved.exists() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    std::thread::sleep(Duration::from_millis(400));
+    let screenshot = session.screenshot("e2e-saved");
+    assert!(
+        saved.exists(),
+        "Ctrl+S and the typed path did not save {} (screenshot: {})",
+        saved.display(),
+        screenshot.display()
+    );
+
+    // The saved file holds the keyed rotation at frame 10 and its pasted copy at frame 40.
+    let scene = keyrig_io::scene_file::load(&saved).expect("the saved scene loads");
+    assert_eq!(
+        frame_of(&scene, WRIST),
+        vec![10, 90],
+        "wrist keys in the saved file (screenshots: {}, {})",
+        keyed_screenshot.display(),
+        screenshot.display()
+    );
+    let key_10 = channels::copy_key(&scene, WRIST, 0).expect("key 10");
+    let key_90 = channels::copy_key(&scene, WRIST, 1).expect("key 90");
+    assert_eq!(key_10.value, key_90.value, "the pasted key holds the copied rotation");
+    let model_key = channels::copy_key(h.state().doc.scene(), WRIST, 0).expect("model key");
+    if let (channels::ChannelValue::Rotation(a), channels::ChannelValue::Rotation(b)) =
+        (key_10.value, model_key.value)
+    {
+        assert!(a.angle_between(b).to_degrees() < 5.0, "the real drag turned the wrist as the model's did");
+    }
+    let _ = window;
+}
+
+/// Screenshots for docs/guide.md: an imported glTF character and an MD2 model, each opened
+/// in the real window (skipped quickly unless `KEYRIG_UPDATE_SCREENSHOTS` is set, as they
+/// only feed the guide).
+#[test]
+fn guide_screenshots_of_imported_models() {
+    if std::env::var_os("KEYRIG_UPDATE_SCREENSHOTS").is_none() {
+        return;
+    }
+    let session = Session::new();
+    for (name, model) in [
+        ("guide-cesium-man", "gltf/CesiumMan/CesiumMan.glb"),
+        ("guide-md2-ratamahatta", "md2/ratamahatta/ratamahatta.md2"),
+    ] {
+        let path = common::corpus(model);
+        let (_keyrig, _window) = session.start_keyrig(&["edit", path.to_str().expect("utf-8 path")]);
+        std::thread::sleep(Duration::from_secs(3));
+        session.screenshot(name);
+    }
+}
