@@ -4,6 +4,8 @@
 //! evaluable track (see [`crate::track`]) whose constructor returns a typed error.
 
 use glam::Vec3;
+use std::sync::Arc;
+
 use serde::{Deserialize, Serialize};
 
 /// How the segment that *starts* at a key is interpolated (the mode of key i governs
@@ -176,22 +178,25 @@ impl<T> Key<T> {
 }
 
 /// An editable, unvalidated list of keys. Serialized as a plain list.
+///
+/// The keys are shared copy-on-write ([`Keys`]): cloning a track — an undo snapshot, a copy of
+/// the scene — shares them, and the first change to one copy copies that track only.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(transparent)]
+#[serde(transparent, bound(serialize = "T: Serialize", deserialize = "T: Deserialize<'de>"))]
 pub struct RawTrack<T> {
-    pub keys: Vec<Key<T>>,
+    pub keys: Keys<T>,
 }
 
 impl<T> Default for RawTrack<T> {
     fn default() -> Self {
-        RawTrack { keys: Vec::new() }
+        RawTrack { keys: Keys::default() }
     }
 }
 
 impl<T> RawTrack<T> {
     #[must_use]
     pub fn new(keys: Vec<Key<T>>) -> Self {
-        RawTrack { keys }
+        RawTrack { keys: Keys::from(keys) }
     }
 
     #[must_use]
@@ -202,6 +207,74 @@ impl<T> RawTrack<T> {
     #[must_use]
     pub fn len(&self) -> usize {
         self.keys.len()
+    }
+}
+
+/// The keys of a track, shared copy-on-write: reads go straight to the list
+/// (`Deref<Target = Vec<Key<T>>>`), and a mutable access (`DerefMut`) first copies the list if
+/// another track still shares it ([`Arc::make_mut`]). So a copy of a scene costs one pointer
+/// per track, an edit copies only the tracks it changes, and [`Keys::shares_with`] tells whether
+/// two tracks are still the same list — which is how the scene evaluator learns what an edit
+/// changed without comparing keys.
+#[derive(Debug)]
+pub struct Keys<T>(Arc<Vec<Key<T>>>);
+
+impl<T> Keys<T> {
+    /// True when both are the same shared list (neither was changed since one was cloned from
+    /// the other).
+    #[must_use]
+    pub fn shares_with(&self, other: &Keys<T>) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl<T> Clone for Keys<T> {
+    fn clone(&self) -> Self {
+        Keys(Arc::clone(&self.0))
+    }
+}
+
+impl<T> Default for Keys<T> {
+    fn default() -> Self {
+        Keys(Arc::new(Vec::new()))
+    }
+}
+
+impl<T> From<Vec<Key<T>>> for Keys<T> {
+    fn from(keys: Vec<Key<T>>) -> Self {
+        Keys(Arc::new(keys))
+    }
+}
+
+impl<T> std::ops::Deref for Keys<T> {
+    type Target = Vec<Key<T>>;
+
+    fn deref(&self) -> &Vec<Key<T>> {
+        &self.0
+    }
+}
+
+impl<T: Clone> std::ops::DerefMut for Keys<T> {
+    fn deref_mut(&mut self) -> &mut Vec<Key<T>> {
+        Arc::make_mut(&mut self.0)
+    }
+}
+
+impl<T: PartialEq> PartialEq for Keys<T> {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0) || *self.0 == *other.0
+    }
+}
+
+impl<T: Serialize> Serialize for Keys<T> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.0.serialize(serializer)
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Keys<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        Vec::<Key<T>>::deserialize(deserializer).map(Keys::from)
     }
 }
 

@@ -9,7 +9,7 @@ pub mod scene;
 pub mod track;
 pub mod validate;
 
-pub use key::{Animated, Interpolation, Key, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
+pub use key::{Animated, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
     ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,

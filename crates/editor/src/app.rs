@@ -236,16 +236,24 @@ impl EditorApp {
         let (document, revision) = self.doc.cache_key();
         let key = (document, revision, self.meshes.generation());
         let mut cache = self.evaluator.borrow_mut();
-        match &*cache {
-            Some((k, eval)) if *k == key => Arc::clone(eval),
-            _ => {
-                let base_dir = self.doc.path().and_then(std::path::Path::parent);
-                let loaded = self.meshes.loaded_for(base_dir, self.doc.scene());
-                let eval = Arc::new(SceneEvaluator::new(self.doc.scene(), &loaded));
-                *cache = Some((key, Arc::clone(&eval)));
-                eval
+        if let Some((k, eval)) = &*cache {
+            if *k == key {
+                return Arc::clone(eval);
             }
         }
+        let base_dir = self.doc.path().and_then(std::path::Path::parent);
+        let loaded = self.meshes.loaded_for(base_dir, self.doc.scene());
+        // After an edit of the same document only what it changed is rebuilt (the keys of
+        // untouched channels are still shared with the evaluator's copies).
+        let eval = match cache.take() {
+            Some(((document_before, _, _), mut eval)) if document_before == document => {
+                Arc::make_mut(&mut eval).update(self.doc.scene(), &loaded);
+                eval
+            }
+            _ => Arc::new(SceneEvaluator::new(self.doc.scene(), &loaded)),
+        };
+        *cache = Some((key, Arc::clone(&eval)));
+        eval
     }
 
     /// The key the evaluator was built for: the GPU view rebuilds its rig when it changes.

@@ -139,7 +139,7 @@ pub fn key_at(scene: &Scene, id: ChannelId, time: f64) -> Option<usize> {
 /// Two key times closer than this are the same frame.
 pub const TIME_EPS: f64 = 5e-4;
 
-fn insert_sorted<T>(track: &mut RawTrack<T>, key: Key<T>) -> usize {
+fn insert_sorted<T: Clone>(track: &mut RawTrack<T>, key: Key<T>) -> usize {
     if let Some(i) = track.keys.iter().position(|k| (k.time - key.time).abs() < TIME_EPS) {
         // Keep the existing key's interpolation settings, replace its value.
         let old = &mut track.keys[i];
@@ -232,7 +232,7 @@ pub fn move_keys(scene: &mut Scene, id: ChannelId, indices: &[usize], delta: f64
     with_track_mut!(c, t => move_in_track(t, indices, delta))
 }
 
-fn move_in_track<T>(track: &mut RawTrack<T>, indices: &[usize], delta: f64) -> Option<Vec<usize>> {
+fn move_in_track<T: Clone>(track: &mut RawTrack<T>, indices: &[usize], delta: f64) -> Option<Vec<usize>> {
     if indices.iter().any(|&i| i >= track.keys.len()) {
         return None;
     }
@@ -244,7 +244,7 @@ fn move_in_track<T>(track: &mut RawTrack<T>, indices: &[usize], delta: f64) -> O
         return None;
     }
     // Permute the keys into their new order.
-    let mut old: Vec<Option<Key<T>>> = std::mem::take(&mut track.keys).into_iter().map(Some).collect();
+    let mut old: Vec<Option<Key<T>>> = std::mem::take(&mut *track.keys).into_iter().map(Some).collect();
     let mut new_index_of_old = vec![0; old.len()];
     for (new_i, &(time, old_i)) in times.iter().enumerate() {
         let mut key = old[old_i].take()?;

@@ -29,7 +29,7 @@ pub struct GpuFrame<'a> {
     pub view: ViewOptions,
     /// Vertex-animated meshes (MD2) of objects whose mesh is a file, by object index; only
     /// read when the rig is rebuilt (see [`GpuView::needs_rig`]).
-    pub morph_meshes: std::collections::HashMap<usize, keyrig_render::MorphMesh>,
+    pub morph_meshes: std::collections::HashMap<usize, std::sync::Arc<keyrig_render::MorphMesh>>,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -168,9 +168,10 @@ impl GpuView {
     pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.rig_key) {
-            self.rig = None;
             let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes);
-            rig.upload(&mut self.renderer).map_err(|e| e.to_string())?;
+            // Only the meshes the edit rebuilt go to the GPU again.
+            let previous = self.rig.take().map(|(_, rig)| rig);
+            rig.upload_changed(&mut self.renderer, previous.as_ref()).map_err(|e| e.to_string())?;
             self.rig = Some((frame.rig_key, rig));
         }
         let Some((_, rig)) = &self.rig else { return Err("no scene prepared for rendering".to_owned()) };

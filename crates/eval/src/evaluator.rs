@@ -7,7 +7,9 @@ use std::sync::Arc;
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
 use keyrig_core::track::TrackValue;
-use keyrig_core::{Animated, AnimatedTrack, DeformerKind, LightKind, MeshSource, Scene};
+use keyrig_core::{
+    Animated, AnimatedTrack, DeformerKind, DeformerSettings, Keys, LightKind, MeshSource, Scene,
+};
 use keyrig_skin::{
     mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
 };
@@ -47,31 +49,52 @@ impl fmt::Display for EvalProblem {
 }
 
 /// A channel's validated track, or its static value when its keys are invalid.
-#[derive(Clone, Debug)]
-enum Slot<T: TrackValue> {
+#[derive(Debug)]
+enum SlotEval<T: TrackValue> {
     Track(AnimatedTrack<T>),
     Fallback(T),
 }
 
+/// One channel: what it was built from (the shared keys and the static value), its evaluable
+/// form and the problem that made it fall back. Cloning shares the evaluable form.
+#[derive(Clone, Debug)]
+struct Slot<T: TrackValue> {
+    keys: Keys<T>,
+    value: T,
+    eval: Arc<SlotEval<T>>,
+    problem: Option<EvalProblem>,
+}
+
 impl<T: TrackValue> Slot<T> {
-    fn new(animated: &Animated<T>, id: ChannelId, problems: &mut Vec<EvalProblem>) -> Self {
-        match AnimatedTrack::new(animated) {
-            Ok(track) => Slot::Track(track),
-            Err(e) => {
-                problems.push(EvalProblem {
+    fn new(animated: &Animated<T>, id: ChannelId) -> Self {
+        let (eval, problem) = match AnimatedTrack::new(animated) {
+            Ok(track) => (SlotEval::Track(track), None),
+            Err(e) => (
+                SlotEval::Fallback(animated.value),
+                Some(EvalProblem {
                     path: keyrig_core::validate::track_error_path(&id.field_path(), &e),
                     message: e.to_string(),
-                });
-                Slot::Fallback(animated.value)
-            }
+                }),
+            ),
+        };
+        Slot { keys: animated.track.keys.clone(), value: animated.value, eval: Arc::new(eval), problem }
+    }
+
+    /// Rebuilds the slot when its channel changed (its keys are no longer the list it was
+    /// built from, or its static value differs); true when it did.
+    fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
+        if self.keys.shares_with(&animated.track.keys) && self.value == animated.value {
+            return false;
         }
+        *self = Slot::new(animated, id);
+        true
     }
 
     #[inline]
     fn sample(&self, t: f64) -> T {
-        match self {
-            Slot::Track(track) => track.sample(t),
-            Slot::Fallback(v) => *v,
+        match &*self.eval {
+            SlotEval::Track(track) => track.sample(t),
+            SlotEval::Fallback(v) => *v,
         }
     }
 }
@@ -118,6 +141,68 @@ struct ObjectRig {
     rest_palette: Option<JointPalette>,
     morph: Option<MorphRig>,
     deformer: DeformerKind,
+    /// What the skeleton's rest data, the mesh and its bindings were built from: when an edit
+    /// leaves these as they were, they are kept.
+    built_from: RestSource,
+    /// Problems of the skeleton, the mesh or the clip (channel problems live in the slots).
+    problems: Vec<EvalProblem>,
+}
+
+/// The parts of an object that its rest data, mesh and bindings depend on.
+#[derive(Clone, Debug, PartialEq)]
+struct RestSource {
+    mesh: Option<MeshSource>,
+    deformer: DeformerSettings,
+    /// Per joint: parent, rest translation, rest rotation; `None` without a skeleton.
+    joints: Option<Vec<(Option<usize>, Vec3, Quat)>>,
+    /// The loaded mesh, by identity.
+    loaded: Option<LoadedKey>,
+}
+
+/// A loaded mesh compared by identity (the same shared data), not by contents.
+#[derive(Clone, Debug)]
+enum LoadedKey {
+    Skinned(Arc<SkinnedMesh>),
+    Morph(Arc<MorphClips>),
+    Static,
+}
+
+impl PartialEq for LoadedKey {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (LoadedKey::Skinned(a), LoadedKey::Skinned(b)) => Arc::ptr_eq(a, b),
+            (LoadedKey::Morph(a), LoadedKey::Morph(b)) => Arc::ptr_eq(a, b),
+            (LoadedKey::Static, LoadedKey::Static) => true,
+            _ => false,
+        }
+    }
+}
+
+impl RestSource {
+    fn of(object: &keyrig_core::Object, loaded: Option<&LoadedMesh>) -> Self {
+        RestSource {
+            mesh: object.mesh.clone(),
+            deformer: object.deformer,
+            joints: object
+                .skeleton
+                .as_ref()
+                .map(|s| s.joints.iter().map(|j| (j.parent, j.rest_translation, j.rest_rotation)).collect()),
+            loaded: loaded.map(|l| match l {
+                LoadedMesh::Skinned(m) => LoadedKey::Skinned(Arc::clone(m)),
+                LoadedMesh::Morph(c) => LoadedKey::Morph(Arc::clone(c)),
+                LoadedMesh::Static => LoadedKey::Static,
+            }),
+        }
+    }
+}
+
+/// What [`SceneEvaluator::update`] rebuilt.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rebuilt {
+    /// Channels whose tracks were validated again.
+    pub channels: usize,
+    /// Objects whose skeleton rest data, mesh and bindings were built again.
+    pub meshes: usize,
 }
 
 #[derive(Clone, Debug)]
@@ -190,24 +275,72 @@ impl SceneEvaluator {
     /// skeleton.
     #[must_use]
     pub fn new(scene: &Scene, meshes: &HashMap<usize, LoadedMesh>) -> Self {
-        let mut problems = Vec::new();
-        let objects = (0..scene.objects.len())
-            .map(|o| ObjectRig::new(scene, o, meshes.get(&o), &mut problems))
-            .collect();
-        let lights = scene
-            .lights
-            .iter()
-            .enumerate()
-            .map(|(l, light)| LightRig {
-                kind: light.kind,
-                enabled: light.enabled,
-                position: Slot::new(&light.position, ChannelId::LightPosition(l), &mut problems),
-                direction: Slot::new(&light.direction, ChannelId::LightDirection(l), &mut problems),
-                colour: Slot::new(&light.colour, ChannelId::LightColour(l), &mut problems),
-                intensity: Slot::new(&light.intensity, ChannelId::LightIntensity(l), &mut problems),
-            })
-            .collect();
-        SceneEvaluator { fps: scene.fps, objects, lights, problems }
+        let mut eval = SceneEvaluator {
+            fps: scene.fps,
+            objects: (0..scene.objects.len()).map(|o| ObjectRig::new(scene, o, meshes.get(&o))).collect(),
+            lights: scene.lights.iter().enumerate().map(|(l, light)| LightRig::new(l, light)).collect(),
+            problems: Vec::new(),
+        };
+        eval.collect_problems();
+        eval
+    }
+
+    /// Brings the evaluator in step with `scene` after an edit, rebuilding only what the edit
+    /// changed: a channel whose keys are still the list it was built from (keyrig-core's
+    /// copy-on-write [`Keys`]) and whose static value is unchanged keeps its validated track;
+    /// an object whose mesh source, deformer settings, skeleton rest pose and loaded mesh are
+    /// unchanged keeps its mesh and bindings. Returns what was rebuilt.
+    pub fn update(&mut self, scene: &Scene, meshes: &HashMap<usize, LoadedMesh>) -> Rebuilt {
+        let mut rebuilt = Rebuilt::default();
+        self.fps = scene.fps;
+        self.objects.truncate(scene.objects.len());
+        for o in 0..scene.objects.len() {
+            let loaded = meshes.get(&o);
+            let object = &scene.objects[o];
+            let same_rest =
+                self.objects.get(o).is_some_and(|rig| rig.built_from == RestSource::of(object, loaded));
+            if same_rest {
+                rebuilt.channels += self.objects[o].refresh(scene, o);
+            } else {
+                let rig = ObjectRig::new(scene, o, loaded);
+                rebuilt.channels += rig.channel_count();
+                rebuilt.meshes += 1;
+                if o < self.objects.len() {
+                    self.objects[o] = rig;
+                } else {
+                    self.objects.push(rig);
+                }
+            }
+        }
+        self.lights.truncate(scene.lights.len());
+        for (l, light) in scene.lights.iter().enumerate() {
+            match self.lights.get_mut(l) {
+                Some(rig) => rebuilt.channels += rig.refresh(l, light),
+                None => {
+                    self.lights.push(LightRig::new(l, light));
+                    rebuilt.channels += 4;
+                }
+            }
+        }
+        self.collect_problems();
+        rebuilt
+    }
+
+    fn collect_problems(&mut self) {
+        self.problems.clear();
+        for rig in &self.objects {
+            self.problems.extend(rig.problems.iter().cloned());
+            rig.for_each_problem(&mut |p| self.problems.push(p.clone()));
+        }
+        for rig in &self.lights {
+            for p in [&rig.position.problem, &rig.direction.problem, &rig.colour.problem]
+                .into_iter()
+                .chain([&rig.intensity.problem])
+                .flatten()
+            {
+                self.problems.push(p.clone());
+            }
+        }
     }
 
     /// What could not be evaluated, with field paths; empty for a valid scene.
@@ -373,15 +506,37 @@ impl SceneEvaluator {
     }
 }
 
+impl LightRig {
+    fn new(l: usize, light: &keyrig_core::Light) -> Self {
+        LightRig {
+            kind: light.kind,
+            enabled: light.enabled,
+            position: Slot::new(&light.position, ChannelId::LightPosition(l)),
+            direction: Slot::new(&light.direction, ChannelId::LightDirection(l)),
+            colour: Slot::new(&light.colour, ChannelId::LightColour(l)),
+            intensity: Slot::new(&light.intensity, ChannelId::LightIntensity(l)),
+        }
+    }
+
+    fn refresh(&mut self, l: usize, light: &keyrig_core::Light) -> usize {
+        self.kind = light.kind;
+        self.enabled = light.enabled;
+        usize::from(self.position.refresh(&light.position, ChannelId::LightPosition(l)))
+            + usize::from(self.direction.refresh(&light.direction, ChannelId::LightDirection(l)))
+            + usize::from(self.colour.refresh(&light.colour, ChannelId::LightColour(l)))
+            + usize::from(self.intensity.refresh(&light.intensity, ChannelId::LightIntensity(l)))
+    }
+}
+
 impl ObjectRig {
-    fn new(scene: &Scene, o: usize, loaded: Option<&LoadedMesh>, problems: &mut Vec<EvalProblem>) -> Self {
+    fn new(scene: &Scene, o: usize, loaded: Option<&LoadedMesh>) -> Self {
         let object = &scene.objects[o];
         let at = |field: &str| format!("objects[{o}].{field}");
+        let mut problems = Vec::new();
         let mut problem = |path: String, message: String| problems.push(EvalProblem { path, message });
-        let mut slot_problems = Vec::new();
-        let translation = Slot::new(&object.translation, ChannelId::ObjectTranslation(o), &mut slot_problems);
-        let rotation = Slot::new(&object.rotation, ChannelId::ObjectRotation(o), &mut slot_problems);
-        let scale = Slot::new(&object.scale, ChannelId::ObjectScale(o), &mut slot_problems);
+        let translation = Slot::new(&object.translation, ChannelId::ObjectTranslation(o));
+        let rotation = Slot::new(&object.rotation, ChannelId::ObjectRotation(o));
+        let scale = Slot::new(&object.scale, ChannelId::ObjectScale(o));
         let scene_rest = object.skeleton.as_ref().and_then(|s| match RestSkeleton::from_scene(s) {
             Ok(rest) => Some(rest),
             Err(e) => {
@@ -390,31 +545,15 @@ impl ObjectRig {
             }
         });
         let mut skeleton = object.skeleton.as_ref().map(|s| SkeletonRig {
-            root_translation: Slot::new(
-                &s.root_translation,
-                ChannelId::RootTranslation(o),
-                &mut slot_problems,
-            ),
+            root_translation: Slot::new(&s.root_translation, ChannelId::RootTranslation(o)),
             joints: s
                 .joints
                 .iter()
                 .enumerate()
                 .map(|(joint, j)| JointSlots {
-                    translation: Slot::new(
-                        &j.translation,
-                        ChannelId::JointTranslation { object: o, joint },
-                        &mut slot_problems,
-                    ),
-                    rotation: Slot::new(
-                        &j.rotation,
-                        ChannelId::JointRotation { object: o, joint },
-                        &mut slot_problems,
-                    ),
-                    scale: Slot::new(
-                        &j.scale,
-                        ChannelId::JointScale { object: o, joint },
-                        &mut slot_problems,
-                    ),
+                    translation: Slot::new(&j.translation, ChannelId::JointTranslation { object: o, joint }),
+                    rotation: Slot::new(&j.rotation, ChannelId::JointRotation { object: o, joint }),
+                    scale: Slot::new(&j.scale, ChannelId::JointScale { object: o, joint }),
                 })
                 .collect(),
             rest: scene_rest.clone(),
@@ -484,7 +623,6 @@ impl ObjectRig {
             }
             _ => None,
         };
-        problems.extend(slot_problems);
         ObjectRig {
             translation,
             rotation,
@@ -494,6 +632,57 @@ impl ObjectRig {
             rest_palette,
             morph,
             deformer: object.deformer.kind,
+            built_from: RestSource::of(object, loaded),
+            problems,
+        }
+    }
+
+    /// Rebuilds the channels that changed (the rest data is known to be the same).
+    fn refresh(&mut self, scene: &Scene, o: usize) -> usize {
+        let object = &scene.objects[o];
+        let mut n =
+            usize::from(self.translation.refresh(&object.translation, ChannelId::ObjectTranslation(o)))
+                + usize::from(self.rotation.refresh(&object.rotation, ChannelId::ObjectRotation(o)))
+                + usize::from(self.scale.refresh(&object.scale, ChannelId::ObjectScale(o)));
+        if let (Some(rig), Some(skeleton)) = (&mut self.skeleton, &object.skeleton) {
+            n += usize::from(
+                rig.root_translation.refresh(&skeleton.root_translation, ChannelId::RootTranslation(o)),
+            );
+            for (joint, (slots, j)) in rig.joints.iter_mut().zip(&skeleton.joints).enumerate() {
+                n += usize::from(
+                    slots
+                        .translation
+                        .refresh(&j.translation, ChannelId::JointTranslation { object: o, joint }),
+                ) + usize::from(
+                    slots.rotation.refresh(&j.rotation, ChannelId::JointRotation { object: o, joint }),
+                ) + usize::from(
+                    slots.scale.refresh(&j.scale, ChannelId::JointScale { object: o, joint }),
+                );
+            }
+        }
+        n
+    }
+
+    fn channel_count(&self) -> usize {
+        3 + self.skeleton.as_ref().map_or(0, |s| 1 + 3 * s.joints.len())
+    }
+
+    fn for_each_problem(&self, f: &mut dyn FnMut(&EvalProblem)) {
+        let mut visit = |p: &Option<EvalProblem>| {
+            if let Some(p) = p {
+                f(p);
+            }
+        };
+        visit(&self.translation.problem);
+        visit(&self.rotation.problem);
+        visit(&self.scale.problem);
+        if let Some(s) = &self.skeleton {
+            visit(&s.root_translation.problem);
+            for j in &s.joints {
+                visit(&j.translation.problem);
+                visit(&j.rotation.problem);
+                visit(&j.scale.problem);
+            }
         }
     }
 }

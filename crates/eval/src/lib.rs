@@ -16,6 +16,6 @@ mod evaluator;
 pub mod morph;
 
 pub use evaluator::{
-    EvalProblem, LightState, LoadedMesh, MorphRig, ObjectState, Overrides, SceneEvaluator, SceneState,
-    SkinRig,
+    EvalProblem, LightState, LoadedMesh, MorphRig, ObjectState, Overrides, Rebuilt, SceneEvaluator,
+    SceneState, SkinRig,
 };

@@ -1243,7 +1243,7 @@ fn read_animation(
                 }
                 let groups: Vec<Vec<f32>> = raw.chunks(targets).map(<[f32]>::to_vec).collect();
                 let track = make_track(&times, &groups, interpolation);
-                ChannelTarget::Weights(WeightsTrack { targets, keys: track.keys })
+                ChannelTarget::Weights(WeightsTrack { targets, keys: track.keys.to_vec() })
             }
         };
         channels.push(ModelChannel { node, target });

@@ -225,7 +225,7 @@ impl Default for ViewOptions {
 struct ObjectDraw {
     colour: Vec3,
     /// The vertices of a vertex-animated mesh (its clips play through the evaluator).
-    morph: Option<MorphMesh>,
+    morph: Option<Arc<MorphMesh>>,
 }
 
 /// A scene prepared for rendering frames: its [`SceneEvaluator`] and what drawing needs.
@@ -309,7 +309,8 @@ impl SceneRig {
         let mut meshes: HashMap<usize, LoadedMesh> =
             loaded.iter().map(|(&o, m)| (o, LoadedMesh::Skinned(Arc::new(m.clone())))).collect();
         meshes.extend(morphs.iter().map(|(&o, m)| (o, LoadedMesh::Morph(Arc::clone(m.playback())))));
-        Self::with_evaluator(scene, Arc::new(SceneEvaluator::new(scene, &meshes)), morphs)
+        let morphs = morphs.iter().map(|(&o, m)| (o, Arc::new(m.clone()))).collect();
+        Self::with_evaluator(scene, Arc::new(SceneEvaluator::new(scene, &meshes)), &morphs)
     }
 
     /// A rig around an evaluator built elsewhere (the editor shares its own) for `scene`;
@@ -318,7 +319,7 @@ impl SceneRig {
     pub fn with_evaluator(
         scene: &Scene,
         eval: Arc<SceneEvaluator>,
-        morphs: &HashMap<usize, MorphMesh>,
+        morphs: &HashMap<usize, Arc<MorphMesh>>,
     ) -> Self {
         let mut drawn = 0usize;
         let objects = (0..scene.objects.len())
@@ -359,9 +360,44 @@ impl SceneRig {
     /// # Errors
     /// [`SceneFrameError::Render`] naming the object.
     pub fn upload(&self, renderer: &mut Renderer) -> Result<(), SceneFrameError> {
+        self.upload_changed(renderer, None).map(|_| ())
+    }
+
+    /// Uploads the meshes that differ from those of `previous` (the rig this one replaces,
+    /// whose meshes are on `renderer`) and returns how many it sent: an edit that changed no
+    /// mesh, skeleton rest pose or deformer setting sends no vertex or index buffer again.
+    /// Meshes are compared by identity (the evaluator shares what an edit did not rebuild).
+    ///
+    /// # Errors
+    /// [`SceneFrameError::Render`] naming the object.
+    pub fn upload_changed(
+        &self,
+        renderer: &mut Renderer,
+        previous: Option<&SceneRig>,
+    ) -> Result<usize, SceneFrameError> {
         let at =
             |i: usize| move |source| SceneFrameError::Render { path: format!("objects[{i}].mesh"), source };
+        let mut uploaded = 0;
         for (i, object) in self.objects.iter().enumerate() {
+            if let Some(previous) = previous {
+                let same_morph = match (&object.morph, previous.objects.get(i).and_then(|p| p.morph.as_ref()))
+                {
+                    (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                    (None, None) => true,
+                    _ => false,
+                };
+                let same_skin = match (self.eval.skin(i), previous.eval.skin(i)) {
+                    (Some(a), Some(b)) => {
+                        Arc::ptr_eq(&a.mesh, &b.mesh) && Arc::ptr_eq(&a.bindings, &b.bindings)
+                    }
+                    (None, None) => true,
+                    _ => false,
+                };
+                if same_morph && same_skin {
+                    continue;
+                }
+            }
+            uploaded += 1;
             if let Some(morph) = &object.morph {
                 renderer
                     .upload_mesh(
@@ -379,7 +415,7 @@ impl SceneRig {
                     .map_err(at(i))?;
             }
         }
-        Ok(())
+        Ok(uploaded)
     }
 
     /// The frame at `time` seconds, from the scene's tracks.

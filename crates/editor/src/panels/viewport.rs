@@ -258,7 +258,7 @@ fn gpu_ui(
                 if let Some(crate::files::FileMesh::Morph(m)) =
                     app.meshes.peek(base_dir.as_deref(), path, *mesh)
                 {
-                    morph_meshes.insert(o, (**m).clone());
+                    morph_meshes.insert(o, std::sync::Arc::clone(m));
                 }
             }
         }
