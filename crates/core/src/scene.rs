@@ -367,3 +367,44 @@ impl<T> Animated<T> {
         &self.track
     }
 }
+
+impl Scene {
+    /// Bytes of key data in `self` that `other` does not share (keys are copy-on-write,
+    /// [`crate::Keys`]): what keeping `self` beside `other` costs, e.g. an undo snapshot beside
+    /// the edited scene. Tracks are paired by position (object, joint, light index).
+    #[must_use]
+    pub fn key_bytes_not_shared_with(&self, other: &Scene) -> usize {
+        fn cost<T>(a: &Animated<T>, b: Option<&Animated<T>>) -> usize {
+            if b.is_some_and(|b| b.track.keys.shares_with(&a.track.keys)) {
+                0
+            } else {
+                a.track.keys.len() * std::mem::size_of::<crate::key::Key<T>>()
+            }
+        }
+        let mut bytes = 0;
+        for (o, object) in self.objects.iter().enumerate() {
+            let theirs = other.objects.get(o);
+            bytes += cost(&object.translation, theirs.map(|t| &t.translation))
+                + cost(&object.rotation, theirs.map(|t| &t.rotation))
+                + cost(&object.scale, theirs.map(|t| &t.scale));
+            if let Some(skeleton) = &object.skeleton {
+                let their_skeleton = theirs.and_then(|t| t.skeleton.as_ref());
+                bytes += cost(&skeleton.root_translation, their_skeleton.map(|s| &s.root_translation));
+                for (j, joint) in skeleton.joints.iter().enumerate() {
+                    let their_joint = their_skeleton.and_then(|s| s.joints.get(j));
+                    bytes += cost(&joint.translation, their_joint.map(|t| &t.translation))
+                        + cost(&joint.rotation, their_joint.map(|t| &t.rotation))
+                        + cost(&joint.scale, their_joint.map(|t| &t.scale));
+                }
+            }
+        }
+        for (l, light) in self.lights.iter().enumerate() {
+            let theirs = other.lights.get(l);
+            bytes += cost(&light.position, theirs.map(|t| &t.position))
+                + cost(&light.direction, theirs.map(|t| &t.direction))
+                + cost(&light.colour, theirs.map(|t| &t.colour))
+                + cost(&light.intensity, theirs.map(|t| &t.intensity));
+        }
+        bytes
+    }
+}

@@ -15,10 +15,18 @@ use crate::channels::ChannelId;
 /// How many undo steps are kept.
 pub const UNDO_LIMIT: usize = 200;
 
+/// Most bytes of key data the undo steps may hold of their own (a step shares every track
+/// its edit did not change with the scene after it, so most steps hold little). Past this the
+/// oldest steps are dropped, at least one step is always kept.
+pub const UNDO_MEMORY_LIMIT: usize = 64 << 20;
+
 #[derive(Clone, Debug)]
 struct Snapshot {
     label: String,
     scene: Scene,
+    /// Key data this snapshot holds that the scene after it does not share (copy-on-write
+    /// keys): what keeping the step costs.
+    bytes: usize,
 }
 
 /// The scene being edited, where it lives on disk, and its history.
@@ -137,13 +145,27 @@ impl Document {
     }
 
     fn push_undo(&mut self, label: &str, before: Scene) {
-        self.undo.push(Snapshot { label: label.to_owned(), scene: before });
-        if self.undo.len() > UNDO_LIMIT {
-            self.undo.remove(0);
+        let bytes = before.key_bytes_not_shared_with(&self.scene);
+        self.undo.push(Snapshot { label: label.to_owned(), scene: before, bytes });
+        // At most UNDO_LIMIT steps, and the oldest go first once the steps together hold more
+        // than UNDO_MEMORY_LIMIT bytes of keys of their own (as Blender's undo memory limit).
+        let mut held: usize = self.undo.iter().map(|s| s.bytes).sum();
+        let mut drop = 0;
+        while self.undo.len() - drop > 1 && (self.undo.len() - drop > UNDO_LIMIT || held > UNDO_MEMORY_LIMIT)
+        {
+            held -= self.undo[drop].bytes;
+            drop += 1;
         }
+        self.undo.drain(..drop);
         self.redo.clear();
         self.dirty = true;
         self.revision += 1;
+    }
+
+    /// Number of undo steps kept (at most [`UNDO_LIMIT`]).
+    #[must_use]
+    pub fn undo_len(&self) -> usize {
+        self.undo.len()
     }
 
     /// Label of the step [`Document::undo`] would revert.
@@ -163,7 +185,8 @@ impl Document {
         self.open_group = None;
         let Some(snapshot) = self.undo.pop() else { return false };
         let current = std::mem::replace(&mut self.scene, snapshot.scene);
-        self.redo.push(Snapshot { label: snapshot.label, scene: current });
+        let bytes = current.key_bytes_not_shared_with(&self.scene);
+        self.redo.push(Snapshot { label: snapshot.label, scene: current, bytes });
         self.dirty = true;
         self.revision += 1;
         true
@@ -174,7 +197,8 @@ impl Document {
         self.open_group = None;
         let Some(snapshot) = self.redo.pop() else { return false };
         let current = std::mem::replace(&mut self.scene, snapshot.scene);
-        self.undo.push(Snapshot { label: snapshot.label, scene: current });
+        let bytes = current.key_bytes_not_shared_with(&self.scene);
+        self.undo.push(Snapshot { label: snapshot.label, scene: current, bytes });
         self.dirty = true;
         self.revision += 1;
         true
@@ -385,5 +409,76 @@ mod tests {
         assert_eq!(doc.title(), "keyrig — arm.ron");
         doc.edit("fps", |s| s.fps = 24.0);
         assert_eq!(doc.title(), "keyrig — arm.ron*");
+    }
+}
+
+#[cfg(test)]
+mod undo_memory_tests {
+    use super::*;
+    use glam::Vec3;
+    use keyrig_core::{Key, Object, RawTrack};
+
+    /// A scene of two objects whose translation tracks hold `keys` keys each.
+    fn scene(keys: usize) -> Scene {
+        let mut scene = Scene::default();
+        for name in ["A", "B"] {
+            let mut o = Object::new(name);
+            o.translation.track =
+                RawTrack::new((0..keys).map(|k| Key::new(k as f64, Vec3::X * k as f32)).collect());
+            scene.objects.push(o);
+        }
+        scene
+    }
+
+    #[test]
+    fn an_undo_step_holds_only_the_tracks_its_edit_changed() {
+        let mut doc = Document::new(scene(1000), None);
+        assert!(doc.edit("move", |s| s.objects[0].translation.track.keys[3].value = Vec3::Y));
+        let before = &doc.undo.last().expect("a step").scene;
+        // B's keys are the same list in the step and in the scene; A's were copied by the edit.
+        assert!(before.objects[1]
+            .translation
+            .track
+            .keys
+            .shares_with(&doc.scene().objects[1].translation.track.keys));
+        assert!(!before.objects[0]
+            .translation
+            .track
+            .keys
+            .shares_with(&doc.scene().objects[0].translation.track.keys));
+        let key = std::mem::size_of::<Key<Vec3>>();
+        assert_eq!(doc.undo.last().unwrap().bytes, 1000 * key);
+        // An edit that changes nothing leaves no step and copies nothing.
+        assert!(!doc.edit("nothing", |s| s.objects[1].translation.value = Vec3::ZERO));
+        assert_eq!(doc.undo_len(), 1);
+        assert!(doc.undo());
+        assert_eq!(doc.scene().objects[0].translation.track.keys[3].value, Vec3::X * 3.0);
+        assert!(doc.redo());
+        assert_eq!(doc.scene().objects[0].translation.track.keys[3].value, Vec3::Y);
+    }
+
+    #[test]
+    fn undo_history_stays_within_its_memory_limit() {
+        // Each edit copies a track of 200,000 keys (about 20 MB): only a few steps fit in the
+        // limit, the newest are kept, and undoing them still works.
+        let keys = 200_000;
+        let mut doc = Document::new(scene(keys), None);
+        for e in 0..12 {
+            assert!(doc.edit("move", |s| s.objects[0].translation.track.keys[5].value =
+                Vec3::Z * e as f32 + Vec3::ONE));
+        }
+        let held: usize = doc.undo.iter().map(|s| s.bytes).sum();
+        assert!(held <= UNDO_MEMORY_LIMIT, "{held} bytes held");
+        assert!(doc.undo_len() >= 2 && doc.undo_len() < 12, "{} steps", doc.undo_len());
+        let kept = doc.undo_len();
+        for _ in 0..kept {
+            assert!(doc.undo());
+        }
+        assert!(!doc.undo());
+        let oldest_kept = 12 - kept;
+        assert_eq!(
+            doc.scene().objects[0].translation.track.keys[5].value,
+            Vec3::Z * (oldest_kept as f32 - 1.0) + Vec3::ONE
+        );
     }
 }
