@@ -243,29 +243,6 @@ fn sun() -> Light {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn demo_scene_is_valid() {
-        assert_eq!(demo_scene().problems(), Vec::new());
-        assert_eq!(twist_scene().problems(), Vec::new());
-    }
-
-    #[test]
-    fn twist_keys_are_less_than_180_degrees_apart() {
-        let scene = demo_scene();
-        let joints = &scene.objects[0].skeleton.as_ref().map(|s| s.joints.clone()).unwrap_or_default();
-        for joint in joints {
-            for pair in joint.rotation.track.keys.windows(2) {
-                let angle = pair[0].value.angle_between(pair[1].value).to_degrees();
-                assert!(angle < 179.0, "{}: {angle}° between consecutive keys", joint.name);
-            }
-        }
-    }
-}
-
 /// The demo with three imported characters beside the arm: CesiumMan (glTF, its walk), the Fox
 /// (glTF, its `Walk` animation, scaled from centimetres) and Sydney (Quake 2 MD2, vertex
 /// morphing), the four-model scene the frame-time benchmarks measure (`assets/characters.ron`,
@@ -296,4 +273,27 @@ pub fn characters_scene(
     let md2 = crate::md2::md2_scene(sydney, "models/sydney/sydney.md2", "Sydney");
     place(md2.objects, Vec3::new(0.0, 0.0, -1.5), 1.0);
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demo_scene_is_valid() {
+        assert_eq!(demo_scene().problems(), Vec::new());
+        assert_eq!(twist_scene().problems(), Vec::new());
+    }
+
+    #[test]
+    fn twist_keys_are_less_than_180_degrees_apart() {
+        let scene = demo_scene();
+        let joints = &scene.objects[0].skeleton.as_ref().map(|s| s.joints.clone()).unwrap_or_default();
+        for joint in joints {
+            for pair in joint.rotation.track.keys.windows(2) {
+                let angle = pair[0].value.angle_between(pair[1].value).to_degrees();
+                assert!(angle < 179.0, "{}: {angle}° between consecutive keys", joint.name);
+            }
+        }
+    }
 }
