@@ -153,6 +153,9 @@ pub struct EditorApp {
     pub(crate) gizmo: transform_gizmo_egui::Gizmo,
     /// The primary button went down on a gizmo handle: the gizmo owns the drag until release.
     pub(crate) gizmo_drag: bool,
+    /// A drag on a rotation ring of a joint or object, turned by the editor itself
+    /// ([`crate::twist::RingDrag`]) rather than by transform-gizmo.
+    pub(crate) ring_drag: Option<panels::viewport::RingDragState>,
     pub(crate) timeline: panels::timeline::TimelineState,
     pub skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
@@ -216,6 +219,7 @@ impl EditorApp {
             dialog_purpose: None,
             gizmo: transform_gizmo_egui::Gizmo::default(),
             gizmo_drag: false,
+            ring_drag: None,
             timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
@@ -346,6 +350,51 @@ impl EditorApp {
                 channels::set_static_value(scene, id, value);
             });
         }
+    }
+
+    /// Applies a rotation turned with a gizmo ring or the inspector's twist field: the value
+    /// `turn.value()` as [`EditorApp::apply_pose`] would, but in record mode the key also gets
+    /// the spin that makes its segment from the previous key turn the way the hand went, turns
+    /// included ([`channels::set_rotation_key`]).
+    pub fn apply_turn(&mut self, id: ChannelId, turn: channels::Turn, group: &str) {
+        let value = turn.value();
+        if !self.record {
+            self.apply_pose(id, ChannelValue::Rotation(value), group);
+            return;
+        }
+        let time = f64::from(self.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+        let label = format!("key {}", id.label(self.doc.scene()));
+        self.doc.edit_continuous(group, &label, |scene| {
+            channels::set_rotation_key(scene, id, time, value, Some(turn));
+        });
+        self.overrides.remove(&id);
+    }
+
+    /// The twist of a rotation channel about its bone axis ([`crate::twist::BONE_AXIS`]) now,
+    /// degrees, unwrapped through spin keys (720 after two turns); a pose override reads as
+    /// its twist nearest the track's.
+    #[must_use]
+    pub fn twist_now(&self, id: ChannelId) -> Option<f64> {
+        use crate::twist::{nearest_turn, twist_degrees, unwrapped_twist, BONE_AXIS};
+        let Some(ChannelValue::Rotation(q)) = self.value_now(id) else { return None };
+        let axis = BONE_AXIS.as_dvec3();
+        let wrapped = twist_degrees(q.as_dquat(), axis);
+        let track = match channels::channel(self.doc.scene(), id) {
+            Some(channels::ChannelRef::Rotation(a)) if !a.track.is_empty() => {
+                keyrig_core::Track::new(&a.track).ok()
+            }
+            _ => None,
+        };
+        Some(match track {
+            Some(track) => nearest_turn(wrapped, unwrapped_twist(&track, axis, self.time())),
+            None => wrapped,
+        })
+    }
+
+    /// The rotation ring being dragged, if any (tests read which ring and mapping).
+    #[must_use]
+    pub fn ring_drag(&self) -> Option<&crate::twist::RingDrag> {
+        self.ring_drag.as_ref().map(|r| &r.drag)
     }
 
     /// Keys the current values of the selection's channels at the current frame.

@@ -3,8 +3,23 @@
 //!
 //! These functions only change a [`Scene`]; the editor calls them through
 //! [`crate::state::Document::edit`] so every change is undoable.
+//!
+//! # Spin keys
+//! A rotation key's [`Spin`] says how it is reached from the *previous* key, so the key
+//! operations keep spins meaningful (docs/channels.md, "Spins under key edits"):
+//! * the first key never keeps a spin (deleting or moving keys drops it there);
+//! * keys move with their spins; a spin that no longer agrees with its key's new neighbour
+//!   or value is recomputed ([`crate::twist::spin_toward`]): the rotation between the two keys
+//!   is kept exactly, and the whole number of turns is the one nearest the turn the segment
+//!   had before (dropped when that is the short way);
+//! * writing a key inside a spin segment splits the segment's turns between the two halves,
+//!   and a key written with a [`Turn`] (a ring drag or the twist field in record mode) gets the
+//!   spin that makes its segment turn the way the hand went.
 
-use keyrig_core::{Interpolation, Key, RawTrack, Scene, Tcb};
+use glam::{DVec3, Quat, Vec3};
+use keyrig_core::{Interpolation, Key, RawTrack, Scene, Spin, Tcb, Track};
+
+use crate::twist::{nearest_turn, spin_toward, twist_degrees};
 
 pub use keyrig_core::channel_id::{
     channel, channel_mut, ChannelId, ChannelKind, ChannelMut, ChannelRef, ChannelValue,
@@ -154,18 +169,177 @@ fn insert_sorted<T: Clone>(track: &mut RawTrack<T>, key: Key<T>) -> usize {
 /// Writes a key with `value` at `time` (replacing the value of a key already there). When the
 /// channel had no keys and `value` differs from its pose, the pose is kept as its static value.
 /// Returns the key's index, or `None` when the channel does not exist or the value type does not
-/// match.
+/// match. Rotation keys go through [`set_rotation_key`] without a turn (spins stay valid).
 pub fn set_key(scene: &mut Scene, id: ChannelId, time: f64, value: ChannelValue) -> Option<usize> {
     match (channel_mut(scene, id)?, value) {
         (ChannelMut::Vec3(a), ChannelValue::Vec3(v)) => Some(insert_sorted(&mut a.track, Key::new(time, v))),
         (ChannelMut::Rotation(a), ChannelValue::Rotation(q)) => {
-            Some(insert_sorted(&mut a.track, Key::new(time, q.normalize())))
+            Some(set_rotation_key_in(&mut a.track, time, q.normalize(), None))
         }
         (ChannelMut::Scalar(a), ChannelValue::Scalar(s)) => {
             Some(insert_sorted(&mut a.track, Key::new(time, s)))
         }
         _ => None,
     }
+}
+
+/// How a rotation was reached when it was turned with a gizmo ring or the twist field: from
+/// `from` (the channel's value at that time before the turn) by `degrees` about `axis`, a
+/// direction in the channel's parent frame, so that the new value is `R(axis, degrees)·from`.
+/// `degrees` may be several turns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Turn {
+    pub from: Quat,
+    pub axis: Vec3,
+    pub degrees: f64,
+}
+
+impl Turn {
+    /// The rotation the turn arrives at, `R(axis, degrees)·from`.
+    #[must_use]
+    pub fn value(&self) -> Quat {
+        let axis = self.axis.normalize_or(Vec3::X);
+        (Quat::from_axis_angle(axis, self.degrees.to_radians() as f32) * self.from).normalize()
+    }
+}
+
+/// Writes the rotation key `value` at `time` like [`set_key`], keeping spins valid (module
+/// documentation). With a `turn`, the key gets the [`Spin`] that makes the segment from the
+/// previous key turn as the hand did: the turn already made from the previous key to
+/// `turn.from` (counting the turns of a spin segment) plus `turn.degrees`. Returns the key's
+/// index, or `None` when `id` is not a rotation channel.
+pub fn set_rotation_key(
+    scene: &mut Scene,
+    id: ChannelId,
+    time: f64,
+    value: Quat,
+    turn: Option<Turn>,
+) -> Option<usize> {
+    match channel_mut(scene, id)? {
+        ChannelMut::Rotation(a) => Some(set_rotation_key_in(&mut a.track, time, value.normalize(), turn)),
+        _ => None,
+    }
+}
+
+/// Twist-like turn of `next` relative to `prev` about `axis` (in `prev`'s frame), degrees in
+/// (−180, 180].
+fn turn_about(prev: Quat, next: Quat, axis: DVec3) -> f64 {
+    twist_degrees(prev.as_dquat().conjugate() * next.as_dquat(), axis)
+}
+
+/// The turn of segment `i` of `track` about `axis`: its spin's angle when it has one about
+/// (nearly) that axis, else the short way's twist about it.
+fn segment_turn(track: &Track<Quat>, i: usize, axis: DVec3) -> f64 {
+    let values = track.key_values();
+    match track.segment_spin(i) {
+        Some((s, degrees)) if s.dot(axis).abs() > 0.5 => degrees * s.dot(axis).signum(),
+        _ => turn_about(values[i], values[i + 1], axis),
+    }
+}
+
+/// What each key's spin meant: its axis (in the previous key's frame) and signed angle, for
+/// keys that have one.
+fn spin_intents(keys: &[Key<Quat>]) -> Vec<Option<(Vec3, f64)>> {
+    (0..keys.len())
+        .map(|i| {
+            let spin = keys[i].spin?;
+            let prev = keys.get(i.checked_sub(1)?)?.value;
+            match keyrig_core::track::spin_chord(prev.as_dquat(), keys[i].value.as_dquat(), spin) {
+                Ok(Some(c)) => Some((c.axis.as_vec3(), c.degrees)),
+                Ok(None) => None,
+                Err(_) => match spin {
+                    Spin::Angle { axis, degrees } => Some((axis, degrees)),
+                    Spin::Turns(_) => None,
+                },
+            }
+        })
+        .collect()
+}
+
+/// Drops the first key's spin and recomputes every spin that no longer agrees with its key
+/// and the previous key from `intents[i]` (what it meant before the edit; the spin's own
+/// angle when `None`). Spins with other problems (out of range, after Hermite) are left for
+/// validation to report.
+fn repair_spins(keys: &mut [Key<Quat>], intents: &[Option<(Vec3, f64)>]) {
+    if let Some(first) = keys.first_mut() {
+        first.spin = None;
+    }
+    for i in 1..keys.len() {
+        let Some(spin) = keys[i].spin else { continue };
+        let (prev, next) = (keys[i - 1].value, keys[i].value);
+        match keyrig_core::track::spin_chord(prev.as_dquat(), next.as_dquat(), spin) {
+            Ok(_) => {}
+            Err(keyrig_core::SpinProblem::Disagrees | keyrig_core::SpinProblem::AmbiguousAxis) => {
+                let intent = intents.get(i).copied().flatten().or(match spin {
+                    Spin::Angle { axis, degrees } => Some((axis, degrees)),
+                    Spin::Turns(_) => None,
+                });
+                keys[i].spin = intent.and_then(|(axis, degrees)| spin_toward(prev, next, axis, degrees));
+            }
+            Err(_) => {}
+        }
+    }
+}
+
+fn set_rotation_key_in(track: &mut RawTrack<Quat>, time: f64, value: Quat, turn: Option<Turn>) -> usize {
+    let intents = spin_intents(&track.keys);
+    let old = Track::new(track).ok();
+    let existing = track.keys.iter().position(|k| (k.time - time).abs() < TIME_EPS);
+    let prev = track.keys.iter().rposition(|k| k.time < time - TIME_EPS);
+    let next = match existing {
+        Some(k) => (k + 1 < track.keys.len()).then_some(k + 1),
+        None => track.keys.iter().position(|k| k.time > time),
+    };
+    // The turn's axis in the previous key's frame (or the spin segment's axis), the turn from
+    // the previous key to the new value about it, and what is left of the old turn to the next
+    // key — all measured before the edit.
+    let plan = old.as_ref().zip(prev).and_then(|(old, p)| {
+        let q_p = track.keys[p].value.normalize();
+        let segment = old.segment_spin(p);
+        let (axis_prev, from, degrees) = match turn {
+            Some(turn) => {
+                let axis = (q_p.inverse() * turn.axis.normalize_or(Vec3::X)).as_dvec3();
+                (axis, turn.from, turn.degrees)
+            }
+            None => (segment?.0, old.sample(time), 0.0),
+        };
+        let short = turn_about(q_p, from, axis_prev);
+        let offset = match (segment, old.spin_degrees(time)) {
+            (Some((s, _)), Some(d)) if s.dot(axis_prev).abs() > 0.5 => {
+                nearest_turn(short, d * s.dot(axis_prev).signum())
+            }
+            _ => short,
+        };
+        let hand = offset + degrees;
+        let next_remaining = next.filter(|&n| track.keys[n].spin.is_some()).map(|n| {
+            let total: f64 = (p..n).map(|i| segment_turn(old, i, axis_prev)).sum();
+            total - hand
+        });
+        let axis_parent = (q_p.as_dquat() * axis_prev).as_vec3();
+        Some((p, axis_prev.as_vec3(), hand, axis_parent, next_remaining))
+    });
+    let k = insert_sorted(track, Key::new(time, value));
+    let mut intents: Vec<Option<(Vec3, f64)>> = match existing {
+        Some(_) => intents,
+        None => {
+            let mut v = intents;
+            v.insert(k, None);
+            v
+        }
+    };
+    if let Some((p, axis_prev, hand, axis_parent, next_remaining)) = plan {
+        track.keys[k].spin = spin_toward(track.keys[p].value, value, axis_prev, hand);
+        intents[k] = None;
+        if let Some(remaining) = next_remaining {
+            if let Some(n) = track.keys.get_mut(k + 1) {
+                let axis_here = value.inverse() * axis_parent;
+                n.spin = spin_toward(value, n.value, axis_here, remaining);
+                intents[k + 1] = None;
+            }
+        }
+    }
+    repair_spins(&mut track.keys, &intents);
+    k
 }
 
 /// Sets the static value (the pose used while the channel has no keys).
@@ -180,8 +354,13 @@ pub fn set_static_value(scene: &mut Scene, id: ChannelId, value: ChannelValue) -
 }
 
 /// Deletes the keys with the given indices of one channel. Returns how many were deleted.
+/// A rotation key whose previous key goes keeps its spin recomputed from the new previous key
+/// with the turns of the segments it now spans; the new first key loses its spin.
 pub fn delete_keys(scene: &mut Scene, id: ChannelId, indices: &[usize]) -> usize {
     let Some(c) = channel_mut(scene, id) else { return 0 };
+    if let ChannelMut::Rotation(a) = c {
+        return delete_rotation_keys(&mut a.track, indices);
+    }
     with_track_mut!(c, t => {
         let before = t.keys.len();
         let mut i = 0;
@@ -192,6 +371,51 @@ pub fn delete_keys(scene: &mut Scene, id: ChannelId, indices: &[usize]) -> usize
         });
         before - t.keys.len()
     })
+}
+
+fn delete_rotation_keys(track: &mut RawTrack<Quat>, indices: &[usize]) -> usize {
+    let before = track.keys.len();
+    let mut intents = spin_intents(&track.keys);
+    // Kept keys whose previous key goes: (old index, axis, turn from the new previous key).
+    let mut spanning: Vec<(usize, Vec3, f64)> = Vec::new();
+    if let Ok(old) = Track::new(track) {
+        // A kept key with a spin whose previous key goes spans the deleted segments too.
+        let mut last_kept: Option<usize> = None;
+        for (i, intent) in intents.iter().enumerate() {
+            if indices.contains(&i) {
+                continue;
+            }
+            if let (Some(p), Some((axis, _))) = (last_kept, intent) {
+                if p + 1 < i {
+                    let axis = axis.as_dvec3().normalize_or(DVec3::X);
+                    let total = (p..i).map(|j| segment_turn(&old, j, axis)).sum();
+                    spanning.push((i, axis.as_vec3(), total));
+                }
+            }
+            last_kept = Some(i);
+        }
+    }
+    let mut i = 0;
+    track.keys.retain(|_| {
+        let keep = !indices.contains(&i);
+        i += 1;
+        keep
+    });
+    let mut i = 0;
+    intents.retain(|_| {
+        let keep = !indices.contains(&i);
+        i += 1;
+        keep
+    });
+    for (old_i, axis, total) in spanning {
+        let new_i = old_i - indices.iter().filter(|&&d| d < old_i).count();
+        if new_i > 0 {
+            let (prev, next) = (track.keys[new_i - 1].value, track.keys[new_i].value);
+            track.keys[new_i].spin = spin_toward(prev, next, axis, total);
+        }
+    }
+    repair_spins(&mut track.keys, &intents);
+    before - track.keys.len()
 }
 
 /// Copies one key.
@@ -229,10 +453,27 @@ pub fn move_keys(scene: &mut Scene, id: ChannelId, indices: &[usize], delta: f64
         return None;
     }
     let c = channel_mut(scene, id)?;
+    if let ChannelMut::Rotation(a) = c {
+        // Spins move with their keys; those whose previous key changed are recomputed.
+        let intents = spin_intents(&a.track.keys);
+        let new_index_of_old = permute_in_track(&mut a.track, indices, delta)?;
+        let mut new_intents = vec![None; intents.len()];
+        for (old, &new) in new_index_of_old.iter().enumerate() {
+            new_intents[new] = intents[old];
+        }
+        repair_spins(&mut a.track.keys, &new_intents);
+        return Some(indices.iter().map(|&i| new_index_of_old[i]).collect());
+    }
     with_track_mut!(c, t => move_in_track(t, indices, delta))
 }
 
 fn move_in_track<T: Clone>(track: &mut RawTrack<T>, indices: &[usize], delta: f64) -> Option<Vec<usize>> {
+    let new_index_of_old = permute_in_track(track, indices, delta)?;
+    Some(indices.iter().map(|&i| new_index_of_old[i]).collect())
+}
+
+/// Moves the keys `indices` by `delta` and sorts; returns the new index of every old key.
+fn permute_in_track<T: Clone>(track: &mut RawTrack<T>, indices: &[usize], delta: f64) -> Option<Vec<usize>> {
     if indices.iter().any(|&i| i >= track.keys.len()) {
         return None;
     }
@@ -252,7 +493,7 @@ fn move_in_track<T: Clone>(track: &mut RawTrack<T>, indices: &[usize], delta: f6
         track.keys.push(key);
         new_index_of_old[old_i] = new_i;
     }
-    Some(indices.iter().map(|&i| new_index_of_old[i]).collect())
+    Some(new_index_of_old)
 }
 
 #[cfg(test)]
@@ -321,5 +562,130 @@ mod tests {
         assert_eq!(key_times(&scene, id), vec![0.0]);
         assert_eq!(paste_key(&mut scene, &copy, 2.0), Some(1));
         assert_eq!(key_times(&scene, id), vec![0.0, 2.0]);
+    }
+
+    // Spin keys under key edits. Timeline of the forearm track used below (seconds):
+    //
+    //   0 ─────────── 1 ─────────── 2
+    //   A 0°          B 0°+360°      C 90°
+    fn twist_track(keys: &[(f64, f64, Option<f64>)]) -> Scene {
+        let mut scene = Scene::default();
+        let mut o = Object::new("Arm");
+        o.rotation.track = RawTrack::new(
+            keys.iter()
+                .map(|&(t, deg, spin)| {
+                    let k = Key::new(t, Quat::from_rotation_x((deg as f32).to_radians()))
+                        .with_interpolation(Interpolation::Linear);
+                    match spin {
+                        Some(d) => k.with_spin(Spin::Angle { axis: Vec3::X, degrees: d }),
+                        None => k,
+                    }
+                })
+                .collect(),
+        );
+        scene.objects.push(o);
+        scene
+    }
+
+    const ROT: ChannelId = ChannelId::ObjectRotation(0);
+
+    fn spins(scene: &Scene) -> Vec<Option<f64>> {
+        scene.objects[0]
+            .rotation
+            .track
+            .keys
+            .iter()
+            .map(|k| match k.spin {
+                None => None,
+                Some(Spin::Angle { axis, degrees }) => {
+                    assert!((axis - Vec3::X).length() < 1e-4, "axis {axis:?}");
+                    Some((degrees * 1000.0).round() / 1000.0)
+                }
+                Some(other) => panic!("{other:?}"),
+            })
+            .collect()
+    }
+
+    fn assert_valid(scene: &Scene) {
+        Track::new(&scene.objects[0].rotation.track).expect("the track stays valid");
+    }
+
+    #[test]
+    fn a_turned_key_gets_the_spin_of_the_turn_either_way() {
+        for degrees in [720.0, -450.0, 540.0, 90.0, -1000.0] {
+            let mut scene = twist_track(&[(0.0, 0.0, None)]);
+            let turn = Turn { from: Quat::IDENTITY, axis: Vec3::X, degrees };
+            set_rotation_key(&mut scene, ROT, 1.0, turn.value(), Some(turn));
+            let expected = (degrees.abs() >= 179.0).then_some(degrees);
+            assert_eq!(spins(&scene), vec![None, expected], "turned {degrees}°");
+            assert_valid(&scene);
+        }
+    }
+
+    #[test]
+    fn a_turn_from_inside_a_spin_segment_counts_the_turns_already_made() {
+        // 0 → 360° over two seconds; at 1.5 s the track is at 270°; a further +180° there is
+        // 450° from A, and the rest of the segment (to 360°) turns back −90°, the short way.
+        let mut scene = twist_track(&[(0.0, 0.0, None), (2.0, 0.0, Some(360.0))]);
+        let from = Quat::from_rotation_x(270_f32.to_radians());
+        let turn = Turn { from, axis: Vec3::X, degrees: 180.0 };
+        assert_eq!(set_rotation_key(&mut scene, ROT, 1.5, turn.value(), Some(turn)), Some(1));
+        assert_eq!(spins(&scene), vec![None, Some(450.0), None]);
+        assert_valid(&scene);
+    }
+
+    #[test]
+    fn keying_inside_a_spin_segment_splits_its_turns() {
+        // I at the middle of a 720° segment: two segments of 360°.
+        let mut scene = twist_track(&[(0.0, 0.0, None), (2.0, 0.0, Some(720.0))]);
+        let middle = channel_value_at(&scene, 1.0);
+        set_key(&mut scene, ROT, 1.0, ChannelValue::Rotation(middle));
+        assert_eq!(spins(&scene), vec![None, Some(360.0), Some(360.0)]);
+        assert_valid(&scene);
+    }
+
+    fn channel_value_at(scene: &Scene, t: f64) -> Quat {
+        Track::new(&scene.objects[0].rotation.track).expect("valid").sample(t)
+    }
+
+    #[test]
+    fn deleting_keys_keeps_spins_valid() {
+        // Deleting the first key: B may not keep a spin as the new first key.
+        let mut scene = twist_track(&[(0.0, 0.0, None), (1.0, 0.0, Some(360.0)), (2.0, 90.0, None)]);
+        delete_keys(&mut scene, ROT, &[0]);
+        assert_eq!(spins(&scene), vec![None, None]);
+        assert_valid(&scene);
+        // Deleting B: C is now reached from A by B's 360° and C's 90°.
+        let mut scene = twist_track(&[(0.0, 0.0, None), (1.0, 0.0, Some(360.0)), (2.0, 90.0, Some(90.0))]);
+        delete_keys(&mut scene, ROT, &[1]);
+        assert_eq!(spins(&scene), vec![None, Some(450.0)]);
+        assert_valid(&scene);
+    }
+
+    #[test]
+    fn moving_keys_keeps_spins_with_their_keys() {
+        let mut scene = twist_track(&[(0.0, 0.0, None), (1.0, 0.0, Some(360.0)), (2.0, 90.0, None)]);
+        assert_eq!(move_keys(&mut scene, ROT, &[1, 2], 0.5), Some(vec![1, 2]));
+        assert_eq!(spins(&scene), vec![None, Some(360.0), None]);
+        // B past C: B's 360° is now reached from C (90°): the turn nearest 360° is 270°.
+        assert_eq!(move_keys(&mut scene, ROT, &[1], 2.0), Some(vec![2]));
+        assert_eq!(spins(&scene), vec![None, None, Some(-450.0 + 720.0)]);
+        assert_valid(&scene);
+        // A after everything: the first key (the old C) loses nothing, A gets no spin of its
+        // own, and a spin never stays on the first key.
+        let mut scene = twist_track(&[(0.0, 0.0, None), (1.0, 0.0, Some(360.0))]);
+        assert_eq!(move_keys(&mut scene, ROT, &[0], 5.0), Some(vec![1]));
+        assert_eq!(spins(&scene), vec![None, None]);
+        assert_valid(&scene);
+    }
+
+    #[test]
+    fn editing_a_spin_keys_value_recomputes_its_spin() {
+        // B (360° from A) set to 30° about X: 390°, the turn nearest the old 360°.
+        let mut scene = twist_track(&[(0.0, 0.0, None), (1.0, 0.0, Some(360.0)), (2.0, 0.0, Some(-360.0))]);
+        set_key(&mut scene, ROT, 1.0, ChannelValue::Rotation(Quat::from_rotation_x(30_f32.to_radians())));
+        // C keeps going back a whole turn from B's new value: −390°.
+        assert_eq!(spins(&scene), vec![None, Some(390.0), Some(-390.0)]);
+        assert_valid(&scene);
     }
 }

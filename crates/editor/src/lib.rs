@@ -6,6 +6,7 @@
 //! - [`channels`]: addressing animated values and the key operations on them.
 //! - [`panels`]: outliner, inspector, timeline (dope sheet), curves, viewport, dialogs.
 //! - [`widgets`]: key diamond, TCB slider.
+//! - [`twist`]: ring drags, the spins of turned keys, the unwrapped twist about a bone.
 //! - [`app`]: [`EditorApp`], which ties them together; [`run_editor`] opens the window.
 
 use std::path::PathBuf;
@@ -21,6 +22,7 @@ pub mod gpu_view;
 pub mod panels;
 pub mod skinning;
 pub mod state;
+pub mod twist;
 pub mod widgets;
 
 pub use app::{EditorApp, EditorOptions};

@@ -3,7 +3,8 @@
 //! record mode on, each drag writes one key at the current frame; without it the drag is a
 //! pose that I keys. The joint's world rotation must turn by the angle dragged, about the
 //! camera's view axis (transform-gizmo's view ring), which checks the whole path from pointer
-//! events through `joint_rotation_from_world` to the document.
+//! events through `joint_rotation_from_world` to the document. Drags of several turns key spin
+//! segments (issue 14), Ctrl snaps to 15°, and a ring seen edge-on turns 1° per point.
 
 mod common;
 
@@ -57,13 +58,20 @@ fn pointer(harness: &mut Harness<'_, EditorApp>, event: Event) {
 /// frame per point, releases at the last point and moves away, so the next frame neither
 /// hovers nor drags the gizmo.
 fn drag_along(harness: &mut Harness<'_, EditorApp>, path: &[Pos2]) {
+    drag_along_with(harness, path, Modifiers::NONE);
+}
+
+/// [`drag_along`] with `modifiers` held from the press to the release (as egui-winit reports
+/// a held Ctrl: in every frame's input).
+fn drag_along_with(harness: &mut Harness<'_, EditorApp>, path: &[Pos2], modifiers: Modifiers) {
     let (Some(&start), Some(&end)) = (path.first(), path.last()) else { return };
     let button = |pos: Pos2, pressed: bool| Event::PointerButton {
         pos,
         button: PointerButton::Primary,
         pressed,
-        modifiers: Modifiers::NONE,
+        modifiers,
     };
+    harness.input_mut().modifiers = modifiers;
     pointer(harness, Event::PointerMoved(start));
     pointer(harness, Event::PointerMoved(start));
     pointer(harness, button(start, true));
@@ -71,19 +79,27 @@ fn drag_along(harness: &mut Harness<'_, EditorApp>, path: &[Pos2]) {
         pointer(harness, Event::PointerMoved(p));
     }
     pointer(harness, button(end, false));
+    harness.input_mut().modifiers = Modifiers::NONE;
     pointer(harness, Event::PointerMoved(end + egui::vec2(0.0, -200.0)));
 }
 
 /// Presses on the view ring to the right of the gizmo's centre and drags a quarter turn
 /// (counter-clockwise on screen, through the top) along the ring, in 5° steps.
 fn drag_quarter_turn(harness: &mut Harness<'_, EditorApp>) {
+    drag_around_view_ring(harness, 90.0, Modifiers::NONE);
+}
+
+/// Presses on the view ring to the right of the wrist's gizmo and drags `degrees` around it
+/// (counter-clockwise on screen when positive, several turns if need be), in 5° steps.
+fn drag_around_view_ring(harness: &mut Harness<'_, EditorApp>, degrees: f32, modifiers: Modifiers) {
     let (centre, _) = wrist_on_screen(harness.state());
     let on_ring = |angle_deg: f32| {
         let a = angle_deg.to_radians();
         centre + egui::vec2(a.cos(), -a.sin()) * VIEW_RING_RADIUS
     };
-    let path: Vec<Pos2> = (0..=18).map(|step| on_ring(step as f32 * 5.0)).collect();
-    drag_along(harness, &path);
+    let steps = (degrees.abs() / 5.0).ceil().max(1.0) as i32;
+    let path: Vec<Pos2> = (0..=steps).map(|step| on_ring(degrees * step as f32 / steps as f32)).collect();
+    drag_along_with(harness, &path, modifiers);
 }
 
 /// The rotation that takes `before` to `after` in world space: its angle in degrees and axis.
@@ -313,4 +329,171 @@ fn dragging_a_spot_lights_view_ring_turns_its_direction() {
         keys_before + 1,
         "record mode keys the direction"
     );
+}
+
+/// The wrist's rotation track as the document holds it.
+fn wrist_track(app: &EditorApp) -> keyrig_core::RawTrack<Quat> {
+    app.doc.scene().objects[0].skeleton.as_ref().expect("the demo arm has a skeleton").joints[WRIST_JOINT]
+        .rotation
+        .track
+        .clone()
+}
+
+/// The spin of key `index` of the wrist as (unit axis in the parent frame, degrees): the key's
+/// spin axis is in the previous key's frame.
+fn wrist_spin(app: &EditorApp, index: usize) -> (Vec3, f64) {
+    let track = wrist_track(app);
+    match track.keys[index].spin {
+        Some(keyrig_core::Spin::Angle { axis, degrees }) => {
+            ((track.keys[index - 1].value * axis).normalize(), degrees)
+        }
+        other => panic!("key {index} should turn with an Angle spin, has {other:?}"),
+    }
+}
+
+/// The world rotation of the frame the wrist's channel is expressed in (parent · rest), now.
+fn wrist_frame(app: &EditorApp) -> Quat {
+    let local = app.joint_rotation(0, WRIST_JOINT).expect("the wrist has a rotation");
+    (rotation_of(wrist_world(app)) * local.inverse()).normalize()
+}
+
+/// Part 2 of issue 14: two and a half turns dragged around the ring in record mode write a key
+/// whose segment turns 900° the way the hand went; a drag the other way back 450°.
+#[test]
+fn dragging_the_ring_several_turns_in_record_mode_keys_the_turns_either_way() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_wrist(&mut h);
+    press(&mut h, Modifiers::NONE, Key::R);
+    go_to_frame(&mut h, 0);
+    press(&mut h, Modifiers::NONE, Key::I);
+
+    go_to_frame(&mut h, 30);
+    let (_, forward) = wrist_on_screen(h.state());
+    // Counter-clockwise on screen is a positive turn about the axis towards the viewer,
+    // expressed in the wrist's parent frame.
+    let towards_viewer = (wrist_frame(h.state()).inverse() * -forward).normalize();
+    drag_around_view_ring(&mut h, 900.0, Modifiers::NONE);
+    assert_eq!(key_frames(h.state()), vec![0, 30]);
+    let (axis, degrees) = wrist_spin(h.state(), 1);
+    let signed = degrees * f64::from(axis.dot(towards_viewer).signum());
+    assert!(axis.dot(towards_viewer).abs() > 0.99, "the spin turns about the view axis: {axis:?}");
+    assert!((signed - 900.0).abs() < 3.0, "2.5 turns counter-clockwise key a 900° segment, not {signed:.1}°");
+
+    // Played back, the segment turns monotonically the whole way.
+    let track = keyrig_core::Track::new(&wrist_track(h.state())).expect("a valid track");
+    let fps = h.state().doc.scene().fps;
+    let angles: Vec<f64> =
+        (0..=30).map(|f| track.spin_degrees(f64::from(f) / fps).expect("inside the spin segment")).collect();
+    assert!(angles.windows(2).all(|w| (w[1] - w[0]) * degrees > 0.0), "monotonic: {angles:?}");
+    assert!((angles[30] - degrees).abs() < 1e-6);
+
+    // Clockwise one and a quarter turns at frame 50: −450° from the key at frame 30.
+    go_to_frame(&mut h, 50);
+    let (_, forward) = wrist_on_screen(h.state());
+    let towards_viewer = (wrist_frame(h.state()).inverse() * -forward).normalize();
+    drag_around_view_ring(&mut h, -450.0, Modifiers::NONE);
+    assert_eq!(key_frames(h.state()), vec![0, 30, 50]);
+    let (axis, degrees) = wrist_spin(h.state(), 2);
+    let signed = degrees * f64::from(axis.dot(towards_viewer).signum());
+    assert!(axis.dot(towards_viewer).abs() > 0.99, "{axis:?}");
+    assert!((signed + 450.0).abs() < 3.0, "1.25 turns clockwise key a −450° segment, not {signed:.1}°");
+
+    // One undo step per drag.
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(key_frames(h.state()), vec![0, 30]);
+}
+
+/// Ctrl snaps the ring's angle to 15° steps (Blender's snapping modifier). (At this frame the
+/// press to the right of the view ring grabs the wrist's Z ring, which lies close to it; any
+/// ring seen open turns by the angle swept around its centre.)
+#[test]
+fn ctrl_snaps_the_ring_to_15_degrees() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_wrist(&mut h);
+    for (dragged, modifiers, expected) in
+        [(37.0, Modifiers::CTRL, 30.0), (38.0, Modifiers::CTRL, 45.0), (37.0, Modifiers::NONE, 37.0)]
+    {
+        let before = rotation_of(wrist_world(h.state()));
+        drag_around_view_ring(&mut h, dragged, modifiers);
+        let (angle, _) = world_turn(before, rotation_of(wrist_world(h.state())));
+        assert!(
+            (angle - expected).abs() < 0.3,
+            "{dragged}° with {modifiers:?} turns {angle:.2}°, expected {expected}°"
+        );
+    }
+}
+
+/// Part 3 of issue 14: a ring seen nearly edge-on turned 0° for a 24-point drag along it;
+/// it now turns 1° per point along its line on screen, the ring's near side following the
+/// pointer.
+#[test]
+fn a_ring_seen_nearly_edge_on_turns_one_degree_per_point() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_wrist(&mut h);
+    // Look at the wrist nearly across the arm: its X (bone) ring is a thin ellipse.
+    {
+        let app = h.state_mut();
+        let target: Vec3 = wrist_world(app).translation.into();
+        app.view.camera.target = target;
+        app.view.camera.yaw_deg = 10.0;
+        app.view.camera.pitch_deg = 0.0;
+    }
+    h.run();
+    let app = h.state();
+    let world = wrist_world(app);
+    let centre_world: Vec3 = world.translation.into();
+    let bone = (rotation_of(world) * Vec3::X).normalize();
+    let eye = app.view.camera.eye();
+    let forward = (centre_world - eye).normalize();
+    assert!(bone.dot(forward).abs() < 0.3, "the X ring is seen nearly edge-on: cos {}", bone.dot(forward));
+    let rect = app.view.viewport_rect.expect("laid out");
+    let projection = Projection::new(&app.view.camera, rect);
+    let centre = projection.project(centre_world).expect("in view");
+    // The ring's world radius from its 75-point screen radius.
+    let right = forward.cross(Vec3::Y).normalize();
+    let points_per_unit =
+        (projection.project(centre_world + right * 0.01).expect("in view") - centre).length() / 0.01;
+    let radius = 75.0 / points_per_unit;
+    // A point of the ring's front half, 40° from its point nearest the viewer.
+    let near = -(forward - bone * bone.dot(forward)).normalize();
+    let side = bone.cross(near);
+    let phi = 40_f32.to_radians();
+    let press_at =
+        projection.project(centre_world + (near * phi.cos() + side * phi.sin()) * radius).expect("in view");
+
+    let before = rotation_of(world);
+    let button = |pos: Pos2, pressed: bool| Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed,
+        modifiers: Modifiers::NONE,
+    };
+    pointer(&mut h, Event::PointerMoved(press_at));
+    pointer(&mut h, Event::PointerMoved(press_at));
+    pointer(&mut h, button(press_at, true));
+    let drag = h.state().ring_drag().cloned().expect("the press grabbed a rotation ring");
+    assert!(drag.axis.dot(bone).abs() > 0.999, "the press grabbed the X ring, not {:?}", drag.axis);
+    let keyrig_editor::twist::RingMapping::Along { tangent } = drag.mapping else {
+        panic!("an edge-on ring turns linearly, got {:?}", drag.mapping)
+    };
+    let tangent = egui::vec2(tangent.x, tangent.y);
+    for step in 1..=6 {
+        pointer(&mut h, Event::PointerMoved(press_at + tangent * (4.0 * step as f32)));
+    }
+    pointer(&mut h, button(press_at + tangent * 24.0, false));
+    pointer(&mut h, Event::PointerMoved(press_at + egui::vec2(0.0, -200.0)));
+
+    let after = rotation_of(wrist_world(h.state()));
+    let (angle, axis) = world_turn(before, after);
+    assert!(axis.dot(bone).abs() > 0.999, "turned about the bone: {axis:?}");
+    assert!((angle - 24.0).abs() < 0.2, "a 24-point drag along the edge-on ring turns 24°, not {angle:.2}°");
+    // The near side of the ring followed the pointer: it moved along the drag on screen.
+    let near_point = centre_world + near * radius;
+    let moved = after * before.inverse() * (near_point - centre_world) + centre_world;
+    let on_screen_move =
+        projection.project(moved).expect("in view") - projection.project(near_point).expect("in view");
+    assert!(on_screen_move.dot(tangent) > 0.0, "the near side moves with the pointer: {on_screen_move:?}");
 }

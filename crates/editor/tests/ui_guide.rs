@@ -1,11 +1,13 @@
 //! The walkthrough of docs/guide.md, performed on the real editor (GPU viewport through
 //! eframe's wgpu path): key a twist on the wrist in record mode, shape it with T/C/B, compare
-//! deformers. Each step checks the document. With `KEYRIG_WRITE_SCREENSHOTS=1` the test also
-//! writes the guide's screenshots to docs/screenshots/.
+//! deformers; then key a full-turn forearm twist with the twist field on assets/twist.ron and
+//! compare the deformers at 180° and 360°. Each step checks the document. With
+//! `KEYRIG_WRITE_SCREENSHOTS=1` the tests also write the guide's screenshots to
+//! docs/screenshots/.
 
 mod common;
 
-use common::{go_to_frame, gpu_harness, press, set_value};
+use common::{go_to_frame, gpu_harness, gpu_harness_for, press, set_value};
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers};
@@ -104,4 +106,94 @@ fn guide_walkthrough_twist_with_record_mode_and_tcb() {
     press(&mut h, Modifiers::NONE, Key::F12);
     assert!(h.state().show_help);
     screenshot(&mut h, "guide_help");
+}
+
+const FOREARM: ChannelId = ChannelId::JointRotation { object: 0, joint: 2 };
+
+/// The forearm's cross-section relative to rest, as the viewport overlay shows it.
+fn forearm_section(h: &Harness<'_, EditorApp>) -> f32 {
+    h.state().skin.cross_section(0, 2).expect("measured").expect("section").ratio()
+}
+
+/// docs/guide.md, "Keying a full-turn twist": assets/twist.ron's forearm turn keyed again with
+/// record mode and the twist field, then the deformers at 180° (frame 30) and 360° (frame 60).
+#[test]
+fn guide_full_turn_twist_with_the_twist_field() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/twist.ron");
+    let mut h = gpu_harness_for(dir.path(), SIZE, Some(file));
+    let shipped = h.state().doc.scene().clone();
+    let sample = |scene: &keyrig_core::Scene, frame: f64| match keyrig_editor::eval::channel_value(
+        scene,
+        FOREARM,
+        frame / scene.fps,
+        &Default::default(),
+    ) {
+        Some(channels::ChannelValue::Rotation(q)) => q,
+        other => panic!("forearm rotation: {other:?}"),
+    };
+
+    // 1. Select the forearm and delete its two keys (click the first diamond, Shift-click the
+    //    second, Delete).
+    h.get_by_label("forearm").click();
+    h.run();
+    h.get_by_label("key forearm rotation frame 0").click();
+    h.run();
+    h.get_by_label("key forearm rotation frame 60").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::Delete);
+    assert_eq!(channels::key_count(h.state().doc.scene(), FOREARM), 0);
+
+    // 2. Record mode; frame 0: key the rest pose with I; frame 60 (End): type 360 in Twist.
+    press(&mut h, Modifiers::NONE, Key::R);
+    press(&mut h, Modifiers::NONE, Key::Home);
+    press(&mut h, Modifiers::NONE, Key::I);
+    press(&mut h, Modifiers::NONE, Key::End);
+    set_value(&mut h, Role::SpinButton, "Twist (°)", 360.0);
+    press(&mut h, Modifiers::NONE, Key::R);
+    let scene = h.state().doc.scene();
+    let frames: Vec<i64> =
+        channels::key_times(scene, FOREARM).iter().map(|t| (t * scene.fps).round() as i64).collect();
+    assert_eq!(frames, vec![0, 60]);
+    let keys = &scene.objects[0].skeleton.as_ref().expect("skeleton").joints[2].rotation.track.keys;
+    match keys[1].spin {
+        Some(keyrig_core::Spin::Angle { axis, degrees }) => {
+            assert!(axis == glam::Vec3::X && (degrees - 360.0).abs() < 1e-3, "{axis:?} {degrees}");
+        }
+        other => panic!("the key at frame 60 turns a whole turn, has {other:?}"),
+    }
+    // The same motion as the shipped file at every frame.
+    for frame in 0..=60 {
+        let (a, b) = (sample(&shipped, f64::from(frame)), sample(scene, f64::from(frame)));
+        assert!(a.angle_between(b) < 1e-3, "frame {frame}: {a:?} vs {b:?}");
+    }
+    go_to_frame(&mut h, 30);
+    screenshot(&mut h, "guide_twist_record");
+
+    // 3. The deformers at 180° (frame 30) and 360° (frame 60).
+    press(&mut h, Modifiers::NONE, Key::Num2);
+    let linear_180 = forearm_section(&h);
+    screenshot(&mut h, "guide_twist_linear_180");
+    press(&mut h, Modifiers::NONE, Key::Num3);
+    let bones_180 = forearm_section(&h);
+    screenshot(&mut h, "guide_twist_bones_180");
+    press(&mut h, Modifiers::NONE, Key::Num4);
+    assert_eq!(h.state().doc.scene().objects[0].deformer.kind, DeformerKind::DualQuaternion);
+    let dq_180 = forearm_section(&h);
+    screenshot(&mut h, "guide_twist_dq_180");
+    press(&mut h, Modifiers::NONE, Key::End);
+    let dq_360 = forearm_section(&h);
+    screenshot(&mut h, "guide_twist_dq_360");
+    press(&mut h, Modifiers::NONE, Key::Num3);
+    let bones_360 = forearm_section(&h);
+    screenshot(&mut h, "guide_twist_bones_360");
+    press(&mut h, Modifiers::NONE, Key::Num2);
+    let linear_360 = forearm_section(&h);
+    eprintln!(
+        "cross-sections: 180° linear {linear_180:.2} bones {bones_180:.2} dq {dq_180:.2}; \
+         360° bones {bones_360:.2} dq {dq_360:.2} linear {linear_360:.2}"
+    );
+    assert!(linear_180 < 0.5, "linear blend collapses at 180°: {linear_180}");
+    assert!(bones_180 > 0.9 && dq_180 > 0.7, "bones {bones_180}, dq {dq_180}");
+    assert!(bones_360 > 0.9 && dq_360 > 0.9, "bones {bones_360}, dq {dq_360}");
 }

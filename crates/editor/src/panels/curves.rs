@@ -1,6 +1,10 @@
 //! The curve view: the selected channels over the frame range, sampled through the same code
 //! as the viewport, so it updates live while a key or a T/C/B slider changes. Positions are
 //! drawn per component; rotations as XYZ Euler angles in degrees, unwrapped along the curve.
+//! A rotation channel with spin keys also gets its unwrapped turn (white): the twist about the
+//! first spin's axis through spin segments ([`crate::twist::unwrapped_twist`], which counts
+//! their turns with `Track::spin_degrees`), so a 720° segment climbs to 720 instead of
+//! wrapping at ±180°.
 
 use egui::{Align2, Color32, FontId, Pos2, Sense, Shape, Stroke, Ui, Vec2};
 
@@ -10,6 +14,19 @@ use crate::eval::{euler_degrees, PoseOverrides};
 
 const COMPONENT_COLOURS: [Color32; 3] =
     [Color32::from_rgb(230, 80, 80), Color32::from_rgb(90, 200, 90), Color32::from_rgb(90, 140, 240)];
+
+/// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
+const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
+
+/// The axis whose unwrapped turn the curve view draws for a rotation channel: the first spin
+/// segment's (in its first key's frame); `None` without spin keys.
+#[must_use]
+pub fn turn_axis(app: &EditorApp, id: ChannelId) -> Option<(keyrig_core::Track<glam::Quat>, glam::DVec3)> {
+    let Some(channels::ChannelRef::Rotation(a)) = channels::channel(app.doc.scene(), id) else { return None };
+    let track = keyrig_core::Track::new(&a.track).ok()?;
+    let axis = (0..track.key_count()).find_map(|i| track.segment_spin(i))?.0;
+    Some((track, axis))
+}
 
 /// One component over time: (frame, value) samples.
 pub type Curve = Vec<(f64, f32)>;
@@ -29,7 +46,8 @@ pub fn shown_channels(app: &EditorApp) -> Vec<ChannelId> {
 }
 
 /// Samples `id` over frames `[start, end]` at `samples` points as one or three curves of
-/// numbers (components, or Euler degrees for rotations).
+/// numbers (components, or Euler degrees for rotations), and for a rotation with spin keys a
+/// fourth: its unwrapped turn in degrees about the first spin's axis ([`turn_axis`]).
 #[must_use]
 pub fn sample_curves(
     app: &EditorApp,
@@ -67,6 +85,16 @@ pub fn sample_curves(
             };
             curves[c].push((frame, v));
         }
+    }
+    if let Some((track, axis)) = turn_axis(app, id) {
+        curves.push(
+            (0..n)
+                .map(|i| {
+                    let frame = start + (end - start) * i as f64 / (n - 1) as f64;
+                    (frame, crate::twist::unwrapped_twist(&track, axis, frame / fps) as f32)
+                })
+                .collect(),
+        );
     }
     curves
 }
@@ -142,8 +170,11 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     let fps = scene.fps.max(1e-9);
     for (id, curves) in &all {
         for (c, curve) in curves.iter().enumerate() {
-            let colour =
-                if curves.len() == 1 { Color32::from_rgb(230, 200, 90) } else { COMPONENT_COLOURS[c % 3] };
+            let colour = match (curves.len(), c) {
+                (1, _) => Color32::from_rgb(230, 200, 90),
+                (_, 3) => TURN_COLOUR,
+                _ => COMPONENT_COLOURS[c % 3],
+            };
             let points: Vec<Pos2> = curve.iter().map(|&(f, v)| to_screen(f, v)).collect();
             painter.add(Shape::line(points, Stroke::new(1.5, colour)));
             // Key markers: the curve's value at each key time.
@@ -158,6 +189,21 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 }
             }
         }
+    }
+    if let Some((_, axis)) = ids.iter().find_map(|&id| turn_axis(app, id)) {
+        painter.text(
+            Pos2::new(plot.right(), plot.top()),
+            Align2::RIGHT_TOP,
+            format!(
+                "white: turn about ({:.2}, {:.2}, {:.2}) through spin keys, unwrapped; X/Y/Z: Euler {}",
+                axis.x,
+                axis.y,
+                axis.z,
+                crate::panels::inspector::EULER_ORDER
+            ),
+            FontId::proportional(10.0),
+            visuals.weak_text_color(),
+        );
     }
     let x = to_screen(app.playback.frame, lo).x;
     painter.line_segment(

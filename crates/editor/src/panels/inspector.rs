@@ -75,6 +75,10 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
             if vec3_editor(ui, label, marker, &mut e, 0.5) && e.is_finite() {
                 app.apply_pose(id, ChannelValue::Rotation(quat_from_euler_degrees(e)), &group);
             }
+            ui.weak(format!("Euler {EULER_ORDER}")).on_hover_text(EULER_ORDER_HELP);
+            if matches!(id, ChannelId::JointRotation { .. }) {
+                twist_ui(ui, app, id, q, &group);
+            }
         }
         ChannelValue::Scalar(mut s) => {
             let changed = ui
@@ -91,6 +95,44 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
                 app.apply_pose(id, ChannelValue::Scalar(s), &group);
             }
         }
+    }
+}
+
+/// The rotation order of the inspector's and curve view's Euler angles.
+pub const EULER_ORDER: &str = "XYZ";
+
+/// What [`EULER_ORDER`] means.
+const EULER_ORDER_HELP: &str =
+    "Euler angles in the order XYZ, intrinsic: R = Rx·Ry·Rz (turn about X, then about \
+     the turned Y, then about the turned Z; glam's EulerRot::XYZ). Blender calls the same \
+     rotation order ZYX, Maya zyx.";
+
+/// The joint's twist about its bone axis (local +X) in degrees, unwrapped through spin keys
+/// (it reads 720 after two turns). Typing a value turns the joint about the bone by the
+/// difference; in record mode the key gets the spin that makes its segment turn that far.
+fn twist_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, q: glam::Quat, group: &str) {
+    let Some(twist) = app.twist_now(id) else { return };
+    let mut value = twist;
+    let response = ui
+        .horizontal(|ui| {
+            ui.label("Twist (°)");
+            let response = ui.add(DragValue::new(&mut value).speed(1.0).max_decimals(2));
+            let turns = (twist.abs() / 360.0).floor();
+            if turns >= 1.0 {
+                ui.weak(format!("{turns:.0} turn{}", if turns >= 2.0 { "s" } else { "" }));
+            }
+            response
+        })
+        .inner
+        .on_hover_text(
+            "Turn about the bone axis (the joint's X), in degrees, counting whole turns: \
+             720 is two turns. In record mode the key turns that far from the previous key.",
+        );
+    ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Twist (°)"));
+    let delta = value - twist;
+    if response.changed() && delta.is_finite() && delta != 0.0 {
+        let axis = q * crate::twist::BONE_AXIS;
+        app.apply_turn(id, crate::channels::Turn { from: q, axis, degrees: delta }, group);
     }
 }
 

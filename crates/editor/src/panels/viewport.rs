@@ -10,9 +10,10 @@ use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrient
 
 use crate::app::{EditorApp, RenderStyle};
 use crate::camera::Projection;
-use crate::channels::{ChannelId, ChannelValue};
+use crate::channels::{ChannelId, ChannelValue, Turn};
 use crate::eval::ObjectPose;
 use crate::state::Selected;
+use crate::twist::RingDrag;
 
 /// Pick radius around joints and lights, points.
 const PICK_RADIUS: f32 = 9.0;
@@ -460,6 +461,13 @@ fn to_transform(a: Affine3A) -> Transform {
 /// it is, which takes hover, scroll and every drag from the viewport while anything is
 /// selected; this drives the gizmo with [`Gizmo::update`] instead, from the viewport's own
 /// response.
+///
+/// The rotation rings of joints and objects are turned by the editor itself: transform-gizmo
+/// maps the pointer to the angle around the ring's centre on screen with no way to change it,
+/// which turns a ring seen edge-on by 0° and a thin ring by large jumps. A press on a ring
+/// asks transform-gizmo which ring it picked; from then on [`RingDrag`] follows the pointer
+/// (around the centre, accumulated over several turns, or 1° per point along an edge-on
+/// ring; 15° steps with Ctrl) and [`EditorApp::apply_turn`] keys the turn, spin included.
 fn gizmo_ui(
     ui: &mut Ui,
     app: &mut EditorApp,
@@ -470,6 +478,7 @@ fn gizmo_ui(
 ) -> bool {
     let Some((world, kind)) = gizmo_target(app, poses) else {
         app.gizmo_drag = false;
+        app.ring_drag = None;
         return false;
     };
     let modes = match kind {
@@ -495,8 +504,14 @@ fn gizmo_ui(
         ..Default::default()
     });
     let targets = [to_transform(world)];
-    let (hover, pressed, down, any_down) = ui.input(|i| {
-        (i.pointer.hover_pos(), i.pointer.primary_pressed(), i.pointer.primary_down(), i.pointer.any_down())
+    let (hover, pressed, down, any_down, snap) = ui.input(|i| {
+        (
+            i.pointer.hover_pos(),
+            i.pointer.primary_pressed(),
+            i.pointer.primary_down(),
+            i.pointer.any_down(),
+            i.modifiers.ctrl || i.modifiers.command,
+        )
     });
     let cursor = hover.unwrap_or_default();
     let interaction = |hovered: bool, drag_started: bool, dragging: bool| GizmoInteraction {
@@ -505,6 +520,31 @@ fn gizmo_ui(
         drag_started,
         dragging,
     };
+    if let Some(mut ring) = app.ring_drag.take() {
+        // A rotation ring drag of our own: the angle follows the pointer (RingDrag), the
+        // gizmo only draws its handles where the target now is.
+        if let Some(p) = hover {
+            ring.drag.drag_to(p);
+        }
+        let degrees = ring.drag.degrees(snap);
+        let delta = degrees - ring.applied;
+        if delta != 0.0 {
+            if let Some(ChannelValue::Rotation(from)) = app.value_now(ring.channel) {
+                let axis = ring.frame.inverse() * ring.drag.axis;
+                app.apply_turn(ring.channel, Turn { from, axis, degrees: delta }, "gizmo");
+                ring.applied = degrees;
+            }
+        }
+        let _ = app.gizmo.update(interaction(false, false, false), &targets);
+        paint_gizmo(ui, &app.gizmo, rect);
+        paint_ring_drag(ui, rect, &ring, degrees, hover, snap);
+        if down {
+            app.ring_drag = Some(ring);
+        } else {
+            app.gizmo_drag = false;
+        }
+        return true;
+    }
     if !app.gizmo_drag {
         // Place the handles for this frame's target and camera (no input) so that the pick
         // test below sees what is drawn.
@@ -523,6 +563,34 @@ fn gizmo_ui(
         app.gizmo.update(interaction(owns, pressed && app.gizmo_drag, down && app.gizmo_drag), &targets);
     if !down {
         app.gizmo_drag = false;
+    }
+    // A press on a rotation ring of a joint or object starts a drag of our own (RingDrag):
+    // transform-gizmo only tells which ring was picked.
+    if let (true, Some((GizmoResult::Rotation { axis, is_view_axis, .. }, _))) = (pressed, &result) {
+        if let Some((channel, frame)) = rotation_channel(app, kind, poses) {
+            let (_, world_rotation, centre_world) = world.to_scale_rotation_translation();
+            let axis = DVec3::from(*axis).as_vec3();
+            let axis = if *is_view_axis { axis } else { world_rotation * axis };
+            let eye = app.view.camera.eye();
+            let centre_world: Vec3 = centre_world;
+            let step = 0.01 * (centre_world - eye).length().max(1e-3);
+            let screen_dir = |v: Vec3| match (
+                projection.project(centre_world),
+                projection.project(centre_world + v.normalize_or_zero() * step),
+            ) {
+                (Some(a), Some(b)) => b - a,
+                _ => egui::Vec2::ZERO,
+            };
+            if let (Some(centre), Some(press)) = (projection.project(centre_world), hover) {
+                let radius = if *is_view_axis { VIEW_RING_RADIUS } else { AXIS_RING_RADIUS };
+                let drag = RingDrag::new(axis, centre_world - eye, centre, press, radius, screen_dir);
+                app.ring_drag = Some(RingDragState { drag, channel, frame, applied: 0.0 });
+                // End transform-gizmo's own drag; it draws idle handles from now on.
+                let _ = app.gizmo.update(interaction(false, false, false), &targets);
+                paint_gizmo(ui, &app.gizmo, rect);
+                return true;
+            }
+        }
     }
     paint_gizmo(ui, &app.gizmo, rect);
     let Some((result, transforms)) = result else { return owns };
@@ -571,6 +639,95 @@ fn gizmo_ui(
         }
     }
     owns
+}
+
+/// Screen radius of transform-gizmo's axis rings with its default visuals (gizmo_size).
+const AXIS_RING_RADIUS: f32 = 75.0;
+/// Screen radius of its view-axis ring (gizmo_size + stroke width + 5).
+const VIEW_RING_RADIUS: f32 = 84.0;
+
+/// A drag on a rotation ring that the editor turns itself (see [`RingDrag`]).
+#[derive(Clone, Debug)]
+pub struct RingDragState {
+    pub drag: RingDrag,
+    /// The rotation channel turned (a joint's or an object's).
+    pub channel: ChannelId,
+    /// World rotation of the frame the channel's value is expressed in (the parent joint's
+    /// world rotation times the joint's rest rotation; identity for an object), so that the
+    /// world axis `a` is `frame⁻¹·a` in the channel's frame.
+    pub frame: Quat,
+    /// Degrees already applied to the channel during this drag.
+    pub applied: f64,
+}
+
+/// The rotation channel the gizmo's rings turn for a joint or object, and the world rotation
+/// of the frame its value is expressed in.
+fn rotation_channel(
+    app: &EditorApp,
+    kind: GizmoKind,
+    poses: &[Option<ObjectPose>],
+) -> Option<(ChannelId, Quat)> {
+    match kind {
+        GizmoKind::Joint { object, joint } => {
+            let skeleton = app.doc.scene().objects.get(object)?.skeleton.as_ref()?;
+            let pose = poses.get(object)?.as_ref()?;
+            let j = skeleton.joints.get(joint)?;
+            let parent_world = match j.parent.filter(|&p| p < joint) {
+                Some(p) => pose.world_from_object * *pose.object_from_joint.get(p)?,
+                None => pose.world_from_object,
+            };
+            let (_, parent_rotation, _) = parent_world.to_scale_rotation_translation();
+            Some((ChannelId::JointRotation { object, joint }, parent_rotation * j.rest_rotation))
+        }
+        GizmoKind::Object(o) => Some((ChannelId::ObjectRotation(o), Quat::IDENTITY)),
+        GizmoKind::Light(..) => None,
+    }
+}
+
+/// Shows a ring drag: the start and current directions (around the centre) or the line the
+/// drag follows (edge-on), and the angle turned, with "snap 15°" while Ctrl is held.
+fn paint_ring_drag(
+    ui: &Ui,
+    rect: Rect,
+    ring: &RingDragState,
+    degrees: f64,
+    pointer: Option<Pos2>,
+    snap: bool,
+) {
+    let painter = ui.painter().with_clip_rect(rect);
+    let colour = Color32::from_rgb(255, 215, 90);
+    let stroke = Stroke::new(1.5, colour);
+    let centre = ring.drag.centre;
+    match ring.drag.mapping {
+        crate::twist::RingMapping::Around { .. } => {
+            if let Some(p) = pointer {
+                painter.line_segment([centre, p], stroke);
+            }
+            painter.circle_filled(centre, 3.0, colour);
+        }
+        crate::twist::RingMapping::Along { tangent } => {
+            let t = egui::vec2(tangent.x, tangent.y) * VIEW_RING_RADIUS;
+            let at = pointer.unwrap_or(centre);
+            painter.arrow(at - t * 0.5, t, stroke);
+        }
+    }
+    let turns = (degrees.abs() / 360.0).floor();
+    let mut text = format!("{degrees:+.1}°");
+    if turns >= 1.0 {
+        text.push_str(&format!("  ({turns:.0} turn{})", if turns >= 2.0 { "s" } else { "" }));
+    }
+    if snap {
+        text.push_str("  snap 15°");
+    }
+    let at = pointer.unwrap_or(centre) + egui::vec2(16.0, -18.0);
+    painter.text(
+        at + egui::vec2(1.0, 1.0),
+        Align2::LEFT_BOTTOM,
+        &text,
+        FontId::proportional(14.0),
+        Color32::BLACK,
+    );
+    painter.text(at, Align2::LEFT_BOTTOM, text, FontId::proportional(14.0), colour);
 }
 
 /// Draws the gizmo's triangles (transform-gizmo's draw data, in screen points).

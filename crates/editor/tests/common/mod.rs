@@ -43,9 +43,18 @@ pub fn harness(dir: &std::path::Path, file: Option<std::path::PathBuf>) -> Harne
 /// The editor on the demo scene with the GPU viewport, as `keyrig` opens it, in a window of
 /// `size` points; the viewport renders at full resolution whatever the adapter.
 pub fn gpu_harness(dir: &std::path::Path, size: [f32; 2]) -> Harness<'static, EditorApp> {
+    gpu_harness_for(dir, size, None)
+}
+
+/// [`gpu_harness`] on `file` (the demo scene when `None`).
+pub fn gpu_harness_for(
+    dir: &std::path::Path,
+    size: [f32; 2],
+    file: Option<std::path::PathBuf>,
+) -> Harness<'static, EditorApp> {
     let dir = dir.to_path_buf();
     let mut harness = Harness::builder().wgpu().with_size(egui::Vec2::from(size)).build_eframe(move |cc| {
-        let mut app = editor_for(None, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
+        let mut app = editor_for(file, EditorOptions { data_dir: Some(dir), autosave_seconds: Some(1e9) });
         if let Some(rs) = &cc.wgpu_render_state {
             app.attach_gpu(rs);
         }
