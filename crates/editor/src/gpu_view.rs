@@ -30,6 +30,9 @@ pub struct GpuFrame<'a> {
     /// Vertex-animated meshes (MD2) of objects whose mesh is a file, by object index; only
     /// read when the rig is rebuilt (see [`GpuView::needs_rig`]).
     pub morph_meshes: std::collections::HashMap<usize, keyrig_render::MorphMesh>,
+    /// Materials of skinned file meshes, by object (read, like `morph_meshes`, only when the
+    /// rig is rebuilt).
+    pub materials: std::collections::HashMap<usize, std::sync::Arc<keyrig_core::Material>>,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -169,7 +172,8 @@ impl GpuView {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.rig_key) {
             self.rig = None;
-            let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes);
+            let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes)
+                .with_materials(&frame.materials);
             rig.upload(&mut self.renderer).map_err(|e| e.to_string())?;
             self.rig = Some((frame.rig_key, rig));
         }

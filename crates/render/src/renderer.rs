@@ -48,17 +48,31 @@ pub enum MeshData<'a> {
     Morph { frames: &'a [Vec<SkinnedVertex>], indices: &'a [u32] },
 }
 
-/// How meshes are drawn (seed text 002's render styles).
+/// How meshes are drawn (seed text 002's render styles). Textures are a separate switch
+/// ([`FrameInput::textures`]): they apply to the solid style.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum RenderStyle {
+    /// Lit, filled surfaces (textured when textures are on).
     #[default]
     Solid,
+    /// Triangle edges only.
     Wireframe,
+    /// Vertices only.
     Points,
 }
 
 impl RenderStyle {
     pub const ALL: [RenderStyle; 3] = [RenderStyle::Solid, RenderStyle::Wireframe, RenderStyle::Points];
+
+    /// `Solid`, `Wireframe`, `Points`: the editor's menu labels.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            RenderStyle::Solid => "Solid",
+            RenderStyle::Wireframe => "Wireframe",
+            RenderStyle::Points => "Points",
+        }
+    }
 
     /// `solid`, `wireframe`, `points`.
     #[must_use]
