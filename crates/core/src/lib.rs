@@ -4,12 +4,14 @@
 pub mod channel;
 pub mod channel_id;
 pub mod key;
+pub mod material;
 pub mod quat;
 pub mod scene;
 pub mod track;
 pub mod validate;
 
 pub use key::{Animated, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
+pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
     ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,

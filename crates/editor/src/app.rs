@@ -21,39 +21,8 @@ use crate::state::{Document, KeyRef, Playback, Selected, Selection};
 /// the mesh store's generation.
 type CachedEvaluator = ((u64, u64, u64), Arc<SceneEvaluator>);
 
-/// How the viewport draws meshes (seed text 002's render styles).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RenderStyle {
-    /// Lit, filled surfaces.
-    Solid,
-    /// Triangle edges only.
-    Wireframe,
-    /// Vertices only.
-    Points,
-}
-
-impl RenderStyle {
-    pub const ALL: [RenderStyle; 3] = [RenderStyle::Solid, RenderStyle::Wireframe, RenderStyle::Points];
-
-    #[must_use]
-    pub fn label(self) -> &'static str {
-        match self {
-            RenderStyle::Solid => "Solid",
-            RenderStyle::Wireframe => "Wireframe",
-            RenderStyle::Points => "Points",
-        }
-    }
-
-    /// keyrig-render's style.
-    #[must_use]
-    pub fn to_render(self) -> keyrig_render::RenderStyle {
-        match self {
-            RenderStyle::Solid => keyrig_render::RenderStyle::Solid,
-            RenderStyle::Wireframe => keyrig_render::RenderStyle::Wireframe,
-            RenderStyle::Points => keyrig_render::RenderStyle::Points,
-        }
-    }
-}
+/// How the viewport draws meshes: keyrig-render's one type (solid, wireframe, points).
+pub use keyrig_render::RenderStyle;
 
 /// Viewport settings that are not part of the document.
 #[derive(Clone, Debug)]
@@ -78,6 +47,9 @@ pub struct ViewSettings {
     pub object_bounds: Vec<Option<crate::camera::Bounds>>,
     /// Objects to frame once their bounds are known (after an import or opening a model).
     pub frame_request: Option<Vec<usize>>,
+    /// Draw materials (glTF base colour and texture, MD2 skins); off shows the plain
+    /// per-object colours.
+    pub textures: bool,
 }
 
 impl ViewSettings {
@@ -132,6 +104,9 @@ pub struct EditorOptions {
 
 /// The whole editor.
 pub struct EditorApp {
+    /// Whether [`crate::fonts::install`] ran on the context (at start-up, else on the first
+    /// frame).
+    pub fonts_installed: bool,
     pub doc: Document,
     pub selection: Selection,
     pub playback: Playback,
@@ -185,6 +160,7 @@ impl EditorApp {
         let mut playback = Playback::default();
         playback.go_to(scene.frame_range.start, scene.frame_range.start, scene.frame_range.end);
         EditorApp {
+            fonts_installed: false,
             doc: Document::new(scene, path),
             selection: Selection::default(),
             playback,
@@ -201,6 +177,7 @@ impl EditorApp {
                 viewport_rect: None,
                 object_bounds: Vec::new(),
                 frame_request: None,
+                textures: true,
             },
             clipboard: Vec::new(),
             status: None,
@@ -865,6 +842,10 @@ impl EditorApp {
     /// One frame of the editor, drawn into `ui` (the whole window).
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
+        if !self.fonts_installed {
+            crate::fonts::install(&ctx);
+            self.fonts_installed = true;
+        }
         // Playback clock.
         let dt = ctx.input(|i| f64::from(i.stable_dt));
         let scene = self.doc.scene();

@@ -215,7 +215,10 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
             let seconds =
                 mesh.clip_duration(None, keyrig_core::MD2_DEFAULT_FPS).map_err(|e| e.to_string())?;
             scene.frame_range.end = frame_range_end(seconds, scene.fps);
-            Ok((scene, vec![((PathBuf::from(file), None), Ok(FileMesh::Morph(std::sync::Arc::new(mesh))))]))
+            Ok((
+                scene,
+                vec![((PathBuf::from(file), None), Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)))],
+            ))
         }
         Some(other) => Err(format!(
             "{}: unknown file type .{other} (expected .ron, .glb, .gltf or .md2)",
@@ -255,10 +258,12 @@ fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<
     Ok(data)
 }
 
-/// The morph mesh of the MD2 file `path` whose bytes are `data` (the skin image is not read:
-/// the editor draws MD2 models untextured).
+/// The morph mesh of the MD2 file `path` whose bytes are `data`, textured with its skin
+/// when one is found beside it ([`keyrig_io::md2::load_skin`]; a skin that cannot be decoded
+/// leaves the model untextured rather than unreadable).
 fn md2_morph_mesh(path: &Path, data: &[u8]) -> Result<MorphMesh, String> {
-    let model = keyrig_io::md2::parse_md2(data).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut model = keyrig_io::md2::parse_md2(data).map_err(|e| format!("{}: {e}", path.display()))?;
+    model.skin = keyrig_io::md2::load_skin(path, &model.skin_names).ok().flatten();
     morph_mesh_from_md2(&model).map_err(|e| format!("{}: {e}", path.display()))
 }
 
@@ -270,7 +275,8 @@ pub fn frame_range_end(seconds: f64, fps: f64) -> i32 {
 }
 
 /// A keyrig morph mesh from an MD2 model: every frame's positions and normals per render
-/// vertex (in the file's Z-up Quake units) and its clips.
+/// vertex (in the file's Z-up Quake units), its clips, texture coordinates and, when the
+/// model's skin was loaded ([`keyrig_io::md2::Md2Model::skin`]), the skin as its material.
 ///
 /// # Errors
 /// A model without frames (keyrig-io's reader refuses those already).
@@ -283,7 +289,10 @@ pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh
         .collect();
     let clips =
         model.clips.iter().map(|c| MorphClip { name: c.name.clone(), frames: c.frames.clone() }).collect();
-    MorphMesh::new(frames, model.indices.clone(), clips).map_err(|e| e.to_string())
+    let material = model.skin.as_ref().and_then(keyrig_io::md2::Md2Skin::material).map(std::sync::Arc::new);
+    MorphMesh::new(frames, model.indices.clone(), clips)
+        .and_then(|m| m.with_look(model.texcoords.clone(), material))
+        .map_err(|e| e.to_string())
 }
 
 /// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame) and adds a
@@ -292,7 +301,8 @@ fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
     let mut points = Vec::new();
     for object in &scene.objects {
         let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
-        let Some((_, Ok(data))) = meshes.iter().find(|((p, m), _)| p == Path::new(path) && m == mesh) else {
+        let Some((_, Ok((data, _)))) = meshes.iter().find(|((p, m), _)| p == Path::new(path) && m == mesh)
+        else {
             continue;
         };
         let world = rest_world_from_object(object);
@@ -371,8 +381,8 @@ fn load_meshes_of(
 }
 
 /// A model file's mesh as [`MeshStore`] keys it (full path, mesh index) and how loading it
-/// went.
-pub type LoadedMesh = ((PathBuf, Option<usize>), Result<FileMesh, String>);
+/// went: the mesh and, for glTF, its material (an MD2 mesh carries its skin itself).
+pub type LoadedMesh = ((PathBuf, Option<usize>), Result<(FileMesh, Option<keyrig_core::Material>), String>);
 
 /// Whether a model import replaces the document or adds to it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -571,6 +581,8 @@ impl FileMesh {
 #[derive(Default)]
 pub struct MeshStore {
     meshes: HashMap<(PathBuf, Option<usize>), Result<FileMesh, String>>,
+    /// Materials of glTF meshes (a morph mesh holds its own).
+    materials: HashMap<(PathBuf, Option<usize>), std::sync::Arc<keyrig_core::Material>>,
     /// Counts loads and inserts, so that whatever was built from the store (the scene
     /// evaluator) knows when to be rebuilt.
     generation: u64,
@@ -585,16 +597,54 @@ impl MeshStore {
         path: &str,
         mesh: Option<usize>,
     ) -> Result<&FileMesh, String> {
-        let full = full_path(base_dir, path);
-        let generation = &mut self.generation;
-        self.meshes
-            .entry((full.clone(), mesh))
-            .or_insert_with(|| {
-                *generation += 1;
-                load_file_mesh(&full, mesh)
-            })
-            .as_ref()
-            .map_err(Clone::clone)
+        let key = (full_path(base_dir, path), mesh);
+        if !self.meshes.contains_key(&key) {
+            self.generation += 1;
+            let loaded = load_file_mesh(&key.0, mesh).map(|(loaded, material)| {
+                if let Some(material) = material {
+                    self.materials.insert(key.clone(), std::sync::Arc::new(material));
+                }
+                loaded
+            });
+            self.meshes.insert(key.clone(), loaded);
+        }
+        self.meshes[&key].as_ref().map_err(Clone::clone)
+    }
+
+    /// The material of a loaded mesh (a glTF mesh's base colour and texture, an MD2 skin).
+    #[must_use]
+    pub fn material(
+        &self,
+        base_dir: Option<&Path>,
+        path: &str,
+        mesh: Option<usize>,
+    ) -> Option<std::sync::Arc<keyrig_core::Material>> {
+        let key = (full_path(base_dir, path), mesh);
+        if let Some(material) = self.materials.get(&key) {
+            return Some(std::sync::Arc::clone(material));
+        }
+        match self.meshes.get(&key)? {
+            Ok(FileMesh::Morph(m)) => m.material().cloned(),
+            _ => None,
+        }
+    }
+
+    /// Materials of the loaded meshes of `scene`'s model-file objects, by object index.
+    #[must_use]
+    pub fn materials_for(
+        &self,
+        base_dir: Option<&Path>,
+        scene: &keyrig_core::Scene,
+    ) -> HashMap<usize, std::sync::Arc<keyrig_core::Material>> {
+        let mut out = HashMap::new();
+        for (o, object) in scene.objects.iter().enumerate() {
+            if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+                if let Some(material) = self.material(base_dir, path, *mesh) {
+                    out.insert(o, material);
+                }
+            }
+        }
+        out
     }
 
     /// The mesh if it was loaded already (nothing is read).
@@ -603,10 +653,24 @@ impl MeshStore {
         self.meshes.get(&(full_path(base_dir, path), mesh))?.as_ref().ok()
     }
 
-    /// Stores a mesh loaded elsewhere (by a background import) under its full path.
-    pub fn insert(&mut self, path: PathBuf, mesh: Option<usize>, loaded: Result<FileMesh, String>) {
+    /// Stores a mesh (and its material) loaded elsewhere (by a background import) under its
+    /// full path.
+    pub fn insert(
+        &mut self,
+        path: PathBuf,
+        mesh: Option<usize>,
+        loaded: Result<(FileMesh, Option<keyrig_core::Material>), String>,
+    ) {
         self.generation += 1;
-        self.meshes.insert((path, mesh), loaded);
+        let key = (path, mesh);
+        let loaded = loaded.map(|(loaded, material)| {
+            match material {
+                Some(material) => self.materials.insert(key.clone(), std::sync::Arc::new(material)),
+                None => self.materials.remove(&key),
+            };
+            loaded
+        });
+        self.meshes.insert(key, loaded);
     }
 
     /// How many meshes were loaded or stored so far.
@@ -648,13 +712,19 @@ fn full_path(base_dir: Option<&Path>, path: &str) -> PathBuf {
     }
 }
 
-fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> {
+/// A model file's mesh and, for glTF, its material ([`keyrig_io::model::ImportedModel::material`];
+/// a texture that cannot be decoded leaves the base colour alone). An MD2 mesh carries its
+/// skin itself.
+fn load_file_mesh(
+    path: &Path,
+    mesh: Option<usize>,
+) -> Result<(FileMesh, Option<keyrig_core::Material>), String> {
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {}
         Some("md2") => {
             let data = keyrig_io::file_io::read_regular_file(path, keyrig_io::file_io::MAX_MD2_BYTES)
                 .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-            return md2_morph_mesh(path, &data).map(|m| FileMesh::Morph(std::sync::Arc::new(m)));
+            return md2_morph_mesh(path, &data).map(|m| (FileMesh::Morph(std::sync::Arc::new(m)), None));
         }
         _ => return Err(format!("{}: the editor shows meshes of glTF and MD2 files only", path.display())),
     }
@@ -663,10 +733,11 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
     let Some(node) = model.nodes.iter().position(|n| n.mesh == Some(index)) else {
         return Err(format!("{}: no node shows mesh {index}", path.display()));
     };
+    let material = model.material(index).unwrap_or_else(|e| Some(e.without_texture()));
     if model.nodes[node].skin.is_some() {
         return model
             .skinned_mesh(node)
-            .map(|m| FileMesh::Skinned(std::sync::Arc::new(m)))
+            .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), material))
             .map_err(|e| format!("{}: {e}", path.display()));
     }
     let mut positions = Vec::new();
@@ -679,7 +750,7 @@ fn load_file_mesh(path: &Path, mesh: Option<usize>) -> Result<FileMesh, String> 
         positions.extend_from_slice(&prim.positions);
         indices.extend(prim.indices.iter().map(|i| i + base));
     }
-    Ok(FileMesh::Static { positions, indices })
+    Ok((FileMesh::Static { positions, indices }, material))
 }
 
 /// Skinned and vertex-animated (MD2) meshes of every object of `scene` whose mesh is a model
@@ -708,7 +779,8 @@ pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMes
             }
         }
     }
-    Ok(RenderMeshes { skinned, morphs })
+    let materials = store.materials_for(base_dir, scene);
+    Ok(RenderMeshes { skinned, morphs, materials })
 }
 
 /// The file meshes of a scene as keyrig-render takes them, by object index.
@@ -716,6 +788,9 @@ pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMes
 pub struct RenderMeshes {
     pub skinned: HashMap<usize, keyrig_skin::SkinnedMesh>,
     pub morphs: HashMap<usize, MorphMesh>,
+    /// Materials of the skinned meshes (morph meshes carry theirs), for
+    /// [`keyrig_render::SceneRig::with_materials`].
+    pub materials: HashMap<usize, std::sync::Arc<keyrig_core::Material>>,
 }
 
 /// The autosave recovery file: `recovery.ron` (a scene file) and `recovery.origin` (the path

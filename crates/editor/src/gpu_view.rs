@@ -30,6 +30,9 @@ pub struct GpuFrame<'a> {
     /// Vertex-animated meshes (MD2) of objects whose mesh is a file, by object index; only
     /// read when the rig is rebuilt (see [`GpuView::needs_rig`]).
     pub morph_meshes: std::collections::HashMap<usize, std::sync::Arc<keyrig_render::MorphMesh>>,
+    /// Materials of skinned file meshes, by object (read, like `morph_meshes`, only when the
+    /// rig is rebuilt).
+    pub materials: std::collections::HashMap<usize, std::sync::Arc<keyrig_core::Material>>,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -168,7 +171,8 @@ impl GpuView {
     pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.rig_key) {
-            let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes);
+            let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes)
+                .with_materials(&frame.materials);
             // Only the meshes the edit rebuilt go to the GPU again.
             let previous = self.rig.take().map(|(_, rig)| rig);
             rig.upload_changed(&mut self.renderer, previous.as_ref()).map_err(|e| e.to_string())?;

@@ -18,6 +18,7 @@ pub mod channels;
 pub mod commands;
 pub mod eval;
 pub mod files;
+pub mod fonts;
 pub mod gpu_view;
 pub mod panels;
 pub mod skinning;
@@ -83,6 +84,8 @@ pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
         "keyrig",
         options,
         Box::new(|cc| {
+            fonts::install(&cc.egui_ctx);
+            app.fonts_installed = true;
             // The GPU viewport needs eframe's wgpu device; without it the painter draws.
             if let Some(render_state) = &cc.wgpu_render_state {
                 app.attach_gpu(render_state);

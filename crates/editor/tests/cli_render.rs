@@ -147,6 +147,58 @@ fn renders_an_animated_gltf_model_with_its_skin() {
     assert_ne!(images[0], images[1]);
 }
 
+/// Distinct colours with each channel quantized to 16 levels: shading of one flat colour gives
+/// a few dozen, a texture many more.
+fn quantized_colours(image: &keyrig_render::image::RgbaImage) -> usize {
+    let mut colours: Vec<[u8; 3]> = image.pixels().map(|p| [p.0[0] / 16, p.0[1] / 16, p.0[2] / 16]).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    colours.len()
+}
+
+/// Renders `model` at 256×256 without grid and skeleton, with or without textures.
+fn render_model(model: &Path, dir: &Path, textures: bool) -> keyrig_render::image::RgbaImage {
+    assert!(model.exists(), "{} is missing (the shared corpus must be beside the checkout)", model.display());
+    let out = dir.join(format!("model_{textures}.png"));
+    let mut args = vec![
+        "render",
+        model.to_str().expect("utf-8 path"),
+        "--size",
+        "256x256",
+        "--no-grid",
+        "--no-skeleton",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ];
+    if !textures {
+        args.push("--no-textures");
+    }
+    let result = keyrig(&args);
+    assert!(result.status.success(), "keyrig render {} failed: {}", model.display(), stderr(&result));
+    keyrig_render::image::open(&out).expect("a PNG").to_rgba8()
+}
+
+#[test]
+fn models_render_with_their_textures_not_flat_grey() {
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus");
+    let dir = tempfile::tempdir().expect("tempdir");
+    // CesiumMan: a JPEG base-colour texture (white suit, green and blue panels); Fox: a PNG
+    // one; ratamahatta: an MD2 model with its skin in skins/.
+    for (model, factor) in
+        [("gltf/CesiumMan/CesiumMan.glb", 3), ("gltf/Fox/Fox.glb", 2), ("md2/ratamahatta/ratamahatta.md2", 2)]
+    {
+        let model = corpus.join(model);
+        let textured = quantized_colours(&render_model(&model, dir.path(), true));
+        let plain = quantized_colours(&render_model(&model, dir.path(), false));
+        assert!(plain < 60, "{}: --no-textures draws one lit colour, {plain} colours", model.display());
+        assert!(
+            textured > 60 && textured > factor * plain,
+            "{}: {textured} colours textured, {plain} without: the texture is not drawn",
+            model.display()
+        );
+    }
+}
+
 #[test]
 fn bad_arguments_and_files_are_explained() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -17,6 +17,8 @@ pub enum MorphError {
     IndexCount { count: usize },
     #[error("triangle index {index} is out of range (the mesh has {vertices} vertices)")]
     Index { index: u32, vertices: usize },
+    #[error("{count} texture coordinates for {vertices} vertices")]
+    UvCount { count: usize, vertices: usize },
     #[error("clip `{name}` covers frames {start}..{end}, outside the {frames} frames (or empty)")]
     ClipRange { name: String, start: usize, end: usize, frames: usize },
     #[error("no clip named `{name}` (clips: {available})")]

@@ -891,6 +891,7 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
             texture: info.texture().index(),
             image: info.texture().source().index(),
             texcoord_set: info.tex_coord(),
+            sampler: sampler_of(&info.texture().sampler()),
         });
         primitives.push(ModelPrimitive {
             mode,
@@ -1283,5 +1284,36 @@ trait TryNormalizeQuat: Sized {
 impl TryNormalizeQuat for Quat {
     fn try_normalize_quat(self) -> Option<Quat> {
         glam::Vec4::from(self).try_normalize().map(Quat::from_vec4)
+    }
+}
+
+/// keyrig's sampler for a glTF sampler; filters the file leaves out are linear, with linear
+/// mipmaps for minification (glTF leaves them to the implementation).
+fn sampler_of(sampler: &gltf::texture::Sampler<'_>) -> keyrig_core::Sampler {
+    use gltf::texture::{MagFilter, MinFilter, WrappingMode};
+    use keyrig_core::{FilterMode, WrapMode};
+    let wrap = |mode| match mode {
+        WrappingMode::ClampToEdge => WrapMode::ClampToEdge,
+        WrappingMode::MirroredRepeat => WrapMode::MirroredRepeat,
+        WrappingMode::Repeat => WrapMode::Repeat,
+    };
+    let mag_filter = match sampler.mag_filter() {
+        Some(MagFilter::Nearest) => FilterMode::Nearest,
+        Some(MagFilter::Linear) | None => FilterMode::Linear,
+    };
+    let (min_filter, mipmap_filter) = match sampler.min_filter() {
+        Some(MinFilter::Nearest) => (FilterMode::Nearest, None),
+        Some(MinFilter::Linear) => (FilterMode::Linear, None),
+        Some(MinFilter::NearestMipmapNearest) => (FilterMode::Nearest, Some(FilterMode::Nearest)),
+        Some(MinFilter::LinearMipmapNearest) => (FilterMode::Linear, Some(FilterMode::Nearest)),
+        Some(MinFilter::NearestMipmapLinear) => (FilterMode::Nearest, Some(FilterMode::Linear)),
+        Some(MinFilter::LinearMipmapLinear) | None => (FilterMode::Linear, Some(FilterMode::Linear)),
+    };
+    keyrig_core::Sampler {
+        wrap_u: wrap(sampler.wrap_s()),
+        wrap_v: wrap(sampler.wrap_t()),
+        mag_filter,
+        min_filter,
+        mipmap_filter,
     }
 }

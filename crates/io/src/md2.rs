@@ -720,18 +720,46 @@ pub fn load_md2_file(path: &Path) -> Result<Md2Model, Md2LoadError> {
         .map_err(|source| Md2LoadError::Io { path: path.to_path_buf(), source })?;
     let mut model =
         parse_md2(&data).map_err(|source| Md2LoadError::Format { path: path.to_path_buf(), source })?;
-    if let Some(skin_path) = find_skin(path, &model.skin_names) {
-        let image = image::open(&skin_path)
-            .map_err(|source| Md2LoadError::Skin { path: skin_path.clone(), source })?
-            .to_rgba8();
-        model.skin = Some(Md2Skin {
-            path: skin_path,
-            width: image.width(),
-            height: image.height(),
-            rgba: image.into_raw(),
-        });
-    }
+    model.skin = load_skin(path, &model.skin_names)?;
     Ok(model)
+}
+
+/// Finds ([`find_skin`]) and decodes the skin image of the MD2 file at `md2_path` whose header
+/// names `skin_names`; `None` when there is none beside it.
+///
+/// # Errors
+/// [`Md2LoadError::Skin`] when the image exists but cannot be decoded.
+pub fn load_skin(md2_path: &Path, skin_names: &[String]) -> Result<Option<Md2Skin>, Md2LoadError> {
+    let Some(skin_path) = find_skin(md2_path, skin_names) else { return Ok(None) };
+    let image = image::open(&skin_path)
+        .map_err(|source| Md2LoadError::Skin { path: skin_path.clone(), source })?
+        .to_rgba8();
+    Ok(Some(Md2Skin {
+        path: skin_path,
+        width: image.width(),
+        height: image.height(),
+        rgba: image.into_raw(),
+    }))
+}
+
+impl Md2Skin {
+    /// The skin as a material: white base colour times the skin, sampled with
+    /// [`keyrig_core::Sampler::default`] (repeat, linear, mipmapped); `None` for an image
+    /// without pixels.
+    #[must_use]
+    pub fn material(&self) -> Option<keyrig_core::Material> {
+        let image = keyrig_core::TextureImage::new(
+            self.width,
+            self.height,
+            self.rgba.clone(),
+            keyrig_core::Sampler::default(),
+        )
+        .ok()?;
+        Some(keyrig_core::Material {
+            base_colour: [1.0; 4],
+            base_colour_texture: Some(std::sync::Arc::new(image)),
+        })
+    }
 }
 
 /// The 162 unit normals MD2 vertices index (Quake 2's `anorms.h`, the vertices of a

@@ -62,6 +62,8 @@ pub struct TextureRef {
     pub image: usize,
     /// Which TEXCOORD_n set it uses.
     pub texcoord_set: u32,
+    /// The texture's sampler (wrap modes and filters).
+    pub sampler: keyrig_core::Sampler,
 }
 
 /// Where an image's bytes are.
@@ -532,6 +534,24 @@ pub fn sample_weights(track: &WeightsTrack, time: f64) -> Option<Vec<f32>> {
     })
 }
 
+/// A base-colour texture that cannot be drawn ([`ImportedModel::material`]), with the
+/// material to draw instead (its colour factor, no texture).
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("image {image}: {message}")]
+pub struct MaterialError {
+    pub image: usize,
+    pub message: String,
+    material: keyrig_core::Material,
+}
+
+impl MaterialError {
+    /// The material without its texture.
+    #[must_use]
+    pub fn without_texture(self) -> keyrig_core::Material {
+        self.material
+    }
+}
+
 /// Why an imported model cannot be mapped onto keyrig's scene or skin types.
 #[derive(Debug, thiserror::Error)]
 pub enum MappingError {
@@ -738,12 +758,21 @@ impl ImportedModel {
             s.joints.iter().map(|&n| keyrig_of_node.get(n).copied().unwrap_or(0)).collect();
         let (mut positions, mut normals, mut indices, mut joints, mut weights) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        // TEXCOORD_0; (0, 0) for the vertices of primitives without one.
+        let (mut uvs, mut has_uvs) = (Vec::new(), false);
         for prim in self.meshes[mesh].primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
             if prim.joint_sets.is_empty() {
                 return Err(bad("a primitive has no JOINTS_0/WEIGHTS_0"));
             }
             let base = positions.len() as u32;
             positions.extend_from_slice(&prim.positions);
+            match &prim.texcoords {
+                Some(t) if t.len() == prim.positions.len() => {
+                    has_uvs = true;
+                    uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { Vec2::ZERO }));
+                }
+                _ => uvs.resize(positions.len(), Vec2::ZERO),
+            }
             match &prim.normals {
                 Some(nm) => normals.extend_from_slice(nm),
                 None => normals.extend(keyrig_skin::mesh::vertex_normals(&prim.positions, &prim.indices)),
@@ -803,8 +832,54 @@ impl ImportedModel {
         }
         let skeleton = keyrig_skin::RestSkeleton::with_inverse_bind_matrices(&rest_joints, &ibms)
             .map_err(|source| MappingError::Skin { skin, source })?;
-        keyrig_skin::SkinnedMesh::new(positions, normals, indices, joints, weights, None, skeleton)
-            .map_err(|source| MappingError::Skin { skin, source })
+        let mesh =
+            keyrig_skin::SkinnedMesh::new(positions, normals, indices, joints, weights, None, skeleton)
+                .map_err(|source| MappingError::Skin { skin, source })?;
+        if has_uvs {
+            mesh.with_uvs(uvs).map_err(|source| MappingError::Skin { skin, source })
+        } else {
+            Ok(mesh)
+        }
+    }
+
+    /// The look of mesh `mesh` as keyrig draws it: the base colour factor and base-colour
+    /// texture (decoded, with its sampler) of its first triangle primitive. keyrig draws a mesh
+    /// with one material; a mesh whose primitives differ shows the first one's everywhere.
+    /// Only TEXCOORD_0 is read ([`ModelPrimitive::texcoords`]), so a texture on another set is
+    /// left out. `None` for a mesh without triangles.
+    ///
+    /// # Errors
+    /// [`MaterialError`] when the texture's image bytes are missing or cannot be decoded; the
+    /// caller can still draw the mesh with [`MaterialError::without_texture`].
+    pub fn material(&self, mesh: usize) -> Result<Option<keyrig_core::Material>, MaterialError> {
+        let Some(prim) = self
+            .meshes
+            .get(mesh)
+            .and_then(|m| m.primitives.iter().find(|p| p.mode == PrimitiveMode::Triangles))
+        else {
+            return Ok(None);
+        };
+        let base_colour = prim.base_colour_factor.map(|c| if c.is_finite() { c } else { 1.0 });
+        let plain = keyrig_core::Material { base_colour, base_colour_texture: None };
+        let Some(texture) = &prim.base_colour_texture else { return Ok(Some(plain)) };
+        let fail = |message: String| MaterialError { image: texture.image, message, material: plain.clone() };
+        if texture.texcoord_set != 0 {
+            return Err(fail(format!(
+                "uses TEXCOORD_{}; keyrig reads TEXCOORD_0 only",
+                texture.texcoord_set
+            )));
+        }
+        if prim.texcoords.is_none() {
+            return Err(fail("the primitive has no TEXCOORD_0".into()));
+        }
+        let Some(Some(data)) = self.image_data.get(texture.image) else {
+            return Err(fail("its bytes could not be read".into()));
+        };
+        let decoded = image::load_from_memory(&data.bytes).map_err(|e| fail(e.to_string()))?.to_rgba8();
+        let (width, height) = decoded.dimensions();
+        let image = keyrig_core::TextureImage::new(width, height, decoded.into_raw(), texture.sampler)
+            .map_err(|e| fail(e.to_string()))?;
+        Ok(Some(keyrig_core::Material { base_colour, base_colour_texture: Some(Arc::new(image)) }))
     }
 
     /// The model as a keyrig scene, with the tracks of `animation`:

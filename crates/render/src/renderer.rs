@@ -8,8 +8,8 @@
 use std::collections::HashMap;
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
-use keyrig_core::{Camera, DeformerKind, LightKind};
+use glam::{Mat4, Vec2, Vec3};
+use keyrig_core::{Camera, DeformerKind, LightKind, TextureImage};
 
 use crate::camera;
 use crate::gpu::with_error_scope;
@@ -33,6 +33,9 @@ pub const SUPPORTED_SAMPLE_COUNTS: [u32; 2] = [1, 4];
 pub const MAX_LIGHTS: usize = 8;
 /// Stride of the per-object uniforms (the largest `min_uniform_buffer_offset_alignment`).
 const OBJECT_STRIDE: u64 = 256;
+/// Format of every mesh texture: RGBA8 holding sRGB-encoded colour (as PNG and JPEG store
+/// it), so that sampling returns linear colour for the lighting.
+pub const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 /// Mesh data to upload.
 #[derive(Clone, Copy, Debug)]
@@ -45,17 +48,31 @@ pub enum MeshData<'a> {
     Morph { frames: &'a [Vec<SkinnedVertex>], indices: &'a [u32] },
 }
 
-/// How meshes are drawn (seed text 002's render styles).
+/// How meshes are drawn (seed text 002's render styles). Textures are a separate switch
+/// ([`FrameInput::textures`]): they apply to the solid style.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum RenderStyle {
+    /// Lit, filled surfaces (textured when textures are on).
     #[default]
     Solid,
+    /// Triangle edges only.
     Wireframe,
+    /// Vertices only.
     Points,
 }
 
 impl RenderStyle {
     pub const ALL: [RenderStyle; 3] = [RenderStyle::Solid, RenderStyle::Wireframe, RenderStyle::Points];
+
+    /// `Solid`, `Wireframe`, `Points`: the editor's menu labels.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            RenderStyle::Solid => "Solid",
+            RenderStyle::Wireframe => "Wireframe",
+            RenderStyle::Points => "Points",
+        }
+    }
 
     /// `solid`, `wireframe`, `points`.
     #[must_use]
@@ -127,6 +144,9 @@ pub struct FrameInput {
     pub light_gizmos: Vec<LightGizmo>,
     /// Linear RGB background.
     pub background: Vec3,
+    /// Multiply each mesh's colour by its texture ([`Renderer::set_texture`]) in the solid
+    /// style; `false` draws every mesh in its plain colour.
+    pub textures: bool,
 }
 
 impl FrameInput {
@@ -145,6 +165,7 @@ impl FrameInput {
             motion_paths: Vec::new(),
             light_gizmos: Vec::new(),
             background: Vec3::new(0.018, 0.02, 0.025),
+            textures: true,
         }
     }
 }
@@ -328,6 +349,117 @@ impl Viewport {
     }
 }
 
+fn address_mode(mode: keyrig_core::WrapMode) -> wgpu::AddressMode {
+    match mode {
+        keyrig_core::WrapMode::ClampToEdge => wgpu::AddressMode::ClampToEdge,
+        keyrig_core::WrapMode::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
+        keyrig_core::WrapMode::Repeat => wgpu::AddressMode::Repeat,
+    }
+}
+
+fn filter_mode(mode: keyrig_core::FilterMode) -> wgpu::FilterMode {
+    match mode {
+        keyrig_core::FilterMode::Nearest => wgpu::FilterMode::Nearest,
+        keyrig_core::FilterMode::Linear => wgpu::FilterMode::Linear,
+    }
+}
+
+/// The mip chain of `image` (level 0 first), each level half the size of the one before
+/// (rounded down, at least 1), down to 1×1; only level 0 when `mipmaps` is false. Levels
+/// are box-filtered in the stored (sRGB-encoded) values, as most tools make them. Level 0 is
+/// scaled down to fit `max_size` per side.
+fn mip_chain(image: &TextureImage, mipmaps: bool, max_size: u32) -> Vec<image::RgbaImage> {
+    use image::imageops::{resize, FilterType};
+    let Some(mut level) = image::RgbaImage::from_raw(image.width(), image.height(), image.rgba().to_vec())
+    else {
+        return vec![image::RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]))];
+    };
+    let max_size = max_size.max(1);
+    if level.width() > max_size || level.height() > max_size {
+        let scale = f64::from(max_size) / f64::from(level.width().max(level.height()));
+        let w = ((f64::from(level.width()) * scale) as u32).clamp(1, max_size);
+        let h = ((f64::from(level.height()) * scale) as u32).clamp(1, max_size);
+        level = resize(&level, w, h, FilterType::Triangle);
+    }
+    let mut levels = Vec::new();
+    loop {
+        let (w, h) = level.dimensions();
+        let next = (mipmaps && (w > 1 || h > 1))
+            .then(|| resize(&level, (w / 2).max(1), (h / 2).max(1), FilterType::Triangle));
+        levels.push(level);
+        match next {
+            Some(n) => level = n,
+            None => return levels,
+        }
+    }
+}
+
+/// Uploads `image` (with its mip chain when its sampler filters between mips) and makes the
+/// bind group of the draw shader's group 2: the texture and its sampler.
+fn texture_bind_group(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    layout: &wgpu::BindGroupLayout,
+    image: &TextureImage,
+) -> wgpu::BindGroup {
+    let sampler_info = image.sampler;
+    let levels =
+        mip_chain(image, sampler_info.mipmap_filter.is_some(), device.limits().max_texture_dimension_2d);
+    let size =
+        wgpu::Extent3d { width: levels[0].width(), height: levels[0].height(), depth_or_array_layers: 1 };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("keyrig base-colour texture"),
+        size,
+        mip_level_count: levels.len() as u32,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: TEXTURE_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for (mip, level) in levels.iter().enumerate() {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: mip as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            level.as_raw(),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * level.width()),
+                rows_per_image: Some(level.height()),
+            },
+            wgpu::Extent3d { width: level.width(), height: level.height(), depth_or_array_layers: 1 },
+        );
+    }
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("keyrig base-colour sampler"),
+        address_mode_u: address_mode(sampler_info.wrap_u),
+        address_mode_v: address_mode(sampler_info.wrap_v),
+        address_mode_w: wgpu::AddressMode::ClampToEdge,
+        mag_filter: filter_mode(sampler_info.mag_filter),
+        min_filter: filter_mode(sampler_info.min_filter),
+        mipmap_filter: match sampler_info.mipmap_filter {
+            Some(keyrig_core::FilterMode::Linear) => wgpu::MipmapFilterMode::Linear,
+            Some(keyrig_core::FilterMode::Nearest) | None => wgpu::MipmapFilterMode::Nearest,
+        },
+        ..Default::default()
+    });
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("keyrig base-colour texture"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&texture.create_view(&Default::default())),
+            },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
+        ],
+    })
+}
+
 /// [`RenderError::UnsupportedSampleCount`] unless `samples` is in [`SUPPORTED_SAMPLE_COUNTS`].
 fn check_sample_count(samples: u32) -> Result<(), RenderError> {
     if SUPPORTED_SAMPLE_COUNTS.contains(&samples) {
@@ -345,6 +477,11 @@ enum Deformation {
 
 struct GpuMesh {
     deformation: Deformation,
+    /// Texture coordinates, one `vec2<f32>` per vertex (zeros for a mesh without any); they
+    /// do not deform, so the compute passes never touch them.
+    uvs: wgpu::Buffer,
+    /// The base-colour texture and its sampler ([`Renderer::set_texture`]).
+    texture: Option<wgpu::BindGroup>,
     vertex_count: u32,
     triangles: wgpu::Buffer,
     triangle_index_count: u32,
@@ -422,6 +559,10 @@ pub struct Renderer {
     globals: wgpu::Buffer,
     globals_bind_group: wgpu::BindGroup,
     object_layout: wgpu::BindGroupLayout,
+    texture_layout: wgpu::BindGroupLayout,
+    /// A 1×1 white texture: what meshes without a texture (or every mesh, with textures off)
+    /// sample.
+    white_texture: wgpu::BindGroup,
     objects: wgpu::Buffer,
     objects_bind_group: wgpu::BindGroup,
     object_capacity: u64,
@@ -457,6 +598,16 @@ impl DrawPipelines {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &two_vec4,
         };
+        let uv_attribute =
+            [wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x2, offset: 0, shader_location: 2 }];
+        let uv_layout = wgpu::VertexBufferLayout {
+            array_stride: 8,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &uv_attribute,
+        };
+        // Meshes: deformed position and normal (slot 0) and the static texture coordinates
+        // (slot 1). Overlay lines: position and colour (slot 0).
+        let mesh_buffers = [vertex_layout.clone(), uv_layout];
         let pipeline = |label: &str,
                         layout: &wgpu::PipelineLayout,
                         vs: &str,
@@ -471,7 +622,11 @@ impl DrawPipelines {
                     module,
                     entry_point: Some(vs),
                     compilation_options: Default::default(),
-                    buffers: std::slice::from_ref(&vertex_layout),
+                    buffers: if vs == "vs_mesh" {
+                        &mesh_buffers
+                    } else {
+                        std::slice::from_ref(&vertex_layout)
+                    },
                 },
                 primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -610,6 +765,30 @@ impl Renderer {
         };
         let globals_layout = uniform_layout("keyrig globals", false);
         let object_layout = uniform_layout("keyrig object", true);
+        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("keyrig base-colour texture"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let white = TextureImage::new(1, 1, vec![255u8; 4], keyrig_core::Sampler::default())
+            .expect("a 1×1 image has 4 bytes");
+        let white_texture = texture_bind_group(device, queue, &texture_layout, &white);
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("keyrig globals"),
             size: std::mem::size_of::<GpuGlobals>() as u64,
@@ -623,7 +802,7 @@ impl Renderer {
         });
         let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("keyrig mesh"),
-            bind_group_layouts: &[Some(&globals_layout), Some(&object_layout)],
+            bind_group_layouts: &[Some(&globals_layout), Some(&object_layout), Some(&texture_layout)],
             immediate_size: 0,
         });
         let line_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -650,6 +829,8 @@ impl Renderer {
             globals,
             globals_bind_group,
             object_layout,
+            texture_layout,
+            white_texture,
             objects,
             objects_bind_group,
             object_capacity,
@@ -706,11 +887,27 @@ impl Renderer {
         &self.skinner
     }
 
-    /// Uploads (or replaces) a mesh. Vertex data stays on the GPU; frames only send joint data.
+    /// Uploads (or replaces) a mesh without texture coordinates. Vertex data stays on the GPU;
+    /// frames only send joint data.
     ///
     /// # Errors
     /// Invalid mesh data (lengths, indices, joints, weights, NaN) or a GPU error.
     pub fn upload_mesh(&mut self, id: MeshId, data: &MeshData<'_>) -> Result<(), RenderError> {
+        self.upload_mesh_with_uvs(id, data, None)
+    }
+
+    /// Uploads (or replaces) a mesh with one texture coordinate per vertex (`None`: all
+    /// (0, 0)). A replaced mesh loses its texture; give it one with [`Renderer::set_texture`].
+    ///
+    /// # Errors
+    /// As [`Renderer::upload_mesh`]; [`RenderError::LengthMismatch`] when `uvs` does not have
+    /// one entry per vertex, [`RenderError::NonFinite`] for a NaN coordinate.
+    pub fn upload_mesh_with_uvs(
+        &mut self,
+        id: MeshId,
+        data: &MeshData<'_>,
+        uvs: Option<&[Vec2]>,
+    ) -> Result<(), RenderError> {
         let (indices, vertex_count) = match data {
             MeshData::Static { vertices, indices } => (*indices, vertices.len()),
             MeshData::Skinned { skin, indices } => (*indices, skin.positions.len()),
@@ -726,6 +923,18 @@ impl Renderer {
             indices.iter().enumerate().find(|(_, &i)| i as usize >= vertex_count)
         {
             return Err(RenderError::IndexOutOfRange { position, index, vertex_count });
+        }
+        if let Some(uvs) = uvs {
+            if uvs.len() != vertex_count {
+                return Err(RenderError::LengthMismatch {
+                    field: "texture coordinates",
+                    expected: vertex_count,
+                    actual: uvs.len(),
+                });
+            }
+            if let Some(index) = uvs.iter().position(|uv| !uv.is_finite()) {
+                return Err(RenderError::NonFinite { what: "texture coordinate", index });
+            }
         }
         let device = self.device.clone();
         let skinner = &self.skinner;
@@ -761,8 +970,19 @@ impl Renderer {
                     wgpu::BufferUsages::INDEX,
                 )
             };
+            let uv_data: Vec<[f32; 2]> = match uvs {
+                Some(uvs) => uvs.iter().map(|uv| uv.to_array()).collect(),
+                None => vec![[0.0; 2]; vertex_count.max(1)],
+            };
             Ok(GpuMesh {
                 deformation,
+                uvs: crate::skinning::buffer_init(
+                    &device,
+                    "keyrig texture coordinates",
+                    bytemuck::cast_slice(&uv_data),
+                    wgpu::BufferUsages::VERTEX,
+                ),
+                texture: None,
                 vertex_count: vertex_count as u32,
                 triangles: index_buffer("keyrig triangles", indices),
                 triangle_index_count: indices.len() as u32,
@@ -787,6 +1007,35 @@ impl Renderer {
         self.queue.submit([encoder.finish()]);
         self.meshes.insert(id, mesh);
         Ok(())
+    }
+
+    /// Gives mesh `id` a base-colour texture, sampled with the image's sampler (wrap modes,
+    /// filters; mipmaps are made here when the sampler uses them), or takes it away (`None`).
+    /// The solid style multiplies the draw item's colour by it (when
+    /// [`FrameInput::textures`] is on); images larger than the device allows are scaled down.
+    ///
+    /// # Errors
+    /// [`RenderError::UnknownMesh`], or a GPU error.
+    pub fn set_texture(&mut self, id: MeshId, image: Option<&TextureImage>) -> Result<(), RenderError> {
+        if !self.meshes.contains_key(&id) {
+            return Err(RenderError::UnknownMesh(id));
+        }
+        let bind_group = match image {
+            Some(image) => Some(with_error_scope(&self.device, || {
+                texture_bind_group(&self.device, &self.queue, &self.texture_layout, image)
+            })?),
+            None => None,
+        };
+        if let Some(mesh) = self.meshes.get_mut(&id) {
+            mesh.texture = bind_group;
+        }
+        Ok(())
+    }
+
+    /// Whether mesh `id` has a texture.
+    #[must_use]
+    pub fn has_texture(&self, id: MeshId) -> bool {
+        self.meshes.get(&id).is_some_and(|m| m.texture.is_some())
     }
 
     /// Forgets a mesh (its GPU buffers are freed).
@@ -1005,7 +1254,13 @@ impl Renderer {
                 let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
+                let texture = match &mesh.texture {
+                    Some(texture) if frame.textures => texture,
+                    _ => &self.white_texture,
+                };
+                pass.set_bind_group(2, texture, &[]);
                 pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
+                pass.set_vertex_buffer(1, mesh.uvs.slice(..));
                 match frame.style {
                     RenderStyle::Solid if mesh.triangle_index_count > 0 => {
                         pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);

@@ -18,8 +18,8 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3};
-use keyrig_core::{Camera, DeformerKind, MeshSource, Scene, TrackError};
+use glam::{Mat4, Vec2, Vec3};
+use keyrig_core::{Camera, DeformerKind, Material, MeshSource, Scene, TrackError};
 use keyrig_eval::morph::MorphClips;
 pub use keyrig_eval::morph::{MorphBlend, MorphClip, MorphError};
 use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator, SceneState};
@@ -74,6 +74,10 @@ pub struct MorphMesh {
     frames: Vec<Vec<SkinnedVertex>>,
     indices: Vec<u32>,
     clips: Arc<MorphClips>,
+    /// One texture coordinate per vertex (the same in every frame).
+    uvs: Option<Vec<Vec2>>,
+    /// The model's look (an MD2 skin).
+    material: Option<Arc<Material>>,
 }
 
 impl MorphMesh {
@@ -98,7 +102,33 @@ impl MorphMesh {
             return Err(MorphError::Index { index, vertices: expected });
         }
         let clips = Arc::new(MorphClips::new(frames.len(), clips)?);
-        Ok(MorphMesh { frames, indices, clips })
+        Ok(MorphMesh { frames, indices, clips, uvs: None, material: None })
+    }
+
+    /// The mesh with one texture coordinate per vertex (MD2: s / skin width, t / skin
+    /// height) and the material that textures it.
+    ///
+    /// # Errors
+    /// [`MorphError::UvCount`] when `uvs` does not have one entry per vertex.
+    pub fn with_look(mut self, uvs: Vec<Vec2>, material: Option<Arc<Material>>) -> Result<Self, MorphError> {
+        if uvs.len() != self.vertex_count() {
+            return Err(MorphError::UvCount { count: uvs.len(), vertices: self.vertex_count() });
+        }
+        self.uvs = Some(uvs);
+        self.material = material;
+        Ok(self)
+    }
+
+    /// Texture coordinates, one per vertex, when the mesh has them.
+    #[must_use]
+    pub fn uvs(&self) -> Option<&[Vec2]> {
+        self.uvs.as_deref()
+    }
+
+    /// The mesh's material (an MD2 skin), when it has one.
+    #[must_use]
+    pub fn material(&self) -> Option<&Arc<Material>> {
+        self.material.as_ref()
     }
 
     /// Every frame's vertices.
@@ -203,6 +233,9 @@ pub struct ViewOptions {
     /// Near and far planes fitted to the scene (view-space distances); `None`: from the
     /// camera's orbit distance.
     pub depth_range: Option<[f32; 2]>,
+    /// Draw materials (base colour and texture: glTF base colour, MD2 skins); `false` draws
+    /// every object in its plain per-object colour.
+    pub textures: bool,
 }
 
 impl Default for ViewOptions {
@@ -217,6 +250,7 @@ impl Default for ViewOptions {
             selection: Selection::None,
             camera: None,
             depth_range: None,
+            textures: true,
         }
     }
 }
@@ -224,6 +258,8 @@ impl Default for ViewOptions {
 /// Drawing data of one object beside its evaluation.
 struct ObjectDraw {
     colour: Vec3,
+    /// The object's material: its base colour replaces `colour`, its texture multiplies it.
+    material: Option<Arc<Material>>,
     /// The vertices of a vertex-animated mesh (its clips play through the evaluator).
     morph: Option<Arc<MorphMesh>>,
 }
@@ -328,10 +364,34 @@ impl SceneRig {
                 if morph.is_some() || eval.skin(o).is_some() {
                     drawn += 1;
                 }
-                ObjectDraw { colour: OBJECT_COLOURS[(drawn.max(1) - 1) % OBJECT_COLOURS.len()], morph }
+                let material = morph.as_ref().and_then(|m| m.material().cloned());
+                ObjectDraw {
+                    colour: OBJECT_COLOURS[(drawn.max(1) - 1) % OBJECT_COLOURS.len()],
+                    material,
+                    morph,
+                }
             })
             .collect();
         SceneRig { scene: scene.clone(), eval, objects }
+    }
+
+    /// The rig with materials for skinned objects, by object index (a morph mesh brings its
+    /// own, [`MorphMesh::with_look`]; one given here replaces it). Call before
+    /// [`SceneRig::upload`]; indices past the scene's objects are ignored.
+    #[must_use]
+    pub fn with_materials(mut self, materials: &HashMap<usize, Arc<Material>>) -> Self {
+        for (&o, material) in materials {
+            if let Some(object) = self.objects.get_mut(o) {
+                object.material = Some(Arc::clone(material));
+            }
+        }
+        self
+    }
+
+    /// The material object `object` is drawn with, if any.
+    #[must_use]
+    pub fn material(&self, object: usize) -> Option<&Arc<Material>> {
+        self.objects.get(object)?.material.as_ref()
     }
 
     /// The scene this rig was built from.
@@ -393,27 +453,39 @@ impl SceneRig {
                     (None, None) => true,
                     _ => false,
                 };
-                if same_morph && same_skin {
+                let same_material =
+                    match (&object.material, previous.objects.get(i).and_then(|p| p.material.as_ref())) {
+                        (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                        (None, None) => true,
+                        _ => false,
+                    };
+                if same_morph && same_skin && same_material {
                     continue;
                 }
             }
             uploaded += 1;
             if let Some(morph) = &object.morph {
                 renderer
-                    .upload_mesh(
+                    .upload_mesh_with_uvs(
                         i as MeshId,
                         &MeshData::Morph { frames: &morph.frames, indices: &morph.indices },
+                        morph.uvs(),
                     )
                     .map_err(at(i))?;
             } else if let Some(skin) = self.eval.skin(i) {
                 let input = OwnedSkinInput::from_skinned_mesh(&skin.mesh, &skin.bindings);
                 renderer
-                    .upload_mesh(
+                    .upload_mesh_with_uvs(
                         i as MeshId,
                         &MeshData::Skinned { skin: input.as_input(), indices: &skin.mesh.indices },
+                        skin.mesh.uvs.as_deref(),
                     )
                     .map_err(at(i))?;
+            } else {
+                continue;
             }
+            let texture = object.material.as_ref().and_then(|m| m.base_colour_texture.as_deref());
+            renderer.set_texture(i as MeshId, texture).map_err(at(i))?;
         }
         Ok(uploaded)
     }
@@ -490,7 +562,15 @@ impl SceneRig {
             })
             .collect();
         frame.grid_spacing = view.grid.then(|| grid_spacing_for(camera.distance));
+        frame.textures = view.textures;
         for (i, (object, state)) in self.objects.iter().zip(&state.objects).enumerate() {
+            let colour = match (&object.material, view.textures) {
+                (Some(material), true) => {
+                    let [r, g, b, _] = material.base_colour;
+                    Vec3::new(r, g, b)
+                }
+                _ => object.colour,
+            };
             let world_from_model = Mat4::from(state.world_from_object);
             let selected = matches!(view.selection, Selection::Object(o) if o == i);
             if let (Some(_), Some(blend)) = (&object.morph, &state.morph) {
@@ -502,7 +582,7 @@ impl SceneRig {
                     mesh: i as MeshId,
                     world_from_model,
                     deform: Deform::Morph { frame_a: blend.frame_a, frame_b: blend.frame_b, t: blend.t },
-                    colour: object.colour,
+                    colour,
                     selected,
                 });
             }
@@ -520,7 +600,7 @@ impl SceneRig {
                         deformer: view.deformer.unwrap_or(self.eval.deformer(i).unwrap_or_default()),
                         joints: joint_poses(palette),
                     },
-                    colour: object.colour,
+                    colour,
                     selected,
                 });
             }

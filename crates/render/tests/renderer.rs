@@ -242,3 +242,150 @@ fn an_uploaded_skin_draws_its_rest_pose_before_any_deformation() {
     let out = r.renderer().read_vertices(2).expect("readback");
     assert_eq!(out, vertices, "a morphing mesh starts at its first frame");
 }
+
+/// A 2×2 checker texture: red, green / blue, yellow (sRGB-encoded bytes).
+fn checker(sampler: keyrig_core::Sampler) -> keyrig_core::TextureImage {
+    #[rustfmt::skip]
+    let rgba = vec![
+        255, 0, 0, 255,    0, 255, 0, 255,
+        0, 0, 255, 255,    255, 255, 0, 255,
+    ];
+    keyrig_core::TextureImage::new(2, 2, rgba, sampler).expect("2×2 texture")
+}
+
+/// The floor with texture coordinates (0, 0) at corner (−1, −1) to (`extent`, `extent`) at
+/// (1, 1), lit by ambient light only so that the image shows the albedo.
+fn textured_floor(
+    r: &mut HeadlessRenderer,
+    extent: f32,
+    texture: Option<&keyrig_core::TextureImage>,
+) -> FrameInput {
+    let (vertices, indices) = floor();
+    let uvs = [
+        glam::Vec2::new(0.0, 0.0),
+        glam::Vec2::new(extent, 0.0),
+        glam::Vec2::new(extent, extent),
+        glam::Vec2::new(0.0, extent),
+    ];
+    let renderer = r.renderer_mut();
+    renderer
+        .upload_mesh_with_uvs(1, &MeshData::Static { vertices: &vertices, indices: &indices }, Some(&uvs))
+        .expect("upload");
+    renderer.set_texture(1, texture).expect("texture");
+    let mut frame = floor_frame(Vec::new());
+    frame.ambient = Vec3::ONE;
+    frame
+}
+
+/// The image's distinct colours, each quantized to 32 levels per channel.
+fn colours(image: &keyrig_render::image::RgbaImage) -> std::collections::HashSet<[u8; 3]> {
+    image.pixels().map(|p| [p.0[0] / 8, p.0[1] / 8, p.0[2] / 8]).collect()
+}
+
+#[test]
+fn a_textured_quad_shows_the_texture_colours_and_the_toggle_turns_them_off() {
+    let nearest = keyrig_core::Sampler {
+        mag_filter: keyrig_core::FilterMode::Nearest,
+        min_filter: keyrig_core::FilterMode::Nearest,
+        mipmap_filter: None,
+        ..keyrig_core::Sampler::default()
+    };
+    let texture = checker(nearest);
+    let mut r = headless();
+    let frame = textured_floor(&mut r, 1.0, Some(&texture));
+    assert!(r.renderer().has_texture(1));
+    let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+    // Seen from above with yaw 0, world −Z is up in the image and +X to the right: texture
+    // coordinate (0, 0) at world (−1, −1) is the top-left of the image.
+    let at = |x: u32, y: u32| {
+        let p = image.get_pixel(x, y).0;
+        [p[0], p[1], p[2]]
+    };
+    let q = SIZE / 4;
+    assert_eq!(at(q, q), [255, 0, 0], "top left: red");
+    assert_eq!(at(3 * q, q), [0, 255, 0], "top right: green");
+    assert_eq!(at(q, 3 * q), [0, 0, 255], "bottom left: blue");
+    assert_eq!(at(3 * q, 3 * q), [255, 255, 0], "bottom right: yellow");
+
+    // The draw item's colour multiplies the texture (glTF base colour factor × texture).
+    let mut tinted = frame.clone();
+    tinted.items[0].colour = Vec3::new(1.0, 0.0, 1.0);
+    let (image, _) = r.render_image(&tinted, SIZE, SIZE).expect("render");
+    assert_eq!(image.get_pixel(3 * q, 3 * q).0[..3], [255, 0, 0], "yellow × magenta = red");
+
+    // Textures off: the plain white colour everywhere.
+    let mut plain = frame.clone();
+    plain.textures = false;
+    let (image, _) = r.render_image(&plain, SIZE, SIZE).expect("render");
+    assert_eq!(colours(&image), [[31, 31, 31]].into_iter().collect(), "one flat white");
+
+    // Taking the texture away does the same.
+    r.renderer_mut().set_texture(1, None).expect("no texture");
+    let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+    assert_eq!(colours(&image).len(), 1);
+}
+
+#[test]
+fn the_sampler_wrap_mode_and_filters_are_used() {
+    let nearest = keyrig_core::Sampler {
+        mag_filter: keyrig_core::FilterMode::Nearest,
+        min_filter: keyrig_core::FilterMode::Nearest,
+        mipmap_filter: None,
+        ..keyrig_core::Sampler::default()
+    };
+    let mut r = headless();
+    let q = SIZE / 8;
+    // Coordinates 0..2 across the floor: repeat shows the checker twice per side.
+    let repeat = checker(nearest);
+    let frame = textured_floor(&mut r, 2.0, Some(&repeat));
+    let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+    assert_eq!(image.get_pixel(q, q).0[..3], [255, 0, 0], "u, v ≈ 0.25: red");
+    assert_eq!(image.get_pixel(5 * q, q).0[..3], [255, 0, 0], "u ≈ 1.25 wraps to 0.25: red");
+    assert_eq!(image.get_pixel(7 * q, q).0[..3], [0, 255, 0], "u ≈ 1.75 wraps to 0.75: green");
+
+    // Clamp to edge: past 1 the last column (green at the top) repeats.
+    let clamp = checker(keyrig_core::Sampler {
+        wrap_u: keyrig_core::WrapMode::ClampToEdge,
+        wrap_v: keyrig_core::WrapMode::ClampToEdge,
+        ..nearest
+    });
+    let frame = textured_floor(&mut r, 2.0, Some(&clamp));
+    let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+    assert_eq!(image.get_pixel(5 * q, q).0[..3], [0, 255, 0], "u ≈ 1.25 clamps to the green edge");
+    assert_eq!(image.get_pixel(7 * q, 7 * q).0[..3], [255, 255, 0], "both clamp: yellow");
+
+    // Mirrored repeat: u ≈ 1.25 mirrors to 0.75 (green).
+    let mirror = checker(keyrig_core::Sampler {
+        wrap_u: keyrig_core::WrapMode::MirroredRepeat,
+        wrap_v: keyrig_core::WrapMode::MirroredRepeat,
+        ..nearest
+    });
+    let frame = textured_floor(&mut r, 2.0, Some(&mirror));
+    let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+    assert_eq!(image.get_pixel(5 * q, q).0[..3], [0, 255, 0], "u ≈ 1.25 mirrors to 0.75: green");
+
+    // Linear magnification blends neighbouring texels: the centre of a nearest-filtered
+    // checker is one of its colours, a linear one mixes all four.
+    let linear = checker(keyrig_core::Sampler::default());
+    let frame = textured_floor(&mut r, 1.0, Some(&linear));
+    let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+    let centre = image.get_pixel(SIZE / 2, SIZE / 2).0;
+    assert!(centre[..3].iter().all(|&c| c > 60 && c < 230), "linear blend at the centre: {centre:?}");
+    assert!(colours(&image).len() > 20, "a smooth gradient");
+}
+
+#[test]
+fn texture_coordinates_of_the_wrong_length_are_a_typed_error() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    let err = r
+        .renderer_mut()
+        .upload_mesh_with_uvs(
+            1,
+            &MeshData::Static { vertices: &vertices, indices: &indices },
+            Some(&[glam::Vec2::ZERO]),
+        )
+        .expect_err("one uv for four vertices");
+    assert!(matches!(err, RenderError::LengthMismatch { expected: 4, actual: 1, .. }), "{err}");
+    assert!(matches!(r.renderer_mut().set_texture(9, None), Err(RenderError::UnknownMesh(9))));
+}

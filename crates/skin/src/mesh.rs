@@ -4,7 +4,7 @@
 //! from the origin; their 4 bones are joints `shoulder`, `elbow`, `forearm` and `wrist`
 //! ([`ARM_JOINT_NAMES`]) at x = 0, L, 2L, 3L with L = 160.158 / 4 = 40.0395 cm.
 
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec2, Vec3};
 use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
 
 use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
@@ -22,8 +22,8 @@ pub const ARM_JOINT_NAMES: [&str; ARM_BONES] = ["shoulder", "elbow", "forearm", 
 /// A triangle mesh bound to a rest skeleton, in bind model space.
 ///
 /// # Invariants (checked by [`SkinnedMesh::new`])
-/// - `positions`, `normals`, `joints`, `weights` (and `bones` when present) have one entry
-///   per vertex; every number is finite;
+/// - `positions`, `normals`, `joints`, `weights` (and `bones` and `uvs` when present) have
+///   one entry per vertex; every position and normal is finite;
 /// - `indices` holds whole triangles of in-range vertex indices;
 /// - every joint index is in the skeleton; weights are ≥ 0 and sum to 1.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,6 +39,9 @@ pub struct SkinnedMesh {
     /// for meshes that come with multi-weights only.
     pub bones: Option<Vec<u16>>,
     pub skeleton: RestSkeleton,
+    /// Texture coordinates per vertex (glTF TEXCOORD_0: (0, 0) is the image's top-left
+    /// corner), for drawing only; the deformers ignore them. `None`: the mesh has none.
+    pub uvs: Option<Vec<Vec2>>,
 }
 
 /// Per-vertex data the deformers need besides the weights, computed once per mesh and blend
@@ -63,9 +66,25 @@ impl SkinnedMesh {
         bones: Option<Vec<u16>>,
         skeleton: RestSkeleton,
     ) -> Result<Self, SkinError> {
-        let mesh = SkinnedMesh { positions, normals, indices, joints, weights, bones, skeleton };
+        let mesh = SkinnedMesh { positions, normals, indices, joints, weights, bones, skeleton, uvs: None };
         mesh.validate()?;
         Ok(mesh)
+    }
+
+    /// The mesh with texture coordinates, one per vertex.
+    ///
+    /// # Errors
+    /// [`SkinError::LengthMismatch`] when `uvs` does not have one entry per vertex.
+    pub fn with_uvs(mut self, uvs: Vec<Vec2>) -> Result<Self, SkinError> {
+        if uvs.len() != self.positions.len() {
+            return Err(SkinError::LengthMismatch {
+                what: "texture coordinates",
+                expected: self.positions.len(),
+                found: uvs.len(),
+            });
+        }
+        self.uvs = Some(uvs);
+        Ok(self)
     }
 
     /// A single-weight mesh with smooth 4-influence weights derived across each joint
@@ -95,6 +114,9 @@ impl SkinnedMesh {
         len("normals", self.normals.len())?;
         len("joints", self.joints.len())?;
         len("weights", self.weights.len())?;
+        if let Some(uvs) = &self.uvs {
+            len("texture coordinates", uvs.len())?;
+        }
         if let Some(bones) = &self.bones {
             len("single-weight joints", bones.len())?;
             let joint_count = self.skeleton.len();

@@ -1,14 +1,16 @@
 //! `keyrig render FILE [--frame F | --frames A..B] [--deformer D] [--size WxH] -o OUT`:
 //! offscreen PNGs of a scene (.ron) or a model (.glb/.gltf: keyrig-io's scene mapping, first
 //! animation; .md2: GPU vertex morphing), through keyrig-render's headless path (the adapter
-//! wgpu finds; lavapipe without a GPU).
+//! wgpu finds; lavapipe without a GPU). Models are drawn with their materials (glTF base
+//! colour and texture, MD2 skins) unless `--no-textures` is given.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::{bail, Context};
 use glam::{Mat4, Quat, Vec3};
-use keyrig_core::{Camera, DeformerKind};
+use keyrig_core::{Camera, DeformerKind, Material};
 use keyrig_render::{
     Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selection,
     ViewOptions,
@@ -43,6 +45,9 @@ pub struct RenderArgs {
     /// Hide the ground grid.
     #[arg(long)]
     pub no_grid: bool,
+    /// Draw without materials (glTF base colour and texture, MD2 skins): plain colours.
+    #[arg(long)]
+    pub no_textures: bool,
     /// Hide skeletons.
     #[arg(long)]
     pub no_skeleton: bool,
@@ -141,6 +146,8 @@ struct Md2Source {
     camera: Camera,
     style: RenderStyle,
     grid: bool,
+    /// The model has a skin and textures are on.
+    textured: bool,
 }
 
 impl FrameSource for Md2Source {
@@ -150,6 +157,7 @@ impl FrameSource for Md2Source {
         let a = position.floor();
         let mut input = FrameInput::new(self.camera);
         input.style = self.style;
+        input.textures = self.textured;
         if !self.grid {
             input.grid_spacing = None;
         }
@@ -170,7 +178,8 @@ impl FrameSource for Md2Source {
                 frame_b: (a as u32 + 1).min(last as u32),
                 t: (position - a) as f32,
             },
-            colour: Vec3::new(0.7, 0.65, 0.6),
+            // The skin as it is (white × texture), or the plain colour.
+            colour: if self.textured { Vec3::ONE } else { Vec3::new(0.7, 0.65, 0.6) },
             selected: false,
         });
         Ok(input)
@@ -232,7 +241,10 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
 
 /// A glTF model as a scene (keyrig-io's mapping, first animation) with its meshes: skinned
 /// nodes through keyrig-io's `skinned_mesh`, other mesh nodes as rigid meshes on one joint.
-fn gltf_scene(path: &Path) -> anyhow::Result<(keyrig_core::Scene, HashMap<usize, SkinnedMesh>)> {
+/// A glTF file's scene, its meshes and their materials, by object.
+type GltfScene = (keyrig_core::Scene, HashMap<usize, SkinnedMesh>, HashMap<usize, Arc<Material>>);
+
+fn gltf_scene(path: &Path) -> anyhow::Result<GltfScene> {
     let model = keyrig_io::gltf_import::import_gltf_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let animation = (!model.animations.is_empty()).then_some(0);
@@ -242,8 +254,15 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(keyrig_core::Scene, HashMap<usize,
     // keyrig-io's to_scene makes one object per node with a mesh, in node order.
     let mesh_nodes: Vec<usize> =
         model.nodes.iter().enumerate().filter(|(_, n)| n.mesh.is_some()).map(|(i, _)| i).collect();
-    let mut loaded = HashMap::new();
+    let (mut loaded, mut materials) = (HashMap::new(), HashMap::new());
     for (object, &node) in mesh_nodes.iter().enumerate() {
+        // A texture that cannot be decoded leaves the base colour (the mesh is still drawn).
+        if let Some(material) = model.nodes[node]
+            .mesh
+            .and_then(|m| model.material(m).unwrap_or_else(|e| Some(e.without_texture())))
+        {
+            materials.insert(object, Arc::new(material));
+        }
         let mesh = if model.nodes[node].skin.is_some() {
             model.skinned_mesh(node).with_context(|| format!("{}: node {node}", path.display()))?
         } else {
@@ -253,18 +272,26 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(keyrig_core::Scene, HashMap<usize,
         loaded.insert(object, mesh);
     }
     frame_scene(&mut scene, &loaded);
-    Ok((scene, loaded))
+    Ok((scene, loaded, materials))
 }
 
 /// The triangle primitives of a glTF mesh merged into one mesh bound rigidly to a root joint.
 fn rigid_mesh(mesh: &keyrig_io::model::ModelMesh) -> anyhow::Result<SkinnedMesh> {
     let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut uvs, mut has_uvs) = (Vec::new(), false);
     for primitive in &mesh.primitives {
         if primitive.mode != keyrig_io::model::PrimitiveMode::Triangles {
             continue;
         }
         let base = positions.len() as u32;
         positions.extend_from_slice(&primitive.positions);
+        match &primitive.texcoords {
+            Some(t) if t.len() == primitive.positions.len() => {
+                has_uvs = true;
+                uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { glam::Vec2::ZERO }));
+            }
+            _ => uvs.resize(positions.len(), glam::Vec2::ZERO),
+        }
         match &primitive.normals {
             Some(n) => normals.extend_from_slice(n),
             None => {
@@ -280,7 +307,7 @@ fn rigid_mesh(mesh: &keyrig_io::model::ModelMesh) -> anyhow::Result<SkinnedMesh>
         Vec3::ZERO,
         Quat::IDENTITY,
     )])?;
-    Ok(SkinnedMesh::new(
+    let mesh = SkinnedMesh::new(
         positions,
         normals,
         indices,
@@ -288,7 +315,8 @@ fn rigid_mesh(mesh: &keyrig_io::model::ModelMesh) -> anyhow::Result<SkinnedMesh>
         vec![[1.0, 0.0, 0.0, 0.0]; n],
         Some(vec![0; n]),
         skeleton,
-    )?)
+    )?;
+    Ok(if has_uvs { mesh.with_uvs(uvs)? } else { mesh })
 }
 
 /// Points the scene's camera at the models' rest bounds (glTF files carry no keyrig camera).
@@ -308,9 +336,12 @@ fn md2_source(path: &Path, headless: &mut HeadlessRenderer, args: &RenderArgs) -
     let mesh = keyrig_editor::files::morph_mesh_from_md2(&model)
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let frames = mesh.frames();
-    headless
-        .upload_mesh(0, &MeshData::Morph { frames, indices: mesh.indices() })
+    let renderer = headless.renderer_mut();
+    renderer
+        .upload_mesh_with_uvs(0, &MeshData::Morph { frames, indices: mesh.indices() }, mesh.uvs())
         .with_context(|| format!("{}: uploading the model", path.display()))?;
+    let texture = mesh.material().and_then(|m| m.base_colour_texture.as_deref());
+    renderer.set_texture(0, texture).with_context(|| format!("{}: uploading its skin", path.display()))?;
     // Frame the first frame's bounds (in Y-up world space).
     let to_world = Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
     let (min, max) = frames[0].iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), v| {
@@ -325,7 +356,13 @@ fn md2_source(path: &Path, headless: &mut HeadlessRenderer, args: &RenderArgs) -
         distance: radius * 2.8,
         fov_y_deg: 45.0,
     };
-    Ok(Md2Source { frame_count: frames.len(), camera, style: style_of(args)?, grid: !args.no_grid })
+    Ok(Md2Source {
+        frame_count: frames.len(),
+        camera,
+        style: style_of(args)?,
+        grid: !args.no_grid,
+        textured: texture.is_some() && !args.no_textures,
+    })
 }
 
 fn style_of(args: &RenderArgs) -> anyhow::Result<RenderStyle> {
@@ -366,19 +403,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Box::new(md2_source(&args.file, &mut headless, &args)?)
     } else {
-        let (scene, loaded, morphs) = if has_extension(&args.file, &["glb", "gltf"]) {
-            let (scene, loaded) = gltf_scene(&args.file)?;
-            (scene, loaded, HashMap::new())
+        let (scene, loaded, morphs, materials) = if has_extension(&args.file, &["glb", "gltf"]) {
+            let (scene, loaded, materials) = gltf_scene(&args.file)?;
+            (scene, loaded, HashMap::new(), materials)
         } else {
             // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
             let scene = keyrig_io::scene_file::load(&args.file)?;
             inputs.extend(keyrig_io::file_io::scene_inputs(&scene, args.file.parent()));
             let meshes = keyrig_editor::files::render_meshes(&scene, args.file.parent())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
-            (scene, meshes.skinned, meshes.morphs)
+            (scene, meshes.skinned, meshes.morphs, meshes.materials)
         };
         let rig = SceneRig::with_loaded(&scene, &loaded, &morphs)
-            .with_context(|| format!("{}: preparing the scene", args.file.display()))?;
+            .with_context(|| format!("{}: preparing the scene", args.file.display()))?
+            .with_materials(&materials);
         rig.upload(headless.renderer_mut())
             .with_context(|| format!("{}: uploading meshes", args.file.display()))?;
         let selection = match &args.select {
@@ -391,6 +429,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             grid: !args.no_grid,
             skeletons: !args.no_skeleton,
             selection,
+            textures: !args.no_textures,
             ..ViewOptions::default()
         };
         Box::new(SceneSource { rig, view })

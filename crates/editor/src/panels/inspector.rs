@@ -48,6 +48,29 @@ fn vec3_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3, speed: f64)
     .inner
 }
 
+/// A colour button that opens egui's colour picker, for a linear-RGB colour as the scene stores
+/// it (components above 1 are clamped by the picker only when it is used). The button carries
+/// the accessible label `label`; its tooltip shows the stored numbers.
+fn colour_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3) -> bool {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        let mut rgb = v.to_array();
+        let response = egui::color_picker::color_edit_button_rgb(ui, &mut rgb)
+            .on_hover_text(format!("Linear RGB {:.3}, {:.3}, {:.3}; click to pick a colour", v.x, v.y, v.z));
+        let name = label.to_owned();
+        ui.ctx().accesskit_node_builder(response.id, |node| node.set_label(name));
+        if !marker.is_empty() {
+            ui.weak(marker);
+        }
+        let changed = response.changed() && Vec3::from_array(rgb) != *v;
+        if changed {
+            *v = Vec3::from_array(rgb);
+        }
+        changed
+    })
+    .inner
+}
+
 fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) {
     let Some(value) = app.value_now(id) else { return };
     let keyed_here = channels::key_at(
@@ -65,6 +88,11 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
     };
     let group = format!("inspector {id:?}");
     match value {
+        ChannelValue::Vec3(mut v) if matches!(id, ChannelId::LightColour(_)) => {
+            if colour_editor(ui, label, marker, &mut v) && v.is_finite() {
+                app.apply_pose(id, ChannelValue::Vec3(v), &group);
+            }
+        }
         ChannelValue::Vec3(mut v) => {
             if vec3_editor(ui, label, marker, &mut v, 0.01) && v.is_finite() {
                 app.apply_pose(id, ChannelValue::Vec3(v), &group);

@@ -99,6 +99,10 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                         ui.close();
                     }
                 }
+                ui.checkbox(&mut app.view.textures, "Textures").on_hover_text(
+                    "Draw imported models with their materials (glTF base colour and texture, MD2 \
+                     skins) in the solid style; off shows plain per-object colours",
+                );
                 ui.separator();
                 for (scale, label) in [(1.0, "Full resolution"), (0.5, "Half resolution")] {
                     let tip = "Pixels the GPU viewport renders per screen pixel; half is four times cheaper \

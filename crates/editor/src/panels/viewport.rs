@@ -232,7 +232,8 @@ fn gpu_ui(
     let scene = app.doc.scene();
     let c = app.view.camera;
     let view = keyrig_render::ViewOptions {
-        style: app.view.style.to_render(),
+        style: app.view.style,
+        textures: app.view.textures,
         deformer: None,
         grid: app.view.grid,
         skeletons: app.view.bones,
@@ -252,8 +253,10 @@ fn gpu_ui(
     let size = [(rect.width() * ppp).round().max(1.0) as u32, (rect.height() * ppp).round().max(1.0) as u32];
     let rig_key = app.evaluator_key();
     let mut morph_meshes = std::collections::HashMap::new();
+    let mut materials = std::collections::HashMap::new();
     if gpu.needs_rig(rig_key) {
         let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        materials = app.meshes.materials_for(base_dir.as_deref(), scene);
         for (o, object) in scene.objects.iter().enumerate() {
             if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
                 if let Some(crate::files::FileMesh::Morph(m)) =
@@ -272,6 +275,7 @@ fn gpu_ui(
         overrides: &app.overrides,
         view,
         morph_meshes,
+        materials,
     };
     if let Err(e) = gpu.set_antialiasing(app.view.antialiasing) {
         errors.push(format!("GPU viewport: {e}"));

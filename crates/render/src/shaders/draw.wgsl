@@ -1,6 +1,8 @@
 // keyrig mesh drawing: skinned vertices (the compute passes' output) lit by the scene's lights.
 //
 // Lighting (all in world space, linear RGB, Y up):
+//   albedo = object colour × base-colour texture at the vertex's texture coordinate (the
+//            texture is sRGB, so the sample is linear; a 1×1 white one when there is none)
 //   colour = albedo · (ambient + Σ_lights radiance · max(n·l, 0)) + specular
 //   directional: radiance = colour·intensity, l = −direction
 //   point:       radiance = colour·intensity / d²
@@ -43,31 +45,41 @@ struct Object {
 
 @group(0) @binding(0) var<uniform> globals: Globals;
 @group(1) @binding(0) var<uniform> object: Object;
+@group(2) @binding(0) var base_colour_texture: texture_2d<f32>;
+@group(2) @binding(1) var base_colour_sampler: sampler;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world_position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
 };
 
 @vertex
-fn vs_mesh(@location(0) position: vec4<f32>, @location(1) normal: vec4<f32>) -> VsOut {
+fn vs_mesh(
+    @location(0) position: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) uv: vec2<f32>,
+) -> VsOut {
     let world = object.world_from_model * vec4<f32>(position.xyz, 1.0);
     var out: VsOut;
     out.clip = globals.clip_from_world * world;
     out.world_position = world.xyz;
     out.normal = (object.normal_from_model * vec4<f32>(normal.xyz, 0.0)).xyz;
+    out.uv = uv;
     return out;
 }
 
 @fragment
 fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    // Sampled first, in uniform control flow (implicit derivatives pick the mip level).
+    let texel = textureSample(base_colour_texture, base_colour_sampler, in.uv);
     var n = normalize(in.normal);
     if !front {
         n = -n;
     }
     let to_eye = normalize(globals.camera_position.xyz - in.world_position);
-    let albedo = object.colour.rgb;
+    let albedo = object.colour.rgb * texel.rgb;
     var diffuse = globals.ambient.rgb;
     var specular = vec3<f32>(0.0);
     let count = min(globals.counts.x, MAX_LIGHTS);
