@@ -141,6 +141,8 @@ pub struct EditorApp {
     pub viewport_errors: Vec<String>,
     /// Smoothed time between frames while playing, seconds (shown in the status bar).
     pub frame_time: Option<f32>,
+    /// `keyrig edit --benchmark-frames N`: plays, measures N frames, prints and quits.
+    pub frame_benchmark: Option<crate::frame_bench::FrameBenchmark>,
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
     pub gpu: Option<crate::gpu_view::GpuView>,
     evaluator: RefCell<Option<CachedEvaluator>>,
@@ -203,6 +205,7 @@ impl EditorApp {
             imports: Vec::new(),
             viewport_errors: Vec::new(),
             frame_time: None,
+            frame_benchmark: None,
             gpu: None,
             evaluator: RefCell::new(None),
             window_title: String::new(),
@@ -842,6 +845,30 @@ impl EditorApp {
     /// One frame of the editor, drawn into `ui` (the whole window).
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
+        let benchmark_start = self.frame_benchmark.as_mut().map(|b| {
+            self.playback.playing = true;
+            b.frame_started()
+        });
+        self.frame(ui, &ctx);
+        if let (Some(bench), Some(start)) = (&mut self.frame_benchmark, benchmark_start) {
+            let gpu = self.gpu.as_ref().map_or(std::time::Duration::ZERO, |g| g.last_render_time);
+            bench.frame_prepared(start, gpu);
+            if bench.is_done() {
+                let viewport = match &self.gpu {
+                    Some(gpu) => format!("GPU viewport on {}", gpu.adapter_name()),
+                    None => "painter viewport".to_owned(),
+                };
+                let size = ctx.content_rect().size();
+                println!("{} at {}x{} points", bench.report(&viewport), size.x, size.y);
+                self.frame_benchmark = None;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            ctx.request_repaint();
+        }
+    }
+
+    fn frame(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
+        let ctx = ctx.clone();
         if !self.fonts_installed {
             crate::fonts::install(&ctx);
             self.fonts_installed = true;

@@ -43,6 +43,8 @@ pub struct GpuView {
     rig: Option<((u64, u64, u64), SceneRig)>,
     /// Statistics of the last rendered frame.
     pub last_stats: Option<FrameStats>,
+    /// Wall-clock time of the last [`GpuView::render`] call (the frame benchmark's split).
+    pub last_render_time: std::time::Duration,
     /// Frame-rate log to stderr, when `KEYRIG_FRAME_LOG` is set.
     frame_log: Option<FrameLog>,
 }
@@ -95,6 +97,7 @@ impl GpuView {
             target: None,
             rig: None,
             last_stats: None,
+            last_render_time: std::time::Duration::ZERO,
             frame_log: FrameLog::from_env(),
         }
     }
@@ -169,6 +172,13 @@ impl GpuView {
 
     /// Renders the frame into a texture of `size_px` pixels and returns its egui texture id.
     pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
+        let started = std::time::Instant::now();
+        let result = self.render_inner(frame, size_px);
+        self.last_render_time = started.elapsed();
+        result
+    }
+
+    fn render_inner(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.rig_key) {
             let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes)

@@ -19,6 +19,7 @@ pub mod commands;
 pub mod eval;
 pub mod files;
 pub mod fonts;
+pub mod frame_bench;
 pub mod gpu_view;
 pub mod panels;
 pub mod skinning;
@@ -62,13 +63,18 @@ pub fn editor_for(file: Option<PathBuf>, options: EditorOptions) -> EditorApp {
 }
 
 /// Opens the editor window on `file`, or on the demo scene when `None`.
-pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
-    let app = editor_for(file, EditorOptions::default());
+pub fn run_editor(
+    file: Option<PathBuf>,
+    benchmark_frames: Option<u32>,
+    window_size: Option<[f32; 2]>,
+) -> anyhow::Result<()> {
+    let mut app = editor_for(file, EditorOptions::default());
+    app.frame_benchmark = benchmark_frames.map(frame_bench::FrameBenchmark::new);
     let title = app.doc.title();
     let mut options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title(title)
-            .with_inner_size(WINDOW_SIZE)
+            .with_inner_size(window_size.unwrap_or(WINDOW_SIZE))
             .with_min_inner_size([800.0, 500.0])
             .with_drag_and_drop(true),
         renderer: eframe::Renderer::Wgpu,
@@ -79,7 +85,6 @@ pub fn run_editor(file: Option<PathBuf>) -> anyhow::Result<()> {
     if gpu_view::default_adapter_is_cpu() {
         options.wgpu_options.present_mode = egui_wgpu::wgpu::PresentMode::AutoNoVsync;
     }
-    let mut app = app;
     eframe::run_native(
         "keyrig",
         options,
