@@ -116,7 +116,6 @@ mod tests {
             starts += 1;
             bench.frame_prepared(start, Duration::ZERO);
         }
-        bench.frame_started();
         // Warm-up frames, then one frame's interval is known only when the next starts.
         assert_eq!(starts, WARM_UP + 4);
         let report = bench.report("test");
