@@ -417,6 +417,24 @@ impl SceneEvaluator {
         }
     }
 
+    /// For a rotation channel with spin keys: the unwrapped angle (degrees) turned since the
+    /// start of the spin segment at `time` (keyrig-core's `Track::spin_degrees`); `None`
+    /// outside spin segments and for other channels.
+    #[must_use]
+    pub fn spin_degrees(&self, id: ChannelId, time: f64) -> Option<f64> {
+        let slot = match id {
+            ChannelId::ObjectRotation(o) => &self.objects.get(o)?.rotation,
+            ChannelId::JointRotation { object, joint } => {
+                &self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation
+            }
+            _ => return None,
+        };
+        match &*slot.eval {
+            SlotEval::Track(track) => track.track()?.spin_degrees(time),
+            SlotEval::Fallback(_) => None,
+        }
+    }
+
     /// The whole scene at `time` seconds.
     #[must_use]
     pub fn evaluate(&self, time: f64, overrides: &Overrides) -> SceneState {

@@ -18,15 +18,15 @@
 //! its node's world transform (`gltf-world` space). OBJ gets `v`, `vn` and `f` lines; JSON
 //! gets positions and unit normals as arrays of [x, y, z].
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::{bail, Context};
 use keyrig_core::{DeformerKind, MeshSource, Scene};
-use keyrig_skin::{
-    deform_mesh_into, mesh_for, BlendZone, Deformed, Execution, JointPalette, Pose, RestSkeleton,
-    ScenePoseSampler, SkinnedMesh,
-};
+use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator};
+use keyrig_skin::{deform_mesh_into, Deformed, Execution, SkinnedMesh};
 
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("when").required(true).args(["frame", "time"])))]
@@ -65,18 +65,6 @@ enum OutputFormat {
 
 fn has_extension(path: &Path, extensions: &[&str]) -> bool {
     path.extension().is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
-}
-
-/// What `keyrig deform` deforms: a mesh bound to its rest skeleton, the pose sampler of the
-/// object's scene skeleton (none: rest pose), and the object's blend zone.
-struct Target {
-    object: String,
-    /// The space of the output: `model` (the object's skeleton space) or `gltf-world` (a
-    /// skinned glTF node: the file's world axes, as the glTF specification skins).
-    space: &'static str,
-    mesh: SkinnedMesh,
-    poser: Option<ScenePoseSampler>,
-    zone: BlendZone,
 }
 
 /// What `keyrig deform` writes: one object's vertices at one time.
@@ -176,33 +164,48 @@ fn skinned_output(
     time: f64,
 ) -> anyhow::Result<Output> {
     let file = &args.file;
-    let target = pick_target(file, scene, loaded, index)?;
-    let pose = match &target.poser {
-        Some(poser) => poser.sample(time),
-        None => Pose::rest(target.mesh.skeleton.len()),
-    };
-    let at = || format!("{}: object `{}`", file.display(), target.object);
-    let palette = JointPalette::new(&target.mesh.skeleton, &pose).with_context(at)?;
-    let bindings = target.mesh.bindings(target.zone).with_context(at)?;
+    let object = &scene.objects[index];
+    let at = || format!("{}: object `{}`", file.display(), object.name);
+    match &object.mesh {
+        None => bail!("{}: object `{}` has no mesh", file.display(), object.name),
+        Some(MeshSource::File { path, .. }) if loaded.get(index).is_none_or(Option::is_none) => bail!(
+            "{}: objects[{index}] (`{}`).mesh: the mesh comes from `{path}`; deform the model file itself (keyrig deform {path} …)",
+            file.display(),
+            object.name
+        ),
+        _ => {}
+    }
+    // The one scene evaluator poses the object, as the editor and `render` do.
+    let meshes: HashMap<usize, LoadedMesh> = loaded
+        .into_iter()
+        .enumerate()
+        .filter_map(|(o, m)| m.map(|m| (o, LoadedMesh::Skinned(Arc::new(m)))))
+        .collect();
+    let eval = SceneEvaluator::new(scene, &meshes);
+    if let Some(problem) = eval.problems().first() {
+        bail!("{}: {problem}", file.display());
+    }
+    let skin = eval.skin(index).with_context(|| format!("{}: the mesh cannot be skinned", at()))?;
+    let state = eval.object_at(index, time, &Overrides::new()).with_context(at)?;
+    if let Some(error) = state.palette_error {
+        return Err(error).with_context(at);
+    }
+    let palette = state.palette.with_context(|| format!("{}: no joint palette", at()))?;
     let mut out = Deformed::default();
-    deform_mesh_into(&target.mesh, &bindings, &palette, args.deformer, Execution::Reference, &mut out)
+    deform_mesh_into(&skin.mesh, &skin.bindings, &palette, args.deformer, Execution::Reference, &mut out)
         .with_context(|| format!("{}: {} deformer", at(), args.deformer.cli_name()))?;
     // A skinned glTF node's skeleton reaches up to the file's scene root, so its model space
     // is the file's world space, where the glTF specification skins.
-    let mut space = target.space;
-    if gltf
+    let skinned_gltf = gltf
         .and_then(|g| g.nodes.get(index))
-        .is_some_and(|&node| gltf.is_some_and(|g| g.model.nodes[node].skin.is_some()))
-    {
-        space = "gltf-world";
-    }
+        .is_some_and(|&node| gltf.is_some_and(|g| g.model.nodes[node].skin.is_some()));
     Ok(Output {
-        object: target.object,
-        space,
+        object: object.name.clone(),
+        space: if skinned_gltf { "gltf-world" } else { "model" },
         animation: "skin",
         positions: out.positions,
         normals: out.normals,
-        indices: target.mesh.indices,
+        indices: skin.mesh.indices.clone(),
     })
 }
 
@@ -291,53 +294,6 @@ fn gltf_morph(file: &Path, object: &str, g: &GltfSource, node: usize, time: f64)
 
 /// The object to deform and its mesh. Scene objects with a procedural mesh get it generated
 /// (bound to the object's own skeleton and scaled to its length, as the renderer does); glTF
-/// objects come with their loaded mesh.
-fn pick_target(
-    file: &Path,
-    scene: &Scene,
-    mut loaded: Vec<Option<SkinnedMesh>>,
-    index: usize,
-) -> anyhow::Result<Target> {
-    let object = &scene.objects[index];
-    let at = |field: &str| format!("{}: objects[{index}] (`{}`).{field}", file.display(), object.name);
-    let rest = match &object.skeleton {
-        Some(skeleton) => Some(RestSkeleton::from_scene(skeleton).with_context(|| at("skeleton"))?),
-        None => None,
-    };
-    let mesh = match &object.mesh {
-        None => bail!("{}: object `{}` has no mesh", file.display(), object.name),
-        Some(MeshSource::Procedural(kind)) => match &rest {
-            Some(rest) => mesh_for(*kind).fit_to_skeleton(rest.clone()).with_context(|| at("skeleton"))?,
-            None => mesh_for(*kind),
-        },
-        Some(MeshSource::File { path, .. }) => match loaded.get_mut(index).and_then(Option::take) {
-            Some(mesh) => {
-                if let Some(rest) = &rest {
-                    if rest.len() != mesh.skeleton.len() {
-                        bail!(
-                            "{}: {} joints, but the mesh from `{path}` is bound to {}",
-                            at("skeleton"),
-                            rest.len(),
-                            mesh.skeleton.len()
-                        );
-                    }
-                }
-                mesh
-            }
-            None => bail!(
-                "{}: the mesh comes from `{path}`; deform the model file itself (keyrig deform {path} …)",
-                at("mesh")
-            ),
-        },
-    };
-    let poser = match &object.skeleton {
-        Some(skeleton) => Some(ScenePoseSampler::new(skeleton).with_context(|| at("skeleton"))?),
-        None => None,
-    };
-    let zone = BlendZone::from_settings(&object.deformer).with_context(|| at("deformer"))?;
-    Ok(Target { object: object.name.clone(), space: "model", mesh, poser, zone })
-}
-
 /// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
 /// its skinned mesh nodes by object index.
 fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, GltfSource)> {

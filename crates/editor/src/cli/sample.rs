@@ -146,6 +146,12 @@ fn resolve_channel(args: &SampleArgs, scene: &Scene) -> anyhow::Result<Channel> 
     path.resolve(scene).with_context(|| format!("{}", args.file.display()))
 }
 
+/// The index-based id of `--channel` (already resolved by [`resolve_channel`]).
+fn channel_id(args: &SampleArgs, scene: &Scene) -> anyhow::Result<keyrig_core::channel_id::ChannelId> {
+    let text = args.channel.as_deref().unwrap_or_default();
+    Ok(ChannelPath::parse(text)?.id(scene)?)
+}
+
 /// A component as printed: f32 (the precision of the scene's values), with −0 shown as 0.
 fn tidy(v: f64) -> f32 {
     v as f32 + 0.0
@@ -202,6 +208,12 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
         RotationFormatArg::Euler => RotationFormat::EulerDegrees,
     };
     let columns = channel.column_names(rotation);
+    // Values come from the one scene evaluator (the editor's, `render`'s); `channel` names
+    // and checks what is sampled.
+    let eval = keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new());
+    let id = channel_id(&args, &scene)?;
+    let none = keyrig_eval::Overrides::new();
+    let value = |time: f64| eval.value(id, time, &none).expect("the channel was resolved in this scene");
     // Spin segments turn beyond what a quaternion (or Euler angles) can show: print the
     // unwrapped angle beside it, in f64 degrees to keep many turns exact.
     let spin = channel.has_spin();
@@ -220,12 +232,12 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
             for &(frame, time) in &instants {
                 use std::fmt::Write as _;
                 let _ = write!(out, "{frame},{time}");
-                for v in channel.sample(time).components(rotation) {
+                for v in value(time).components(rotation) {
                     let _ = write!(out, ",{}", tidy(v));
                 }
                 if spin {
                     out.push(',');
-                    if let Some(degrees) = channel.spin_degrees(time) {
+                    if let Some(degrees) = eval.spin_degrees(id, time) {
                         let _ = write!(out, "{}", tidy_degrees(degrees));
                     }
                 }
@@ -237,8 +249,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
             let samples: Vec<serde_json::Value> = instants
                 .iter()
                 .map(|&(frame, time)| {
-                    let values: Vec<f32> =
-                        channel.sample(time).components(rotation).into_iter().map(tidy).collect();
+                    let values: Vec<f32> = value(time).components(rotation).into_iter().map(tidy).collect();
                     let value = if values.len() == 1 {
                         serde_json::json!(values[0])
                     } else {
@@ -246,7 +257,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
                     };
                     let mut sample = serde_json::json!({ "frame": frame, "time": time, "value": value });
                     if spin {
-                        sample["spin_deg"] = serde_json::json!(channel.spin_degrees(time).map(tidy_degrees));
+                        sample["spin_deg"] = serde_json::json!(eval.spin_degrees(id, time).map(tidy_degrees));
                     }
                     sample
                 })
