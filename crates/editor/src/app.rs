@@ -42,6 +42,10 @@ pub struct ViewSettings {
     /// Where the viewport was laid out in the last frame (screen points), for picking tools
     /// and tests that aim at what the viewport shows.
     pub viewport_rect: Option<egui::Rect>,
+    /// Where the curve view was laid out this frame; it is painted at the end of the frame
+    /// ([`crate::panels::curves::paint_pending`]) so that edits made later in the frame (a
+    /// slider in the inspector, a gizmo in the viewport) show in the same frame.
+    pub pending_curves: Option<(egui::LayerId, egui::Rect)>,
     /// World bounds of each object as drawn in the last frame (deformed mesh, or joints and
     /// origin), by object index: framing (F, imports) and the clip planes use them.
     pub object_bounds: Vec<Option<crate::camera::Bounds>>,
@@ -177,6 +181,7 @@ impl EditorApp {
                 antialiasing: true,
                 style: RenderStyle::Solid,
                 viewport_rect: None,
+                pending_curves: None,
                 object_bounds: Vec::new(),
                 frame_request: None,
                 textures: true,
@@ -905,6 +910,7 @@ impl EditorApp {
         panels::outliner::ui(ui, self);
         panels::inspector::ui(ui, self);
         panels::viewport::ui(ui, self);
+        panels::curves::paint_pending(&ctx, self);
 
         panels::dialogs::help_ui(&ctx, self);
         panels::dialogs::confirm_ui(&ctx, self);

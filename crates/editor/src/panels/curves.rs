@@ -109,9 +109,18 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     ui.label(title);
     let size = ui.available_size().max(Vec2::new(100.0, 60.0));
     let (rect, _response) = ui.allocate_exact_size(size, Sense::hover());
-    let painter = ui.painter_at(rect);
-    let visuals = ui.visuals().clone();
+    // Painted at the end of the frame, after the inspector and the viewport had their say.
+    app.view.pending_curves = Some((ui.layer_id(), rect.intersect(ui.clip_rect())));
+}
+
+/// Paints the curve view laid out by [`ui`] this frame, with the document as the rest of the
+/// frame left it (a value dragged in the inspector or the viewport shows at once).
+pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
+    let Some((layer, rect)) = app.view.pending_curves.take() else { return };
+    let painter = egui::Painter::new(ctx.clone(), layer, rect);
+    let visuals = ctx.global_style().visuals.clone();
     painter.rect_filled(rect, 2.0, visuals.extreme_bg_color);
+    let ids = shown_channels(app);
     if ids.is_empty() {
         return;
     }
