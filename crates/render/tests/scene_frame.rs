@@ -217,3 +217,39 @@ fn morph_objects_draw_their_clip_at_the_time() {
     // Without the loaded mesh the file is reported as not loaded.
     assert!(matches!(SceneRig::new(&scene), Err(SceneFrameError::MeshNotLoaded { object: 0, .. })));
 }
+
+/// Vertex and index buffers go to the GPU once per mesh change: a rig rebuilt around an
+/// evaluator updated after a key edit sends none, one after a deformer setting change sends
+/// that object's mesh again.
+#[test]
+fn rebuilt_rigs_upload_only_changed_meshes() {
+    let mut scene = arm_scene();
+    scene
+        .objects
+        .push(Object { mesh: Some(MeshSource::Procedural(ProceduralMesh::Cube)), ..Object::new("Cube") });
+    let mut headless = keyrig_render::HeadlessRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    let mut eval =
+        std::sync::Arc::new(keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new()));
+    let morphs = std::collections::HashMap::new();
+    let first = SceneRig::with_evaluator(&scene, std::sync::Arc::clone(&eval), &morphs);
+    assert_eq!(first.upload_changed(headless.renderer_mut(), None).expect("upload"), 2);
+
+    // A key edit: the evaluator keeps the meshes, nothing is sent.
+    scene.objects[0].skeleton.as_mut().unwrap().joints[2].rotation.track.keys[1].value =
+        Quat::from_rotation_x(0.5);
+    let rebuilt = std::sync::Arc::make_mut(&mut eval).update(&scene, &std::collections::HashMap::new());
+    assert_eq!((rebuilt.channels, rebuilt.meshes), (1, 0));
+    let second = SceneRig::with_evaluator(&scene, std::sync::Arc::clone(&eval), &morphs);
+    assert_eq!(second.upload_changed(headless.renderer_mut(), Some(&first)).expect("upload"), 0);
+
+    // The arm's blend zone: its bindings are rebuilt and its mesh sent again, the cube's not.
+    scene.objects[0].deformer.blend_parent_fraction = 0.4;
+    std::sync::Arc::make_mut(&mut eval).update(&scene, &std::collections::HashMap::new());
+    let third = SceneRig::with_evaluator(&scene, std::sync::Arc::clone(&eval), &morphs);
+    assert_eq!(third.upload_changed(headless.renderer_mut(), Some(&second)).expect("upload"), 1);
+    // And the frame still draws both.
+    let state = third.evaluator().evaluate(0.5, &Overrides::new());
+    let frame = third.frame_from_state(&state, &ViewOptions::default()).expect("frame");
+    headless.render_image(&frame, 32, 32).expect("render");
+    assert_eq!(frame.items.len(), 2);
+}
