@@ -180,8 +180,7 @@ fn deform(
         .run_with(execution)?,
         2 => LinearBlendJob {
             palette: &data.palette,
-            joints: &data.joints,
-            weights: &data.weights,
+            influences: &data.influences,
             positions: &data.positions,
             normals: &data.normals,
             out_positions: op,
@@ -200,8 +199,7 @@ fn deform(
         .run_with(execution)?,
         _ => DualQuatJob {
             dual_quaternions: &data.dual_quaternions,
-            joints: &data.joints,
-            weights: &data.weights,
+            influences: &data.influences,
             positions: &data.positions,
             normals: &data.normals,
             out_positions: op,
