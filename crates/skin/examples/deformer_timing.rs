@@ -33,6 +33,12 @@
 //! `weights3.f32` (3 per vertex; ozz restores the fourth as 1 − Σ), `positions.f32`,
 //! `normals.f32` (3 per vertex) and `keyrig_positions.f32` (linear blend's output, to check).
 //!
+//! `KEYRIG_SKIN_WEIGHT_PRECISION=1` runs only an accuracy check instead: the weights stored
+//! as normalized 16-bit integers (as glTF allows; three rounded, the fourth 65535 − their sum)
+//! against the f32 weights, linear blend's largest position error relative to the posed
+//! model's size (bounding-box diagonal). No kernel reads such weights yet; this measures
+//! whether one could.
+//!
 //! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64 (the AVX2 dual
 //! quaternion build copies palettes of up to 64 joints beside the stack and reads larger ones
 //! in place, so its speed above 64 joints is measured with this).
@@ -77,6 +83,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     if let Some(dir) = std::env::var_os("KEYRIG_SKIN_DUMP") {
         dump(&data, std::path::Path::new(&dir))?;
+    }
+    if std::env::var_os("KEYRIG_SKIN_WEIGHT_PRECISION").is_some() {
+        return weight_precision(&data);
     }
     if std::env::var_os("KEYRIG_SKIN_STACK_SWEEP").is_some() {
         return stack_sweep(&data, n, rounds);
@@ -131,7 +140,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         if execution == Execution::SingleThreaded {
-            println!("  linear vs ozz_rs_port (in-tree Rust port) throughput: {:.2}x", best[0].as_secs_f64() / lbs);
+            println!(
+                "  linear vs ozz_rs_port (in-tree Rust port) throughput: {:.2}x",
+                best[0].as_secs_f64() / lbs
+            );
         }
     }
     // One job per frame at 60 frames per second: each deformer after an idle gap of 16.7 ms, on
@@ -307,5 +319,44 @@ fn dump(data: &support::Data, dir: &std::path::Path) -> Result<(), Box<dyn std::
     for (name, bytes) in files {
         std::fs::write(dir.join(name), bytes)?;
     }
+    Ok(())
+}
+
+/// Linear blend with unorm16 weights against f32 weights (see the module docs).
+fn weight_precision(data: &support::Data) -> Result<(), Box<dyn std::error::Error>> {
+    let n = data.positions.len();
+    let quantized: Vec<[f32; 4]> = data
+        .weights
+        .iter()
+        .map(|ws| {
+            let q: [u32; 3] = [0, 1, 2].map(|i| (ws[i] * 65535.0).round() as u32);
+            let last = 65535u32.saturating_sub(q.iter().sum());
+            [q[0], q[1], q[2], last].map(|q| q as f32 / 65535.0)
+        })
+        .collect();
+    let influences = keyrig_skin::Influences::new(data.joints.clone(), quantized, data.palette.len())?;
+    let (mut exact, mut exact_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    let (mut q, mut q_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    deform(2, data, Execution::Reference, &mut exact, &mut exact_n)?;
+    LinearBlendJob {
+        palette: &data.palette,
+        influences: &influences,
+        positions: &data.positions,
+        normals: &data.normals,
+        out_positions: &mut q,
+        out_normals: &mut q_n,
+    }
+    .run_with(Execution::Reference)?;
+    let min = exact.iter().fold(Vec3::MAX, |a, &b| a.min(b));
+    let max = exact.iter().fold(Vec3::MIN, |a, &b| a.max(b));
+    let size = (max - min).length();
+    let worst = exact.iter().zip(&q).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
+    let mean = exact.iter().zip(&q).map(|(a, b)| a.distance(*b) as f64).sum::<f64>() / n as f64;
+    println!(
+        "{n} vertices, unorm16 weights: model size {size:.3}, largest position error {worst:.3e} \
+         ({:.2e} of the size), mean {mean:.3e} ({:.2e} of the size)",
+        worst / size,
+        mean / size as f64
+    );
     Ok(())
 }
