@@ -548,7 +548,8 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
                     normals: Some(mesh.normals.clone()),
                     texcoords: None,
                     indices: mesh.indices.clone(),
-                    skin: skinned.then(|| (mesh.joints.clone(), mesh.weights.clone())),
+                    skin: skinned
+                        .then(|| (mesh.influences.joints().to_vec(), mesh.influences.weights().to_vec())),
                     targets: Vec::new(),
                     material: None,
                 };
@@ -941,8 +942,8 @@ fn gltf_object(
                 texcoords: p.texcoords.as_ref().map(|t| t.to_vec()),
                 indices: skinned.indices[ibase..ibase + ni].iter().map(|&i| i - vbase as u32).collect(),
                 skin: Some((
-                    skinned.joints[vbase..vbase + nv].to_vec(),
-                    skinned.weights[vbase..vbase + nv].to_vec(),
+                    skinned.influences.joints()[vbase..vbase + nv].to_vec(),
+                    skinned.influences.weights()[vbase..vbase + nv].to_vec(),
                 )),
                 targets: Vec::new(),
                 material: Some(material),

@@ -316,8 +316,8 @@ impl OwnedSkinInput {
         OwnedSkinInput {
             positions: mesh.positions.clone(),
             normals: mesh.normals.clone(),
-            joints: mesh.joints.iter().map(|js| js.map(u32::from)).collect(),
-            weights: mesh.weights.clone(),
+            joints: mesh.influences.joints().iter().map(|js| js.map(u32::from)).collect(),
+            weights: mesh.influences.weights().to_vec(),
             rigid_joints: bindings.rigid.iter().map(|&j| u32::from(j)).collect(),
             blend: bindings.bones_blending.iter().map(|b| BlendBinding { joint: b.joint, t: b.t }).collect(),
             bind_from_model: mesh.skeleton.joint_from_bind_model().iter().map(|a| Mat4::from(*a)).collect(),

@@ -1,5 +1,9 @@
-//! Interleaved minimum-time measurement of the four deformers and the ozz-style loop on the
-//! same data as `benches/deformers.rs`. On a shared machine the minimum over many interleaved
+//! Interleaved minimum-time measurement of the four deformers on the same data as
+//! `benches/deformers.rs`, beside `ozz_rs_port`: an in-tree Rust port of ozz-animation-rs's
+//! loop, **not** ozz-animation's C++ `SkinningJob` (it ran ~1.4× slower than the real one on
+//! the benchmark machine). The comparison with the real peer runs the C++ library built from
+//! source on data this example writes (`KEYRIG_SKIN_DUMP=DIR`, below); docs/benchmarks.md says
+//! how. On a shared machine the minimum over many interleaved
 //! rounds is far less sensitive to other processes than criterion's mean; use it for the
 //! ratios, and criterion for the full statistics.
 //!
@@ -23,6 +27,17 @@
 //! even on a CPU with AVX-512VL (what AVX2-only CPUs run), `KEYRIG_SKIN_FORCE_AVX2=unplaced`
 //! the same without the placed palette copy (the AVX2 build as it was before). This goes
 //! through `keyrig_skin::deform::force_avx2_dual_quaternion`, a hidden timing knob.
+//!
+//! `KEYRIG_SKIN_DUMP=DIR` also writes the data in ozz-animation's layout for an outside C++
+//! driver: `palette.f32` (16 floats per joint, column-major), `joints.u16` (4 per vertex),
+//! `weights3.f32` (3 per vertex; ozz restores the fourth as 1 − Σ), `positions.f32`,
+//! `normals.f32` (3 per vertex) and `keyrig_positions.f32` (linear blend's output, to check).
+//!
+//! `KEYRIG_SKIN_WEIGHT_PRECISION=1` runs only an accuracy check instead: the weights stored
+//! as normalized 16-bit integers (as glTF allows; three rounded, the fourth 65535 − their sum)
+//! against the f32 weights, linear blend's largest position error relative to the posed
+//! model's size (bounding-box diagonal). No kernel reads such weights yet; this measures
+//! whether one could.
 //!
 //! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64 (the AVX2 dual
 //! quaternion build copies palettes of up to 64 joints beside the stack and reads larger ones
@@ -66,12 +81,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         Err(_) => support::data(n),
     };
+    if let Some(dir) = std::env::var_os("KEYRIG_SKIN_DUMP") {
+        dump(&data, std::path::Path::new(&dir))?;
+    }
+    if std::env::var_os("KEYRIG_SKIN_WEIGHT_PRECISION").is_some() {
+        return weight_precision(&data);
+    }
     if std::env::var_os("KEYRIG_SKIN_STACK_SWEEP").is_some() {
         return stack_sweep(&data, n, rounds);
     }
     let mut op = vec![Vec3::ZERO; n];
     let mut on = vec![Vec3::ZERO; n];
-    let names = ["ozz_port", "rigid", "linear", "bones_blending", "dual_quaternion", "copy_50", "copy_72"];
+    let names = ["ozz_rs_port", "rigid", "linear", "bones_blending", "dual_quaternion", "copy_50", "copy_72"];
     // Bytes read + written per vertex (positions, normals, influences in; positions, normals out).
     let bytes_per_vertex = [68, 50, 72, 56, 72, 50, 72];
     let copy_source = vec![1.0f32; n * 72 / 8];
@@ -119,7 +140,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         if execution == Execution::SingleThreaded {
-            println!("  linear vs ozz_port throughput: {:.2}x", best[0].as_secs_f64() / lbs);
+            println!(
+                "  linear vs ozz_rs_port (in-tree Rust port) throughput: {:.2}x",
+                best[0].as_secs_f64() / lbs
+            );
         }
     }
     // One job per frame at 60 frames per second: each deformer after an idle gap of 16.7 ms, on
@@ -159,7 +183,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Runs deformer `d` (0 ozz_port, 1 rigid, 2 linear blend, 3 bones blending, 4 dual quaternion).
+/// Runs deformer `d` (0 ozz_rs_port, 1 rigid, 2 linear blend, 3 bones blending, 4 dual quaternion).
 fn deform(
     d: usize,
     data: &support::Data,
@@ -180,8 +204,7 @@ fn deform(
         .run_with(execution)?,
         2 => LinearBlendJob {
             palette: &data.palette,
-            joints: &data.joints,
-            weights: &data.weights,
+            influences: &data.influences,
             positions: &data.positions,
             normals: &data.normals,
             out_positions: op,
@@ -200,8 +223,7 @@ fn deform(
         .run_with(execution)?,
         _ => DualQuatJob {
             dual_quaternions: &data.dual_quaternions,
-            joints: &data.joints,
-            weights: &data.weights,
+            influences: &data.influences,
             positions: &data.positions,
             normals: &data.normals,
             out_positions: op,
@@ -275,4 +297,66 @@ fn padded(
         std::hint::black_box(&pad);
         Ok(())
     }
+}
+
+/// Writes the data in ozz-animation's layout (see the module docs) for the C++ driver.
+fn dump(data: &support::Data, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    fn floats(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
+        values.into_iter().flat_map(f32::to_le_bytes).collect()
+    }
+    std::fs::create_dir_all(dir)?;
+    let n = data.positions.len();
+    let (mut op, mut on) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    deform(2, data, Execution::SingleThreaded, &mut op, &mut on)?;
+    let files: [(&str, Vec<u8>); 6] = [
+        ("palette.f32", floats(data.ozz_palette.iter().flat_map(|m| m.to_cols_array()))),
+        ("joints.u16", data.ozz_joints.iter().flat_map(|j| j.to_le_bytes()).collect()),
+        ("weights3.f32", floats(data.ozz_weights.iter().copied())),
+        ("positions.f32", floats(data.positions.iter().flat_map(|p| p.to_array()))),
+        ("normals.f32", floats(data.normals.iter().flat_map(|p| p.to_array()))),
+        ("keyrig_positions.f32", floats(op.iter().flat_map(|p| p.to_array()))),
+    ];
+    for (name, bytes) in files {
+        std::fs::write(dir.join(name), bytes)?;
+    }
+    Ok(())
+}
+
+/// Linear blend with unorm16 weights against f32 weights (see the module docs).
+fn weight_precision(data: &support::Data) -> Result<(), Box<dyn std::error::Error>> {
+    let n = data.positions.len();
+    let quantized: Vec<[f32; 4]> = data
+        .weights
+        .iter()
+        .map(|ws| {
+            let q: [u32; 3] = [0, 1, 2].map(|i| (ws[i] * 65535.0).round() as u32);
+            let last = 65535u32.saturating_sub(q.iter().sum());
+            [q[0], q[1], q[2], last].map(|q| q as f32 / 65535.0)
+        })
+        .collect();
+    let influences = keyrig_skin::Influences::new(data.joints.clone(), quantized, data.palette.len())?;
+    let (mut exact, mut exact_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    let (mut q, mut q_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    deform(2, data, Execution::Reference, &mut exact, &mut exact_n)?;
+    LinearBlendJob {
+        palette: &data.palette,
+        influences: &influences,
+        positions: &data.positions,
+        normals: &data.normals,
+        out_positions: &mut q,
+        out_normals: &mut q_n,
+    }
+    .run_with(Execution::Reference)?;
+    let min = exact.iter().fold(Vec3::MAX, |a, &b| a.min(b));
+    let max = exact.iter().fold(Vec3::MIN, |a, &b| a.max(b));
+    let size = (max - min).length();
+    let worst = exact.iter().zip(&q).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
+    let mean = exact.iter().zip(&q).map(|(a, b)| a.distance(*b) as f64).sum::<f64>() / n as f64;
+    println!(
+        "{n} vertices, unorm16 weights: model size {size:.3}, largest position error {worst:.3e} \
+         ({:.2e} of the size), mean {mean:.3e} ({:.2e} of the size)",
+        worst / size,
+        mean / size as f64
+    );
+    Ok(())
 }

@@ -42,8 +42,7 @@ pub fn deform_mesh_into(
         .run_with(execution),
         DeformerKind::LinearBlend => LinearBlendJob {
             palette,
-            joints: &mesh.joints,
-            weights: &mesh.weights,
+            influences: &mesh.influences,
             positions: &mesh.positions,
             normals: &mesh.normals,
             out_positions,
@@ -64,8 +63,7 @@ pub fn deform_mesh_into(
             let dual_quaternions = palette.dual_quaternions()?;
             DualQuatJob {
                 dual_quaternions: &dual_quaternions,
-                joints: &mesh.joints,
-                weights: &mesh.weights,
+                influences: &mesh.influences,
                 positions: &mesh.positions,
                 normals: &mesh.normals,
                 out_positions,

@@ -12,6 +12,7 @@ pub mod deform;
 pub mod deformer;
 pub mod dual_quat;
 pub mod error;
+pub mod influences;
 pub mod measure;
 pub mod mesh;
 pub mod paper;
@@ -26,6 +27,7 @@ pub use deform::{
 pub use deformer::{deform_mesh, deform_mesh_into, Deformed};
 pub use dual_quat::DualQuat;
 pub use error::SkinError;
+pub use influences::Influences;
 pub use measure::{enclosed_volume, joint_cross_section, CrossSection};
 pub use mesh::{
     mesh_for, scene_skeleton_for, MeshBindings, SkinnedMesh, ARM_BONES, ARM_JOINT_NAMES, ARM_LENGTH_CM,

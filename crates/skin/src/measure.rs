@@ -75,8 +75,9 @@ pub fn joint_cross_section(
         let j = match &mesh.bones {
             Some(bones) => bones[v] as usize,
             None => {
-                let ws = mesh.weights[v];
-                mesh.joints[v][(1..4).fold(0, |best, i| if ws[i] > ws[best] { i } else { best })] as usize
+                let ws = mesh.influences.weights()[v];
+                mesh.influences.joints()[v][(1..4).fold(0, |best, i| if ws[i] > ws[best] { i } else { best })]
+                    as usize
             }
         };
         j == joint || Some(j) == parent

@@ -8,8 +8,9 @@ use glam::{Quat, Vec2, Vec3};
 use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
 
 use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
-use crate::deform::{validate_influences, BonesBlendVertex};
+use crate::deform::BonesBlendVertex;
 use crate::error::SkinError;
+use crate::influences::Influences;
 use crate::skeleton::RestSkeleton;
 
 /// Length of the paper's arms along X, in centimetres.
@@ -22,19 +23,19 @@ pub const ARM_JOINT_NAMES: [&str; ARM_BONES] = ["shoulder", "elbow", "forearm", 
 /// A triangle mesh bound to a rest skeleton, in bind model space.
 ///
 /// # Invariants (checked by [`SkinnedMesh::new`])
-/// - `positions`, `normals`, `joints`, `weights` (and `bones` and `uvs` when present) have
-///   one entry per vertex; every position and normal is finite;
+/// - `positions`, `normals`, `influences` (and `bones` and `uvs` when present) have one
+///   entry per vertex; every position and normal is finite;
 /// - `indices` holds whole triangles of in-range vertex indices;
-/// - every joint index is in the skeleton; weights are ≥ 0 and sum to 1.
+/// - every joint index is in the skeleton; weights are ≥ 0 and sum to 1 ([`Influences`] holds
+///   only such weights, checked once when it is built).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkinnedMesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     /// Triangle list, counter-clockwise seen from outside.
     pub indices: Vec<u32>,
-    /// Up to 4 joints per vertex (unused ones: joint 0, weight 0).
-    pub joints: Vec<[u16; 4]>,
-    pub weights: Vec<[f32; 4]>,
+    /// Up to 4 joints and weights per vertex (unused ones: joint 0, weight 0), validated.
+    pub influences: Influences,
     /// The single joint of each vertex for single-weight meshes (the paper's arms); `None`
     /// for meshes that come with multi-weights only.
     pub bones: Option<Vec<u16>>,
@@ -66,7 +67,8 @@ impl SkinnedMesh {
         bones: Option<Vec<u16>>,
         skeleton: RestSkeleton,
     ) -> Result<Self, SkinError> {
-        let mesh = SkinnedMesh { positions, normals, indices, joints, weights, bones, skeleton, uvs: None };
+        let influences = Influences::new(joints, weights, skeleton.len())?;
+        let mesh = SkinnedMesh { positions, normals, indices, influences, bones, skeleton, uvs: None };
         mesh.validate()?;
         Ok(mesh)
     }
@@ -112,8 +114,7 @@ impl SkinnedMesh {
             }
         };
         len("normals", self.normals.len())?;
-        len("joints", self.joints.len())?;
-        len("weights", self.weights.len())?;
+        len("influences", self.influences.len())?;
         if let Some(uvs) = &self.uvs {
             len("texture coordinates", uvs.len())?;
         }
@@ -147,7 +148,7 @@ impl SkinnedMesh {
         if let Some((i, &index)) = self.indices.iter().enumerate().find(|(_, &i)| i as usize >= n) {
             return Err(SkinError::TriangleIndexOutOfRange { triangle: i / 3, index, vertex_count: n });
         }
-        validate_influences(&self.joints, &self.weights, self.skeleton.len())
+        self.influences.check_joint_count(self.skeleton.len())
     }
 
     /// Replaces the rest skeleton (e.g. by the scene object's own, possibly edited, one),
@@ -201,8 +202,14 @@ impl SkinnedMesh {
                 bones_blending: bind_single_weights(&self.skeleton, &self.positions, bones, zone)?,
             }),
             None => Ok(MeshBindings {
-                rigid: self.joints.iter().zip(&self.weights).map(|(js, ws)| js[dominant(ws)]).collect(),
-                bones_blending: bind_from_weights(&self.skeleton, &self.joints, &self.weights)?,
+                rigid: (self.influences.joints().iter().zip(self.influences.weights()))
+                    .map(|(js, ws)| js[dominant(ws)])
+                    .collect(),
+                bones_blending: bind_from_weights(
+                    &self.skeleton,
+                    self.influences.joints(),
+                    self.influences.weights(),
+                )?,
             }),
         }
     }

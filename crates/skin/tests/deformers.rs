@@ -5,7 +5,7 @@ use glam::{Quat, Vec3};
 use keyrig_core::{DeformerKind, ProceduralMesh};
 use keyrig_skin::{
     deform_mesh_into, mesh_for, BlendZone, BonesBlendJob, BonesBlendVertex, Deformed, DualQuatJob, Execution,
-    JointPalette, LinearBlendJob, Pose, RestJoint, RestSkeleton, RigidJob, SkinError,
+    Influences, JointPalette, LinearBlendJob, Pose, RestJoint, RestSkeleton, RigidJob, SkinError,
 };
 use proptest::prelude::*;
 
@@ -132,6 +132,7 @@ fn agreement(joint_count: usize, n: usize) {
     let mut rng = Lcg(7 + joint_count as u64);
     let skeleton = random_skeleton(&mut rng, joint_count);
     let d = random_data(&mut rng, &skeleton, n);
+    let influences = Influences::new(d.joints.clone(), d.weights.clone(), skeleton.len()).unwrap();
     for round in 0..3 {
         let pose = random_pose(&mut rng, skeleton.len());
         let palette = JointPalette::new(&skeleton, &pose).unwrap();
@@ -151,8 +152,7 @@ fn agreement(joint_count: usize, n: usize) {
         let linear = run_all(n, |e, op, on| {
             LinearBlendJob {
                 palette: &palette,
-                joints: &d.joints,
-                weights: &d.weights,
+                influences: &influences,
                 positions: &d.positions,
                 normals: &d.normals,
                 out_positions: op,
@@ -177,8 +177,7 @@ fn agreement(joint_count: usize, n: usize) {
         let dq = run_all(n, |e, op, on| {
             DualQuatJob {
                 dual_quaternions: &dqs,
-                joints: &d.joints,
-                weights: &d.weights,
+                influences: &influences,
                 positions: &d.positions,
                 normals: &d.normals,
                 out_positions: op,
@@ -207,11 +206,11 @@ fn more_than_four_influences_work() {
             ws.map(|w| w / s)
         })
         .collect();
+    let influences = Influences::new(joints, weights, skeleton.len()).unwrap();
     let runs = run_all(n, |e, op, on| {
         LinearBlendJob {
             palette: &palette,
-            joints: &joints,
-            weights: &weights,
+            influences: &influences,
             positions: &positions,
             normals: &normals,
             out_positions: op,
@@ -224,8 +223,7 @@ fn more_than_four_influences_work() {
     let runs = run_all(n, |e, op, on| {
         DualQuatJob {
             dual_quaternions: &dqs,
-            joints: &joints,
-            weights: &weights,
+            influences: &influences,
             positions: &positions,
             normals: &normals,
             out_positions: op,
@@ -346,12 +344,12 @@ fn dual_quaternion_with_one_influence_is_rigid() {
     let d = random_data(&mut rng, &skeleton, n);
     let joints: Vec<[u16; 4]> = d.bones.iter().map(|&b| [b, 0, 0, 0]).collect();
     let weights = vec![[1.0f32, 0.0, 0.0, 0.0]; n];
+    let influences = Influences::new(joints, weights, skeleton.len()).unwrap();
     let (mut a, mut an, mut b, mut bn) =
         (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
     DualQuatJob {
         dual_quaternions: &dqs,
-        joints: &joints,
-        weights: &weights,
+        influences: &influences,
         positions: &d.positions,
         normals: &d.normals,
         out_positions: &mut a,
@@ -426,37 +424,40 @@ fn bad_inputs_are_typed_errors_and_leave_outputs_alone() {
         ),
     ];
     for (joints, weights, expected) in cases {
-        let r = LinearBlendJob {
-            palette: &palette,
-            joints: &joints,
-            weights: &weights,
-            positions: &positions,
-            normals: &normals,
-            out_positions: &mut op,
-            out_normals: &mut on,
-        }
-        .run();
-        // NaN != NaN: compare the rendered message instead.
-        assert_eq!(r.unwrap_err().to_string(), expected.to_string());
-        let r = DualQuatJob {
-            dual_quaternions: &dqs,
-            joints: &joints,
-            weights: &weights,
-            positions: &positions,
-            normals: &normals,
-            out_positions: &mut op,
-            out_normals: &mut on,
-        }
-        .run();
-        assert_eq!(r.unwrap_err().to_string(), expected.to_string());
-        assert_eq!(op, [poison; 2]);
+        // Bad influences never become `Influences`: the error names the vertex (NaN != NaN:
+        // compare the rendered message).
+        let built = Influences::new(joints.to_vec(), weights.to_vec(), 3);
+        assert_eq!(built.unwrap_err().to_string(), expected.to_string());
     }
-    let good_joints = [[0u16, 1, 0, 0]; 2];
-    let good_weights = [[0.5f32, 0.5, 0.0, 0.0]; 2];
+    // Influences checked against a larger skeleton than the palette: the job refuses them in
+    // its O(1) check and names the vertex, before writing anything.
+    let wide = Influences::new(vec![[0, 1, 0, 0], [0, 9, 0, 0]], vec![[0.5, 0.5, 0.0, 0.0]; 2], 10).unwrap();
+    let expected = SkinError::JointOutOfRange { vertex: 1, influence: 1, joint: 9, joint_count: 3 };
     let r = LinearBlendJob {
         palette: &palette,
-        joints: &good_joints,
-        weights: &good_weights,
+        influences: &wide,
+        positions: &positions,
+        normals: &normals,
+        out_positions: &mut op,
+        out_normals: &mut on,
+    }
+    .run();
+    assert_eq!(r, Err(expected.clone()));
+    let r = DualQuatJob {
+        dual_quaternions: &dqs,
+        influences: &wide,
+        positions: &positions,
+        normals: &normals,
+        out_positions: &mut op,
+        out_normals: &mut on,
+    }
+    .run();
+    assert_eq!(r, Err(expected));
+    assert_eq!(op, [poison; 2]);
+    let good = Influences::new(vec![[0u16, 1, 0, 0]; 2], vec![[0.5f32, 0.5, 0.0, 0.0]; 2], 3).unwrap();
+    let r = LinearBlendJob {
+        palette: &palette,
+        influences: &good,
         positions: &positions,
         normals: &normals[..1],
         out_positions: &mut op,
@@ -467,8 +468,7 @@ fn bad_inputs_are_typed_errors_and_leave_outputs_alone() {
     let (mut short, mut short_n) = ([poison; 1], [poison; 1]);
     let r = LinearBlendJob {
         palette: &palette,
-        joints: &good_joints,
-        weights: &good_weights,
+        influences: &good,
         positions: &positions,
         normals: &normals,
         out_positions: &mut short,

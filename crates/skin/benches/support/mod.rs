@@ -1,10 +1,10 @@
-//! Data and the ozz peer shared by `benches/deformers.rs` (criterion) and
+//! Data and an in-tree Rust port of ozz-animation-rs's loop shared by `benches/deformers.rs` (criterion) and
 //! `examples/deformer_timing.rs` (interleaved minimum times), so both measure the same thing:
 //! a random branching skeleton of [`JOINTS`] joints, a random pose, and vertices with 4
 //! influences on neighbouring joints.
 
 use glam::{Mat4, Quat, Vec3, Vec4};
-use keyrig_skin::{BonesBlendVertex, DualQuat, JointPalette, Pose, RestJoint, RestSkeleton};
+use keyrig_skin::{BonesBlendVertex, DualQuat, Influences, JointPalette, Pose, RestJoint, RestSkeleton};
 
 pub const JOINTS: usize = 64;
 
@@ -37,6 +37,8 @@ pub struct Data {
     pub normals: Vec<Vec3>,
     pub joints: Vec<[u16; 4]>,
     pub weights: Vec<[f32; 4]>,
+    /// `joints` and `weights`, validated once (what the jobs take).
+    pub influences: Influences,
     pub bones: Vec<u16>,
     pub bindings: Vec<BonesBlendVertex>,
     // The same data in ozz's layout.
@@ -76,6 +78,7 @@ pub fn data_with_joints(n: usize, joint_count: usize) -> Data {
         normals: Vec::with_capacity(n),
         joints: Vec::with_capacity(n),
         weights: Vec::with_capacity(n),
+        influences: Influences::default(),
         bones: Vec::with_capacity(n),
         bindings: Vec::with_capacity(n),
         ozz_joints: Vec::with_capacity(4 * n),
@@ -98,10 +101,15 @@ pub fn data_with_joints(n: usize, joint_count: usize) -> Data {
         d.ozz_joints.extend_from_slice(&js);
         d.ozz_weights.extend_from_slice(&ws[..3]);
     }
+    d.influences = Influences::new(d.joints.clone(), d.weights.clone(), joint_count).unwrap();
     d
 }
 
-/// ozz-animation-rs's 4-influence, positions-and-normals skinning loop, on glam Mat4.
+/// An in-tree Rust port of ozz-animation-rs's 4-influence, positions-and-normals skinning loop
+/// (the Rust rewrite of ozz, on glam `Mat4`). It is **not** ozz-animation's C++ `SkinningJob`:
+/// on the benchmark machine it ran about 1.4× slower than the real one, so it is a loop to
+/// compare shapes of code against, not the peer. The real comparison is in
+/// `docs/benchmarks.md` (ozz-animation 0.16.0 C++ built from source, run interleaved).
 pub fn ozz_port(d: &Data, out_positions: &mut [Vec3], out_normals: &mut [Vec3]) -> Result<(), &'static str> {
     #[inline(always)]
     fn col_mul(m: &Mat4, w: Vec4) -> Mat4 {

@@ -5,23 +5,21 @@
 //! Normals rotate with the blended real part. Needs a rigid palette
 //! ([`crate::pose::JointPalette::dual_quaternions`]).
 
-use std::ops::Range;
-
 use glam::{BVec4A, Mat4, Quat, Vec3, Vec3A, Vec4};
 
-use super::{
-    check_buffers, check_len, for_each_chunk, influences_pass, validate_influences_with, Check, Execution,
-};
+use super::{check_buffers, check_len, for_each_chunk, Execution};
 use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
+use crate::influences::Influences;
 
-/// Dual quaternion skinning with `N` influences per vertex.
+/// Dual quaternion skinning with `N` influences per vertex. The influences were checked
+/// vertex by vertex when they were built ([`Influences::new`]); a run checks only the buffer
+/// lengths and that the palette holds their largest joint index.
 #[derive(Debug)]
 pub struct DualQuatJob<'a, const N: usize = 4> {
     /// The palette M(j) as unit dual quaternions.
     pub dual_quaternions: &'a [DualQuat],
-    pub joints: &'a [[u16; N]],
-    pub weights: &'a [[f32; N]],
+    pub influences: &'a Influences<N>,
     pub positions: &'a [Vec3],
     pub normals: &'a [Vec3],
     pub out_positions: &'a mut [Vec3],
@@ -29,21 +27,13 @@ pub struct DualQuatJob<'a, const N: usize = 4> {
 }
 
 impl<const N: usize> DualQuatJob<'_, N> {
-    /// Checks buffer lengths, joint indices and weights (finite, ≥ 0, not all zero, Σ = 1).
+    /// Checks buffer lengths and that the palette holds every joint index: O(joints), not
+    /// O(vertices) (the influences are valid by construction).
     pub fn validate(&self) -> Result<(), SkinError> {
-        self.validate_with(true)
-    }
-
-    fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
-        self.check_lengths()?;
-        validate_influences_with(self.joints, self.weights, self.dual_quaternions.len(), parallel)
-    }
-
-    fn check_lengths(&self) -> Result<(), SkinError> {
         let n = self.positions.len();
-        check_len("joints", n, self.joints.len())?;
-        check_len("weights", n, self.weights.len())?;
-        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())
+        check_len("influences", n, self.influences.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        self.influences.check_joint_count(self.dual_quaternions.len())
     }
 
     /// Validates, then deforms on all cores.
@@ -53,28 +43,17 @@ impl<const N: usize> DualQuatJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        if execution.parallel() {
-            // The quick per-chunk check runs in the same dispatch as the kernel (see
-            // `for_each_chunk`); when it fails nothing was written, and the full validation
-            // below names the error.
-            self.check_lengths()?;
-            if self.fast(execution, true) {
-                return Ok(());
-            }
-        }
-        self.validate_with(false)?;
+        self.validate()?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
-                self.fast(execution, false);
-            }
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
         }
         Ok(())
     }
 
     fn reference(&mut self) {
         for v in 0..self.positions.len() {
-            let (js, ws) = (&self.joints[v], &self.weights[v]);
+            let (js, ws) = (&self.influences.joints()[v], &self.influences.weights()[v]);
             let mut dominant = 0;
             for i in 1..N {
                 if ws[i] > ws[dominant] {
@@ -97,47 +76,35 @@ impl<const N: usize> DualQuatJob<'_, N> {
         }
     }
 
-    /// The fast path; with `check`, only if every chunk passes the quick check (returns
-    /// whether it ran).
-    fn fast(&mut self, execution: Execution, check: bool) -> bool {
+    /// The fast path.
+    fn fast(&mut self, execution: Execution) {
         let parallel = execution.parallel();
         let dqs = self.dual_quaternions;
-        let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
-        let joint_count = dqs.len();
-        let quick_check = |r: Range<usize>| influences_pass(&joints[r.clone()], &weights[r], joint_count);
-        let check: Option<Check> = check.then_some(&quick_check);
+        let (joints, weights) = (self.influences.joints(), self.influences.weights());
+        let (positions, normals) = (self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
         if execution.simd() {
-            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
-            // index against the palette.
+            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked that the
+            // palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
             let avx512 = super::simd::avx512_available()
                 && !super::simd::FORCE_AVX2.load(std::sync::atomic::Ordering::Relaxed);
-            return for_each_chunk(
-                parallel,
-                check,
-                self.out_positions,
-                self.out_normals,
-                |start, out_p, out_n| {
-                    let end = start + out_p.len();
-                    let (js, ws) = (&joints[start..end], &weights[start..end]);
-                    let (ps, ns) = (&positions[start..end], &normals[start..end]);
-                    // SAFETY: as above; the AVX-512VL build only where the CPU has it.
-                    unsafe {
-                        if avx512 {
-                            super::simd::dual_quaternion_chunk_soa_avx512(
-                                &packed, js, ws, ps, ns, out_p, out_n,
-                            )
-                        } else {
-                            super::simd::dual_quaternion_chunk_soa_placed(
-                                &packed, js, ws, ps, ns, out_p, out_n,
-                            )
-                        }
+            for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                let (js, ws) = (&joints[start..end], &weights[start..end]);
+                let (ps, ns) = (&positions[start..end], &normals[start..end]);
+                // SAFETY: as above; the AVX-512VL build only where the CPU has it.
+                unsafe {
+                    if avx512 {
+                        super::simd::dual_quaternion_chunk_soa_avx512(&packed, js, ws, ps, ns, out_p, out_n)
+                    } else {
+                        super::simd::dual_quaternion_chunk_soa_placed(&packed, js, ws, ps, ns, out_p, out_n)
                     }
-                },
-            );
+                }
+            });
+            return;
         }
-        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
                 .iter()
@@ -174,6 +141,6 @@ impl<const N: usize> DualQuatJob<'_, N> {
                 *op = (p + 2.0 * r.cross(r.cross(p) + rw * p) + translation).into();
                 *on = (n + 2.0 * r.cross(r.cross(n) + rw * n)).into();
             }
-        })
+        });
     }
 }

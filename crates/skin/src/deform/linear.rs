@@ -2,23 +2,22 @@
 //! v' = Σᵢ wᵢ·M(jᵢ)·v with Σ wᵢ = 1, normals by the blended inverse-transpose, renormalized.
 //! Collapses under twist (the "candy wrapper"): a 180° twist averages v with its mirror image.
 
-use std::ops::Range;
-
 use glam::{Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
-use super::{
-    check_buffers, check_len, for_each_chunk, influences_pass, validate_influences_with, Check, Execution,
-};
+use super::{check_buffers, check_len, for_each_chunk, Execution};
 use crate::error::SkinError;
+use crate::influences::Influences;
 use crate::pose::JointPalette;
 
 /// Linear blend skinning with `N` influences per vertex (4 for most meshes, 8 for glTF meshes
 /// with `JOINTS_1`). Zero-weight influences still need an in-range joint index.
+///
+/// The influences were checked vertex by vertex when they were built ([`Influences::new`]);
+/// a run checks only the buffer lengths and that the palette holds their largest joint index.
 #[derive(Debug)]
 pub struct LinearBlendJob<'a, const N: usize = 4> {
     pub palette: &'a JointPalette,
-    pub joints: &'a [[u16; N]],
-    pub weights: &'a [[f32; N]],
+    pub influences: &'a Influences<N>,
     pub positions: &'a [Vec3],
     pub normals: &'a [Vec3],
     pub out_positions: &'a mut [Vec3],
@@ -26,26 +25,13 @@ pub struct LinearBlendJob<'a, const N: usize = 4> {
 }
 
 impl<const N: usize> LinearBlendJob<'_, N> {
-    /// Checks buffer lengths, joint indices and weights (finite, ≥ 0, not all zero, Σ = 1).
+    /// Checks buffer lengths and that the palette holds every joint index: O(joints), not
+    /// O(vertices) (the influences are valid by construction).
     pub fn validate(&self) -> Result<(), SkinError> {
-        self.validate_with(true)
-    }
-
-    /// [`Self::validate`] on the calling thread.
-    pub fn validate_single_threaded(&self) -> Result<(), SkinError> {
-        self.validate_with(false)
-    }
-
-    fn validate_with(&self, parallel: bool) -> Result<(), SkinError> {
-        self.check_lengths()?;
-        validate_influences_with(self.joints, self.weights, self.palette.len(), parallel)
-    }
-
-    fn check_lengths(&self) -> Result<(), SkinError> {
         let n = self.positions.len();
-        check_len("joints", n, self.joints.len())?;
-        check_len("weights", n, self.weights.len())?;
-        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())
+        check_len("influences", n, self.influences.len())?;
+        check_buffers(n, self.normals.len(), self.out_positions.len(), self.out_normals.len())?;
+        self.influences.check_joint_count(self.palette.len())
     }
 
     /// Validates, then deforms on all cores.
@@ -55,21 +41,10 @@ impl<const N: usize> LinearBlendJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        if execution.parallel() {
-            // The quick per-chunk check runs in the same dispatch as the kernel (see
-            // `for_each_chunk`); when it fails nothing was written, and the full validation
-            // below names the error.
-            self.check_lengths()?;
-            if self.fast(execution, true) {
-                return Ok(());
-            }
-        }
-        self.validate_with(false)?;
+        self.validate()?;
         match execution {
             Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
-                self.fast(execution, false);
-            }
+            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
         }
         Ok(())
     }
@@ -79,8 +54,8 @@ impl<const N: usize> LinearBlendJob<'_, N> {
             let mut m = Mat4::ZERO;
             let mut nm = Mat3::ZERO;
             for i in 0..N {
-                let j = self.joints[v][i] as usize;
-                let w = self.weights[v][i];
+                let j = self.influences.joints()[v][i] as usize;
+                let w = self.influences.weights()[v][i];
                 let mj = Mat4::from(self.palette.skinning[j]);
                 m += mj * w;
                 nm += match &self.palette.normal_skinning {
@@ -94,44 +69,36 @@ impl<const N: usize> LinearBlendJob<'_, N> {
         }
     }
 
-    /// The fast path; with `check`, only if every chunk passes the quick check (returns
-    /// whether it ran).
-    fn fast(&mut self, execution: Execution, check: bool) -> bool {
+    /// The fast path.
+    fn fast(&mut self, execution: Execution) {
         let parallel = execution.parallel();
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
-        let (joints, weights, positions, normals) = (self.joints, self.weights, self.positions, self.normals);
-        let joint_count = self.palette.len();
-        let quick_check = |r: Range<usize>| influences_pass(&joints[r.clone()], &weights[r], joint_count);
-        let check: Option<Check> = check.then_some(&quick_check);
+        let (joints, weights) = (self.influences.joints(), self.influences.weights());
+        let (positions, normals) = (self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
         if normal_palette.is_none() && execution.simd() {
-            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked every joint
-            // index against the palette.
+            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked that the
+            // palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_palette(palette) };
-            return for_each_chunk(
-                parallel,
-                check,
-                self.out_positions,
-                self.out_normals,
-                |start, out_p, out_n| {
-                    let end = start + out_p.len();
-                    // SAFETY: as above.
-                    unsafe {
-                        super::simd::linear_blend_chunk(
-                            &packed,
-                            &joints[start..end],
-                            &weights[start..end],
-                            &positions[start..end],
-                            &normals[start..end],
-                            out_p,
-                            out_n,
-                        )
-                    }
-                },
-            );
+            for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                // SAFETY: as above.
+                unsafe {
+                    super::simd::linear_blend_chunk(
+                        &packed,
+                        &joints[start..end],
+                        &weights[start..end],
+                        &positions[start..end],
+                        &normals[start..end],
+                        out_p,
+                        out_n,
+                    )
+                }
+            });
+            return;
         }
-        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
                 .iter()
@@ -165,6 +132,6 @@ impl<const N: usize> LinearBlendJob<'_, N> {
                 };
                 *on = nm.into();
             }
-        })
+        });
     }
 }

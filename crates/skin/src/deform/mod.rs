@@ -595,6 +595,7 @@ mod tests {
     fn parallel_jobs_refuse_bad_input_in_any_chunk_before_writing() {
         use glam::Quat;
 
+        use crate::influences::Influences;
         use crate::pose::{JointPalette, Pose};
         use crate::skeleton::{RestJoint, RestSkeleton};
 
@@ -627,10 +628,16 @@ mod tests {
         }
         .run();
         assert_eq!(rigid, Err(out_of_range));
+        // Influences checked against a skeleton of 3 joints do not fit a palette of 2: the job
+        // refuses them, naming the first vertex that reaches past the palette.
+        assert_eq!(
+            Influences::new(joints.clone(), weights.clone(), 2),
+            Err(SkinError::JointOutOfRange { vertex: bad, influence: 1, joint: 2, joint_count: 2 })
+        );
+        let influences = Influences::new(joints.clone(), weights.clone(), 3).unwrap();
         let linear = LinearBlendJob {
             palette: &palette,
-            joints: &joints,
-            weights: &weights,
+            influences: &influences,
             positions: &positions,
             normals: &normals,
             out_positions: &mut op,
@@ -643,8 +650,7 @@ mod tests {
         );
         let dual = DualQuatJob {
             dual_quaternions: &dqs,
-            joints: &joints,
-            weights: &weights,
+            influences: &influences,
             positions: &positions,
             normals: &normals,
             out_positions: &mut op,
@@ -668,14 +674,13 @@ mod tests {
         assert!(matches!(blend, Err(SkinError::BadBlendParameter { vertex, .. }) if vertex == bad));
         assert!(op.iter().chain(&on).all(|v| v.is_nan()));
 
-        // A weight of −0.0 fails the quick check (its sign bit) but not the full one: the job
-        // still runs.
+        // A weight of −0.0 is not negative: the influences are built and the job runs.
         joints[bad][1] = 1;
         weights[bad] = [1.0, -0.0, 0.0, 0.0];
+        let influences = Influences::new(joints, weights, 2).unwrap();
         let linear = LinearBlendJob {
             palette: &palette,
-            joints: &joints,
-            weights: &weights,
+            influences: &influences,
             positions: &positions,
             normals: &normals,
             out_positions: &mut op,

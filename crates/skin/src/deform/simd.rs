@@ -882,10 +882,11 @@ mod tests {
             })
             .collect();
         let mut expected = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        let influences =
+            crate::influences::Influences::new(joints.clone(), weights.clone(), joint_count).unwrap();
         DualQuatJob {
             dual_quaternions: &dqs,
-            joints: &joints,
-            weights: &weights,
+            influences: &influences,
             positions: &positions,
             normals: &normals,
             out_positions: &mut expected.0,
