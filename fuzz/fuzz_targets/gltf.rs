@@ -14,11 +14,14 @@ fuzz_target!(|data: &[u8]| {
             let _ = model.deformed_positions(node, animation, 0.5);
             let skin = model.nodes[node].skin;
             if let (Ok(mesh), Some(skin)) = (model.skinned_mesh(node), skin) {
-                let pose = model
-                    .scene_skeleton(skin, animation)
-                    .ok()
-                    .and_then(|s| keyrig_skin::ScenePoseSampler::new(&s).ok())
-                    .map(|sampler| sampler.sample(0.5));
+                let pose = model.scene_skeleton(skin, animation).ok().and_then(|skeleton| {
+                    let scene = keyrig_core::Scene {
+                        objects: vec![keyrig_core::Object { skeleton: Some(skeleton), ..keyrig_core::Object::new("fuzz") }],
+                        ..keyrig_core::Scene::default()
+                    };
+                    let eval = keyrig_eval::SceneEvaluator::new(&scene, &Default::default());
+                    eval.object_at(0, 0.5, &Default::default()).and_then(|s| s.pose)
+                });
                 let palette = pose.and_then(|p| keyrig_skin::JointPalette::new(&mesh.skeleton, &p).ok());
                 if let (Some(palette), Ok(zone)) = (palette, keyrig_skin::BlendZone::new(0.25, 0.25)) {
                     if let Ok(bindings) = mesh.bindings(zone) {

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 use keyrig_core::{DeformerKind, MeshSource, Scene};
+use keyrig_eval::{Overrides, SceneEvaluator};
 use keyrig_skin::{
-    deform_mesh, joint_cross_section, mesh_for, BlendZone, JointPalette, Pose, RestSkeleton,
-    ScenePoseSampler, SkinnedMesh,
+    deform_mesh, joint_cross_section, mesh_for, BlendZone, JointPalette, Pose, RestSkeleton, SkinnedMesh,
 };
 
 fn demo() -> Scene {
@@ -20,13 +20,16 @@ fn demo() -> Scene {
 struct Arm {
     mesh: SkinnedMesh,
     rest: RestSkeleton,
-    poser: ScenePoseSampler,
+    /// The scene evaluator and the arm's object index: the poses the editor plays.
+    eval: SceneEvaluator,
+    index: usize,
     zone: BlendZone,
     forearm: usize,
 }
 
 fn arm(scene: &Scene) -> Arm {
-    let object = scene.objects.iter().find(|o| o.skeleton.is_some()).expect("the demo has a skinned arm");
+    let index = scene.objects.iter().position(|o| o.skeleton.is_some()).expect("the demo has a skinned arm");
+    let object = &scene.objects[index];
     let skeleton = object.skeleton.as_ref().unwrap();
     let Some(MeshSource::Procedural(kind)) = object.mesh else { panic!("the demo arm is a procedural mesh") };
     let rest = RestSkeleton::from_scene(skeleton).unwrap();
@@ -35,9 +38,16 @@ fn arm(scene: &Scene) -> Arm {
     Arm {
         mesh,
         rest,
-        poser: ScenePoseSampler::new(skeleton).unwrap(),
+        eval: SceneEvaluator::new(scene, &std::collections::HashMap::new()),
+        index,
         zone: BlendZone::from_settings(&object.deformer).unwrap(),
         forearm,
+    }
+}
+
+impl Arm {
+    fn pose(&self, t: f64) -> Pose {
+        self.eval.object_at(self.index, t, &Overrides::new()).and_then(|s| s.pose).expect("the arm's pose")
     }
 }
 
@@ -62,7 +72,7 @@ fn every_frame_deforms_finitely_with_every_deformer() {
     // The arm is 1.60158 m long in the scene: no vertex may leave a generous box around it.
     let bound = 3.0;
     for frame in scene.frame_range.start..=scene.frame_range.end {
-        let pose = arm.poser.sample(f64::from(frame) / scene.fps);
+        let pose = arm.pose(f64::from(frame) / scene.fps);
         for kind in DeformerKind::ALL {
             let (_, positions) = deformed(&arm, &pose, kind);
             assert_eq!(positions.len(), arm.mesh.vertex_count());
@@ -95,7 +105,7 @@ fn the_demo_twist_collapses_linear_blend_only() {
     let scene = demo();
     let arm = arm(&scene);
     // Frame 60 is the demo's 180° forearm twist.
-    let pose = arm.poser.sample(60.0 / scene.fps);
+    let pose = arm.pose(60.0 / scene.fps);
     let ratio = |kind| {
         let (palette, positions) = deformed(&arm, &pose, kind);
         joint_cross_section(&arm.mesh, &palette, arm.forearm, &positions).unwrap().ratio()

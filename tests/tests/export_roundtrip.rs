@@ -6,7 +6,7 @@
 //! the exported file's deformed vertices must equal what keyrig shows, within 1e-4 of the
 //! model's size:
 //!
-//! - skinned glTF objects: scene skeleton → `ScenePoseSampler` → `JointPalette` on the mesh of
+//! - skinned glTF objects: the scene evaluator (`SceneEvaluator::object_at`) → `JointPalette` on the mesh of
 //!   `ImportedModel::skinned_mesh` → linear blend → the object's transform;
 //! - unskinned glTF objects: the mesh morphed with the file's first animation's weights (as
 //!   `keyrig deform` does), placed by the object's transform tracks;
@@ -56,10 +56,9 @@ fn object_world(object: &Object, t: f64) -> Mat4 {
 
 /// What keyrig shows of one object over time.
 enum Shown {
+    /// The object alone, through the scene evaluator with its mesh.
     Skinned {
-        mesh: Box<keyrig_skin::SkinnedMesh>,
-        bindings: keyrig_skin::MeshBindings,
-        sampler: keyrig_skin::ScenePoseSampler,
+        eval: Box<keyrig_eval::SceneEvaluator>,
     },
     Morphed {
         model: Box<ImportedModel>,
@@ -91,11 +90,14 @@ impl Shown {
         let node = model.nodes.iter().position(|n| n.mesh == Some(index)).expect("node of the mesh");
         if model.nodes[node].skin.is_some() {
             let mesh = model.skinned_mesh(node).expect("skinned mesh");
-            let bindings =
-                mesh.bindings(keyrig_skin::BlendZone::new(0.25, 0.25).expect("zone")).expect("bindings");
-            let sampler = keyrig_skin::ScenePoseSampler::new(object.skeleton.as_ref().expect("skeleton"))
-                .expect("sampler");
-            Shown::Skinned { mesh: Box::new(mesh), bindings, sampler }
+            let alone = keyrig_core::Scene { objects: vec![object.clone()], ..keyrig_core::Scene::default() };
+            let loaded = std::collections::HashMap::from([(
+                0,
+                keyrig_eval::LoadedMesh::Skinned(std::sync::Arc::new(mesh)),
+            )]);
+            let eval = keyrig_eval::SceneEvaluator::new(&alone, &loaded);
+            assert!(eval.problems().is_empty(), "{:?}", eval.problems());
+            Shown::Skinned { eval: Box::new(eval) }
         } else {
             Shown::Morphed { model: Box::new(model), node, mesh: index }
         }
@@ -104,12 +106,20 @@ impl Shown {
     /// World positions at `t`.
     fn at(&self, object: &Object, t: f64) -> Vec<DVec3> {
         let local: Vec<Vec3> = match self {
-            Shown::Skinned { mesh, bindings, sampler } => {
-                let palette =
-                    keyrig_skin::JointPalette::new(&mesh.skeleton, &sampler.sample(t)).expect("palette");
-                keyrig_skin::deform_mesh(mesh, bindings, &palette, keyrig_core::DeformerKind::LinearBlend)
-                    .expect("linear blend")
-                    .positions
+            Shown::Skinned { eval } => {
+                let skin = eval.skin(0).expect("skinned");
+                let palette = eval
+                    .object_at(0, t, &keyrig_eval::Overrides::new())
+                    .and_then(|s| s.palette)
+                    .expect("palette");
+                keyrig_skin::deform_mesh(
+                    &skin.mesh,
+                    &skin.bindings,
+                    &palette,
+                    keyrig_core::DeformerKind::LinearBlend,
+                )
+                .expect("linear blend")
+                .positions
             }
             Shown::Morphed { model, node, mesh } => {
                 let weights = model

@@ -60,18 +60,18 @@ fn imported_characters_match_an_independent_gltf_evaluation_at_every_frame() {
                     .iter()
                     .find(|o| o.name == model.nodes[node.index()].name)
                     .unwrap_or_else(|| panic!("{file}: no object for node {}", node.index()));
-                let skeleton = object.skeleton.as_ref().expect("skeleton");
+                let o = scene.objects.iter().position(|x| std::ptr::eq(x, object)).expect("index");
                 let mesh = model.skinned_mesh(node.index()).unwrap_or_else(|e| panic!("{file}: {e}"));
                 assert_eq!(mesh.positions.len(), gltf_node.positions.len(), "{file}: vertex count");
-                let sampler =
-                    keyrig_skin::ScenePoseSampler::new(skeleton).unwrap_or_else(|e| panic!("{file}: {e}"));
-                let object_tracks = (
-                    keyrig_core::AnimatedTrack::new(&object.translation).expect("translation"),
-                    keyrig_core::AnimatedTrack::new(&object.rotation).expect("rotation"),
-                    keyrig_core::AnimatedTrack::new(&object.scale).expect("scale"),
-                );
-                let bindings =
-                    mesh.bindings(keyrig_skin::BlendZone::new(0.25, 0.25).expect("zone")).expect("bindings");
+                // keyrig's one path: the scene evaluator with the object's mesh (the editor's,
+                // `render`'s and `deform`'s).
+                let loaded = std::collections::HashMap::from([(
+                    o,
+                    keyrig_eval::LoadedMesh::Skinned(std::sync::Arc::new(mesh.clone())),
+                )]);
+                let eval = keyrig_eval::SceneEvaluator::new(&scene, &loaded);
+                assert!(eval.problems().is_empty(), "{file}: {:?}", eval.problems());
+                let skin = eval.skin(o).expect("skinned");
                 let rest = gltf_node.at(&reference, Some(animation), 0.0, Interpolator::Spec);
                 let (lo, hi) = rest.iter().fold((DVec3::MAX, DVec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
                 let size = (hi - lo).length();
@@ -80,20 +80,16 @@ fn imported_characters_match_an_independent_gltf_evaluation_at_every_frame() {
                 for frame in 0..=frames {
                     let t = frame as f64 / FPS;
                     let expected = gltf_node.at(&reference, Some(animation), t, Interpolator::Spec);
-                    let palette =
-                        keyrig_skin::JointPalette::new(&mesh.skeleton, &sampler.sample(t)).expect("palette");
+                    let state = eval.object_at(o, t, &keyrig_eval::Overrides::new()).expect("object");
+                    let palette = state.palette.expect("palette");
                     let deformed = keyrig_skin::deform_mesh(
-                        &mesh,
-                        &bindings,
+                        &skin.mesh,
+                        &skin.bindings,
                         &palette,
                         keyrig_core::DeformerKind::LinearBlend,
                     )
                     .expect("linear blend");
-                    let world_from_object = glam::Mat4::from_scale_rotation_translation(
-                        object_tracks.2.sample(t),
-                        object_tracks.1.sample(t),
-                        object_tracks.0.sample(t),
-                    );
+                    let world_from_object = glam::Mat4::from(state.world_from_object);
                     for (v, (got, want)) in deformed.positions.iter().zip(&expected).enumerate() {
                         let got = world_from_object.transform_point3(*got).as_dvec3();
                         let error = (got - *want).length() / size;

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use keyrig_core::DeformerKind;
 use keyrig_io::gltf_import::import_gltf_file;
-use keyrig_skin::{deform_mesh, BlendZone, JointPalette, ScenePoseSampler};
+use keyrig_skin::{deform_mesh, BlendZone, JointPalette};
 
 fn corpus(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
@@ -45,7 +45,11 @@ fn skinned_corpus_models_deform_with_all_four_deformers() {
         assert!(skeleton.joints.len() >= model.skins[skin].joints.len(), "{file}");
         let mesh = model.skinned_mesh(mesh_node).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(mesh.skeleton.len(), skeleton.joints.len(), "{file}");
-        let sampler = ScenePoseSampler::new(skeleton).unwrap_or_else(|e| panic!("{file}: {e}"));
+        // Poses from the scene evaluator, as the editor plays them.
+        let o = scene.objects.iter().position(|x| std::ptr::eq(x, object)).expect("index");
+        let eval = keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new());
+        let pose =
+            |t: f64| eval.object_at(o, t, &keyrig_eval::Overrides::new()).and_then(|s| s.pose).expect("pose");
         let bindings = mesh.bindings(BlendZone::new(0.25, 0.25).expect("zone")).expect("bindings");
         let (lo, hi) = mesh.positions.iter().fold((Vec3::MAX, Vec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
         let size = (hi - lo).length();
@@ -53,7 +57,7 @@ fn skinned_corpus_models_deform_with_all_four_deformers() {
         let mut worst_linear = 0.0f32;
         for step in 0..=8 {
             let t = duration * f64::from(step) / 8.0;
-            let palette = JointPalette::new(&mesh.skeleton, &sampler.sample(t)).expect("palette");
+            let palette = JointPalette::new(&mesh.skeleton, &pose(t)).expect("palette");
             let exact = model.deformed_positions(mesh_node, Some(0), t).expect("exact");
             let exact: Vec<Vec3> = exact.into_iter().flatten().collect();
             for kind in DeformerKind::ALL {

@@ -151,14 +151,17 @@ fn skinned_arm_deforms_like_keyrig_skin_after_export() {
     let mesh = mesh.with_skeleton(rest.clone()).expect("fits");
     let bindings =
         mesh.bindings(keyrig_skin::BlendZone::from_settings(&arm.deformer).expect("zone")).expect("bind");
-    let sampler = keyrig_skin::ScenePoseSampler::new(skeleton).expect("sampler");
+    // The arm's poses from the scene evaluator (object 0), as the editor plays them.
+    let eval = keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new());
+    let pose =
+        |t: f64| eval.object_at(0, t, &keyrig_eval::Overrides::new()).and_then(|s| s.pose).expect("pose");
     let object_translation = arm.translation.value;
     let reach: f32 = len(skeleton);
     // Each of the 4 joints may deviate by the rotation tolerance; the tip moves at most
     // Σ tolerance × distance to the tip.
     let bound = 4.0 * (options.rotation_tolerance_deg.to_radians() as f32) * reach + 1e-4;
     for t in sample_times(&scene).into_iter().step_by(10) {
-        let palette = keyrig_skin::JointPalette::new(&rest, &sampler.sample(t)).expect("palette");
+        let palette = keyrig_skin::JointPalette::new(&rest, &pose(t)).expect("palette");
         let ours =
             keyrig_skin::deform_mesh(&mesh, &bindings, &palette, DeformerKind::LinearBlend).expect("deform");
         let gltf = model.deformed_positions(mesh_node, Some(0), t).expect("mesh");

@@ -62,8 +62,4 @@ pub enum SkinError {
     NoSuchJoint { joint: usize, joint_count: usize },
     #[error("triangle {triangle}: vertex index {index} is out of range ({vertex_count} vertices)")]
     TriangleIndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
-    #[error("joint {joint} (`{name}`), {property} track: {source}")]
-    JointTrack { joint: usize, name: String, property: &'static str, source: keyrig_core::TrackError },
-    #[error("skeleton root translation track: {0}")]
-    RootTranslationTrack(keyrig_core::TrackError),
 }

@@ -5,7 +5,6 @@
 //! translation; M(j) = F(j)·A(j)⁻¹ is the skinning matrix ("joint palette").
 
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
-use keyrig_core::AnimatedTrack;
 
 use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
@@ -68,57 +67,6 @@ impl Pose {
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.local_rotations.is_empty()
-    }
-}
-
-/// Samples a scene skeleton's joint tracks (translation, rotation, scale) and root translation
-/// into [`Pose`]s. The tracks are validated once here (tangents cached by keyrig-core), not
-/// per frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ScenePoseSampler {
-    translations: Vec<AnimatedTrack<Vec3>>,
-    rotations: Vec<AnimatedTrack<Quat>>,
-    scales: Vec<AnimatedTrack<Vec3>>,
-    root_translation: AnimatedTrack<Vec3>,
-}
-
-impl ScenePoseSampler {
-    /// Validates every joint's tracks and the root translation track.
-    pub fn new(skeleton: &keyrig_core::Skeleton) -> Result<Self, SkinError> {
-        let n = skeleton.joints.len();
-        let (mut translations, mut rotations, mut scales) =
-            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
-        for (joint, j) in skeleton.joints.iter().enumerate() {
-            let err = |property: &'static str| {
-                let name = j.name.clone();
-                move |source| SkinError::JointTrack { joint, name, property, source }
-            };
-            translations.push(AnimatedTrack::new(&j.translation).map_err(err("translation"))?);
-            rotations.push(AnimatedTrack::new(&j.rotation).map_err(err("rotation"))?);
-            scales.push(AnimatedTrack::new(&j.scale).map_err(err("scale"))?);
-        }
-        let root_translation =
-            AnimatedTrack::new(&skeleton.root_translation).map_err(SkinError::RootTranslationTrack)?;
-        Ok(ScenePoseSampler { translations, rotations, scales, root_translation })
-    }
-
-    /// The pose at time `t` (seconds).
-    #[must_use]
-    pub fn sample(&self, t: f64) -> Pose {
-        let mut pose = Pose::rest(self.rotations.len());
-        self.sample_into(t, &mut pose);
-        pose
-    }
-
-    /// The pose at time `t` (seconds), reusing `pose`'s allocation.
-    pub fn sample_into(&self, t: f64, pose: &mut Pose) {
-        pose.local_translations.clear();
-        pose.local_translations.extend(self.translations.iter().map(|track| track.sample(t)));
-        pose.local_rotations.clear();
-        pose.local_rotations.extend(self.rotations.iter().map(|track| track.sample(t)));
-        pose.local_scales.clear();
-        pose.local_scales.extend(self.scales.iter().map(|track| track.sample(t)));
-        pose.root_translation = self.root_translation.sample(t);
     }
 }
 
@@ -335,30 +283,6 @@ mod tests {
         assert!(palette.joint_position(2).abs_diff_eq(Vec3::new(3.0, 2.0, 0.0), 1e-5));
         let moved = palette.skinning[2].transform_point3(Vec3::new(6.0, 0.0, 0.0));
         assert!(moved.abs_diff_eq(Vec3::new(3.0, 3.0, 0.0), 1e-5));
-    }
-
-    #[test]
-    fn scene_tracks_sample_into_poses() {
-        use keyrig_core::{Animated, Interpolation, Key, RawTrack};
-        let mut skeleton = crate::mesh::arm_scene_skeleton();
-        let quarter = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
-        skeleton.joints[2].rotation = Animated {
-            value: Quat::IDENTITY,
-            track: RawTrack::new(vec![
-                Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
-                Key::new(1.0, quarter),
-            ]),
-        };
-        let sampler = ScenePoseSampler::new(&skeleton).unwrap();
-        let pose = sampler.sample(0.5);
-        assert!(pose.local_rotations[2].abs_diff_eq(Quat::from_rotation_x(std::f32::consts::FRAC_PI_4), 1e-6));
-        assert_eq!(pose.local_rotations[1], Quat::IDENTITY);
-        skeleton.joints[1].rotation.track =
-            RawTrack::new(vec![Key::new(1.0, quarter), Key::new(0.0, quarter)]);
-        assert!(matches!(
-            ScenePoseSampler::new(&skeleton),
-            Err(SkinError::JointTrack { joint: 1, property: "rotation", .. })
-        ));
     }
 
     #[test]
