@@ -531,12 +531,34 @@ impl crate::EditorApp {
                 let n = scene.objects.len();
                 let first = self.doc.scene().objects.len();
                 self.view.frame_request = Some((first..first + n).collect());
+                // The model's animation (its keys, or the range its own scene gives it, as an
+                // MD2 loop) in seconds; the scene's range grows to cover it, in the same step.
+                let model_seconds = crate::channels::last_key_time(&scene)
+                    .unwrap_or(0.0)
+                    .max(f64::from(scene.frame_range.end) / scene.fps.max(1e-9));
+                let range = self.doc.scene().frame_range;
+                let needed = (model_seconds * self.doc.scene().fps - 1e-6).ceil() as i32;
+                let extend = needed > range.end && needed <= 100_000;
                 self.doc.edit(&format!("import {}", path.display()), |doc| {
                     doc.objects.extend(scene.objects);
                     doc.lights.extend(scene.lights);
+                    if extend {
+                        doc.frame_range.end = needed;
+                    }
                 });
                 self.recent.add(&path);
-                self.info(format!("Imported {n} object(s) from {} ({seconds:.2} s)", path.display()));
+                let extended = if extend {
+                    format!(
+                        "; frame range extended from {}–{} to {}–{needed} to cover its animation",
+                        range.start, range.end, range.start
+                    )
+                } else {
+                    String::new()
+                };
+                self.info(format!(
+                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}",
+                    path.display()
+                ));
             }
         }
     }

@@ -145,3 +145,44 @@ fn a_drag_on_a_field_is_one_undo_step() {
     assert!(h.state_mut().doc.undo());
     assert_eq!(h.state().doc.scene().fps, 30.0);
 }
+
+/// Every key of the demo as (channel, frame at the scene's fps).
+fn key_frames(h: &Harness<'_, EditorApp>) -> Vec<(ChannelId, f64)> {
+    let scene = h.state().doc.scene();
+    keyrig_editor::channels::all_channels(scene)
+        .into_iter()
+        .flat_map(|id| {
+            keyrig_editor::channels::key_times(scene, id).into_iter().map(move |t| (id, t * scene.fps))
+        })
+        .collect()
+}
+
+#[test]
+fn changing_fps_keeps_key_times_or_frames_and_the_range_follows() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let frames = key_frames(&h);
+    assert!(!frames.is_empty());
+    let range = h.state().doc.scene().frame_range;
+    let steps = h.state().doc.undo_len();
+    // Default: keys keep their seconds; at 60 fps they lie on twice the frames, and so does
+    // the range.
+    type_into(&mut h, "FPS", "60", Key::Enter);
+    assert_eq!(h.state().doc.scene().frame_range.end, range.end * 2);
+    for ((id, f), (id2, f2)) in frames.iter().zip(key_frames(&h)) {
+        assert_eq!(*id, id2);
+        assert!((f * 2.0 - f2).abs() < 1e-6, "{f} → {f2}");
+    }
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "retiming and the range are one step");
+    assert!(h.state_mut().doc.undo());
+    assert_eq!(h.state().doc.scene().frame_range, range);
+    // Keep key frames: the keys stay on their frames and the range stays.
+    h.get_by_label("Keep key frames").click();
+    h.run();
+    type_into(&mut h, "FPS", "60", Key::Enter);
+    assert_eq!(h.state().doc.scene().fps, 60.0);
+    assert_eq!(h.state().doc.scene().frame_range, range);
+    for ((_, f), (_, f2)) in frames.iter().zip(key_frames(&h)) {
+        assert!((f - f2).abs() < 1e-6, "{f} → {f2}");
+    }
+}
