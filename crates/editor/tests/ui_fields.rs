@@ -186,3 +186,36 @@ fn changing_fps_keeps_key_times_or_frames_and_the_range_follows() {
         assert!((f - f2).abs() < 1e-6, "{f} → {f2}");
     }
 }
+
+/// Transport (beside the fields in the timeline's control row): Play at the last frame with
+/// looping off starts from the first frame; every-frame playback advances one frame per drawn
+/// frame.
+#[test]
+fn play_at_the_end_starts_from_the_first_frame() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("🔁 Loop").click();
+    h.run();
+    assert!(!h.state().playback.looping);
+    h.key_press(Key::End);
+    h.run();
+    let range = h.state().doc.scene().frame_range;
+    assert_eq!(h.state().playback.whole_frame(), range.end);
+    h.get_by_label("▶ Play").click();
+    h.step();
+    assert!(h.state().playback.playing);
+    assert!(h.state().playback.frame < f64::from(range.start) + 5.0, "{}", h.state().playback.frame);
+    h.key_press(Key::Space);
+    h.step();
+    assert!(!h.state().playback.playing);
+    h.get_by_label("Every frame").click();
+    h.step();
+    assert!(h.state().playback.every_frame);
+    let before = h.state().playback.frame;
+    h.key_press(Key::Space);
+    h.step();
+    h.step();
+    h.step();
+    let advanced = h.state().playback.frame - before;
+    assert!((1.0..=3.0).contains(&advanced), "one frame per drawn frame: {advanced}");
+}

@@ -155,6 +155,16 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
         tool_button(ui, app, Command::LastFrame, "⏭", false);
         let looping = app.playback.looping;
         tool_button(ui, app, Command::ToggleLoop, "🔁 Loop", looping);
+        ui.checkbox(&mut app.playback.every_frame, "Every frame").on_hover_text(
+            "Checked: every frame is drawn, even when drawing is slower than the scene's fps \
+             (slow motion). Unchecked (the default): real time, dropping frames to keep time.",
+        );
+        if let Some(t) = app.frame_time.filter(|_| app.playback.playing) {
+            let fps = app.doc.scene().fps;
+            let achieved = app.playback.achieved_fps(f64::from(t), fps);
+            ui.weak(format!("{achieved:.1}/{fps} fps"))
+                .on_hover_text("Scene frames shown per second while playing, against the scene's fps");
+        }
         ui.separator();
 
         let scene = app.doc.scene();
