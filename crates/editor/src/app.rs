@@ -635,7 +635,7 @@ impl EditorApp {
             }
             Command::PasteKeys => self.paste_keys(),
             Command::PlayPause => {
-                self.playback.playing = !self.playback.playing;
+                self.playback.toggle_play(range.start, range.end);
                 self.overrides.clear();
             }
             Command::ToggleLoop => self.playback.looping = !self.playback.looping,

@@ -134,14 +134,57 @@ pub fn file_dialog(
     dialog
 }
 
-/// Loads a scene file.
+/// Loads a scene file. Model paths relative to the file's folder become absolute in memory,
+/// so that the document (and its undo history) does not depend on where it is saved next.
 pub fn load_scene(path: &Path) -> Result<Scene, String> {
-    keyrig_io::scene_file::load(path).map_err(|e| e.to_string())
+    let mut scene = keyrig_io::scene_file::load(path).map_err(|e| e.to_string())?;
+    let folder = path.parent().map(|p| fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf()));
+    if let Some(folder) = folder {
+        map_model_paths(&mut scene, |p| {
+            let file = Path::new(p);
+            (!file.is_absolute()).then(|| folder.join(file).to_string_lossy().into_owned())
+        });
+    }
+    Ok(scene)
 }
 
-/// Saves a scene file atomically (keyrig-io keeps the previous file as a backup).
+/// Saves a scene file atomically (keyrig-io keeps the previous file as a backup). Models that
+/// lie below the file's folder are written with paths relative to it (`/`-separated), so the
+/// folder can be moved or shared; others keep their absolute paths.
 pub fn save_scene(path: &Path, scene: &Scene) -> Result<(), String> {
-    keyrig_io::scene_file::save(path, scene).map_err(|e| e.to_string())
+    let portable = portable_scene(path, scene);
+    keyrig_io::scene_file::save(path, &portable).map_err(|e| e.to_string())
+}
+
+/// `scene` with the model paths below `scene_file`'s folder made relative to it.
+#[must_use]
+pub fn portable_scene(scene_file: &Path, scene: &Scene) -> Scene {
+    let mut out = scene.clone();
+    let Some(folder) = scene_file.parent() else { return out };
+    let folder = fs::canonicalize(folder).unwrap_or_else(|_| folder.to_path_buf());
+    map_model_paths(&mut out, |p| {
+        let file = Path::new(p);
+        if !file.is_absolute() {
+            return None;
+        }
+        let file = fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
+        let relative = file.strip_prefix(&folder).ok()?;
+        let parts: Vec<String> =
+            relative.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+        (!parts.is_empty()).then(|| parts.join("/"))
+    });
+    out
+}
+
+/// Replaces each model path `p` of the scene by `change(p)` where that is `Some`.
+fn map_model_paths(scene: &mut Scene, mut change: impl FnMut(&str) -> Option<String>) {
+    for object in &mut scene.objects {
+        if let Some(keyrig_core::MeshSource::File { path, .. }) = &mut object.mesh {
+            if let Some(new) = change(path) {
+                *path = new;
+            }
+        }
+    }
 }
 
 /// Opens a scene file, or a model as a new scene (synchronously; the editor's menus use
@@ -531,12 +574,34 @@ impl crate::EditorApp {
                 let n = scene.objects.len();
                 let first = self.doc.scene().objects.len();
                 self.view.frame_request = Some((first..first + n).collect());
+                // The model's animation (its keys, or the range its own scene gives it, as an
+                // MD2 loop) in seconds; the scene's range grows to cover it, in the same step.
+                let model_seconds = crate::channels::last_key_time(&scene)
+                    .unwrap_or(0.0)
+                    .max(f64::from(scene.frame_range.end) / scene.fps.max(1e-9));
+                let range = self.doc.scene().frame_range;
+                let needed = (model_seconds * self.doc.scene().fps - 1e-6).ceil() as i32;
+                let extend = needed > range.end && needed <= 100_000;
                 self.doc.edit(&format!("import {}", path.display()), |doc| {
                     doc.objects.extend(scene.objects);
                     doc.lights.extend(scene.lights);
+                    if extend {
+                        doc.frame_range.end = needed;
+                    }
                 });
                 self.recent.add(&path);
-                self.info(format!("Imported {n} object(s) from {} ({seconds:.2} s)", path.display()));
+                let extended = if extend {
+                    format!(
+                        "; frame range extended from {}–{} to {}–{needed} to cover its animation",
+                        range.start, range.end, range.start
+                    )
+                } else {
+                    String::new()
+                };
+                self.info(format!(
+                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}",
+                    path.display()
+                ));
             }
         }
     }

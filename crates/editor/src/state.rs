@@ -299,11 +299,15 @@ pub struct Playback {
     pub frame: f64,
     pub playing: bool,
     pub looping: bool,
+    /// Every-frame playback: each drawn frame advances one scene frame, however long it
+    /// took (slow motion when drawing is slower than the scene's fps). Off (the default) is
+    /// real-time playback: the clock follows the wall clock and drops frames to keep time.
+    pub every_frame: bool,
 }
 
 impl Default for Playback {
     fn default() -> Self {
-        Playback { frame: 0.0, playing: false, looping: true }
+        Playback { frame: 0.0, playing: false, looping: true, every_frame: false }
     }
 }
 
@@ -330,7 +334,7 @@ impl Playback {
             return;
         }
         let (start, end) = (f64::from(start), f64::from(end.max(start)));
-        self.frame += dt * fps;
+        self.frame += if self.every_frame { 1.0 } else { dt * fps };
         if self.frame > end {
             if self.looping && end > start {
                 self.frame = start + (self.frame - start) % (end - start);
@@ -341,6 +345,27 @@ impl Playback {
         }
         if self.frame < start {
             self.frame = start;
+        }
+    }
+
+    /// Starts or stops playback; starting at (or past) the end with looping off starts from
+    /// `start`, as a player's Play at the end of a clip does.
+    pub fn toggle_play(&mut self, start: i32, end: i32) {
+        if !self.playing && !self.looping && self.frame >= f64::from(end) {
+            self.frame = f64::from(start);
+        }
+        self.playing = !self.playing;
+    }
+
+    /// Scene frames shown per second while playing, given the smoothed seconds between drawn
+    /// frames: every drawn frame in every-frame mode, at most the scene's fps in real time.
+    #[must_use]
+    pub fn achieved_fps(&self, frame_time: f64, fps: f64) -> f64 {
+        let drawn = 1.0 / frame_time.max(1e-6);
+        if self.every_frame {
+            drawn
+        } else {
+            drawn.min(fps)
         }
     }
 
@@ -394,13 +419,35 @@ mod tests {
 
     #[test]
     fn playback_loops_and_stops() {
-        let mut p = Playback { frame: 9.0, playing: true, looping: true };
+        let mut p = Playback { frame: 9.0, playing: true, looping: true, every_frame: false };
         p.advance(0.1, 30.0, 0, 10);
         assert!((p.frame - 2.0).abs() < 1e-9, "{}", p.frame);
-        let mut p = Playback { frame: 9.0, playing: true, looping: false };
+        let mut p = Playback { frame: 9.0, playing: true, looping: false, every_frame: false };
         p.advance(0.1, 30.0, 0, 10);
         assert_eq!(p.frame, 10.0);
         assert!(!p.playing);
+        // Play at the end with looping off starts from the first frame.
+        p.toggle_play(0, 10);
+        assert!(p.playing);
+        assert_eq!(p.frame, 0.0);
+        // With looping on, Play at the end stays (the next step wraps).
+        let mut p = Playback { frame: 10.0, playing: false, looping: true, every_frame: false };
+        p.toggle_play(0, 10);
+        assert_eq!(p.frame, 10.0);
+    }
+
+    #[test]
+    fn real_time_drops_frames_and_every_frame_does_not() {
+        // A slow draw (0.1 s) at 30 fps: real time jumps 3 frames, every-frame mode 1.
+        let mut p = Playback { frame: 0.0, playing: true, looping: true, every_frame: false };
+        p.advance(0.1, 30.0, 0, 100);
+        assert!((p.frame - 3.0).abs() < 1e-9);
+        assert!((p.achieved_fps(0.1, 30.0) - 10.0).abs() < 1e-9);
+        assert!((p.achieved_fps(0.01, 30.0) - 30.0).abs() < 1e-9, "never above the scene's fps");
+        p.every_frame = true;
+        p.advance(0.1, 30.0, 0, 100);
+        assert!((p.frame - 4.0).abs() < 1e-9);
+        assert!((p.achieved_fps(0.01, 30.0) - 100.0).abs() < 1e-6);
     }
 
     #[test]

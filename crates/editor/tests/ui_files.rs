@@ -109,3 +109,48 @@ fn dropping_a_scene_on_a_dirty_document_asks_first() {
     assert_eq!(h.state().doc.scene(), &other);
     assert_eq!(h.state().doc.title(), "keyrig — other.ron");
 }
+
+/// A scene saved in a project folder names the models inside it relative to itself, so the
+/// folder can be moved (or shared) and the scene still opens its models.
+#[test]
+fn a_moved_project_folder_still_opens_its_models() {
+    let root = tempfile::tempdir().expect("temp dir");
+    let project = root.path().join("project");
+    std::fs::create_dir_all(project.join("models")).expect("create folder");
+    let model = project.join("models/sydney.md2");
+    std::fs::copy(corpus("md2/sydney/sydney.md2"), &model).expect("copy model");
+    let outside = root.path().join("outside.md2");
+    std::fs::copy(corpus("md2/sydney/sydney.md2"), &outside).expect("copy model");
+
+    let mut h = common::harness(root.path(), None);
+    let first = h.state().doc.scene().objects.len();
+    h.state_mut().import_path(model);
+    h.state_mut().import_path(outside.clone());
+    h.state_mut().wait_for_background_work();
+    h.run();
+    let scene_file = project.join("scene.ron");
+    h.state_mut().save_to(scene_file.clone());
+    let text = std::fs::read_to_string(&scene_file).expect("read scene");
+    assert!(text.contains("path: \"models/sydney.md2\""), "relative below the scene's folder:\n{text}");
+    let outside_abs = std::fs::canonicalize(&outside).expect("canonical");
+    assert!(
+        text.contains(&format!("path: \"{}\"", outside_abs.display())),
+        "absolute outside the scene's folder"
+    );
+    drop(h);
+
+    let moved = root.path().join("moved");
+    std::fs::rename(&project, &moved).expect("move the project folder");
+    let mut h = common::harness(root.path(), Some(moved.join("scene.ron")));
+    h.run();
+    assert!(h.state().status.as_ref().is_none_or(|s| !s.is_error), "{:?}", h.state().status);
+    let Some(keyrig_core::MeshSource::File { path, .. }) = &h.state().doc.scene().objects[first].mesh else {
+        panic!("a file mesh")
+    };
+    assert!(
+        std::path::Path::new(path).starts_with(std::fs::canonicalize(&moved).expect("canonical")),
+        "{path}"
+    );
+    assert!(h.state().skin.deformed_positions(first).is_some(), "the moved model loads and morphs");
+    assert!(h.state().skin.deformed_positions(first + 1).is_some(), "the outside model loads too");
+}

@@ -60,10 +60,17 @@ fn dropped_md2_is_imported_in_the_background_and_morphs_over_time() {
     assert!(moved > a.len() / 10, "{moved} of {} vertices moved", a.len());
     assert_eq!(positions_at(&mut h, before, 0), a, "the same time gives the same vertices");
 
-    // The import is one undo step.
+    // The model's loop is longer than the demo's 90 frames: the range grew to cover it, and
+    // the status bar said so.
+    let end = h.state().doc.scene().frame_range.end;
+    assert!(end > 90, "range end {end}");
+    assert!(status.text.contains(&format!("frame range extended from 0–90 to 0–{end}")), "{status:?}");
+
+    // The import is one undo step, the range's growth with it.
     h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
     h.run();
     assert_eq!(h.state().doc.scene().objects.len(), before);
+    assert_eq!(h.state().doc.scene().frame_range.end, 90);
 }
 
 #[test]

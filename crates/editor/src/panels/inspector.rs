@@ -2,7 +2,7 @@
 //! key inspector (interpolation mode and T/C/B of the selected keys), and the deformer with its
 //! parameters, plus the cross-section measure of the selected joint.
 
-use egui::{DragValue, Ui};
+use egui::Ui;
 use glam::Vec3;
 use keyrig_core::{DeformerKind, Interpolation, Tcb};
 
@@ -10,7 +10,16 @@ use crate::app::EditorApp;
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::eval::{euler_degrees, quat_from_euler_degrees};
 use crate::state::Selected;
+use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::tcb_slider::tcb_slider_ui;
+
+/// Starts applying a field's change: a committed (typed) value is its own undo step, so any
+/// open continuous group is closed first; a drag continues its group until release.
+fn begin(app: &mut EditorApp, change: FieldChange) {
+    if change == FieldChange::Committed {
+        app.doc.close_group();
+    }
+}
 
 pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     egui::Panel::right("inspector").resizable(true).default_size(270.0).show_inside(ui, |ui| {
@@ -27,7 +36,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
 
 /// A row of three drag values. Each carries the accessible label "<label> X" (Y, Z), which is
 /// what screen readers and the UI tests find.
-fn vec3_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3, speed: f64) -> bool {
+fn vec3_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3, speed: f64) -> FieldChange {
     ui.horizontal(|ui| {
         ui.label(label);
         if !marker.is_empty() {
@@ -35,13 +44,14 @@ fn vec3_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3, speed: f64)
         }
     });
     ui.horizontal(|ui| {
-        let mut changed = false;
+        let mut changed = FieldChange::None;
         for (axis, c) in ["X", "Y", "Z"].iter().zip([&mut v.x, &mut v.y, &mut v.z]) {
             ui.label(*axis);
-            let response = ui.add(DragValue::new(c).speed(speed).max_decimals(3));
             let name = format!("{label} {axis}");
-            ui.ctx().accesskit_node_builder(response.id, |node| node.set_label(name));
-            changed |= response.changed();
+            let (_, change) = number_field(ui, c, &name, |d| d.speed(speed).max_decimals(3));
+            if change.any() {
+                changed = change;
+            }
         }
         changed
     })
@@ -94,13 +104,17 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
             }
         }
         ChannelValue::Vec3(mut v) => {
-            if vec3_editor(ui, label, marker, &mut v, 0.01) && v.is_finite() {
+            let change = vec3_editor(ui, label, marker, &mut v, 0.01);
+            if change.any() && v.is_finite() {
+                begin(app, change);
                 app.apply_pose(id, ChannelValue::Vec3(v), &group);
             }
         }
         ChannelValue::Rotation(q) => {
             let mut e = euler_degrees(q);
-            if vec3_editor(ui, label, marker, &mut e, 0.5) && e.is_finite() {
+            let change = vec3_editor(ui, label, marker, &mut e, 0.5);
+            if change.any() && e.is_finite() {
+                begin(app, change);
                 app.apply_pose(id, ChannelValue::Rotation(quat_from_euler_degrees(e)), &group);
             }
             ui.weak(format!("Euler {EULER_ORDER}")).on_hover_text(EULER_ORDER_HELP);
@@ -112,14 +126,13 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
             let changed = ui
                 .horizontal(|ui| {
                     ui.label(label);
-                    let response = ui.add(DragValue::new(&mut s).speed(0.05));
-                    let name = label.to_owned();
-                    ui.ctx().accesskit_node_builder(response.id, |node| node.set_label(name));
+                    let (_, change) = number_field(ui, &mut s, label, |d| d.speed(0.05));
                     ui.weak(marker);
-                    response.changed()
+                    change
                 })
                 .inner;
-            if changed && s.is_finite() {
+            if changed.any() && s.is_finite() {
+                begin(app, changed);
                 app.apply_pose(id, ChannelValue::Scalar(s), &group);
             }
         }
@@ -141,24 +154,25 @@ const EULER_ORDER_HELP: &str =
 fn twist_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, q: glam::Quat, group: &str) {
     let Some(twist) = app.twist_now(id) else { return };
     let mut value = twist;
-    let response = ui
+    let (response, change) = ui
         .horizontal(|ui| {
             ui.label("Twist (°)");
-            let response = ui.add(DragValue::new(&mut value).speed(1.0).max_decimals(2));
+            let (response, change) =
+                number_field(ui, &mut value, "Twist (°)", |d| d.speed(1.0).max_decimals(2));
             let turns = (twist.abs() / 360.0).floor();
             if turns >= 1.0 {
                 ui.weak(format!("{turns:.0} turn{}", if turns >= 2.0 { "s" } else { "" }));
             }
-            response
+            (response, change)
         })
-        .inner
-        .on_hover_text(
-            "Turn about the bone axis (the joint's X), in degrees, counting whole turns: \
-             720 is two turns. In record mode the key turns that far from the previous key.",
-        );
-    ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Twist (°)"));
+        .inner;
+    response.on_hover_text(
+        "Turn about the bone axis (the joint's X), in degrees, counting whole turns: \
+         720 is two turns. In record mode the key turns that far from the previous key.",
+    );
     let delta = value - twist;
-    if response.changed() && delta.is_finite() && delta != 0.0 {
+    if change.any() && delta.is_finite() && delta != 0.0 {
+        begin(app, change);
         let axis = q * crate::twist::BONE_AXIS;
         app.apply_turn(id, crate::channels::Turn { from: q, axis, degrees: delta }, group);
     }
@@ -248,14 +262,15 @@ fn md2_ui(ui: &mut Ui, app: &mut EditorApp, o: usize) {
         .response;
     response.on_hover_text("Which frame group of the model plays, looping over scene time");
     let mut rate = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
-    let drag = ui
+    let rate_change = ui
         .horizontal(|ui| {
             ui.label("Rate (fps)");
-            ui.add(DragValue::new(&mut rate).speed(0.1).range(0.1..=1000.0).max_decimals(2))
-                .on_hover_text("Model frames per second (Quake 2 played its models at 10)")
+            let (response, change) =
+                number_field(ui, &mut rate, "Model fps", |d| d.speed(0.1).max_decimals(2));
+            response.on_hover_text("Model frames per second (Quake 2 played its models at 10)");
+            change
         })
         .inner;
-    ui.ctx().accesskit_node_builder(drag.id, |node| node.set_label("Model fps"));
     let frames = match clip.as_deref() {
         None => clips.iter().map(|(_, n)| n).sum::<usize>(),
         Some(name) => clips.iter().find(|(c, _)| c == name).map_or(0, |(_, n)| *n),
@@ -274,7 +289,13 @@ fn md2_ui(ui: &mut Ui, app: &mut EditorApp, o: usize) {
             }
         });
     }
-    if drag.changed() && rate.is_finite() && rate > 0.0 && Some(rate) != fps {
+    if rate_change == FieldChange::Dragged {
+        rate = rate.clamp(0.1, 1000.0);
+    }
+    if rate_change.any() && !(rate.is_finite() && (0.1..=1000.0).contains(&rate)) {
+        app.error(format!("Model fps must be between 0.1 and 1000 (typed {rate})"));
+    } else if rate_change.any() && Some(rate) != fps {
+        begin(app, rate_change);
         app.doc.edit_continuous("md2 fps", &format!("{name} model fps"), |scene| {
             if let Some(keyrig_core::MeshSource::File { fps, .. }) =
                 scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())

@@ -11,6 +11,7 @@ use crate::channels::{self, ChannelId};
 use crate::commands::Command;
 use crate::panels::menu::tool_button;
 use crate::state::{KeyRef, Selected};
+use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::key_diamond::key_diamond_ui;
 
 const ROW_HEIGHT: f32 = 17.0;
@@ -24,6 +25,10 @@ pub struct TimelineState {
     drag_applied: i32,
     /// Where a box selection started.
     box_start: Option<Pos2>,
+    /// When the FPS changes, keys keep their frames (true) or their times in seconds (false).
+    pub keep_frames: bool,
+    /// (fps, start, end) when the current FPS drag started.
+    fps_drag_origin: Option<(f64, i32, i32)>,
 }
 
 /// One dope-sheet row.
@@ -150,32 +155,141 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
         tool_button(ui, app, Command::LastFrame, "⏭", false);
         let looping = app.playback.looping;
         tool_button(ui, app, Command::ToggleLoop, "🔁 Loop", looping);
+        ui.checkbox(&mut app.playback.every_frame, "Every frame").on_hover_text(
+            "Checked: every frame is drawn, even when drawing is slower than the scene's fps \
+             (slow motion). Unchecked (the default): real time, dropping frames to keep time.",
+        );
+        if let Some(t) = app.frame_time.filter(|_| app.playback.playing) {
+            let fps = app.doc.scene().fps;
+            let achieved = app.playback.achieved_fps(f64::from(t), fps);
+            ui.weak(format!("{achieved:.1}/{fps} fps"))
+                .on_hover_text("Scene frames shown per second while playing, against the scene's fps");
+        }
         ui.separator();
 
         let scene = app.doc.scene();
         let (mut start, mut end, mut fps) = (scene.frame_range.start, scene.frame_range.end, scene.fps);
+        let (old_start, old_end, old_fps) = (start, end, fps);
         let mut frame = app.playback.whole_frame();
         ui.label("Frame");
-        if ui.add(egui::DragValue::new(&mut frame).range(start..=end)).changed() {
+        let (_, change) = number_field(ui, &mut frame, "Frame", |d| d.range(start..=end));
+        if change.any() {
             app.set_frame(frame);
         }
         ui.label("Start");
-        let start_changed = ui.add(egui::DragValue::new(&mut start).range(-100_000..=end - 1)).changed();
+        let (_, start_change) = number_field(ui, &mut start, "Start", |d| d);
         ui.label("End");
-        let end_changed = ui.add(egui::DragValue::new(&mut end).range(start + 1..=100_000)).changed();
+        let (_, end_change) = number_field(ui, &mut end, "End", |d| d);
         ui.label("FPS");
-        let fps_changed = ui.add(egui::DragValue::new(&mut fps).range(1.0..=240.0).speed(0.1)).changed();
-        if start_changed || end_changed {
-            app.doc.edit_continuous("frame range", "change frame range", |s| {
-                s.frame_range.start = start;
-                s.frame_range.end = end.max(start + 1);
-            });
+        let (_, fps_change) = number_field(ui, &mut fps, "FPS", |d| d.speed(0.1).max_decimals(3));
+        ui.checkbox(&mut app.timeline.keep_frames, "Keep key frames").on_hover_text(
+            "When the FPS changes: checked, keys stay on their frames (the animation plays \
+             faster or slower, as Blender's time stretching); unchecked, keys keep their time \
+             in seconds and move to other frames. Either way the frame range follows the keys.",
+        );
+        if start_change.any() || end_change.any() {
+            apply_range(app, (old_start, old_end), (start, end), start_change, end_change);
         }
-        if fps_changed && fps.is_finite() {
-            // Keys are stored in seconds: changing fps keeps their timing in seconds.
-            app.doc.edit_continuous("fps", "change fps", |s| s.fps = fps.clamp(1.0, 240.0));
+        match fps_change {
+            FieldChange::None => {}
+            FieldChange::Dragged => {
+                // Computed from the fps at the start of the drag, so the range does not
+                // drift by rounding as the drag goes on.
+                let origin = *app.timeline.fps_drag_origin.get_or_insert((old_fps, old_start, old_end));
+                let fps = if fps.is_finite() { fps.clamp(MIN_FPS, MAX_FPS) } else { old_fps };
+                let keep_frames = app.timeline.keep_frames;
+                app.doc.edit_continuous("fps", &fps_label(fps), |s| retime(s, origin, fps, keep_frames));
+            }
+            FieldChange::Committed => {
+                if !(fps.is_finite() && (MIN_FPS..=MAX_FPS).contains(&fps)) {
+                    app.error(format!(
+                        "FPS must be between {MIN_FPS} and {MAX_FPS} (typed {fps}); it stays {old_fps}"
+                    ));
+                } else {
+                    let keep_frames = app.timeline.keep_frames;
+                    let origin = (old_fps, old_start, old_end);
+                    app.doc.close_group();
+                    app.doc.edit(&fps_label(fps), |s| retime(s, origin, fps, keep_frames));
+                }
+            }
+        }
+        if !ui.input(|i| i.pointer.any_down()) {
+            app.timeline.fps_drag_origin = None;
         }
     });
+}
+
+/// The lowest and highest scene frame rates the FPS field accepts.
+pub const MIN_FPS: f64 = 1.0;
+pub const MAX_FPS: f64 = 240.0;
+/// The frame range limits of the Start and End fields.
+const FRAME_LIMIT: i32 = 100_000;
+
+fn fps_label(fps: f64) -> String {
+    format!("change fps to {fps}")
+}
+
+/// Sets the scene's fps to `fps` from `origin` = (fps, start, end) before the change: with
+/// `keep_frames` every key stays on its frame (its time in seconds scales) and the range stays;
+/// otherwise keys keep their seconds and the range scales with them.
+pub fn retime(scene: &mut keyrig_core::Scene, origin: (f64, i32, i32), fps: f64, keep_frames: bool) {
+    let (old_fps, start, end) = origin;
+    let current = scene.fps;
+    if keep_frames {
+        channels::scale_key_times(scene, current / fps);
+        scene.frame_range.start = start;
+        scene.frame_range.end = end;
+    } else {
+        let ratio = fps / old_fps;
+        let s = (f64::from(start) * ratio).round() as i32;
+        let e = ((f64::from(end) * ratio).round() as i32).max(s + 1);
+        scene.frame_range.start = s;
+        scene.frame_range.end = e;
+    }
+    scene.fps = fps;
+}
+
+/// Applies an edit of the Start or End field: a drag clamps to a valid range (one undo step per
+/// drag), a typed value is checked (Start before End) and refused with a status-bar error.
+fn apply_range(
+    app: &mut EditorApp,
+    old: (i32, i32),
+    new: (i32, i32),
+    start_change: FieldChange,
+    end_change: FieldChange,
+) {
+    let (mut start, mut end) = new;
+    let dragged = start_change == FieldChange::Dragged || end_change == FieldChange::Dragged;
+    if dragged {
+        start = start.clamp(-FRAME_LIMIT, old.1 - 1);
+        end = end.clamp(old.0 + 1, FRAME_LIMIT);
+        app.doc.edit_continuous("frame range", "change frame range", |s| {
+            s.frame_range.start = start;
+            s.frame_range.end = end;
+        });
+    } else if start.abs() > FRAME_LIMIT || end.abs() > FRAME_LIMIT {
+        app.error(format!("Frames must lie between {} and {FRAME_LIMIT}", -FRAME_LIMIT));
+        return;
+    } else if start >= end {
+        let which = if start_change.any() {
+            format!("Start ({start}) must be before End ({end})")
+        } else {
+            format!("End ({end}) must be after Start ({start})")
+        };
+        app.error(format!("{which}; the range stays {}–{}", old.0, old.1));
+        return;
+    } else {
+        app.doc.close_group();
+        app.doc.edit(&format!("frame range {start}–{end}"), |s| {
+            s.frame_range.start = start;
+            s.frame_range.end = end;
+        });
+    }
+    // The playhead stays where it was unless the new range leaves it out.
+    let frame = app.playback.whole_frame();
+    if frame < start || frame > end {
+        app.set_frame(frame);
+    }
 }
 
 fn frame_to_x(frame: f64, start: i32, end: i32, area: Rect) -> f32 {

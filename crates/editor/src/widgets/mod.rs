@@ -2,5 +2,6 @@
 //! `impl Widget` wrapper (the egui demo's recipe: allocate, handle input, paint, report
 //! accessibility info).
 
+pub mod field;
 pub mod key_diamond;
 pub mod tcb_slider;
