@@ -49,10 +49,7 @@ fn scene() -> Scene {
         position: Animated::constant(Vec3::Y),
         direction: Animated::constant(Vec3::NEG_Y),
         colour: Animated::constant(Vec3::ONE),
-        intensity: Animated {
-            value: 1.0,
-            track: RawTrack::new(vec![Key::new(0.0, 1.0), Key::new(1.0, 3.0)]),
-        },
+        intensity: Animated::new(1.0, RawTrack::new(vec![Key::new(0.0, 1.0), Key::new(1.0, 3.0)])),
     });
     scene
 }

@@ -173,20 +173,20 @@ fn cube() -> Object {
     cube.mesh = Some(MeshSource::Procedural(ProceduralMesh::Cube));
     cube.scale = Animated::constant(Vec3::splat(0.25));
     // A loop in front of the arm; the last key repeats the first so playback loops cleanly.
-    cube.translation = Animated {
-        value: Vec3::new(-0.8, 0.3, 0.8),
-        track: RawTrack::new(vec![
+    cube.translation = Animated::new(
+        Vec3::new(-0.8, 0.3, 0.8),
+        RawTrack::new(vec![
             Key::new(at(0), Vec3::new(-0.8, 0.3, 0.8)),
             Key::new(at(30), Vec3::new(0.0, 0.7, 1.0)).with_tcb(Tcb::new(0.0, 0.0, 0.4)),
             Key::new(at(60), Vec3::new(0.8, 0.3, 0.8)).with_tcb(Tcb::new(-0.4, 0.2, 0.0)),
             Key::new(at(75), Vec3::new(0.0, 0.15, 0.6)).with_tcb(Tcb::new(0.6, 0.0, 0.0)),
             Key::new(at(90), Vec3::new(-0.8, 0.3, 0.8)),
         ]),
-    };
+    );
     // One full turn about Y at constant speed, in 120° steps.
-    cube.rotation = Animated {
-        value: Quat::IDENTITY,
-        track: RawTrack::new(
+    cube.rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(
             [0.0, 120.0, 240.0, 360.0]
                 .into_iter()
                 .enumerate()
@@ -196,7 +196,7 @@ fn cube() -> Object {
                 })
                 .collect(),
         ),
-    };
+    );
     cube
 }
 
@@ -208,26 +208,26 @@ fn spot_light() -> Light {
         name: "Key".to_string(),
         kind: LightKind::Spot { cutoff_deg: 35.0, inner_angle_deg: 25.0, dropoff: 2.0 },
         enabled: true,
-        position: Animated {
-            value: positions[0].1,
-            track: RawTrack::new(positions.iter().map(|&(f, p)| Key::new(at(f), p)).collect()),
-        },
+        position: Animated::new(
+            positions[0].1,
+            RawTrack::new(positions.iter().map(|&(f, p)| Key::new(at(f), p)).collect()),
+        ),
         // Aimed at the arm's centre throughout.
-        direction: Animated {
-            value: target - positions[0].1,
-            track: RawTrack::new(positions.iter().map(|&(f, p)| Key::new(at(f), target - p)).collect()),
-        },
+        direction: Animated::new(
+            target - positions[0].1,
+            RawTrack::new(positions.iter().map(|&(f, p)| Key::new(at(f), target - p)).collect()),
+        ),
         colour: Animated::constant(Vec3::new(1.0, 0.92, 0.8)),
-        intensity: Animated {
-            value: 1.0,
-            track: RawTrack::new(vec![
+        intensity: Animated::new(
+            1.0,
+            RawTrack::new(vec![
                 Key::new(at(0), 1.0),
                 Key::new(at(30), 2.5).with_tcb(Tcb::new(0.0, 0.0, -0.5)),
                 Key::new(at(60), 1.5).with_interpolation(Interpolation::Step),
                 Key::new(at(75), 1.0),
                 Key::new(at(90), 1.0),
             ]),
-        },
+        ),
     }
 }
 

@@ -382,7 +382,7 @@ fn keys<T: std::fmt::Debug + Clone + 'static>(
 fn animated<T: std::fmt::Debug + Clone + 'static>(
     value: impl Strategy<Value = T> + Clone,
 ) -> impl Strategy<Value = Animated<T>> {
-    (value.clone(), keys(value)).prop_map(|(value, keys)| Animated { value, track: RawTrack::new(keys) })
+    (value.clone(), keys(value)).prop_map(|(value, keys)| Animated::new(value, RawTrack::new(keys)))
 }
 
 fn object() -> impl Strategy<Value = Object> {

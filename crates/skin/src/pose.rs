@@ -342,13 +342,13 @@ mod tests {
         use keyrig_core::{Animated, Interpolation, Key, RawTrack};
         let mut skeleton = crate::mesh::arm_scene_skeleton();
         let quarter = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
-        skeleton.joints[2].rotation = Animated {
-            value: Quat::IDENTITY,
-            track: RawTrack::new(vec![
+        skeleton.joints[2].rotation = Animated::new(
+            Quat::IDENTITY,
+            RawTrack::new(vec![
                 Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
                 Key::new(1.0, quarter),
             ]),
-        };
+        );
         let sampler = ScenePoseSampler::new(&skeleton).unwrap();
         let pose = sampler.sample(0.5);
         assert!(pose.local_rotations[2].abs_diff_eq(Quat::from_rotation_x(std::f32::consts::FRAC_PI_4), 1e-6));
