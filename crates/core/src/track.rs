@@ -395,6 +395,8 @@ pub struct Track<T: TrackValue> {
 struct Ends<T: TrackValue> {
     /// `t_n − t_0`.
     period: f64,
+    /// `1 / period` (a multiplication is cheaper than a division per sample).
+    inv_period: f64,
     /// One offset cycle: `P_n − P_0`, or `q_n·q_0⁻¹`.
     delta: T::Delta,
     /// The rate leaving the first key (backwards in time) and arriving at the last.
@@ -519,6 +521,7 @@ impl<T: TrackValue> Track<T> {
         let n = times.len();
         let ends = Ends {
             period: times[n - 1] - times[0],
+            inv_period: 1.0 / (times[n - 1] - times[0]),
             delta: T::cycle_delta(wide[0], wide[n - 1]),
             rate_before: segments
                 .first()
@@ -606,7 +609,7 @@ impl<T: TrackValue> Track<T> {
     }
 
     /// Outside the domain with a cycle at that end; `held` samples a local time.
-    #[inline(never)]
+    #[inline]
     fn sample_outside(&self, t: f64, mut held: impl FnMut(f64) -> T::Wide) -> T::Wide {
         match self.outside(t) {
             Outside::Key(i) => self.wide[i],
@@ -629,6 +632,7 @@ impl<T: TrackValue> Track<T> {
     }
 
     /// Where `t`, outside the domain, is sampled (module documentation, "Cycles").
+    #[inline]
     fn outside(&self, t: f64) -> Outside {
         let last = self.times.len() - 1;
         let (t0, period) = (self.times[0], self.ends.period);
@@ -639,7 +643,7 @@ impl<T: TrackValue> Track<T> {
             Cycle::Hold => held,
             Cycle::Linear => Outside::Linear { after },
             Cycle::Repeat | Cycle::RepeatOffset => {
-                let k = ((t - t0) / period).floor();
+                let k = floor((t - t0) * self.ends.inv_period);
                 if !k.is_finite() {
                     return held;
                 }
@@ -766,6 +770,23 @@ impl<T: TrackValue> Cursor<'_, T> {
         }
         self.segment = i;
         i
+    }
+}
+
+/// `x.floor()` without a libm call on baseline x86-64 (no SSE4.1 `roundsd`): truncate, then
+/// step down for negative non-integers. Beyond ±2^52 every f64 is an integer already.
+#[inline]
+fn floor(x: f64) -> f64 {
+    const EXACT: f64 = 4_503_599_627_370_496.0; // 2^52
+    if x.abs() < EXACT {
+        let k = x as i64 as f64;
+        if k > x {
+            k - 1.0
+        } else {
+            k
+        }
+    } else {
+        x
     }
 }
 
