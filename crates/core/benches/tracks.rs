@@ -8,7 +8,10 @@
 //! * `quat_slerp_track`: the same rotation keys as a Linear (slerp) keyrig track;
 //! * `glam_slerp`: the same keys with a plain `partition_point` + glam `Quat::slerp` (f32), the
 //!   cost of "plain slerp between the same keys";
-//! * `splines_catmull_rom`: the `splines` crate (v5) Catmull-Rom on the same positions, a peer.
+//! * `splines_catmull_rom`: the `splines` crate (v5) Catmull-Rom on the same positions, a peer;
+//! * `vec3_tcb_repeat`, `quat_squad_repeat`: the `vec3_tcb` and `quat_squad` keys with
+//!   `before: Repeat, after: Repeat` (cycles, issue 19), sampled at the same times moved three
+//!   periods later, so every sample goes through the cycle (same values as the plain rows).
 //!
 //! Access patterns, 4096 samples per iteration, all inside `[t_1, t_{n−2})` (where splines'
 //! Catmull-Rom is defined):
@@ -20,7 +23,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Quat, Vec3};
-use keyrig_core::{Interpolation, Key, RawTrack, Spin, Tcb, Track};
+use keyrig_core::{Cycle, Cycles, Interpolation, Key, RawTrack, Spin, Tcb, Track};
 
 const SAMPLES: usize = 4096;
 const KEY_COUNTS: [usize; 4] = [4, 100, 10_000, 100_000];
@@ -71,10 +74,19 @@ fn make_keys(n: usize) -> Keys {
 }
 
 fn track<T: keyrig_core::TrackValue>(keys: &Keys, values: &[T], mode: Interpolation) -> Track<T> {
+    cycled_track(keys, values, mode, Cycles::HOLD)
+}
+
+fn cycled_track<T: keyrig_core::TrackValue>(
+    keys: &Keys,
+    values: &[T],
+    mode: Interpolation,
+    cycles: Cycles,
+) -> Track<T> {
     let raw = (0..values.len())
         .map(|i| Key::new(keys.times[i], values[i]).with_tcb(keys.tcbs[i]).with_interpolation(mode))
         .collect();
-    Track::new(&RawTrack::new(raw)).expect("bench keys are valid")
+    Track::with_cycles(&RawTrack::new(raw), cycles).expect("bench keys are valid")
 }
 
 /// The rotation keys with one extra turn on every key whose short way from the previous key
@@ -121,6 +133,11 @@ fn bench_tracks(c: &mut Criterion) {
         let quat_squad = track(&keys, &keys.rotations, Interpolation::Tcb);
         let quat_slerp = track(&keys, &keys.rotations, Interpolation::Linear);
         let quat_spin = spin_track(&keys);
+        let repeat = Cycles::new(Cycle::Repeat, Cycle::Repeat);
+        let vec3_repeat = cycled_track(&keys, &keys.positions, Interpolation::Tcb, repeat);
+        let quat_repeat = cycled_track(&keys, &keys.rotations, Interpolation::Tcb, repeat);
+        let (t0, tn) = vec3_repeat.domain();
+        let later = 3.0 * (tn - t0);
         // glam's slerp takes the short way itself; give it the sign-consistent keys keyrig uses.
         let consistent: Vec<Quat> = quat_slerp.key_values().to_vec();
         let spline = splines::Spline::from_vec(
@@ -148,6 +165,31 @@ fn bench_tracks(c: &mut Criterion) {
                         times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
                     } else {
                         times.iter().for_each(|&t| acc += vec3_tcb.sample(black_box(t)));
+                    }
+                    acc
+                })
+            });
+            let repeated: Vec<f64> = times.iter().map(|t| t + later).collect();
+            group.bench_with_input(BenchmarkId::new("vec3_tcb_repeat", pattern), &repeated, |b, times| {
+                b.iter(|| {
+                    let mut acc = Vec3::ZERO;
+                    if cursor_or_sample {
+                        let mut cursor = vec3_repeat.cursor();
+                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
+                    } else {
+                        times.iter().for_each(|&t| acc += vec3_repeat.sample(black_box(t)));
+                    }
+                    acc
+                })
+            });
+            group.bench_with_input(BenchmarkId::new("quat_squad_repeat", pattern), &repeated, |b, times| {
+                b.iter(|| {
+                    let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+                    if cursor_or_sample {
+                        let mut cursor = quat_repeat.cursor();
+                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
+                    } else {
+                        times.iter().for_each(|&t| acc += quat_repeat.sample(black_box(t)));
                     }
                     acc
                 })

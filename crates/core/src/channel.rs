@@ -514,13 +514,13 @@ mod tests {
             RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(1.0, Vec3::new(2.0, 0.0, 0.0))]);
         arm.skeleton = Some(Skeleton {
             joints: vec![Joint {
-                rotation: Animated {
-                    value: Quat::IDENTITY,
-                    track: RawTrack::new(vec![
+                rotation: Animated::new(
+                    Quat::IDENTITY,
+                    RawTrack::new(vec![
                         Key::new(0.0, Quat::IDENTITY),
                         Key::new(1.0, Quat::from_rotation_x(90f32.to_radians())),
                     ]),
-                },
+                ),
                 ..Joint::new("elbow", None, Vec3::ZERO, Quat::IDENTITY)
             }],
             root_translation: Animated::constant(Vec3::ZERO),

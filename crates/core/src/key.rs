@@ -278,21 +278,137 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Keys<T> {
     }
 }
 
+/// What a track does before its first key (`before`) or after its last (`after`): a cycle
+/// (DESIGN.md §9 "Cycles"; docs/interpolation.md gives the formulas). `P = t_n − t_0` is the
+/// period, the time from the first key to the last.
+///
+/// Every behaviour but [`Cycle::Hold`] needs at least two keys (a positive period).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Cycle {
+    /// Keep the end key's value (constant extrapolation); what tracks did before cycles.
+    #[default]
+    Hold,
+    /// Continue with the velocity at the end key (for rotations: keep turning at the end
+    /// key's angular velocity). A Step end segment has none, so it holds.
+    Linear,
+    /// Play the keys again and again: the value at `t ± P` is the value at `t`.
+    Repeat,
+    /// Repeat, each cycle continuing from where the last one ended (a walk): the value at
+    /// `t + P` is the value at `t` plus `P_n − P_0`; for rotations `q(t + P) = M·q(t)` with
+    /// `M = q_n·q_0⁻¹`, i.e. the turn `q_0⁻¹·q_n` relative to the first key is added once per
+    /// cycle.
+    RepeatOffset,
+    /// Play the keys forwards, then backwards, then forwards…: mirrored at each end key.
+    PingPong,
+}
+
+impl Cycle {
+    /// Every behaviour, in the order the inspector lists them.
+    pub const ALL: [Cycle; 5] =
+        [Cycle::Hold, Cycle::Linear, Cycle::Repeat, Cycle::RepeatOffset, Cycle::PingPong];
+
+    /// `Hold`, the default (left out of scene files).
+    #[must_use]
+    pub fn is_hold(&self) -> bool {
+        *self == Cycle::Hold
+    }
+
+    /// Whether the keys are played again ([`Cycle::Repeat`], [`Cycle::RepeatOffset`],
+    /// [`Cycle::PingPong`]).
+    #[must_use]
+    pub fn is_cyclic(self) -> bool {
+        matches!(self, Cycle::Repeat | Cycle::RepeatOffset | Cycle::PingPong)
+    }
+
+    /// The name shown in the editor ("Repeat with offset").
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            Cycle::Hold => "Hold",
+            Cycle::Linear => "Linear",
+            Cycle::Repeat => "Repeat",
+            Cycle::RepeatOffset => "Repeat with offset",
+            Cycle::PingPong => "Ping-pong",
+        }
+    }
+}
+
+impl std::fmt::Display for Cycle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
+/// What a track does outside its keys: `before` the first key and `after` the last.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Cycles {
+    pub before: Cycle,
+    pub after: Cycle,
+}
+
+impl Cycles {
+    /// Hold at both ends.
+    pub const HOLD: Cycles = Cycles { before: Cycle::Hold, after: Cycle::Hold };
+
+    #[must_use]
+    pub const fn new(before: Cycle, after: Cycle) -> Self {
+        Cycles { before, after }
+    }
+
+    /// Both ends [`Cycle::Hold`].
+    #[must_use]
+    pub fn is_hold(self) -> bool {
+        self.before.is_hold() && self.after.is_hold()
+    }
+}
+
 /// A value that may be animated: the static `value` (the pose) is used while `track` has no
-/// keys; once it has keys, the sampled track wins.
+/// keys; once it has keys, the sampled track wins, with `before` and `after` ([`Cycle`])
+/// deciding what happens outside its keys. Both are left out of the file when
+/// [`Cycle::Hold`], so scenes without cycles read and write as before:
+///
+/// ```text
+/// rotation: (value: (0.0, 0.0, 0.0, 1.0), track: [ … ], after: Repeat)
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, bound(deserialize = "T: Deserialize<'de>"))]
 pub struct Animated<T> {
     pub value: T,
     #[serde(default = "RawTrack::default", skip_serializing_if = "RawTrack::is_empty")]
     pub track: RawTrack<T>,
+    /// Before the first key.
+    #[serde(default, skip_serializing_if = "Cycle::is_hold")]
+    pub before: Cycle,
+    /// After the last key.
+    #[serde(default, skip_serializing_if = "Cycle::is_hold")]
+    pub after: Cycle,
 }
 
 impl<T> Animated<T> {
     /// A constant, not animated.
     #[must_use]
     pub fn constant(value: T) -> Self {
-        Animated { value, track: RawTrack::default() }
+        Animated::new(value, RawTrack::default())
+    }
+
+    /// The static `value` and a `track`, holding outside its keys.
+    #[must_use]
+    pub fn new(value: T, track: RawTrack<T>) -> Self {
+        Animated { value, track, before: Cycle::Hold, after: Cycle::Hold }
+    }
+
+    /// The same with the given behaviour before the first key and after the last.
+    #[must_use]
+    pub fn with_cycles(mut self, cycles: Cycles) -> Self {
+        self.before = cycles.before;
+        self.after = cycles.after;
+        self
+    }
+
+    /// `before` and `after` together.
+    #[must_use]
+    pub fn cycles(&self) -> Cycles {
+        Cycles { before: self.before, after: self.after }
     }
 
     #[must_use]

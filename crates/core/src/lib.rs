@@ -10,12 +10,13 @@ pub mod scene;
 pub mod track;
 pub mod validate;
 
-pub use key::{Animated, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
+pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
     ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
 };
 pub use track::{
-    AnimatedCursor, AnimatedTrack, Cursor, SpinProblem, TangentSide, Track, TrackError, TrackValue,
+    check_cycles, AnimatedCursor, AnimatedTrack, Cursor, SpinProblem, TangentSide, Track, TrackEnd,
+    TrackError, TrackValue,
 };

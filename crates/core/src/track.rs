@@ -8,7 +8,8 @@
 //!
 //! # Sampling rule
 //! * `t` before the first key (or NaN) gives the first key's value; `t` at or after the last key
-//!   gives the last key's value (constant extrapolation).
+//!   gives the last key's value (constant extrapolation) — unless the track has a [`Cycle`]
+//!   at that end (below).
 //! * At a key time `t_i` the result is exactly the key's value (normalized and sign-adjusted for
 //!   rotations, see [`Track::key_values`]).
 //! * Inside segment i (`t_i < t < t_{i+1}`), the mode of key i decides: Step holds `P_i`;
@@ -39,6 +40,27 @@
 //! A TCB segment next to a spin segment (whose tangents carry that chord) uses the same form,
 //! so C = 0 keys stay C¹. Tracks without spins are interpolated exactly as before.
 //!
+//! # Cycles
+//! Outside its keys a track does what its [`Cycles`] say (DESIGN.md §9; period `P = t_n − t_0`):
+//! * Hold: the end key's value.
+//! * Linear: `P_n + (t − t_n)·v_n` with `v_n` the velocity arriving at the last key (leaving
+//!   the first, backwards, before it); rotations `q_n·exp((t − t_n)·ω_n)` with `ω_n = q⁻¹·dq/dt`.
+//! * Repeat: `t` is moved by whole periods `k = ⌊(t − t_0)/P⌋` into the keys: `sample(t − k·P)`.
+//! * RepeatOffset: the same plus `k·(P_n − P_0)`; rotations `M^k·q(t − k·P)` with
+//!   `M = q_n·q_0⁻¹` (so relative to the first key each cycle adds `q_0⁻¹·q_n`).
+//! * PingPong: the keys forwards, then backwards: `sample(t_0 + φ)` for the phase
+//!   `φ = (t − t_0) mod 2P ≤ P`, else `sample(t_0 + 2P − φ)`.
+//!
+//! TCB and Squad use the keys across the seam as the end keys' neighbours ([`end_chords`]):
+//! for Repeat the key before the first is the second-to-last key one period earlier (for
+//! RepeatOffset also one offset lower), the key after the last is the second key one period
+//! later; for PingPong the neighbour is the mirrored key. So a closed repeating loop
+//! (`P_n = P_0`) or any RepeatOffset track with C = 0 keys and equal tension and bias at
+//! its first and last key is C¹ through the seam, and a ping-pong with T = C = B = 0 at its
+//! end keys turns with zero velocity. Tracks with Hold at both ends are built and sampled
+//! exactly as before; [`Track::velocity`] and [`Track::segment_tangents`] describe the keys'
+//! own segments only.
+//!
 //! All arithmetic is done in f64 (values are widened from f32 once, at validation) and the
 //! result is rounded to the value type at the end; [`Track::sample_wide`] returns the f64
 //! value before rounding.
@@ -49,8 +71,8 @@ use std::ops::{Add, Mul, Sub};
 use glam::{DQuat, DVec3, DVec4, Quat, Vec3};
 
 use crate::key::{
-    Animated, Interpolation, Key, RawTrack, Spin, Tcb, MAX_SPIN_TURNS, SPIN_ANGLE_TOLERANCE_DEG,
-    SPIN_TURNS_MIN_CHORD_DEG,
+    Animated, Cycle, Cycles, Interpolation, Key, RawTrack, Spin, Tcb, MAX_SPIN_TURNS,
+    SPIN_ANGLE_TOLERANCE_DEG, SPIN_TURNS_MIN_CHORD_DEG,
 };
 use crate::quat::{self, Arc};
 
@@ -103,6 +125,58 @@ pub enum TrackError {
     NonFiniteStaticValue,
     #[error("static rotation quaternion has (nearly) zero length")]
     ZeroStaticQuaternion,
+    #[error("{cycle} {end} the keys needs at least two keys (a cycle repeats the time from the first key to the last)")]
+    CycleNeedsTwoKeys { end: TrackEnd, cycle: Cycle },
+    #[error("{cycle} {end} the keys needs a positive, finite period (last key time − first key time)")]
+    CyclePeriod { end: TrackEnd, cycle: Cycle },
+}
+
+/// Which end of a track a [`Cycle`] applies to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TrackEnd {
+    /// Before the first key (`Animated::before`).
+    Before,
+    /// After the last key (`Animated::after`).
+    After,
+}
+
+impl TrackEnd {
+    /// The field's name in the scene file: `before` or `after`.
+    #[must_use]
+    pub fn field(self) -> &'static str {
+        match self {
+            TrackEnd::Before => "before",
+            TrackEnd::After => "after",
+        }
+    }
+}
+
+impl std::fmt::Display for TrackEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.field())
+    }
+}
+
+/// Checks the cycles of a track with the given key times: each end other than
+/// [`Cycle::Hold`] needs two keys and a positive, finite period. The one place this rule is
+/// computed ([`Track::with_cycles`] and [`crate::Scene::problems`] call it).
+///
+/// # Errors
+/// [`TrackError::CycleNeedsTwoKeys`] or [`TrackError::CyclePeriod`], `before` first.
+pub fn check_cycles(times: &[f64], cycles: Cycles) -> Result<(), TrackError> {
+    for (end, cycle) in [(TrackEnd::Before, cycles.before), (TrackEnd::After, cycles.after)] {
+        if cycle.is_hold() {
+            continue;
+        }
+        if times.len() < 2 {
+            return Err(TrackError::CycleNeedsTwoKeys { end, cycle });
+        }
+        let period = times[times.len() - 1] - times[0];
+        if !(period.is_finite() && period > 0.0) {
+            return Err(TrackError::CyclePeriod { end, cycle });
+        }
+    }
+    Ok(())
 }
 
 /// Why a key's [`Spin`] is refused ([`TrackError::Spin`]).
@@ -226,6 +300,12 @@ pub trait TrackValue: Copy + Debug + PartialEq + sealed::Sealed {
     /// Whether keys of this type may carry a [`Spin`].
     #[doc(hidden)]
     const ROTATION: bool;
+    /// A rate of change per second (for rotations the body-frame half-angle rate `q⁻¹·dq/dt`).
+    #[doc(hidden)]
+    type Rate: Copy + Debug + PartialEq;
+    /// What one cycle of [`Cycle::RepeatOffset`] adds.
+    #[doc(hidden)]
+    type Delta: Copy + Debug + PartialEq;
 
     /// Widens to f64 (exact).
     fn widen(self) -> Self::Wide;
@@ -239,14 +319,30 @@ pub trait TrackValue: Copy + Debug + PartialEq + sealed::Sealed {
     fn is_finite_tangent(self) -> bool;
     /// Builds the n−1 segment shapes; `values` are the checked values, in/out may be adjusted
     /// (sign consistency). Times, values, tangents and the spins' ranges are validated.
+    /// `cycles` decide the neighbours of the end keys (module documentation, "Cycles").
     #[doc(hidden)]
     fn build(
         times: &[f64],
         keys: &[Key<Self>],
         values: &mut [Self::Wide],
+        cycles: Cycles,
     ) -> Result<Vec<Self::Shape>, TrackError>;
     #[doc(hidden)]
     fn eval(shape: &Self::Shape, u: f64) -> Self::Wide;
+    /// The rate of change per second of a segment at `u` (0 or 1).
+    #[doc(hidden)]
+    fn end_rate(shape: &Self::Shape, u: f64, inv_duration: f64) -> Self::Rate;
+    #[doc(hidden)]
+    fn zero_rate() -> Self::Rate;
+    /// `value` moved on at `rate` for `dt` seconds (linear extrapolation).
+    #[doc(hidden)]
+    fn advance(value: Self::Wide, rate: Self::Rate, dt: f64) -> Self::Wide;
+    /// The change of one [`Cycle::RepeatOffset`] cycle from the first key's value to the last's.
+    #[doc(hidden)]
+    fn cycle_delta(first: Self::Wide, last: Self::Wide) -> Self::Delta;
+    /// `value` offset by `cycles` (a whole number, maybe negative) times `delta`.
+    #[doc(hidden)]
+    fn offset(value: Self::Wide, delta: Self::Delta, cycles: f64) -> Self::Wide;
 }
 
 /// One segment: from key i (at `start`) to key i+1.
@@ -288,6 +384,36 @@ pub struct Track<T: TrackValue> {
     wide: Vec<T::Wide>,
     /// `times.len() − 1` segments.
     segments: Vec<Segment<T::Shape>>,
+    /// Before the first key and after the last.
+    cycles: Cycles,
+    /// What sampling outside the keys needs.
+    ends: Ends<T>,
+}
+
+/// Precomputed for sampling outside the keys.
+#[derive(Clone, Debug, PartialEq)]
+struct Ends<T: TrackValue> {
+    /// `t_n − t_0`.
+    period: f64,
+    /// `1 / period` (a multiplication is cheaper than a division per sample).
+    inv_period: f64,
+    /// One offset cycle: `P_n − P_0`, or `q_n·q_0⁻¹`.
+    delta: T::Delta,
+    /// The rate leaving the first key (backwards in time) and arriving at the last.
+    rate_before: T::Rate,
+    rate_after: T::Rate,
+}
+
+/// Where a time outside the keys is sampled: at `local`, inside the keys, then offset by
+/// `cycles` offset cycles (zero unless [`Cycle::RepeatOffset`]); or extrapolated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Outside {
+    /// Hold the key.
+    Key(usize),
+    /// Linear extrapolation from the first (`false`) or last (`true`) key.
+    Linear { after: bool },
+    /// A time inside the keys; `mirrored` when a ping-pong plays it backwards.
+    Cycle { local: f64, cycles: f64, mirrored: bool },
 }
 
 impl<T: TrackValue> Track<T> {
@@ -308,6 +434,23 @@ impl<T: TrackValue> Track<T> {
     /// # Errors
     /// See [`Track::new`].
     pub fn from_keys(keys: &[Key<T>]) -> Result<Self, TrackError> {
+        Self::from_keys_with_cycles(keys, Cycles::HOLD)
+    }
+
+    /// [`Track::new`] with `cycles` before the first key and after the last.
+    ///
+    /// # Errors
+    /// See [`Track::new`], and [`check_cycles`]: a behaviour other than [`Cycle::Hold`] needs
+    /// two keys and a positive, finite period.
+    pub fn with_cycles(raw: &RawTrack<T>, cycles: Cycles) -> Result<Self, TrackError> {
+        Self::from_keys_with_cycles(&raw.keys, cycles)
+    }
+
+    /// [`Track::with_cycles`] on a slice of keys.
+    ///
+    /// # Errors
+    /// See [`Track::with_cycles`].
+    pub fn from_keys_with_cycles(keys: &[Key<T>], cycles: Cycles) -> Result<Self, TrackError> {
         if keys.is_empty() {
             return Err(TrackError::Empty);
         }
@@ -362,8 +505,9 @@ impl<T: TrackValue> Track<T> {
                 }
             }
         }
-        let shapes = T::build(&times, keys, &mut wide)?;
-        let segments = shapes
+        check_cycles(&times, cycles)?;
+        let shapes = T::build(&times, keys, &mut wide, cycles)?;
+        let segments: Vec<Segment<T::Shape>> = shapes
             .into_iter()
             .enumerate()
             .map(|(i, shape)| Segment {
@@ -374,7 +518,25 @@ impl<T: TrackValue> Track<T> {
             })
             .collect();
         let values = wide.iter().map(|&w| T::narrow(w)).collect();
-        Ok(Track { times, values, wide, segments })
+        let n = times.len();
+        let ends = Ends {
+            period: times[n - 1] - times[0],
+            inv_period: 1.0 / (times[n - 1] - times[0]),
+            delta: T::cycle_delta(wide[0], wide[n - 1]),
+            rate_before: segments
+                .first()
+                .map_or(T::zero_rate(), |s| T::end_rate(&s.shape, 0.0, s.inv_duration)),
+            rate_after: segments
+                .last()
+                .map_or(T::zero_rate(), |s| T::end_rate(&s.shape, 1.0, s.inv_duration)),
+        };
+        Ok(Track { times, values, wide, segments, cycles, ends })
+    }
+
+    /// What the track does before its first key and after its last.
+    #[must_use]
+    pub fn cycles(&self) -> Cycles {
+        self.cycles
     }
 
     /// `(first key time, last key time)`; equal for a single key.
@@ -408,8 +570,8 @@ impl<T: TrackValue> Track<T> {
         self.segments.get(i).map(|s| s.interpolation)
     }
 
-    /// The value at time `t` (seconds), clamped to the first/last key outside the domain.
-    /// O(log n) binary search; use [`Track::cursor`] for playback.
+    /// The value at time `t` (seconds); outside the domain as [`Track::cycles`] say (by default
+    /// held at the first/last key). O(log n) binary search; use [`Track::cursor`] for playback.
     #[must_use]
     #[inline]
     pub fn sample(&self, t: f64) -> T {
@@ -422,9 +584,83 @@ impl<T: TrackValue> Track<T> {
     pub fn sample_wide(&self, t: f64) -> T::Wide {
         match self.clamp(t) {
             Clamped::Key(i) => self.wide[i],
-            Clamped::Inside => {
-                let i = self.times.partition_point(|&x| x <= t) - 1;
-                self.eval_segment(i, t)
+            Clamped::Inside => self.sample_inside(t),
+            Clamped::Outside => self.sample_outside(t, |local| self.sample_held(local)),
+        }
+    }
+
+    /// Strictly inside the domain.
+    #[inline]
+    fn sample_inside(&self, t: f64) -> T::Wide {
+        let i = self.times.partition_point(|&x| x <= t) - 1;
+        self.eval_segment(i, t)
+    }
+
+    /// With the hold rule at both ends (a cycle's local time may round onto an end key).
+    fn sample_held(&self, t: f64) -> T::Wide {
+        let last = self.times.len() - 1;
+        if t.is_nan() || t <= self.times[0] {
+            self.wide[0]
+        } else if t >= self.times[last] {
+            self.wide[last]
+        } else {
+            self.sample_inside(t)
+        }
+    }
+
+    /// Outside the domain with a cycle at that end; `held` samples a local time.
+    #[inline]
+    fn sample_outside(&self, t: f64, mut held: impl FnMut(f64) -> T::Wide) -> T::Wide {
+        match self.outside(t) {
+            Outside::Key(i) => self.wide[i],
+            Outside::Linear { after: false } => {
+                T::advance(self.wide[0], self.ends.rate_before, t - self.times[0])
+            }
+            Outside::Linear { after: true } => {
+                let last = self.times.len() - 1;
+                T::advance(self.wide[last], self.ends.rate_after, t - self.times[last])
+            }
+            Outside::Cycle { local, cycles, .. } => {
+                let value = held(local);
+                if cycles == 0.0 {
+                    value
+                } else {
+                    T::offset(value, self.ends.delta, cycles)
+                }
+            }
+        }
+    }
+
+    /// Where `t`, outside the domain, is sampled (module documentation, "Cycles").
+    #[inline]
+    fn outside(&self, t: f64) -> Outside {
+        let last = self.times.len() - 1;
+        let (t0, period) = (self.times[0], self.ends.period);
+        let after = t > self.times[last];
+        let held = Outside::Key(if after { last } else { 0 });
+        let cycle = if after { self.cycles.after } else { self.cycles.before };
+        match cycle {
+            Cycle::Hold => held,
+            Cycle::Linear => Outside::Linear { after },
+            Cycle::Repeat | Cycle::RepeatOffset => {
+                let k = floor((t - t0) * self.ends.inv_period);
+                if !k.is_finite() {
+                    return held;
+                }
+                let local = t0 + ((t - t0) - k * period);
+                let cycles = if cycle == Cycle::RepeatOffset { k } else { 0.0 };
+                Outside::Cycle { local, cycles, mirrored: false }
+            }
+            Cycle::PingPong => {
+                let phase = (t - t0).rem_euclid(2.0 * period);
+                if !phase.is_finite() {
+                    return held;
+                }
+                if phase <= period {
+                    Outside::Cycle { local: t0 + phase, cycles: 0.0, mirrored: false }
+                } else {
+                    Outside::Cycle { local: t0 + (2.0 * period - phase), cycles: 0.0, mirrored: true }
+                }
             }
         }
     }
@@ -436,14 +672,24 @@ impl<T: TrackValue> Track<T> {
         Cursor { track: self, segment: 0 }
     }
 
-    /// Outside the open domain: the key whose value holds; inside: needs a segment.
+    /// At or outside the ends of the open domain: the key whose value holds (at the end keys
+    /// themselves, for NaN, and outside them when the cycle there is [`Cycle::Hold`]); inside:
+    /// needs a segment; outside with another cycle: see [`Track::outside`].
     #[inline]
     fn clamp(&self, t: f64) -> Clamped {
         let last = self.times.len() - 1;
         if t.is_nan() || t <= self.times[0] {
-            Clamped::Key(0)
+            if t < self.times[0] && !self.cycles.before.is_hold() {
+                Clamped::Outside
+            } else {
+                Clamped::Key(0)
+            }
         } else if t >= self.times[last] {
-            Clamped::Key(last)
+            if t > self.times[last] && !self.cycles.after.is_hold() {
+                Clamped::Outside
+            } else {
+                Clamped::Key(last)
+            }
         } else {
             Clamped::Inside
         }
@@ -464,6 +710,7 @@ impl<T: TrackValue> Track<T> {
 enum Clamped {
     Key(usize),
     Inside,
+    Outside,
 }
 
 /// Sequential sampler over a [`Track`], remembering the last segment.
@@ -483,12 +730,24 @@ impl<T: TrackValue> Cursor<'_, T> {
     /// Same value as [`Track::sample_wide`] at `t`.
     #[inline]
     pub fn sample_wide(&mut self, t: f64) -> T::Wide {
-        match self.track.clamp(t) {
-            Clamped::Key(i) => self.track.wide[i],
+        let track = self.track;
+        match track.clamp(t) {
+            Clamped::Key(i) => track.wide[i],
             Clamped::Inside => {
                 let i = self.seek(t);
-                self.track.eval_segment(i, t)
+                track.eval_segment(i, t)
             }
+            Clamped::Outside => track.sample_outside(t, |local| {
+                let last = track.times.len() - 1;
+                if local.is_nan() || local <= track.times[0] {
+                    track.wide[0]
+                } else if local >= track.times[last] {
+                    track.wide[last]
+                } else {
+                    let i = self.seek(local);
+                    track.eval_segment(i, local)
+                }
+            }),
         }
     }
 
@@ -511,6 +770,23 @@ impl<T: TrackValue> Cursor<'_, T> {
         }
         self.segment = i;
         i
+    }
+}
+
+/// `x.floor()` without a libm call on baseline x86-64 (no SSE4.1 `roundsd`): truncate, then
+/// step down for negative non-integers. Beyond ±2^52 every f64 is an integer already.
+#[inline]
+fn floor(x: f64) -> f64 {
+    const EXACT: f64 = 4_503_599_627_370_496.0; // 2^52
+    if x.abs() < EXACT {
+        let k = x as i64 as f64;
+        if k > x {
+            k - 1.0
+        } else {
+            k
+        }
+    } else {
+        x
     }
 }
 
@@ -546,18 +822,24 @@ impl Vector for DVec4 {
 /// DESIGN.md §3:
 /// `S_i = 2Δ_i/(Δ_{i−1}+Δ_i) · [(1−T)(1+B)(1+C)/2 · d_{i−1} + (1−T)(1−B)(1−C)/2 · d_i]`,
 /// `D_i = 2Δ_{i−1}/(Δ_{i−1}+Δ_i) · [(1−T)(1+B)(1−C)/2 · d_{i−1} + (1−T)(1−B)(1+C)/2 · d_i]`,
-/// with `d_{−1} = d_n = 0` and `Δ_{−1} = Δ_0`, `Δ_n = Δ_{n−1}` at the ends.
-fn kb_tangents<W: Vector>(times: &[f64], tcbs: impl Iterator<Item = Tcb>, chords: &[W]) -> Vec<(W, W)> {
+/// with `d_{−1}`, `d_n`, `Δ_{−1}`, `Δ_n` at the ends from [`end_chords`] (without cycles
+/// `d_{−1} = d_n = 0`, `Δ_{−1} = Δ_0`, `Δ_n = Δ_{n−1}`).
+fn kb_tangents<W: Vector>(
+    times: &[f64],
+    tcbs: impl Iterator<Item = Tcb>,
+    chords: &[W],
+    ends: &EndChords<W>,
+) -> Vec<(W, W)> {
     let n = times.len();
     tcbs.enumerate()
         .map(|(i, tcb)| {
             if n < 2 {
                 return (W::ZERO, W::ZERO);
             }
-            let d_prev = if i > 0 { chords[i - 1] } else { W::ZERO };
-            let d_next = if i + 1 < n { chords[i] } else { W::ZERO };
-            let dt_prev = if i > 0 { times[i] - times[i - 1] } else { times[1] - times[0] };
-            let dt_next = if i + 1 < n { times[i + 1] - times[i] } else { times[n - 1] - times[n - 2] };
+            let d_prev = if i > 0 { chords[i - 1] } else { ends.before };
+            let d_next = if i + 1 < n { chords[i] } else { ends.after };
+            let dt_prev = if i > 0 { times[i] - times[i - 1] } else { ends.dt_before };
+            let dt_next = if i + 1 < n { times[i + 1] - times[i] } else { ends.dt_after };
             let (t, c, b) = (f64::from(tcb.tension), f64::from(tcb.continuity), f64::from(tcb.bias));
             let out = d_prev * ((1.0 - t) * (1.0 + b) * (1.0 + c) / 2.0)
                 + d_next * ((1.0 - t) * (1.0 - b) * (1.0 - c) / 2.0);
@@ -567,6 +849,54 @@ fn kb_tangents<W: Vector>(times: &[f64], tcbs: impl Iterator<Item = Tcb>, chords
             (inc * (2.0 * dt_prev / sum), out * (2.0 * dt_next / sum))
         })
         .collect()
+}
+
+/// The chords to the neighbours of the end keys: `d_{−1}` (from the key before the first key)
+/// and `d_n` (from the last key to the key after it), with their spacings.
+#[derive(Clone, Copy, Debug)]
+struct EndChords<W> {
+    before: W,
+    dt_before: f64,
+    after: W,
+    dt_after: f64,
+}
+
+/// The end keys' neighbours under `cycles` (module documentation, "Cycles"): none (a zero
+/// chord) for Hold and Linear; for Repeat and RepeatOffset the keys of the previous/next cycle
+/// (`d_{−1} = d_{n−1} + g`, `d_n = d_0 + g`, with `g` = `gap()` = `P_0 − P_n` for Repeat and 0
+/// for RepeatOffset); for PingPong the mirrored key (`d_{−1} = −d_0`, `d_n = −d_{n−1}`). The
+/// first and last key start and end every repeated cycle, so a Repeat at either end sets both;
+/// where the two ends disagree, `after` decides.
+fn end_chords<W: Vector>(times: &[f64], chords: &[W], cycles: Cycles, gap: impl Fn() -> W) -> EndChords<W> {
+    let n = times.len();
+    if n < 2 {
+        return EndChords { before: W::ZERO, dt_before: 0.0, after: W::ZERO, dt_after: 0.0 };
+    }
+    let (first, last) = (chords[0], chords[n - 2]);
+    let (dt_first, dt_last) = (times[1] - times[0], times[n - 1] - times[n - 2]);
+    let repeats = |c: Cycle| matches!(c, Cycle::Repeat | Cycle::RepeatOffset);
+    let gap_of = |c: Cycle| if c == Cycle::Repeat { gap() } else { W::ZERO };
+    let before_source = if repeats(cycles.after) {
+        Some(cycles.after)
+    } else {
+        Some(cycles.before).filter(|c| c.is_cyclic())
+    };
+    let after_source = if cycles.after.is_cyclic() {
+        Some(cycles.after)
+    } else {
+        Some(cycles.before).filter(|&c| repeats(c))
+    };
+    let (before, dt_before) = match before_source {
+        None => (W::ZERO, dt_first),
+        Some(Cycle::PingPong) => (first * -1.0, dt_first),
+        Some(c) => (last + gap_of(c), dt_last),
+    };
+    let (after, dt_after) = match after_source {
+        None => (W::ZERO, dt_last),
+        Some(Cycle::PingPong) => (last * -1.0, dt_last),
+        Some(c) => (first + gap_of(c), dt_first),
+    };
+    EndChords { before, dt_before, after, dt_after }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -609,12 +939,18 @@ impl<W: Vector> Cubic<W> {
 }
 
 /// Segment shapes for scalar and vector values.
-fn build_cubics<T: TrackValue>(times: &[f64], keys: &[Key<T>], values: &[T::Wide]) -> Vec<Cubic<T::Wide>>
+fn build_cubics<T: TrackValue>(
+    times: &[f64],
+    keys: &[Key<T>],
+    values: &[T::Wide],
+    cycles: Cycles,
+) -> Vec<Cubic<T::Wide>>
 where
     T::Wide: Vector,
 {
     let chords: Vec<T::Wide> = values.windows(2).map(|w| w[1] - w[0]).collect();
-    let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &chords);
+    let ends = end_chords(times, &chords, cycles, || values[0] - values[values.len() - 1]);
+    let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &chords, &ends);
     (0..values.len().saturating_sub(1))
         .map(|i| {
             let (p0, p1) = (values[i], values[i + 1]);
@@ -637,6 +973,8 @@ impl TrackValue for f32 {
     type Wide = f64;
     type Shape = Cubic<f64>;
     const ROTATION: bool = false;
+    type Rate = f64;
+    type Delta = f64;
 
     fn widen(self) -> f64 {
         f64::from(self)
@@ -658,13 +996,38 @@ impl TrackValue for f32 {
         self.is_finite()
     }
 
-    fn build(times: &[f64], keys: &[Key<f32>], values: &mut [f64]) -> Result<Vec<Cubic<f64>>, TrackError> {
-        Ok(build_cubics(times, keys, values))
+    fn build(
+        times: &[f64],
+        keys: &[Key<f32>],
+        values: &mut [f64],
+        cycles: Cycles,
+    ) -> Result<Vec<Cubic<f64>>, TrackError> {
+        Ok(build_cubics(times, keys, values, cycles))
     }
 
     #[inline]
     fn eval(shape: &Cubic<f64>, u: f64) -> f64 {
         shape.eval(u)
+    }
+
+    fn end_rate(shape: &Cubic<f64>, u: f64, inv_duration: f64) -> f64 {
+        shape.derivative(u) * inv_duration
+    }
+
+    fn zero_rate() -> f64 {
+        0.0
+    }
+
+    fn advance(value: f64, rate: f64, dt: f64) -> f64 {
+        value + rate * dt
+    }
+
+    fn cycle_delta(first: f64, last: f64) -> f64 {
+        last - first
+    }
+
+    fn offset(value: f64, delta: f64, cycles: f64) -> f64 {
+        value + delta * cycles
     }
 }
 
@@ -672,6 +1035,8 @@ impl TrackValue for Vec3 {
     type Wide = DVec3;
     type Shape = Cubic<DVec3>;
     const ROTATION: bool = false;
+    type Rate = DVec3;
+    type Delta = DVec3;
 
     fn widen(self) -> DVec3 {
         self.as_dvec3()
@@ -697,13 +1062,34 @@ impl TrackValue for Vec3 {
         times: &[f64],
         keys: &[Key<Vec3>],
         values: &mut [DVec3],
+        cycles: Cycles,
     ) -> Result<Vec<Cubic<DVec3>>, TrackError> {
-        Ok(build_cubics(times, keys, values))
+        Ok(build_cubics(times, keys, values, cycles))
     }
 
     #[inline]
     fn eval(shape: &Cubic<DVec3>, u: f64) -> DVec3 {
         shape.eval(u)
+    }
+
+    fn end_rate(shape: &Cubic<DVec3>, u: f64, inv_duration: f64) -> DVec3 {
+        shape.derivative(u) * inv_duration
+    }
+
+    fn zero_rate() -> DVec3 {
+        DVec3::ZERO
+    }
+
+    fn advance(value: DVec3, rate: DVec3, dt: f64) -> DVec3 {
+        value + rate * dt
+    }
+
+    fn cycle_delta(first: DVec3, last: DVec3) -> DVec3 {
+        last - first
+    }
+
+    fn offset(value: DVec3, delta: DVec3, cycles: f64) -> DVec3 {
+        value + delta * cycles
     }
 }
 
@@ -836,10 +1222,22 @@ impl SpinSegment {
     }
 }
 
+/// One [`Cycle::RepeatOffset`] cycle of a rotation track: `M = q_n·q_0⁻¹ = sign·exp(log)`,
+/// with `log` the half-angle vector of `±M` with `w ≥ 0`, so `M^k = sign^k·exp(k·log)` exactly
+/// continues the quaternions' signs from cycle to cycle.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuatDelta {
+    log: DVec3,
+    negative: bool,
+}
+
 impl TrackValue for Quat {
     type Wide = DQuat;
     type Shape = QuatShape;
     const ROTATION: bool = true;
+    type Rate = DVec3;
+    type Delta = QuatDelta;
 
     fn widen(self) -> DQuat {
         self.as_dquat()
@@ -865,7 +1263,12 @@ impl TrackValue for Quat {
         self.is_finite()
     }
 
-    fn build(times: &[f64], keys: &[Key<Quat>], values: &mut [DQuat]) -> Result<Vec<QuatShape>, TrackError> {
+    fn build(
+        times: &[f64],
+        keys: &[Key<Quat>],
+        values: &mut [DQuat],
+        cycles: Cycles,
+    ) -> Result<Vec<QuatShape>, TrackError> {
         // Sign consistency and the chords L(q_i, q_{i+1}): the short-way log, or a spin's
         // unwrapped chord with q_{i+1} given the sign of q_i·exp(L).
         let n = values.len();
@@ -899,8 +1302,22 @@ impl TrackValue for Quat {
             });
             spins.push(spin);
         }
-        let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &logs);
+        // Repeat's gap across the seam, `log(q_n⁻¹·q_0)` the short way (zero when the loop
+        // closes, also after whole turns).
+        let ends = end_chords(times, &logs, cycles, || {
+            let mut r = values[n - 1].conjugate() * values[0];
+            if r.w < 0.0 {
+                r = -r;
+            }
+            quat::log(r)
+        });
+        let tangents = kb_tangents(times, keys.iter().map(|k| k.tcb), &logs, &ends);
         let sign = |i: usize| if flipped[i] { -1.0 } else { 1.0 };
+        // With cycles the end segments are neighbours across the seam: a spin at one end
+        // puts its chord into the other end's tangent, which only the spin form can follow.
+        let seam_spin = n >= 2
+            && (cycles.before.is_cyclic() || cycles.after.is_cyclic())
+            && spins.iter().any(Option::is_some);
         let is_spin = |i: usize| spins.get(i).is_some_and(Option::is_some);
         Ok((0..n.saturating_sub(1))
             .map(|i| {
@@ -922,7 +1339,8 @@ impl TrackValue for Quat {
                     Interpolation::Linear => QuatShape::Slerp(Arc::new(q0, q1)),
                     Interpolation::Tcb => {
                         let (out_tangent, in_tangent) = (tangents[i].1, tangents[i + 1].0);
-                        if is_spin(i) || (i > 0 && is_spin(i - 1)) || is_spin(i + 1) {
+                        let at_seam = seam_spin && (i == 0 || i + 2 == n);
+                        if is_spin(i) || (i > 0 && is_spin(i - 1)) || is_spin(i + 1) || at_seam {
                             spin_segment((out_tangent - logs[i]) * 0.5, (logs[i] - in_tangent) * 0.5)
                         } else {
                             let a = q0 * quat::exp((out_tangent - logs[i]) * 0.5);
@@ -963,6 +1381,41 @@ impl TrackValue for Quat {
             QuatShape::Spin(segment) => segment.eval(u),
         }
     }
+
+    /// `q⁻¹·dq/dt` by one-sided differences of the logarithm over `h` and `h/2` in `u`, combined
+    /// by Richardson extrapolation (error O(h²), about 1e-8 of the curvature).
+    fn end_rate(shape: &QuatShape, u: f64, inv_duration: f64) -> DVec3 {
+        const H: f64 = 1e-4;
+        let h = if u > 0.5 { -H } else { H };
+        let q = Self::eval(shape, u);
+        let slope = |h: f64| quat::log_between(q, Self::eval(shape, u + h)) / h;
+        (slope(h / 2.0) * 2.0 - slope(h)) * inv_duration
+    }
+
+    fn zero_rate() -> DVec3 {
+        DVec3::ZERO
+    }
+
+    /// `q·exp(rate·dt)`: turning on at the end key's body-frame angular velocity.
+    fn advance(value: DQuat, rate: DVec3, dt: f64) -> DQuat {
+        value * quat::exp(rate * dt)
+    }
+
+    fn cycle_delta(first: DQuat, last: DQuat) -> QuatDelta {
+        let m = last * first.conjugate();
+        let negative = m.w < 0.0;
+        QuatDelta { log: quat::log(if negative { -m } else { m }), negative }
+    }
+
+    /// `M^k·q`.
+    fn offset(value: DQuat, delta: QuatDelta, cycles: f64) -> DQuat {
+        let power = quat::exp(delta.log * cycles) * value;
+        if delta.negative && cycles.rem_euclid(2.0) == 1.0 {
+            -power
+        } else {
+            power
+        }
+    }
 }
 
 /// Spin segments of rotation tracks.
@@ -995,7 +1448,17 @@ impl Track<Quat> {
         let last = self.times.len() - 1;
         let at_start = |i: usize| self.segment_spin(i).map(|_| 0.0);
         let at_end = |i: usize| self.segment_spin(i).map(|(_, degrees)| degrees);
-        match self.clamp(t) {
+        let clamped = match self.clamp(t) {
+            Clamped::Outside => match self.outside(t) {
+                Outside::Cycle { local, .. } => {
+                    return self.spin_degrees(local.clamp(self.times[0], self.times[last]))
+                }
+                Outside::Key(i) => Clamped::Key(i),
+                Outside::Linear { .. } => return None,
+            },
+            clamped => clamped,
+        };
+        match clamped {
             Clamped::Key(0) => at_start(0),
             Clamped::Key(i) if i == last => at_end(last - 1),
             Clamped::Key(_) => None,
@@ -1012,6 +1475,7 @@ impl Track<Quat> {
                     _ => None,
                 }
             }
+            Clamped::Outside => None,
         }
     }
 }
@@ -1032,7 +1496,8 @@ impl<T: TrackValue> AnimatedTrack<T> {
     ///
     /// # Errors
     /// [`TrackError::NonFiniteStaticValue`] / [`TrackError::ZeroStaticQuaternion`] for a bad
-    /// static value of an unanimated property, else the errors of [`Track::new`].
+    /// static value of an unanimated property, else the errors of [`Track::with_cycles`]
+    /// (cycles on an unanimated value are ignored: it has nothing to repeat).
     pub fn new(animated: &Animated<T>) -> Result<Self, TrackError> {
         if animated.track.is_empty() {
             let wide = animated.value.check().map_err(|problem| match problem {
@@ -1041,7 +1506,7 @@ impl<T: TrackValue> AnimatedTrack<T> {
             })?;
             Ok(AnimatedTrack::Constant(T::narrow(wide)))
         } else {
-            Track::new(&animated.track).map(AnimatedTrack::Keyed)
+            Track::with_cycles(&animated.track, animated.cycles()).map(AnimatedTrack::Keyed)
         }
     }
 

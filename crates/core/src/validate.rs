@@ -16,7 +16,9 @@
 //!    the first. A property test keeps the rules equal to the validator's, so a scene without
 //!    problems always gives valid tracks. A key's `spin` ([`crate::Spin`]) is on a rotation
 //!    key other than the first, in range, not ending a Hermite segment, and agrees with the
-//!    key values (Turns: a defined short way; Angle: arrives at the key's value).
+//!    key values (Turns: a defined short way; Angle: arrives at the key's value). A track's
+//!    `before` and `after` other than `Hold` ([`crate::Cycle`]) need two keys and a positive,
+//!    finite period (last key time − first key time).
 //! 7. Lights: non-negative intensity and colour, a non-zero direction for directional and spot
 //!    lights, spot angles with 0 < inner ≤ cutoff ≤ 90 and dropoff ≥ 0.
 //! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
@@ -33,7 +35,9 @@ use crate::scene::{
 };
 #[cfg(doc)]
 use crate::track::AnimatedTrack;
-use crate::track::{spin_chord, SpinProblem, TangentSide, TrackError, TrackValue, MIN_QUATERNION_NORM};
+use crate::track::{
+    check_cycles, spin_chord, SpinProblem, TangentSide, TrackError, TrackValue, MIN_QUATERNION_NORM,
+};
 
 /// The path of the field a [`TrackError`] of the `Animated` value at `animated_path` concerns,
 /// e.g. `objects[0].rotation` + `Unsorted { index: 4 }` → `objects[0].rotation.track[4].time`.
@@ -52,6 +56,9 @@ pub fn track_error_path(animated_path: &str, err: &TrackError) -> String {
         TrackError::TcbOutOfRange { index } => key(index, "tcb"),
         TrackError::Spin { index, .. } => key(index, "spin"),
         TrackError::NonFiniteStaticValue | TrackError::ZeroStaticQuaternion => join(animated_path, "value"),
+        TrackError::CycleNeedsTwoKeys { end, .. } | TrackError::CyclePeriod { end, .. } => {
+            join(animated_path, end.field())
+        }
     }
 }
 
@@ -198,6 +205,18 @@ impl Checker {
             self.push(join(path, "value"), "zero quaternion: not a rotation");
         }
         self.track(&join(path, "track"), &a.track);
+        // Cycles need two keys and a positive period; an unanimated value ignores them.
+        if !a.track.is_empty() && !a.cycles().is_hold() {
+            let times: Vec<f64> = a.track.keys.iter().map(|k| k.time).collect();
+            for cycles in [
+                crate::key::Cycles::new(a.before, crate::key::Cycle::Hold),
+                crate::key::Cycles::new(crate::key::Cycle::Hold, a.after),
+            ] {
+                if let Err(err) = check_cycles(&times, cycles) {
+                    self.push(track_error_path(path, &err), err.to_string());
+                }
+            }
+        }
     }
 
     fn track<T: KeyValue>(&mut self, path: &str, track: &RawTrack<T>) {
@@ -777,19 +796,19 @@ mod tests {
 
         #[test]
         fn same_rules_as_the_track_validator_vec3(value in vec3(), keys in raw_keys(vec3())) {
-            let a = Animated { value, track: RawTrack::new(keys) };
+            let a = Animated::new(value, RawTrack::new(keys));
             prop_assert_eq!(problems_of(&a).is_empty(), agrees(&a), "{:?}", a);
         }
 
         #[test]
         fn same_rules_as_the_track_validator_quat(value in quat(), keys in raw_keys(quat())) {
-            let a = Animated { value, track: RawTrack::new(keys) };
+            let a = Animated::new(value, RawTrack::new(keys));
             prop_assert_eq!(problems_of(&a).is_empty(), agrees(&a), "{:?}", a);
         }
 
         #[test]
         fn same_rules_as_the_track_validator_scalar(value in number(), keys in raw_keys(number())) {
-            let a = Animated { value, track: RawTrack::new(keys) };
+            let a = Animated::new(value, RawTrack::new(keys));
             prop_assert_eq!(problems_of(&a).is_empty(), agrees(&a), "{:?}", a);
         }
     }

@@ -17,7 +17,7 @@
 //!   spin that makes its segment turn the way the hand went.
 
 use glam::{DVec3, Quat, Vec3};
-use keyrig_core::{Interpolation, Key, RawTrack, Scene, Spin, Tcb, Track};
+use keyrig_core::{Cycles, Interpolation, Key, RawTrack, Scene, Spin, Tcb, Track};
 
 use crate::twist::{nearest_turn, spin_toward, twist_degrees};
 
@@ -186,6 +186,32 @@ pub fn last_key_time(scene: &Scene) -> Option<f64> {
         .into_iter()
         .flat_map(|id| key_times(scene, id))
         .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))))
+}
+
+/// What the channel does before its first key and after its last ([`Cycles`]); `None` when
+/// the channel does not exist.
+#[must_use]
+pub fn cycles(scene: &Scene, id: ChannelId) -> Option<Cycles> {
+    Some(match channel(scene, id)? {
+        ChannelRef::Vec3(a) => a.cycles(),
+        ChannelRef::Rotation(a) => a.cycles(),
+        ChannelRef::Scalar(a) => a.cycles(),
+    })
+}
+
+/// Sets the channel's behaviour before its first key and after its last. Returns false when
+/// the channel does not exist. A cycle other than Hold needs two keys (the caller offers it
+/// only then; [`delete_keys`] returns a channel to Hold when fewer remain).
+pub fn set_cycles(scene: &mut Scene, id: ChannelId, cycles: Cycles) -> bool {
+    let Some(c) = channel_mut(scene, id) else { return false };
+    let (before, after) = match c {
+        ChannelMut::Vec3(a) => (&mut a.before, &mut a.after),
+        ChannelMut::Rotation(a) => (&mut a.before, &mut a.after),
+        ChannelMut::Scalar(a) => (&mut a.before, &mut a.after),
+    };
+    *before = cycles.before;
+    *after = cycles.after;
+    true
 }
 
 /// Index of the key at `time` (within half a millisecond), if any.
@@ -400,6 +426,16 @@ pub fn set_static_value(scene: &mut Scene, id: ChannelId, value: ChannelValue) -
 /// A rotation key whose previous key goes keeps its spin recomputed from the new previous key
 /// with the turns of the segments it now spans; the new first key loses its spin.
 pub fn delete_keys(scene: &mut Scene, id: ChannelId, indices: &[usize]) -> usize {
+    let deleted = delete_keys_keeping_cycles(scene, id, indices);
+    // A cycle needs two keys: with fewer left the channel holds again (else the scene would
+    // not evaluate).
+    if key_count(scene, id) < 2 {
+        set_cycles(scene, id, Cycles::HOLD);
+    }
+    deleted
+}
+
+fn delete_keys_keeping_cycles(scene: &mut Scene, id: ChannelId, indices: &[usize]) -> usize {
     let Some(c) = channel_mut(scene, id) else { return 0 };
     if let ChannelMut::Rotation(a) = c {
         return delete_rotation_keys(&mut a.track, indices);

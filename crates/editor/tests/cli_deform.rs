@@ -36,14 +36,14 @@ fn twist_scene(dir: &Path) -> PathBuf {
     object.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmLowPoly));
     let mut skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly).unwrap();
     let half = std::f32::consts::FRAC_PI_2;
-    skeleton.joints[2].rotation = Animated {
-        value: Quat::IDENTITY,
-        track: RawTrack::new(vec![
+    skeleton.joints[2].rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(vec![
             Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
             Key::new(1.0, Quat::from_rotation_x(half)).with_interpolation(Interpolation::Linear),
             Key::new(2.0, Quat::from_rotation_x(2.0 * half)).with_interpolation(Interpolation::Linear),
         ]),
-    };
+    );
     object.skeleton = Some(skeleton);
     scene.objects.push(object);
     let path = dir.join("twist.ron");

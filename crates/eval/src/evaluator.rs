@@ -61,6 +61,7 @@ enum SlotEval<T: TrackValue> {
 struct Slot<T: TrackValue> {
     keys: Keys<T>,
     value: T,
+    cycles: keyrig_core::Cycles,
     eval: Arc<SlotEval<T>>,
     problem: Option<EvalProblem>,
 }
@@ -77,13 +78,22 @@ impl<T: TrackValue> Slot<T> {
                 }),
             ),
         };
-        Slot { keys: animated.track.keys.clone(), value: animated.value, eval: Arc::new(eval), problem }
+        Slot {
+            keys: animated.track.keys.clone(),
+            value: animated.value,
+            cycles: animated.cycles(),
+            eval: Arc::new(eval),
+            problem,
+        }
     }
 
     /// Rebuilds the slot when its channel changed (its keys are no longer the list it was
-    /// built from, or its static value differs); true when it did.
+    /// built from, or its static value or its cycles differ); true when it did.
     fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
-        if self.keys.shares_with(&animated.track.keys) && self.value == animated.value {
+        if self.keys.shares_with(&animated.track.keys)
+            && self.value == animated.value
+            && self.cycles == animated.cycles()
+        {
             return false;
         }
         *self = Slot::new(animated, id);

@@ -49,10 +49,7 @@ fn scene() -> Scene {
         position: Animated::constant(Vec3::Y),
         direction: Animated::constant(Vec3::NEG_Y),
         colour: Animated::constant(Vec3::ONE),
-        intensity: Animated {
-            value: 1.0,
-            track: RawTrack::new(vec![Key::new(0.0, 1.0), Key::new(1.0, 3.0)]),
-        },
+        intensity: Animated::new(1.0, RawTrack::new(vec![Key::new(0.0, 1.0), Key::new(1.0, 3.0)])),
     });
     scene
 }
@@ -252,6 +249,10 @@ fn updates_rebuild_only_what_an_edit_changed() {
     scene.objects[1].translation.value = Vec3::Z;
     scene.lights[0].intensity.track.keys.push(Key::new(2.0, 0.5));
     assert_eq!(eval.update(&scene, &HashMap::new()), keyrig_eval::Rebuilt { channels: 2, meshes: 0 });
+    same(&eval, &scene);
+    // A channel's cycle alone (its keys untouched) is a change too.
+    scene.objects[1].rotation.after = keyrig_core::Cycle::Repeat;
+    assert_eq!(eval.update(&scene, &HashMap::new()), keyrig_eval::Rebuilt { channels: 1, meshes: 0 });
     same(&eval, &scene);
     // Deformer settings rebuild the object's bindings (and its channels).
     scene.objects[0].deformer.blend_child_fraction = 0.5;

@@ -21,6 +21,11 @@
 //!   is unambiguous; spin segments (keys beyond half a turn, [`keyrig_core::Spin`]) are first
 //!   cut into pieces of at most [`SPIN_PIECE_DEG`] of their unwrapped angle, so a 720° twist
 //!   exports as at least 16 steps and a glTF viewer turns it the whole way, turns included.
+//! - **Cycles** (a track's `before`/`after` other than Hold): glTF has no such setting, so the
+//!   track is written as LINEAR keys over its keys and the scene's frame range, the repeats
+//!   included, resampled between every repeated (or mirrored) key time within the rotation
+//!   tolerance or [`CYCLE_POSITION_TOLERANCE`] (Blender mode: its tolerances); a viewer
+//!   holds the last written key after the range.
 //! - light colour and intensity are written at the start of the frame range (core glTF
 //!   cannot animate them).
 
@@ -471,6 +476,9 @@ impl Document {
 /// cannot be loaded: each with the path of the scene field.
 pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGltf, ExportError> {
     let mut doc = Document::default();
+    // Tracks with cycles are written as keys over the scene's frame range.
+    let range =
+        (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
     let mut lights: Vec<Value> = Vec::new();
     let mut files: HashMap<PathBuf, LoadedFile> = HashMap::new();
 
@@ -503,6 +511,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             &object.translation,
             identity,
             options,
+            range,
             &format!("{here}.translation"),
         )?);
         doc.channels.extend(vec3_channel(
@@ -511,6 +520,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             &object.scale,
             identity,
             options,
+            range,
             &format!("{here}.scale"),
         )?);
         doc.channels.extend(quat_channel(
@@ -518,11 +528,12 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             &object.rotation,
             Quat::IDENTITY,
             options,
+            range,
             &format!("{here}.rotation"),
         )?);
 
         let joint_nodes = match &object.skeleton {
-            Some(skeleton) => export_joints(&mut doc, node, skeleton, options, &here)?,
+            Some(skeleton) => export_joints(&mut doc, node, skeleton, options, range, &here)?,
             None => Vec::new(),
         };
 
@@ -651,6 +662,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             &light.position,
             identity,
             options,
+            range,
             &format!("{here}.position"),
         )?);
         // Direction → rotation taking the light's −Z to the direction.
@@ -660,12 +672,11 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
         doc.nodes[node]["rotation"] = json!(rest.to_array());
         if let Some(track) = dir.track() {
             let (start, end) = track.domain();
+            let breaks = if track.cycles().is_hold() { vec![start, end] } else { cycle_breaks(track, range) };
             let sampler = |t: f64| look_rotation(track.sample(t));
             let (times, values) = match &options.bake {
-                Some(bake) => {
-                    resample_rotation(&sampler, &[start, end], bake.rotation_tolerance(options), nlerp)
-                }
-                None => resample_rotation(&sampler, &[start, end], tol, crate::model::slerp_short),
+                Some(bake) => resample_rotation(&sampler, &breaks, bake.rotation_tolerance(options), nlerp),
+                None => resample_rotation(&sampler, &breaks, tol, crate::model::slerp_short),
             };
             doc.channels.push(linear_quat_channel(node, times, values));
         }
@@ -737,6 +748,7 @@ fn export_joints(
     object_node: usize,
     skeleton: &keyrig_core::Skeleton,
     options: &ExportOptions,
+    range: (f64, f64),
     here: &str,
 ) -> Result<Vec<usize>, ExportError> {
     let mut joint_nodes: Vec<usize> = Vec::with_capacity(skeleton.joints.len());
@@ -767,7 +779,7 @@ fn export_joints(
             add_child(&mut doc.nodes[parent], helper);
             let identity = (Quat::IDENTITY, Vec3::ZERO);
             set_vec3(&mut doc.nodes[helper], "translation", rt, identity, Vec3::ZERO, &rt_here)?;
-            doc.channels.extend(vec3_channel(helper, "translation", rt, identity, options, &rt_here)?);
+            doc.channels.extend(vec3_channel(helper, "translation", rt, identity, options, range, &rt_here)?);
             parent = helper;
         }
         let jn = doc.nodes.len();
@@ -781,6 +793,7 @@ fn export_joints(
             &joint.rotation,
             rest_rotation,
             options,
+            range,
             &format!("{jhere}.rotation"),
         )?);
         set_vec3(
@@ -797,6 +810,7 @@ fn export_joints(
             &joint.scale,
             (Quat::IDENTITY, Vec3::ZERO),
             options,
+            range,
             &format!("{jhere}.scale"),
         )?);
         // Translation: t_rest + q_rest·t(t) (+ the root translation).
@@ -809,10 +823,18 @@ fn export_joints(
         }
         if joint.translation.is_animated() {
             let map = (rest_rotation, joint.rest_translation + root_shift);
-            doc.channels.extend(vec3_channel(jn, "translation", &joint.translation, map, options, &t_here)?);
+            doc.channels.extend(vec3_channel(
+                jn,
+                "translation",
+                &joint.translation,
+                map,
+                options,
+                range,
+                &t_here,
+            )?);
         } else if is_root && rt.is_animated() {
             let map = (Quat::IDENTITY, joint.rest_translation + rest_rotation * t_value);
-            doc.channels.extend(vec3_channel(jn, "translation", rt, map, options, &rt_here)?);
+            doc.channels.extend(vec3_channel(jn, "translation", rt, map, options, range, &rt_here)?);
         }
     }
     Ok(joint_nodes)
@@ -1203,13 +1225,30 @@ fn vec3_channel(
     a: &Animated<Vec3>,
     map: Vec3Map,
     options: &ExportOptions,
+    range: (f64, f64),
     here: &str,
 ) -> Result<Option<Channel>, ExportError> {
     if a.track.is_empty() {
         return Ok(None);
     }
-    let track = Track::new(&a.track).map_err(|e| scene_err(format!("{here}.track"), e.to_string()))?;
     let (rotation, offset) = map;
+    if !a.cycles().is_hold() {
+        let track = Track::with_cycles(&a.track, a.cycles()).map_err(|e| scene_err(here, e.to_string()))?;
+        let f = |t: f64| -> Vec<f64> {
+            (rotation * track.sample(t) + offset).to_array().iter().map(|&x| f64::from(x)).collect()
+        };
+        let tolerance = options.bake.map_or(CYCLE_POSITION_TOLERANCE, |b| b.position_tolerance);
+        let (t, v) = resample_linear(&f, &cycle_breaks(&track, range), tolerance, euclidean);
+        return Ok(Some(Channel {
+            node,
+            path,
+            interpolation: "LINEAR",
+            times: t.iter().map(|&t| t as f32).collect(),
+            values: v.iter().flatten().map(|&x| x as f32).collect(),
+            width: 3,
+        }));
+    }
+    let track = Track::new(&a.track).map_err(|e| scene_err(format!("{here}.track"), e.to_string()))?;
     if let Some(bake) = &options.bake {
         let n = track.key_count();
         let all_step = (0..n - 1).all(|i| track.segment_interpolation(i) == Some(Interpolation::Step));
@@ -1238,6 +1277,44 @@ fn vec3_channel(
         v.copy_from_slice(&y.to_array());
     }
     Ok(Some(channel))
+}
+
+/// Largest distance (scene units) between the LINEAR keys a translation or scale track with
+/// cycles is written as and keyrig's curve, outside Blender mode.
+pub const CYCLE_POSITION_TOLERANCE: f64 = 1e-4;
+
+/// The times a track with cycles is resampled between: its key times and their repeats (for
+/// ping-pong, their mirror images) over the keys and the scene's `range`, with the range's ends.
+/// glTF has no cycles: the exported keys play the repeats up to the end of the range and hold
+/// after it.
+fn cycle_breaks<T: keyrig_core::TrackValue>(track: &Track<T>, range: (f64, f64)) -> Vec<f64> {
+    let times = track.key_times();
+    let (t0, tn) = track.domain();
+    let (start, end) = (range.0.min(t0), range.1.max(tn));
+    let period = tn - t0;
+    let mut breaks = vec![start, end];
+    breaks.extend_from_slice(times);
+    if period > 0.0 && start.is_finite() && end.is_finite() {
+        let first = ((start - t0) / period).floor() as i64;
+        let last = ((end - t0) / period).ceil() as i64;
+        // At most a million repeats: a longer range than that is not worth writing out.
+        if last - first <= 1_000_000 {
+            for k in first..=last {
+                let shift = k as f64 * period;
+                for &t in times {
+                    // Repeats: t + k·P; ping-pong's odd cycles are mirrored, its even ones repeat.
+                    breaks.push(t + shift);
+                    breaks.push(t0 + shift + (tn - t));
+                }
+            }
+        }
+    }
+    breaks.retain(|&t| (start..=end).contains(&t));
+    breaks.sort_by(f64::total_cmp);
+    // Repeated key times differ from each other by rounding only: keep one (f32 key times
+    // must increase).
+    breaks.dedup_by(|later, earlier| *later - *earlier < MIN_SEGMENT);
+    breaks
 }
 
 /// Key times plus, for every Step segment, a break just before its end key (hold, then jump
@@ -1367,10 +1444,26 @@ fn quat_channel(
     a: &Animated<Quat>,
     rest: Quat,
     options: &ExportOptions,
+    range: (f64, f64),
     here: &str,
 ) -> Result<Option<Channel>, ExportError> {
     if a.track.is_empty() {
         return Ok(None);
+    }
+    if !a.cycles().is_hold() {
+        let track = Track::with_cycles(&a.track, a.cycles()).map_err(|e| scene_err(here, e.to_string()))?;
+        let sampler = |t: f64| (rest * track.sample(t)).normalize();
+        let breaks = cycle_breaks(&track, range);
+        let (t, v) = match &options.bake {
+            Some(bake) => resample_rotation(&sampler, &breaks, bake.rotation_tolerance(options), nlerp),
+            None => resample_rotation(
+                &sampler,
+                &breaks,
+                options.rotation_tolerance_deg.to_radians(),
+                crate::model::slerp_short,
+            ),
+        };
+        return Ok(Some(linear_quat_channel(node, t, v)));
     }
     let track = Track::new(&a.track).map_err(|e| scene_err(format!("{here}.track"), e.to_string()))?;
     let times = track.key_times();

@@ -999,7 +999,7 @@ fn animated<T: Copy>(
         })
         .collect();
     match keys.first() {
-        Some(first) => keyrig_core::Animated { value: first.value, track: RawTrack::new(keys) },
+        Some(first) => keyrig_core::Animated::new(first.value, RawTrack::new(keys)),
         None => fallback,
     }
 }

@@ -95,6 +95,51 @@ fn import_of_the_export_samples_like_the_scene() {
     }
 }
 
+/// glTF has no cycles: the export writes the repeats as keys over the scene's frame range, and
+/// the re-imported animation plays the cycle (the waving arm of `assets/cycle.ron`, and a box
+/// moving with RepeatOffset after and PingPong before its keys).
+#[test]
+fn cycles_export_as_keys_over_the_frame_range() {
+    use keyrig_core::{Cycle, Cycles};
+    let mut scene = keyrig_io::demo::cycle_scene();
+    let mut mover = keyrig_core::Object::new("mover");
+    mover.translation.track = RawTrack::new(vec![
+        Key::new(0.5, Vec3::ZERO),
+        Key::new(1.0, Vec3::new(1.0, 0.5, 0.0)).with_tcb(Tcb::new(0.3, 0.0, 0.2)),
+        Key::new(1.25, Vec3::new(2.0, 0.0, -1.0)),
+    ]);
+    mover.translation = mover.translation.with_cycles(Cycles::new(Cycle::PingPong, Cycle::RepeatOffset));
+    scene.objects.push(mover);
+    let options = ExportOptions::default();
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    let tol = options.rotation_tolerance_deg.to_radians() + 1e-5;
+    let (start, end) = (0.0, f64::from(scene.frame_range.end) / scene.fps);
+    let times: Vec<f64> = (0..=480).map(|i| start + (end - start) * f64::from(i) / 480.0).collect();
+    let skeleton = scene.objects[0].skeleton.as_ref().expect("arm");
+    for joint in &skeleton.joints {
+        let node = node_named(&model, &joint.name);
+        let track = AnimatedTrack::new(&joint.rotation).expect("track");
+        for &t in &times {
+            let expected = joint.rest_rotation * track.sample(t);
+            let angle = rotation_angle(model.pose_at(Some(0), t).rotation[node], expected);
+            assert!(angle <= tol, "{} t {t}: {} deg", joint.name, angle.to_degrees());
+        }
+    }
+    // The elbow waves four times: its keys cover only the first second.
+    let elbow = node_named(&model, "elbow");
+    let wave = |t: f64| model.pose_at(Some(0), t).rotation[elbow];
+    assert!(rotation_angle(wave(0.5), wave(3.5)) < tol, "still waving at 3.5 s");
+    let node = node_named(&model, "mover");
+    let track = AnimatedTrack::new(&scene.objects[1].translation).expect("track");
+    for &t in &times {
+        let (got, want) = (model.pose_at(Some(0), t).translation[node], track.sample(t));
+        assert!((got - want).length() < 2e-4, "mover t {t}: {got} vs {want}");
+    }
+    // RepeatOffset: 3 s after the keys the box has moved on by whole cycles.
+    assert!(model.pose_at(Some(0), end).translation[node].x > 6.0);
+}
+
 #[test]
 fn position_tracks_export_exactly_as_cubic_spline() {
     // A TCB track with non-uniform spacing and non-zero T/C/B: the glTF Hermite curve must

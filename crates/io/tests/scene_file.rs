@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use glam::{Quat, Vec3};
 use keyrig_core::{
-    Animated, Interpolation, Joint, Key, Light, LightKind, Object, RawTrack, Scene, Skeleton, Tcb,
+    Animated, Cycle, Cycles, Interpolation, Joint, Key, Light, LightKind, Object, RawTrack, Scene, Skeleton,
+    Tcb,
 };
 use keyrig_io::demo::{demo_scene, DEMO_RON};
 use keyrig_io::scene_file::{self, SceneFileError, CURRENT_VERSION};
@@ -382,7 +383,15 @@ fn keys<T: std::fmt::Debug + Clone + 'static>(
 fn animated<T: std::fmt::Debug + Clone + 'static>(
     value: impl Strategy<Value = T> + Clone,
 ) -> impl Strategy<Value = Animated<T>> {
-    (value.clone(), keys(value)).prop_map(|(value, keys)| Animated { value, track: RawTrack::new(keys) })
+    (value.clone(), keys(value), cycle(), cycle()).prop_map(|(value, keys, before, after)| {
+        // Cycles need two keys (else the scene has a problem); Hold is the default.
+        let cycles = if keys.len() >= 2 { Cycles::new(before, after) } else { Cycles::HOLD };
+        Animated::new(value, RawTrack::new(keys)).with_cycles(cycles)
+    })
+}
+
+fn cycle() -> impl Strategy<Value = Cycle> + Clone {
+    prop::sample::select(Cycle::ALL.to_vec())
 }
 
 fn object() -> impl Strategy<Value = Object> {
@@ -536,6 +545,35 @@ fn every_shipped_and_documented_scene_opens() {
         }
     }
     assert!(opened >= 3, "found only {opened} scene documents");
+}
+
+/// Cycles are written after the keys, by name, and only when not Hold; a cycle on a track with
+/// one key is a problem at the `after` line.
+#[test]
+fn cycles_are_written_readably_and_checked() {
+    let mut scene = demo_scene();
+    let cube = &mut scene.objects[1];
+    cube.translation.after = Cycle::RepeatOffset;
+    cube.rotation.before = Cycle::PingPong;
+    let text = scene_file::to_string(&scene).expect("serialize");
+    assert_eq!(text.matches("after: RepeatOffset,\n").count(), 1, "{text}");
+    assert_eq!(text.matches("before: PingPong,\n").count(), 1, "{text}");
+    assert_eq!(scene_file::from_str(&text, origin()).expect("valid"), scene);
+    // Without cycles nothing is written: the demo saves as before.
+    assert!(!DEMO_RON.contains("before:") && !DEMO_RON.contains("after:"));
+
+    let one_key = doc(&format!(
+        "{TIMING}\n        objects: [(name: \"Box\", translation: (value: (0.0, 0.0, 0.0), track: [(time: 0.0, value: (0.0, 0.0, 0.0))],\n            after: Repeat), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))],"
+    ));
+    let (err, shown) = parse_err(&one_key);
+    let SceneFileError::Invalid { problems, .. } = &err else { panic!("{err:?}") };
+    assert_eq!(problems.len(), 1, "{shown}");
+    assert_eq!(problems[0].problem.path, "objects[0].translation.after");
+    assert_eq!(
+        problems[0].position.map(|p| p.0),
+        Some(one_key.lines().position(|l| l.contains("after: Repeat")).unwrap() + 1)
+    );
+    assert!(shown.contains("Repeat after the keys needs at least two keys"), "{shown}");
 }
 
 #[test]

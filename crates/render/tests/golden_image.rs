@@ -26,13 +26,13 @@ pub fn test_scene() -> Scene {
     let mut arm = Object::new("Arm");
     arm.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmLowPoly));
     let mut skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly).expect("arm skeleton");
-    skeleton.joints[2].rotation = Animated {
-        value: Quat::IDENTITY,
-        track: RawTrack::new(vec![
+    skeleton.joints[2].rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(vec![
             Key::new(0.0, Quat::IDENTITY),
             Key::new(1.0, Quat::from_rotation_x(150f32.to_radians())),
         ]),
-    };
+    );
     skeleton.joints[1].rotation = Animated::constant(Quat::from_rotation_z(-0.4));
     arm.skeleton = Some(skeleton);
     arm.deformer.kind = DeformerKind::BonesBlending;
@@ -41,14 +41,14 @@ pub fn test_scene() -> Scene {
     let mut cube = Object::new("Cube");
     cube.mesh = Some(MeshSource::Procedural(ProceduralMesh::Cube));
     cube.scale = Animated::constant(Vec3::splat(30.0));
-    cube.translation = Animated {
-        value: Vec3::ZERO,
-        track: RawTrack::new(vec![
+    cube.translation = Animated::new(
+        Vec3::ZERO,
+        RawTrack::new(vec![
             Key::new(0.0, Vec3::new(60.0, 15.0, 60.0)),
             Key::new(0.5, Vec3::new(40.0, 30.0, 70.0)),
             Key::new(1.0, Vec3::new(20.0, 15.0, 60.0)),
         ]),
-    };
+    );
 
     let light = |name: &str, kind, position: Vec3, direction: Vec3, intensity: f32| Light {
         name: name.into(),

@@ -10,20 +10,20 @@ fn arm_scene() -> Scene {
     let mut arm = Object::new("Arm");
     arm.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmLowPoly));
     let mut skeleton = keyrig_skin::scene_skeleton_for(ProceduralMesh::ArmLowPoly).expect("arm skeleton");
-    skeleton.joints[2].rotation = Animated {
-        value: Quat::IDENTITY,
-        track: RawTrack::new(vec![
+    skeleton.joints[2].rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(vec![
             Key::new(0.0, Quat::IDENTITY),
             Key::new(1.0, Quat::from_rotation_x(1.5)),
             Key::new(2.0, Quat::from_rotation_x(3.0)),
         ]),
-    };
+    );
     arm.skeleton = Some(skeleton);
     arm.deformer.kind = DeformerKind::DualQuaternion;
-    arm.translation = Animated {
-        value: Vec3::ZERO,
-        track: RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(2.0, Vec3::new(0.0, 100.0, 0.0))]),
-    };
+    arm.translation = Animated::new(
+        Vec3::ZERO,
+        RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(2.0, Vec3::new(0.0, 100.0, 0.0))]),
+    );
     Scene { objects: vec![arm], ..Scene::default() }
 }
 

@@ -4,7 +4,8 @@
 //! A rotation channel with spin keys also gets its unwrapped turn (white): the twist about the
 //! first spin's axis through spin segments ([`crate::twist::unwrapped_twist`], which counts
 //! their turns with `Track::spin_degrees`), so a 720° segment climbs to 720 instead of
-//! wrapping at ±180°.
+//! wrapping at ±180°. A channel with cycles (`before`/`after` other than Hold) is drawn over the
+//! whole range, its repeats included; the stretches beyond its keys are shaded and named.
 
 use egui::{Align2, Color32, FontId, Pos2, Sense, Shape, Stroke, Ui, Vec2};
 
@@ -177,6 +178,37 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
         );
     }
     let fps = scene.fps.max(1e-9);
+    // Cycles: the curves go on beyond the keys (sampled like everything else); the stretches
+    // outside the keys are shaded and named ("after: Repeat") so the repeats read as repeats.
+    for id in &ids {
+        let Some(cycles) = channels::cycles(scene, *id).filter(|c| !c.is_hold()) else { continue };
+        let times = channels::key_times(scene, *id);
+        let (Some(&first), Some(&last)) = (times.first(), times.last()) else { continue };
+        let (first, last) = ((first * fps).clamp(start, end), (last * fps).clamp(start, end));
+        for (from, to, cycle, text_at, align) in [
+            (start, first, cycles.before, first, Align2::RIGHT_TOP),
+            (last, end, cycles.after, last, Align2::LEFT_TOP),
+        ] {
+            if cycle.is_hold() || to <= from {
+                continue;
+            }
+            let (a, b) = (to_screen(from, hi), to_screen(to, lo));
+            painter.rect_filled(
+                egui::Rect::from_min_max(Pos2::new(a.x, plot.top()), Pos2::new(b.x, plot.bottom())),
+                0.0,
+                visuals.faint_bg_color.gamma_multiply(0.6),
+            );
+            let end_name = if align == Align2::LEFT_TOP { "after" } else { "before" };
+            let text = format!("{end_name}: {}", cycle.label());
+            painter.text(
+                Pos2::new(to_screen(text_at, lo).x, plot.top()),
+                align,
+                text,
+                FontId::proportional(10.0),
+                visuals.weak_text_color(),
+            );
+        }
+    }
     for (id, curves) in &all {
         for (c, curve) in curves.iter().enumerate() {
             let colour = match (curves.len(), c) {

@@ -1,10 +1,11 @@
 //! The inspector: the selection's transform (changes go through record mode or the pose), the
-//! key inspector (interpolation mode and T/C/B of the selected keys), and the deformer with its
+//! key inspector (interpolation mode and T/C/B of the selected keys, and the cycles of their
+//! channel before and after its keys), and the deformer with its
 //! parameters, plus the cross-section measure of the selected joint.
 
 use egui::Ui;
 use glam::Vec3;
-use keyrig_core::{DeformerKind, Interpolation, Tcb};
+use keyrig_core::{Cycle, DeformerKind, Interpolation, Tcb};
 
 use crate::app::EditorApp;
 use crate::channels::{self, ChannelId, ChannelValue};
@@ -393,6 +394,55 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
                 channels::set_key_params(scene, k.channel, k.index, m, t);
             }
         });
+    }
+    cycles_ui(ui, app, first.channel);
+}
+
+/// The channel's behaviour before its first key and after its last (cycles, DESIGN.md §9): two
+/// combo boxes, "Before keys" and "After keys", each an undoable edit of the channel of the
+/// first selected key.
+fn cycles_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId) {
+    let scene = app.doc.scene();
+    let Some(old) = channels::cycles(scene, id) else { return };
+    let keyed = channels::key_count(scene, id) >= 2;
+    let name = id.label(scene);
+    ui.add_space(4.0);
+    ui.strong("Channel cycles");
+    let mut cycles = old;
+    ui.add_enabled_ui(keyed, |ui| {
+        for (label, cycle, hover) in [
+            ("Before keys", &mut cycles.before, "What the channel does before its first key"),
+            ("After keys", &mut cycles.after, "What the channel does after its last key"),
+        ] {
+            egui::ComboBox::from_label(label)
+                .selected_text(cycle.label())
+                .show_ui(ui, |ui| {
+                    for c in Cycle::ALL {
+                        ui.selectable_value(cycle, c, c.label()).on_hover_text(cycle_hover(c));
+                    }
+                })
+                .response
+                .on_hover_text(hover)
+                .on_disabled_hover_text("A cycle needs at least two keys");
+        }
+    });
+    if cycles != old {
+        let (end, cycle) =
+            if cycles.before != old.before { ("before", cycles.before) } else { ("after", cycles.after) };
+        let label = format!("{name}: {} {end} keys", cycle.label());
+        app.doc.edit(&label, |scene| {
+            channels::set_cycles(scene, id, cycles);
+        });
+    }
+}
+
+fn cycle_hover(cycle: Cycle) -> &'static str {
+    match cycle {
+        Cycle::Hold => "Keep the end key's value",
+        Cycle::Linear => "Continue at the end key's speed",
+        Cycle::Repeat => "Play the keys again and again",
+        Cycle::RepeatOffset => "Repeat, each cycle starting where the last ended (walks)",
+        Cycle::PingPong => "Play the keys forwards, then backwards",
     }
 }
 
