@@ -27,6 +27,11 @@ fn documented_example_loads() {
     assert_eq!(elbow.rotation.track.len(), 5);
     assert_eq!(elbow.rotation.track.keys[3].interpolation, keyrig_core::Interpolation::Linear);
     assert!(matches!(scene.lights[0].kind, LightKind::Spot { .. }));
+    // Its arm mesh binds to its skeleton, and the whole scene evaluates.
+    assert_eq!(arm.skeleton.as_ref().unwrap().joints.len(), keyrig_skin::ARM_BONES);
+    let eval = keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new());
+    assert!(eval.problems().is_empty(), "{:?}", eval.problems());
+    assert!(eval.skin(0).is_some(), "the arm is skinned");
     // Saving it gives the canonical layout, which reads back to the same scene.
     let text = scene_file::to_string(&scene).unwrap();
     assert_eq!(scene_file::from_str(&text, Path::new("x.ron")).unwrap(), scene);

@@ -24,11 +24,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     writeln!(
         md,
         "Seed text 000, chapter V (DESIGN.md §6): two arms along +X, {ARM_LENGTH_CM} cm long, 4 bones of {:.4} cm; \
-         one inner joint (`arm.{PAPER_JOINT}`, x = {:.3} cm) is rotated, every other joint stays at rest. \
+         one inner joint (`{}`, index {PAPER_JOINT}, x = {:.3} cm) is rotated, every other joint stays at rest. \
          Weights: each vertex is bound to one bone (single weights); linear blend and dual quaternion use the \
          smooth weights derived across each joint with the default blend zone (a quarter of the parent bone and \
          a quarter of the child bone), bones blending the same zone.",
         ARM_LENGTH_CM / 4.0,
+        keyrig_skin::ARM_JOINT_NAMES[PAPER_JOINT],
         ARM_LENGTH_CM / 2.0
     )?;
     writeln!(md)?;

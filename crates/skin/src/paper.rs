@@ -13,7 +13,7 @@ use crate::measure::{enclosed_volume, joint_cross_section};
 use crate::mesh::mesh_for;
 use crate::pose::{JointPalette, Pose};
 
-/// The posed joint: `arm.2`, the middle joint of the arm (x = 80.079 cm).
+/// The posed joint: `forearm` (index 2), the middle joint of the arm (x = 80.079 cm).
 pub const PAPER_JOINT: usize = 2;
 
 /// The four poses of the paper's test.
