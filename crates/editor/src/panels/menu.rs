@@ -16,9 +16,16 @@ fn command_button(ui: &mut Ui, app: &mut EditorApp, command: Command, checked: O
         Command::Redo => app.doc.redo_label().is_some(),
         _ => true,
     };
+    // Undo and Redo say which step they revert or repeat ("Undo move key").
+    let label = match command {
+        Command::Undo => app.doc.undo_label().map(|step| format!("{} {step}", command.label())),
+        Command::Redo => app.doc.redo_label().map(|step| format!("{} {step}", command.label())),
+        _ => None,
+    }
+    .unwrap_or_else(|| command.label().to_owned());
     let button = match checked {
-        Some(on) => Button::selectable(on, command.label()),
-        None => Button::new(command.label()),
+        Some(on) => Button::selectable(on, label),
+        None => Button::new(label),
     };
     let response = ui.add_enabled(enabled, button.shortcut_text(shortcut)).on_hover_text(command.tooltip());
     if response.clicked() {

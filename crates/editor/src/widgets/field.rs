@@ -25,14 +25,18 @@ impl FieldChange {
 }
 
 /// Adds a number field for `value` with the accessible label `label`; `configure` sets its
-/// speed, range and decimals. Typed text applies only when editing ends.
+/// speed, range and decimals. Typed text applies only when editing ends; −0 shows as 0.
 pub fn number_field<'a, N: egui::emath::Numeric>(
     ui: &mut Ui,
     value: &'a mut N,
     label: &str,
     configure: impl FnOnce(DragValue<'a>) -> DragValue<'a>,
 ) -> (Response, FieldChange) {
-    let response = ui.add(configure(DragValue::new(value)).update_while_editing(false));
+    // A negative zero (a rotation's component that rounded to 0) shows as 0, not "-0.0".
+    let field = DragValue::new(value).custom_formatter(|n, decimals| {
+        egui::emath::format_with_decimals_in_range(if n == 0.0 { 0.0 } else { n }, decimals)
+    });
+    let response = ui.add(configure(field).update_while_editing(false));
     let name = label.to_owned();
     ui.ctx().accesskit_node_builder(response.id, |node| node.set_label(name));
     let change = if !response.changed() {
