@@ -480,19 +480,8 @@ impl<T: TrackValue> Track<T> {
             if tangents.iter().flatten().any(|tangent| !tangent.is_finite_tangent()) {
                 return Err(TrackError::NonFiniteTangent { index });
             }
-            if let Some(spin) = key.spin {
-                let problem = if !T::ROTATION {
-                    Some(SpinProblem::NotARotation)
-                } else if index == 0 {
-                    Some(SpinProblem::FirstKey)
-                } else if !spin.is_in_range() {
-                    Some(SpinProblem::OutOfRange)
-                } else {
-                    None
-                };
-                if let Some(problem) = problem {
-                    return Err(TrackError::Spin { index, problem });
-                }
+            if let Some(problem) = key.spin.and_then(|spin| spin_problem(spin, index, T::ROTATION)) {
+                return Err(TrackError::Spin { index, problem });
             }
         }
         for (index, pair) in keys.windows(2).enumerate() {
@@ -787,6 +776,20 @@ fn floor(x: f64) -> f64 {
         }
     } else {
         x
+    }
+}
+
+/// What is wrong with `spin` on key `index` of a track (of rotations when `rotation`), judged
+/// from the key alone (the track validator and `Scene::problems` share this rule).
+pub(crate) fn spin_problem(spin: crate::key::Spin, index: usize, rotation: bool) -> Option<SpinProblem> {
+    if !rotation {
+        Some(SpinProblem::NotARotation)
+    } else if index == 0 {
+        Some(SpinProblem::FirstKey)
+    } else if !spin.is_in_range() {
+        Some(SpinProblem::OutOfRange)
+    } else {
+        None
     }
 }
 

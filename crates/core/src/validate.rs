@@ -273,19 +273,9 @@ impl Checker {
                     self.value(&join(&kp, name), t);
                 }
             }
-            if let Some(spin) = key.spin {
-                let problem = if !T::ROTATION {
-                    Some(SpinProblem::NotARotation)
-                } else if i == 0 {
-                    Some(SpinProblem::FirstKey)
-                } else if !spin.is_in_range() {
-                    Some(SpinProblem::OutOfRange)
-                } else {
-                    None
-                };
-                if let Some(problem) = problem {
-                    self.push(join(&kp, "spin"), problem.to_string());
-                }
+            if let Some(problem) = key.spin.and_then(|spin| crate::track::spin_problem(spin, i, T::ROTATION))
+            {
+                self.push(join(&kp, "spin"), problem.to_string());
             }
         }
         // A Hermite segment i needs key i's out-tangent and key i+1's in-tangent.

@@ -145,26 +145,13 @@ pub fn set_key_params(scene: &mut Scene, id: ChannelId, index: usize, mode: Inte
     })
 }
 
-/// Every channel of the scene: each object's (with its skeleton's) and each light's.
-#[must_use]
-pub fn all_channels(scene: &Scene) -> Vec<ChannelId> {
-    let mut out = Vec::new();
-    for o in 0..scene.objects.len() {
-        out.extend(ChannelId::of_object(scene, o));
-    }
-    for l in 0..scene.lights.len() {
-        out.extend(ChannelId::of_light(l));
-    }
-    out
-}
-
 /// Multiplies every key time of the scene by `factor` (> 0); Hermite tangents, stored per
 /// second, are divided by it so the curves keep their shape in frames.
 pub fn scale_key_times(scene: &mut Scene, factor: f64) {
     if !(factor.is_finite() && factor > 0.0) || factor == 1.0 {
         return;
     }
-    for id in all_channels(scene) {
+    for id in ChannelId::all(scene) {
         let Some(c) = channel_mut(scene, id) else { continue };
         with_track_mut!(c, t => {
             if !t.keys.is_empty() {
@@ -182,7 +169,7 @@ pub fn scale_key_times(scene: &mut Scene, factor: f64) {
 /// The time of the last key of the scene, seconds (`None` without keys).
 #[must_use]
 pub fn last_key_time(scene: &Scene) -> Option<f64> {
-    all_channels(scene)
+    ChannelId::all(scene)
         .into_iter()
         .flat_map(|id| key_times(scene, id))
         .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))))

@@ -149,7 +149,7 @@ fn a_drag_on_a_field_is_one_undo_step() {
 /// Every key of the demo as (channel, frame at the scene's fps).
 fn key_frames(h: &Harness<'_, EditorApp>) -> Vec<(ChannelId, f64)> {
     let scene = h.state().doc.scene();
-    keyrig_editor::channels::all_channels(scene)
+    keyrig_editor::channels::ChannelId::all(scene)
         .into_iter()
         .flat_map(|id| {
             keyrig_editor::channels::key_times(scene, id).into_iter().map(move |t| (id, t * scene.fps))

@@ -153,8 +153,21 @@ pub fn twist_scene() -> Scene {
         Key::new(0.0, Quat::IDENTITY),
         Key::new(TWIST_SECONDS, Quat::IDENTITY).with_spin(Spin::Angle { axis: Vec3::X, degrees: 360.0 }),
     ]);
+    let camera = Camera {
+        target: Vec3::new(0.0, 1.0, 0.0),
+        yaw_deg: 25.0,
+        pitch_deg: 15.0,
+        distance: 2.6,
+        fov_y_deg: 45.0,
+    };
+    arm_alone(skeleton, Vec3::new(-ARM_LENGTH / 2.0, 1.0, 0.0), (TWIST_SECONDS * FPS) as i32, camera)
+}
+
+/// A scene of the high-poly arm alone (bones blending, the sun), placed at `translation`,
+/// with `skeleton`, frames 0..=`end` and `camera`: the twist and cycle examples.
+fn arm_alone(skeleton: Skeleton, translation: Vec3, end: i32, camera: Camera) -> Scene {
     let mut arm = Object::new("Arm");
-    arm.translation = Animated::constant(Vec3::new(-ARM_LENGTH / 2.0, 1.0, 0.0));
+    arm.translation = Animated::constant(translation);
     arm.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmHighPoly));
     arm.skeleton = Some(skeleton);
     arm.deformer = DeformerSettings {
@@ -164,17 +177,11 @@ pub fn twist_scene() -> Scene {
     };
     Scene {
         fps: FPS,
-        frame_range: FrameRange { start: 0, end: (TWIST_SECONDS * FPS) as i32 },
+        frame_range: FrameRange { start: 0, end },
         ambient: Vec3::splat(0.08),
         objects: vec![arm],
         lights: vec![sun()],
-        camera: Camera {
-            target: Vec3::new(0.0, 1.0, 0.0),
-            yaw_deg: 25.0,
-            pitch_deg: 15.0,
-            distance: 2.6,
-            fov_y_deg: 45.0,
-        },
+        camera,
     }
 }
 
@@ -205,29 +212,14 @@ pub fn cycle_scene() -> Scene {
         RawTrack::new(vec![Key::new(0.0, Quat::IDENTITY), Key::new(at(10), bend(25.0))]),
     )
     .with_cycles(Cycles::new(Cycle::Hold, Cycle::PingPong));
-    let mut arm = Object::new("Arm");
-    arm.translation = Animated::constant(Vec3::new(-0.2, 0.6, 0.0));
-    arm.mesh = Some(MeshSource::Procedural(ProceduralMesh::ArmHighPoly));
-    arm.skeleton = Some(skeleton);
-    arm.deformer = DeformerSettings {
-        kind: DeformerKind::BonesBlending,
-        blend_parent_fraction: 0.25,
-        blend_child_fraction: 0.25,
+    let camera = Camera {
+        target: Vec3::new(0.0, 1.2, 0.0),
+        yaw_deg: 15.0,
+        pitch_deg: 10.0,
+        distance: 3.0,
+        fov_y_deg: 45.0,
     };
-    Scene {
-        fps: FPS,
-        frame_range: FrameRange { start: 0, end: 120 },
-        ambient: Vec3::splat(0.08),
-        objects: vec![arm],
-        lights: vec![sun()],
-        camera: Camera {
-            target: Vec3::new(0.0, 1.2, 0.0),
-            yaw_deg: 15.0,
-            pitch_deg: 10.0,
-            distance: 3.0,
-            fov_y_deg: 45.0,
-        },
-    }
+    arm_alone(skeleton, Vec3::new(-0.2, 0.6, 0.0), 120, camera)
 }
 
 fn cube() -> Object {
