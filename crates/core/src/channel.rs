@@ -380,17 +380,7 @@ pub enum ValueKind {
     Rotation,
 }
 
-/// How rotations are printed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum RotationFormat {
-    /// The unit quaternion x, y, z, w.
-    #[default]
-    Quat,
-    /// Euler angles in degrees, extrinsic X then Y then Z (q = Rz·Ry·Rx, Blender's "XYZ Euler").
-    EulerDegrees,
-}
-
-pub use crate::channel_id::ChannelValue;
+pub use crate::channel_id::{ChannelValue, RotationFormat};
 
 #[derive(Clone, Debug, PartialEq)]
 enum Sampler {

@@ -6,9 +6,18 @@
 
 use glam::{EulerRot, Quat, Vec3};
 
-use crate::channel::RotationFormat;
 use crate::key::Animated;
 use crate::scene::Scene;
+
+/// How rotations are printed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RotationFormat {
+    /// The unit quaternion x, y, z, w.
+    #[default]
+    Quat,
+    /// Euler angles in degrees, extrinsic X then Y then Z (q = Rz·Ry·Rx, Blender's "XYZ Euler").
+    EulerDegrees,
+}
 
 /// One animated value of the scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]

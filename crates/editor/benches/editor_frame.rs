@@ -53,7 +53,7 @@ fn frame_time(c: &mut Criterion) {
         .with_size(SIZE)
         .with_step_dt(1.0 / 60.0)
         .build_ui_state(|ui, app: &mut EditorApp| app.ui(ui), app);
-    painter.state_mut().playback.playing = true;
+    painter.state_mut().session.playback.playing = true;
     group.bench_function("painter", |b| b.iter(|| painter.step()));
 
     // The window drawn through wgpu with the painter viewport (no keyrig-render): what egui's
@@ -64,7 +64,7 @@ fn frame_time(c: &mut Criterion) {
         .with_size(SIZE)
         .with_step_dt(1.0 / 60.0)
         .build_eframe(move |_cc| editor_for(None, options(&data_dir)));
-    egui_only.state_mut().playback.playing = true;
+    egui_only.state_mut().session.playback.playing = true;
     group.bench_function("wgpu_painter_viewport", |b| {
         b.iter(|| {
             egui_only.step();
@@ -95,7 +95,7 @@ fn frame_time(c: &mut Criterion) {
         let adapter =
             gpu.state().gpu.as_ref().map(GpuView::adapter_name).expect("the wgpu harness gives a device");
         eprintln!("adapter: {adapter}");
-        gpu.state_mut().playback.playing = true;
+        gpu.state_mut().session.playback.playing = true;
         // The first frames build the rig and the viewport texture.
         for _ in 0..3 {
             gpu.step();

@@ -55,7 +55,7 @@ fn frame_prep(c: &mut Criterion) {
 
         // The editor's path for one key edit: Document::edit (undo snapshot, change check),
         // SceneEvaluator::update, a new rig around the evaluator, then the frame.
-        let mut doc = keyrig_editor::state::Document::new(scene.clone(), None);
+        let mut doc = keyrig_editor::document::Document::new(scene.clone(), None);
         let loaded: std::collections::HashMap<usize, keyrig_eval::LoadedMesh> = meshes
             .skinned
             .iter()

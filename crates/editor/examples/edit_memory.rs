@@ -12,7 +12,7 @@ use std::time::Instant;
 use glam::{Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
 use keyrig_core::{Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene};
-use keyrig_editor::state::Document;
+use keyrig_editor::document::Document;
 use keyrig_eval::SceneEvaluator;
 
 const CUBES: usize = 10;

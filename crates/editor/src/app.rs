@@ -1,76 +1,31 @@
-//! The editor application: state, command dispatch and the frame's layout.
+//! The editor application: the [`Document`], the [`Session`] and the [`ViewState`] together
+//! with the editor's caches (evaluator, meshes, GPU view), and the operations that span them
+//! (commands, keying, files). The frame's layout is in [`crate::window`].
 
 use std::cell::RefCell;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use egui::{Context, Key, Modifiers};
+use std::time::Duration;
+
+use egui::Context;
 use glam::Quat;
 use keyrig_core::{DeformerKind, Scene};
 use keyrig_eval::SceneEvaluator;
 
 use crate::camera::OrbitCamera;
-use crate::channels::{self, ChannelId, ChannelValue, KeyCopy};
-use crate::commands::{pressed_commands, Command};
-use crate::eval::{ObjectPose, PoseOverrides};
-use crate::files::{self, Recent, Recovery};
-use crate::panels;
-use crate::state::{Document, KeyRef, Playback, Selected, Selection};
+use crate::channels::{self, ChannelId, ChannelValue};
+use crate::commands::Command;
+use crate::document::Document;
+use crate::eval::ObjectPose;
+pub use crate::files::DialogPurpose;
+use crate::files::{self, BackgroundImport, ImportPurpose, Recent, Recovery};
+use crate::session::{KeyRef, Selected, Session};
+use crate::view::ViewState;
 
 /// The scene evaluator and what it was built from: the document key (document, revision) and
 /// the mesh store's generation.
 type CachedEvaluator = ((u64, u64, u64), Arc<SceneEvaluator>);
-
-/// How the viewport draws meshes: keyrig-render's one type (solid, wireframe, points).
-pub use keyrig_render::RenderStyle;
-
-/// Viewport settings that are not part of the document.
-#[derive(Clone, Debug)]
-pub struct ViewSettings {
-    pub camera: OrbitCamera,
-    pub grid: bool,
-    pub bones: bool,
-    /// Draw the selected object's or joint's motion path (GPU viewport).
-    pub motion_path: bool,
-    /// Pixels of the GPU viewport per screen pixel: 1 (full, the default) or 0.5 (half, four
-    /// times fewer pixels to rasterize).
-    pub resolution_scale: f32,
-    /// 4× MSAA in the GPU viewport (off by default on a CPU rasterizer, where it costs more
-    /// than the rest of the viewport).
-    pub antialiasing: bool,
-    pub style: RenderStyle,
-    /// Where the viewport was laid out in the last frame (screen points), for picking tools
-    /// and tests that aim at what the viewport shows.
-    pub viewport_rect: Option<egui::Rect>,
-    /// Where the curve view was laid out this frame; it is painted at the end of the frame
-    /// ([`crate::panels::curves::paint_pending`]) so that edits made later in the frame (a
-    /// slider in the inspector, a gizmo in the viewport) show in the same frame.
-    pub pending_curves: Option<(egui::LayerId, egui::Rect)>,
-    /// World bounds of each object as drawn in the last frame (deformed mesh, or joints and
-    /// origin), by object index: framing (F, imports) and the clip planes use them.
-    pub object_bounds: Vec<Option<crate::camera::Bounds>>,
-    /// Objects to frame once their bounds are known (after an import or opening a model).
-    pub frame_request: Option<Vec<usize>>,
-    /// Draw materials (glTF base colour and texture, MD2 skins); off shows the plain
-    /// per-object colours.
-    pub textures: bool,
-}
-
-impl ViewSettings {
-    /// The union of the bounds of `objects` (all when `None`).
-    #[must_use]
-    pub fn bounds_of(&self, objects: Option<&[usize]>) -> Option<crate::camera::Bounds> {
-        let pick = |o: usize| self.object_bounds.get(o).copied().flatten();
-        let all: Vec<usize> = (0..self.object_bounds.len()).collect();
-        objects.unwrap_or(&all).iter().filter_map(|&o| pick(o)).reduce(crate::camera::Bounds::union)
-    }
-
-    /// Width / height of the viewport (16:10 before the first frame).
-    #[must_use]
-    pub fn aspect(&self) -> f32 {
-        self.viewport_rect.map_or(1.6, |r| r.width() / r.height().max(1.0))
-    }
-}
 
 /// A status-bar message.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,15 +40,6 @@ pub enum PendingAction {
     New,
     Open(Option<PathBuf>),
     Quit,
-}
-
-/// Why the file dialog is open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum DialogPurpose {
-    Open,
-    SaveAs,
-    Import,
-    Export,
 }
 
 /// Start-up options (tests use a temporary folder for recovery and recent files).
@@ -111,15 +57,13 @@ pub struct EditorApp {
     /// Whether [`crate::fonts::install`] ran on the context (at start-up, else on the first
     /// frame).
     pub fonts_installed: bool,
+    /// The scene and its undo history.
     pub doc: Document,
-    pub selection: Selection,
-    pub playback: Playback,
-    pub record: bool,
-    pub overrides: PoseOverrides,
-    pub view: ViewSettings,
-    pub clipboard: Vec<KeyCopy>,
+    /// Selection, clock, record mode, overrides, clipboard.
+    pub session: Session,
+    /// Camera, viewport options, panel state.
+    pub view: ViewState,
     pub status: Option<Status>,
-    pub show_help: bool,
     pub pending: Option<PendingAction>,
     pub recent: Recent,
     pub recovery: Recovery,
@@ -134,8 +78,7 @@ pub struct EditorApp {
     pub(crate) gizmo_drag: bool,
     /// A drag on a rotation ring of a joint or object, turned by the editor itself
     /// ([`crate::twist::RingDrag`]) rather than by transform-gizmo.
-    pub(crate) ring_drag: Option<panels::viewport::RingDragState>,
-    pub(crate) timeline: panels::timeline::TimelineState,
+    pub(crate) ring_drag: Option<crate::twist::RingDragState>,
     pub skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
     pub meshes: files::MeshStore,
@@ -150,9 +93,9 @@ pub struct EditorApp {
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
     pub gpu: Option<crate::gpu_view::GpuView>,
     evaluator: RefCell<Option<CachedEvaluator>>,
-    window_title: String,
-    close_sent: bool,
-    quit_confirmed: bool,
+    pub(crate) window_title: String,
+    pub(crate) close_sent: bool,
+    pub(crate) quit_confirmed: bool,
 }
 
 impl EditorApp {
@@ -162,33 +105,14 @@ impl EditorApp {
         let data_dir = options.data_dir.clone().or_else(files::default_data_dir);
         let recovery = Recovery::new(data_dir.as_deref());
         let recovery_offer = recovery.load_pending();
-        let camera = OrbitCamera::from(scene.camera);
-        let mut playback = Playback::default();
-        playback.go_to(scene.frame_range.start, scene.frame_range.start, scene.frame_range.end);
+        let view = ViewState::new(OrbitCamera::from(scene.camera));
+        let session = Session::at_start(scene.frame_range);
         EditorApp {
             fonts_installed: false,
             doc: Document::new(scene, path),
-            selection: Selection::default(),
-            playback,
-            record: false,
-            overrides: PoseOverrides::new(),
-            view: ViewSettings {
-                camera,
-                grid: true,
-                bones: true,
-                motion_path: true,
-                resolution_scale: 1.0,
-                antialiasing: true,
-                style: RenderStyle::Solid,
-                viewport_rect: None,
-                pending_curves: None,
-                object_bounds: Vec::new(),
-                frame_request: None,
-                textures: true,
-            },
-            clipboard: Vec::new(),
+            session,
+            view,
             status: None,
-            show_help: false,
             pending: None,
             recent: Recent::load(data_dir.as_deref()),
             autosave: crate::autosave::Autosave::new(
@@ -204,7 +128,6 @@ impl EditorApp {
             gizmo: transform_gizmo_egui::Gizmo::default(),
             gizmo_drag: false,
             ring_drag: None,
-            timeline: panels::timeline::TimelineState::default(),
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
             imports: Vec::new(),
@@ -255,13 +178,15 @@ impl EditorApp {
     /// The value of a channel now (sampled, or its pose override).
     #[must_use]
     pub fn value_now(&self, id: ChannelId) -> Option<ChannelValue> {
-        self.evaluator().value(id, self.time(), &self.overrides)
+        self.evaluator().value(id, self.time(), &self.session.overrides)
     }
 
     /// Object `o` evaluated now.
     #[must_use]
     pub fn object_pose_now(&self, o: usize) -> Option<ObjectPose> {
-        self.evaluator().object_at(o, self.time(), &self.overrides).map(|s| ObjectPose::from_state(&s))
+        self.evaluator()
+            .object_at(o, self.time(), &self.session.overrides)
+            .map(|s| ObjectPose::from_state(&s))
     }
 
     /// Gives the editor keyrig-render on eframe's wgpu device; on a CPU rasterizer the viewport
@@ -275,7 +200,7 @@ impl EditorApp {
     /// Current time in seconds.
     #[must_use]
     pub fn time(&self) -> f64 {
-        self.playback.time(self.doc.scene().fps)
+        self.session.time(self.doc.scene().fps)
     }
 
     /// Shows a message in the status bar.
@@ -290,29 +215,26 @@ impl EditorApp {
 
     /// Moves the clock to a whole frame; pose overrides are dropped.
     pub fn set_frame(&mut self, frame: i32) {
-        let range = self.doc.scene().frame_range;
-        self.playback.go_to(frame, range.start, range.end);
-        self.overrides.clear();
+        self.session.set_frame(frame, self.doc.scene().frame_range);
     }
 
     /// Replaces the document (new, open, recover).
     pub fn replace_document(&mut self, scene: Scene, path: Option<PathBuf>) {
         self.view.camera = OrbitCamera::from(scene.camera);
-        let range = scene.frame_range;
+        // Record mode and the key clipboard carry over to the new document.
+        let session = Session {
+            record: self.session.record,
+            clipboard: std::mem::take(&mut self.session.clipboard),
+            ..Session::at_start(scene.frame_range)
+        };
         self.doc = Document::new(scene, path);
-        self.selection = Selection::default();
-        self.overrides.clear();
-        self.playback = Playback::default();
-        self.playback.go_to(range.start, range.start, range.end);
+        self.session = session;
     }
 
     /// The object index the selection belongs to (the joint's object for joints).
     #[must_use]
     pub fn selected_object(&self) -> Option<usize> {
-        match self.selection.item {
-            Some(Selected::Object(o)) | Some(Selected::Joint { object: o, .. }) => Some(o),
-            _ => None,
-        }
+        self.session.selected_object()
     }
 
     /// Applies a pose change made with a gizmo or the inspector. In record mode it writes a key
@@ -320,15 +242,15 @@ impl EditorApp {
     /// with I) and a static one changes its value. `group` merges a drag into one undo step.
     pub fn apply_pose(&mut self, id: ChannelId, value: ChannelValue, group: &str) {
         let animated = channels::key_count(self.doc.scene(), id) > 0;
-        if self.record {
-            let time = f64::from(self.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+        if self.session.record {
+            let time = self.session.key_time(self.doc.scene().fps);
             let label = format!("key {}", id.label(self.doc.scene()));
             self.doc.edit_continuous(group, &label, |scene| {
                 channels::set_key(scene, id, time, value);
             });
-            self.overrides.remove(&id);
+            self.session.overrides.remove(&id);
         } else if animated {
-            self.overrides.insert(id, value);
+            self.session.overrides.insert(id, value);
         } else {
             let label = format!("pose {}", id.label(self.doc.scene()));
             self.doc.edit_continuous(group, &label, |scene| {
@@ -343,16 +265,16 @@ impl EditorApp {
     /// included ([`channels::set_rotation_key`]).
     pub fn apply_turn(&mut self, id: ChannelId, turn: channels::Turn, group: &str) {
         let value = turn.value();
-        if !self.record {
+        if !self.session.record {
             self.apply_pose(id, ChannelValue::Rotation(value), group);
             return;
         }
-        let time = f64::from(self.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+        let time = self.session.key_time(self.doc.scene().fps);
         let label = format!("key {}", id.label(self.doc.scene()));
         self.doc.edit_continuous(group, &label, |scene| {
             channels::set_rotation_key(scene, id, time, value, Some(turn));
         });
-        self.overrides.remove(&id);
+        self.session.overrides.remove(&id);
     }
 
     /// The twist of a rotation channel about its bone axis ([`crate::twist::BONE_AXIS`]) now,
@@ -384,34 +306,34 @@ impl EditorApp {
 
     /// Keys the current values of the selection's channels at the current frame.
     pub fn insert_key(&mut self) {
-        let ids = self.selection.channels(self.doc.scene());
+        let ids = self.session.selection.channels(self.doc.scene());
         if ids.is_empty() {
             self.error("Insert key: select an object, joint or light first");
             return;
         }
-        let time = f64::from(self.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+        let time = self.session.key_time(self.doc.scene().fps);
         let values: Vec<(ChannelId, ChannelValue)> =
             ids.iter().filter_map(|&id| self.value_now(id).map(|v| (id, v))).collect();
-        let frame = self.playback.whole_frame();
+        let frame = self.session.playback.whole_frame();
         self.doc.edit(&format!("insert key at frame {frame}"), |scene| {
             for (id, v) in &values {
                 channels::set_key(scene, *id, time, *v);
             }
         });
         for id in ids {
-            self.overrides.remove(&id);
+            self.session.overrides.remove(&id);
         }
-        self.selection.retain_valid(self.doc.scene());
+        self.session.selection.retain_valid(self.doc.scene());
         self.info(format!("Keyed {} channel(s) at frame {frame}", values.len()));
     }
 
     /// Deletes the selected keys.
     pub fn delete_selected_keys(&mut self) {
-        if self.selection.keys.is_empty() {
+        if self.session.selection.keys.is_empty() {
             self.info("Delete: no keys selected");
             return;
         }
-        let keys: Vec<KeyRef> = self.selection.keys.iter().copied().collect();
+        let keys: Vec<KeyRef> = self.session.selection.keys.iter().copied().collect();
         let n = keys.len();
         self.doc.edit(&format!("delete {n} key(s)"), |scene| {
             let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
@@ -422,31 +344,32 @@ impl EditorApp {
                 channels::delete_keys(scene, id, &indices);
             }
         });
-        self.selection.keys.clear();
+        self.session.selection.keys.clear();
         self.info(format!("Deleted {n} key(s)"));
     }
 
     /// Copies the selected keys to the editor's clipboard.
     pub fn copy_selected_keys(&mut self) {
-        self.clipboard = self
+        self.session.clipboard = self
+            .session
             .selection
             .keys
             .iter()
             .filter_map(|k| channels::copy_key(self.doc.scene(), k.channel, k.index))
             .collect();
-        self.info(format!("Copied {} key(s)", self.clipboard.len()));
+        self.info(format!("Copied {} key(s)", self.session.clipboard.len()));
     }
 
     /// Pastes the clipboard at the current frame, keeping the keys' relative timing.
     pub fn paste_keys(&mut self) {
-        if self.clipboard.is_empty() {
+        if self.session.clipboard.is_empty() {
             self.info("Paste: the clipboard is empty");
             return;
         }
         let fps = self.doc.scene().fps.max(1e-9);
-        let now = f64::from(self.playback.whole_frame()) / fps;
-        let earliest = self.clipboard.iter().map(|k| k.time).fold(f64::INFINITY, f64::min);
-        let copies = self.clipboard.clone();
+        let now = f64::from(self.session.playback.whole_frame()) / fps;
+        let earliest = self.session.clipboard.iter().map(|k| k.time).fold(f64::INFINITY, f64::min);
+        let copies = self.session.clipboard.clone();
         let mut pasted = Vec::new();
         self.doc.edit(&format!("paste {} key(s)", copies.len()), |scene| {
             for c in &copies {
@@ -455,8 +378,8 @@ impl EditorApp {
                 }
             }
         });
-        self.selection.keys = pasted.into_iter().collect();
-        self.selection.retain_valid(self.doc.scene());
+        self.session.selection.keys = pasted.into_iter().collect();
+        self.session.selection.retain_valid(self.doc.scene());
     }
 
     /// Sets the deformer of the selected object (or of every skinned object when none is
@@ -504,7 +427,7 @@ impl EditorApp {
     /// with nothing selected the whole scene is framed.
     pub fn frame_selection(&mut self) {
         let aspect = self.view.aspect();
-        match self.selection.item {
+        match self.session.selection.item {
             Some(Selected::Joint { object, joint }) => {
                 let Some(pose) = self.object_pose_now(object) else { return };
                 let Some(skeleton) = self.doc.scene().objects.get(object).and_then(|o| o.skeleton.as_ref())
@@ -615,32 +538,32 @@ impl EditorApp {
                     self.doc.undo();
                     self.info(format!("Undo {label}"));
                 }
-                self.selection.retain_valid(self.doc.scene());
+                self.session.selection.retain_valid(self.doc.scene());
             }
             Command::Redo => {
                 if let Some(label) = self.doc.redo_label().map(str::to_owned) {
                     self.doc.redo();
                     self.info(format!("Redo {label}"));
                 }
-                self.selection.retain_valid(self.doc.scene());
+                self.session.selection.retain_valid(self.doc.scene());
             }
-            Command::ToggleRecord => self.record = !self.record,
+            Command::ToggleRecord => self.session.record = !self.session.record,
             Command::InsertKey => self.insert_key(),
             Command::DeleteKeys => self.delete_selected_keys(),
             Command::CopyKeys => {
                 self.copy_selected_keys();
-                if !self.clipboard.is_empty() {
+                if !self.session.clipboard.is_empty() {
                     ctx.copy_text(self.clipboard_text());
                 }
             }
             Command::PasteKeys => self.paste_keys(),
             Command::PlayPause => {
-                self.playback.toggle_play(range.start, range.end);
-                self.overrides.clear();
+                self.session.playback.toggle_play(range.start, range.end);
+                self.session.overrides.clear();
             }
-            Command::ToggleLoop => self.playback.looping = !self.playback.looping,
-            Command::NextFrame => self.set_frame(self.playback.whole_frame() + 1),
-            Command::PrevFrame => self.set_frame(self.playback.whole_frame() - 1),
+            Command::ToggleLoop => self.session.playback.looping = !self.session.playback.looping,
+            Command::NextFrame => self.set_frame(self.session.playback.whole_frame() + 1),
+            Command::PrevFrame => self.set_frame(self.session.playback.whole_frame() - 1),
             Command::FirstFrame => self.set_frame(range.start),
             Command::LastFrame => self.set_frame(range.end),
             Command::ToggleGrid => self.view.grid = !self.view.grid,
@@ -652,7 +575,7 @@ impl EditorApp {
             | Command::CameraShoulder
             | Command::CameraElbow => self.camera_preset(command),
             Command::FrameSelection => self.frame_selection(),
-            Command::ShowHelp => self.show_help = !self.show_help,
+            Command::ShowHelp => self.view.show_help = !self.view.show_help,
         }
         ctx.request_repaint();
     }
@@ -744,7 +667,7 @@ impl EditorApp {
         self.dialog_purpose
     }
 
-    fn dialog_ui(&mut self, ctx: &Context) {
+    pub(crate) fn dialog_ui(&mut self, ctx: &Context) {
         let Some(purpose) = self.dialog_purpose else { return };
         self.file_dialog.update(ctx);
         if let Some(path) = self.file_dialog.take_picked() {
@@ -778,7 +701,7 @@ impl EditorApp {
         }
     }
 
-    fn handle_dropped_files(&mut self, ctx: &Context) {
+    pub(crate) fn handle_dropped_files(&mut self, ctx: &Context) {
         let dropped: Vec<PathBuf> =
             ctx.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.path.clone()).collect());
         for path in dropped {
@@ -792,7 +715,7 @@ impl EditorApp {
 
     /// Hands the document to the autosave timer (a copy only when it changed); the timer's
     /// thread writes it when due, drawing or not.
-    fn autosave(&mut self) {
+    pub(crate) fn note_autosave(&mut self) {
         let doc = &self.doc;
         self.autosave.note(doc.cache_key(), doc.is_dirty(), || {
             (doc.scene().clone(), doc.path().map(std::path::Path::to_path_buf))
@@ -806,7 +729,7 @@ impl EditorApp {
     /// Ctrl+X and Ctrl+V (and the Copy/Cut/Paste keys) into [`egui::Event::Copy`],
     /// [`egui::Event::Cut`] and [`egui::Event::Paste`] with the system clipboard's text, not
     /// into key presses. Left to a text field that has the keyboard.
-    fn clipboard_events(&mut self, ctx: &Context) {
+    pub(crate) fn clipboard_events(&mut self, ctx: &Context) {
         if ctx.text_edit_focused() {
             return;
         }
@@ -822,7 +745,7 @@ impl EditorApp {
                 egui::Event::Copy => self.run_command(ctx, Command::CopyKeys),
                 egui::Event::Cut => {
                     self.run_command(ctx, Command::CopyKeys);
-                    if !self.clipboard.is_empty() {
+                    if !self.session.clipboard.is_empty() {
                         self.delete_selected_keys();
                     }
                 }
@@ -836,7 +759,7 @@ impl EditorApp {
     /// other text pastes the editor's own clipboard.
     pub fn paste_text(&mut self, text: &str) {
         if let Some(keys) = channels::keys_from_clipboard_text(text) {
-            self.clipboard = keys;
+            self.session.clipboard = keys;
         }
         self.paste_keys();
     }
@@ -844,100 +767,7 @@ impl EditorApp {
     /// The copied keys as system clipboard text.
     #[must_use]
     pub fn clipboard_text(&self) -> String {
-        channels::keys_to_clipboard_text(&self.clipboard)
-    }
-
-    /// One frame of the editor, drawn into `ui` (the whole window).
-    pub fn ui(&mut self, ui: &mut egui::Ui) {
-        let ctx = ui.ctx().clone();
-        let benchmark_start = self.frame_benchmark.as_mut().map(|b| {
-            self.playback.playing = true;
-            b.frame_started()
-        });
-        self.frame(ui, &ctx);
-        if let (Some(bench), Some(start)) = (&mut self.frame_benchmark, benchmark_start) {
-            let gpu = self.gpu.as_ref().map_or(std::time::Duration::ZERO, |g| g.last_render_time);
-            bench.frame_prepared(start, gpu);
-            if bench.is_done() {
-                let viewport = match &self.gpu {
-                    Some(gpu) => format!("GPU viewport on {}", gpu.adapter_name()),
-                    None => "painter viewport".to_owned(),
-                };
-                let size = ctx.content_rect().size();
-                println!("{} at {}x{} points", bench.report(&viewport), size.x, size.y);
-                self.frame_benchmark = None;
-                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-            }
-            ctx.request_repaint();
-        }
-    }
-
-    fn frame(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
-        let ctx = ctx.clone();
-        if !self.fonts_installed {
-            crate::fonts::install(&ctx);
-            self.fonts_installed = true;
-        }
-        // Playback clock.
-        let dt = ctx.input(|i| f64::from(i.stable_dt));
-        let scene = self.doc.scene();
-        let (fps, range) = (scene.fps, scene.frame_range);
-        if self.playback.playing {
-            self.playback.advance(dt, fps, range.start, range.end);
-            ctx.request_repaint();
-            let raw = ctx.input(|i| i.unstable_dt);
-            if raw.is_finite() && raw > 0.0 {
-                self.frame_time = Some(self.frame_time.map_or(raw, |t| t * 0.9 + raw * 0.1));
-            }
-        } else {
-            self.frame_time = None;
-        }
-
-        self.clipboard_events(&ctx);
-        for command in pressed_commands(&ctx) {
-            self.run_command(&ctx, command);
-        }
-        // Escape closes the help window.
-        if self.show_help && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {
-            self.show_help = false;
-        }
-        self.poll_background_work(&ctx);
-        self.handle_dropped_files(&ctx);
-
-        panels::menu::ui(ui, self);
-        panels::status::ui(ui, self);
-        panels::timeline::ui(ui, self);
-        panels::outliner::ui(ui, self);
-        panels::inspector::ui(ui, self);
-        panels::viewport::ui(ui, self);
-        panels::curves::paint_pending(&ctx, self);
-
-        panels::dialogs::help_ui(&ctx, self);
-        panels::dialogs::confirm_ui(&ctx, self);
-        panels::dialogs::recovery_ui(&ctx, self);
-        self.dialog_ui(&ctx);
-
-        // A drag (slider, gizmo, key drag) ends when the pointer is released.
-        if !ctx.input(|i| i.pointer.any_down()) {
-            self.doc.close_group();
-        }
-        self.selection.retain_valid(self.doc.scene());
-        self.autosave();
-
-        // Viewport commands request a repaint: send the title only when it changes.
-        let title = self.doc.title();
-        if title != self.window_title {
-            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
-            self.window_title = title;
-        }
-        if self.quit_confirmed && !self.close_sent {
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-            self.close_sent = true;
-        }
-        if ctx.input(|i| i.viewport().close_requested()) && !self.quit_confirmed && self.doc.is_dirty() {
-            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            self.pending = Some(PendingAction::Quit);
-        }
+        channels::keys_to_clipboard_text(&self.session.clipboard)
     }
 
     /// Whether the user confirmed quitting (tests check it instead of a closed window).
@@ -956,15 +786,91 @@ impl EditorApp {
     }
 }
 
-impl eframe::App for EditorApp {
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        EditorApp::ui(self, ui);
+impl EditorApp {
+    /// Starts reading a model in the background for `purpose`.
+    pub fn start_import(&mut self, path: PathBuf, purpose: ImportPurpose) {
+        self.imports.push(BackgroundImport::start(path, purpose));
     }
 
-    fn on_exit(&mut self) {
-        // A clean exit leaves no recovery file; a dirty one keeps the last autosave.
-        if !self.doc.is_dirty() {
-            self.autosave.clear();
+    /// Applies the imports that have finished; while some still run, asks for a repaint soon
+    /// (the status bar shows them).
+    pub fn poll_background_work(&mut self, ctx: &egui::Context) {
+        let (done, running): (Vec<_>, Vec<_>) =
+            std::mem::take(&mut self.imports).into_iter().partition(BackgroundImport::is_finished);
+        self.imports = running;
+        for import in done {
+            self.apply_import(import);
+        }
+        if !self.imports.is_empty() {
+            ctx.request_repaint_after(Duration::from_millis(50));
+        }
+    }
+
+    /// Waits for every running import and applies it (tests, and before quitting).
+    pub fn wait_for_background_work(&mut self) {
+        for import in std::mem::take(&mut self.imports) {
+            self.apply_import(import);
+        }
+    }
+
+    fn apply_import(&mut self, import: BackgroundImport) {
+        let (path, purpose, elapsed) = (import.path.clone(), import.purpose, import.elapsed());
+        let imported = match import.finish() {
+            Ok(imported) => imported,
+            Err(e) => {
+                self.error(e);
+                return;
+            }
+        };
+        // A mesh that failed to load is stored with its error: the viewport reports it over
+        // the object, as for a scene file that names a broken model.
+        for ((file, mesh), loaded) in imported.meshes {
+            self.meshes.insert(file, mesh, loaded);
+        }
+        let seconds = elapsed.as_secs_f64();
+        match purpose {
+            ImportPurpose::Open => {
+                let n = imported.scene.objects.len();
+                self.replace_document(imported.scene, None);
+                // Frame what the viewport draws (deformed, in its own units) once it has.
+                self.view.frame_request = Some((0..n).collect());
+                self.recent.add(&path);
+                self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
+            }
+            ImportPurpose::Import => {
+                let scene = imported.scene;
+                let n = scene.objects.len();
+                let first = self.doc.scene().objects.len();
+                self.view.frame_request = Some((first..first + n).collect());
+                // The model's animation (its keys, or the range its own scene gives it, as an
+                // MD2 loop) in seconds; the scene's range grows to cover it, in the same step.
+                let model_seconds = crate::channels::last_key_time(&scene)
+                    .unwrap_or(0.0)
+                    .max(f64::from(scene.frame_range.end) / scene.fps.max(1e-9));
+                let range = self.doc.scene().frame_range;
+                let needed = (model_seconds * self.doc.scene().fps - 1e-6).ceil() as i32;
+                let extend = needed > range.end && needed <= 100_000;
+                self.doc.edit(&format!("import {}", path.display()), |doc| {
+                    doc.objects.extend(scene.objects);
+                    doc.lights.extend(scene.lights);
+                    if extend {
+                        doc.frame_range.end = needed;
+                    }
+                });
+                self.recent.add(&path);
+                let extended = if extend {
+                    format!(
+                        "; frame range extended from {}–{} to {}–{needed} to cover its animation",
+                        range.start, range.end, range.start
+                    )
+                } else {
+                    String::new()
+                };
+                self.info(format!(
+                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}",
+                    path.display()
+                ));
+            }
         }
     }
 }

@@ -59,11 +59,19 @@ pub fn with_extension_if_missing(path: PathBuf, ext: &str) -> PathBuf {
     }
 }
 
+/// Why the file dialog is open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DialogPurpose {
+    Open,
+    SaveAs,
+    Import,
+    Export,
+}
+
 /// What each file dialog lists: (filter name, extensions) in the order the drop-down shows
 /// them; the first is chosen when the dialog opens.
 #[must_use]
-pub fn dialog_filters(purpose: crate::app::DialogPurpose) -> Vec<(&'static str, &'static [&'static str])> {
-    use crate::app::DialogPurpose;
+pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'static str])> {
     const SCENES: (&str, &[&str]) = ("keyrig scenes (.ron)", &["ron"]);
     const MODELS: (&str, &[&str]) = ("Models (.glb, .gltf, .md2)", &["glb", "gltf", "md2"]);
     match purpose {
@@ -86,12 +94,11 @@ pub fn dialog_filters(purpose: crate::app::DialogPurpose) -> Vec<(&'static str, 
 /// it is.
 #[must_use]
 pub fn file_dialog(
-    purpose: crate::app::DialogPurpose,
+    purpose: DialogPurpose,
     stem: &str,
     folder: Option<PathBuf>,
     storage: egui_file_dialog::FileDialogStorage,
 ) -> egui_file_dialog::FileDialog {
-    use crate::app::DialogPurpose;
     let title = match purpose {
         DialogPurpose::Open => "Open scene or model",
         DialogPurpose::SaveAs => "Save scene as",
@@ -515,95 +522,6 @@ impl BackgroundImport {
         self.handle
             .join()
             .unwrap_or_else(|_| Err(format!("{}: the import stopped unexpectedly", path.display())))
-    }
-}
-
-impl crate::EditorApp {
-    /// Starts reading a model in the background for `purpose`.
-    pub fn start_import(&mut self, path: PathBuf, purpose: ImportPurpose) {
-        self.imports.push(BackgroundImport::start(path, purpose));
-    }
-
-    /// Applies the imports that have finished; while some still run, asks for a repaint soon
-    /// (the status bar shows them).
-    pub fn poll_background_work(&mut self, ctx: &egui::Context) {
-        let (done, running): (Vec<_>, Vec<_>) =
-            std::mem::take(&mut self.imports).into_iter().partition(BackgroundImport::is_finished);
-        self.imports = running;
-        for import in done {
-            self.apply_import(import);
-        }
-        if !self.imports.is_empty() {
-            ctx.request_repaint_after(Duration::from_millis(50));
-        }
-    }
-
-    /// Waits for every running import and applies it (tests, and before quitting).
-    pub fn wait_for_background_work(&mut self) {
-        for import in std::mem::take(&mut self.imports) {
-            self.apply_import(import);
-        }
-    }
-
-    fn apply_import(&mut self, import: BackgroundImport) {
-        let (path, purpose, elapsed) = (import.path.clone(), import.purpose, import.elapsed());
-        let imported = match import.finish() {
-            Ok(imported) => imported,
-            Err(e) => {
-                self.error(e);
-                return;
-            }
-        };
-        // A mesh that failed to load is stored with its error: the viewport reports it over
-        // the object, as for a scene file that names a broken model.
-        for ((file, mesh), loaded) in imported.meshes {
-            self.meshes.insert(file, mesh, loaded);
-        }
-        let seconds = elapsed.as_secs_f64();
-        match purpose {
-            ImportPurpose::Open => {
-                let n = imported.scene.objects.len();
-                self.replace_document(imported.scene, None);
-                // Frame what the viewport draws (deformed, in its own units) once it has.
-                self.view.frame_request = Some((0..n).collect());
-                self.recent.add(&path);
-                self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
-            }
-            ImportPurpose::Import => {
-                let scene = imported.scene;
-                let n = scene.objects.len();
-                let first = self.doc.scene().objects.len();
-                self.view.frame_request = Some((first..first + n).collect());
-                // The model's animation (its keys, or the range its own scene gives it, as an
-                // MD2 loop) in seconds; the scene's range grows to cover it, in the same step.
-                let model_seconds = crate::channels::last_key_time(&scene)
-                    .unwrap_or(0.0)
-                    .max(f64::from(scene.frame_range.end) / scene.fps.max(1e-9));
-                let range = self.doc.scene().frame_range;
-                let needed = (model_seconds * self.doc.scene().fps - 1e-6).ceil() as i32;
-                let extend = needed > range.end && needed <= 100_000;
-                self.doc.edit(&format!("import {}", path.display()), |doc| {
-                    doc.objects.extend(scene.objects);
-                    doc.lights.extend(scene.lights);
-                    if extend {
-                        doc.frame_range.end = needed;
-                    }
-                });
-                self.recent.add(&path);
-                let extended = if extend {
-                    format!(
-                        "; frame range extended from {}–{} to {}–{needed} to cover its animation",
-                        range.start, range.end, range.start
-                    )
-                } else {
-                    String::new()
-                };
-                self.info(format!(
-                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}",
-                    path.display()
-                ));
-            }
-        }
     }
 }
 

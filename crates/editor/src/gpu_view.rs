@@ -231,8 +231,8 @@ fn is_cpu(render_state: &RenderState) -> bool {
 
 /// The renderer's selection for the editor's.
 #[must_use]
-pub fn selection_for(item: Option<crate::state::Selected>) -> Selection {
-    use crate::state::Selected;
+pub fn selection_for(item: Option<crate::session::Selected>) -> Selection {
+    use crate::session::Selected;
     match item {
         None => Selection::None,
         Some(Selected::Object(o)) => Selection::Object(o),

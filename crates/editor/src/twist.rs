@@ -259,6 +259,20 @@ pub fn unwrapped_twist(track: &Track<Quat>, axis: DVec3, t: f64) -> f64 {
     total
 }
 
+/// A drag on a rotation ring that the editor turns itself (see [`RingDrag`]).
+#[derive(Clone, Debug)]
+pub struct RingDragState {
+    pub drag: RingDrag,
+    /// The rotation channel turned (a joint's or an object's).
+    pub channel: keyrig_core::channel_id::ChannelId,
+    /// World rotation of the frame the channel's value is expressed in (the parent joint's
+    /// world rotation times the joint's rest rotation; identity for an object), so that the
+    /// world axis `a` is `frame⁻¹·a` in the channel's frame.
+    pub frame: Quat,
+    /// Degrees already applied to the channel during this drag.
+    pub applied: f64,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

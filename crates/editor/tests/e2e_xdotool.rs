@@ -288,7 +288,7 @@ fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
     session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "10", "Right"]);
     common::press(&mut h, Modifiers::NONE, egui::Key::R);
     common::go_to_frame(&mut h, 10);
-    assert!(h.state().record);
+    assert!(h.state().session.record);
 
     // 4. Key a rotation: drag a quarter turn along the gizmo's view ring.
     let centre = wrist_on_screen(h.state());

@@ -52,7 +52,7 @@ fn a_light_colour_is_a_colour_picker_with_pose_record_and_undo() {
     // The outliner's row (the dope sheet has a `Key` row too).
     h.get_all_by_label("Key").next().expect("the Key light in the outliner").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(keyrig_editor::state::Selected::Light(0)));
+    assert_eq!(h.state().session.selection.item, Some(keyrig_editor::session::Selected::Light(0)));
     assert!(h.query_by_label("Colour X").is_none(), "no X/Y/Z fields for a colour");
     assert!(h.query_by_role_and_label(Role::ColorWell, "Colour").is_some(), "a colour button");
     let before = colour_now(&h);
@@ -73,7 +73,7 @@ fn a_light_colour_is_a_colour_picker_with_pose_record_and_undo() {
     // With record mode: a key at the current frame, undone by Ctrl+Z.
     h.get_by_label("⏺ Record").click();
     h.run();
-    assert!(h.state().record);
+    assert!(h.state().session.record);
     pick_red(&mut h, 0.0);
     assert_eq!(channels::key_count(h.state().doc.scene(), KEY_COLOUR), 1, "record keys the colour");
     assert!(colour_now(&h).x < 1e-3);

@@ -11,7 +11,7 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use glam::Vec3;
 use keyrig_core::DeformerKind;
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
 /// The arm's deformed positions (object space) and the forearm's cross-section ratio.
@@ -28,7 +28,7 @@ fn switching_deformer_changes_the_skinned_arm_and_the_measure() {
     let mut h = harness(dir.path(), None);
     h.get_by_label("forearm").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(Selected::Joint { object: 0, joint: 2 }));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Joint { object: 0, joint: 2 }));
     // Frame 60: the forearm joint is twisted 180° in the demo.
     press(&mut h, Modifiers::NONE, Key::Home);
     for _ in 0..60 {
@@ -69,7 +69,7 @@ fn the_deformer_menu_switches_while_playing() {
     let mut h = harness(dir.path(), None);
     h.key_press(Key::Space);
     h.step();
-    assert!(h.state().playback.playing);
+    assert!(h.state().session.playback.playing);
     h.get_by_role_and_label(Role::Button, "Deformer").click();
     h.step();
     // A menu item's accessible label is its text followed by its shortcut.
@@ -77,8 +77,8 @@ fn the_deformer_menu_switches_while_playing() {
     h.step();
     h.step();
     assert_eq!(h.state().doc.scene().objects[0].deformer.kind, DeformerKind::DualQuaternion);
-    assert!(h.state().playback.playing, "playback continues while switching");
+    assert!(h.state().session.playback.playing, "playback continues while switching");
     h.key_press(Key::Space);
     h.run();
-    assert!(!h.state().playback.playing);
+    assert!(!h.state().session.playback.playing);
 }

@@ -11,7 +11,7 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::{Interpolation, Scene};
 use keyrig_editor::channels::{self, ChannelId};
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::{Command, EditorApp};
 
 const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
@@ -21,10 +21,10 @@ const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
 fn record_two_wrist_keys(harness: &mut Harness<'_, EditorApp>) {
     harness.get_by_label("wrist").click();
     harness.run();
-    assert_eq!(harness.state().selection.item, Some(Selected::Joint { object: 0, joint: 3 }));
+    assert_eq!(harness.state().session.selection.item, Some(Selected::Joint { object: 0, joint: 3 }));
     harness.get_by_label("⏺ Record").click();
     harness.run();
-    assert!(harness.state().record, "the Record button turns record mode on");
+    assert!(harness.state().session.record, "the Record button turns record mode on");
 
     go_to_frame(harness, 10);
     set_value(harness, Role::SpinButton, "Rotation (°) X", 45.0);
@@ -68,13 +68,13 @@ fn without_record_mode_a_change_is_a_pose_that_i_keys() {
     // The elbow is keyed: the change is a transient pose, not an edit.
     assert_eq!(h.state().doc.scene(), &before);
     let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
-    assert!(h.state().overrides.contains_key(&elbow));
+    assert!(h.state().session.overrides.contains_key(&elbow));
     press(&mut h, Modifiers::NONE, Key::I);
     let scene = h.state().doc.scene();
     let index = channels::key_at(scene, elbow, 5.0 / scene.fps).expect("I wrote a key at frame 5");
     let key = &scene.objects[0].skeleton.as_ref().expect("skeleton").joints[1].rotation.track.keys[index];
     assert!((keyrig_editor::eval::euler_degrees(key.value).x - 30.0).abs() < 0.01);
-    assert!(h.state().overrides.is_empty());
+    assert!(h.state().session.overrides.is_empty());
 }
 
 /// Selects the elbow key at frame 15 by clicking its diamond in the dope sheet.
@@ -89,7 +89,7 @@ fn copied_text(h: &Harness<'_, EditorApp>) -> Option<String> {
 fn select_elbow_key_15(h: &mut Harness<'_, EditorApp>) {
     h.get_by_label("key elbow rotation frame 15").click();
     h.run();
-    assert_eq!(h.state().selection.keys.len(), 1);
+    assert_eq!(h.state().session.selection.keys.len(), 1);
 }
 
 #[test]
@@ -182,7 +182,7 @@ fn shortcuts_do_what_the_help_window_says() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
     press(&mut h, Modifiers::NONE, Key::F12);
-    assert!(h.state().show_help);
+    assert!(h.state().view.show_help);
     // Every command is listed with its shortcut text.
     let ctx = h.ctx.clone();
     for command in Command::ALL {
@@ -191,24 +191,24 @@ fn shortcuts_do_what_the_help_window_says() {
         assert!(h.query_all_by_label(command.tooltip()).next().is_some(), "help explains {command:?}");
     }
     press(&mut h, Modifiers::NONE, Key::Escape);
-    assert!(!h.state().show_help);
+    assert!(!h.state().view.show_help);
 
     // Each shortcut runs its command.
     press(&mut h, Modifiers::NONE, Key::R);
-    assert!(h.state().record);
+    assert!(h.state().session.record);
     press(&mut h, Modifiers::NONE, Key::R);
-    assert!(!h.state().record);
+    assert!(!h.state().session.record);
     let grid = h.state().view.grid;
     press(&mut h, Modifiers::NONE, Key::G);
     assert_eq!(h.state().view.grid, !grid);
     press(&mut h, Modifiers::NONE, Key::End);
-    assert_eq!(h.state().playback.whole_frame(), h.state().doc.scene().frame_range.end);
+    assert_eq!(h.state().session.playback.whole_frame(), h.state().doc.scene().frame_range.end);
     press(&mut h, Modifiers::NONE, Key::Home);
-    assert_eq!(h.state().playback.whole_frame(), h.state().doc.scene().frame_range.start);
+    assert_eq!(h.state().session.playback.whole_frame(), h.state().doc.scene().frame_range.start);
     press(&mut h, Modifiers::NONE, Key::ArrowRight);
-    assert_eq!(h.state().playback.whole_frame(), 1);
+    assert_eq!(h.state().session.playback.whole_frame(), 1);
     press(&mut h, Modifiers::NONE, Key::ArrowLeft);
-    assert_eq!(h.state().playback.whole_frame(), 0);
+    assert_eq!(h.state().session.playback.whole_frame(), 0);
     for (key, kind) in [
         (Key::Num1, keyrig_core::DeformerKind::Rigid),
         (Key::Num3, keyrig_core::DeformerKind::BonesBlending),
@@ -221,16 +221,16 @@ fn shortcuts_do_what_the_help_window_says() {
     // Space and Ctrl+P toggle playback (stop again so the harness settles).
     h.key_press(Key::Space);
     h.step();
-    assert!(h.state().playback.playing);
+    assert!(h.state().session.playback.playing);
     h.key_press(Key::Space);
     h.run();
-    assert!(!h.state().playback.playing);
+    assert!(!h.state().session.playback.playing);
     h.key_press_modifiers(Modifiers::COMMAND, Key::P);
     h.step();
-    assert!(h.state().playback.playing);
+    assert!(h.state().session.playback.playing);
     h.key_press_modifiers(Modifiers::COMMAND, Key::P);
     h.run();
-    assert!(!h.state().playback.playing);
+    assert!(!h.state().session.playback.playing);
     // Ctrl+N on a dirty document asks first; Discard goes ahead.
     assert!(h.state().doc.is_dirty(), "deformer switches are edits");
     press(&mut h, Modifiers::COMMAND, Key::N);
@@ -276,7 +276,11 @@ fn copy_paste_and_box_select_keys() {
     let missed: Vec<_> = all
         .iter()
         .filter(|(id, i)| {
-            !h.state().selection.keys.contains(&keyrig_editor::state::KeyRef { channel: *id, index: *i })
+            !h.state()
+                .session
+                .selection
+                .keys
+                .contains(&keyrig_editor::session::KeyRef { channel: *id, index: *i })
         })
         .collect();
     assert!(missed.is_empty(), "box selection missed {missed:?}");
@@ -298,8 +302,8 @@ fn dragging_a_key_diamond_moves_it_in_time_as_one_undo_step() {
         channels::key_times(scene, elbow).iter().map(|t| (t * scene.fps).round() as i64).collect();
     assert_eq!(frames, vec![0, 20, 30, 45, 75, 90]);
     // The moved key stays selected, and the whole drag is one undo step.
-    let selected: Vec<_> = h.state().selection.keys.iter().copied().collect();
-    assert_eq!(selected, vec![keyrig_editor::state::KeyRef { channel: elbow, index: 1 }]);
+    let selected: Vec<_> = h.state().session.selection.keys.iter().copied().collect();
+    assert_eq!(selected, vec![keyrig_editor::session::KeyRef { channel: elbow, index: 1 }]);
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert_eq!(h.state().doc.scene(), &original);
 }

@@ -12,7 +12,7 @@ use egui::{Event, Key};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_editor::channels::{ChannelId, ChannelValue};
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
 /// Clicks the number field labelled `label`, types `text` character by character (a frame
@@ -76,7 +76,7 @@ fn typing_end_does_not_pass_through_its_prefix() {
     let steps = h.state().doc.undo_len();
     type_into(&mut h, "End", "120", Key::Enter);
     assert_eq!(h.state().doc.scene().frame_range.end, 120);
-    assert_eq!(h.state().playback.whole_frame(), end, "the playhead did not visit frame 1 or 12");
+    assert_eq!(h.state().session.playback.whole_frame(), end, "the playhead did not visit frame 1 or 12");
     assert_eq!(h.state().doc.undo_len(), steps + 1);
     type_into(&mut h, "Start", "100", Key::Enter);
     assert_eq!(h.state().doc.scene().frame_range.start, 100);
@@ -106,7 +106,7 @@ fn typing_the_frame_field_moves_the_playhead_without_a_step() {
     let mut h = harness(dir.path(), None);
     let steps = h.state().doc.undo_len();
     type_into(&mut h, "Frame", "45", Key::Enter);
-    assert_eq!(h.state().playback.whole_frame(), 45);
+    assert_eq!(h.state().session.playback.whole_frame(), 45);
     assert_eq!(h.state().doc.undo_len(), steps);
 }
 
@@ -116,7 +116,7 @@ fn typing_an_inspector_value_is_one_step() {
     let mut h = harness(dir.path(), None);
     h.get_by_label("wrist").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(Selected::Joint { object: 0, joint: 3 }));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Joint { object: 0, joint: 3 }));
     let steps = h.state().doc.undo_len();
     type_into(&mut h, "Rotation (°) X", "12.5", Key::Enter);
     let wrist = ChannelId::JointRotation { object: 0, joint: 3 };
@@ -196,26 +196,30 @@ fn play_at_the_end_starts_from_the_first_frame() {
     let mut h = harness(dir.path(), None);
     h.get_by_label("🔁 Loop").click();
     h.run();
-    assert!(!h.state().playback.looping);
+    assert!(!h.state().session.playback.looping);
     h.key_press(Key::End);
     h.run();
     let range = h.state().doc.scene().frame_range;
-    assert_eq!(h.state().playback.whole_frame(), range.end);
+    assert_eq!(h.state().session.playback.whole_frame(), range.end);
     h.get_by_label("▶ Play").click();
     h.step();
-    assert!(h.state().playback.playing);
-    assert!(h.state().playback.frame < f64::from(range.start) + 5.0, "{}", h.state().playback.frame);
+    assert!(h.state().session.playback.playing);
+    assert!(
+        h.state().session.playback.frame < f64::from(range.start) + 5.0,
+        "{}",
+        h.state().session.playback.frame
+    );
     h.key_press(Key::Space);
     h.step();
-    assert!(!h.state().playback.playing);
+    assert!(!h.state().session.playback.playing);
     h.get_by_label("Every frame").click();
     h.step();
-    assert!(h.state().playback.every_frame);
-    let before = h.state().playback.frame;
+    assert!(h.state().session.playback.every_frame);
+    let before = h.state().session.playback.frame;
     h.key_press(Key::Space);
     h.step();
     h.step();
     h.step();
-    let advanced = h.state().playback.frame - before;
+    let advanced = h.state().session.playback.frame - before;
     assert!((1.0..=3.0).contains(&advanced), "one frame per drawn frame: {advanced}");
 }

@@ -9,7 +9,7 @@ use common::{corpus, harness, press};
 use egui::{Key, Modifiers};
 use egui_kittest::Harness;
 use keyrig_editor::camera::{Bounds, Projection};
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
 /// Every corner of `b` projects inside the viewport, and the box spans at least a third of
@@ -56,11 +56,11 @@ fn an_imported_fox_is_framed_and_f_frames_selection_and_scene() {
     assert!(near < d - bounds.radius() && far > d + bounds.radius(), "{near} {far} {d}");
 
     // F on the demo arm frames the arm; F with nothing selected frames everything.
-    h.state_mut().selection.item = Some(Selected::Object(0));
+    h.state_mut().session.selection.item = Some(Selected::Object(0));
     press(&mut h, Modifiers::NONE, Key::F);
     let arm = h.state().view.object_bounds[0].expect("the arm was drawn");
     assert_framed(h.state(), arm, "the arm after F");
-    h.state_mut().selection.item = None;
+    h.state_mut().session.selection.item = None;
     press(&mut h, Modifiers::NONE, Key::F);
     let all = h.state().view.bounds_of(None).expect("scene bounds");
     assert_framed(h.state(), all, "the scene after F with nothing selected");

@@ -17,7 +17,7 @@ use egui_kittest::Harness;
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_editor::camera::Projection;
 use keyrig_editor::channels::{self, ChannelId};
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
 /// The wrist of the demo arm: it has no keys in the demo scene.
@@ -113,7 +113,10 @@ fn world_turn(before: Quat, after: Quat) -> (f32, Vec3) {
 fn select_wrist(harness: &mut Harness<'_, EditorApp>) {
     harness.get_by_label("wrist").click();
     harness.run();
-    assert_eq!(harness.state().selection.item, Some(Selected::Joint { object: 0, joint: WRIST_JOINT }));
+    assert_eq!(
+        harness.state().session.selection.item,
+        Some(Selected::Joint { object: 0, joint: WRIST_JOINT })
+    );
 }
 
 fn key_frames(app: &EditorApp) -> Vec<i64> {
@@ -138,7 +141,7 @@ fn dragging_the_gizmo_in_record_mode_keys_the_joint_at_each_frame() {
     select_wrist(&mut h);
     h.get_by_label("⏺ Record").click();
     h.run();
-    assert!(h.state().record);
+    assert!(h.state().session.record);
     assert!(key_frames(h.state()).is_empty(), "the demo's wrist starts without keys");
 
     go_to_frame(&mut h, 10);
@@ -175,7 +178,7 @@ fn dragging_the_gizmo_without_record_mode_poses_until_i_keys_it() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
     select_wrist(&mut h);
-    assert!(!h.state().record);
+    assert!(!h.state().session.record);
     go_to_frame(&mut h, 15);
     let (_, forward) = wrist_on_screen(h.state());
     let before = rotation_of(wrist_world(h.state()));
@@ -248,7 +251,7 @@ fn dragging_the_gizmo_translates_lights_and_objects_and_records_keys() {
     // "Key" also names the light's dope-sheet row; the outliner's entry is a toggle.
     h.get_by_role_and_label(Role::Button, "Key").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(Selected::Light(0)));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Light(0)));
     let light = ChannelId::LightPosition(0);
     let keys_before = channels::key_count(h.state().doc.scene(), light);
     let light_position = |app: &EditorApp| match app.value_now(ChannelId::LightPosition(0)) {
@@ -265,7 +268,7 @@ fn dragging_the_gizmo_translates_lights_and_objects_and_records_keys() {
     // The object "Cube": translation keyed the same way.
     h.get_by_label("Cube").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(Selected::Object(1)));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Object(1)));
     let cube = ChannelId::ObjectTranslation(1);
     let cube_keys_before = channels::key_count(h.state().doc.scene(), cube);
     let cube_position = |app: &EditorApp| -> Vec3 {
@@ -291,7 +294,7 @@ fn dragging_a_spot_lights_view_ring_turns_its_direction() {
     go_to_frame(&mut h, 8);
     h.get_by_role_and_label(Role::Button, "Key").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(Selected::Light(0)));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Light(0)));
     let vec3 = |app: &EditorApp, id: ChannelId| match app.value_now(id) {
         Some(channels::ChannelValue::Vec3(v)) => v,
         other => panic!("{id:?} is a Vec3 channel, got {other:?}"),

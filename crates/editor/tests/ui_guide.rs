@@ -59,7 +59,7 @@ fn guide_walkthrough_twist_with_record_mode_and_tcb() {
     h.get_by_label("wrist").click();
     h.run();
     press(&mut h, Modifiers::NONE, Key::R);
-    assert!(h.state().record);
+    assert!(h.state().session.record);
 
     // 2. Key a twist: 0° at frame 0, 90° at 20, 180° at 40, 90° at 60, 0° at 80 (consecutive
     //    keys under 180° apart, so each segment turns the short way the intended direction).
@@ -77,7 +77,7 @@ fn guide_walkthrough_twist_with_record_mode_and_tcb() {
     go_to_frame(&mut h, 30);
     screenshot(&mut h, "guide_record");
     press(&mut h, Modifiers::NONE, Key::R);
-    assert!(!h.state().record);
+    assert!(!h.state().session.record);
 
     // 3. Shape the key at frame 40 with tension and bias; the curve view follows.
     h.get_by_label("key wrist rotation frame 40").click();
@@ -104,7 +104,7 @@ fn guide_walkthrough_twist_with_record_mode_and_tcb() {
 
     // 5. Help lists every shortcut.
     press(&mut h, Modifiers::NONE, Key::F12);
-    assert!(h.state().show_help);
+    assert!(h.state().view.show_help);
     screenshot(&mut h, "guide_help");
 }
 

@@ -13,7 +13,7 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_editor::app::DialogPurpose;
 use keyrig_editor::channels::{self, ChannelId};
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
 const ELBOW: ChannelId = ChannelId::JointRotation { object: 0, joint: 1 };
@@ -21,7 +21,7 @@ const ELBOW: ChannelId = ChannelId::JointRotation { object: 0, joint: 1 };
 fn select_elbow(h: &mut Harness<'_, EditorApp>) {
     h.get_by_label("elbow").click();
     h.run();
-    assert_eq!(h.state().selection.item, Some(Selected::Joint { object: 0, joint: 1 }));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Joint { object: 0, joint: 1 }));
 }
 
 /// A point of the viewport away from the selection's gizmo (its lower left).
@@ -99,7 +99,11 @@ fn scroll_and_pan_work_with_a_joint_selected() {
             "{button:?} {modifiers:?} drag pans with a joint selected"
         );
         assert_eq!((after.yaw_deg, after.pitch_deg), (camera.yaw_deg, camera.pitch_deg));
-        assert_eq!(h.state().selection.item, Some(Selected::Joint { object: 0, joint: 1 }), "still selected");
+        assert_eq!(
+            h.state().session.selection.item,
+            Some(Selected::Joint { object: 0, joint: 1 }),
+            "still selected"
+        );
     }
 
     // A left drag on empty space orbits and writes nothing.
@@ -135,7 +139,7 @@ fn copy_and_paste_events_move_keys_between_two_editors() {
     // Another editor window (its own clipboard empty) pastes what the system clipboard holds.
     let other_dir = tempfile::tempdir().expect("temp dir");
     let mut other = harness(other_dir.path(), None);
-    assert!(other.state().clipboard.is_empty());
+    assert!(other.state().session.clipboard.is_empty());
     go_to_frame(&mut other, 50);
     let before = channels::key_count(other.state().doc.scene(), ELBOW);
     other.event(Event::Paste(text.clone()));

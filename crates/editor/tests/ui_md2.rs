@@ -12,7 +12,7 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::MeshSource;
 use keyrig_editor::files::ImportPurpose;
-use keyrig_editor::state::Selected;
+use keyrig_editor::session::Selected;
 use keyrig_editor::{editor_for, EditorApp, EditorOptions};
 
 /// Object-space positions the viewport morphed for object `o` at `frame`.
@@ -81,7 +81,7 @@ fn clip_and_rate_are_edited_in_the_inspector_saved_and_reopened() {
     h.state_mut().import_path(corpus("md2/faerie/faerie.md2"));
     h.state_mut().wait_for_background_work();
     h.run();
-    h.state_mut().selection.item = Some(Selected::Object(o));
+    h.state_mut().session.selection.item = Some(Selected::Object(o));
     h.run();
     let mesh_of = |h: &Harness<'static, EditorApp>| h.state().doc.scene().objects[o].mesh.clone();
 
@@ -114,7 +114,7 @@ fn clip_and_rate_are_edited_in_the_inspector_saved_and_reopened() {
     assert_eq!(reopened.state().doc.scene(), &saved);
 
     // Undo takes back the rate, then the clip.
-    h.state_mut().selection.item = None;
+    h.state_mut().session.selection.item = None;
     h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
     h.run();
     let Some(MeshSource::File { fps, .. }) = mesh_of(&h) else { panic!("file mesh") };

@@ -31,40 +31,6 @@ pub struct InfoArgs {
     pub format: InfoFormat,
 }
 
-/// Loads the scene at `path` for a headless command. `.ron` scenes are read leniently (problems
-/// are returned beside the scene, located in the file); `.glb`/`.gltf` models are imported and
-/// mapped to a scene with keyrig-io's mapping (first animation), whose problems have no file
-/// position. MD2 models hold vertex animation, not channels, and are refused.
-pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, Vec<LocatedProblem>)> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("ron") => Ok(scene_file::load_lenient(path)?),
-        Some("glb" | "gltf") => {
-            let model = keyrig_io::gltf_import::import_gltf_file(path)?;
-            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let animation = (!model.animations.is_empty()).then_some(0);
-            let scene = model
-                .to_scene(&name, animation)
-                .with_context(|| format!("{}: mapping the model to a scene", path.display()))?;
-            let problems = scene
-                .problems()
-                .into_iter()
-                .map(|problem| LocatedProblem { problem, position: None })
-                .collect();
-            Ok((scene, problems))
-        }
-        Some("md2") => bail!(
-            "{}: MD2 models hold vertex animation (frames and clips), not channels; \
-             `keyrig {command}` reads .ron scenes and .glb/.gltf models",
-            path.display()
-        ),
-        _ => bail!(
-            "{}: unknown file type; `keyrig {command}` reads .ron scenes and .glb/.gltf models",
-            path.display()
-        ),
-    }
-}
-
 fn is_scene(path: &Path) -> bool {
     path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("ron"))
 }
@@ -143,7 +109,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     if is_md2 {
         return md2_info(&args);
     }
-    let (scene, mut problems) = load_scene_lenient(&args.file, "info")?;
+    let (scene, mut problems) = super::common::load_scene_lenient(&args.file, "info")?;
     if is_scene(&args.file) {
         problems.extend(
             mesh_problems(&scene, &keyrig_io::file_io::parent_or_dot(&args.file))
@@ -159,7 +125,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
                 + "\n"
         }
     };
-    super::sample::write_stdout(text.as_bytes())?;
+    super::common::write_stdout(text.as_bytes())?;
     if !problems.is_empty() {
         bail!(
             "{}: {} validation problem{}, listed above",
@@ -230,7 +196,7 @@ fn md2_info(args: &InfoArgs) -> anyhow::Result<()> {
             serde_json::to_string_pretty(&doc).context("writing JSON")? + "\n"
         }
     };
-    super::sample::write_stdout(text.as_bytes())
+    super::common::write_stdout(text.as_bytes())
 }
 
 fn mesh_text(mesh: Option<&MeshSource>) -> String {

@@ -137,7 +137,7 @@ impl FrameSource for SceneSource {
     }
 
     fn check(&self, frame: f64, what: &str) -> anyhow::Result<()> {
-        super::check_frame(self.rig.scene(), frame, what)
+        super::common::check_frame(self.rig.scene(), frame, what)
     }
 }
 

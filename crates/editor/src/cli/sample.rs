@@ -4,7 +4,6 @@
 //! spin keys gets one more column, `spin_deg`: the unwrapped angle turned since the start of
 //! the spin segment (empty outside spin segments); channels without spins print as before.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
@@ -163,18 +162,8 @@ fn tidy_degrees(degrees: f64) -> f64 {
     (degrees * 1e9).round() / 1e9 + 0.0
 }
 
-/// Writes to stdout; a closed pipe (`keyrig sample … | head`) is not an error.
-pub fn write_stdout(bytes: &[u8]) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
-    match out.write_all(bytes).and_then(|()| out.flush()) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-        Err(e) => Err(e).context("writing to standard output"),
-    }
-}
-
 pub fn run(args: SampleArgs) -> anyhow::Result<()> {
-    let (scene, problems) = super::info::load_scene_lenient(&args.file, "sample")?;
+    let (scene, problems) = super::common::load_scene_lenient(&args.file, "sample")?;
     if !(scene.fps.is_finite() && scene.fps > 0.0) {
         bail!(
             "{}: fps {} is not a positive number; cannot convert frames to time",
@@ -201,7 +190,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
         _ => format!("--time {}", v / scene.fps),
     };
     for &(frame, _) in instants.first().into_iter().chain(instants.last()) {
-        super::check_frame(&scene, frame, &flag(frame))?;
+        super::common::check_frame(&scene, frame, &flag(frame))?;
     }
     let rotation = match args.rotation_format {
         RotationFormatArg::Quat => RotationFormat::Quat,
@@ -274,7 +263,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
         }
     };
     match &args.output {
-        None => write_stdout(text.as_bytes()),
+        None => super::common::write_stdout(text.as_bytes()),
         Some(out) => {
             let mut inputs = vec![(args.file.clone(), "the input file".to_owned())];
             inputs.extend(keyrig_io::file_io::scene_inputs(&scene, args.file.parent()));

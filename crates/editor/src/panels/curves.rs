@@ -36,8 +36,8 @@ pub type Curve = Vec<(f64, f32)>;
 #[must_use]
 pub fn shown_channels(app: &EditorApp) -> Vec<ChannelId> {
     let scene = app.doc.scene();
-    let mut ids: Vec<ChannelId> = app.selection.channels(scene);
-    for k in &app.selection.keys {
+    let mut ids: Vec<ChannelId> = app.session.selection.channels(scene);
+    for k in &app.session.selection.keys {
         if !ids.contains(&k.channel) {
             ids.push(k.channel);
         }
@@ -246,7 +246,7 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
             visuals.weak_text_color(),
         );
     }
-    let x = to_screen(app.playback.frame, lo).x;
+    let x = to_screen(app.session.playback.frame, lo).x;
     painter.line_segment(
         [Pos2::new(x, plot.top()), Pos2::new(x, plot.bottom())],
         Stroke::new(1.5, Color32::from_rgb(90, 170, 255)),

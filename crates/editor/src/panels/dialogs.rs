@@ -8,7 +8,7 @@ use crate::commands::Command;
 
 /// The help window: every command with its shortcuts and tooltip.
 pub fn help_ui(ctx: &Context, app: &mut EditorApp) {
-    let mut open = app.show_help;
+    let mut open = app.view.show_help;
     egui::Window::new("Keyboard shortcuts").open(&mut open).resizable(true).default_width(520.0).show(
         ctx,
         |ui| {
@@ -24,7 +24,7 @@ pub fn help_ui(ctx: &Context, app: &mut EditorApp) {
             });
         },
     );
-    app.show_help = open && app.show_help;
+    app.view.show_help = open && app.view.show_help;
 }
 
 /// Asks what to do with unsaved changes before a pending New, Open or Quit.

@@ -10,7 +10,7 @@ use keyrig_core::{Cycle, DeformerKind, Interpolation, Tcb};
 use crate::app::EditorApp;
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::eval::{euler_degrees, quat_from_euler_degrees};
-use crate::state::Selected;
+use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::tcb_slider::tcb_slider_ui;
 
@@ -87,10 +87,10 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
     let keyed_here = channels::key_at(
         app.doc.scene(),
         id,
-        f64::from(app.playback.whole_frame()) / app.doc.scene().fps.max(1e-9),
+        f64::from(app.session.playback.whole_frame()) / app.doc.scene().fps.max(1e-9),
     )
     .is_some();
-    let marker = if app.overrides.contains_key(&id) {
+    let marker = if app.session.overrides.contains_key(&id) {
         "posed, press I to key"
     } else if keyed_here {
         "(keyed)"
@@ -181,7 +181,7 @@ fn twist_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, q: glam::Quat, grou
 
 fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
     let scene = app.doc.scene();
-    match app.selection.item {
+    match app.session.selection.item {
         None => {
             ui.label("Nothing selected. Click an object, joint or light in the outliner or the viewport.");
         }
@@ -319,7 +319,7 @@ fn mode_label(mode: Interpolation) -> &'static str {
 
 fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
     ui.strong("Key");
-    let keys: Vec<_> = app.selection.keys.iter().copied().collect();
+    let keys: Vec<_> = app.session.selection.keys.iter().copied().collect();
     let Some(first) = keys.first().copied() else {
         ui.weak("No key selected. Click a diamond in the dope sheet.");
         return;

@@ -4,8 +4,9 @@
 use egui::{Button, Ui};
 use keyrig_core::DeformerKind;
 
-use crate::app::{EditorApp, PendingAction, RenderStyle};
+use crate::app::{EditorApp, PendingAction};
 use crate::commands::Command;
+use crate::view::RenderStyle;
 
 /// A menu entry for `command`; runs it when clicked.
 fn command_button(ui: &mut Ui, app: &mut EditorApp, command: Command, checked: Option<bool>) {
@@ -81,7 +82,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                     command_button(ui, app, c, None);
                 }
                 ui.separator();
-                let record = app.record;
+                let record = app.session.record;
                 command_button(ui, app, Command::ToggleRecord, Some(record));
             });
             ui.menu_button("View", |ui| {
@@ -131,7 +132,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 }
             });
             ui.menu_button("Playback", |ui| {
-                let (playing, looping) = (app.playback.playing, app.playback.looping);
+                let (playing, looping) = (app.session.playback.playing, app.session.playback.looping);
                 command_button(ui, app, Command::PlayPause, Some(playing));
                 command_button(ui, app, Command::ToggleLoop, Some(looping));
                 for c in [Command::FirstFrame, Command::PrevFrame, Command::NextFrame, Command::LastFrame] {
@@ -148,7 +149,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
 
 fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
     ui.horizontal(|ui| {
-        let record = app.record;
+        let record = app.session.record;
         let rec_text = "⏺ Record";
         let tip = format!(
             "{} ({})",

@@ -1,5 +1,5 @@
 //! The editor's panels, one file each. Every panel is a `ui(ui, app)` function that draws
-//! itself into the window and changes the document only through [`crate::state::Document`].
+//! itself into the window and changes the document only through [`crate::document::Document`].
 
 pub mod curves;
 pub mod dialogs;

@@ -5,7 +5,7 @@ use egui::Ui;
 use keyrig_core::Skeleton;
 
 use crate::app::EditorApp;
-use crate::state::Selected;
+use crate::session::Selected;
 
 /// Indentation per tree level, points.
 const INDENT: f32 = 14.0;
@@ -17,7 +17,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             let mut clicked = None;
             let scene = app.doc.scene();
             for (o, object) in scene.objects.iter().enumerate() {
-                let selected = app.selection.item == Some(Selected::Object(o));
+                let selected = app.session.selection.item == Some(Selected::Object(o));
                 if ui.selectable_label(selected, object.name.as_str()).clicked() {
                     clicked = Some(Selected::Object(o));
                 }
@@ -26,7 +26,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                         let item = Selected::Joint { object: o, joint: j };
                         ui.horizontal(|ui| {
                             ui.add_space(INDENT * (1 + depth(skeleton, j)) as f32);
-                            let selected = app.selection.item == Some(item);
+                            let selected = app.session.selection.item == Some(item);
                             if ui.selectable_label(selected, skeleton.joints[j].name.as_str()).clicked() {
                                 clicked = Some(item);
                             }
@@ -36,13 +36,13 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             }
             ui.separator();
             for (l, light) in scene.lights.iter().enumerate() {
-                let selected = app.selection.item == Some(Selected::Light(l));
+                let selected = app.session.selection.item == Some(Selected::Light(l));
                 if ui.selectable_label(selected, light.name.as_str()).clicked() {
                     clicked = Some(Selected::Light(l));
                 }
             }
             if let Some(item) = clicked {
-                app.selection.item = Some(item);
+                app.session.selection.item = Some(item);
             }
         });
     });

@@ -9,10 +9,10 @@ use crate::app::EditorApp;
 pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     egui::Panel::bottom("status_bar").show_inside(ui, |ui| {
         ui.horizontal(|ui| {
-            if app.record {
+            if app.session.record {
                 ui.label(RichText::new("● REC").color(Color32::from_rgb(255, 80, 80)).strong());
             }
-            ui.label(format!("Frame {}", app.playback.whole_frame()));
+            ui.label(format!("Frame {}", app.session.playback.whole_frame()));
             if let Some(t) = app.frame_time {
                 ui.weak(format!("{:.1} ms/frame ({:.0} fps)", t * 1000.0, 1.0 / t.max(1e-6)));
             }

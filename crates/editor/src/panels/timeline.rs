@@ -10,26 +10,13 @@ use crate::app::EditorApp;
 use crate::channels::{self, ChannelId};
 use crate::commands::Command;
 use crate::panels::menu::tool_button;
-use crate::state::{KeyRef, Selected};
+use crate::session::{KeyRef, Selected};
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::key_diamond::key_diamond_ui;
 
 const ROW_HEIGHT: f32 = 17.0;
 const NAME_WIDTH: f32 = 170.0;
 const RULER_HEIGHT: f32 = 20.0;
-
-/// Interaction state of the dope sheet that lives across frames.
-#[derive(Clone, Debug, Default)]
-pub struct TimelineState {
-    /// Frames already applied by the current key drag.
-    drag_applied: i32,
-    /// Where a box selection started.
-    box_start: Option<Pos2>,
-    /// When the FPS changes, keys keep their frames (true) or their times in seconds (false).
-    pub keep_frames: bool,
-    /// (fps, start, end) when the current FPS drag started.
-    fps_drag_origin: Option<(f64, i32, i32)>,
-}
 
 /// One dope-sheet row.
 struct Row {
@@ -55,7 +42,7 @@ fn rows(app: &EditorApp) -> Vec<Row> {
             shows: all.clone(),
             item: Some(Selected::Object(o)),
         });
-        let selected_object = app.selection.item == Some(Selected::Object(o));
+        let selected_object = app.session.selection.item == Some(Selected::Object(o));
         for id in [ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)] {
             if keyed(id) || selected_object {
                 out.push(Row {
@@ -111,7 +98,7 @@ fn rows(app: &EditorApp) -> Vec<Row> {
             shows: all.clone(),
             item: Some(Selected::Light(l)),
         });
-        let selected = app.selection.item == Some(Selected::Light(l));
+        let selected = app.session.selection.item == Some(Selected::Light(l));
         for id in all {
             if keyed(id) || selected {
                 out.push(Row {
@@ -149,19 +136,19 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
     ui.horizontal(|ui| {
         tool_button(ui, app, Command::FirstFrame, "⏮", false);
         tool_button(ui, app, Command::PrevFrame, "⏴", false);
-        let playing = app.playback.playing;
+        let playing = app.session.playback.playing;
         tool_button(ui, app, Command::PlayPause, if playing { "⏸ Pause" } else { "▶ Play" }, playing);
         tool_button(ui, app, Command::NextFrame, "⏵", false);
         tool_button(ui, app, Command::LastFrame, "⏭", false);
-        let looping = app.playback.looping;
+        let looping = app.session.playback.looping;
         tool_button(ui, app, Command::ToggleLoop, "🔁 Loop", looping);
-        ui.checkbox(&mut app.playback.every_frame, "Every frame").on_hover_text(
+        ui.checkbox(&mut app.session.playback.every_frame, "Every frame").on_hover_text(
             "Checked: every frame is drawn, even when drawing is slower than the scene's fps \
              (slow motion). Unchecked (the default): real time, dropping frames to keep time.",
         );
-        if let Some(t) = app.frame_time.filter(|_| app.playback.playing) {
+        if let Some(t) = app.frame_time.filter(|_| app.session.playback.playing) {
             let fps = app.doc.scene().fps;
-            let achieved = app.playback.achieved_fps(f64::from(t), fps);
+            let achieved = app.session.playback.achieved_fps(f64::from(t), fps);
             ui.weak(format!("{achieved:.1}/{fps} fps"))
                 .on_hover_text("Scene frames shown per second while playing, against the scene's fps");
         }
@@ -170,7 +157,7 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
         let scene = app.doc.scene();
         let (mut start, mut end, mut fps) = (scene.frame_range.start, scene.frame_range.end, scene.fps);
         let (old_start, old_end, old_fps) = (start, end, fps);
-        let mut frame = app.playback.whole_frame();
+        let mut frame = app.session.playback.whole_frame();
         ui.label("Frame");
         let (_, change) = number_field(ui, &mut frame, "Frame", |d| d.range(start..=end));
         if change.any() {
@@ -182,7 +169,7 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
         let (_, end_change) = number_field(ui, &mut end, "End", |d| d);
         ui.label("FPS");
         let (_, fps_change) = number_field(ui, &mut fps, "FPS", |d| d.speed(0.1).max_decimals(3));
-        ui.checkbox(&mut app.timeline.keep_frames, "Keep key frames").on_hover_text(
+        ui.checkbox(&mut app.view.timeline.keep_frames, "Keep key frames").on_hover_text(
             "When the FPS changes: checked, keys stay on their frames (the animation plays \
              faster or slower, as Blender's time stretching); unchecked, keys keep their time \
              in seconds and move to other frames. Either way the frame range follows the keys.",
@@ -195,9 +182,9 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
             FieldChange::Dragged => {
                 // Computed from the fps at the start of the drag, so the range does not
                 // drift by rounding as the drag goes on.
-                let origin = *app.timeline.fps_drag_origin.get_or_insert((old_fps, old_start, old_end));
+                let origin = *app.view.timeline.fps_drag_origin.get_or_insert((old_fps, old_start, old_end));
                 let fps = if fps.is_finite() { fps.clamp(MIN_FPS, MAX_FPS) } else { old_fps };
-                let keep_frames = app.timeline.keep_frames;
+                let keep_frames = app.view.timeline.keep_frames;
                 app.doc.edit_continuous("fps", &fps_label(fps), |s| retime(s, origin, fps, keep_frames));
             }
             FieldChange::Committed => {
@@ -206,7 +193,7 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
                         "FPS must be between {MIN_FPS} and {MAX_FPS} (typed {fps}); it stays {old_fps}"
                     ));
                 } else {
-                    let keep_frames = app.timeline.keep_frames;
+                    let keep_frames = app.view.timeline.keep_frames;
                     let origin = (old_fps, old_start, old_end);
                     app.doc.close_group();
                     app.doc.edit(&fps_label(fps), |s| retime(s, origin, fps, keep_frames));
@@ -214,7 +201,7 @@ fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
             }
         }
         if !ui.input(|i| i.pointer.any_down()) {
-            app.timeline.fps_drag_origin = None;
+            app.view.timeline.fps_drag_origin = None;
         }
     });
 }
@@ -286,7 +273,7 @@ fn apply_range(
         });
     }
     // The playhead stays where it was unless the new range leaves it out.
-    let frame = app.playback.whole_frame();
+    let frame = app.session.playback.whole_frame();
     if frame < start || frame > end {
         app.set_frame(frame);
     }
@@ -361,7 +348,7 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
             let top = outer.top() + RULER_HEIGHT + r as f32 * ROW_HEIGHT;
             let row_rect =
                 Rect::from_min_max(Pos2::new(outer.left(), top), Pos2::new(outer.right(), top + ROW_HEIGHT));
-            let is_selected_item = row.item.is_some() && row.item == app.selection.item;
+            let is_selected_item = row.item.is_some() && row.item == app.session.selection.item;
             if is_selected_item {
                 painter.rect_filled(row_rect, 0.0, visuals.selection.bg_fill.gamma_multiply(0.35));
             } else if r % 2 == 1 {
@@ -390,7 +377,7 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
                         continue;
                     }
                     let key = KeyRef { channel: id, index };
-                    let selected = app.selection.keys.contains(&key);
+                    let selected = app.session.selection.keys.contains(&key);
                     if row.channel.is_none() {
                         // Summary rows show the keys of their channels, not editable.
                         let c = Pos2::new(x, y);
@@ -433,50 +420,50 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
         }
 
         // Current-frame line.
-        let x = frame_to_x(app.playback.frame, start, end, keys_area);
+        let x = frame_to_x(app.session.playback.frame, start, end, keys_area);
         painter.line_segment(
             [Pos2::new(x, outer.top()), Pos2::new(x, outer.bottom())],
             Stroke::new(2.0, Color32::from_rgb(90, 170, 255)),
         );
 
         if let Some(item) = clicked_item {
-            app.selection.item = Some(item);
+            app.session.selection.item = Some(item);
         }
         if let Some((key, additive)) = diamond_clicked {
             if additive {
-                if !app.selection.keys.remove(&key) {
-                    app.selection.keys.insert(key);
+                if !app.session.selection.keys.remove(&key) {
+                    app.session.selection.keys.insert(key);
                 }
             } else {
-                app.selection.keys = BTreeSet::from([key]);
+                app.session.selection.keys = BTreeSet::from([key]);
                 select_owner(app, key.channel);
             }
         }
         if let Some(key) = drag_started_on {
-            if !app.selection.keys.contains(&key) {
-                app.selection.keys = BTreeSet::from([key]);
+            if !app.session.selection.keys.contains(&key) {
+                app.session.selection.keys = BTreeSet::from([key]);
                 select_owner(app, key.channel);
             }
-            app.timeline.drag_applied = 0;
+            app.view.timeline.drag_applied = 0;
         }
         if let Some(dx) = dragging_delta {
             let frames_per_point = f64::from((end - start).max(1)) / f64::from(keys_area.width().max(1.0));
             let wanted = (f64::from(dx) * frames_per_point).round() as i32;
-            let step = wanted - app.timeline.drag_applied;
+            let step = wanted - app.view.timeline.drag_applied;
             if step != 0 && move_selected_keys(app, f64::from(step) / fps) {
-                app.timeline.drag_applied = wanted;
+                app.view.timeline.drag_applied = wanted;
             }
         }
         if drag_stopped {
             app.doc.close_group();
-            app.timeline.drag_applied = 0;
+            app.view.timeline.drag_applied = 0;
         }
 
         // Box selection on the background.
         if background.drag_started() {
-            app.timeline.box_start = ui.input(|i| i.pointer.press_origin());
+            app.view.timeline.box_start = ui.input(|i| i.pointer.press_origin());
         }
-        if let (Some(a), Some(b)) = (app.timeline.box_start, ui.input(|i| i.pointer.interact_pos())) {
+        if let (Some(a), Some(b)) = (app.view.timeline.box_start, ui.input(|i| i.pointer.interact_pos())) {
             let rect = Rect::from_two_pos(a, b);
             painter.rect_stroke(
                 rect,
@@ -487,7 +474,7 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
             if background.drag_stopped() {
                 let additive = ui.input(|i| i.modifiers.shift || i.modifiers.command);
                 if !additive {
-                    app.selection.keys.clear();
+                    app.session.selection.keys.clear();
                 }
                 for (r, row) in rows.iter().enumerate() {
                     let Some(id) = row.channel else { continue };
@@ -495,25 +482,25 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
                     for (index, time) in channels::key_times(app.doc.scene(), id).into_iter().enumerate() {
                         let x = frame_to_x(time * fps, start, end, keys_area);
                         if rect.contains(Pos2::new(x, y)) {
-                            app.selection.keys.insert(KeyRef { channel: id, index });
+                            app.session.selection.keys.insert(KeyRef { channel: id, index });
                         }
                     }
                 }
-                app.timeline.box_start = None;
+                app.view.timeline.box_start = None;
             }
         }
         if !background.dragged() && !background.drag_stopped() {
-            app.timeline.box_start = None;
+            app.view.timeline.box_start = None;
         }
         if background.clicked() {
-            app.selection.keys.clear();
+            app.session.selection.keys.clear();
         }
     });
 }
 
 /// Selects the scene item that owns `channel`.
 fn select_owner(app: &mut EditorApp, channel: ChannelId) {
-    app.selection.item = Some(match channel {
+    app.session.selection.item = Some(match channel {
         ChannelId::ObjectTranslation(o)
         | ChannelId::ObjectRotation(o)
         | ChannelId::ObjectScale(o)
@@ -532,7 +519,7 @@ fn select_owner(app: &mut EditorApp, channel: ChannelId) {
 /// when a key would land on another key.
 pub fn move_selected_keys(app: &mut EditorApp, delta: f64) -> bool {
     let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
-    for k in &app.selection.keys {
+    for k in &app.session.selection.keys {
         by_channel.entry(k.channel).or_default().push(k.index);
     }
     let mut trial = app.doc.scene().clone();
@@ -546,7 +533,7 @@ pub fn move_selected_keys(app: &mut EditorApp, delta: f64) -> bool {
         }
     }
     app.doc.edit_continuous("move keys", "move keys", |scene| *scene = trial);
-    app.selection.keys = new_keys;
+    app.session.selection.keys = new_keys;
     true
 }
 

@@ -8,12 +8,13 @@ use keyrig_core::LightKind;
 use transform_gizmo_egui::math::Transform;
 use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrientation, GizmoResult};
 
-use crate::app::{EditorApp, RenderStyle};
+use crate::app::EditorApp;
 use crate::camera::Projection;
 use crate::channels::{ChannelId, ChannelValue, Turn};
 use crate::eval::ObjectPose;
-use crate::state::Selected;
-use crate::twist::RingDrag;
+use crate::session::Selected;
+use crate::twist::{RingDrag, RingDragState};
+use crate::view::RenderStyle;
 
 /// Pick radius around joints and lights, points.
 const PICK_RADIUS: f32 = 9.0;
@@ -41,7 +42,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             }
         }
         let eval = app.evaluator();
-        let state = eval.evaluate(time, &app.overrides);
+        let state = eval.evaluate(time, &app.session.overrides);
         let poses: Vec<Option<ObjectPose>> =
             state.objects.iter().map(|s| Some(ObjectPose::from_state(s))).collect();
 
@@ -111,7 +112,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 draw_grid(&painter, &projection);
             }
             for (o, world, indices) in &cpu_meshes {
-                let selected = app.selection.item == Some(Selected::Object(*o));
+                let selected = app.session.selection.item == Some(Selected::Object(*o));
                 draw_mesh(&painter, &projection, &app.view.camera, world, indices, app.view.style, selected);
             }
         }
@@ -135,7 +136,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 if gpu_drawn || !app.view.bones {
                     continue;
                 }
-                let selected = app.selection.item == Some(Selected::Joint { object: o, joint: j });
+                let selected = app.session.selection.item == Some(Selected::Joint { object: o, joint: j });
                 let bone_colour =
                     if selected { Color32::from_rgb(255, 200, 60) } else { Color32::from_rgb(120, 200, 255) };
                 if let Some(p) = joint.parent.filter(|&p| p < j) {
@@ -159,7 +160,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         for ((l, light), light_state) in scene.lights.iter().enumerate().zip(&state.lights) {
             let pos = light_state.position;
             let Some(p) = projection.project(pos) else { continue };
-            let selected = app.selection.item == Some(Selected::Light(l));
+            let selected = app.session.selection.item == Some(Selected::Light(l));
             let colour = if selected {
                 Color32::from_rgb(255, 200, 60)
             } else if light.enabled {
@@ -204,7 +205,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                     .iter()
                     .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
                     .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)));
-                app.selection.item = hit.map(|(_, s)| *s);
+                app.session.selection.item = hit.map(|(_, s)| *s);
             }
         }
         if response.contains_pointer() {
@@ -238,7 +239,7 @@ fn gpu_ui(
         grid: app.view.grid,
         skeletons: app.view.bones,
         motion_path: app.view.motion_path,
-        selection: crate::gpu_view::selection_for(app.selection.item),
+        selection: crate::gpu_view::selection_for(app.session.selection.item),
         camera: Some(keyrig_core::Camera {
             target: c.target,
             yaw_deg: c.yaw_deg,
@@ -272,7 +273,7 @@ fn gpu_ui(
         rig_key,
         evaluator: std::sync::Arc::clone(eval),
         state,
-        overrides: &app.overrides,
+        overrides: &app.session.overrides,
         view,
         morph_meshes,
         materials,
@@ -358,7 +359,7 @@ fn draw_axes(painter: &egui::Painter, projection: &Projection, world_from_object
 }
 
 fn overlay_ui(painter: &egui::Painter, rect: Rect, app: &EditorApp, errors: &[String]) {
-    let mut lines = vec![format!("Frame {}  ·  {:.2} s", app.playback.whole_frame(), app.time())];
+    let mut lines = vec![format!("Frame {}  ·  {:.2} s", app.session.playback.whole_frame(), app.time())];
     if let Some(o) =
         app.selected_object().or_else(|| app.doc.scene().objects.iter().position(|x| x.skeleton.is_some()))
     {
@@ -388,7 +389,7 @@ fn overlay_ui(painter: &egui::Painter, rect: Rect, app: &EditorApp, errors: &[St
             Color32::from_rgb(255, 110, 110),
         );
     }
-    if app.record {
+    if app.session.record {
         painter.rect_stroke(
             rect.shrink(1.0),
             0.0,
@@ -407,7 +408,7 @@ fn overlay_ui(painter: &egui::Painter, rect: Rect, app: &EditorApp, errors: &[St
 
 /// The world transform the gizmo edits for the selection, and which channels it drives.
 fn gizmo_target(app: &EditorApp, poses: &[Option<ObjectPose>]) -> Option<(Affine3A, GizmoKind)> {
-    match app.selection.item? {
+    match app.session.selection.item? {
         Selected::Joint { object, joint } => {
             let pose = poses.get(object)?.as_ref()?;
             Some((
@@ -650,20 +651,6 @@ const AXIS_RING_RADIUS: f32 = 75.0;
 /// Screen radius of its view-axis ring (gizmo_size + stroke width + 5).
 const VIEW_RING_RADIUS: f32 = 84.0;
 
-/// A drag on a rotation ring that the editor turns itself (see [`RingDrag`]).
-#[derive(Clone, Debug)]
-pub struct RingDragState {
-    pub drag: RingDrag,
-    /// The rotation channel turned (a joint's or an object's).
-    pub channel: ChannelId,
-    /// World rotation of the frame the channel's value is expressed in (the parent joint's
-    /// world rotation times the joint's rest rotation; identity for an object), so that the
-    /// world axis `a` is `frame⁻¹·a` in the channel's frame.
-    pub frame: Quat,
-    /// Degrees already applied to the channel during this drag.
-    pub applied: f64,
-}
-
 /// The rotation channel the gizmo's rings turn for a joint or object, and the world rotation
 /// of the frame its value is expressed in.
 fn rotation_channel(
@@ -757,7 +744,7 @@ fn paint_gizmo(ui: &Ui, gizmo: &transform_gizmo_egui::Gizmo, rect: Rect) {
 /// "Cross-section at elbow: 0.98 × rest" for the selected joint, from the last skinned frame.
 #[must_use]
 pub fn measure_text(app: &EditorApp) -> Option<String> {
-    let Some(Selected::Joint { object, joint }) = app.selection.item else { return None };
+    let Some(Selected::Joint { object, joint }) = app.session.selection.item else { return None };
     let name = app.doc.scene().objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone();
     Some(match app.skin.cross_section(object, joint)? {
         Ok(section) => format!("Cross-section at {name}: {:.2} × rest", section.ratio()),

@@ -9,7 +9,7 @@ use egui::{DragValue, Response, Ui};
 pub enum FieldChange {
     /// Nothing to apply.
     None,
-    /// The value moves under a drag: apply it with [`crate::state::Document::edit_continuous`];
+    /// The value moves under a drag: apply it with [`crate::document::Document::edit_continuous`];
     /// the group closes when the drag is released.
     Dragged,
     /// A typed value was committed (Enter or focus lost), or set by an arrow key or a screen

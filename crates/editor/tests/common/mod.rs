@@ -78,7 +78,7 @@ pub fn go_to_frame(h: &mut Harness<'_, EditorApp>, frame: i32) {
     for _ in 0..frame {
         press(h, Modifiers::NONE, Key::ArrowRight);
     }
-    assert_eq!(h.state().playback.whole_frame(), frame);
+    assert_eq!(h.state().session.playback.whole_frame(), frame);
 }
 
 /// Sets a drag value or slider found by its role and accessible label, as a screen reader

@@ -1,16 +1,12 @@
-//! Editor state kept apart from the UI: the [`Document`] (scene, file, dirty flag, undo
-//! history), the [`Selection`] and the [`Playback`] clock.
+//! The document: the scene being edited, its file, dirty flag and undo history.
 //!
 //! Every change to the scene goes through [`Document::edit`] (or [`Document::edit_continuous`]
 //! for drags), which records a whole-scene snapshot for undo. Widgets never keep their own
 //! undo state.
 
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use keyrig_core::Scene;
-
-use crate::channels::ChannelId;
 
 /// How many undo steps are kept.
 pub const UNDO_LIMIT: usize = 200;
@@ -216,165 +212,6 @@ impl Document {
     }
 }
 
-/// What is selected in the scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Selected {
-    Object(usize),
-    Joint { object: usize, joint: usize },
-    Light(usize),
-}
-
-/// One key of one channel (index into the channel's track).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct KeyRef {
-    pub channel: ChannelId,
-    pub index: usize,
-}
-
-/// The selected scene item and the selected keys.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Selection {
-    pub item: Option<Selected>,
-    pub keys: BTreeSet<KeyRef>,
-}
-
-impl Selection {
-    /// The channels the selected item owns (a joint's rotation, an object's transform, a light's
-    /// channels).
-    #[must_use]
-    pub fn channels(&self, scene: &Scene) -> Vec<ChannelId> {
-        match self.item {
-            Some(Selected::Object(o)) => {
-                vec![ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)]
-                    .into_iter()
-                    .filter(|_| o < scene.objects.len())
-                    .collect()
-            }
-            Some(Selected::Joint { object, joint }) => {
-                let exists = scene
-                    .objects
-                    .get(object)
-                    .and_then(|o| o.skeleton.as_ref())
-                    .is_some_and(|s| joint < s.joints.len());
-                if exists {
-                    ChannelId::of_object(scene, object)
-                        .into_iter()
-                        .filter(|id| {
-                            matches!(id, ChannelId::JointTranslation { joint: j, .. }
-                                | ChannelId::JointRotation { joint: j, .. }
-                                | ChannelId::JointScale { joint: j, .. } if *j == joint)
-                        })
-                        .collect()
-                } else {
-                    Vec::new()
-                }
-            }
-            Some(Selected::Light(l)) if l < scene.lights.len() => ChannelId::of_light(l).to_vec(),
-            _ => Vec::new(),
-        }
-    }
-
-    /// Drops selections that no longer exist in `scene` (after undo, open, delete).
-    pub fn retain_valid(&mut self, scene: &Scene) {
-        let item_ok = match self.item {
-            None => true,
-            Some(Selected::Object(o)) => o < scene.objects.len(),
-            Some(Selected::Joint { object, joint }) => scene
-                .objects
-                .get(object)
-                .and_then(|o| o.skeleton.as_ref())
-                .is_some_and(|s| joint < s.joints.len()),
-            Some(Selected::Light(l)) => l < scene.lights.len(),
-        };
-        if !item_ok {
-            self.item = None;
-        }
-        self.keys.retain(|k| k.index < crate::channels::key_count(scene, k.channel));
-    }
-}
-
-/// The playback clock. The current time is kept in frames (fractional while playing).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Playback {
-    pub frame: f64,
-    pub playing: bool,
-    pub looping: bool,
-    /// Every-frame playback: each drawn frame advances one scene frame, however long it
-    /// took (slow motion when drawing is slower than the scene's fps). Off (the default) is
-    /// real-time playback: the clock follows the wall clock and drops frames to keep time.
-    pub every_frame: bool,
-}
-
-impl Default for Playback {
-    fn default() -> Self {
-        Playback { frame: 0.0, playing: false, looping: true, every_frame: false }
-    }
-}
-
-impl Playback {
-    /// Current time in seconds for a scene running at `fps`.
-    #[must_use]
-    pub fn time(&self, fps: f64) -> f64 {
-        if fps > 0.0 {
-            self.frame / fps
-        } else {
-            0.0
-        }
-    }
-
-    /// The whole frame the clock is on (what keys are written at).
-    #[must_use]
-    pub fn whole_frame(&self) -> i32 {
-        self.frame.round() as i32
-    }
-
-    /// Advances by `dt` seconds at `fps`, looping or stopping at the end of `[start, end]`.
-    pub fn advance(&mut self, dt: f64, fps: f64, start: i32, end: i32) {
-        if !(self.playing && dt.is_finite() && fps.is_finite() && fps > 0.0) {
-            return;
-        }
-        let (start, end) = (f64::from(start), f64::from(end.max(start)));
-        self.frame += if self.every_frame { 1.0 } else { dt * fps };
-        if self.frame > end {
-            if self.looping && end > start {
-                self.frame = start + (self.frame - start) % (end - start);
-            } else {
-                self.frame = end;
-                self.playing = false;
-            }
-        }
-        if self.frame < start {
-            self.frame = start;
-        }
-    }
-
-    /// Starts or stops playback; starting at (or past) the end with looping off starts from
-    /// `start`, as a player's Play at the end of a clip does.
-    pub fn toggle_play(&mut self, start: i32, end: i32) {
-        if !self.playing && !self.looping && self.frame >= f64::from(end) {
-            self.frame = f64::from(start);
-        }
-        self.playing = !self.playing;
-    }
-
-    /// Scene frames shown per second while playing, given the smoothed seconds between drawn
-    /// frames: every drawn frame in every-frame mode, at most the scene's fps in real time.
-    #[must_use]
-    pub fn achieved_fps(&self, frame_time: f64, fps: f64) -> f64 {
-        let drawn = 1.0 / frame_time.max(1e-6);
-        if self.every_frame {
-            drawn
-        } else {
-            drawn.min(fps)
-        }
-    }
-
-    /// Jumps to a whole frame, clamped to `[start, end]`.
-    pub fn go_to(&mut self, frame: i32, start: i32, end: i32) {
-        self.frame = f64::from(frame.clamp(start, end.max(start)));
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -415,39 +252,6 @@ mod tests {
         assert!(doc.undo());
         assert_eq!(doc.scene().fps, 30.0);
         assert!(!doc.undo());
-    }
-
-    #[test]
-    fn playback_loops_and_stops() {
-        let mut p = Playback { frame: 9.0, playing: true, looping: true, every_frame: false };
-        p.advance(0.1, 30.0, 0, 10);
-        assert!((p.frame - 2.0).abs() < 1e-9, "{}", p.frame);
-        let mut p = Playback { frame: 9.0, playing: true, looping: false, every_frame: false };
-        p.advance(0.1, 30.0, 0, 10);
-        assert_eq!(p.frame, 10.0);
-        assert!(!p.playing);
-        // Play at the end with looping off starts from the first frame.
-        p.toggle_play(0, 10);
-        assert!(p.playing);
-        assert_eq!(p.frame, 0.0);
-        // With looping on, Play at the end stays (the next step wraps).
-        let mut p = Playback { frame: 10.0, playing: false, looping: true, every_frame: false };
-        p.toggle_play(0, 10);
-        assert_eq!(p.frame, 10.0);
-    }
-
-    #[test]
-    fn real_time_drops_frames_and_every_frame_does_not() {
-        // A slow draw (0.1 s) at 30 fps: real time jumps 3 frames, every-frame mode 1.
-        let mut p = Playback { frame: 0.0, playing: true, looping: true, every_frame: false };
-        p.advance(0.1, 30.0, 0, 100);
-        assert!((p.frame - 3.0).abs() < 1e-9);
-        assert!((p.achieved_fps(0.1, 30.0) - 10.0).abs() < 1e-9);
-        assert!((p.achieved_fps(0.01, 30.0) - 30.0).abs() < 1e-9, "never above the scene's fps");
-        p.every_frame = true;
-        p.advance(0.1, 30.0, 0, 100);
-        assert!((p.frame - 4.0).abs() < 1e-9);
-        assert!((p.achieved_fps(0.01, 30.0) - 100.0).abs() < 1e-6);
     }
 
     #[test]

@@ -1,0 +1,94 @@
+//! The view: how the editor looks at the document — the orbit camera, viewport options and
+//! the panels' interaction state. Changing it never touches the document or its undo history.
+
+use crate::camera::{Bounds, OrbitCamera};
+
+/// How the viewport draws meshes: keyrig-render's one type (solid, wireframe, points).
+pub use keyrig_render::RenderStyle;
+
+/// How the editor looks at the document: the camera, viewport options and the panels' own
+/// state. Not saved with the scene (the camera is copied to it on save) and not undone.
+#[derive(Clone, Debug)]
+pub struct ViewState {
+    pub camera: OrbitCamera,
+    pub grid: bool,
+    pub bones: bool,
+    /// Draw the selected object's or joint's motion path (GPU viewport).
+    pub motion_path: bool,
+    /// Pixels of the GPU viewport per screen pixel: 1 (full, the default) or 0.5 (half, four
+    /// times fewer pixels to rasterize).
+    pub resolution_scale: f32,
+    /// 4× MSAA in the GPU viewport (off by default on a CPU rasterizer, where it costs more
+    /// than the rest of the viewport).
+    pub antialiasing: bool,
+    pub style: RenderStyle,
+    /// Where the viewport was laid out in the last frame (screen points), for picking tools
+    /// and tests that aim at what the viewport shows.
+    pub viewport_rect: Option<egui::Rect>,
+    /// Where the curve view was laid out this frame; it is painted at the end of the frame
+    /// ([`crate::panels::curves::paint_pending`]) so that edits made later in the frame (a
+    /// slider in the inspector, a gizmo in the viewport) show in the same frame.
+    pub pending_curves: Option<(egui::LayerId, egui::Rect)>,
+    /// World bounds of each object as drawn in the last frame (deformed mesh, or joints and
+    /// origin), by object index: framing (F, imports) and the clip planes use them.
+    pub object_bounds: Vec<Option<Bounds>>,
+    /// Objects to frame once their bounds are known (after an import or opening a model).
+    pub frame_request: Option<Vec<usize>>,
+    /// Draw materials (glTF base colour and texture, MD2 skins); off shows the plain
+    /// per-object colours.
+    pub textures: bool,
+    /// The dope sheet's interaction state.
+    pub timeline: TimelineState,
+    /// The shortcut list (F12) is open.
+    pub show_help: bool,
+}
+
+impl ViewState {
+    /// The default view of a scene: its camera, grid, bones and motion paths on.
+    #[must_use]
+    pub fn new(camera: OrbitCamera) -> Self {
+        ViewState {
+            camera,
+            grid: true,
+            bones: true,
+            motion_path: true,
+            resolution_scale: 1.0,
+            antialiasing: true,
+            style: RenderStyle::Solid,
+            viewport_rect: None,
+            pending_curves: None,
+            object_bounds: Vec::new(),
+            frame_request: None,
+            textures: true,
+            timeline: TimelineState::default(),
+            show_help: false,
+        }
+    }
+
+    /// The union of the bounds of `objects` (all when `None`).
+    #[must_use]
+    pub fn bounds_of(&self, objects: Option<&[usize]>) -> Option<Bounds> {
+        let pick = |o: usize| self.object_bounds.get(o).copied().flatten();
+        let all: Vec<usize> = (0..self.object_bounds.len()).collect();
+        objects.unwrap_or(&all).iter().filter_map(|&o| pick(o)).reduce(Bounds::union)
+    }
+
+    /// Width / height of the viewport (16:10 before the first frame).
+    #[must_use]
+    pub fn aspect(&self) -> f32 {
+        self.viewport_rect.map_or(1.6, |r| r.width() / r.height().max(1.0))
+    }
+}
+
+/// Interaction state of the dope sheet that lives across frames.
+#[derive(Clone, Debug, Default)]
+pub struct TimelineState {
+    /// Frames already applied by the current key drag.
+    pub(crate) drag_applied: i32,
+    /// Where a box selection started.
+    pub(crate) box_start: Option<egui::Pos2>,
+    /// When the FPS changes, keys keep their frames (true) or their times in seconds (false).
+    pub keep_frames: bool,
+    /// (fps, start, end) when the current FPS drag started.
+    pub(crate) fps_drag_origin: Option<(f64, i32, i32)>,
+}
