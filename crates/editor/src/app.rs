@@ -619,7 +619,7 @@ impl EditorApp {
                 self.recent.add(&path);
                 self.info(format!("Opened {}", path.display()));
             }
-            Err(e) => self.error(e),
+            Err(e) => self.error(e.to_string()),
         }
     }
 
@@ -634,14 +634,14 @@ impl EditorApp {
     /// Saves to `path`.
     pub fn save_to(&mut self, path: PathBuf) {
         let scene = self.doc.scene();
-        match files::save_scene(&path, scene) {
+        match keyrig_io::project::save_scene(&path, scene) {
             Ok(()) => {
                 self.doc.mark_saved(path.clone());
                 self.autosave.clear();
                 self.recent.add(&path);
                 self.info(format!("Saved {}", path.display()));
             }
-            Err(e) => self.error(e),
+            Err(e) => self.error(e.to_string()),
         }
     }
 
@@ -697,7 +697,7 @@ impl EditorApp {
         let base_dir = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
         match files::export_gltf(&path, self.doc.scene(), base_dir.as_deref()) {
             Ok(()) => self.info(format!("Exported {}", path.display())),
-            Err(e) => self.error(e),
+            Err(e) => self.error(e.to_string()),
         }
     }
 
@@ -818,7 +818,7 @@ impl EditorApp {
         let imported = match import.finish() {
             Ok(imported) => imported,
             Err(e) => {
-                self.error(e);
+                self.error(e.to_string());
                 return;
             }
         };

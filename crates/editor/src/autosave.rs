@@ -25,7 +25,7 @@ struct State {
     /// When the pending scene is to be written.
     due: Option<Instant>,
     /// The last write's error, for the status bar.
-    error: Option<String>,
+    error: Option<crate::files::FileError>,
     /// Recovery files written so far.
     writes: u64,
     stop: bool,
@@ -101,7 +101,7 @@ impl Autosave {
 
     /// The error of the last write, once (the status bar shows it).
     #[must_use]
-    pub fn take_error(&self) -> Option<String> {
+    pub fn take_error(&self) -> Option<crate::files::FileError> {
         lock(&self.shared).error.take()
     }
 

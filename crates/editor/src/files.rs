@@ -15,7 +15,63 @@ use std::time::{Duration, Instant};
 
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::Scene;
+use keyrig_io::project::{load_scene, save_scene};
 use keyrig_render::{MorphClip, MorphMesh, SkinnedVertex};
+
+/// Why a file could not be opened, imported, exported or kept. Clone: the [`MeshStore`]
+/// keeps a failed load's error to show it every frame without reading the file again.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum FileError {
+    #[error(transparent)]
+    Scene(Arc<keyrig_io::scene_file::SceneFileError>),
+    #[error(transparent)]
+    Gltf(Arc<keyrig_io::gltf_import::GltfError>),
+    #[error("{}: {source}", path.display())]
+    Md2 { path: PathBuf, source: Arc<keyrig_io::md2::Md2Error> },
+    #[error("{}: {source}", path.display())]
+    Mapping { path: PathBuf, source: Arc<keyrig_io::model::MappingError> },
+    #[error("{}: {source}", path.display())]
+    SkinnedMesh { path: PathBuf, source: Arc<keyrig_io::model::MappingError> },
+    #[error("{}: {source}", path.display())]
+    Morph { path: PathBuf, source: keyrig_render::MorphError },
+    #[error("{}: {source}", path.display())]
+    Export { path: PathBuf, source: Arc<keyrig_io::gltf_export::ExportError> },
+    #[error("{}: cannot read: {source}", path.display())]
+    Read { path: PathBuf, source: Arc<std::io::Error> },
+    #[error("{}: cannot write: {source}", path.display())]
+    Write { path: PathBuf, source: Arc<std::io::Error> },
+    #[error("{}: cannot create folder: {source}", path.display())]
+    Folder { path: PathBuf, source: Arc<std::io::Error> },
+    #[error("{}: unknown file type .{extension} (expected .ron, .glb, .gltf or .md2)", path.display())]
+    UnknownType { path: PathBuf, extension: String },
+    #[error("{}: no file extension (expected .ron, .glb, .gltf or .md2)", path.display())]
+    NoExtension { path: PathBuf },
+    #[error("{}: the editor shows meshes of glTF and MD2 files only", path.display())]
+    NotAMeshFile { path: PathBuf },
+    #[error("{}: no node shows mesh {index}", path.display())]
+    NoSuchMesh { path: PathBuf, index: usize },
+    #[error("{}: the import stopped unexpectedly", path.display())]
+    ImportStopped { path: PathBuf },
+    #[error("no data folder for the recovery file")]
+    NoDataFolder,
+    /// A file of an object of the scene (`at` names the object).
+    #[error("{at}: {source}")]
+    OfObject { at: String, source: Box<FileError> },
+    #[error("{at}: `{path}` has no skin; only skinned glTF meshes are drawn")]
+    NotSkinned { at: String, path: String },
+}
+
+impl From<keyrig_io::scene_file::SceneFileError> for FileError {
+    fn from(e: keyrig_io::scene_file::SceneFileError) -> Self {
+        FileError::Scene(Arc::new(e))
+    }
+}
+
+impl From<keyrig_io::gltf_import::GltfError> for FileError {
+    fn from(e: keyrig_io::gltf_import::GltfError) -> Self {
+        FileError::Gltf(Arc::new(e))
+    }
+}
 
 /// MD2 models are Z-up in Quake units; keyrig scenes are Y-up in metres. An MD2 object gets
 /// this rotation (−90° about X: Quake's +Z becomes +Y, its +X stays +X and its +Y becomes −Z)
@@ -141,64 +197,11 @@ pub fn file_dialog(
     dialog
 }
 
-/// Loads a scene file. Model paths relative to the file's folder become absolute in memory,
-/// so that the document (and its undo history) does not depend on where it is saved next.
-pub fn load_scene(path: &Path) -> Result<Scene, String> {
-    let mut scene = keyrig_io::scene_file::load(path).map_err(|e| e.to_string())?;
-    let folder = path.parent().map(|p| fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf()));
-    if let Some(folder) = folder {
-        map_model_paths(&mut scene, |p| {
-            let file = Path::new(p);
-            (!file.is_absolute()).then(|| folder.join(file).to_string_lossy().into_owned())
-        });
-    }
-    Ok(scene)
-}
-
-/// Saves a scene file atomically (keyrig-io keeps the previous file as a backup). Models that
-/// lie below the file's folder are written with paths relative to it (`/`-separated), so the
-/// folder can be moved or shared; others keep their absolute paths.
-pub fn save_scene(path: &Path, scene: &Scene) -> Result<(), String> {
-    let portable = portable_scene(path, scene);
-    keyrig_io::scene_file::save(path, &portable).map_err(|e| e.to_string())
-}
-
-/// `scene` with the model paths below `scene_file`'s folder made relative to it.
-#[must_use]
-pub fn portable_scene(scene_file: &Path, scene: &Scene) -> Scene {
-    let mut out = scene.clone();
-    let Some(folder) = scene_file.parent() else { return out };
-    let folder = fs::canonicalize(folder).unwrap_or_else(|_| folder.to_path_buf());
-    map_model_paths(&mut out, |p| {
-        let file = Path::new(p);
-        if !file.is_absolute() {
-            return None;
-        }
-        let file = fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
-        let relative = file.strip_prefix(&folder).ok()?;
-        let parts: Vec<String> =
-            relative.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
-        (!parts.is_empty()).then(|| parts.join("/"))
-    });
-    out
-}
-
-/// Replaces each model path `p` of the scene by `change(p)` where that is `Some`.
-fn map_model_paths(scene: &mut Scene, mut change: impl FnMut(&str) -> Option<String>) {
-    for object in &mut scene.objects {
-        if let Some(keyrig_core::MeshSource::File { path, .. }) = &mut object.mesh {
-            if let Some(new) = change(path) {
-                *path = new;
-            }
-        }
-    }
-}
-
 /// Opens a scene file, or a model as a new scene (synchronously; the editor's menus use
 /// [`BackgroundImport`] for models).
-pub fn open_any(path: &Path) -> Result<Scene, String> {
+pub fn open_any(path: &Path) -> Result<Scene, FileError> {
     if is_scene_file(path) {
-        load_scene(path)
+        Ok(load_scene(path)?)
     } else {
         let (mut scene, read) = read_model(path, &mut |_, _| {})?;
         let meshes = load_meshes_of(&scene, read, &mut |_| {});
@@ -215,7 +218,7 @@ pub fn open_any(path: &Path) -> Result<Scene, String> {
 /// ground; the frame range covers one loop of it. The
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
-pub fn import_model(path: &Path) -> Result<Scene, String> {
+pub fn import_model(path: &Path) -> Result<Scene, FileError> {
     read_model(path, &mut |_, _| {}).map(|(scene, _)| scene)
 }
 
@@ -226,16 +229,16 @@ type ProgressFn<'a> = &'a mut dyn FnMut(&str, Option<f32>);
 /// they need not be read again, reporting its stages to `progress`: glTF is read and parsed
 /// by keyrig-io in one step (no fraction); an MD2 file is read in chunks (fraction of its
 /// bytes), then parsed (no fraction).
-fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<LoadedMesh>), String> {
+fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<LoadedMesh>), FileError> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
             progress("reading and parsing", None);
-            let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
+            let model = keyrig_io::gltf_import::import_gltf_file(path)?;
             let animation = (!model.animations.is_empty()).then_some(0);
             let scene = model
                 .to_scene(&absolute().to_string_lossy(), animation)
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+                .map_err(|e| FileError::Mapping { path: path.to_path_buf(), source: Arc::new(e) })?;
             Ok((scene, Vec::new()))
         }
         Some("md2") => {
@@ -262,19 +265,17 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
                 object.translation = keyrig_core::Animated::constant(Vec3::Y * (-lowest * MD2_SCALE));
             }
             scene.objects.push(object);
-            let seconds =
-                mesh.clip_duration(None, keyrig_core::MD2_DEFAULT_FPS).map_err(|e| e.to_string())?;
+            let seconds = mesh
+                .clip_duration(None, keyrig_core::MD2_DEFAULT_FPS)
+                .map_err(|source| FileError::Morph { path: path.to_path_buf(), source })?;
             scene.frame_range.end = frame_range_end(seconds, scene.fps);
             Ok((
                 scene,
                 vec![((PathBuf::from(file), None), Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)))],
             ))
         }
-        Some(other) => Err(format!(
-            "{}: unknown file type .{other} (expected .ron, .glb, .gltf or .md2)",
-            path.display()
-        )),
-        None => Err(format!("{}: no file extension (expected .ron, .glb, .gltf or .md2)", path.display())),
+        Some(other) => Err(FileError::UnknownType { path: path.to_path_buf(), extension: other.to_owned() }),
+        None => Err(FileError::NoExtension { path: path.to_path_buf() }),
     }
 }
 
@@ -282,9 +283,9 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
 const READ_CHUNK: usize = 256 * 1024;
 
 /// Reads a whole file in chunks, reporting the fraction of its bytes read after each.
-fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<u8>, String> {
+fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<u8>, FileError> {
     use std::io::Read as _;
-    let cannot = |e: std::io::Error| format!("{}: cannot read: {e}", path.display());
+    let cannot = |e: std::io::Error| FileError::Read { path: path.to_path_buf(), source: Arc::new(e) };
     // A regular file within the MD2 size limit (never a FIFO or a device), checked before
     // reading; the reads below stop at the limit too.
     let limit = keyrig_io::file_io::MAX_MD2_BYTES;
@@ -311,10 +312,11 @@ fn read_with_progress(path: &Path, progress: &mut dyn FnMut(f32)) -> Result<Vec<
 /// The morph mesh of the MD2 file `path` whose bytes are `data`, textured with its skin
 /// when one is found beside it ([`keyrig_io::md2::load_skin`]; a skin that cannot be decoded
 /// leaves the model untextured rather than unreadable).
-fn md2_morph_mesh(path: &Path, data: &[u8]) -> Result<MorphMesh, String> {
-    let mut model = keyrig_io::md2::parse_md2(data).map_err(|e| format!("{}: {e}", path.display()))?;
+fn md2_morph_mesh(path: &Path, data: &[u8]) -> Result<MorphMesh, FileError> {
+    let mut model = keyrig_io::md2::parse_md2(data)
+        .map_err(|e| FileError::Md2 { path: path.to_path_buf(), source: Arc::new(e) })?;
     model.skin = keyrig_io::md2::load_skin(path, &model.skin_names).ok().flatten();
-    morph_mesh_from_md2(&model).map_err(|e| format!("{}: {e}", path.display()))
+    morph_mesh_from_md2(&model).map_err(|source| FileError::Morph { path: path.to_path_buf(), source })
 }
 
 /// The last frame of a range starting at 0 that shows `seconds` of looping animation at
@@ -330,7 +332,7 @@ pub fn frame_range_end(seconds: f64, fps: f64) -> i32 {
 ///
 /// # Errors
 /// A model without frames (keyrig-io's reader refuses those already).
-pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh, String> {
+pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh, keyrig_render::MorphError> {
     let frames: Vec<Vec<SkinnedVertex>> = (0..model.frames.len())
         .filter_map(|f| model.frame_pose(f))
         .map(|pose| {
@@ -342,7 +344,6 @@ pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh
     let material = model.skin.as_ref().and_then(keyrig_io::md2::Md2Skin::material).map(std::sync::Arc::new);
     MorphMesh::new(frames, model.indices.clone(), clips)
         .and_then(|m| m.with_look(model.texcoords.clone(), material))
-        .map_err(|e| e.to_string())
 }
 
 /// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame) and adds a
@@ -432,7 +433,8 @@ fn load_meshes_of(
 
 /// A model file's mesh as [`MeshStore`] keys it (full path, mesh index) and how loading it
 /// went: the mesh and, for glTF, its material (an MD2 mesh carries its skin itself).
-pub type LoadedMesh = ((PathBuf, Option<usize>), Result<(FileMesh, Option<keyrig_core::Material>), String>);
+pub type LoadedMesh =
+    ((PathBuf, Option<usize>), Result<(FileMesh, Option<keyrig_core::Material>), FileError>);
 
 /// Whether a model import replaces the document or adds to it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -467,7 +469,7 @@ pub struct BackgroundImport {
     pub purpose: ImportPurpose,
     started: Instant,
     progress: Arc<Mutex<ImportProgress>>,
-    handle: std::thread::JoinHandle<Result<ImportedModel, String>>,
+    handle: std::thread::JoinHandle<Result<ImportedModel, FileError>>,
 }
 
 impl BackgroundImport {
@@ -517,24 +519,25 @@ impl BackgroundImport {
     }
 
     /// The result, waiting for the thread if it still runs.
-    pub fn finish(self) -> Result<ImportedModel, String> {
+    ///
+    /// # Errors
+    /// The model could not be read, or its thread stopped ([`FileError::ImportStopped`]).
+    pub fn finish(self) -> Result<ImportedModel, FileError> {
         let path = self.path.clone();
-        self.handle
-            .join()
-            .unwrap_or_else(|_| Err(format!("{}: the import stopped unexpectedly", path.display())))
+        self.handle.join().unwrap_or(Err(FileError::ImportStopped { path }))
     }
 }
 
 /// Writes the scene as glTF (.glb, or .gltf with the buffer embedded), resolving mesh files
 /// against `base_dir` (the scene's folder).
-pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Result<(), String> {
+pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Result<(), FileError> {
     let options = keyrig_io::gltf_export::ExportOptions {
         base_dir: base_dir.map(Path::to_path_buf),
         ..keyrig_io::gltf_export::ExportOptions::default()
     };
     let exported = keyrig_io::gltf_export::export_scene(scene, &options)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    exported.write(path).map_err(|e| e.to_string())
+        .map_err(|e| FileError::Export { path: path.to_path_buf(), source: Arc::new(e) })?;
+    exported.write(path).map_err(|e| FileError::Export { path: path.to_path_buf(), source: Arc::new(e) })
 }
 
 /// A mesh read from a model file.
@@ -563,7 +566,7 @@ impl FileMesh {
 /// Meshes of model files, loaded once per (file, mesh index).
 #[derive(Default)]
 pub struct MeshStore {
-    meshes: HashMap<(PathBuf, Option<usize>), Result<FileMesh, String>>,
+    meshes: HashMap<(PathBuf, Option<usize>), Result<FileMesh, FileError>>,
     /// Materials of glTF meshes (a morph mesh holds its own).
     materials: HashMap<(PathBuf, Option<usize>), std::sync::Arc<keyrig_core::Material>>,
     /// Counts loads and inserts, so that whatever was built from the store (the scene
@@ -579,7 +582,7 @@ impl MeshStore {
         base_dir: Option<&Path>,
         path: &str,
         mesh: Option<usize>,
-    ) -> Result<&FileMesh, String> {
+    ) -> Result<&FileMesh, FileError> {
         let key = (full_path(base_dir, path), mesh);
         if !self.meshes.contains_key(&key) {
             self.generation += 1;
@@ -642,7 +645,7 @@ impl MeshStore {
         &mut self,
         path: PathBuf,
         mesh: Option<usize>,
-        loaded: Result<(FileMesh, Option<keyrig_core::Material>), String>,
+        loaded: Result<(FileMesh, Option<keyrig_core::Material>), FileError>,
     ) {
         self.generation += 1;
         let key = (path, mesh);
@@ -701,27 +704,27 @@ fn full_path(base_dir: Option<&Path>, path: &str) -> PathBuf {
 fn load_file_mesh(
     path: &Path,
     mesh: Option<usize>,
-) -> Result<(FileMesh, Option<keyrig_core::Material>), String> {
+) -> Result<(FileMesh, Option<keyrig_core::Material>), FileError> {
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {}
         Some("md2") => {
             let data = keyrig_io::file_io::read_regular_file(path, keyrig_io::file_io::MAX_MD2_BYTES)
-                .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+                .map_err(|e| FileError::Read { path: path.to_path_buf(), source: Arc::new(e) })?;
             return md2_morph_mesh(path, &data).map(|m| (FileMesh::Morph(std::sync::Arc::new(m)), None));
         }
-        _ => return Err(format!("{}: the editor shows meshes of glTF and MD2 files only", path.display())),
+        _ => return Err(FileError::NotAMeshFile { path: path.to_path_buf() }),
     }
-    let model = keyrig_io::gltf_import::import_gltf_file(path).map_err(|e| e.to_string())?;
+    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
     let index = mesh.unwrap_or(0);
     let Some(node) = model.nodes.iter().position(|n| n.mesh == Some(index)) else {
-        return Err(format!("{}: no node shows mesh {index}", path.display()));
+        return Err(FileError::NoSuchMesh { path: path.to_path_buf(), index });
     };
     let material = model.material(index).unwrap_or_else(|e| Some(e.without_texture()));
     if model.nodes[node].skin.is_some() {
         return model
             .skinned_mesh(node)
             .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), material))
-            .map_err(|e| format!("{}: {e}", path.display()));
+            .map_err(|e| FileError::SkinnedMesh { path: path.to_path_buf(), source: Arc::new(e) });
     }
     let mut positions = Vec::new();
     let mut indices = Vec::new();
@@ -744,22 +747,23 @@ fn load_file_mesh(
 /// # Errors
 /// A file that cannot be read, or a glTF mesh without a skin (keyrig-render draws file
 /// meshes skinned or morphed), naming the object.
-pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMeshes, String> {
+pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMeshes, FileError> {
     let mut store = MeshStore::default();
     let (mut skinned, mut morphs) = (HashMap::new(), HashMap::new());
     for (o, object) in scene.objects.iter().enumerate() {
         let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
         let at = || format!("objects[{o}] ({})", object.name);
-        match store.get(base_dir, path, *mesh).map_err(|e| format!("{}: {e}", at()))? {
+        match store
+            .get(base_dir, path, *mesh)
+            .map_err(|e| FileError::OfObject { at: at(), source: Box::new(e) })?
+        {
             FileMesh::Skinned(m) => {
                 skinned.insert(o, (**m).clone());
             }
             FileMesh::Morph(m) => {
                 morphs.insert(o, (**m).clone());
             }
-            FileMesh::Static { .. } => {
-                return Err(format!("{}: `{path}` has no skin; only skinned glTF meshes are drawn", at()))
-            }
+            FileMesh::Static { .. } => return Err(FileError::NotSkinned { at: at(), path: path.clone() }),
         }
     }
     let materials = store.materials_for(base_dir, scene);
@@ -800,15 +804,15 @@ impl Recovery {
     }
 
     /// Writes `scene` as the recovery file.
-    pub fn write(&self, scene: &Scene, origin: Option<&Path>) -> Result<(), String> {
+    pub fn write(&self, scene: &Scene, origin: Option<&Path>) -> Result<(), FileError> {
         let (Some(dir), Some(file), Some(origin_file)) = (&self.dir, self.file(), self.origin_file()) else {
-            return Err("no data folder for the recovery file".to_owned());
+            return Err(FileError::NoDataFolder);
         };
-        fs::create_dir_all(dir).map_err(|e| format!("{}: cannot create folder: {e}", dir.display()))?;
+        fs::create_dir_all(dir).map_err(|e| FileError::Folder { path: dir.clone(), source: Arc::new(e) })?;
         save_scene(&file, scene)?;
         let origin_text = origin.map(|p| p.to_string_lossy().into_owned()).unwrap_or_default();
         keyrig_io::file_io::write_atomic(&origin_file, origin_text.as_bytes())
-            .map_err(|e| format!("{}: cannot write: {e}", origin_file.display()))
+            .map_err(|e| FileError::Write { path: origin_file.clone(), source: Arc::new(e) })
     }
 
     /// A recovery scene left by a session that did not exit cleanly, if one is readable.
@@ -906,12 +910,16 @@ mod tests {
         assert!(fractions.windows(2).all(|w| w[0] < w[1]), "{fractions:?}");
         assert_eq!(fractions.last(), Some(&1.0));
         let err = read_with_progress(&dir.path().join("missing.md2"), &mut |_| {}).expect_err("no file");
+        assert!(matches!(err, FileError::Read { .. }), "{err:?}");
+        let err = err.to_string();
         assert!(err.contains("missing.md2") && err.contains("cannot read"), "{err}");
     }
 
     #[test]
     fn unknown_extension_is_an_error_naming_the_file() {
         let err = open_any(Path::new("/tmp/x.txt")).expect_err("txt is not a scene");
+        assert!(matches!(&err, FileError::UnknownType { extension, .. } if extension == "txt"), "{err:?}");
+        let err = err.to_string();
         assert!(err.contains("x.txt") && err.contains(".txt"), "{err}");
     }
 }

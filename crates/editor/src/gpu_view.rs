@@ -13,6 +13,19 @@ use egui::TextureId;
 use egui_wgpu::{wgpu, RenderState};
 use keyrig_render::{FrameStats, Renderer, SceneRig, Selection, ViewOptions, Viewport};
 
+/// Why the GPU viewport could not draw a frame (shown over the viewport).
+#[derive(Debug, thiserror::Error)]
+pub enum GpuViewError {
+    #[error(transparent)]
+    Render(#[from] keyrig_render::RenderError),
+    #[error(transparent)]
+    Scene(#[from] keyrig_render::SceneFrameError),
+    #[error("no scene prepared for rendering")]
+    NoScene,
+    #[error("no viewport texture")]
+    NoTarget,
+}
+
 /// The colour format of the offscreen viewport (sRGB: the shaders write linear colour).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
@@ -118,10 +131,10 @@ impl GpuView {
     /// texture when this changes anything (the uploaded meshes stay).
     ///
     /// # Errors
-    /// The renderer's error as text (it cannot refuse 1 or 4 samples).
-    pub fn set_antialiasing(&mut self, on: bool) -> Result<(), String> {
+    /// The renderer's error (it cannot refuse 1 or 4 samples).
+    pub fn set_antialiasing(&mut self, on: bool) -> Result<(), GpuViewError> {
         let samples = if on { keyrig_render::SAMPLE_COUNT } else { 1 };
-        self.renderer.set_sample_count(samples).map_err(|e| e.to_string())
+        Ok(self.renderer.set_sample_count(samples)?)
     }
 
     /// The adapter's name and backend, for the status bar and benchmarks.
@@ -131,7 +144,7 @@ impl GpuView {
         format!("{} ({:?})", info.name, info.backend)
     }
 
-    fn ensure_target(&mut self, width: u32, height: u32) -> Result<TextureId, String> {
+    fn ensure_target(&mut self, width: u32, height: u32) -> Result<TextureId, GpuViewError> {
         let samples = self.renderer.sample_count();
         if let Some((viewport, id)) = &self.target {
             if viewport.size() == (width, height) && viewport.sample_count() == samples {
@@ -139,8 +152,7 @@ impl GpuView {
             }
         }
         let device = &self.render_state.device;
-        let viewport =
-            Viewport::with_sample_count(device, width, height, FORMAT, samples).map_err(|e| e.to_string())?;
+        let viewport = Viewport::with_sample_count(device, width, height, FORMAT, samples)?;
         let mut egui_renderer = self.render_state.renderer.write();
         let id = match &self.target {
             Some((_, id)) => {
@@ -171,35 +183,32 @@ impl GpuView {
     }
 
     /// Renders the frame into a texture of `size_px` pixels and returns its egui texture id.
-    pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
+    pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, GpuViewError> {
         let started = std::time::Instant::now();
         let result = self.render_inner(frame, size_px);
         self.last_render_time = started.elapsed();
         result
     }
 
-    fn render_inner(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, String> {
+    fn render_inner(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, GpuViewError> {
         let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.rig_key) {
             let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes)
                 .with_materials(&frame.materials);
             // Only the meshes the edit rebuilt go to the GPU again.
             let previous = self.rig.take().map(|(_, rig)| rig);
-            rig.upload_changed(&mut self.renderer, previous.as_ref()).map_err(|e| e.to_string())?;
+            rig.upload_changed(&mut self.renderer, previous.as_ref())?;
             self.rig = Some((frame.rig_key, rig));
         }
-        let Some((_, rig)) = &self.rig else { return Err("no scene prepared for rendering".to_owned()) };
-        let mut input = rig.frame_from_state(frame.state, &frame.view).map_err(|e| e.to_string())?;
+        let Some((_, rig)) = &self.rig else { return Err(GpuViewError::NoScene) };
+        let mut input = rig.frame_from_state(frame.state, &frame.view)?;
         if frame.view.motion_path {
-            if let Some(path) = rig
-                .motion_path(frame.view.selection, frame.state.time, frame.overrides)
-                .map_err(|e| e.to_string())?
-            {
+            if let Some(path) = rig.motion_path(frame.view.selection, frame.state.time, frame.overrides)? {
                 input.motion_paths.push(path);
             }
         }
-        let Some((viewport, _)) = &self.target else { return Err("no viewport texture".to_owned()) };
-        self.last_stats = Some(self.renderer.render(&input, viewport).map_err(|e| e.to_string())?);
+        let Some((viewport, _)) = &self.target else { return Err(GpuViewError::NoTarget) };
+        self.last_stats = Some(self.renderer.render(&input, viewport)?);
         if let Some(log) = &mut self.frame_log {
             log.tick(size_px, self.renderer.sample_count());
         }

@@ -58,7 +58,7 @@ pub fn editor_for(file: Option<PathBuf>, options: EditorOptions) -> EditorApp {
             }
             Err(e) => {
                 let mut app = EditorApp::new(keyrig_io::demo::demo_scene(), None, options);
-                app.error(e);
+                app.error(e.to_string());
                 app
             }
         },

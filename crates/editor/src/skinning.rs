@@ -39,18 +39,26 @@ pub struct SkinCache {
     morphs: HashMap<usize, Vec<Vec3>>,
 }
 
+/// A deformer that refused the mesh or pose, with its name.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", kind.label())]
+pub struct DeformError {
+    pub kind: DeformerKind,
+    pub source: keyrig_skin::SkinError,
+}
+
 impl SkinCache {
     /// Skins object `index`'s mesh (`skin`, from the evaluator) with `palette` and `kind`.
     ///
     /// # Errors
-    /// The deformer's error (e.g. a dual quaternion of a scaled joint), as text.
+    /// The deformer's error (e.g. a dual quaternion of a scaled joint), with the deformer.
     pub fn skin(
         &mut self,
         index: usize,
         skin: &SkinRig,
         palette: &JointPalette,
         kind: DeformerKind,
-    ) -> Result<SkinnedView<'_>, String> {
+    ) -> Result<SkinnedView<'_>, DeformError> {
         self.morphs.remove(&index);
         let entry = self.entries.entry(index).or_insert_with(|| Entry {
             mesh: Arc::clone(&skin.mesh),
@@ -62,7 +70,7 @@ impl SkinCache {
         }
         entry.palette.clone_from(palette);
         deform_mesh_into(&skin.mesh, &skin.bindings, palette, kind, Execution::Parallel, &mut entry.deformed)
-            .map_err(|e| format!("{}: {e}", kind.label()))?;
+            .map_err(|source| DeformError { kind, source })?;
         Ok(SkinnedView {
             positions: &entry.deformed.positions,
             normals: &entry.deformed.normals,
@@ -77,15 +85,16 @@ impl SkinCache {
 
     /// The cross-section at `joint` of the object's last skinned frame, relative to rest.
     #[must_use]
-    pub fn cross_section(&self, index: usize, joint: usize) -> Option<Result<CrossSection, String>> {
+    pub fn cross_section(
+        &self,
+        index: usize,
+        joint: usize,
+    ) -> Option<Result<CrossSection, keyrig_skin::SkinError>> {
         let entry = self.entries.get(&index)?;
         if entry.deformed.positions.len() != entry.mesh.vertex_count() {
             return None;
         }
-        Some(
-            joint_cross_section(&entry.mesh, &entry.palette, joint, &entry.deformed.positions)
-                .map_err(|e| e.to_string()),
-        )
+        Some(joint_cross_section(&entry.mesh, &entry.palette, joint, &entry.deformed.positions))
     }
 
     /// Morphs object `index`'s vertex-animated mesh to the frames the evaluator chose

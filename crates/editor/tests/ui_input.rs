@@ -207,7 +207,7 @@ fn open_and_import_dialogs_list_only_their_files() {
         std::fs::write(dir.path().join(file), b"x").expect("write");
     }
     let scene_path = dir.path().join("shot.ron");
-    keyrig_editor::files::save_scene(&scene_path, &keyrig_io::demo::demo_scene()).expect("save");
+    keyrig_io::project::save_scene(&scene_path, &keyrig_io::demo::demo_scene()).expect("save");
     let mut h = harness(dir.path(), Some(scene_path));
     h.key_press_modifiers(Modifiers::COMMAND, Key::I);
     h.run();

@@ -371,29 +371,6 @@ pub fn refuse_overwriting(output: &Path, inputs: &[(PathBuf, String)]) -> Result
     Ok(())
 }
 
-/// The files a scene reads: every `MeshSource::File` model (resolved against `base_dir`,
-/// the scene's folder) and, for MD2 models, the skin image found beside them; each with a
-/// description naming the object.
-#[must_use]
-pub fn scene_inputs(scene: &keyrig_core::Scene, base_dir: Option<&Path>) -> Vec<(PathBuf, String)> {
-    let mut out = Vec::new();
-    for (i, object) in scene.objects.iter().enumerate() {
-        let Some(keyrig_core::MeshSource::File { path, .. }) = &object.mesh else { continue };
-        let file = match base_dir {
-            Some(dir) => dir.join(path),
-            None => PathBuf::from(path),
-        };
-        let here = format!("objects[{i}] (`{}`)", object.name);
-        if file.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2")) {
-            if let Some(skin) = crate::md2::skin_of_file(&file) {
-                out.push((skin, format!("the skin image of the MD2 model that {here} uses")));
-            }
-        }
-        out.push((file, format!("the model file that {here} uses")));
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

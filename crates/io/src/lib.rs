@@ -8,6 +8,7 @@ pub mod gltf_import;
 pub mod md2;
 pub mod message;
 pub mod model;
+pub mod project;
 mod scene_fast;
 pub mod scene_file;
 mod scene_locate;

@@ -92,7 +92,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
     let (time, out) = if has_extension(file, &["md2"]) {
         let scene = keyrig_editor::files::open_any(file).map_err(anyhow::Error::msg)?;
         let time = super::common::time_in_range(&scene, args.frame, args.time)?;
-        inputs.extend(keyrig_io::file_io::scene_inputs(&scene, None));
+        inputs.extend(keyrig_io::project::scene_inputs(&scene, None));
         (time, morph_object(file, &scene, None, args.object.as_deref(), time)?)
     } else {
         let (scene, loaded, gltf) = if has_extension(file, &["ron"]) {
@@ -109,7 +109,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         let time = super::common::time_in_range(&scene, args.frame, args.time)?;
         let base_dir = if gltf.is_some() { None } else { Some(keyrig_io::file_io::parent_or_dot(file)) };
         if gltf.is_none() {
-            inputs.extend(keyrig_io::file_io::scene_inputs(&scene, base_dir.as_deref()));
+            inputs.extend(keyrig_io::project::scene_inputs(&scene, base_dir.as_deref()));
         }
         let index = object_index(file, &scene, args.object.as_deref())?;
         let is_md2_object = matches!(

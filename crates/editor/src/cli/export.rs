@@ -47,7 +47,7 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
     check_output_extension(&args.output)?;
     let (scene, base_dir) = load_scene_or_model(&args.scene)?;
     let mut inputs = vec![(args.scene.clone(), "the input file".to_owned())];
-    inputs.extend(keyrig_io::file_io::scene_inputs(&scene, base_dir.as_deref()));
+    inputs.extend(keyrig_io::project::scene_inputs(&scene, base_dir.as_deref()));
     keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
     let options = ExportOptions {
         rotation_tolerance_deg: args.rotation_tolerance,

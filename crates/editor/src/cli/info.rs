@@ -71,7 +71,7 @@ fn mesh_problems(scene: &Scene, base_dir: &Path) -> Vec<keyrig_core::Problem> {
                 }
             }
             Some(MeshSource::File { path, mesh, .. }) => match store.get(Some(base_dir), path, *mesh) {
-                Err(e) => problem("mesh", e),
+                Err(e) => problem("mesh", e.to_string()),
                 Ok(FileMesh::Skinned(m)) => match &rest {
                     Some(rest) if rest.len() != m.skeleton.len() => problem(
                         "skeleton",

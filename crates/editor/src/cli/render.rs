@@ -409,7 +409,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         } else {
             // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
             let scene = keyrig_io::scene_file::load(&args.file)?;
-            inputs.extend(keyrig_io::file_io::scene_inputs(&scene, args.file.parent()));
+            inputs.extend(keyrig_io::project::scene_inputs(&scene, args.file.parent()));
             let meshes = keyrig_editor::files::render_meshes(&scene, args.file.parent())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
             (scene, meshes.skinned, meshes.morphs, meshes.materials)

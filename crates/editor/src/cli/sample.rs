@@ -266,7 +266,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<()> {
         None => super::common::write_stdout(text.as_bytes()),
         Some(out) => {
             let mut inputs = vec![(args.file.clone(), "the input file".to_owned())];
-            inputs.extend(keyrig_io::file_io::scene_inputs(&scene, args.file.parent()));
+            inputs.extend(keyrig_io::project::scene_inputs(&scene, args.file.parent()));
             keyrig_io::file_io::refuse_overwriting(out, &inputs)?;
             keyrig_io::file_io::write_atomic(out, text.as_bytes())
                 .with_context(|| format!("{}: cannot write", out.display()))
