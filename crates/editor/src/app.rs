@@ -105,7 +105,7 @@ impl EditorApp {
         let data_dir = options.data_dir.clone().or_else(files::default_data_dir);
         let recovery = Recovery::new(data_dir.as_deref());
         let recovery_offer = recovery.load_pending();
-        let view = ViewState::new(OrbitCamera::from(scene.camera));
+        let view = ViewState::new(scene.camera.sanitized());
         let session = Session::at_start(scene.frame_range);
         EditorApp {
             fonts_installed: false,
@@ -220,7 +220,7 @@ impl EditorApp {
 
     /// Replaces the document (new, open, recover).
     pub fn replace_document(&mut self, scene: Scene, path: Option<PathBuf>) {
-        self.view.camera = OrbitCamera::from(scene.camera);
+        self.view.camera = scene.camera.sanitized();
         // Record mode and the key clipboard carry over to the new document.
         let session = Session {
             record: self.session.record,

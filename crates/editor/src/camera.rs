@@ -3,16 +3,7 @@
 
 use egui::{Pos2, Rect};
 use glam::{Mat4, Vec3};
-
-/// An orbit camera: a target point, yaw about world Y, pitch above the ground, a distance.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OrbitCamera {
-    pub target: Vec3,
-    pub yaw_deg: f32,
-    pub pitch_deg: f32,
-    pub distance: f32,
-    pub fov_y_deg: f32,
-}
+use keyrig_core::Camera;
 
 /// Pitch stays inside ±89.9° so the view never flips at the poles.
 const PITCH_LIMIT: f32 = 89.9;
@@ -89,10 +80,40 @@ impl Bounds {
     }
 }
 
-impl From<keyrig_core::Camera> for OrbitCamera {
-    fn from(c: keyrig_core::Camera) -> Self {
+/// The editor's controls of the scene's one camera type ([`keyrig_core::Camera`], an orbit
+/// around a target): orbit, pan, zoom and framing, and the matrices of the overlay. The view
+/// and the eye come from keyrig-render's camera functions, so the overlay, the gizmo and the
+/// GPU viewport see through the same camera.
+pub trait OrbitCamera {
+    /// The camera with non-finite fields replaced by the defaults and the angles, distance
+    /// and field of view inside what the controls keep to (a scene file's camera).
+    #[must_use]
+    fn sanitized(self) -> Camera;
+    /// Where the camera is, world space.
+    fn eye(&self) -> Vec3;
+    /// View matrix (camera from world).
+    fn camera_from_world(&self) -> Mat4;
+    /// Projection matrix (clip from camera) for the overlay and the gizmo.
+    fn clip_from_camera(&self, aspect: f32) -> Mat4;
+    /// Near and far planes fitted to `bounds` (see the implementation).
+    fn depth_range(&self, bounds: Option<Bounds>) -> [f32; 2];
+    /// The orbit distance at which a sphere of `radius` fills the view.
+    fn distance_to_fit(&self, radius: f32, aspect: f32) -> f32;
+    /// Centres on `bounds` and moves back until they fill the view (keeps the angles).
+    fn frame(&mut self, bounds: Bounds, aspect: f32);
+    /// Rotates the view by a mouse drag (degrees per point).
+    fn orbit(&mut self, dx: f32, dy: f32);
+    /// Moves the target in the view plane by a drag in points.
+    fn pan(&mut self, dx: f32, dy: f32, height: f32);
+    /// Zooms by a scroll amount (positive moves closer).
+    fn zoom(&mut self, scroll: f32);
+}
+
+impl OrbitCamera for Camera {
+    fn sanitized(self) -> Camera {
+        let c = self;
         let finite_or = |v: f32, d: f32| if v.is_finite() { v } else { d };
-        OrbitCamera {
+        Camera {
             target: if c.target.is_finite() { c.target } else { Vec3::ZERO },
             yaw_deg: finite_or(c.yaw_deg, 30.0),
             pitch_deg: finite_or(c.pitch_deg, 20.0).clamp(-PITCH_LIMIT, PITCH_LIMIT),
@@ -100,27 +121,18 @@ impl From<keyrig_core::Camera> for OrbitCamera {
             fov_y_deg: finite_or(c.fov_y_deg, 45.0).clamp(5.0, 150.0),
         }
     }
-}
 
-impl OrbitCamera {
-    /// Where the camera is, world space.
-    #[must_use]
-    pub fn eye(&self) -> Vec3 {
-        let (yaw, pitch) = (self.yaw_deg.to_radians(), self.pitch_deg.to_radians());
-        let dir = Vec3::new(pitch.cos() * yaw.sin(), pitch.sin(), pitch.cos() * yaw.cos());
-        self.target + dir * self.distance
+    fn eye(&self) -> Vec3 {
+        keyrig_render::camera::eye_position(self)
     }
 
-    /// View matrix (camera from world).
-    #[must_use]
-    pub fn camera_from_world(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye(), self.target, Vec3::Y)
+    fn camera_from_world(&self) -> Mat4 {
+        keyrig_render::camera::view_from_world(self)
     }
 
     /// Projection matrix (clip from camera) for a viewport of the given aspect ratio (for
     /// the overlay and the gizmo: planes wide enough for any zoom).
-    #[must_use]
-    pub fn clip_from_camera(&self, aspect: f32) -> Mat4 {
+    fn clip_from_camera(&self, aspect: f32) -> Mat4 {
         let near = NEAR.min(self.distance * 1e-3).max(1e-6);
         let far = FAR.max(self.distance * 1e3);
         Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect.max(1e-3), near, far)
@@ -131,8 +143,7 @@ impl OrbitCamera {
     /// scene's deformed meshes) when the scene is larger than that, as when a 100 m model
     /// is looked at from a metre; the ratio far / near stays within 10⁶ for depth
     /// precision.
-    #[must_use]
-    pub fn depth_range(&self, bounds: Option<Bounds>) -> [f32; 2] {
+    fn depth_range(&self, bounds: Option<Bounds>) -> [f32; 2] {
         let d = self.distance.max(1e-6);
         let near = d * 0.01;
         let far = match bounds.filter(Bounds::is_valid) {
@@ -144,15 +155,14 @@ impl OrbitCamera {
 
     /// The orbit distance at which a sphere of `radius` fills the view (with a margin), for
     /// framing.
-    #[must_use]
-    pub fn distance_to_fit(&self, radius: f32, aspect: f32) -> f32 {
+    fn distance_to_fit(&self, radius: f32, aspect: f32) -> f32 {
         let half_y = (self.fov_y_deg.to_radians() * 0.5).clamp(0.01, 1.5);
         let half_x = (half_y.tan() * aspect.max(0.1)).atan();
         (radius.max(1e-3) / half_y.min(half_x).sin() * 1.1).clamp(MIN_DISTANCE, MAX_DISTANCE)
     }
 
     /// Centres on `bounds` and moves back until they fill the view (keeps the angles).
-    pub fn frame(&mut self, bounds: Bounds, aspect: f32) {
+    fn frame(&mut self, bounds: Bounds, aspect: f32) {
         if bounds.is_valid() {
             self.target = bounds.centre();
             self.distance = self.distance_to_fit(bounds.radius(), aspect);
@@ -160,13 +170,13 @@ impl OrbitCamera {
     }
 
     /// Rotates the view by a mouse drag (degrees per point).
-    pub fn orbit(&mut self, dx: f32, dy: f32) {
+    fn orbit(&mut self, dx: f32, dy: f32) {
         self.yaw_deg = (self.yaw_deg - dx * 0.4).rem_euclid(360.0);
         self.pitch_deg = (self.pitch_deg + dy * 0.4).clamp(-PITCH_LIMIT, PITCH_LIMIT);
     }
 
     /// Moves the target in the view plane by a drag in points, for a viewport `height` points high.
-    pub fn pan(&mut self, dx: f32, dy: f32, height: f32) {
+    fn pan(&mut self, dx: f32, dy: f32, height: f32) {
         let view = self.camera_from_world().inverse();
         let right = view.transform_vector3(Vec3::X);
         let up = view.transform_vector3(Vec3::Y);
@@ -176,7 +186,7 @@ impl OrbitCamera {
     }
 
     /// Zooms by a scroll amount (positive moves closer).
-    pub fn zoom(&mut self, scroll: f32) {
+    fn zoom(&mut self, scroll: f32) {
         self.distance = (self.distance * (-scroll * 0.002).exp()).clamp(MIN_DISTANCE, MAX_DISTANCE);
     }
 }
@@ -192,7 +202,7 @@ pub struct Projection {
 
 impl Projection {
     #[must_use]
-    pub fn new(camera: &OrbitCamera, rect: Rect) -> Self {
+    pub fn new(camera: &Camera, rect: Rect) -> Self {
         let camera_from_world = camera.camera_from_world();
         let clip_from_camera = camera.clip_from_camera(rect.width() / rect.height().max(1.0));
         Projection {
@@ -246,7 +256,7 @@ mod tests {
 
     #[test]
     fn target_projects_to_the_centre() {
-        let camera = OrbitCamera {
+        let camera = Camera {
             target: Vec3::new(1.0, 2.0, 3.0),
             yaw_deg: 40.0,
             pitch_deg: 20.0,
@@ -263,11 +273,11 @@ mod tests {
     fn depth_range_holds_the_scene() {
         let big = Bounds { min: Vec3::splat(-100.0), max: Vec3::splat(100.0) };
         let camera =
-            OrbitCamera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 0.0, distance: 1.0, fov_y_deg: 45.0 };
+            Camera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 0.0, distance: 1.0, fov_y_deg: 45.0 };
         let [near, far] = camera.depth_range(Some(big));
         assert!(far > 1.0 + big.radius() && near < 1.0 && near > 0.0, "{near} {far}");
         let small = Bounds { min: Vec3::splat(-0.005), max: Vec3::splat(0.005) };
-        let camera = OrbitCamera { distance: 0.05, ..camera };
+        let camera = Camera { distance: 0.05, ..camera };
         let [near, far] = camera.depth_range(Some(small));
         assert!(near > 0.0 && near < 0.05 - small.radius() && far > 0.05 + small.radius() && far < 10.0);
     }
@@ -275,13 +285,8 @@ mod tests {
     #[test]
     fn framing_fits_the_box_and_exit_distance_leaves_it() {
         let b = Bounds { min: Vec3::new(-1.0, 0.0, -1.0), max: Vec3::new(1.0, 2.0, 1.0) };
-        let mut camera = OrbitCamera {
-            target: Vec3::ZERO,
-            yaw_deg: 30.0,
-            pitch_deg: 10.0,
-            distance: 1.0,
-            fov_y_deg: 45.0,
-        };
+        let mut camera =
+            Camera { target: Vec3::ZERO, yaw_deg: 30.0, pitch_deg: 10.0, distance: 1.0, fov_y_deg: 45.0 };
         camera.frame(b, 1.5);
         assert_eq!(camera.target, Vec3::Y);
         assert!(camera.distance > b.radius() / (22.5f32.to_radians().sin()));
@@ -292,7 +297,7 @@ mod tests {
     #[test]
     fn points_behind_the_camera_do_not_project() {
         let camera =
-            OrbitCamera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 0.0, distance: 4.0, fov_y_deg: 45.0 };
+            Camera { target: Vec3::ZERO, yaw_deg: 0.0, pitch_deg: 0.0, distance: 4.0, fov_y_deg: 45.0 };
         let rect = Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 300.0));
         assert!(Projection::new(&camera, rect).project(Vec3::new(0.0, 0.0, 10.0)).is_none());
     }

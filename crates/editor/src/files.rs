@@ -458,7 +458,7 @@ pub struct ImportProgress {
 
 /// A model read on a background thread: the scene it maps to and its meshes, ready for the
 /// [`MeshStore`].
-pub struct ImportedModel {
+pub struct LoadedModel {
     pub scene: Scene,
     pub meshes: Vec<LoadedMesh>,
 }
@@ -469,7 +469,7 @@ pub struct BackgroundImport {
     pub purpose: ImportPurpose,
     started: Instant,
     progress: Arc<Mutex<ImportProgress>>,
-    handle: std::thread::JoinHandle<Result<ImportedModel, FileError>>,
+    handle: std::thread::JoinHandle<Result<LoadedModel, FileError>>,
 }
 
 impl BackgroundImport {
@@ -492,7 +492,7 @@ impl BackgroundImport {
             if purpose == ImportPurpose::Open {
                 frame_new_scene(&mut scene, &meshes);
             }
-            Ok(ImportedModel { scene, meshes })
+            Ok(LoadedModel { scene, meshes })
         });
         BackgroundImport { path, purpose, started: Instant::now(), progress, handle }
     }
@@ -522,7 +522,7 @@ impl BackgroundImport {
     ///
     /// # Errors
     /// The model could not be read, or its thread stopped ([`FileError::ImportStopped`]).
-    pub fn finish(self) -> Result<ImportedModel, FileError> {
+    pub fn finish(self) -> Result<LoadedModel, FileError> {
         let path = self.path.clone();
         self.handle.join().unwrap_or(Err(FileError::ImportStopped { path }))
     }

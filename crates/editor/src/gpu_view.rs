@@ -11,7 +11,7 @@
 
 use egui::TextureId;
 use egui_wgpu::{wgpu, RenderState};
-use keyrig_render::{FrameStats, Renderer, SceneRig, Selection, ViewOptions, Viewport};
+use keyrig_render::{FrameStats, Renderer, SceneRig, ViewOptions, Viewport};
 
 /// Why the GPU viewport could not draw a frame (shown over the viewport).
 #[derive(Debug, thiserror::Error)]
@@ -236,16 +236,4 @@ pub fn default_adapter_is_cpu() -> bool {
 
 fn is_cpu(render_state: &RenderState) -> bool {
     render_state.adapter.get_info().device_type == wgpu::DeviceType::Cpu
-}
-
-/// The renderer's selection for the editor's.
-#[must_use]
-pub fn selection_for(item: Option<crate::session::Selected>) -> Selection {
-    use crate::session::Selected;
-    match item {
-        None => Selection::None,
-        Some(Selected::Object(o)) => Selection::Object(o),
-        Some(Selected::Joint { object, joint }) => Selection::Joint { object, joint },
-        Some(Selected::Light(l)) => Selection::Light(l),
-    }
 }

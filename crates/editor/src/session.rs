@@ -7,7 +7,10 @@ use std::collections::BTreeSet;
 use keyrig_core::Scene;
 
 use crate::channels::{ChannelId, KeyCopy};
+
 use crate::eval::PoseOverrides;
+/// What can be selected in the scene: keyrig-render's one type (object, joint, light).
+pub use keyrig_render::Selected;
 
 /// Everything about the current editing session that is not the document or the view.
 #[derive(Clone, Debug, Default)]
@@ -57,14 +60,6 @@ impl Session {
             _ => None,
         }
     }
-}
-
-/// What is selected in the scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Selected {
-    Object(usize),
-    Joint { object: usize, joint: usize },
-    Light(usize),
 }
 
 /// One key of one channel (index into the channel's track).

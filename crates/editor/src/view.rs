@@ -1,7 +1,9 @@
 //! The view: how the editor looks at the document — the orbit camera, viewport options and
 //! the panels' interaction state. Changing it never touches the document or its undo history.
 
-use crate::camera::{Bounds, OrbitCamera};
+use keyrig_core::Camera;
+
+use crate::camera::Bounds;
 
 /// How the viewport draws meshes: keyrig-render's one type (solid, wireframe, points).
 pub use keyrig_render::RenderStyle;
@@ -10,7 +12,7 @@ pub use keyrig_render::RenderStyle;
 /// state. Not saved with the scene (the camera is copied to it on save) and not undone.
 #[derive(Clone, Debug)]
 pub struct ViewState {
-    pub camera: OrbitCamera,
+    pub camera: Camera,
     pub grid: bool,
     pub bones: bool,
     /// Draw the selected object's or joint's motion path (GPU viewport).
@@ -46,7 +48,7 @@ pub struct ViewState {
 impl ViewState {
     /// The default view of a scene: its camera, grid, bones and motion paths on.
     #[must_use]
-    pub fn new(camera: OrbitCamera) -> Self {
+    pub fn new(camera: Camera) -> Self {
         ViewState {
             camera,
             grid: true,

@@ -8,6 +8,7 @@ use common::{corpus, harness, press};
 
 use egui::{Key, Modifiers};
 use egui_kittest::Harness;
+use keyrig_editor::camera::OrbitCamera as _;
 use keyrig_editor::camera::{Bounds, Projection};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;

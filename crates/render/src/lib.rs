@@ -45,7 +45,7 @@ pub use renderer::{
     SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
 };
 pub use scene_frame::{
-    MorphBlend, MorphClip, MorphError, MorphMesh, SceneFrameError, SceneRig, Selection, ViewOptions,
+    MorphBlend, MorphClip, MorphError, MorphMesh, SceneFrameError, SceneRig, Selected, ViewOptions,
 };
 pub use skinning::{
     joint_poses, BlendBinding, GpuSkinner, JointPose, OwnedSkinInput, SkinMeshInput, SkinnedVertex,

@@ -202,16 +202,13 @@ impl MorphMesh {
     }
 }
 
-/// What is selected in the viewport (highlighted; its motion path is drawn).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Selection {
-    #[default]
-    None,
+/// A scene item that can be selected: an object, a joint of an object's skeleton, or a light.
+/// The editor's selection and what the renderer highlights (and draws the motion path of)
+/// are this one type; `None` where nothing is selected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Selected {
     Object(usize),
-    Joint {
-        object: usize,
-        joint: usize,
-    },
+    Joint { object: usize, joint: usize },
     Light(usize),
 }
 
@@ -227,7 +224,7 @@ pub struct ViewOptions {
     pub motion_path: bool,
     /// Draw lights as gizmos.
     pub lights: bool,
-    pub selection: Selection,
+    pub selection: Option<Selected>,
     /// Replaces the scene's camera when set (the editor's orbit camera).
     pub camera: Option<Camera>,
     /// Near and far planes fitted to the scene (view-space distances); `None`: from the
@@ -247,7 +244,7 @@ impl Default for ViewOptions {
             skeletons: true,
             motion_path: true,
             lights: true,
-            selection: Selection::None,
+            selection: None,
             camera: None,
             depth_range: None,
             textures: true,
@@ -510,7 +507,7 @@ impl SceneRig {
 
     /// Gizmos of the enabled lights of `state` (the selected one highlighted).
     #[must_use]
-    pub fn light_gizmos(&self, selection: Selection, state: &SceneState) -> Vec<LightGizmo> {
+    pub fn light_gizmos(&self, selection: Option<Selected>, state: &SceneState) -> Vec<LightGizmo> {
         state
             .lights
             .iter()
@@ -520,7 +517,7 @@ impl SceneRig {
                 kind: l.kind,
                 position: l.position,
                 direction: l.direction,
-                selected: selection == Selection::Light(i),
+                selected: selection == Some(Selected::Light(i)),
             })
             .collect()
     }
@@ -572,7 +569,7 @@ impl SceneRig {
                 _ => object.colour,
             };
             let world_from_model = Mat4::from(state.world_from_object);
-            let selected = matches!(view.selection, Selection::Object(o) if o == i);
+            let selected = matches!(view.selection, Some(Selected::Object(o)) if o == i);
             if let (Some(_), Some(blend)) = (&object.morph, &state.morph) {
                 let blend = blend.clone().map_err(|source| SceneFrameError::Morph {
                     path: format!("objects[{i}].mesh"),
@@ -612,7 +609,7 @@ impl SceneRig {
                         .map(|j| world_from_model.transform_point3(palette.joint_position(j)))
                         .collect();
                     let selected = match view.selection {
-                        Selection::Joint { object, joint } if object == i => Some(joint),
+                        Some(Selected::Joint { object, joint }) if object == i => Some(joint),
                         _ => None,
                     };
                     frame.skeletons.push(SkeletonOverlay {
@@ -634,14 +631,14 @@ impl SceneRig {
     /// A pose that cannot be evaluated.
     pub fn motion_path(
         &self,
-        selection: Selection,
+        selection: Option<Selected>,
         time: f64,
         overrides: &Overrides,
     ) -> Result<Option<MotionPath>, SceneFrameError> {
         let (object, joint) = match selection {
-            Selection::Object(o) => (o, None),
-            Selection::Joint { object, joint } => (object, Some(joint)),
-            Selection::None | Selection::Light(_) => return Ok(None),
+            Some(Selected::Object(o)) => (o, None),
+            Some(Selected::Joint { object, joint }) => (object, Some(joint)),
+            None | Some(Selected::Light(_)) => return Ok(None),
         };
         let Some(scene_object) = self.scene.objects.get(object) else { return Ok(None) };
         let position_at = |t: f64| -> Result<Option<Vec3>, SceneFrameError> {

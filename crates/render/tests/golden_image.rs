@@ -12,7 +12,7 @@ use keyrig_core::{
     Animated, Camera, DeformerKind, Key, Light, LightKind, MeshSource, Object, ProceduralMesh, RawTrack,
     Scene,
 };
-use keyrig_render::{HeadlessRenderer, RenderStyle, SceneRig, Selection, ViewOptions};
+use keyrig_render::{HeadlessRenderer, RenderStyle, SceneRig, Selected, ViewOptions};
 
 const WIDTH: u32 = 192;
 const HEIGHT: u32 = 128;
@@ -126,7 +126,7 @@ fn golden_images_of_each_render_style() {
     for style in RenderStyle::ALL {
         let view = ViewOptions {
             style,
-            selection: Selection::Joint { object: 0, joint: 2 },
+            selection: Some(Selected::Joint { object: 0, joint: 2 }),
             ..ViewOptions::default()
         };
         let frame = rig.frame(1.0, &view).expect("frame");

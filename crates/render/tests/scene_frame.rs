@@ -4,7 +4,7 @@
 use glam::{Quat, Vec3};
 use keyrig_core::{Animated, DeformerKind, Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene};
 use keyrig_eval::Overrides;
-use keyrig_render::{Deform, RenderStyle, SceneFrameError, SceneRig, Selection, ViewOptions};
+use keyrig_render::{Deform, RenderStyle, SceneFrameError, SceneRig, Selected, ViewOptions};
 
 fn arm_scene() -> Scene {
     let mut arm = Object::new("Arm");
@@ -32,7 +32,7 @@ fn frame_has_the_skinned_arm_its_skeleton_and_the_selected_path() {
     let rig = SceneRig::new(&arm_scene()).expect("rig");
     let view = ViewOptions {
         style: RenderStyle::Wireframe,
-        selection: Selection::Joint { object: 0, joint: 3 },
+        selection: Some(Selected::Joint { object: 0, joint: 3 }),
         ..ViewOptions::default()
     };
     let frame = rig.frame(1.0, &view).expect("frame");
@@ -66,7 +66,8 @@ fn frame_has_the_skinned_arm_its_skeleton_and_the_selected_path() {
 #[test]
 fn object_path_has_a_marker_per_key() {
     let rig = SceneRig::new(&arm_scene()).expect("rig");
-    let path = rig.motion_path(Selection::Object(0), 0.5, &Overrides::new()).expect("path").expect("a path");
+    let path =
+        rig.motion_path(Some(Selected::Object(0)), 0.5, &Overrides::new()).expect("path").expect("a path");
     assert_eq!(path.keys.len(), 2);
     assert!((path.keys[1] - Vec3::new(0.0, 100.0, 0.0)).length() < 1e-4);
 }
@@ -83,7 +84,7 @@ fn editor_states_replace_the_tracks() {
     let state = rig.evaluator().evaluate(0.0, &overrides);
     let frame = rig.frame_from_state(&state, &ViewOptions::default()).expect("frame");
     assert_eq!(frame.items[0].world_from_model.w_axis.x, 7.0);
-    let path = rig.motion_path(Selection::Object(0), 0.0, &overrides).expect("path").expect("a path");
+    let path = rig.motion_path(Some(Selected::Object(0)), 0.0, &overrides).expect("path").expect("a path");
     assert_eq!(path.current, Some(Vec3::new(7.0, 0.0, 0.0)));
 
     let mut other = state.clone();

@@ -12,7 +12,7 @@ use anyhow::{bail, Context};
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{Camera, DeformerKind, Material};
 use keyrig_render::{
-    Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selection,
+    Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selected,
     ViewOptions,
 };
 use keyrig_skin::SkinnedMesh;
@@ -203,7 +203,7 @@ impl FrameSource for Md2Source {
 }
 
 /// Parses `--select` against the scene's names.
-fn parse_selection(scene: &keyrig_core::Scene, text: &str) -> anyhow::Result<Selection> {
+fn parse_selection(scene: &keyrig_core::Scene, text: &str) -> anyhow::Result<Selected> {
     let object_index = |name: &str| {
         scene.objects.iter().position(|o| o.name == name).with_context(|| {
             let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
@@ -211,13 +211,13 @@ fn parse_selection(scene: &keyrig_core::Scene, text: &str) -> anyhow::Result<Sel
         })
     };
     match text.split_once(':') {
-        Some(("object", name)) => Ok(Selection::Object(object_index(name)?)),
+        Some(("object", name)) => Ok(Selected::Object(object_index(name)?)),
         Some(("light", name)) => {
             let index = scene.lights.iter().position(|l| l.name == name).with_context(|| {
                 let names: Vec<&str> = scene.lights.iter().map(|l| l.name.as_str()).collect();
                 format!("--select `{text}`: no light named `{name}` (lights: {})", names.join(", "))
             })?;
-            Ok(Selection::Light(index))
+            Ok(Selected::Light(index))
         }
         Some(("joint", path)) => {
             let (object, joint) = path
@@ -229,7 +229,7 @@ fn parse_selection(scene: &keyrig_core::Scene, text: &str) -> anyhow::Result<Sel
                 let names: Vec<&str> = joints.iter().map(|j| j.name.as_str()).collect();
                 format!("--select `{text}`: `{object}` has no joint `{joint}` (joints: {})", names.join(", "))
             })?;
-            Ok(Selection::Joint { object: o, joint: j })
+            Ok(Selected::Joint { object: o, joint: j })
         }
         _ => bail!("--select `{text}`: expected object:NAME, joint:OBJECT/JOINT or light:NAME"),
     }
@@ -420,8 +420,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         rig.upload(headless.renderer_mut())
             .with_context(|| format!("{}: uploading meshes", args.file.display()))?;
         let selection = match &args.select {
-            Some(text) => parse_selection(&scene, text)?,
-            None => Selection::None,
+            Some(text) => Some(parse_selection(&scene, text)?),
+            None => None,
         };
         let view = ViewOptions {
             style,

@@ -9,7 +9,7 @@ use transform_gizmo_egui::math::Transform;
 use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrientation, GizmoResult};
 
 use crate::app::EditorApp;
-use crate::camera::Projection;
+use crate::camera::{OrbitCamera, Projection};
 use crate::channels::{ChannelId, ChannelValue, Turn};
 use crate::eval::ObjectPose;
 use crate::session::Selected;
@@ -239,14 +239,8 @@ fn gpu_ui(
         grid: app.view.grid,
         skeletons: app.view.bones,
         motion_path: app.view.motion_path,
-        selection: crate::gpu_view::selection_for(app.session.selection.item),
-        camera: Some(keyrig_core::Camera {
-            target: c.target,
-            yaw_deg: c.yaw_deg,
-            pitch_deg: c.pitch_deg,
-            distance: c.distance,
-            fov_y_deg: c.fov_y_deg,
-        }),
+        selection: app.session.selection.item,
+        camera: Some(c),
         depth_range: Some(c.depth_range(app.view.bounds_of(None))),
         ..keyrig_render::ViewOptions::default()
     };
@@ -772,7 +766,7 @@ pub fn measure_ui(ui: &mut Ui, app: &EditorApp) {
 fn draw_mesh(
     painter: &egui::Painter,
     projection: &Projection,
-    camera: &crate::camera::OrbitCamera,
+    camera: &keyrig_core::Camera,
     world: &[Vec3],
     indices: &[u32],
     style: RenderStyle,
