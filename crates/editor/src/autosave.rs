@@ -110,12 +110,6 @@ impl Autosave {
     pub fn writes(&self) -> u64 {
         lock(&self.shared).writes
     }
-
-    /// Whether a write is waiting for its time.
-    #[must_use]
-    pub fn is_pending(&self) -> bool {
-        lock(&self.shared).pending.is_some()
-    }
 }
 
 /// The thread: sleeps until a write is due, then writes the latest scene.

@@ -218,17 +218,6 @@ impl Command {
         self.shortcuts().iter().map(|s| ctx.format_shortcut(s)).collect::<Vec<_>>().join(", ")
     }
 
-    /// All shortcuts as text with PC key names ("Ctrl+P, Space"), independent of a context; the
-    /// guide's shortcut table uses it.
-    #[must_use]
-    pub fn shortcut_text_plain(self) -> String {
-        self.shortcuts()
-            .iter()
-            .map(|s| s.format(&egui::ModifierNames::NAMES, false))
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-
     /// Whether the shortcut must not fire while a text field has the keyboard: plain keys, and
     /// the clipboard and undo keys, which the text field uses itself.
     #[must_use]
@@ -280,12 +269,15 @@ mod tests {
         }
     }
 
-    /// docs/guide.md lists every command with its shortcuts, as the help window does.
+    /// docs/guide.md lists every command with its shortcuts (PC key names, "Ctrl+P, Space"),
+    /// as the help window does.
     #[test]
     fn the_guide_lists_every_shortcut() {
         let guide = include_str!("../../../docs/guide.md");
         for command in Command::ALL {
-            let row = format!("| {} | {} |", command.label(), command.shortcut_text_plain());
+            let shortcuts: Vec<String> =
+                command.shortcuts().iter().map(|s| s.format(&egui::ModifierNames::NAMES, false)).collect();
+            let row = format!("| {} | {} |", command.label(), shortcuts.join(", "));
             assert!(guide.contains(&row), "docs/guide.md lacks the row `{row}`");
         }
     }

@@ -365,12 +365,6 @@ impl SceneEvaluator {
         self.fps
     }
 
-    /// Number of objects.
-    #[must_use]
-    pub fn object_count(&self) -> usize {
-        self.objects.len()
-    }
-
     /// The skinned mesh of object `o` with its bindings (procedural meshes and loaded skinned
     /// meshes).
     #[must_use]

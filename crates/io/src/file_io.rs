@@ -173,12 +173,6 @@ impl AtomicFile {
         self
     }
 
-    /// The temporary file being written (it is removed or renamed by the end).
-    #[must_use]
-    pub fn temporary_path(&self) -> &Path {
-        &self.tmp_path
-    }
-
     /// Flushes and syncs the temporary file, keeps the backup when asked, renames the
     /// temporary file over the target and syncs the folder.
     ///
@@ -411,7 +405,7 @@ mod tests {
         let path = dir.path().join("a.png");
         let mut f = AtomicFile::create(&path).expect("create");
         f.write_all(b"partial").expect("write");
-        let tmp = f.temporary_path().to_path_buf();
+        let tmp = f.tmp_path.clone();
         assert!(tmp.exists());
         drop(f);
         assert!(!tmp.exists() && !path.exists());

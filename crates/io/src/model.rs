@@ -31,14 +31,6 @@ pub struct ModelNode {
     pub weights: Option<Vec<f32>>,
 }
 
-impl ModelNode {
-    /// `parent_from_node` = T · R · S.
-    #[must_use]
-    pub fn local_matrix(&self) -> Mat4 {
-        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
-    }
-}
-
 /// How a primitive's indices are to be read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PrimitiveMode {

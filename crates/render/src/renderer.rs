@@ -1038,16 +1038,6 @@ impl Renderer {
         self.meshes.get(&id).is_some_and(|m| m.texture.is_some())
     }
 
-    /// Forgets a mesh (its GPU buffers are freed).
-    pub fn remove_mesh(&mut self, id: MeshId) {
-        self.meshes.remove(&id);
-    }
-
-    #[must_use]
-    pub fn has_mesh(&self, id: MeshId) -> bool {
-        self.meshes.contains_key(&id)
-    }
-
     /// Encodes and submits one frame into `viewport`: compute passes for every deformed item,
     /// then one render pass (meshes, grid, skeletons, motion paths) with MSAA resolve.
     ///

@@ -19,6 +19,20 @@ use crate::view::RenderStyle;
 /// Pick radius around joints and lights, points.
 const PICK_RADIUS: f32 = 9.0;
 
+/// What the viewport shows this frame, evaluated once and shared by its parts.
+struct ViewportFrame {
+    eval: std::sync::Arc<keyrig_eval::SceneEvaluator>,
+    state: keyrig_eval::SceneState,
+    poses: Vec<Option<ObjectPose>>,
+    /// Deformed (or static) meshes in world space by object, skinned on the CPU: they feed
+    /// the cross-section measure and, without a GPU viewport, the painter.
+    cpu_meshes: Vec<(usize, Vec<Vec3>, Vec<u32>)>,
+    /// What could not be drawn (shown in red over the viewport).
+    errors: Vec<String>,
+}
+
+/// The viewport: evaluates the frame, draws it (GPU, else the painter), the skeleton and
+/// light overlays, the gizmo; then camera navigation and click-to-select.
 pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     egui::CentralPanel::default().frame(egui::Frame::NONE).show_inside(ui, |ui| {
         let rect = ui.available_rect_before_wrap();
@@ -27,196 +41,264 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         // Filled below only when the painter draws: under the GPU image it would double the
         // pixels a CPU rasterizer shades (docs/benchmarks.md, "Editor").
         let background = painter.add(egui::Shape::Noop);
-
         app.view.viewport_rect = Some(rect);
-        let projection = Projection::new(&app.view.camera, rect);
-        let time = app.time();
-        // Model files are loaded before the evaluator is asked for (it reads no files).
-        let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
-        let mut errors: Vec<String> = Vec::new();
-        for object in &app.doc.scene().objects {
-            if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
-                if let Err(e) = app.meshes.get(base_dir.as_deref(), path, *mesh) {
-                    errors.push(format!("{}: {e}", object.name));
-                }
-            }
-        }
-        let eval = app.evaluator();
-        let state = eval.evaluate(time, &app.session.overrides);
-        let poses: Vec<Option<ObjectPose>> =
-            state.objects.iter().map(|s| Some(ObjectPose::from_state(s))).collect();
 
-        // CPU skinning runs every frame: it feeds the cross-section measure and, without a
-        // GPU viewport, the painter.
-        let mut cpu_meshes: Vec<(usize, Vec<Vec3>, Vec<u32>)> = Vec::new();
-        for (o, object_state) in state.objects.iter().enumerate() {
-            let object = &app.doc.scene().objects[o];
-            let world_from_object = object_state.world_from_object;
-            if let (Some(skin), Some(palette)) = (eval.skin(o), &object_state.palette) {
-                match app.skin.skin(o, skin, palette, object.deformer.kind) {
-                    Ok(view) => cpu_meshes.push((
-                        o,
-                        crate::skinning::to_world(world_from_object, view.positions),
-                        view.indices.to_vec(),
-                    )),
-                    Err(e) => errors.push(format!("{}: {e}", object.name)),
-                }
-                continue;
-            }
-            app.skin.forget(o);
-            if let Some(e) = &object_state.palette_error {
-                errors.push(format!("{}: pose: {e}", object.name));
-            }
-            let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
-            match (app.meshes.peek(base_dir.as_deref(), path, *mesh), &object_state.morph) {
-                (Some(crate::files::FileMesh::Morph(morph)), Some(Ok(blend))) => {
-                    let positions = app.skin.morph(o, morph, *blend);
-                    cpu_meshes.push((
-                        o,
-                        crate::skinning::to_world(world_from_object, positions),
-                        morph.indices().to_vec(),
-                    ));
-                }
-                (Some(crate::files::FileMesh::Morph(_)), Some(Err(e))) => {
-                    errors.push(format!("{}: {e}", object.name))
-                }
-                (Some(crate::files::FileMesh::Static { positions, indices }), _) => {
-                    cpu_meshes.push((
-                        o,
-                        crate::skinning::to_world(world_from_object, positions),
-                        indices.clone(),
-                    ));
-                }
-                _ => {}
-            }
-        }
-        for problem in eval.problems().iter().take(3) {
-            errors.push(problem.to_string());
-        }
-
-        record_bounds(app, &poses, &cpu_meshes);
+        let mut frame = evaluate_frame(app);
+        record_bounds(app, &frame.poses, &frame.cpu_meshes);
         // Framing after an import moves the camera before anything is drawn this frame.
-        let projection = match app.view.frame_request.take() {
-            Some(objects) => {
-                app.frame_objects(&objects);
-                Projection::new(&app.view.camera, rect)
-            }
-            None => projection,
-        };
+        if let Some(objects) = app.view.frame_request.take() {
+            app.frame_objects(&objects);
+        }
+        let projection = Projection::new(&app.view.camera, rect);
 
-        let gpu_drawn = gpu_ui(ui, app, rect, &eval, &state, &mut errors);
-        let scene = app.doc.scene();
+        let gpu_drawn = gpu_ui(ui, app, rect, &frame.eval, &frame.state, &mut frame.errors);
         if !gpu_drawn {
             painter.set(background, egui::Shape::rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46)));
-            if app.view.grid {
-                draw_grid(&painter, &projection);
-            }
-            for (o, world, indices) in &cpu_meshes {
-                let selected = app.session.selection.item == Some(Selected::Object(*o));
-                draw_mesh(&painter, &projection, &app.view.camera, world, indices, app.view.style, selected);
-            }
+            paint_scene(&painter, &projection, app, &frame.cpu_meshes);
         }
-        let mut pick_targets: Vec<(Pos2, Selected)> = Vec::new();
-        for (o, pose) in poses.iter().enumerate() {
-            let Some(pose) = pose else { continue };
-            let object = &scene.objects[o];
-            if let Some(p) = projection.project(pose.world_from_object.translation.into()) {
-                pick_targets.push((p, Selected::Object(o)));
-            }
-            if object.mesh.is_none() {
-                draw_axes(&painter, &projection, pose.world_from_object);
-            }
-            let Some(skeleton) = &object.skeleton else { continue };
-            for (j, joint) in skeleton.joints.iter().enumerate() {
-                let world = pose.world_from_object * pose.object_from_joint[j];
-                let at: Vec3 = world.translation.into();
-                if let Some(p) = projection.project(at) {
-                    pick_targets.push((p, Selected::Joint { object: o, joint: j }));
-                }
-                if gpu_drawn || !app.view.bones {
-                    continue;
-                }
-                let selected = app.session.selection.item == Some(Selected::Joint { object: o, joint: j });
-                let bone_colour =
-                    if selected { Color32::from_rgb(255, 200, 60) } else { Color32::from_rgb(120, 200, 255) };
-                if let Some(p) = joint.parent.filter(|&p| p < j) {
-                    let from: Vec3 = (pose.world_from_object * pose.object_from_joint[p]).translation.into();
-                    if let Some(seg) = projection.project_segment(from, at) {
-                        painter.line_segment(seg, Stroke::new(3.0, bone_colour));
-                    }
-                }
-                // The last joint of a chain draws a stub along its local X.
-                if !skeleton.joints.iter().any(|c| c.parent == Some(j)) {
-                    let tip = world.transform_point3(Vec3::X * 0.15);
-                    if let Some(seg) = projection.project_segment(at, tip) {
-                        painter.line_segment(seg, Stroke::new(2.0, bone_colour));
-                    }
-                }
-                if let Some(p) = projection.project(at) {
-                    painter.circle(p, 5.0, Color32::from_rgb(30, 30, 30), Stroke::new(2.0, bone_colour));
-                }
-            }
+        paint_axes(&painter, &projection, app, &frame.poses);
+        if !gpu_drawn && app.view.bones {
+            paint_bones(&painter, &projection, app, &frame.poses);
         }
-        for ((l, light), light_state) in scene.lights.iter().enumerate().zip(&state.lights) {
-            let pos = light_state.position;
-            let Some(p) = projection.project(pos) else { continue };
-            let selected = app.session.selection.item == Some(Selected::Light(l));
-            let colour = if selected {
-                Color32::from_rgb(255, 200, 60)
-            } else if light.enabled {
-                Color32::from_rgb(255, 240, 150)
-            } else {
-                Color32::GRAY
-            };
-            painter.circle_stroke(p, 7.0, Stroke::new(2.0, colour));
-            for k in 0..8 {
-                let a = k as f32 * std::f32::consts::TAU / 8.0;
-                let d = egui::vec2(a.cos(), a.sin());
-                painter.line_segment([p + d * 9.0, p + d * 13.0], Stroke::new(1.5, colour));
-            }
-            let dir = light_state.direction;
-            if let Some(seg) = projection.project_segment(pos, pos + dir.normalize_or_zero() * 0.5) {
-                painter.arrow(seg[0], seg[1] - seg[0], Stroke::new(1.0, colour));
-            }
-            pick_targets.push((p, Selected::Light(l)));
-        }
+        paint_lights(&painter, &projection, app, &frame.state);
+        let pick_targets = pick_targets(&projection, app, &frame);
 
         // Gizmo for the selection (drawn last, on top). It owns the primary button only on
         // one of its handles; scroll, right/middle drags and drags that start elsewhere stay
         // with the camera, as in Blender's viewport.
-        let gizmo_owns_primary = gizmo_ui(ui, app, &projection, rect, &response, &poses);
-
-        // Camera navigation and picking.
-        let shift = ui.input(|i| i.modifiers.shift);
-        let primary = response.dragged_by(egui::PointerButton::Primary) && !gizmo_owns_primary;
-        if primary && !shift {
-            let d = response.drag_delta();
-            app.view.camera.orbit(d.x, d.y);
-        } else if response.dragged_by(egui::PointerButton::Secondary)
-            || response.dragged_by(egui::PointerButton::Middle)
-            || (primary && shift)
-        {
-            let d = response.drag_delta();
-            app.view.camera.pan(d.x, d.y, rect.height());
-        }
+        let gizmo_owns_primary = gizmo_ui(ui, app, &projection, rect, &response, &frame.poses);
+        navigate(ui, app, &response, rect, gizmo_owns_primary);
         if response.clicked() && !gizmo_owns_primary {
             if let Some(pos) = response.interact_pointer_pos() {
-                let hit = pick_targets
-                    .iter()
-                    .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
-                    .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)));
-                app.session.selection.item = hit.map(|(_, s)| *s);
+                app.session.selection.item = pick(&pick_targets, pos);
             }
         }
-        if response.contains_pointer() {
-            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                app.view.camera.zoom(scroll);
-            }
-        }
-        overlay_ui(&painter, rect, app, &errors);
-        app.viewport_errors = errors;
+        overlay_ui(&painter, rect, app, &frame.errors);
+        app.viewport_errors = frame.errors;
     });
+}
+
+/// Loads the model files the scene shows (the evaluator reads no files), evaluates the
+/// scene now and skins or morphs every mesh on the CPU.
+fn evaluate_frame(app: &mut EditorApp) -> ViewportFrame {
+    let time = app.time();
+    let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+    let mut errors: Vec<String> = Vec::new();
+    for object in &app.doc.scene().objects {
+        if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+            if let Err(e) = app.meshes.get(base_dir.as_deref(), path, *mesh) {
+                errors.push(format!("{}: {e}", object.name));
+            }
+        }
+    }
+    let eval = app.evaluator();
+    let state = eval.evaluate(time, &app.session.overrides);
+    let poses: Vec<Option<ObjectPose>> =
+        state.objects.iter().map(|s| Some(ObjectPose::from_state(s))).collect();
+
+    let mut cpu_meshes: Vec<(usize, Vec<Vec3>, Vec<u32>)> = Vec::new();
+    for (o, object_state) in state.objects.iter().enumerate() {
+        let object = &app.doc.scene().objects[o];
+        let world_from_object = object_state.world_from_object;
+        if let (Some(skin), Some(palette)) = (eval.skin(o), &object_state.palette) {
+            match app.skin.skin(o, skin, palette, object.deformer.kind) {
+                Ok(view) => cpu_meshes.push((
+                    o,
+                    crate::skinning::to_world(world_from_object, view.positions),
+                    view.indices.to_vec(),
+                )),
+                Err(e) => errors.push(format!("{}: {e}", object.name)),
+            }
+            continue;
+        }
+        app.skin.forget(o);
+        if let Some(e) = &object_state.palette_error {
+            errors.push(format!("{}: pose: {e}", object.name));
+        }
+        let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
+        match (app.meshes.peek(base_dir.as_deref(), path, *mesh), &object_state.morph) {
+            (Some(crate::files::FileMesh::Morph(morph)), Some(Ok(blend))) => {
+                let positions = app.skin.morph(o, morph, *blend);
+                cpu_meshes.push((
+                    o,
+                    crate::skinning::to_world(world_from_object, positions),
+                    morph.indices().to_vec(),
+                ));
+            }
+            (Some(crate::files::FileMesh::Morph(_)), Some(Err(e))) => {
+                errors.push(format!("{}: {e}", object.name))
+            }
+            (Some(crate::files::FileMesh::Static { positions, indices }), _) => {
+                cpu_meshes.push((
+                    o,
+                    crate::skinning::to_world(world_from_object, positions),
+                    indices.clone(),
+                ));
+            }
+            _ => {}
+        }
+    }
+    for problem in eval.problems().iter().take(3) {
+        errors.push(problem.to_string());
+    }
+    ViewportFrame { eval, state, poses, cpu_meshes, errors }
+}
+
+/// The painter's scene without a GPU viewport: grid and meshes.
+fn paint_scene(
+    painter: &egui::Painter,
+    projection: &Projection,
+    app: &EditorApp,
+    cpu_meshes: &[(usize, Vec<Vec3>, Vec<u32>)],
+) {
+    if app.view.grid {
+        draw_grid(painter, projection);
+    }
+    for (o, world, indices) in cpu_meshes {
+        let selected = app.session.selection.item == Some(Selected::Object(*o));
+        draw_mesh(painter, projection, &app.view.camera, world, indices, app.view.style, selected);
+    }
+}
+
+/// Bones and joints of every skeleton (the painter's skeleton overlay; the GPU viewport draws
+/// its own).
+fn paint_bones(
+    painter: &egui::Painter,
+    projection: &Projection,
+    app: &EditorApp,
+    poses: &[Option<ObjectPose>],
+) {
+    let scene = app.doc.scene();
+    for (o, pose) in poses.iter().enumerate() {
+        let Some(pose) = pose else { continue };
+        let Some(skeleton) = &scene.objects[o].skeleton else { continue };
+        for (j, joint) in skeleton.joints.iter().enumerate() {
+            let world = pose.world_from_object * pose.object_from_joint[j];
+            let at: Vec3 = world.translation.into();
+            let selected = app.session.selection.item == Some(Selected::Joint { object: o, joint: j });
+            let bone_colour =
+                if selected { Color32::from_rgb(255, 200, 60) } else { Color32::from_rgb(120, 200, 255) };
+            if let Some(p) = joint.parent.filter(|&p| p < j) {
+                let from: Vec3 = (pose.world_from_object * pose.object_from_joint[p]).translation.into();
+                if let Some(seg) = projection.project_segment(from, at) {
+                    painter.line_segment(seg, Stroke::new(3.0, bone_colour));
+                }
+            }
+            // The last joint of a chain draws a stub along its local X.
+            if !skeleton.joints.iter().any(|c| c.parent == Some(j)) {
+                let tip = world.transform_point3(Vec3::X * 0.15);
+                if let Some(seg) = projection.project_segment(at, tip) {
+                    painter.line_segment(seg, Stroke::new(2.0, bone_colour));
+                }
+            }
+            if let Some(p) = projection.project(at) {
+                painter.circle(p, 5.0, Color32::from_rgb(30, 30, 30), Stroke::new(2.0, bone_colour));
+            }
+        }
+    }
+}
+
+/// The axes of objects without a mesh (empties, skeletons alone).
+fn paint_axes(
+    painter: &egui::Painter,
+    projection: &Projection,
+    app: &EditorApp,
+    poses: &[Option<ObjectPose>],
+) {
+    for (object, pose) in app.doc.scene().objects.iter().zip(poses) {
+        if let (None, Some(pose)) = (&object.mesh, pose) {
+            draw_axes(painter, projection, pose.world_from_object);
+        }
+    }
+}
+
+/// Light icons with their direction.
+fn paint_lights(
+    painter: &egui::Painter,
+    projection: &Projection,
+    app: &EditorApp,
+    state: &keyrig_eval::SceneState,
+) {
+    for ((l, light), light_state) in app.doc.scene().lights.iter().enumerate().zip(&state.lights) {
+        let pos = light_state.position;
+        let Some(p) = projection.project(pos) else { continue };
+        let selected = app.session.selection.item == Some(Selected::Light(l));
+        let colour = if selected {
+            Color32::from_rgb(255, 200, 60)
+        } else if light.enabled {
+            Color32::from_rgb(255, 240, 150)
+        } else {
+            Color32::GRAY
+        };
+        painter.circle_stroke(p, 7.0, Stroke::new(2.0, colour));
+        for k in 0..8 {
+            let a = k as f32 * std::f32::consts::TAU / 8.0;
+            let d = egui::vec2(a.cos(), a.sin());
+            painter.line_segment([p + d * 9.0, p + d * 13.0], Stroke::new(1.5, colour));
+        }
+        let dir = light_state.direction;
+        if let Some(seg) = projection.project_segment(pos, pos + dir.normalize_or_zero() * 0.5) {
+            painter.arrow(seg[0], seg[1] - seg[0], Stroke::new(1.0, colour));
+        }
+    }
+}
+
+/// Where each object origin, joint and light is on screen, for click-to-select (objects
+/// first, then their joints, then lights, as they were drawn).
+fn pick_targets(projection: &Projection, app: &EditorApp, frame: &ViewportFrame) -> Vec<(Pos2, Selected)> {
+    let scene = app.doc.scene();
+    let mut targets = Vec::new();
+    for (o, pose) in frame.poses.iter().enumerate() {
+        let Some(pose) = pose else { continue };
+        if let Some(p) = projection.project(pose.world_from_object.translation.into()) {
+            targets.push((p, Selected::Object(o)));
+        }
+        let Some(skeleton) = &scene.objects[o].skeleton else { continue };
+        for j in 0..skeleton.joints.len() {
+            let at: Vec3 = (pose.world_from_object * pose.object_from_joint[j]).translation.into();
+            if let Some(p) = projection.project(at) {
+                targets.push((p, Selected::Joint { object: o, joint: j }));
+            }
+        }
+    }
+    for (l, light_state) in frame.state.lights.iter().enumerate().take(scene.lights.len()) {
+        if let Some(p) = projection.project(light_state.position) {
+            targets.push((p, Selected::Light(l)));
+        }
+    }
+    targets
+}
+
+/// The nearest pick target within [`PICK_RADIUS`] of `pos` (nothing when none is).
+fn pick(targets: &[(Pos2, Selected)], pos: Pos2) -> Option<Selected> {
+    targets
+        .iter()
+        .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
+        .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)))
+        .map(|(_, s)| *s)
+}
+
+/// Orbit (left drag), pan (right or middle drag, Shift+left drag) and zoom (scroll); a
+/// primary drag the gizmo owns is left to it.
+fn navigate(ui: &Ui, app: &mut EditorApp, response: &egui::Response, rect: Rect, gizmo_owns_primary: bool) {
+    let shift = ui.input(|i| i.modifiers.shift);
+    let primary = response.dragged_by(egui::PointerButton::Primary) && !gizmo_owns_primary;
+    if primary && !shift {
+        let d = response.drag_delta();
+        app.view.camera.orbit(d.x, d.y);
+    } else if response.dragged_by(egui::PointerButton::Secondary)
+        || response.dragged_by(egui::PointerButton::Middle)
+        || (primary && shift)
+    {
+        let d = response.drag_delta();
+        app.view.camera.pan(d.x, d.y, rect.height());
+    }
+    if response.contains_pointer() {
+        let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+        if scroll != 0.0 {
+            app.view.camera.zoom(scroll);
+        }
+    }
 }
 
 /// Renders the viewport with keyrig-render when the editor runs on eframe's wgpu backend.
