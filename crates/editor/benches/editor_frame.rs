@@ -92,15 +92,14 @@ fn frame_time(c: &mut Criterion) {
                 app.view.antialiasing = antialiasing;
                 app
             });
-        let adapter =
-            gpu.state().gpu.as_ref().map(GpuView::adapter_name).expect("the wgpu harness gives a device");
+        let adapter = gpu.state().gpu().map(GpuView::adapter_name).expect("the wgpu harness gives a device");
         eprintln!("adapter: {adapter}");
         gpu.state_mut().session.playback.playing = true;
         // The first frames build the rig and the viewport texture.
         for _ in 0..3 {
             gpu.step();
         }
-        let msaa = gpu.state().gpu.as_ref().is_some_and(GpuView::antialiasing);
+        let msaa = gpu.state().gpu().is_some_and(GpuView::antialiasing);
         assert_eq!(msaa, antialiasing, "{name}: the viewport's MSAA setting");
         group.bench_function(name, |b| {
             b.iter(|| {

@@ -56,21 +56,21 @@ pub struct EditorOptions {
 pub struct EditorApp {
     /// Whether [`crate::fonts::install`] ran on the context (at start-up, else on the first
     /// frame).
-    pub fonts_installed: bool,
+    pub(crate) fonts_installed: bool,
     /// The scene and its undo history.
     pub doc: Document,
     /// Selection, clock, record mode, overrides, clipboard.
     pub session: Session,
     /// Camera, viewport options, panel state.
     pub view: ViewState,
-    pub status: Option<Status>,
-    pub pending: Option<PendingAction>,
-    pub recent: Recent,
-    pub recovery: Recovery,
+    pub(crate) status: Option<Status>,
+    pub(crate) pending: Option<PendingAction>,
+    pub(crate) recent: Recent,
+    pub(crate) recovery: Recovery,
     /// The autosave timer (a thread of its own: it writes while the window is idle).
-    pub autosave: crate::autosave::Autosave,
+    pub(crate) autosave: crate::autosave::Autosave,
     /// A recovered scene the user has been offered, not yet accepted or declined.
-    pub recovery_offer: Option<Scene>,
+    pub(crate) recovery_offer: Option<Scene>,
     pub(crate) file_dialog: egui_file_dialog::FileDialog,
     pub(crate) dialog_purpose: Option<DialogPurpose>,
     pub(crate) gizmo: transform_gizmo_egui::Gizmo,
@@ -79,19 +79,19 @@ pub struct EditorApp {
     /// A drag on a rotation ring of a joint or object, turned by the editor itself
     /// ([`crate::twist::RingDrag`]) rather than by transform-gizmo.
     pub(crate) ring_drag: Option<crate::twist::RingDragState>,
-    pub skin: crate::skinning::SkinCache,
+    pub(crate) skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
-    pub meshes: files::MeshStore,
+    pub(crate) meshes: files::MeshStore,
     /// Model imports running on background threads (the status bar shows them).
-    pub imports: Vec<files::BackgroundImport>,
+    pub(crate) imports: Vec<files::BackgroundImport>,
     /// What the viewport could not draw in the last frame (shown in red over it).
-    pub viewport_errors: Vec<String>,
+    pub(crate) viewport_errors: Vec<String>,
     /// Smoothed time between frames while playing, seconds (shown in the status bar).
-    pub frame_time: Option<f32>,
+    pub(crate) frame_time: Option<f32>,
     /// `keyrig edit --benchmark-frames N`: plays, measures N frames, prints and quits.
-    pub frame_benchmark: Option<crate::frame_bench::FrameBenchmark>,
+    pub(crate) frame_benchmark: Option<crate::frame_bench::FrameBenchmark>,
     /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
-    pub gpu: Option<crate::gpu_view::GpuView>,
+    pub(crate) gpu: Option<crate::gpu_view::GpuView>,
     evaluator: RefCell<Option<CachedEvaluator>>,
     pub(crate) window_title: String,
     pub(crate) close_sent: bool,
@@ -140,6 +140,55 @@ impl EditorApp {
             close_sent: false,
             quit_confirmed: false,
         }
+    }
+
+    /// The status-bar message, if any.
+    #[must_use]
+    pub fn status(&self) -> Option<&Status> {
+        self.status.as_ref()
+    }
+
+    /// The action waiting for the unsaved-changes dialog, if any.
+    #[must_use]
+    pub fn pending(&self) -> Option<&PendingAction> {
+        self.pending.as_ref()
+    }
+
+    /// A recovered scene offered and not yet accepted or declined.
+    #[must_use]
+    pub fn recovery_offer(&self) -> Option<&Scene> {
+        self.recovery_offer.as_ref()
+    }
+
+    /// The CPU-skinned frames of the objects (the cross-section readout and the painter
+    /// read them).
+    #[must_use]
+    pub fn skin_cache(&self) -> &crate::skinning::SkinCache {
+        &self.skin
+    }
+
+    /// Model imports still running.
+    #[must_use]
+    pub fn imports(&self) -> &[files::BackgroundImport] {
+        &self.imports
+    }
+
+    /// What the viewport could not draw in the last frame.
+    #[must_use]
+    pub fn viewport_errors(&self) -> &[String] {
+        &self.viewport_errors
+    }
+
+    /// The GPU viewport, when the editor runs on eframe's wgpu backend.
+    #[must_use]
+    pub fn gpu(&self) -> Option<&crate::gpu_view::GpuView> {
+        self.gpu.as_ref()
+    }
+
+    /// Plays, measures `frames` frames, prints the figures and closes the window
+    /// (`keyrig edit --benchmark-frames N`).
+    pub fn benchmark_frames(&mut self, frames: u32) {
+        self.frame_benchmark = Some(crate::frame_bench::FrameBenchmark::new(frames));
     }
 
     /// The document's scene evaluator, rebuilt when the document or its loaded meshes change.

@@ -72,7 +72,9 @@ pub fn run_editor(
     window_size: Option<[f32; 2]>,
 ) -> anyhow::Result<()> {
     let mut app = editor_for(file, EditorOptions::default());
-    app.frame_benchmark = benchmark_frames.map(frame_bench::FrameBenchmark::new);
+    if let Some(frames) = benchmark_frames {
+        app.benchmark_frames(frames);
+    }
     let title = app.doc.title();
     let mut options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

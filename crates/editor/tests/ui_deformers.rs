@@ -17,8 +17,8 @@ use keyrig_editor::EditorApp;
 /// The arm's deformed positions (object space) and the forearm's cross-section ratio.
 fn skinned(h: &Harness<'_, EditorApp>) -> (Vec<Vec3>, f32) {
     let app = h.state();
-    let positions = app.skin.deformed_positions(0).expect("the arm is skinned").to_vec();
-    let ratio = app.skin.cross_section(0, 2).expect("measured").expect("a cross-section").ratio();
+    let positions = app.skin_cache().deformed_positions(0).expect("the arm is skinned").to_vec();
+    let ratio = app.skin_cache().cross_section(0, 2).expect("measured").expect("a cross-section").ratio();
     (positions, ratio)
 }
 
@@ -58,7 +58,7 @@ fn switching_deformer_changes_the_skinned_arm_and_the_measure() {
     // The measure is shown beside the viewport (in the inspector) as text.
     let shown = format!(
         "Cross-section at forearm: {:.2} × rest",
-        h.state().skin.cross_section(0, 2).expect("m").expect("m").ratio()
+        h.state().skin_cache().cross_section(0, 2).expect("m").expect("m").ratio()
     );
     assert!(h.query_by_label(&shown).is_some(), "inspector shows {shown}");
 }

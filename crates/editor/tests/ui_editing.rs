@@ -156,7 +156,7 @@ fn save_reopen_compare() {
     record_two_wrist_keys(&mut h);
     assert_eq!(h.state().doc.title(), "keyrig — arm.ron*");
     press(&mut h, Modifiers::COMMAND, Key::S);
-    assert!(!h.state().doc.is_dirty(), "{:?}", h.state().status);
+    assert!(!h.state().doc.is_dirty(), "{:?}", h.state().status().cloned());
     assert_eq!(h.state().doc.title(), "keyrig — arm.ron");
     let saved = h.state().doc.scene().clone();
 
@@ -171,7 +171,7 @@ fn a_bad_file_is_an_error_in_the_status_bar_not_a_panic() {
     let path = dir.path().join("broken.ron");
     std::fs::write(&path, "(version: 1, scene: (fps: NaN").expect("write");
     let h = harness(dir.path(), Some(path));
-    let status = h.state().status.clone().expect("an error is shown");
+    let status = h.state().status().cloned().expect("an error is shown");
     assert!(status.is_error && status.text.contains("broken.ron"), "{status:?}");
     // The editor still opened (on the demo scene).
     assert!(!h.state().doc.scene().objects.is_empty());
@@ -234,7 +234,7 @@ fn shortcuts_do_what_the_help_window_says() {
     // Ctrl+N on a dirty document asks first; Discard goes ahead.
     assert!(h.state().doc.is_dirty(), "deformer switches are edits");
     press(&mut h, Modifiers::COMMAND, Key::N);
-    assert!(h.state().pending.is_some());
+    assert!(h.state().pending().is_some());
     h.get_by_label("Discard changes").click();
     h.run();
     assert!(h.state().doc.scene().objects.is_empty(), "a new, empty scene");

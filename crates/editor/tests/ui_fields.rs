@@ -37,7 +37,7 @@ fn type_into(h: &mut Harness<'_, EditorApp>, label: &str, text: &str, finish: Ke
 }
 
 fn status(h: &Harness<'_, EditorApp>) -> Option<(String, bool)> {
-    h.state().status.as_ref().map(|s| (s.text.clone(), s.is_error))
+    h.state().status().map(|s| (s.text.clone(), s.is_error))
 }
 
 #[test]

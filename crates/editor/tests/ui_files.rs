@@ -29,7 +29,7 @@ fn autosave_is_offered_for_recovery_after_a_crash() {
         // Dropped without quitting: as if the editor had crashed.
     };
     let mut h = harness_autosaving(dir.path(), None, 1e9);
-    assert!(h.state().recovery_offer.is_some());
+    assert!(h.state().recovery_offer().is_some());
     h.get_by_label("Recover").click();
     h.run();
     assert_eq!(h.state().doc.scene(), &edited);
@@ -39,7 +39,7 @@ fn autosave_is_offered_for_recovery_after_a_crash() {
     let mut again = harness_autosaving(dir.path(), None, 1e9);
     again.get_by_label("Discard autosave").click();
     again.run();
-    assert!(again.state().recovery_offer.is_none());
+    assert!(again.state().recovery_offer().is_none());
     assert!(!dir.path().join("recovery.ron").exists());
 }
 
@@ -52,14 +52,14 @@ fn import_a_skinned_gltf_into_the_scene_and_undo_it() {
     h.state_mut().import_path(model);
     h.state_mut().wait_for_background_work();
     h.run();
-    let status = h.state().status.clone().expect("a message");
+    let status = h.state().status().cloned().expect("a message");
     assert!(!status.is_error, "{status:?}");
     let scene = h.state().doc.scene();
     assert!(scene.objects.len() > before);
     let imported = &scene.objects[before];
     assert!(imported.skeleton.is_some(), "the skinned cylinder comes with its skeleton");
     // The viewport skinned it on the CPU (the painter draws it without a GPU).
-    assert!(h.state().skin.deformed_positions(before).is_some_and(|p| !p.is_empty()));
+    assert!(h.state().skin_cache().deformed_positions(before).is_some_and(|p| !p.is_empty()));
     h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
     h.run();
     assert_eq!(h.state().doc.scene().objects.len(), before);
@@ -72,7 +72,7 @@ fn export_gltf_writes_a_file_and_a_bad_file_reports_an_error() {
     let out = dir.path().join("demo.glb");
     h.state_mut().export_to(out.clone());
     h.run();
-    assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
+    assert!(!h.state().status().is_some_and(|s| s.is_error), "{:?}", h.state().status().cloned());
     let bytes = std::fs::read(&out).expect("exported");
     assert_eq!(&bytes[..4], b"glTF");
 
@@ -81,7 +81,7 @@ fn export_gltf_writes_a_file_and_a_bad_file_reports_an_error() {
     h.state_mut().import_path(junk);
     h.state_mut().wait_for_background_work();
     h.run();
-    let status = h.state().status.clone().expect("an error");
+    let status = h.state().status().cloned().expect("an error");
     assert!(status.is_error && status.text.contains("junk.glb"), "{status:?}");
 }
 
@@ -98,7 +98,7 @@ fn dropping_a_scene_on_a_dirty_document_asks_first() {
     assert!(h.state().doc.is_dirty());
     h.input_mut().dropped_files.push(egui::DroppedFile { path: Some(path.clone()), ..Default::default() });
     h.run();
-    assert!(h.state().pending.is_some(), "unsaved changes: the editor asks");
+    assert!(h.state().pending().is_some(), "unsaved changes: the editor asks");
     h.get_by_label("Cancel").click();
     h.run();
     assert_eq!(h.state().doc.scene().fps, 30.0, "cancel keeps the document");
@@ -143,7 +143,7 @@ fn a_moved_project_folder_still_opens_its_models() {
     std::fs::rename(&project, &moved).expect("move the project folder");
     let mut h = common::harness(root.path(), Some(moved.join("scene.ron")));
     h.run();
-    assert!(h.state().status.as_ref().is_none_or(|s| !s.is_error), "{:?}", h.state().status);
+    assert!(h.state().status().is_none_or(|s| !s.is_error), "{:?}", h.state().status().cloned());
     let Some(keyrig_core::MeshSource::File { path, .. }) = &h.state().doc.scene().objects[first].mesh else {
         panic!("a file mesh")
     };
@@ -151,6 +151,6 @@ fn a_moved_project_folder_still_opens_its_models() {
         std::path::Path::new(path).starts_with(std::fs::canonicalize(&moved).expect("canonical")),
         "{path}"
     );
-    assert!(h.state().skin.deformed_positions(first).is_some(), "the moved model loads and morphs");
-    assert!(h.state().skin.deformed_positions(first + 1).is_some(), "the outside model loads too");
+    assert!(h.state().skin_cache().deformed_positions(first).is_some(), "the moved model loads and morphs");
+    assert!(h.state().skin_cache().deformed_positions(first + 1).is_some(), "the outside model loads too");
 }

@@ -38,7 +38,7 @@ fn import(h: &mut Harness<'_, EditorApp>, path: std::path::PathBuf) -> usize {
     h.state_mut().import_path(path);
     h.state_mut().wait_for_background_work();
     h.run();
-    let status = h.state().status.clone().expect("a message");
+    let status = h.state().status().cloned().expect("a message");
     assert!(!status.is_error, "{status:?}");
     first
 }

@@ -47,7 +47,7 @@ fn wrist_x_degrees_at(h: &Harness<'_, EditorApp>, frame: f64) -> f32 {
 fn guide_walkthrough_twist_with_record_mode_and_tcb() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = gpu_harness(dir.path(), SIZE);
-    assert!(h.state().gpu.is_some());
+    assert!(h.state().gpu().is_some());
 
     // The editor as it opens (README screenshot), at the demo's twist with bones blending.
     h.get_by_label("forearm").click();
@@ -94,11 +94,11 @@ fn guide_walkthrough_twist_with_record_mode_and_tcb() {
     h.run();
     go_to_frame(&mut h, 60);
     press(&mut h, Modifiers::NONE, Key::Num2);
-    let linear = h.state().skin.cross_section(0, 2).expect("measured").expect("section").ratio();
+    let linear = h.state().skin_cache().cross_section(0, 2).expect("measured").expect("section").ratio();
     screenshot(&mut h, "guide_linear_blend");
     press(&mut h, Modifiers::NONE, Key::Num3);
     assert_eq!(h.state().doc.scene().objects[0].deformer.kind, DeformerKind::BonesBlending);
-    let bones = h.state().skin.cross_section(0, 2).expect("measured").expect("section").ratio();
+    let bones = h.state().skin_cache().cross_section(0, 2).expect("measured").expect("section").ratio();
     screenshot(&mut h, "guide_bones_blending");
     assert!(linear < 0.5 && bones > 0.9, "linear {linear}, bones blending {bones}");
 
@@ -112,7 +112,7 @@ const FOREARM: ChannelId = ChannelId::JointRotation { object: 0, joint: 2 };
 
 /// The forearm's cross-section relative to rest, as the viewport overlay shows it.
 fn forearm_section(h: &Harness<'_, EditorApp>) -> f32 {
-    h.state().skin.cross_section(0, 2).expect("measured").expect("section").ratio()
+    h.state().skin_cache().cross_section(0, 2).expect("measured").expect("section").ratio()
 }
 
 /// docs/guide.md, "Keying a full-turn twist": assets/twist.ron's forearm turn keyed again with

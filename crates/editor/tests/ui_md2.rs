@@ -19,7 +19,7 @@ use keyrig_editor::{editor_for, EditorApp, EditorOptions};
 fn positions_at(h: &mut Harness<'static, EditorApp>, o: usize, frame: i32) -> Vec<glam::Vec3> {
     h.state_mut().set_frame(frame);
     h.run();
-    h.state().skin.deformed_positions(o).expect("the viewport morphed the model").to_vec()
+    h.state().skin_cache().deformed_positions(o).expect("the viewport morphed the model").to_vec()
 }
 
 #[test]
@@ -32,13 +32,13 @@ fn dropped_md2_is_imported_in_the_background_and_morphs_over_time() {
     // The frame that takes the drop starts the import; results are applied from the next
     // frame on, so this frame's status bar shows the running import.
     h.step();
-    assert_eq!(h.state().imports.len(), 1);
-    assert_eq!(h.state().imports[0].purpose, ImportPurpose::Import);
+    assert_eq!(h.state().imports().len(), 1);
+    assert_eq!(h.state().imports()[0].purpose, ImportPurpose::Import);
     assert!(h.query_by_label_contains("Importing sydney.md2").is_some(), "the status bar shows the import");
     h.state_mut().wait_for_background_work();
     h.run();
-    assert!(h.state().imports.is_empty());
-    let status = h.state().status.clone().expect("a message");
+    assert!(h.state().imports().is_empty());
+    let status = h.state().status().cloned().expect("a message");
     assert!(!status.is_error && status.text.contains("sydney.md2"), "{status:?}");
 
     let scene = h.state().doc.scene();
@@ -153,17 +153,17 @@ fn opening_an_md2_makes_a_scene_that_covers_it() {
     h.run();
     assert_eq!(h.state().doc.scene(), &scene);
     assert_eq!((h.state().doc.is_dirty(), h.state().doc.undo_label()), (dirty, undo.as_deref()));
-    let status = h.state().status.clone().expect("a message");
+    let status = h.state().status().cloned().expect("a message");
     assert!(status.text.contains("No skinned object"), "{status:?}");
 
     // File ▸ Open of a model runs in the background and gives the same scene.
     let mut h = harness(dir.path(), None);
     h.state_mut().open_path(model);
-    assert_eq!(h.state().imports[0].purpose, ImportPurpose::Open);
+    assert_eq!(h.state().imports()[0].purpose, ImportPurpose::Open);
     h.state_mut().wait_for_background_work();
     h.run();
     assert_eq!(h.state().doc.scene(), &scene);
-    assert!(h.state().skin.deformed_positions(0).is_some_and(|p| !p.is_empty()));
+    assert!(h.state().skin_cache().deformed_positions(0).is_some_and(|p| !p.is_empty()));
 }
 
 #[test]
@@ -183,7 +183,7 @@ fn a_malformed_md2_is_a_status_bar_error() {
         h.state_mut().import_path(file.clone());
         h.state_mut().wait_for_background_work();
         h.run();
-        let status = h.state().status.clone().expect("an error");
+        let status = h.state().status().cloned().expect("an error");
         assert!(
             status.is_error && status.text.contains(needle) && status.text.contains("byte"),
             "{status:?}"
@@ -237,15 +237,15 @@ fn an_imported_md2_morphs_in_the_gpu_viewport() {
         app
     });
     h.run();
-    assert!(h.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
+    assert!(h.state().gpu().is_some(), "kittest's wgpu renderer gives the editor a device");
     h.state_mut().import_path(corpus("md2/ratamahatta/ratamahatta.md2"));
     h.state_mut().wait_for_background_work();
     for frame in [0, 7] {
         h.state_mut().set_frame(frame);
         h.run();
-        assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
-        assert_eq!(h.state().viewport_errors, Vec::<String>::new());
-        let stats = h.state().gpu.as_ref().and_then(|g| g.last_stats).expect("a GPU frame");
+        assert!(!h.state().status().is_some_and(|s| s.is_error), "{:?}", h.state().status().cloned());
+        assert_eq!(h.state().viewport_errors(), Vec::<String>::new());
+        let stats = h.state().gpu().and_then(|g| g.last_stats).expect("a GPU frame");
         assert_eq!(stats.morph_bytes, 16, "one morphing mesh: {stats:?}");
     }
 }

@@ -29,7 +29,7 @@ fn twist_at_frame_60_linear_blend_and_bones_blending() {
     go_to_frame(&mut h, 60);
     h.key_press_modifiers(Modifiers::NONE, Key::Num2);
     h.run();
-    let gpu_error = h.state().status.clone().filter(|s| s.is_error);
+    let gpu_error = h.state().status().cloned().filter(|s| s.is_error);
     assert_eq!(gpu_error, None);
     h.snapshot_options("editor_linear_blend_twist", &options());
     h.key_press_modifiers(Modifiers::NONE, Key::Num3);
@@ -46,9 +46,9 @@ fn an_imported_skinned_gltf_renders_on_the_gpu() {
     h.state_mut().import_path(model);
     h.state_mut().wait_for_background_work();
     h.run();
-    assert!(!h.state().status.as_ref().is_some_and(|s| s.is_error), "{:?}", h.state().status);
-    assert_eq!(h.state().viewport_errors, Vec::<String>::new());
-    let stats = h.state().gpu.as_ref().and_then(|g| g.last_stats).expect("a GPU frame");
+    assert!(!h.state().status().is_some_and(|s| s.is_error), "{:?}", h.state().status().cloned());
+    assert_eq!(h.state().viewport_errors(), Vec::<String>::new());
+    let stats = h.state().gpu().and_then(|g| g.last_stats).expect("a GPU frame");
     // The demo arm has 1250 vertices; the imported cylinder is skinned on the GPU as well.
     assert!(stats.deformed_vertices > 1250, "{stats:?}");
 }

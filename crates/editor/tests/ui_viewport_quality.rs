@@ -19,19 +19,19 @@ fn gpu_harness(dir: &std::path::Path) -> Harness<'static, EditorApp> {
         app
     });
     harness.run();
-    assert!(harness.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
+    assert!(harness.state().gpu().is_some(), "kittest's wgpu renderer gives the editor a device");
     harness
 }
 
 fn gpu_msaa(h: &Harness<'_, EditorApp>) -> bool {
-    h.state().gpu.as_ref().expect("GPU viewport").antialiasing()
+    h.state().gpu().expect("GPU viewport").antialiasing()
 }
 
 #[test]
 fn antialiasing_follows_the_adapter_and_the_view_menu() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = gpu_harness(dir.path());
-    let cpu = h.state().gpu.as_ref().expect("GPU viewport").is_cpu_adapter();
+    let cpu = h.state().gpu().expect("GPU viewport").is_cpu_adapter();
     assert_eq!(h.state().view.antialiasing, !cpu, "MSAA on by default only on a GPU");
     assert_eq!(gpu_msaa(&h), !cpu);
     assert_eq!(h.state().view.resolution_scale, 1.0, "full resolution on every adapter");
@@ -43,7 +43,7 @@ fn antialiasing_follows_the_adapter_and_the_view_menu() {
         h.run();
         assert_eq!(h.state().view.antialiasing, expected, "the menu toggles the setting");
         assert_eq!(gpu_msaa(&h), expected, "the renderer follows on the next frame");
-        assert!(h.state().viewport_errors.is_empty(), "{:?}", h.state().viewport_errors);
+        assert!(h.state().viewport_errors().is_empty(), "{:?}", h.state().viewport_errors());
         // Close the menu for the next round.
         h.key_press(egui::Key::Escape);
         h.run();

@@ -62,7 +62,7 @@ pub fn gpu_harness_for(
         app
     });
     harness.run();
-    assert!(harness.state().gpu.is_some(), "kittest's wgpu renderer gives the editor a device");
+    assert!(harness.state().gpu().is_some(), "kittest's wgpu renderer gives the editor a device");
     harness
 }
 
