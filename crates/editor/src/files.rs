@@ -828,7 +828,7 @@ impl Recovery {
     /// The document path the recovery scene was autosaved from.
     #[must_use]
     pub fn origin(&self) -> Option<PathBuf> {
-        let text = fs::read_to_string(self.origin_file()?).ok()?;
+        let text = read_small_text(&self.origin_file()?)?;
         (!text.trim().is_empty()).then(|| PathBuf::from(text.trim()))
     }
 
@@ -855,7 +855,7 @@ impl Recent {
     #[must_use]
     pub fn load(dir: Option<&Path>) -> Self {
         let paths = dir
-            .and_then(|d| fs::read_to_string(d.join("recent.txt")).ok())
+            .and_then(|d| read_small_text(&d.join("recent.txt")))
             .map(|text| {
                 text.lines().filter(|l| !l.trim().is_empty()).map(PathBuf::from).take(RECENT_LIMIT).collect()
             })
@@ -877,6 +877,13 @@ impl Recent {
             }
         }
     }
+}
+
+/// The editor's own small text files (the recent list, the recovery file's origin): a regular
+/// file of at most 1 MiB in UTF-8, read through keyrig-io; `None` when missing or not that.
+fn read_small_text(path: &Path) -> Option<String> {
+    let bytes = keyrig_io::file_io::read_regular_file(path, 1 << 20).ok()?;
+    String::from_utf8(bytes).ok()
 }
 
 #[cfg(test)]
