@@ -355,7 +355,7 @@ impl EditorApp {
 
     /// Keys the current values of the selection's channels at the current frame.
     pub fn insert_key(&mut self) {
-        let ids = self.session.selection.channels(self.doc.scene());
+        let ids = self.session.selection.key_channels(self.doc.scene());
         if ids.is_empty() {
             self.error("Insert key: select an object, joint or light first");
             return;
@@ -374,6 +374,128 @@ impl EditorApp {
         }
         self.session.selection.retain_valid(self.doc.scene());
         self.info(format!("Keyed {} channel(s) at frame {frame}", values.len()));
+    }
+
+    /// Deletes the selected object or light (undoable); a joint is not deleted on its own.
+    pub fn delete_selected_item(&mut self) {
+        let Some(item) = self.session.selection.item else {
+            self.info("Delete: nothing selected");
+            return;
+        };
+        let name = item_name(self.doc.scene(), item).unwrap_or_default();
+        match item {
+            Selected::Object(o) => {
+                self.doc.edit(&format!("delete object {name}"), |scene| {
+                    scene.objects.remove(o);
+                });
+            }
+            Selected::Light(l) => {
+                self.doc.edit(&format!("delete light {name}"), |scene| {
+                    scene.lights.remove(l);
+                });
+            }
+            Selected::Joint { .. } => {
+                self.error(format!(
+                    "Delete: {name} is a joint of a skeleton; select its object to delete the whole model"
+                ));
+                return;
+            }
+        }
+        self.session.forget_removed(item);
+        self.view.object_bounds.clear();
+        self.info(format!("Deleted {name}"));
+    }
+
+    /// Copies the selected object or light (keys, mesh and skeleton included) under a new
+    /// unique name (`Arm` → `Arm.001`), adds it to the end of the scene and selects it.
+    pub fn duplicate_selected_item(&mut self) {
+        let scene = self.doc.scene();
+        let copy = match self.session.selection.item {
+            Some(Selected::Object(o)) => {
+                let mut object = scene.objects[o].clone();
+                object.name = unique_name(&object.name, scene.objects.iter().map(|x| x.name.as_str()));
+                let name = object.name.clone();
+                let index = scene.objects.len();
+                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.objects.push(object));
+                Some((Selected::Object(index), name))
+            }
+            Some(Selected::Light(l)) => {
+                let mut light = scene.lights[l].clone();
+                light.name = unique_name(&light.name, scene.lights.iter().map(|x| x.name.as_str()));
+                let name = light.name.clone();
+                let index = scene.lights.len();
+                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.lights.push(light));
+                Some((Selected::Light(index), name))
+            }
+            Some(Selected::Joint { .. }) => {
+                self.error("Duplicate: joints are duplicated with their model; select the object");
+                None
+            }
+            None => {
+                self.info("Duplicate: select an object or light first");
+                None
+            }
+        };
+        if let Some((item, name)) = copy {
+            self.session.selection.select_only(Some(item));
+            self.session.selection.keys.clear();
+            self.info(format!("Duplicated as {name}"));
+        }
+    }
+
+    /// Opens the outliner's name field on the selected item.
+    pub fn start_rename(&mut self) {
+        match self.session.selection.item {
+            Some(item) => {
+                let name = item_name(self.doc.scene(), item).unwrap_or_default();
+                self.view.renaming = Some(crate::view::Renaming { item, text: name, focused: false });
+            }
+            None => self.info("Rename: select an object, joint or light first"),
+        }
+    }
+
+    /// Renames an object, joint or light (one undo step). Names are not empty and unique
+    /// among objects, among lights, and among the joints of one skeleton (channel paths
+    /// address them by name); a refused name leaves the item as it was and says why.
+    pub fn rename_item(&mut self, item: Selected, name: &str) -> bool {
+        let name = name.trim();
+        let scene = self.doc.scene();
+        let Some(old) = item_name(scene, item) else { return false };
+        if name == old {
+            return false;
+        }
+        let taken = match item {
+            Selected::Object(o) => scene.objects.iter().enumerate().any(|(i, x)| i != o && x.name == name),
+            Selected::Light(l) => scene.lights.iter().enumerate().any(|(i, x)| i != l && x.name == name),
+            Selected::Joint { object, joint } => scene.objects[object]
+                .skeleton
+                .as_ref()
+                .is_some_and(|s| s.joints.iter().enumerate().any(|(i, j)| i != joint && j.name == name)),
+        };
+        if name.is_empty() {
+            self.error(format!("Rename {old}: a name cannot be empty"));
+            return false;
+        }
+        if name.chars().count() > MAX_NAME_CHARS {
+            self.error(format!("Rename {old}: a name has at most {MAX_NAME_CHARS} characters"));
+            return false;
+        }
+        if taken {
+            self.error(format!("Rename {old}: the name {name} is taken"));
+            return false;
+        }
+        let new = name.to_owned();
+        self.doc.edit(&format!("rename {old} to {name}"), |scene| match item {
+            Selected::Object(o) => scene.objects[o].name = new,
+            Selected::Light(l) => scene.lights[l].name = new,
+            Selected::Joint { object, joint } => {
+                if let Some(s) = scene.objects[object].skeleton.as_mut() {
+                    s.joints[joint].name = new;
+                }
+            }
+        });
+        self.info(format!("Renamed {old} to {name}"));
+        true
     }
 
     /// Deletes the selected keys.
@@ -598,7 +720,15 @@ impl EditorApp {
             }
             Command::ToggleRecord => self.session.record = !self.session.record,
             Command::InsertKey => self.insert_key(),
-            Command::DeleteKeys => self.delete_selected_keys(),
+            Command::Delete => {
+                if self.session.selection.keys.is_empty() && self.session.selection.item.is_some() {
+                    self.delete_selected_item();
+                } else {
+                    self.delete_selected_keys();
+                }
+            }
+            Command::DuplicateItem => self.duplicate_selected_item(),
+            Command::RenameItem => self.start_rename(),
             Command::CopyKeys => {
                 self.copy_selected_keys();
                 if !self.session.clipboard.is_empty() {
@@ -922,4 +1052,34 @@ impl EditorApp {
             }
         }
     }
+}
+
+/// Longest name the editor's rename accepts, characters.
+pub const MAX_NAME_CHARS: usize = 256;
+
+/// The name of an object, joint or light, if it exists.
+#[must_use]
+pub fn item_name(scene: &Scene, item: Selected) -> Option<String> {
+    Some(match item {
+        Selected::Object(o) => scene.objects.get(o)?.name.clone(),
+        Selected::Light(l) => scene.lights.get(l)?.name.clone(),
+        Selected::Joint { object, joint } => {
+            scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone()
+        }
+    })
+}
+
+/// `name` with the first free numbered suffix among `taken` (`Arm` → `Arm.001`, `Arm.001` →
+/// `Arm.002`), as Blender names copies.
+#[must_use]
+pub fn unique_name<'a>(name: &str, taken: impl Iterator<Item = &'a str>) -> String {
+    let taken: std::collections::HashSet<&str> = taken.collect();
+    let base = match name.rsplit_once('.') {
+        Some((base, n)) if n.len() == 3 && n.bytes().all(|b| b.is_ascii_digit()) => base,
+        _ => name,
+    };
+    (1..)
+        .map(|n| format!("{base}.{n:03}"))
+        .find(|candidate| !taken.contains(candidate.as_str()))
+        .expect("a free name")
 }

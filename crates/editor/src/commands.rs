@@ -18,7 +18,9 @@ pub enum Command {
     Redo,
     ToggleRecord,
     InsertKey,
-    DeleteKeys,
+    Delete,
+    DuplicateItem,
+    RenameItem,
     CopyKeys,
     PasteKeys,
     PlayPause,
@@ -51,7 +53,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 33] = [
+    pub const ALL: [Command; 35] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -63,7 +65,9 @@ impl Command {
         Command::Undo,
         Command::ToggleRecord,
         Command::InsertKey,
-        Command::DeleteKeys,
+        Command::Delete,
+        Command::DuplicateItem,
+        Command::RenameItem,
         Command::CopyKeys,
         Command::PasteKeys,
         Command::PlayPause,
@@ -102,7 +106,9 @@ impl Command {
             Command::Redo => "Redo",
             Command::ToggleRecord => "Record mode",
             Command::InsertKey => "Insert key",
-            Command::DeleteKeys => "Delete keys",
+            Command::Delete => "Delete",
+            Command::DuplicateItem => "Duplicate",
+            Command::RenameItem => "Rename…",
             Command::CopyKeys => "Copy keys",
             Command::PasteKeys => "Paste keys",
             Command::PlayPause => "Play / pause",
@@ -141,7 +147,11 @@ impl Command {
                 "Auto-key: a gizmo or inspector change writes a key at the current frame"
             }
             Command::InsertKey => "Key the selection's current pose at the current frame",
-            Command::DeleteKeys => "Delete the selected keys",
+            Command::Delete => "Delete the selected keys; with no key selected, the selected object or light",
+            Command::DuplicateItem => "Copy the selected object or light, keys included, and select the copy",
+            Command::RenameItem => {
+                "Rename the selected object, joint or light (or double-click it in the outliner)"
+            }
             Command::CopyKeys => "Copy the selected keys",
             Command::PasteKeys => "Paste copied keys at the current frame",
             Command::PlayPause => "Start or stop playback",
@@ -187,7 +197,9 @@ impl Command {
             Command::Redo => vec![sc(CMD_SHIFT, Key::Z), sc(CMD, Key::Y)],
             Command::ToggleRecord => vec![sc(NONE, Key::R)],
             Command::InsertKey => vec![sc(NONE, Key::I)],
-            Command::DeleteKeys => vec![sc(NONE, Key::Delete), sc(NONE, Key::Backspace)],
+            Command::Delete => vec![sc(NONE, Key::Delete), sc(NONE, Key::Backspace)],
+            Command::DuplicateItem => vec![sc(Modifiers::SHIFT, Key::D)],
+            Command::RenameItem => vec![sc(CMD, Key::R)],
             Command::CopyKeys => vec![sc(CMD, Key::C)],
             Command::PasteKeys => vec![sc(CMD, Key::V)],
             Command::PlayPause => vec![sc(CMD, Key::P), sc(NONE, Key::Space)],

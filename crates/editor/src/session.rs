@@ -52,6 +52,21 @@ impl Session {
         self.overrides.clear();
     }
 
+    /// After `removed` (an object or light) left the scene: nothing is selected, pose
+    /// overrides go, and copied keys of later items follow their new index (those of the
+    /// removed one are dropped).
+    pub fn forget_removed(&mut self, removed: Selected) {
+        self.selection = Selection::default();
+        self.overrides.clear();
+        self.clipboard.retain_mut(|key| match shifted(key.channel, removed) {
+            Some(id) => {
+                key.channel = id;
+                true
+            }
+            None => false,
+        });
+    }
+
     /// The object index the selection belongs to (the joint's object for joints).
     #[must_use]
     pub fn selected_object(&self) -> Option<usize> {
@@ -69,14 +84,63 @@ pub struct KeyRef {
     pub index: usize,
 }
 
-/// The selected scene item and the selected keys.
+/// The selected scene items and the selected keys. `item` is the active item (the inspector,
+/// the gizmo and framing follow it); `others` are further items selected with Shift or Ctrl.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Selection {
     pub item: Option<Selected>,
+    pub others: BTreeSet<Selected>,
     pub keys: BTreeSet<KeyRef>,
 }
 
 impl Selection {
+    /// Selects `item` alone (a plain click); `None` clears the item selection.
+    pub fn select_only(&mut self, item: Option<Selected>) {
+        self.item = item;
+        self.others.clear();
+    }
+
+    /// Shift/Ctrl-click: adds `item` as the active item, or removes it when it was selected.
+    pub fn toggle(&mut self, item: Selected) {
+        if self.item == Some(item) {
+            self.item = self.others.pop_first();
+        } else if !self.others.remove(&item) {
+            if let Some(active) = self.item.replace(item) {
+                self.others.insert(active);
+            }
+        }
+    }
+
+    /// Every selected item, the active one first.
+    pub fn items(&self) -> impl Iterator<Item = Selected> + '_ {
+        self.item.into_iter().chain(self.others.iter().copied().filter(move |o| Some(*o) != self.item))
+    }
+
+    /// Whether `item` is selected (active or not).
+    #[must_use]
+    pub fn contains(&self, item: Selected) -> bool {
+        self.item == Some(item) || self.others.contains(&item)
+    }
+
+    /// The channels `I` keys: every selected joint's and light's, and for a selected object
+    /// its own and (a character) every joint's of its skeleton.
+    #[must_use]
+    pub fn key_channels(&self, scene: &Scene) -> Vec<ChannelId> {
+        let mut out = Vec::new();
+        for item in self.items() {
+            let ids = match item {
+                Selected::Object(o) if o < scene.objects.len() => ChannelId::of_object(scene, o),
+                other => Selection { item: Some(other), ..Selection::default() }.channels(scene),
+            };
+            for id in ids {
+                if !out.contains(&id) {
+                    out.push(id);
+                }
+            }
+        }
+        out
+    }
+
     /// The channels the selected item owns (a joint's rotation, an object's transform, a light's
     /// channels).
     #[must_use]
@@ -112,9 +176,9 @@ impl Selection {
         }
     }
 
-    /// Drops selections that no longer exist in `scene` (after undo, open, delete).
-    pub fn retain_valid(&mut self, scene: &Scene) {
-        let item_ok = match self.item {
+    /// Whether the active item exists in `scene` (true when there is none).
+    fn item_exists(&self, scene: &Scene) -> bool {
+        match self.item {
             None => true,
             Some(Selected::Object(o)) => o < scene.objects.len(),
             Some(Selected::Joint { object, joint }) => scene
@@ -123,10 +187,18 @@ impl Selection {
                 .and_then(|o| o.skeleton.as_ref())
                 .is_some_and(|s| joint < s.joints.len()),
             Some(Selected::Light(l)) => l < scene.lights.len(),
-        };
+        }
+    }
+
+    /// Drops selections that no longer exist in `scene` (after undo, open, delete).
+    pub fn retain_valid(&mut self, scene: &Scene) {
+        let item_ok = self.item_exists(scene);
         if !item_ok {
             self.item = None;
         }
+        let valid =
+            |item: &Selected| Selection { item: Some(*item), ..Selection::default() }.item_exists(scene);
+        self.others.retain(valid);
         self.keys.retain(|k| k.index < crate::channels::key_count(scene, k.channel));
     }
 }
@@ -213,9 +285,53 @@ impl Playback {
     }
 }
 
+/// Where channel `id` is after `removed` left the scene: `None` when it belonged to it, one
+/// index lower when it belonged to a later item of the same kind, unchanged otherwise.
+#[must_use]
+pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
+    let shift = |i: usize, gone: usize| match i.cmp(&gone) {
+        std::cmp::Ordering::Less => Some(i),
+        std::cmp::Ordering::Equal => None,
+        std::cmp::Ordering::Greater => Some(i - 1),
+    };
+    use ChannelId as C;
+    Some(match (id, removed) {
+        (C::ObjectTranslation(o), Selected::Object(r)) => C::ObjectTranslation(shift(o, r)?),
+        (C::ObjectRotation(o), Selected::Object(r)) => C::ObjectRotation(shift(o, r)?),
+        (C::ObjectScale(o), Selected::Object(r)) => C::ObjectScale(shift(o, r)?),
+        (C::RootTranslation(o), Selected::Object(r)) => C::RootTranslation(shift(o, r)?),
+        (C::JointTranslation { object, joint }, Selected::Object(r)) => {
+            C::JointTranslation { object: shift(object, r)?, joint }
+        }
+        (C::JointRotation { object, joint }, Selected::Object(r)) => {
+            C::JointRotation { object: shift(object, r)?, joint }
+        }
+        (C::JointScale { object, joint }, Selected::Object(r)) => {
+            C::JointScale { object: shift(object, r)?, joint }
+        }
+        (C::LightPosition(l), Selected::Light(r)) => C::LightPosition(shift(l, r)?),
+        (C::LightDirection(l), Selected::Light(r)) => C::LightDirection(shift(l, r)?),
+        (C::LightColour(l), Selected::Light(r)) => C::LightColour(shift(l, r)?),
+        (C::LightIntensity(l), Selected::Light(r)) => C::LightIntensity(shift(l, r)?),
+        (id, _) => id,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn channels_follow_a_removed_item() {
+        let elbow = |object| ChannelId::JointRotation { object, joint: 1 };
+        assert_eq!(shifted(elbow(0), Selected::Object(1)), Some(elbow(0)));
+        assert_eq!(shifted(elbow(1), Selected::Object(1)), None);
+        assert_eq!(shifted(elbow(2), Selected::Object(1)), Some(elbow(1)));
+        assert_eq!(shifted(ChannelId::LightColour(3), Selected::Object(0)), Some(ChannelId::LightColour(3)));
+        assert_eq!(shifted(ChannelId::LightColour(3), Selected::Light(1)), Some(ChannelId::LightColour(2)));
+        assert_eq!(shifted(ChannelId::LightIntensity(1), Selected::Light(1)), None);
+        assert_eq!(shifted(ChannelId::ObjectScale(4), Selected::Light(0)), Some(ChannelId::ObjectScale(4)));
+    }
 
     #[test]
     fn playback_loops_and_stops() {

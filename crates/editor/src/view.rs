@@ -43,6 +43,18 @@ pub struct ViewState {
     pub timeline: TimelineState,
     /// The shortcut list (F12) is open.
     pub show_help: bool,
+    /// The outliner's name field, while an item is being renamed.
+    pub renaming: Option<Renaming>,
+}
+
+/// An item being renamed in the outliner: Enter or leaving the field applies the name (one
+/// undo step), Escape cancels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Renaming {
+    pub item: crate::session::Selected,
+    pub text: String,
+    /// The field has been given the keyboard once.
+    pub focused: bool,
 }
 
 impl ViewState {
@@ -64,6 +76,7 @@ impl ViewState {
             textures: true,
             timeline: TimelineState::default(),
             show_help: false,
+            renaming: None,
         }
     }
 

@@ -78,7 +78,14 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 command_button(ui, app, Command::Undo, None);
                 command_button(ui, app, Command::Redo, None);
                 ui.separator();
-                for c in [Command::InsertKey, Command::DeleteKeys, Command::CopyKeys, Command::PasteKeys] {
+                for c in [
+                    Command::InsertKey,
+                    Command::Delete,
+                    Command::CopyKeys,
+                    Command::PasteKeys,
+                    Command::DuplicateItem,
+                    Command::RenameItem,
+                ] {
                     command_button(ui, app, c, None);
                 }
                 ui.separator();

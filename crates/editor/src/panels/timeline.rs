@@ -427,7 +427,7 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
         );
 
         if let Some(item) = clicked_item {
-            app.session.selection.item = Some(item);
+            app.session.selection.select_only(Some(item));
         }
         if let Some((key, additive)) = diamond_clicked {
             if additive {
@@ -500,7 +500,7 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
 
 /// Selects the scene item that owns `channel`.
 fn select_owner(app: &mut EditorApp, channel: ChannelId) {
-    app.session.selection.item = Some(match channel {
+    app.session.selection.select_only(Some(match channel {
         ChannelId::ObjectTranslation(o)
         | ChannelId::ObjectRotation(o)
         | ChannelId::ObjectScale(o)
@@ -512,7 +512,7 @@ fn select_owner(app: &mut EditorApp, channel: ChannelId) {
         | ChannelId::LightDirection(l)
         | ChannelId::LightColour(l)
         | ChannelId::LightIntensity(l) => Selected::Light(l),
-    });
+    }));
 }
 
 /// Moves every selected key by `delta` seconds as one continuous edit. Refused (returns false)

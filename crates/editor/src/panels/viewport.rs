@@ -70,7 +70,12 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         navigate(ui, app, &response, rect, gizmo_owns_primary);
         if response.clicked() && !gizmo_owns_primary {
             if let Some(pos) = response.interact_pointer_pos() {
-                app.session.selection.item = pick(&pick_targets, pos);
+                let adding = ui.input(|i| i.modifiers.shift || i.modifiers.command);
+                match (pick(&pick_targets, pos), adding) {
+                    (Some(item), true) => app.session.selection.toggle(item),
+                    (hit, false) => app.session.selection.select_only(hit),
+                    (None, true) => {}
+                }
             }
         }
         overlay_ui(&painter, rect, app, &frame.errors);

@@ -1,0 +1,207 @@
+//! Managing objects and lights as a user does: the outliner's clicks (with Shift and Ctrl),
+//! double-click to rename with typed text, its context menu, and the Delete, Shift+D and
+//! Ctrl+R shortcuts. Each step is checked in the document and its undo history.
+
+mod common;
+
+use common::{go_to_frame, harness, press};
+
+use egui::{Event, Key, Modifiers};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use keyrig_editor::channels::{self, ChannelId};
+use keyrig_editor::session::Selected;
+use keyrig_editor::EditorApp;
+
+fn object_names(h: &Harness<'_, EditorApp>) -> Vec<String> {
+    h.state().doc.scene().objects.iter().map(|o| o.name.clone()).collect()
+}
+
+fn light_names(h: &Harness<'_, EditorApp>) -> Vec<String> {
+    h.state().doc.scene().lights.iter().map(|l| l.name.clone()).collect()
+}
+
+fn status_text(h: &Harness<'_, EditorApp>) -> String {
+    h.state().status().map(|s| s.text.clone()).unwrap_or_default()
+}
+
+/// The outliner's row named `name` (the leftmost widget with that label: the dope sheet
+/// names its rows too).
+fn outliner_row<'a>(h: &'a Harness<'_, EditorApp>, name: &'a str) -> egui_kittest::Node<'a> {
+    h.get_all_by_label(name).min_by(|a, b| a.rect().left().total_cmp(&b.rect().left())).expect("a row")
+}
+
+/// Types `text` into the focused field as the window system delivers it (text events), then
+/// presses `end` (Enter or Escape).
+fn type_and(h: &mut Harness<'_, EditorApp>, text: &str, end: Key) {
+    h.key_press_modifiers(Modifiers::COMMAND, Key::A);
+    h.run();
+    h.event(Event::Text(text.to_owned()));
+    h.run();
+    press(h, Modifiers::NONE, end);
+}
+
+#[test]
+fn delete_removes_the_selected_light_or_object_and_undo_brings_it_back() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    assert_eq!(light_names(&h), ["Key", "Sun"]);
+    outliner_row(&h, "Key").click();
+    h.run();
+    assert_eq!(h.state().session.selection.item, Some(Selected::Light(0)));
+    press(&mut h, Modifiers::NONE, Key::Delete);
+    assert_eq!(light_names(&h), ["Sun"]);
+    assert_eq!(status_text(&h), "Deleted Key");
+    assert_eq!(h.state().session.selection.item, None);
+    assert_eq!(h.state().doc.undo_label(), Some("delete light Key"));
+
+    // The cube through the outliner's context menu.
+    outliner_row(&h, "Cube").click_secondary();
+    h.run();
+    h.get_by_label("Delete").click();
+    h.run();
+    assert_eq!(object_names(&h), ["Arm"]);
+
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(object_names(&h), ["Arm", "Cube"]);
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(light_names(&h), ["Key", "Sun"]);
+}
+
+#[test]
+fn delete_prefers_selected_keys_and_refuses_a_lone_joint() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let keys = channels::key_count(h.state().doc.scene(), elbow);
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::Delete);
+    assert_eq!(channels::key_count(h.state().doc.scene(), elbow), keys - 1, "the selected key goes");
+    assert_eq!(object_names(&h), ["Arm", "Cube"], "not the object");
+
+    h.get_by_label("elbow").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::Delete);
+    assert!(h.state().status().is_some_and(|s| s.is_error), "{:?}", h.state().status());
+    assert!(status_text(&h).contains("elbow is a joint"), "{}", status_text(&h));
+    assert_eq!(h.state().doc.scene().objects[0].skeleton.as_ref().map(|s| s.joints.len()), Some(4));
+}
+
+#[test]
+fn shift_d_duplicates_with_a_new_name_keys_included() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Arm").click();
+    h.run();
+    press(&mut h, Modifiers::SHIFT, Key::D);
+    assert_eq!(object_names(&h), ["Arm", "Cube", "Arm.001"]);
+    assert_eq!(h.state().session.selection.item, Some(Selected::Object(2)));
+    let scene = h.state().doc.scene();
+    assert_eq!(scene.objects[2].skeleton, scene.objects[0].skeleton, "the copy has the keys");
+    press(&mut h, Modifiers::SHIFT, Key::D);
+    assert_eq!(object_names(&h)[3], "Arm.002");
+    assert!(h.state().doc.scene().problems().is_empty(), "names stay unique");
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(object_names(&h), ["Arm", "Cube"]);
+}
+
+#[test]
+fn double_click_renames_with_typed_text_in_one_undo_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let steps = h.state().doc.undo_len();
+    h.get_by_label("Cube").click();
+    h.run();
+    // A double click: two presses and releases within egui's 0.3 s (the harness advances a
+    // quarter second per event, so they arrive in one frame, as after a slow frame).
+    let cube = h.get_by_label("Cube").rect().center();
+    for pressed in [true, false, true, false] {
+        h.input_mut().events.push(Event::PointerButton {
+            pos: cube,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.step();
+    h.run();
+    assert!(h.state().view.renaming.is_some(), "double-click opens the name field");
+    type_and(&mut h, "Box", Key::Enter);
+    assert_eq!(object_names(&h), ["Arm", "Box"]);
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "typing is one step");
+    assert_eq!(h.state().doc.undo_label(), Some("rename Cube to Box"));
+
+    // Ctrl+R on a joint; Escape leaves the name alone.
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::COMMAND, Key::R);
+    type_and(&mut h, "hand", Key::Escape);
+    assert_eq!(h.state().doc.scene().objects[0].skeleton.as_ref().unwrap().joints[3].name, "wrist");
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+
+    // A taken name is refused with a message, the item keeps its name.
+    h.get_by_label("Box").click();
+    h.run();
+    press(&mut h, Modifiers::COMMAND, Key::R);
+    type_and(&mut h, "Arm", Key::Enter);
+    assert_eq!(object_names(&h), ["Arm", "Box"]);
+    assert!(status_text(&h).contains("the name Arm is taken"), "{}", status_text(&h));
+    press(&mut h, Modifiers::COMMAND, Key::R);
+    type_and(&mut h, "  ", Key::Enter);
+    assert!(status_text(&h).contains("cannot be empty"), "{}", status_text(&h));
+    assert_eq!(object_names(&h), ["Arm", "Box"]);
+}
+
+#[test]
+fn shift_and_ctrl_click_select_several_joints_and_i_keys_them_all() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    go_to_frame(&mut h, 10);
+    h.get_by_label("wrist").click();
+    h.run();
+    h.get_by_label("shoulder").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    h.get_by_label("elbow").click_modifiers(Modifiers::COMMAND);
+    h.run();
+    let selection = &h.state().session.selection;
+    let joints: Vec<Selected> = selection.items().collect();
+    assert_eq!(joints.len(), 3, "{joints:?}");
+    assert_eq!(selection.item, Some(Selected::Joint { object: 0, joint: 1 }), "the last clicked is active");
+    // Ctrl-click again removes it.
+    h.get_by_label("elbow").click_modifiers(Modifiers::COMMAND);
+    h.run();
+    assert!(!h.state().session.selection.contains(Selected::Joint { object: 0, joint: 1 }));
+
+    let rotation = |h: &Harness<'_, EditorApp>, joint| {
+        channels::key_count(h.state().doc.scene(), ChannelId::JointRotation { object: 0, joint })
+    };
+    let before: Vec<usize> = (0..4).map(|j| rotation(&h, j)).collect();
+    press(&mut h, Modifiers::NONE, Key::I);
+    assert_eq!(rotation(&h, 3), before[3] + 1, "the wrist is keyed");
+    assert_eq!(rotation(&h, 0), before[0] + 1, "the shoulder is keyed");
+    assert_eq!(rotation(&h, 1), before[1], "the elbow is not selected");
+    // A plain click selects one item again.
+    h.get_by_label("elbow").click();
+    h.run();
+    assert_eq!(h.state().session.selection.items().count(), 1);
+}
+
+#[test]
+fn i_on_a_character_keys_every_joint_of_its_skeleton() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    go_to_frame(&mut h, 12);
+    h.get_by_label("Arm").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::I);
+    let scene = h.state().doc.scene();
+    let time = 12.0 / scene.fps;
+    for joint in 0..4 {
+        let id = ChannelId::JointRotation { object: 0, joint };
+        let keyed = channels::key_times(scene, id).iter().any(|t| (t - time).abs() < 1e-9);
+        assert!(keyed, "joint {joint} has a key at frame 12");
+    }
+    assert!(status_text(&h).starts_with("Keyed"), "{}", status_text(&h));
+}
