@@ -274,6 +274,7 @@ impl EditorApp {
         let session = Session {
             record: self.session.record,
             clipboard: std::mem::take(&mut self.session.clipboard),
+            pose_clipboard: std::mem::take(&mut self.session.pose_clipboard),
             ..Session::at_start(scene.frame_range)
         };
         self.doc = Document::new(scene, path);
@@ -496,6 +497,109 @@ impl EditorApp {
         });
         self.info(format!("Renamed {old} to {name}"));
         true
+    }
+
+    /// Goes to the nearest key after (or before) the current frame among the channels of the
+    /// selection (every channel when nothing is selected), as Blender's Up and Down arrows do.
+    pub fn jump_to_key(&mut self, forward: bool) {
+        let scene = self.doc.scene();
+        let selected = self.session.selection.key_channels(scene);
+        let ids = if selected.is_empty() { ChannelId::all(scene) } else { selected };
+        let fps = scene.fps.max(1e-9);
+        let now = self.session.playback.whole_frame();
+        let frames =
+            ids.iter().flat_map(|&id| channels::key_times(scene, id)).map(|t| (t * fps).round() as i32);
+        let target =
+            if forward { frames.filter(|&f| f > now).min() } else { frames.filter(|&f| f < now).max() };
+        match target {
+            Some(frame) => {
+                self.set_frame(frame);
+                let range = self.doc.scene().frame_range;
+                if !(range.start..=range.end).contains(&frame) {
+                    self.info(format!("The key at frame {frame} is outside the frame range"));
+                }
+            }
+            None => self.info(format!("No key {} frame {now}", if forward { "after" } else { "before" })),
+        }
+    }
+
+    /// Copies the values of the selected joints and objects (a character: every joint) at the
+    /// current frame.
+    pub fn copy_pose(&mut self) {
+        let ids = self.session.selection.key_channels(self.doc.scene());
+        let pose: Vec<(ChannelId, ChannelValue)> = ids
+            .into_iter()
+            .filter(|id| {
+                !matches!(
+                    id,
+                    ChannelId::LightPosition(_)
+                        | ChannelId::LightDirection(_)
+                        | ChannelId::LightColour(_)
+                        | ChannelId::LightIntensity(_)
+                )
+            })
+            .filter_map(|id| self.value_now(id).map(|v| (id, v)))
+            .collect();
+        if pose.is_empty() {
+            self.info("Copy pose: select joints or a character first");
+            return;
+        }
+        self.info(format!("Copied the pose of {} channel(s)", pose.len()));
+        self.session.pose_clipboard = pose;
+    }
+
+    /// Applies the copied pose at the current frame: in record mode as keys, otherwise as
+    /// the pose shown (overrides on animated channels, values of static ones); one undo step.
+    /// Mirrored, each value goes to the joint of the other side (`.L`/`.R`, `Left`/`Right`;
+    /// a joint without one keeps it) flipped across the X axis, as Blender's Paste Flipped.
+    pub fn paste_pose(&mut self, mirrored: bool) {
+        if self.session.pose_clipboard.is_empty() {
+            self.info("Paste pose: copy a pose first (Alt+C)");
+            return;
+        }
+        let scene = self.doc.scene();
+        let pose: Vec<(ChannelId, ChannelValue)> = self
+            .session
+            .pose_clipboard
+            .iter()
+            .filter_map(|&(id, value)| {
+                let (id, value) = if mirrored {
+                    (crate::mirror::mirror_channel(scene, id), crate::mirror::mirror_value(id, value))
+                } else {
+                    (id, value)
+                };
+                channels::channel(scene, id).map(|_| (id, value))
+            })
+            .collect();
+        let time = self.session.key_time(scene.fps);
+        let frame = self.session.playback.whole_frame();
+        let what = if mirrored { "paste pose mirrored" } else { "paste pose" };
+        let count = pose.len();
+        if self.session.record {
+            self.doc.edit(&format!("{what} at frame {frame}"), |scene| {
+                for &(id, value) in &pose {
+                    channels::set_key(scene, id, time, value);
+                }
+            });
+            for (id, _) in &pose {
+                self.session.overrides.remove(id);
+            }
+        } else {
+            let (animated, fixed): (Vec<_>, Vec<_>) =
+                pose.into_iter().partition(|(id, _)| channels::key_count(self.doc.scene(), *id) > 0);
+            self.doc.edit(what, |scene| {
+                for &(id, value) in &fixed {
+                    channels::set_static_value(scene, id, value);
+                }
+            });
+            for (id, value) in animated {
+                self.session.overrides.insert(id, value);
+            }
+        }
+        self.info(format!(
+            "Pasted the pose on {count} channel(s){}",
+            if mirrored { ", mirrored" } else { "" }
+        ));
     }
 
     /// Deletes the selected keys.
@@ -745,6 +849,11 @@ impl EditorApp {
             Command::PrevFrame => self.set_frame(self.session.playback.whole_frame() - 1),
             Command::FirstFrame => self.set_frame(range.start),
             Command::LastFrame => self.set_frame(range.end),
+            Command::PrevKey => self.jump_to_key(false),
+            Command::NextKey => self.jump_to_key(true),
+            Command::CopyPose => self.copy_pose(),
+            Command::PastePose => self.paste_pose(false),
+            Command::PastePoseMirrored => self.paste_pose(true),
             Command::ToggleGrid => self.view.grid = !self.view.grid,
             Command::ToggleBones => self.view.bones = !self.view.bones,
             Command::SetDeformer(kind) => self.set_deformer(kind),

@@ -22,6 +22,7 @@ pub mod files;
 pub mod fonts;
 pub mod frame_bench;
 pub mod gpu_view;
+pub mod mirror;
 pub mod panels;
 pub mod session;
 pub mod skinning;

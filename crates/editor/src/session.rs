@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 
 use keyrig_core::Scene;
 
-use crate::channels::{ChannelId, KeyCopy};
+use crate::channels::{ChannelId, ChannelValue, KeyCopy};
 
 use crate::eval::PoseOverrides;
 /// What can be selected in the scene: keyrig-render's one type (object, joint, light).
@@ -23,6 +23,8 @@ pub struct Session {
     pub overrides: PoseOverrides,
     /// Keys copied with Copy or Cut.
     pub clipboard: Vec<KeyCopy>,
+    /// A pose copied with Copy pose: channel values at one frame.
+    pub pose_clipboard: Vec<(ChannelId, ChannelValue)>,
 }
 
 impl Session {
@@ -65,6 +67,13 @@ impl Session {
             }
             None => false,
         });
+        self.pose_clipboard.retain_mut(|(channel, _)| match shifted(*channel, removed) {
+            Some(id) => {
+                *channel = id;
+                true
+            }
+            None => false,
+        });
     }
 
     /// The object index the selection belongs to (the joint's object for joints).
@@ -94,10 +103,24 @@ pub struct Selection {
 }
 
 impl Selection {
-    /// Selects `item` alone (a plain click); `None` clears the item selection.
+    /// Selects `item` alone (a plain click); `None` clears the item selection. Selected keys
+    /// of other items are deselected, so the key inspector follows the selection.
     pub fn select_only(&mut self, item: Option<Selected>) {
         self.item = item;
         self.others.clear();
+        self.keep_keys_of_items();
+    }
+
+    /// Drops selected keys whose channel belongs to no selected item (a character's object
+    /// owns the keys of its joints too).
+    fn keep_keys_of_items(&mut self) {
+        let items: Vec<Selected> = self.items().collect();
+        self.keys.retain(|k| {
+            let owner = owner_of(k.channel);
+            items.iter().any(|&item| {
+                item == owner || matches!((item, owner), (Selected::Object(o), Selected::Joint { object, .. }) if o == object)
+            })
+        });
     }
 
     /// Shift/Ctrl-click: adds `item` as the active item, or removes it when it was selected.
@@ -109,6 +132,7 @@ impl Selection {
                 self.others.insert(active);
             }
         }
+        self.keep_keys_of_items();
     }
 
     /// Every selected item, the active one first.
@@ -282,6 +306,24 @@ impl Playback {
     /// Jumps to a whole frame, clamped to `[start, end]`.
     pub fn go_to(&mut self, frame: i32, start: i32, end: i32) {
         self.frame = f64::from(frame.clamp(start, end.max(start)));
+    }
+}
+
+/// The scene item a channel belongs to (an object's root translation: the object).
+#[must_use]
+pub fn owner_of(channel: ChannelId) -> Selected {
+    match channel {
+        ChannelId::ObjectTranslation(o)
+        | ChannelId::ObjectRotation(o)
+        | ChannelId::ObjectScale(o)
+        | ChannelId::RootTranslation(o) => Selected::Object(o),
+        ChannelId::JointTranslation { object, joint }
+        | ChannelId::JointRotation { object, joint }
+        | ChannelId::JointScale { object, joint } => Selected::Joint { object, joint },
+        ChannelId::LightPosition(l)
+        | ChannelId::LightDirection(l)
+        | ChannelId::LightColour(l)
+        | ChannelId::LightIntensity(l) => Selected::Light(l),
     }
 }
 

@@ -45,6 +45,8 @@ pub struct ViewState {
     pub show_help: bool,
     /// The outliner's name field, while an item is being renamed.
     pub renaming: Option<Renaming>,
+    /// Where a Ctrl+drag box selection in the viewport started (screen points).
+    pub box_select: Option<egui::Pos2>,
 }
 
 /// An item being renamed in the outliner: Enter or leaving the field applies the name (one
@@ -77,6 +79,7 @@ impl ViewState {
             timeline: TimelineState::default(),
             show_help: false,
             renaming: None,
+            box_select: None,
         }
     }
 

@@ -205,3 +205,39 @@ fn i_on_a_character_keys_every_joint_of_its_skeleton() {
     }
     assert!(status_text(&h).starts_with("Keyed"), "{}", status_text(&h));
 }
+
+#[test]
+fn the_key_inspector_follows_the_selection_and_edits_every_selected_key() {
+    use egui::accesskit::Role;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    assert!(h.query_by_label("elbow rotation at frame 30").is_some(), "the inspector shows the key");
+    // Another object: its keys are not selected, so the inspector shows none.
+    outliner_row(&h, "Cube").click();
+    h.run();
+    assert!(h.state().session.selection.keys.is_empty());
+    assert!(h.query_by_label("elbow rotation at frame 30").is_none(), "no stale key");
+
+    // Two keys with different tension: shown as mixed; a change applies to both, one step.
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    common::set_value(&mut h, Role::Slider, "Tension", 0.9);
+    h.get_by_label("key elbow rotation frame 15").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    assert_eq!(h.state().session.selection.keys.len(), 2);
+    assert!(h.query_by_label("2 keys selected (editing all)").is_some());
+    let steps = h.state().doc.undo_len();
+    common::set_value(&mut h, Role::Slider, "Tension (mixed)", -0.25);
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one step for both keys");
+    for index in 0..channels::key_count(h.state().doc.scene(), elbow) {
+        let (time, _, tcb) = channels::key_params(h.state().doc.scene(), elbow, index).expect("a key");
+        let frame = (time * 30.0).round() as i32;
+        if frame == 15 || frame == 30 {
+            assert_eq!(tcb.tension, -0.25, "key at frame {frame}");
+        }
+    }
+    assert!(h.query_by_label("Tension (mixed)").is_none(), "now equal");
+}

@@ -329,17 +329,37 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
         return;
     };
     let fps = app.doc.scene().fps.max(1e-9);
+    let scene = app.doc.scene();
+    let params: Vec<(f64, Interpolation, Tcb)> =
+        keys.iter().filter_map(|k| channels::key_params(scene, k.channel, k.index)).collect();
+    let describe = |k: &crate::session::KeyRef, time: f64| {
+        format!("{} at frame {}", k.channel.label(scene), (time * fps).round() as i64)
+    };
     if keys.len() == 1 {
-        ui.label(format!(
-            "{} at frame {}",
-            first.channel.label(app.doc.scene()),
-            (time * fps).round() as i64
-        ));
+        ui.label(describe(&first, time));
     } else {
-        ui.label(format!("{} keys selected (editing all)", keys.len()));
+        // Every selected key, and which values differ between them (shown as mixed; a change
+        // applies the one value that moved to all of them).
+        egui::CollapsingHeader::new(format!("{} keys selected (editing all)", keys.len()))
+            .id_salt("selected keys")
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().max_height(120.0).show_rows(ui, 16.0, keys.len(), |ui, rows| {
+                    for r in rows {
+                        if let Some((t, _, _)) = params.get(r) {
+                            ui.label(describe(&keys[r], *t));
+                        }
+                    }
+                });
+            });
     }
+    let mixed = |f: &dyn Fn(&(f64, Interpolation, Tcb)) -> f32| params.iter().any(|p| f(p) != f(&params[0]));
+    let mixed_mode = params.iter().any(|p| p.1 != params[0].1);
+    let mixed_tension = mixed(&|p| p.2.tension);
+    let mixed_continuity = mixed(&|p| p.2.continuity);
+    let mixed_bias = mixed(&|p| p.2.bias);
     let before = (mode, tcb);
-    egui::ComboBox::from_label("Interpolation").selected_text(mode_label(mode)).show_ui(ui, |ui| {
+    let shown_mode = if mixed_mode { "— mixed —" } else { mode_label(mode) };
+    egui::ComboBox::from_label("Interpolation").selected_text(shown_mode).show_ui(ui, |ui| {
         for m in [Interpolation::Step, Interpolation::Linear, Interpolation::Tcb] {
             ui.selectable_value(&mut mode, m, mode_label(m));
         }
@@ -354,19 +374,19 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
         tcb_slider_ui(
             ui,
             &mut tcb.tension,
-            "Tension",
+            if mixed_tension { "Tension (mixed)" } else { "Tension" },
             "Tension: +1 tightens the curve at the key, −1 loosens it",
         );
         tcb_slider_ui(
             ui,
             &mut tcb.continuity,
-            "Continuity",
+            if mixed_continuity { "Continuity (mixed)" } else { "Continuity" },
             "Continuity: 0 is smooth; ±1 makes a corner at the key",
         );
         tcb_slider_ui(
             ui,
             &mut tcb.bias,
-            "Bias",
+            if mixed_bias { "Bias (mixed)" } else { "Bias" },
             "Bias: −1 anticipates (overshoots before), +1 overshoots after the key",
         );
         if ui.button("Reset T/C/B").on_hover_text("Catmull–Rom / Shoemake squad").clicked() {

@@ -500,19 +500,7 @@ fn dope_sheet_ui(ui: &mut Ui, app: &mut EditorApp) {
 
 /// Selects the scene item that owns `channel`.
 fn select_owner(app: &mut EditorApp, channel: ChannelId) {
-    app.session.selection.select_only(Some(match channel {
-        ChannelId::ObjectTranslation(o)
-        | ChannelId::ObjectRotation(o)
-        | ChannelId::ObjectScale(o)
-        | ChannelId::RootTranslation(o) => Selected::Object(o),
-        ChannelId::JointTranslation { object, joint }
-        | ChannelId::JointRotation { object, joint }
-        | ChannelId::JointScale { object, joint } => Selected::Joint { object, joint },
-        ChannelId::LightPosition(l)
-        | ChannelId::LightDirection(l)
-        | ChannelId::LightColour(l)
-        | ChannelId::LightIntensity(l) => Selected::Light(l),
-    }));
+    app.session.selection.select_only(Some(crate::session::owner_of(channel)));
 }
 
 /// Moves every selected key by `delta` seconds as one continuous edit. Refused (returns false)

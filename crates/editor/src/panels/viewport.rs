@@ -67,7 +67,8 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         // one of its handles; scroll, right/middle drags and drags that start elsewhere stay
         // with the camera, as in Blender's viewport.
         let gizmo_owns_primary = gizmo_ui(ui, app, &projection, rect, &response, &frame.poses);
-        navigate(ui, app, &response, rect, gizmo_owns_primary);
+        let boxing = box_select(ui, app, &response, &painter, &pick_targets, gizmo_owns_primary);
+        navigate(ui, app, &response, rect, gizmo_owns_primary || boxing);
         if response.clicked() && !gizmo_owns_primary {
             if let Some(pos) = response.interact_pointer_pos() {
                 let adding = ui.input(|i| i.modifiers.shift || i.modifiers.command);
@@ -281,6 +282,50 @@ fn pick(targets: &[(Pos2, Selected)], pos: Pos2) -> Option<Selected> {
         .filter(|(p, _)| p.distance(pos) <= PICK_RADIUS)
         .min_by(|a, b| a.0.distance(pos).total_cmp(&b.0.distance(pos)))
         .map(|(_, s)| *s)
+}
+
+/// Ctrl+drag on empty space draws a box and selects the joints inside it when released
+/// (Ctrl+Shift+drag adds them to the selection). Returns whether a box drag is under way.
+fn box_select(
+    ui: &Ui,
+    app: &mut EditorApp,
+    response: &egui::Response,
+    painter: &egui::Painter,
+    targets: &[(Pos2, Selected)],
+    gizmo_owns_primary: bool,
+) -> bool {
+    let (ctrl, shift) = ui.input(|i| (i.modifiers.command, i.modifiers.shift));
+    if response.drag_started_by(egui::PointerButton::Primary) && ctrl && !gizmo_owns_primary {
+        app.view.box_select = ui.input(|i| i.pointer.press_origin());
+    }
+    let Some(start) = app.view.box_select else { return false };
+    let Some(now) = ui.input(|i| i.pointer.latest_pos()) else { return true };
+    let area = Rect::from_two_pos(start, now);
+    painter.rect(
+        area,
+        0.0,
+        Color32::from_rgba_unmultiplied(90, 170, 255, 30),
+        Stroke::new(1.0, Color32::from_rgb(90, 170, 255)),
+        egui::StrokeKind::Inside,
+    );
+    if response.drag_stopped() || !ui.input(|i| i.pointer.primary_down()) {
+        app.view.box_select = None;
+        let joints: Vec<Selected> = targets
+            .iter()
+            .filter(|(p, item)| area.contains(*p) && matches!(item, Selected::Joint { .. }))
+            .map(|(_, item)| *item)
+            .collect();
+        let selection = &mut app.session.selection;
+        if !shift {
+            selection.select_only(None);
+        }
+        for joint in joints {
+            if !selection.contains(joint) {
+                selection.toggle(joint);
+            }
+        }
+    }
+    true
 }
 
 /// Orbit (left drag), pan (right or middle drag, Shift+left drag) and zoom (scroll); a

@@ -1,0 +1,166 @@
+//! Posing a rig as a user does: jumping between keys with the Up and Down arrows, copying a
+//! pose with Alt+C and pasting it (Alt+V) at another frame or mirrored (Alt+Shift+V) onto the
+//! other side of a rig, and Ctrl+drag box selection of joints in the viewport.
+
+mod common;
+
+use common::{go_to_frame, harness, press};
+
+use egui::{Event, Key, Modifiers, Pos2};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use glam::{Quat, Vec3};
+use keyrig_core::{Key as SceneKey, Object, RawTrack, Scene, Skeleton};
+use keyrig_editor::camera::Projection;
+use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_editor::eval::ObjectPose;
+use keyrig_editor::session::Selected;
+use keyrig_editor::EditorApp;
+
+fn frame(h: &Harness<'_, EditorApp>) -> i32 {
+    h.state().session.playback.whole_frame()
+}
+
+#[test]
+fn up_and_down_jump_to_the_selections_next_and_previous_key() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("elbow").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let frames: Vec<i32> =
+        channels::key_times(scene, elbow).iter().map(|t| (t * scene.fps).round() as i32).collect();
+    assert!(frames.len() >= 3, "{frames:?}");
+    go_to_frame(&mut h, 0);
+    for &expected in frames.iter().filter(|&&f| f > 0) {
+        press(&mut h, Modifiers::NONE, Key::ArrowUp);
+        assert_eq!(frame(&h), expected);
+    }
+    press(&mut h, Modifiers::NONE, Key::ArrowUp);
+    assert_eq!(frame(&h), *frames.last().unwrap(), "no key after the last: stays");
+    assert!(h.state().status().is_some_and(|s| s.text.starts_with("No key after")));
+    press(&mut h, Modifiers::NONE, Key::ArrowDown);
+    assert_eq!(frame(&h), frames[frames.len() - 2]);
+}
+
+#[test]
+fn a_copied_pose_pastes_as_keys_at_another_frame_in_one_undo_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    go_to_frame(&mut h, 30);
+    h.get_by_label("Arm").click();
+    h.run();
+    let at_30: Vec<Option<ChannelValue>> =
+        (0..4).map(|joint| h.state().value_now(ChannelId::JointRotation { object: 0, joint })).collect();
+    press(&mut h, Modifiers::ALT, Key::C);
+    assert!(h.state().status().is_some_and(|s| s.text.starts_with("Copied the pose")));
+    press(&mut h, Modifiers::NONE, Key::R);
+    go_to_frame(&mut h, 70);
+    let steps = h.state().doc.undo_len();
+    press(&mut h, Modifiers::ALT, Key::V);
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one step");
+    assert_eq!(h.state().doc.undo_label(), Some("paste pose at frame 70"));
+    for (joint, before) in at_30.iter().enumerate() {
+        let id = ChannelId::JointRotation { object: 0, joint };
+        let (Some(ChannelValue::Rotation(a)), Some(ChannelValue::Rotation(b))) =
+            (before, h.state().value_now(id))
+        else {
+            panic!("rotations")
+        };
+        assert!(a.dot(b).abs() > 1.0 - 1e-6, "joint {joint}: {a:?} → {b:?}");
+        let times = channels::key_times(h.state().doc.scene(), id);
+        assert!(times.iter().any(|t| (t * 30.0 - 70.0).abs() < 1e-6), "joint {joint} keyed at 70");
+    }
+}
+
+/// A rig with a spine and two arms named by side.
+fn two_armed_scene() -> Scene {
+    let joint = |name: &str, parent: Option<usize>, at: Vec3| {
+        keyrig_core::Joint::new(name, parent, at, Quat::IDENTITY)
+    };
+    let mut skeleton = Skeleton {
+        joints: vec![
+            joint("spine", None, Vec3::Y),
+            joint("arm.L", Some(0), Vec3::new(0.3, 0.5, 0.0)),
+            joint("arm.R", Some(0), Vec3::new(-0.3, 0.5, 0.0)),
+        ],
+        root_translation: keyrig_core::Animated::constant(Vec3::ZERO),
+    };
+    let mut rig = Object::new("Rig");
+    let lift = Quat::from_rotation_z(0.8) * Quat::from_rotation_y(0.3);
+    skeleton.joints[1].rotation.track =
+        RawTrack::new(vec![SceneKey::new(0.0, lift), SceneKey::new(1.0, Quat::IDENTITY)]);
+    rig.skeleton = Some(skeleton);
+    Scene { objects: vec![rig], ..Scene::default() }
+}
+
+#[test]
+fn paste_mirrored_puts_the_left_arms_pose_on_the_right_arm() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("rig.ron");
+    keyrig_io::scene_file::save(&file, &two_armed_scene()).expect("save");
+    let mut h = harness(dir.path(), Some(file));
+    h.get_by_label("arm.L").click();
+    h.run();
+    let Some(ChannelValue::Rotation(left)) =
+        h.state().value_now(ChannelId::JointRotation { object: 0, joint: 1 })
+    else {
+        panic!("a rotation")
+    };
+    press(&mut h, Modifiers::ALT, Key::C);
+    press(&mut h, Modifiers::ALT.plus(Modifiers::SHIFT), Key::V);
+    let right = h.state().doc.scene().objects[0].skeleton.as_ref().unwrap().joints[2].rotation.value;
+    let mirrored = Quat::from_xyzw(left.x, -left.y, -left.z, left.w);
+    assert!(right.dot(mirrored).abs() > 1.0 - 1e-6, "the right arm, mirrored: {right:?} vs {mirrored:?}");
+    assert_eq!(h.state().doc.undo_label(), Some("paste pose mirrored"));
+}
+
+#[test]
+fn ctrl_drag_in_the_viewport_box_selects_joints() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let app = h.state();
+    let rect = app.view.viewport_rect.expect("laid out");
+    let projection = Projection::new(&app.view.camera, rect);
+    let pose: ObjectPose = app.object_pose_now(0).expect("the arm");
+    let on_screen: Vec<Pos2> = (0..4)
+        .map(|j| {
+            let at: Vec3 = (pose.world_from_object * pose.object_from_joint[j]).translation.into();
+            projection.project(at).expect("in view")
+        })
+        .collect();
+    // A box around the elbow and the forearm only.
+    let inside = [on_screen[1], on_screen[2]];
+    let min = Pos2::new(inside[0].x.min(inside[1].x) - 6.0, inside[0].y.min(inside[1].y) - 6.0);
+    let max = Pos2::new(inside[0].x.max(inside[1].x) + 6.0, inside[0].y.max(inside[1].y) + 6.0);
+    for (j, p) in on_screen.iter().enumerate() {
+        let boxed = p.x >= min.x && p.x <= max.x && p.y >= min.y && p.y <= max.y;
+        assert_eq!(boxed, j == 1 || j == 2, "the box holds joints 1 and 2 only (joint {j} at {p:?})");
+    }
+    let camera = h.state().view.camera;
+    let ctrl = Modifiers::COMMAND;
+    h.input_mut().modifiers = ctrl;
+    h.event(Event::PointerMoved(min));
+    h.event(Event::PointerButton {
+        pos: min,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: ctrl,
+    });
+    for i in 1..=8 {
+        h.event(Event::PointerMoved(min + (max - min) * (i as f32 / 8.0)));
+    }
+    h.event(Event::PointerButton {
+        pos: max,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: ctrl,
+    });
+    h.run();
+    let selected: Vec<Selected> = h.state().session.selection.items().collect();
+    assert_eq!(selected.len(), 2, "{selected:?}");
+    assert!(selected.contains(&Selected::Joint { object: 0, joint: 1 }));
+    assert!(selected.contains(&Selected::Joint { object: 0, joint: 2 }));
+    assert_eq!(h.state().view.camera, camera, "a box drag does not orbit");
+}
