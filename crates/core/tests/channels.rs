@@ -1,0 +1,52 @@
+//! Channels through their public paths: spin angles, domains and names as `keyrig sample` and
+//! the editor read them.
+
+use glam::{Quat, Vec3};
+use keyrig_core::channel::ChannelPath;
+use keyrig_core::{Animated, Joint, Key, Object, RawTrack, Scene, Skeleton, Spin};
+
+/// An arm whose forearm turns 360° about X between 0 s and 2 s (one spin key), and whose
+/// object translation is keyed from 1 s to 3 s.
+fn twist() -> Scene {
+    let mut forearm = Joint::new("forearm", None, Vec3::ZERO, Quat::IDENTITY);
+    forearm.rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(vec![
+            Key::new(0.0, Quat::IDENTITY),
+            Key::new(2.0, Quat::IDENTITY).with_spin(Spin::Angle { axis: Vec3::X, degrees: 360.0 }),
+        ]),
+    );
+    let mut arm = Object::new("Arm");
+    arm.skeleton = Some(Skeleton { joints: vec![forearm], root_translation: Animated::constant(Vec3::ZERO) });
+    arm.translation.track = RawTrack::new(vec![Key::new(1.0, Vec3::ZERO), Key::new(3.0, Vec3::X)]);
+    let mut scene = Scene::default();
+    scene.objects.push(arm);
+    scene
+}
+
+#[test]
+fn a_spin_channel_reports_the_angle_turned() {
+    let scene = twist();
+    let channel = ChannelPath::parse("object/Arm/joint/forearm/rotation").unwrap().resolve(&scene).unwrap();
+    assert!(channel.has_spin());
+    assert_eq!(channel.spin_degrees(0.0), Some(0.0));
+    let middle = channel.spin_degrees(1.0).expect("inside the spin segment");
+    assert!((middle - 180.0).abs() < 1e-9, "{middle}");
+    assert_eq!(channel.spin_degrees(2.0), Some(360.0));
+
+    // Channels without spin keys, and channels that are not rotations, have none.
+    let translation = ChannelPath::parse("object/Arm/translation").unwrap().resolve(&scene).unwrap();
+    assert!(!translation.has_spin());
+    assert_eq!(translation.spin_degrees(2.0), None);
+    let still = ChannelPath::parse("object/Arm/rotation").unwrap().resolve(&scene).unwrap();
+    assert_eq!(still.spin_degrees(1.0), None);
+}
+
+#[test]
+fn domains_are_the_keyed_range() {
+    let scene = twist();
+    let resolve = |path: &str| ChannelPath::parse(path).unwrap().resolve(&scene).unwrap();
+    assert_eq!(resolve("object/Arm/translation").domain(), Some((1.0, 3.0)));
+    assert_eq!(resolve("object/Arm/joint/forearm/rotation").domain(), Some((0.0, 2.0)));
+    assert_eq!(resolve("object/Arm/scale").domain(), None);
+}
