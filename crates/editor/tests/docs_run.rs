@@ -46,6 +46,11 @@ const BY_HAND: &[(&str, &str, &str)] = &[
         "use egui_wgpu::wgpu;",
         "needs eframe's window with the wgpu backend: compiled as a doctest, not run",
     ),
+    (
+        "docs/testing.md",
+        "cargo install cargo-mutants",
+        "installs a tool and mutation-tests for most of an hour",
+    ),
 ];
 
 struct Block {
