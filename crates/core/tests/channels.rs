@@ -50,3 +50,38 @@ fn domains_are_the_keyed_range() {
     assert_eq!(resolve("object/Arm/joint/forearm/rotation").domain(), Some((0.0, 2.0)));
     assert_eq!(resolve("object/Arm/scale").domain(), None);
 }
+
+#[test]
+fn joint_translation_and_scale_are_listed_when_keyed_or_not_at_rest() {
+    let joint = |name: &str| Joint::new(name, Some(0), Vec3::X, Quat::IDENTITY);
+    let mut keyed = joint("keyed");
+    keyed.translation.track = RawTrack::new(vec![Key::new(0.0, Vec3::ZERO)]);
+    keyed.scale.track = RawTrack::new(vec![Key::new(0.0, Vec3::ONE)]);
+    let mut moved = joint("moved");
+    moved.translation.value = Vec3::Y;
+    moved.scale.value = Vec3::splat(2.0);
+    let mut arm = Object::new("Arm");
+    arm.skeleton = Some(Skeleton {
+        joints: vec![Joint::new("root", None, Vec3::ZERO, Quat::IDENTITY), keyed, moved],
+        root_translation: Animated::constant(Vec3::ZERO),
+    });
+    let mut scene = Scene::default();
+    scene.objects.push(arm);
+    let joints: Vec<String> = keyrig_core::channel::list_channels(&scene)
+        .iter()
+        .map(ToString::to_string)
+        .filter(|path| path.contains("/joint/"))
+        .collect();
+    assert_eq!(
+        joints,
+        [
+            "object/Arm/joint/root/rotation",
+            "object/Arm/joint/keyed/translation",
+            "object/Arm/joint/keyed/rotation",
+            "object/Arm/joint/keyed/scale",
+            "object/Arm/joint/moved/translation",
+            "object/Arm/joint/moved/rotation",
+            "object/Arm/joint/moved/scale",
+        ]
+    );
+}
