@@ -85,3 +85,23 @@ fn joint_translation_and_scale_are_listed_when_keyed_or_not_at_rest() {
         ]
     );
 }
+
+#[test]
+fn channel_ids_know_their_kind_of_value() {
+    use keyrig_core::channel_id::{ChannelId, ChannelKind};
+    for (id, kind) in [
+        (ChannelId::ObjectTranslation(0), ChannelKind::Vec3),
+        (ChannelId::ObjectRotation(0), ChannelKind::Rotation),
+        (ChannelId::ObjectScale(0), ChannelKind::Vec3),
+        (ChannelId::RootTranslation(0), ChannelKind::Vec3),
+        (ChannelId::JointTranslation { object: 0, joint: 1 }, ChannelKind::Vec3),
+        (ChannelId::JointRotation { object: 0, joint: 1 }, ChannelKind::Rotation),
+        (ChannelId::JointScale { object: 0, joint: 1 }, ChannelKind::Vec3),
+        (ChannelId::LightPosition(0), ChannelKind::Vec3),
+        (ChannelId::LightDirection(0), ChannelKind::Vec3),
+        (ChannelId::LightColour(0), ChannelKind::Vec3),
+        (ChannelId::LightIntensity(0), ChannelKind::Scalar),
+    ] {
+        assert_eq!(id.kind(), kind, "{id:?}");
+    }
+}
