@@ -15,9 +15,10 @@
 //!
 //! Access patterns, 4096 samples per iteration, all inside `[t_1, t_{n−2})` (where splines'
 //! Catmull-Rom is defined):
-//! * `sequential`: playback at 4 samples per key, wrapping around to the start (a loop), through a
-//!   keyrig `Cursor` (the peers have no cursor and search every time);
-//! * `random`: uniformly random times, keyrig `Track::sample` (binary search).
+//! * `sequential`: playback at 4 samples per key, wrapping around to the start (a loop);
+//! * `random`: uniformly random times.
+//!
+//! Every keyrig row samples with `Track::sample` (binary search), as the product does.
 
 use std::hint::black_box;
 
@@ -156,16 +157,10 @@ fn bench_tracks(c: &mut Criterion) {
         let mut group = c.benchmark_group(format!("tracks/{n}_keys"));
         group.throughput(Throughput::Elements(SAMPLES as u64));
         for (pattern, times) in [("sequential", &sequential), ("random", &random)] {
-            let cursor_or_sample = pattern == "sequential";
             group.bench_with_input(BenchmarkId::new("vec3_tcb", pattern), times, |b, times| {
                 b.iter(|| {
                     let mut acc = Vec3::ZERO;
-                    if cursor_or_sample {
-                        let mut cursor = vec3_tcb.cursor();
-                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
-                    } else {
-                        times.iter().for_each(|&t| acc += vec3_tcb.sample(black_box(t)));
-                    }
+                    times.iter().for_each(|&t| acc += vec3_tcb.sample(black_box(t)));
                     acc
                 })
             });
@@ -173,60 +168,35 @@ fn bench_tracks(c: &mut Criterion) {
             group.bench_with_input(BenchmarkId::new("vec3_tcb_repeat", pattern), &repeated, |b, times| {
                 b.iter(|| {
                     let mut acc = Vec3::ZERO;
-                    if cursor_or_sample {
-                        let mut cursor = vec3_repeat.cursor();
-                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
-                    } else {
-                        times.iter().for_each(|&t| acc += vec3_repeat.sample(black_box(t)));
-                    }
+                    times.iter().for_each(|&t| acc += vec3_repeat.sample(black_box(t)));
                     acc
                 })
             });
             group.bench_with_input(BenchmarkId::new("quat_squad_repeat", pattern), &repeated, |b, times| {
                 b.iter(|| {
                     let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
-                    if cursor_or_sample {
-                        let mut cursor = quat_repeat.cursor();
-                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
-                    } else {
-                        times.iter().for_each(|&t| acc += quat_repeat.sample(black_box(t)));
-                    }
+                    times.iter().for_each(|&t| acc += quat_repeat.sample(black_box(t)));
                     acc
                 })
             });
             group.bench_with_input(BenchmarkId::new("quat_squad", pattern), times, |b, times| {
                 b.iter(|| {
                     let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
-                    if cursor_or_sample {
-                        let mut cursor = quat_squad.cursor();
-                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
-                    } else {
-                        times.iter().for_each(|&t| acc += quat_squad.sample(black_box(t)));
-                    }
+                    times.iter().for_each(|&t| acc += quat_squad.sample(black_box(t)));
                     acc
                 })
             });
             group.bench_with_input(BenchmarkId::new("quat_spin", pattern), times, |b, times| {
                 b.iter(|| {
                     let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
-                    if cursor_or_sample {
-                        let mut cursor = quat_spin.cursor();
-                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
-                    } else {
-                        times.iter().for_each(|&t| acc += quat_spin.sample(black_box(t)));
-                    }
+                    times.iter().for_each(|&t| acc += quat_spin.sample(black_box(t)));
                     acc
                 })
             });
             group.bench_with_input(BenchmarkId::new("quat_slerp_track", pattern), times, |b, times| {
                 b.iter(|| {
                     let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
-                    if cursor_or_sample {
-                        let mut cursor = quat_slerp.cursor();
-                        times.iter().for_each(|&t| acc += cursor.sample(black_box(t)));
-                    } else {
-                        times.iter().for_each(|&t| acc += quat_slerp.sample(black_box(t)));
-                    }
+                    times.iter().for_each(|&t| acc += quat_slerp.sample(black_box(t)));
                     acc
                 })
             });

@@ -233,8 +233,8 @@ impl ChannelPath {
             }
             ["object" | "light", _] | ["object" | "light"] => Err(syntax("missing property")),
             ["object" | "light", ..] => Err(syntax("too many parts")),
-            [first, ..] => Err(syntax(&format!("unknown kind {first:?} (expected \"object\" or \"light\")"))),
-            [] => Err(syntax("empty path")),
+            // `split` yields at least one part, so `parts[0]` exists.
+            _ => Err(syntax(&format!("unknown kind {:?} (expected \"object\" or \"light\")", parts[0]))),
         }
     }
 

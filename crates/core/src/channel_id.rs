@@ -187,18 +187,6 @@ pub enum ChannelRef<'a> {
     Scalar(&'a Animated<f32>),
 }
 
-impl<'a> ChannelRef<'a> {
-    /// Another borrow of the same channel.
-    #[must_use]
-    pub fn clone_ref(&self) -> ChannelRef<'a> {
-        match self {
-            ChannelRef::Vec3(a) => ChannelRef::Vec3(a),
-            ChannelRef::Rotation(a) => ChannelRef::Rotation(a),
-            ChannelRef::Scalar(a) => ChannelRef::Scalar(a),
-        }
-    }
-}
-
 /// A mutably borrowed channel.
 pub enum ChannelMut<'a> {
     Vec3(&'a mut Animated<Vec3>),

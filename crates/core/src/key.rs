@@ -92,12 +92,6 @@ pub const SPIN_ANGLE_TOLERANCE_DEG: f64 = 0.01;
 pub const MIN_SPIN_AXIS_LENGTH: f32 = 1e-6;
 
 impl Spin {
-    /// `Turns(0)`: the short way, interpolated exactly as a key without a spin.
-    #[must_use]
-    pub fn is_short_way(self) -> bool {
-        self == Spin::Turns(0)
-    }
-
     /// Whether the numbers are usable on their own: |turns| ≤ [`MAX_SPIN_TURNS`]; for an
     /// angle, finite numbers, an axis at least [`MIN_SPIN_AXIS_LENGTH`] long and
     /// |degrees| ≤ 360 · [`MAX_SPIN_TURNS`].

@@ -17,6 +17,5 @@ pub use scene::{
     ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
 };
 pub use track::{
-    check_cycles, AnimatedCursor, AnimatedTrack, Cursor, SpinProblem, TangentSide, Track, TrackEnd,
-    TrackError, TrackValue,
+    check_cycles, AnimatedTrack, SpinProblem, TangentSide, Track, TrackEnd, TrackError, TrackValue,
 };

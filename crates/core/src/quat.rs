@@ -304,20 +304,6 @@ pub fn slerp_fast(a: DQuat, b: DQuat, s: f64) -> DQuat {
     DQuat::from_vec4(va * cs + ortho * (sn / sin_angle))
 }
 
-/// Flips every quaternion whose dot product with its predecessor is negative, so that
-/// consecutive keys are at most 90° apart in 4-D (180° of rotation) and interpolation takes
-/// the short way. Returns, per element, whether it was flipped (relative to the input).
-pub fn make_sign_consistent(quats: &mut [DQuat]) -> Vec<bool> {
-    let mut flipped = vec![false; quats.len()];
-    for i in 1..quats.len() {
-        if quats[i - 1].dot(quats[i]) < 0.0 {
-            quats[i] = -quats[i];
-            flipped[i] = true;
-        }
-    }
-    flipped
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -423,14 +409,5 @@ mod tests {
                 assert!(close(slerp_fast(a, b, s), slerp(a, b, s), 1e-14), "{label} s = {s}");
             }
         }
-    }
-
-    #[test]
-    fn sign_consistency_flips_only_when_needed() {
-        let q = DQuat::from_axis_angle(DVec3::X, 0.5);
-        let mut qs = [q, -q, q, -q];
-        let flipped = make_sign_consistent(&mut qs);
-        assert_eq!(flipped, vec![false, true, false, true]);
-        assert!(qs.iter().all(|&x| x == q));
     }
 }

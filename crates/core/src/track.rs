@@ -3,8 +3,7 @@
 //! A [`RawTrack`] is checked once by [`Track::new`] into a [`Track`], which precomputes
 //! everything that depends only on the keys (Kochanek–Bartels tangents with the non-uniform
 //! spacing factors, Squad control quaternions, sign-consistent unit quaternions). Sampling then
-//! only locates the segment (binary search, or an amortized O(1) step with a [`Cursor`]) and
-//! evaluates one cubic or one Squad.
+//! only locates the segment (binary search) and evaluates one cubic or one Squad.
 //!
 //! # Sampling rule
 //! * `t` before the first key (or NaN) gives the first key's value; `t` at or after the last key
@@ -356,8 +355,7 @@ struct Segment<S> {
 
 /// A validated, evaluable track of `f32`, [`Vec3`] or [`Quat`] keys.
 ///
-/// Build it with [`Track::new`]; sample it with [`Track::sample`] (random access, O(log n)) or
-/// with a [`Cursor`] (sequential playback, amortized O(1)).
+/// Build it with [`Track::new`]; sample it with [`Track::sample`] (O(log n) binary search).
 ///
 /// ```
 /// use glam::Vec3;
@@ -426,15 +424,7 @@ impl<T: TrackValue> Track<T> {
     /// is refused ([`SpinProblem`]: on a non-rotation or the first key, out of range, ending a
     /// Hermite segment, Turns without a defined short way, Angle disagreeing with the value).
     pub fn new(raw: &RawTrack<T>) -> Result<Self, TrackError> {
-        Self::from_keys(&raw.keys)
-    }
-
-    /// [`Track::new`] on a slice of keys.
-    ///
-    /// # Errors
-    /// See [`Track::new`].
-    pub fn from_keys(keys: &[Key<T>]) -> Result<Self, TrackError> {
-        Self::from_keys_with_cycles(keys, Cycles::HOLD)
+        Self::with_cycles(raw, Cycles::HOLD)
     }
 
     /// [`Track::new`] with `cycles` before the first key and after the last.
@@ -443,14 +433,7 @@ impl<T: TrackValue> Track<T> {
     /// See [`Track::new`], and [`check_cycles`]: a behaviour other than [`Cycle::Hold`] needs
     /// two keys and a positive, finite period.
     pub fn with_cycles(raw: &RawTrack<T>, cycles: Cycles) -> Result<Self, TrackError> {
-        Self::from_keys_with_cycles(&raw.keys, cycles)
-    }
-
-    /// [`Track::with_cycles`] on a slice of keys.
-    ///
-    /// # Errors
-    /// See [`Track::with_cycles`].
-    pub fn from_keys_with_cycles(keys: &[Key<T>], cycles: Cycles) -> Result<Self, TrackError> {
+        let keys = &raw.keys[..];
         if keys.is_empty() {
             return Err(TrackError::Empty);
         }
@@ -560,7 +543,7 @@ impl<T: TrackValue> Track<T> {
     }
 
     /// The value at time `t` (seconds); outside the domain as [`Track::cycles`] say (by default
-    /// held at the first/last key). O(log n) binary search; use [`Track::cursor`] for playback.
+    /// held at the first/last key). O(log n) binary search.
     #[must_use]
     #[inline]
     pub fn sample(&self, t: f64) -> T {
@@ -574,7 +557,7 @@ impl<T: TrackValue> Track<T> {
         match self.clamp(t) {
             Clamped::Key(i) => self.wide[i],
             Clamped::Inside => self.sample_inside(t),
-            Clamped::Outside => self.sample_outside(t, |local| self.sample_held(local)),
+            Clamped::Outside => self.sample_outside(t),
         }
     }
 
@@ -597,9 +580,9 @@ impl<T: TrackValue> Track<T> {
         }
     }
 
-    /// Outside the domain with a cycle at that end; `held` samples a local time.
+    /// Outside the domain with a cycle at that end.
     #[inline]
-    fn sample_outside(&self, t: f64, mut held: impl FnMut(f64) -> T::Wide) -> T::Wide {
+    fn sample_outside(&self, t: f64) -> T::Wide {
         match self.outside(t) {
             Outside::Key(i) => self.wide[i],
             Outside::Linear { after: false } => {
@@ -610,7 +593,7 @@ impl<T: TrackValue> Track<T> {
                 T::advance(self.wide[last], self.ends.rate_after, t - self.times[last])
             }
             Outside::Cycle { local, cycles, .. } => {
-                let value = held(local);
+                let value = self.sample_held(local);
                 if cycles == 0.0 {
                     value
                 } else {
@@ -654,13 +637,6 @@ impl<T: TrackValue> Track<T> {
         }
     }
 
-    /// A sequential sampler: amortized O(1) when `t` moves forward in small steps, still exact
-    /// (O(log n)) when it jumps, including backwards.
-    #[must_use]
-    pub fn cursor(&self) -> Cursor<'_, T> {
-        Cursor { track: self, segment: 0 }
-    }
-
     /// At or outside the ends of the open domain: the key whose value holds (at the end keys
     /// themselves, for NaN, and outside them when the cycle there is [`Cycle::Hold`]); inside:
     /// needs a segment; outside with another cycle: see [`Track::outside`].
@@ -700,66 +676,6 @@ enum Clamped {
     Key(usize),
     Inside,
     Outside,
-}
-
-/// Sequential sampler over a [`Track`], remembering the last segment.
-#[derive(Clone, Debug)]
-pub struct Cursor<'a, T: TrackValue> {
-    track: &'a Track<T>,
-    segment: usize,
-}
-
-impl<T: TrackValue> Cursor<'_, T> {
-    /// Same value as [`Track::sample`] at `t`.
-    #[inline]
-    pub fn sample(&mut self, t: f64) -> T {
-        T::narrow(self.sample_wide(t))
-    }
-
-    /// Same value as [`Track::sample_wide`] at `t`.
-    #[inline]
-    pub fn sample_wide(&mut self, t: f64) -> T::Wide {
-        let track = self.track;
-        match track.clamp(t) {
-            Clamped::Key(i) => track.wide[i],
-            Clamped::Inside => {
-                let i = self.seek(t);
-                track.eval_segment(i, t)
-            }
-            Clamped::Outside => track.sample_outside(t, |local| {
-                let last = track.times.len() - 1;
-                if local.is_nan() || local <= track.times[0] {
-                    track.wide[0]
-                } else if local >= track.times[last] {
-                    track.wide[last]
-                } else {
-                    let i = self.seek(local);
-                    track.eval_segment(i, local)
-                }
-            }),
-        }
-    }
-
-    /// The segment containing `t`, for `t` strictly inside the domain.
-    #[inline]
-    fn seek(&mut self, t: f64) -> usize {
-        let times = &self.track.times;
-        let mut i = self.segment;
-        if t < times[i] {
-            // Backwards: search the keys before the current segment (times[0] < t).
-            i = times[..=i].partition_point(|&x| x <= t) - 1;
-        } else if t >= times[i + 1] {
-            // Forward: the next segment is the common case during playback.
-            if t < times[i + 2] {
-                i += 1;
-            } else {
-                // times[i + 1] <= t < times[last], so the partition point is in 1..len.
-                i += times[i + 1..].partition_point(|&x| x <= t);
-            }
-        }
-        self.segment = i;
-        i
-    }
 }
 
 /// `x.floor()` without a libm call on baseline x86-64 (no SSE4.1 `roundsd`): truncate, then
@@ -1541,31 +1457,5 @@ impl<T: TrackValue> AnimatedTrack<T> {
     #[must_use]
     pub fn domain(&self) -> Option<(f64, f64)> {
         self.track().map(Track::domain)
-    }
-
-    /// A sequential sampler (see [`Cursor`]).
-    #[must_use]
-    pub fn cursor(&self) -> AnimatedCursor<'_, T> {
-        match self {
-            AnimatedTrack::Constant(value) => AnimatedCursor::Constant(*value),
-            AnimatedTrack::Keyed(track) => AnimatedCursor::Keyed(track.cursor()),
-        }
-    }
-}
-
-/// Sequential sampler over an [`AnimatedTrack`].
-#[derive(Clone, Debug)]
-pub enum AnimatedCursor<'a, T: TrackValue> {
-    Constant(T),
-    Keyed(Cursor<'a, T>),
-}
-
-impl<T: TrackValue> AnimatedCursor<'_, T> {
-    /// Same value as [`AnimatedTrack::sample`] at `t`.
-    pub fn sample(&mut self, t: f64) -> T {
-        match self {
-            AnimatedCursor::Constant(value) => *value,
-            AnimatedCursor::Keyed(cursor) => cursor.sample(t),
-        }
     }
 }

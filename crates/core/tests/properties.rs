@@ -384,18 +384,4 @@ proptest! {
         prop_assert_eq!(Track::new(&RawTrack::new(nan_time)).unwrap_err(), TrackError::NonFiniteTime { index: i });
     }
 
-    #[test]
-    fn cursor_agrees_with_random_access_in_any_order(
-        keys in quat_keys(120.0),
-        steps in prop::collection::vec(-0.3..1.0f64, 1..80),
-    ) {
-        let track = track(keys);
-        let (first, last) = track.domain();
-        let mut cursor = track.cursor();
-        let mut t = first - 0.5;
-        for step in steps {
-            t += step * (last - first + 1.0) * 0.1;
-            prop_assert_eq!(cursor.sample(t), track.sample(t), "t = {}", t);
-        }
-    }
 }

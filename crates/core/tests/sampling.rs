@@ -1,8 +1,6 @@
 //! Table-driven sampling tests: each track's keys are drawn as an ASCII timeline above a table
 //! of `(time, expected)` rows that covers times before the first key, at and ±1e-6 around each
-//! key, inside segments, and after the last key. Every table is then replayed through a
-//! [`Cursor`](keyrig_core::Cursor) forwards, backwards (scrubbing) and in a jumbled order, which
-//! must give bit-identical results to random access.
+//! key, inside segments, and after the last key.
 
 mod support;
 
@@ -12,20 +10,10 @@ use support::{rot, tricky_quaternion_sets, ApproxDist};
 
 const E: f64 = 1e-6;
 
-/// Checks `rows` by random access, then through one cursor in order, reversed and jumbled.
+/// Checks every row of `rows` by sampling the track.
 fn check_table<T: TrackValue + ApproxDist>(name: &str, track: &Track<T>, rows: &[(f64, T)], eps: f64) {
     for &(t, expected) in rows {
         assert_approx_eq!(track.sample(t), expected, eps, "{name}: sample({t})");
-    }
-    let mut cursor = track.cursor();
-    let mut order: Vec<usize> = (0..rows.len()).collect();
-    let reversed: Vec<usize> = order.iter().rev().copied().collect();
-    let jumbled: Vec<usize> = (0..rows.len()).map(|i| (i * 7 + 3) % rows.len()).collect();
-    order.extend(reversed);
-    order.extend(jumbled);
-    for i in order {
-        let (t, _) = rows[i];
-        assert_eq!(cursor.sample(t), track.sample(t), "{name}: cursor at t = {t} (row {i})");
     }
 }
 
@@ -238,10 +226,9 @@ fn tricky_quaternion_sets_give_unit_finite_rotations_in_every_mode() {
                 .map(|(i, &q)| Key::new(i as f64 * 0.5, q).with_interpolation(mode))
                 .collect();
             let track = Track::new(&RawTrack::new(keys)).unwrap();
-            let mut cursor = track.cursor();
             for j in 0..=200 {
                 let t = j as f64 * (quats.len() as f64 * 0.5) / 200.0 - 0.1;
-                let q = cursor.sample(t);
+                let q = track.sample(t);
                 assert!(q.is_finite(), "{name} {mode:?} t = {t}: {q:?}");
                 assert!((q.length() - 1.0).abs() < 1e-6, "{name} {mode:?} t = {t}: |q| = {}", q.length());
             }
@@ -285,7 +272,7 @@ fn animated_track_is_constant_without_keys_and_keyed_with_them() {
     assert!(!constant.is_animated());
     assert_eq!(constant.domain(), None);
     assert_eq!(constant.sample(123.0), Vec3::new(1.0, 2.0, 3.0));
-    assert_eq!(constant.cursor().sample(-4.0), Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(constant.sample(-4.0), Vec3::new(1.0, 2.0, 3.0));
 
     // A non-normalized static rotation is normalized.
     let rotation = AnimatedTrack::new(&Animated::constant(Quat::from_xyzw(0.0, 0.0, 0.0, 2.0))).unwrap();
@@ -298,21 +285,24 @@ fn animated_track_is_constant_without_keys_and_keyed_with_them() {
     assert!(keyed.is_animated());
     assert_eq!(keyed.domain(), Some((0.0, 2.0)));
     assert_eq!(keyed.sample(1.0), 2.0);
-    let mut cursor = keyed.cursor();
-    assert_eq!([cursor.sample(0.5), cursor.sample(1.5), cursor.sample(0.0)], [1.5, 2.5, 1.0]);
+    assert_eq!([keyed.sample(0.5), keyed.sample(1.5), keyed.sample(0.0)], [1.5, 2.5, 1.0]);
     assert_eq!(keyed.track().map(Track::key_count), Some(2));
 }
 
 #[test]
-fn cursor_handles_long_playback_and_wraparound_loops() {
-    // 1000 keys, played at 3 samples per key for two loops: the loop jumps back to the start.
-    let keys = (0..1000).map(|i| Key::new(i as f64 * 0.1, Vec3::splat((i as f32 * 0.37).sin()))).collect();
+fn long_track_finds_the_right_segment_everywhere() {
+    // 1000 Linear keys: at each key its value, a third into each segment a third of the way
+    // to the next key (binary search over many segments).
+    let value = |i: usize| Vec3::splat((i as f32 * 0.37).sin());
+    let keys = (0..1000)
+        .map(|i| Key::new(i as f64 * 0.1, value(i)).with_interpolation(Interpolation::Linear))
+        .collect();
     let track = Track::new(&RawTrack::new(keys)).unwrap();
-    let mut cursor = track.cursor();
-    for pass in 0..2 {
-        for j in 0..3000 {
-            let t = j as f64 * (0.1 / 3.0);
-            assert_eq!(cursor.sample(t), track.sample(t), "pass {pass}, t = {t}");
-        }
+    for i in 0..999 {
+        let t = i as f64 * 0.1;
+        assert_eq!(track.sample(t), value(i), "key {i}");
+        let expected = value(i) + (value(i + 1) - value(i)) / 3.0;
+        assert_approx_eq!(track.sample(t + 0.1 / 3.0), expected, 1e-5, "a third into segment {i}");
     }
+    assert_eq!(track.sample(99.9), value(999));
 }

@@ -1,0 +1,107 @@
+//! Channels through their public paths: spin angles, domains and names as `keyrig sample` and
+//! the editor read them.
+
+use glam::{Quat, Vec3};
+use keyrig_core::channel::ChannelPath;
+use keyrig_core::{Animated, Joint, Key, Object, RawTrack, Scene, Skeleton, Spin};
+
+/// An arm whose forearm turns 360° about X between 0 s and 2 s (one spin key), and whose
+/// object translation is keyed from 1 s to 3 s.
+fn twist() -> Scene {
+    let mut forearm = Joint::new("forearm", None, Vec3::ZERO, Quat::IDENTITY);
+    forearm.rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(vec![
+            Key::new(0.0, Quat::IDENTITY),
+            Key::new(2.0, Quat::IDENTITY).with_spin(Spin::Angle { axis: Vec3::X, degrees: 360.0 }),
+        ]),
+    );
+    let mut arm = Object::new("Arm");
+    arm.skeleton = Some(Skeleton { joints: vec![forearm], root_translation: Animated::constant(Vec3::ZERO) });
+    arm.translation.track = RawTrack::new(vec![Key::new(1.0, Vec3::ZERO), Key::new(3.0, Vec3::X)]);
+    let mut scene = Scene::default();
+    scene.objects.push(arm);
+    scene
+}
+
+#[test]
+fn a_spin_channel_reports_the_angle_turned() {
+    let scene = twist();
+    let channel = ChannelPath::parse("object/Arm/joint/forearm/rotation").unwrap().resolve(&scene).unwrap();
+    assert!(channel.has_spin());
+    assert_eq!(channel.spin_degrees(0.0), Some(0.0));
+    let middle = channel.spin_degrees(1.0).expect("inside the spin segment");
+    assert!((middle - 180.0).abs() < 1e-9, "{middle}");
+    assert_eq!(channel.spin_degrees(2.0), Some(360.0));
+
+    // Channels without spin keys, and channels that are not rotations, have none.
+    let translation = ChannelPath::parse("object/Arm/translation").unwrap().resolve(&scene).unwrap();
+    assert!(!translation.has_spin());
+    assert_eq!(translation.spin_degrees(2.0), None);
+    let still = ChannelPath::parse("object/Arm/rotation").unwrap().resolve(&scene).unwrap();
+    assert_eq!(still.spin_degrees(1.0), None);
+}
+
+#[test]
+fn domains_are_the_keyed_range() {
+    let scene = twist();
+    let resolve = |path: &str| ChannelPath::parse(path).unwrap().resolve(&scene).unwrap();
+    assert_eq!(resolve("object/Arm/translation").domain(), Some((1.0, 3.0)));
+    assert_eq!(resolve("object/Arm/joint/forearm/rotation").domain(), Some((0.0, 2.0)));
+    assert_eq!(resolve("object/Arm/scale").domain(), None);
+}
+
+#[test]
+fn joint_translation_and_scale_are_listed_when_keyed_or_not_at_rest() {
+    let joint = |name: &str| Joint::new(name, Some(0), Vec3::X, Quat::IDENTITY);
+    let mut keyed = joint("keyed");
+    keyed.translation.track = RawTrack::new(vec![Key::new(0.0, Vec3::ZERO)]);
+    keyed.scale.track = RawTrack::new(vec![Key::new(0.0, Vec3::ONE)]);
+    let mut moved = joint("moved");
+    moved.translation.value = Vec3::Y;
+    moved.scale.value = Vec3::splat(2.0);
+    let mut arm = Object::new("Arm");
+    arm.skeleton = Some(Skeleton {
+        joints: vec![Joint::new("root", None, Vec3::ZERO, Quat::IDENTITY), keyed, moved],
+        root_translation: Animated::constant(Vec3::ZERO),
+    });
+    let mut scene = Scene::default();
+    scene.objects.push(arm);
+    let joints: Vec<String> = keyrig_core::channel::list_channels(&scene)
+        .iter()
+        .map(ToString::to_string)
+        .filter(|path| path.contains("/joint/"))
+        .collect();
+    assert_eq!(
+        joints,
+        [
+            "object/Arm/joint/root/rotation",
+            "object/Arm/joint/keyed/translation",
+            "object/Arm/joint/keyed/rotation",
+            "object/Arm/joint/keyed/scale",
+            "object/Arm/joint/moved/translation",
+            "object/Arm/joint/moved/rotation",
+            "object/Arm/joint/moved/scale",
+        ]
+    );
+}
+
+#[test]
+fn channel_ids_know_their_kind_of_value() {
+    use keyrig_core::channel_id::{ChannelId, ChannelKind};
+    for (id, kind) in [
+        (ChannelId::ObjectTranslation(0), ChannelKind::Vec3),
+        (ChannelId::ObjectRotation(0), ChannelKind::Rotation),
+        (ChannelId::ObjectScale(0), ChannelKind::Vec3),
+        (ChannelId::RootTranslation(0), ChannelKind::Vec3),
+        (ChannelId::JointTranslation { object: 0, joint: 1 }, ChannelKind::Vec3),
+        (ChannelId::JointRotation { object: 0, joint: 1 }, ChannelKind::Rotation),
+        (ChannelId::JointScale { object: 0, joint: 1 }, ChannelKind::Vec3),
+        (ChannelId::LightPosition(0), ChannelKind::Vec3),
+        (ChannelId::LightDirection(0), ChannelKind::Vec3),
+        (ChannelId::LightColour(0), ChannelKind::Vec3),
+        (ChannelId::LightIntensity(0), ChannelKind::Scalar),
+    ] {
+        assert_eq!(id.kind(), kind, "{id:?}");
+    }
+}
