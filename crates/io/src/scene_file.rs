@@ -265,8 +265,8 @@ pub fn from_str_lenient(text: &str, origin: &Path) -> Result<(Scene, Vec<Located
     // A byte-order mark (some Windows editors start UTF-8 files with one) is not part of the
     // document; without it, lines and columns are unchanged.
     let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
-    let scene = match read_current(text) {
-        Some(scene) => scene,
+    let (scene, version) = match read_current(text) {
+        Some(scene) => (scene, CURRENT_VERSION),
         None => read_general(text, origin)?,
     };
     let problems = scene.problems();
@@ -274,7 +274,11 @@ pub fn from_str_lenient(text: &str, origin: &Path) -> Result<(Scene, Vec<Located
         Vec::new()
     } else {
         let paths: Vec<String> = problems.iter().map(|p| format!("scene.{}", p.path)).collect();
-        let positions = locate(text, &paths);
+        // Read the text again as the document type of its version (`migrate` names them).
+        let positions = match version {
+            1 => locate::<crate::scene_v1::SceneFileV1>(text, &paths),
+            _ => locate::<SceneFileCurrent>(text, &paths),
+        };
         problems
             .into_iter()
             .zip(positions)
@@ -294,10 +298,10 @@ fn read_current(text: &str) -> Option<Scene> {
 
 /// The general path with `ron`: any RON syntax, versions other than the current one (refused
 /// or migrated), and errors located at line and column.
-fn read_general(text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
+fn read_general(text: &str, origin: &Path) -> Result<(Scene, u32), SceneFileError> {
     let seen = std::cell::Cell::new(None);
     match ron::Options::default().from_str_seed(text, CurrentVersionReader { seen: &seen }) {
-        Ok(scene) => Ok(scene),
+        Ok(scene) => Ok((scene, CURRENT_VERSION)),
         Err(err) => match seen.get() {
             None => Err(syntax_error(origin, &err)),
             Some(Seen::OtherVersion(version)) => read_version(version, text, origin),
@@ -311,10 +315,13 @@ fn read_general(text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
     }
 }
 
-/// Reads a document of `version`: refuses newer versions, migrates older ones.
-fn read_version(version: u32, text: &str, origin: &Path) -> Result<Scene, SceneFileError> {
-    let version_at =
-        || locate(text, &["version".to_string()])[0].unwrap_or(TextPosition { line: 1, column: 1 });
+/// Reads a document of `version`: refuses newer versions, migrates older ones. Returns the
+/// scene and the version it was read as.
+fn read_version(version: u32, text: &str, origin: &Path) -> Result<(Scene, u32), SceneFileError> {
+    let version_at = || {
+        locate::<VersionHeader>(text, &["version".to_string()])[0]
+            .unwrap_or(TextPosition { line: 1, column: 1 })
+    };
     if version > CURRENT_VERSION {
         let at = version_at();
         return Err(SceneFileError::TooNew {
@@ -325,7 +332,7 @@ fn read_version(version: u32, text: &str, origin: &Path) -> Result<Scene, SceneF
             supported: CURRENT_VERSION,
         });
     }
-    migrate(version, text, origin).map_err(|err| match err {
+    let scene = migrate(version, text, origin).map_err(|err| match err {
         MigrationError::Unsupported => {
             let at = version_at();
             SceneFileError::TooOld {
@@ -337,7 +344,8 @@ fn read_version(version: u32, text: &str, origin: &Path) -> Result<Scene, SceneF
             }
         }
         MigrationError::File(err) => err,
-    })
+    })?;
+    Ok((scene, version))
 }
 
 /// Why [`migrate`] failed.
@@ -592,7 +600,7 @@ mod tests {
             if let Some(fast) = fast {
                 assert_eq!(format!("{:?}", Some(fast)), format!("{ron:?}"), "{text}");
             }
-            let general = read_general(text, Path::new("t.ron")).ok();
+            let general = read_general(text, Path::new("t.ron")).ok().map(|(scene, _)| scene);
             assert_eq!(format!("{general:?}"), format!("{ron:?}"), "{text}");
         }
         // The plain forms are taken by the fast path.
