@@ -108,7 +108,7 @@ pub enum ExportError {
     #[error("{path}: {message}")]
     Scene { path: String, message: String },
     #[error("{path}: cannot load mesh file {file}: {source}")]
-    MeshFile { path: String, file: PathBuf, source: MeshFileError },
+    MeshFile { path: String, file: PathBuf, source: Box<MeshFileError> },
     #[error("{path}: cannot write: {source}")]
     Write { path: PathBuf, source: std::io::Error },
 }
@@ -617,7 +617,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
                 let err = |source: MeshFileError| ExportError::MeshFile {
                     path: mesh_here.clone(),
                     file: file.clone(),
-                    source,
+                    source: Box::new(source),
                 };
                 if !files.contains_key(&file) {
                     let loaded = load_file(&file).map_err(err)?;
@@ -957,7 +957,7 @@ fn gltf_object(
     let file_err = |source: MeshFileError| ExportError::MeshFile {
         path: format!("{here}.mesh"),
         file: file.to_path_buf(),
-        source,
+        source: Box::new(source),
     };
     let Some(source_mesh) = model.meshes.get(index) else {
         return Err(file_err(MeshFileError::NoMesh(index)));
