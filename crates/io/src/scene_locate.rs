@@ -201,10 +201,6 @@ impl<'de, D: Deserializer<'de>> Deserializer<'de> for Tracked<'_, '_, D> {
         deserialize_identifier();
         deserialize_ignored_any();
     }
-
-    fn is_human_readable(&self) -> bool {
-        self.de.is_human_readable()
-    }
 }
 
 /// The caller's visitor; what it is given to read further is tracked.
@@ -300,10 +296,6 @@ impl<'de, A: SeqAccess<'de>> SeqAccess<'de> for Elements<'_, '_, A> {
         self.index += 1;
         element
     }
-
-    fn size_hint(&self) -> Option<usize> {
-        self.seq.size_hint()
-    }
 }
 
 /// Struct fields (and map entries): `.name`, the name as the key's visitor saw it.
@@ -327,10 +319,6 @@ impl<'de, A: MapAccess<'de>> MapAccess<'de> for Fields<'_, '_, A> {
         let name = self.key.borrow_mut().take().unwrap_or_default();
         let dot = if walk.path.borrow().is_empty() { "" } else { "." };
         walk.within(format_args!("{dot}{name}"), || map.next_value_seed(Wrapped { seed, walk }))
-    }
-
-    fn size_hint(&self) -> Option<usize> {
-        self.map.size_hint()
     }
 }
 
@@ -397,10 +385,6 @@ impl<'de, D: Deserializer<'de>> Deserializer<'de> for KeyDeserializer<'_, D> {
         deserialize_enum(name: &'static str, variants: &'static [&'static str]);
         deserialize_identifier();
         deserialize_ignored_any();
-    }
-
-    fn is_human_readable(&self) -> bool {
-        self.de.is_human_readable()
     }
 }
 
