@@ -1040,4 +1040,37 @@ mod writer_tests {
 )"#;
         assert_eq!(to_ron(&doc).unwrap(), expected);
     }
+
+    /// Kinds of value no scene holds today (small integers, characters, newtype structs,
+    /// maps, unit) are still written so that `ron` reads them back to the same value.
+    #[test]
+    fn values_outside_the_scene_types_read_back_with_ron() {
+        #[derive(Serialize, serde::Deserialize, Debug, PartialEq)]
+        struct Wrapper(u16);
+
+        #[derive(Serialize, serde::Deserialize, Debug, PartialEq)]
+        struct Other {
+            small: (i8, i16, u8, u16, u64),
+            chars: Vec<char>,
+            wrapped: Wrapper,
+            unit: (),
+            flags: (bool, bool),
+            map: std::collections::BTreeMap<String, f32>,
+            nested: Vec<Vec<u8>>,
+        }
+
+        let value = Other {
+            small: (-8, -16, 8, 16, u64::MAX),
+            chars: vec!['a', '\'', '\\', '\n', '\r', '\t', '\u{1}', 'é'],
+            wrapped: Wrapper(7),
+            unit: (),
+            flags: (true, false),
+            map: [("a".to_string(), 1.5), ("b \"c\"".to_string(), -0.0)].into_iter().collect(),
+            nested: vec![vec![1, 2], vec![]],
+        };
+        let text = to_ron(&value).unwrap();
+        assert!(text.contains(r"'\u{1}'") && text.contains("wrapped: (7)"), "{text}");
+        let back: Other = ron::from_str(&text).unwrap_or_else(|e| panic!("{e}:\n{text}"));
+        assert_eq!(back, value, "{text}");
+    }
 }
