@@ -1070,6 +1070,7 @@ mod writer_tests {
         };
         let text = to_ron(&value).unwrap();
         assert!(text.contains(r"'\u{1}'") && text.contains("wrapped: (7)"), "{text}");
+        assert!(text.contains("'a',\n") && text.contains("'é',\n"), "plain characters unescaped: {text}");
         let back: Other = ron::from_str(&text).unwrap_or_else(|e| panic!("{e}:\n{text}"));
         assert_eq!(back, value, "{text}");
     }
