@@ -107,10 +107,45 @@ impl BakeOptions {
 pub enum ExportError {
     #[error("{path}: {message}")]
     Scene { path: String, message: String },
-    #[error("{path}: cannot load mesh file {file}: {message}")]
-    MeshFile { path: String, file: PathBuf, message: String },
+    #[error("{path}: cannot load mesh file {file}: {source}")]
+    MeshFile { path: String, file: PathBuf, source: Box<MeshFileError> },
     #[error("{path}: cannot write: {source}")]
     Write { path: PathBuf, source: std::io::Error },
+}
+
+/// What is wrong with the model file an object's mesh comes from ([`ExportError::MeshFile`]).
+#[derive(Debug, thiserror::Error)]
+pub enum MeshFileError {
+    #[error(transparent)]
+    Gltf(#[from] crate::gltf_import::GltfError),
+    #[error(transparent)]
+    Md2(#[from] crate::md2::Md2LoadError),
+    #[error("has no mesh {0}")]
+    NoMesh(usize),
+    #[error("no node shows mesh {0}")]
+    MeshNotShown(usize),
+    #[error("mesh {0} has no triangles")]
+    NoTriangles(usize),
+    #[error(transparent)]
+    Skin(#[from] crate::model::MappingError),
+    #[error("no clip `{clip}` (clips: {})", clips.join(", "))]
+    NoClip { clip: String, clips: Vec<String> },
+    #[error("the model has no frames")]
+    NoFrames,
+    #[error("{0} is not a frame rate")]
+    BadFps(f64),
+    #[error("frame {0} is missing")]
+    FrameMissing(usize),
+    #[error("the scene's frame range is not finite")]
+    FrameRangeNotFinite,
+    #[error("the scene's frame range holds more than 10 million model frames")]
+    TooManyFrames,
+    #[error(transparent)]
+    Playback(#[from] keyrig_eval::morph::MorphError),
+    #[error("skin image size does not match its pixels")]
+    SkinSize,
+    #[error("skin image: {0}")]
+    SkinImage(#[from] image::ImageError),
 }
 
 fn scene_err(path: impl Into<String>, message: impl Into<String>) -> ExportError {
@@ -337,15 +372,13 @@ enum LoadedFile {
 /// Loads the model file at `path` (glTF by default, MD2 by its extension), through the same
 /// readers as the editor: [`crate::gltf_import::import_gltf_file`] and
 /// [`crate::md2::load_md2_file`] (which also finds the skin image).
-fn load_file(path: &Path) -> Result<LoadedFile, String> {
+fn load_file(path: &Path) -> Result<LoadedFile, MeshFileError> {
     let is_md2 = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
-    if is_md2 {
-        crate::md2::load_md2_file(path).map(|m| LoadedFile::Md2(Box::new(m))).map_err(|e| e.to_string())
+    Ok(if is_md2 {
+        LoadedFile::Md2(Box::new(crate::md2::load_md2_file(path)?))
     } else {
-        crate::gltf_import::import_gltf_file(path)
-            .map(|m| LoadedFile::Gltf(Box::new(m)))
-            .map_err(|e| e.to_string())
-    }
+        LoadedFile::Gltf(Box::new(crate::gltf_import::import_gltf_file(path)?))
+    })
 }
 
 /// Everything a document accumulates besides the buffer.
@@ -581,10 +614,10 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             }
             MeshSource::File { path, mesh, clip, fps } => {
                 let file = options.base_dir.as_deref().unwrap_or(Path::new(".")).join(path);
-                let err = |message: String| ExportError::MeshFile {
+                let err = |source: MeshFileError| ExportError::MeshFile {
                     path: mesh_here.clone(),
                     file: file.clone(),
-                    message,
+                    source: Box::new(source),
                 };
                 if !files.contains_key(&file) {
                     let loaded = load_file(&file).map_err(err)?;
@@ -608,13 +641,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
                             &joint_nodes,
                             options,
                             &here,
-                        )
-                        .map_err(|e| match e {
-                            ExportError::Scene { message, .. } if message.starts_with('!') => {
-                                err(message[1..].to_owned())
-                            }
-                            other => other,
-                        })?;
+                        )?;
                     }
                 }
             }
@@ -927,22 +954,25 @@ fn gltf_object(
     options: &ExportOptions,
     here: &str,
 ) -> Result<(), ExportError> {
-    // Errors about the file itself start with '!' (turned into MeshFile by the caller).
-    let file_err = |m: String| scene_err(here, format!("!{m}"));
+    let file_err = |source: MeshFileError| ExportError::MeshFile {
+        path: format!("{here}.mesh"),
+        file: file.to_path_buf(),
+        source: Box::new(source),
+    };
     let Some(source_mesh) = model.meshes.get(index) else {
-        return Err(file_err(format!("has no mesh {index}")));
+        return Err(file_err(MeshFileError::NoMesh(index)));
     };
     let Some(model_node) = model.nodes.iter().position(|n| n.mesh == Some(index)) else {
-        return Err(file_err(format!("no node shows mesh {index}")));
+        return Err(file_err(MeshFileError::MeshNotShown(index)));
     };
     let triangles: Vec<&ModelPrimitive> =
         source_mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles).collect();
     if triangles.is_empty() {
-        return Err(file_err(format!("mesh {index} has no triangles")));
+        return Err(file_err(MeshFileError::NoTriangles(index)));
     }
     if model.nodes[model_node].skin.is_some() && !joint_nodes.is_empty() {
         // As keyrig deforms it: keyrig-skin's mesh, split back into the file's primitives.
-        let skinned = model.skinned_mesh(model_node).map_err(|e| file_err(e.to_string()))?;
+        let skinned = model.skinned_mesh(model_node).map_err(|e| file_err(e.into()))?;
         if skinned.skeleton.len() != joint_nodes.len() {
             return Err(scene_err(
                 format!("{here}.skeleton"),
@@ -1090,21 +1120,21 @@ fn md2_object(
     fps: f64,
     node: usize,
     name: &str,
-) -> Result<(), String> {
-    let frames = model.clip_frames(clip).ok_or_else(|| {
-        let names: Vec<&str> = model.clips.iter().map(|c| c.name.as_str()).collect();
-        format!("no clip `{}` (clips: {})", clip.unwrap_or_default(), names.join(", "))
+) -> Result<(), MeshFileError> {
+    let frames = model.clip_frames(clip).ok_or_else(|| MeshFileError::NoClip {
+        clip: clip.unwrap_or_default().to_string(),
+        clips: model.clips.iter().map(|c| c.name.clone()).collect(),
     })?;
     if frames.is_empty() {
-        return Err("the model has no frames".into());
+        return Err(MeshFileError::NoFrames);
     }
     if !(fps.is_finite() && fps > 0.0) {
-        return Err(format!("{fps} is not a frame rate"));
+        return Err(MeshFileError::BadFps(fps));
     }
-    let base = model.frame_pose(frames.start).ok_or("frame missing")?;
+    let base = model.frame_pose(frames.start).ok_or(MeshFileError::FrameMissing(frames.start))?;
     let mut targets = Vec::with_capacity(frames.len());
     for f in frames.clone() {
-        let pose = model.frame_pose(f).ok_or("frame missing")?;
+        let pose = model.frame_pose(f).ok_or(MeshFileError::FrameMissing(f))?;
         let dp: Vec<Vec3> = pose.positions.iter().zip(&base.positions).map(|(p, q)| *p - *q).collect();
         let dn: Vec<Vec3> = pose.normals.iter().zip(&base.normals).map(|(p, q)| *p - *q).collect();
         targets.push((dp, Some(dn)));
@@ -1113,9 +1143,8 @@ fn md2_object(
         Some(skin) => {
             let mut png = Vec::new();
             image::RgbaImage::from_raw(skin.width, skin.height, skin.rgba.clone())
-                .ok_or("skin image size does not match its pixels")?
-                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-                .map_err(|e| format!("skin image: {e}"))?;
+                .ok_or(MeshFileError::SkinSize)?
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;
             Some(doc.texture((file.to_path_buf(), 0), &png, "image/png"))
         }
         None => None,
@@ -1136,21 +1165,21 @@ fn md2_object(
     let (t0, t1) =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
     if !(t0.is_finite() && t1.is_finite()) {
-        return Err("the scene's frame range is not finite".into());
+        return Err(MeshFileError::FrameRangeNotFinite);
     }
     let mut times = vec![t0];
     let (k0, k1) = ((t0 * fps).floor() as i64 + 1, (t1 * fps).ceil() as i64 - 1);
     if k1 - k0 > 10_000_000 {
-        return Err("the scene's frame range holds more than 10 million model frames".into());
+        return Err(MeshFileError::TooManyFrames);
     }
     times.extend((k0..=k1).map(|k| k as f64 / fps).filter(|&t| t > t0 && t < t1));
     if t1 > t0 {
         times.push(t1);
     }
-    let playback = model.playback().map_err(|e| e.to_string())?;
+    let playback = model.playback()?;
     let mut weights = vec![0.0f32; times.len() * n];
     for (i, &t) in times.iter().enumerate() {
-        let blend = playback.blend_at(clip, fps, t).map_err(|e| e.to_string())?;
+        let blend = playback.blend_at(clip, fps, t)?;
         let (a, b) = (blend.frame_a as usize, blend.frame_b as usize);
         weights[i * n + (a - frames.start)] += 1.0 - blend.t;
         weights[i * n + (b - frames.start)] += blend.t;

@@ -76,6 +76,8 @@ pub enum GltfErrorKind {
     UnsupportedExtension(String),
     #[error("buffer: {0}")]
     Buffer(String),
+    #[error("buffer: {}: {source}", path.display())]
+    BufferFile { path: PathBuf, source: std::io::Error },
     #[error("accessor: {0}")]
     Accessor(String),
     #[error("{0} is not finite")]
@@ -291,10 +293,9 @@ fn load_buffers<'a>(
                     .map_err(|e| ptr(format!("{here}/uri"), GltfErrorKind::Buffer(e.to_string())))?;
                 Cow::Owned(data.0)
             }
-            gltf::buffer::Source::Uri(uri) => Cow::Owned(
-                read_relative(base, uri)
-                    .map_err(|msg| ptr(format!("{here}/uri"), GltfErrorKind::Buffer(msg)))?,
-            ),
+            gltf::buffer::Source::Uri(uri) => {
+                Cow::Owned(read_relative(base, uri).map_err(|kind| ptr(format!("{here}/uri"), kind))?)
+            }
         };
         if bytes.len() < buffer.length() {
             return Err(ptr(
@@ -312,37 +313,40 @@ fn load_buffers<'a>(
 }
 
 /// Decodes `%XX` escapes of a URI.
-fn percent_decode(uri: &str) -> Result<String, String> {
+fn percent_decode(uri: &str) -> Result<String, GltfErrorKind> {
+    let bad_escape = || GltfErrorKind::Buffer(format!("bad escape in URI {uri:?}"));
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
     while i < bytes.len() {
         if bytes[i] == b'%' {
-            let hex = uri.get(i + 1..i + 3).ok_or_else(|| format!("bad escape in URI {uri:?}"))?;
-            out.push(u8::from_str_radix(hex, 16).map_err(|_| format!("bad escape in URI {uri:?}"))?);
+            let hex = uri.get(i + 1..i + 3).ok_or_else(bad_escape)?;
+            out.push(u8::from_str_radix(hex, 16).map_err(|_| bad_escape())?);
             i += 3;
         } else {
             out.push(bytes[i]);
             i += 1;
         }
     }
-    String::from_utf8(out).map_err(|_| format!("URI {uri:?} is not UTF-8"))
+    String::from_utf8(out).map_err(|_| GltfErrorKind::Buffer(format!("URI {uri:?} is not UTF-8")))
 }
 
-fn read_relative(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, String> {
+/// Reads the external buffer file `uri` names, relative to the model's folder `base`.
+fn read_relative(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, GltfErrorKind> {
+    let buffer = |message: String| GltfErrorKind::Buffer(message);
     let Some(base) = base else {
-        return Err(format!("external file {uri:?} cannot be resolved when importing from memory"));
+        return Err(buffer(format!("external file {uri:?} cannot be resolved when importing from memory")));
     };
     if uri.contains(':') {
-        return Err(format!("URI {uri:?}: only relative paths and data: URIs are supported"));
+        return Err(buffer(format!("URI {uri:?}: only relative paths and data: URIs are supported")));
     }
     let rel = PathBuf::from(percent_decode(uri)?);
     if rel.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir)) {
-        return Err(format!("URI {uri:?} must stay inside the model's folder"));
+        return Err(buffer(format!("URI {uri:?} must stay inside the model's folder")));
     }
     let path = base.join(rel);
     crate::file_io::read_regular_file(&path, crate::file_io::MAX_MODEL_BYTES)
-        .map_err(|e| format!("{}: {e}", path.display()))
+        .map_err(|source| GltfErrorKind::BufferFile { path, source })
 }
 
 /// Borrowed buffers, the byte budget that bounds accessors without a buffer view, and the

@@ -9,10 +9,9 @@ pub mod md2;
 pub mod message;
 pub mod model;
 pub mod project;
-mod scene_fast;
 pub mod scene_file;
 mod scene_locate;
-mod scene_ser;
+mod scene_text;
 mod scene_v1;
 
 pub use scene_file::{load, save, LocatedProblem, SceneFileError};
