@@ -1,11 +1,15 @@
-//! Joint influences (indices and weights per vertex), checked once when a mesh or binding is
-//! built and then skinned any number of times.
+//! Joint influences (indices and weights per vertex) and bones-blending bindings, checked once
+//! when a mesh or binding is built and then skinned any number of times.
 //!
 //! ozz-animation leaves the validity of its runtime data to the step that builds it and checks
 //! only buffer sizes per [`SkinningJob`](https://guillaumeblanc.github.io/ozz-animation/) call;
 //! keyrig does the same with a type: an [`Influences`] can only be made by [`Influences::new`],
 //! which checks every vertex (and names the first bad one), so a job that takes one checks
 //! only that the palette holds its largest joint index, O(1), instead of every vertex, O(n).
+
+use std::ops::Deref;
+
+use bytemuck::{Pod, Zeroable};
 
 use crate::deform::validate_influences;
 use crate::error::SkinError;
@@ -100,6 +104,101 @@ impl<const N: usize> Influences<N> {
     }
 }
 
+/// A vertex's bones-blending binding: the joint k it blends across and how far (t) it
+/// follows k's rotation. A vertex bound rigidly to joint k has t = 1.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BonesBlendVertex {
+    pub joint: u32,
+    pub t: f32,
+}
+
+/// Bones-blending bindings, valid by construction: every joint below the joint count they were
+/// checked against, every t in [0, 1], and t < 1 only at joints with a parent. Read them as a
+/// slice (`Deref`); immutable after construction ([`BonesBlendBindings::into_inner`] to edit,
+/// and build them again).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BonesBlendBindings {
+    bindings: Vec<BonesBlendVertex>,
+    /// One more than the largest joint (0 without vertices).
+    joints_needed: usize,
+    /// The joints some vertex blends across (t < 1), ascending: each needs a parent.
+    blended_joints: Vec<u32>,
+}
+
+impl BonesBlendBindings {
+    /// Checks every vertex's binding against a skeleton's parents (`RestSkeleton::parents`).
+    ///
+    /// # Errors
+    /// The first bad vertex: [`SkinError::JointOutOfRange`] (joint not in the skeleton),
+    /// [`SkinError::BadBlendParameter`] (t not in [0, 1], NaN included) or
+    /// [`SkinError::RootBlend`] (t < 1 at a joint without a parent).
+    pub fn new(bindings: Vec<BonesBlendVertex>, parents: &[Option<usize>]) -> Result<Self, SkinError> {
+        let joint_count = parents.len();
+        let mut blended = vec![false; joint_count];
+        let mut joints_needed = 0;
+        for (vertex, b) in bindings.iter().enumerate() {
+            let joint = b.joint as usize;
+            if joint >= joint_count {
+                return Err(SkinError::JointOutOfRange { vertex, influence: 0, joint, joint_count });
+            }
+            if !(0.0..=1.0).contains(&b.t) {
+                return Err(SkinError::BadBlendParameter { vertex, t: b.t });
+            }
+            if b.t < 1.0 {
+                if parents[joint].is_none() {
+                    return Err(SkinError::RootBlend { vertex, joint, t: b.t });
+                }
+                blended[joint] = true;
+            }
+            joints_needed = joints_needed.max(joint + 1);
+        }
+        let blended_joints = (0..joint_count as u32).filter(|&j| blended[j as usize]).collect();
+        Ok(BonesBlendBindings { bindings, joints_needed, blended_joints })
+    }
+
+    /// One more than the largest joint (0 without vertices).
+    #[must_use]
+    pub fn joints_needed(&self) -> usize {
+        self.joints_needed
+    }
+
+    /// The bindings, to edit and check again.
+    #[must_use]
+    pub fn into_inner(self) -> Vec<BonesBlendVertex> {
+        self.bindings
+    }
+
+    /// Checks that a skeleton with these `parents` (the one a job's palette comes from) holds
+    /// every joint and has a parent at every joint blended across: O(joints). On failure the
+    /// error names the first vertex concerned.
+    pub fn check_joints(&self, parents: &[Option<usize>]) -> Result<(), SkinError> {
+        let joint_count = parents.len();
+        let fits = self.joints_needed <= joint_count;
+        if fits && self.blended_joints.iter().all(|&j| parents[j as usize].is_some()) {
+            return Ok(());
+        }
+        for (vertex, b) in self.bindings.iter().enumerate() {
+            let joint = b.joint as usize;
+            if joint >= joint_count {
+                return Err(SkinError::JointOutOfRange { vertex, influence: 0, joint, joint_count });
+            }
+            if b.t < 1.0 && parents[joint].is_none() {
+                return Err(SkinError::RootBlend { vertex, joint, t: b.t });
+            }
+        }
+        unreachable!("a joint past the skeleton or blended at a root belongs to some vertex")
+    }
+}
+
+impl Deref for BonesBlendBindings {
+    type Target = [BonesBlendVertex];
+
+    fn deref(&self) -> &[BonesBlendVertex] {
+        &self.bindings
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -137,5 +236,45 @@ mod tests {
         let empty = Influences::<4>::new(Vec::new(), Vec::new(), 0).unwrap();
         assert_eq!((empty.joints_needed(), empty.is_empty()), (0, true));
         assert_eq!(empty.check_joint_count(0), Ok(()));
+    }
+
+    #[test]
+    fn only_valid_bones_blending_bindings_are_built_and_errors_name_the_vertex() {
+        let parents = [None, Some(0), Some(1)];
+        let b = |joint, t| BonesBlendVertex { joint, t };
+        let good = BonesBlendBindings::new(vec![b(0, 1.0), b(2, 0.25), b(1, 0.0)], &parents).unwrap();
+        assert_eq!((good.len(), good.joints_needed(), good[1]), (3, 3, b(2, 0.25)));
+        assert_eq!(good.blended_joints, [1, 2]);
+        assert_eq!(good.check_joints(&parents), Ok(()));
+        assert_eq!(
+            good.check_joints(&parents[..2]),
+            Err(SkinError::JointOutOfRange { vertex: 1, influence: 0, joint: 2, joint_count: 2 })
+        );
+        assert_eq!(
+            good.check_joints(&[None, None, Some(1)]),
+            Err(SkinError::RootBlend { vertex: 2, joint: 1, t: 0.0 })
+        );
+        assert_eq!(
+            BonesBlendBindings::new(vec![b(0, 1.0), b(3, 1.0)], &parents),
+            Err(SkinError::JointOutOfRange { vertex: 1, influence: 0, joint: 3, joint_count: 3 })
+        );
+        for t in [1.5, -0.25] {
+            assert_eq!(
+                BonesBlendBindings::new(vec![b(1, 0.5), b(1, t)], &parents),
+                Err(SkinError::BadBlendParameter { vertex: 1, t })
+            );
+        }
+        assert!(matches!(
+            BonesBlendBindings::new(vec![b(1, f32::NAN)], &parents),
+            Err(SkinError::BadBlendParameter { vertex: 0, .. })
+        ));
+        assert_eq!(
+            BonesBlendBindings::new(vec![b(1, 0.5), b(0, 0.5)], &parents),
+            Err(SkinError::RootBlend { vertex: 1, joint: 0, t: 0.5 })
+        );
+        assert_eq!(good.clone().into_inner(), vec![b(0, 1.0), b(2, 0.25), b(1, 0.0)]);
+        let empty = BonesBlendBindings::new(Vec::new(), &[]).unwrap();
+        assert_eq!((empty.joints_needed(), empty.is_empty()), (0, true));
+        assert_eq!(empty.check_joints(&[]), Ok(()));
     }
 }

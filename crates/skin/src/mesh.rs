@@ -8,9 +8,8 @@ use glam::{Quat, Vec2, Vec3};
 use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
 
 use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
-use crate::deform::BonesBlendVertex;
 use crate::error::SkinError;
-use crate::influences::Influences;
+use crate::influences::{BonesBlendBindings, Influences};
 use crate::skeleton::RestSkeleton;
 
 /// Length of the paper's arms along X, in centimetres.
@@ -51,8 +50,8 @@ pub struct SkinnedMesh {
 pub struct MeshBindings {
     /// The rigid deformer's joint per vertex: the single weight, or the dominant influence.
     pub rigid: Vec<u16>,
-    /// Bones-blending (joint, t) per vertex.
-    pub bones_blending: Vec<BonesBlendVertex>,
+    /// Bones-blending (joint, t) per vertex, checked against the mesh's skeleton.
+    pub bones_blending: BonesBlendBindings,
 }
 
 impl SkinnedMesh {
@@ -199,16 +198,18 @@ impl SkinnedMesh {
         match &self.bones {
             Some(bones) => Ok(MeshBindings {
                 rigid: bones.clone(),
-                bones_blending: bind_single_weights(&self.skeleton, &self.positions, bones, zone)?,
+                bones_blending: BonesBlendBindings::new(
+                    bind_single_weights(&self.skeleton, &self.positions, bones, zone)?,
+                    self.skeleton.parents(),
+                )?,
             }),
             None => Ok(MeshBindings {
                 rigid: (self.influences.joints().iter().zip(self.influences.weights()))
                     .map(|(js, ws)| js[dominant(ws)])
                     .collect(),
-                bones_blending: bind_from_weights(
-                    &self.skeleton,
-                    self.influences.joints(),
-                    self.influences.weights(),
+                bones_blending: BonesBlendBindings::new(
+                    bind_from_weights(&self.skeleton, self.influences.joints(), self.influences.weights())?,
+                    self.skeleton.parents(),
                 )?,
             }),
         }

@@ -4,8 +4,9 @@
 use glam::{Quat, Vec3};
 use keyrig_core::{DeformerKind, ProceduralMesh};
 use keyrig_skin::{
-    deform_mesh_into, mesh_for, BlendZone, BonesBlendJob, BonesBlendVertex, Deformed, DualQuatJob, Execution,
-    Influences, JointPalette, LinearBlendJob, Pose, RestJoint, RestSkeleton, RigidJob, SkinError,
+    deform_mesh_into, mesh_for, BlendZone, BonesBlendBindings, BonesBlendJob, BonesBlendVertex, Deformed,
+    DualQuatJob, Execution, Influences, JointPalette, LinearBlendJob, Pose, RestJoint, RestSkeleton,
+    RigidJob, SkinError,
 };
 use proptest::prelude::*;
 
@@ -161,11 +162,12 @@ fn agreement(joint_count: usize, n: usize) {
             .run_with(e)
         });
         assert_all_equal(&linear, &format!("linear, round {round}"));
+        let bindings = BonesBlendBindings::new(d.bindings.clone(), skeleton.parents()).unwrap();
         let bones = run_all(n, |e, op, on| {
             BonesBlendJob {
                 palette: &palette,
                 parents: skeleton.parents(),
-                bindings: &d.bindings,
+                bindings: &bindings,
                 positions: &d.positions,
                 normals: &d.normals,
                 out_positions: op,
@@ -269,6 +271,7 @@ fn bones_blend(
     bindings: &[BonesBlendVertex],
     p: &[Vec3],
 ) -> Vec<Vec3> {
+    let bindings = &BonesBlendBindings::new(bindings.to_vec(), skeleton.parents()).unwrap();
     let normals = vec![Vec3::Y; p.len()];
     let mut out = vec![Vec3::NAN; p.len()];
     let mut out_n = vec![Vec3::NAN; p.len()];
@@ -495,7 +498,16 @@ fn bad_inputs_are_typed_errors_and_leave_outputs_alone() {
             SkinError::RootBlend { vertex: 1, joint: 0, t: 0.5 },
         ),
     ];
-    for (bindings, expected) in bb_cases {
+    for (bindings, expected) in &bb_cases {
+        // Bad bindings are refused when they are built, naming the vertex.
+        let built = BonesBlendBindings::new(bindings.to_vec(), skeleton.parents());
+        assert_eq!(built.unwrap_err().to_string(), expected.to_string());
+    }
+    // Bindings built for another skeleton (5 joints, joint 0 with a parent) reach the job, which
+    // refuses them against its own before writing anything.
+    let other_parents = [Some(1), Some(0), Some(1), Some(2), Some(3)];
+    for (bindings, expected) in [&bb_cases[0], &bb_cases[3]] {
+        let bindings = BonesBlendBindings::new(bindings.to_vec(), &other_parents).unwrap();
         let r = BonesBlendJob {
             palette: &palette,
             parents: skeleton.parents(),

@@ -22,8 +22,9 @@ mod linear;
 mod rigid;
 #[cfg(target_arch = "x86_64")]
 mod simd;
+mod trig;
 
-pub use bones_blending::{BonesBlendJob, BonesBlendVertex};
+pub use bones_blending::BonesBlendJob;
 pub use dual_quaternion::DualQuatJob;
 pub use linear::LinearBlendJob;
 pub use rigid::RigidJob;
@@ -36,8 +37,8 @@ pub enum Execution {
     /// The fast path on the calling thread.
     SingleThreaded,
     /// The fast path on the calling thread and rayon's thread pool together, in chunks of
-    /// [`chunk_len`] vertices; afterwards the pool threads linger awake for the next job
-    /// ([`set_pool_linger`]).
+    /// [`chunk_len`] vertices; afterwards the pool threads linger awake for 1 ms in case the
+    /// next job follows (see `run_chunks`).
     #[default]
     Parallel,
     /// The fast path on the calling thread without the CPU-specific (AVX2 + FMA) kernels: what
@@ -50,27 +51,104 @@ impl Execution {
         self == Execution::Parallel
     }
 
-    /// Whether CPU-specific kernels may be used.
-    #[cfg(target_arch = "x86_64")]
-    pub(crate) fn simd(self) -> bool {
-        self != Execution::Portable && simd::available()
+    /// The build of the fast kernels this execution runs on this CPU.
+    pub(crate) fn build(self) -> Build {
+        if self == Execution::Portable {
+            Build::Portable
+        } else {
+            Build::best()
+        }
     }
 }
 
-/// Timing and test knob, not part of the supported API: with `force`, dual quaternion jobs
-/// run the AVX2 build of their kernel even on CPUs with AVX-512VL (what AVX2-only CPUs run);
-/// `place_palette` turns the placed palette copy of that build on (the default) or off (the
-/// kernel reads the packed palette where it was allocated). Used by
-/// `examples/deformer_timing.rs` through `KEYRIG_SKIN_FORCE_AVX2`; see docs/skinning.md.
-#[doc(hidden)]
-pub fn force_avx2_dual_quaternion(force: bool, place_palette: bool) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        simd::FORCE_AVX2.store(force, Ordering::Relaxed);
-        simd::PLACE_PALETTE.store(place_palette, Ordering::Relaxed);
+/// The builds of the fast kernels. Which one runs is decided by the CPU alone (the best one
+/// it supports) or by [`Execution::Portable`]; there is no switch to force another.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Build {
+    /// glam's SSE2 code (every x86-64 CPU) or scalar code elsewhere.
+    Portable,
+    /// 256-bit kernels with fused multiply-adds (`deform/simd.rs`).
+    Avx2Fma,
+    /// The same with AVX-512VL enabled: the dual quaternion kernel is compiled once more, to
+    /// use 32 vector registers instead of 16 (it spills none); the other kernels run their AVX2
+    /// build.
+    Avx512Vl,
+}
+
+impl Build {
+    /// Every build, portable first.
+    #[cfg(test)]
+    pub(crate) const ALL: [Build; 3] = [Build::Portable, Build::Avx2Fma, Build::Avx512Vl];
+
+    /// The name tests print and assert.
+    #[cfg(test)]
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Build::Portable => "portable",
+            Build::Avx2Fma => "avx2+fma",
+            Build::Avx512Vl => "avx512vl",
+        }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (force, place_palette);
+
+    /// Whether this CPU can run the build.
+    pub(crate) fn runs_here(self) -> bool {
+        match self {
+            Build::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Build::Avx2Fma => simd::available(),
+            #[cfg(target_arch = "x86_64")]
+            Build::Avx512Vl => simd::avx512_available(),
+            #[cfg(not(target_arch = "x86_64"))]
+            Build::Avx2Fma | Build::Avx512Vl => false,
+        }
+    }
+
+    /// The best build this CPU runs (detected once, then cached by std).
+    pub(crate) fn best() -> Build {
+        if Build::Avx512Vl.runs_here() {
+            Build::Avx512Vl
+        } else if Build::Avx2Fma.runs_here() {
+            Build::Avx2Fma
+        } else {
+            Build::Portable
+        }
+    }
+}
+
+/// What the four jobs have in common, so that one function ([`run`]) runs them all.
+pub(crate) trait Job {
+    /// The job's `validate()`: buffer sizes and the palette, and for inputs that are not
+    /// validated by their type (rigid's joint indices), those, in parallel chunks when
+    /// `parallel`.
+    fn check(&self, parallel: bool) -> Result<(), SkinError>;
+    /// The formula as written, one vertex at a time.
+    fn reference(&mut self);
+    /// The fast path with the given build of its kernels, on the calling thread or in parallel
+    /// chunks. Only after [`Job::check`] passed, and only with a build that
+    /// [`Build::runs_here`].
+    fn fast(&mut self, parallel: bool, build: Build);
+}
+
+/// Checks the job, then deforms the chosen way: every job's `run_with`.
+pub(crate) fn run<J: Job>(job: &mut J, execution: Execution) -> Result<(), SkinError> {
+    job.check(execution.parallel())?;
+    match execution {
+        Execution::Reference => job.reference(),
+        Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
+            job.fast(execution.parallel(), execution.build());
+        }
+    }
+    Ok(())
+}
+
+/// [`run`] with a chosen build of the fast kernels on the calling thread, for the tests that
+/// check every build this CPU runs. `None` when the CPU cannot run it.
+#[cfg(test)]
+pub(crate) fn run_build<J: Job>(job: &mut J, build: Build) -> Option<Result<(), SkinError>> {
+    if !build.runs_here() {
+        return None;
+    }
+    Some(job.check(false).map(|()| job.fast(false, build)))
 }
 
 /// Fewest vertices per parallel task: enough to amortize claiming a chunk. Jobs of up to
@@ -220,34 +298,22 @@ pub fn normalize_weights<const N: usize>(weights: &mut [[f32; N]]) -> Result<(),
     Ok(())
 }
 
-/// A branch-free "all good?" test of a job's per-vertex inputs over a range of vertices.
-pub(crate) type Check<'a> = &'a (dyn Fn(Range<usize>) -> bool + Sync);
-
 /// Runs `kernel(first_vertex, out_positions_chunk, out_normals_chunk)` over the outputs, on
-/// the calling thread or in chunks of [`chunk_len`] vertices shared out by [`run_chunks`].
-///
-/// With a `check`, every chunk's inputs are checked first and the kernel runs only if all pass;
-/// the result says whether it ran (on `false` no output was touched). In parallel the checks
-/// and the kernel share one dispatch: check tickets come first, and a thread that draws a
-/// kernel ticket waits until every check is done, so a job wakes the pool once, not twice.
+/// the calling thread or in chunks of [`chunk_len`] vertices shared out by [`run_chunks`]:
+/// the one parallel helper of the four jobs.
 pub(crate) fn for_each_chunk<F>(
     parallel: bool,
-    check: Option<Check>,
     out_positions: &mut [Vec3],
     out_normals: &mut [Vec3],
     kernel: F,
-) -> bool
-where
+) where
     F: Fn(usize, &mut [Vec3], &mut [Vec3]) + Sync + Send,
 {
     let n = out_positions.len();
     let chunk_len = chunk_len(n);
     if !(parallel && n > chunk_len) {
-        if check.is_some_and(|check| !check(0..n)) {
-            return false;
-        }
         kernel(0, out_positions, out_normals);
-        return true;
+        return;
     }
     // Each chunk's output slices, taken by whichever thread claims the chunk.
     type Slot<'a> = Mutex<Option<(&'a mut [Vec3], &'a mut [Vec3])>>;
@@ -256,29 +322,12 @@ where
         .zip(out_normals.chunks_mut(chunk_len))
         .map(|c| Mutex::new(Some(c)))
         .collect();
-    let chunks = slots.len();
-    let checks = if check.is_some() { chunks } else { 0 };
-    let ok = AtomicBool::new(true);
-    let checked = AtomicUsize::new(0);
-    run_chunks(checks + chunks, |ticket| {
-        if ticket < checks {
-            // A check that panics counts as failed, so no kernel runs on unchecked input.
-            let mut done = CheckDone { ok: &ok, checked: &checked, passed: false };
-            done.passed =
-                check.is_none_or(|check| check(ticket * chunk_len..((ticket + 1) * chunk_len).min(n)));
-            return;
-        }
-        // Every check ticket is already claimed and running; wait for the last ones.
-        wait_until(|| checked.load(Ordering::Acquire) == checks);
-        if ok.load(Ordering::Relaxed) {
-            let c = ticket - checks;
-            let taken = slots[c].lock().map(|mut slot| slot.take());
-            if let Ok(Some((p, q))) = taken {
-                kernel(c * chunk_len, p, q);
-            }
+    run_chunks(slots.len(), |c| {
+        let taken = slots[c].lock().map(|mut slot| slot.take());
+        if let Ok(Some((p, q))) = taken {
+            kernel(c * chunk_len, p, q);
         }
     });
-    ok.into_inner()
 }
 
 /// Adds one to a counter when dropped, also when the work it guards panics: the threads that
@@ -289,22 +338,6 @@ struct CountOnDrop<'a>(&'a AtomicUsize);
 impl Drop for CountOnDrop<'_> {
     fn drop(&mut self) {
         self.0.fetch_add(1, Ordering::Release);
-    }
-}
-
-/// Records one finished check when dropped (also when the check panicked, as a failure).
-struct CheckDone<'a> {
-    ok: &'a AtomicBool,
-    checked: &'a AtomicUsize,
-    passed: bool,
-}
-
-impl Drop for CheckDone<'_> {
-    fn drop(&mut self) {
-        if !self.passed {
-            self.ok.store(false, Ordering::Relaxed);
-        }
-        self.checked.fetch_add(1, Ordering::Release);
     }
 }
 
@@ -350,7 +383,7 @@ where
 /// `par_chunks` puts to sleep until the pool is done — would have to be woken again at the end.
 /// Against a job of 0.1–0.5 ms (100 000 vertices) those two wake-ups ate most of the second
 /// core. Here the calling thread starts on the first chunk at once, the helpers join in when they
-/// wake — at once when they are still lingering after the previous job ([`set_pool_linger`]) —
+/// wake — at once when they are still lingering after the previous job ([`POOL_LINGER`]) —
 /// and at the end the calling thread spins for the helpers' last chunks (one chunk's time at
 /// most) instead of sleeping. See docs/benchmarks.md, skinning section.
 pub(crate) fn run_chunks<W>(count: usize, work: W)
@@ -378,53 +411,32 @@ where
     keep_pool_awake();
 }
 
-/// How long rayon's pool threads stay awake after a parallel job unless [`set_pool_linger`]
-/// says otherwise: 1 ms. The order of GNU OpenMP's default spin before a worker sleeps
-/// (`GOMP_SPINCOUNT`, 300 000 spins); Intel's and LLVM's OpenMP runtimes spin far longer
-/// (`KMP_BLOCKTIME`, 200 ms). Long enough to cover a short stretch of single-threaded work
-/// between two jobs (a 100 000-vertex job is 0.1–0.7 ms), short enough that an idle program
-/// keeps no core busy: the threads spin for 1 ms after the last job, then sleep.
-pub const DEFAULT_POOL_LINGER: Duration = Duration::from_millis(1);
+/// How long rayon's pool threads stay awake, spinning, after a parallel skinning job
+/// (`Execution::Parallel`) in case the next one follows: 1 ms. A job that finds them awake gets
+/// its other cores at once instead of after the 20–50 µs a sleeping thread takes to wake. The
+/// order of GNU OpenMP's default spin before a worker sleeps (`GOMP_SPINCOUNT`, 300 000 spins);
+/// long enough to cover a short stretch of single-threaded work between two jobs (a
+/// 100 000-vertex job is 0.1–0.7 ms), short enough that an idle program keeps no core busy.
+/// All pool threads but one linger (the calling thread keeps a core for itself); the clock
+/// restarts with every parallel job. Fixed: timing experiments with other values belong in a
+/// branch of `examples/deformer_timing.rs`, not in the library's API.
+const POOL_LINGER: Duration = Duration::from_millis(1);
 
-/// Longest accepted linger (20 ms, a frame at 50–60 frames per second); longer requests are
-/// clamped to it, so a program that stops calling jobs has no busy core after at most 20 ms.
-pub const MAX_POOL_LINGER: Duration = Duration::from_millis(20);
-
-/// The linger in nanoseconds (0: none).
-static LINGER_NS: AtomicU64 = AtomicU64::new(DEFAULT_POOL_LINGER.as_nanos() as u64);
 /// Parallel jobs finished so far: a lingering thread restarts its clock when this moves.
 static JOBS_DONE: AtomicU64 = AtomicU64::new(0);
 /// Lingering tasks not yet finished (queued or running). A new round of them is spawned only
 /// when this is 0, so no thread ever runs two.
 static LINGERING: AtomicUsize = AtomicUsize::new(0);
 
-/// Sets how long rayon's pool threads stay awake, spinning, after a parallel skinning job
-/// (`Execution::Parallel`) in case the next one follows: a job that finds them awake gets its
-/// other cores at once instead of after the 20–50 µs a sleeping thread takes to wake. All pool
-/// threads but one linger (the calling thread keeps a core for itself); the clock restarts with
-/// every parallel job, and once it runs out the threads go back to rayon and sleep.
-/// `Duration::ZERO` turns lingering off; values above [`MAX_POOL_LINGER`] are clamped to it.
-/// Process-wide; the default is [`DEFAULT_POOL_LINGER`].
-pub fn set_pool_linger(linger: Duration) {
-    let ns = linger.min(MAX_POOL_LINGER).as_nanos() as u64;
-    LINGER_NS.store(ns, Ordering::Relaxed);
-}
-
-/// The current linger (see [`set_pool_linger`]).
-#[must_use]
-pub fn pool_linger() -> Duration {
-    Duration::from_nanos(LINGER_NS.load(Ordering::Relaxed))
-}
-
 /// After a parallel job: counts it, and unless pool threads are lingering already, sends
-/// every pool thread but the last a lingering task (see [`set_pool_linger`]). Nothing on a
+/// every pool thread but the last a lingering task (see [`POOL_LINGER`]). Nothing on a
 /// single-threaded pool, where a lingering thread would take the caller's only core.
 fn keep_pool_awake() {
     // SeqCst here and in `linger`: either this job's count is seen by the last lingering task
     // before it leaves (it then starts a new round), or its leaving is seen here.
     JOBS_DONE.fetch_add(1, Ordering::SeqCst);
     let lingerers = rayon::current_num_threads() - 1;
-    if LINGER_NS.load(Ordering::Relaxed) > 0 && lingerers > 0 {
+    if lingerers > 0 {
         start_lingering(lingerers);
     }
 }
@@ -454,7 +466,7 @@ fn linger(lingerers: usize) {
         let now = Instant::now();
         if jobs != seen {
             (seen, since) = (jobs, now);
-        } else if now.duration_since(since) >= pool_linger() {
+        } else if now.duration_since(since) >= POOL_LINGER {
             // The last one out starts a new round if a job finished meanwhile: that job may
             // have found this round still running and started none.
             if LINGERING.fetch_sub(1, Ordering::SeqCst) == 1 && JOBS_DONE.load(Ordering::SeqCst) != seen {
@@ -471,6 +483,7 @@ fn linger(lingerers: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::influences::Influences;
 
     #[test]
     fn influence_errors_name_vertex_and_influence() {
@@ -531,31 +544,15 @@ mod tests {
             for parallel in [false, true] {
                 let mut p = vec![Vec3::NAN; n];
                 let mut q = vec![Vec3::NAN; n];
-                let ran = for_each_chunk(parallel, None, &mut p, &mut q, |start, p, q| {
+                for_each_chunk(parallel, &mut p, &mut q, |start, p, q| {
                     for (i, (p, q)) in p.iter_mut().zip(q).enumerate() {
                         *p = Vec3::splat((start + i) as f32);
                         *q = -*p;
                     }
                 });
-                assert!(ran);
                 assert!(p.iter().enumerate().all(|(i, p)| *p == Vec3::splat(i as f32)), "{n} {parallel}");
-                // A failed check anywhere: the kernel runs nowhere.
-                let bad = n / 2;
-                let refuse = |r: Range<usize>| !r.contains(&bad);
-                let mut untouched = vec![Vec3::NAN; n];
-                let ran = for_each_chunk(parallel, Some(&refuse), &mut p, &mut untouched, |_, p, q| {
-                    p.fill(Vec3::ZERO);
-                    q.fill(Vec3::ZERO);
-                });
-                assert_eq!(ran, n == 0, "{n} {parallel}");
-                assert!(n == 0 || untouched.iter().all(|q| q.is_nan()), "{n} {parallel}");
-                let accept = |r: Range<usize>| r.end <= n;
-                assert!(for_each_chunk(parallel, Some(&accept), &mut p, &mut untouched, |_, p, q| {
-                    p.fill(Vec3::ZERO);
-                    q.fill(Vec3::ONE);
-                }));
-                assert!(untouched.iter().all(|q| *q == Vec3::ONE), "{n} {parallel}");
                 assert!(q.iter().enumerate().all(|(i, q)| *q == Vec3::splat(-(i as f32))), "{n} {parallel}");
+                let bad = n / 2;
                 assert_eq!(all_chunks(parallel, n, |r| !r.contains(&bad)), n == 0, "{n} {parallel}");
                 assert!(
                     all_chunks(parallel, n, |r| r.end <= n && (r.start < r.end || n == 0)),
@@ -578,9 +575,9 @@ mod tests {
         for n in [100_000, 16 * MAX_CHUNK + 7] {
             let seen = Mutex::new(Vec::new());
             let (mut p, mut q) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-            assert!(for_each_chunk(true, None, &mut p, &mut q, |start, p, _| {
+            for_each_chunk(true, &mut p, &mut q, |start, p, _| {
                 seen.lock().unwrap().push((start, p.len()));
-            }));
+            });
             let mut seen = seen.into_inner().unwrap();
             seen.sort_unstable();
             let len = chunk_len(n);
@@ -589,13 +586,14 @@ mod tests {
         }
     }
 
-    /// The parallel path checks inputs in the same dispatch as the kernel: a bad vertex in the
-    /// last of several chunks still gives the typed error and leaves every output untouched.
+    /// A bad vertex in the last of several parallel chunks gives the typed error naming it and
+    /// leaves every output untouched: when the input is built (influences, bones-blending
+    /// bindings) or when the job checks it against its palette (all four jobs).
     #[test]
     fn parallel_jobs_refuse_bad_input_in_any_chunk_before_writing() {
         use glam::Quat;
 
-        use crate::influences::Influences;
+        use crate::influences::{BonesBlendBindings, BonesBlendVertex};
         use crate::pose::{JointPalette, Pose};
         use crate::skeleton::{RestJoint, RestSkeleton};
 
@@ -613,9 +611,15 @@ mod tests {
         let mut joints = vec![[0u16, 1, 0, 0]; n];
         let mut weights = vec![[0.5f32, 0.5, 0.0, 0.0]; n];
         let mut bindings = vec![BonesBlendVertex { joint: 1, t: 0.5 }; n];
+        let mut bad_t = bindings.clone();
+        bad_t[bad].t = f32::NAN;
+        assert!(matches!(
+            BonesBlendBindings::new(bad_t, skeleton.parents()),
+            Err(SkinError::BadBlendParameter { vertex, .. }) if vertex == bad
+        ));
         bones[bad] = 2;
         joints[bad][1] = 2;
-        bindings[bad].t = f32::NAN;
+        bindings[bad].joint = 2;
         let (mut op, mut on) = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
         let out_of_range = SkinError::JointOutOfRange { vertex: bad, influence: 0, joint: 2, joint_count: 2 };
         let rigid = RigidJob {
@@ -627,7 +631,7 @@ mod tests {
             out_normals: &mut on,
         }
         .run();
-        assert_eq!(rigid, Err(out_of_range));
+        assert_eq!(rigid, Err(out_of_range.clone()));
         // Influences checked against a skeleton of 3 joints do not fit a palette of 2: the job
         // refuses them, naming the first vertex that reaches past the palette.
         assert_eq!(
@@ -661,6 +665,8 @@ mod tests {
             dual,
             Err(SkinError::JointOutOfRange { vertex: bad, influence: 1, joint: 2, joint_count: 2 })
         );
+        // Bindings checked against a skeleton of 3 joints do not fit a palette of 2.
+        let bindings = BonesBlendBindings::new(bindings, &[None, Some(0), Some(1)]).unwrap();
         let blend = BonesBlendJob {
             palette: &palette,
             parents: skeleton.parents(),
@@ -671,7 +677,7 @@ mod tests {
             out_normals: &mut on,
         }
         .run();
-        assert!(matches!(blend, Err(SkinError::BadBlendParameter { vertex, .. }) if vertex == bad));
+        assert_eq!(blend, Err(out_of_range.clone()));
         assert!(op.iter().chain(&on).all(|v| v.is_nan()));
 
         // A weight of −0.0 is not negative: the influences are built and the job runs.
@@ -695,21 +701,15 @@ mod tests {
     /// output; a panicking one still reaches the caller; and the lingering ends on its own.
     #[test]
     fn a_lingering_pool_thread_takes_the_next_job_then_sleeps() {
-        set_pool_linger(MAX_POOL_LINGER * 3);
-        assert_eq!(pool_linger(), MAX_POOL_LINGER);
-        set_pool_linger(DEFAULT_POOL_LINGER);
-        assert_eq!(pool_linger(), DEFAULT_POOL_LINGER);
-
         let n = 7 * CHUNK + 3;
         let (mut p, mut q) = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
         for round in 0..20 {
-            let ran = for_each_chunk(true, None, &mut p, &mut q, |start, p, q| {
+            for_each_chunk(true, &mut p, &mut q, |start, p, q| {
                 for (i, (p, q)) in p.iter_mut().zip(q).enumerate() {
                     *p = Vec3::new((start + i) as f32, round as f32, 0.0);
                     *q = -*p;
                 }
             });
-            assert!(ran);
             assert!(
                 p.iter()
                     .zip(&q)
@@ -731,6 +731,326 @@ mod tests {
             assert!(start.elapsed() < Duration::from_secs(60), "a pool thread kept lingering");
             std::thread::sleep(Duration::from_millis(1));
         }
+    }
+
+    /// A small deterministic generator (the tests need no statistics, only varied data).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next_f32(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            ((self.0 >> 40) as f32) / ((1u64 << 24) as f32)
+        }
+        fn vec3(&mut self, r: f32) -> Vec3 {
+            Vec3::new(self.next_f32() - 0.5, self.next_f32() - 0.5, self.next_f32() - 0.5) * 2.0 * r
+        }
+        fn index(&mut self, n: usize) -> usize {
+            ((self.next_f32() * n as f32) as usize).min(n - 1)
+        }
+    }
+
+    fn assert_close(build: &str, what: &str, got: &[Vec3], want: &[Vec3]) {
+        for (v, (g, w)) in got.iter().zip(want).enumerate() {
+            let diff = (*g - *w).abs().max_element();
+            assert!(diff <= 1e-4 * (1.0 + w.abs().max_element()), "{build} {what} {v}: {g} vs {w}");
+        }
+    }
+
+    /// Influences with ties for the largest weight (the dual quaternion pivot), zero weights
+    /// and all-equal weights.
+    fn random_influences<const N: usize>(rng: &mut Lcg, n: usize, joint_count: usize) -> Influences<N> {
+        let joints = (0..n).map(|_| [0; N].map(|_| rng.index(joint_count) as u16)).collect();
+        let weights = (0..n)
+            .map(|v| {
+                let mut ws = [0.0f32; N].map(|_| rng.next_f32() + 0.01);
+                match v % 5 {
+                    0 => ws = [1.0; N],
+                    1 => ws[N - 1] = 0.0,
+                    2 => ws[1] = ws[0],
+                    _ => {}
+                }
+                let sum: f32 = ws.iter().sum();
+                ws.map(|w| w / sum)
+            })
+            .collect();
+        Influences::normalized(joints, weights, joint_count).unwrap()
+    }
+
+    /// Runs `job(build)` for every build of the fast kernels, compares each output with the
+    /// reference, and returns the names of the builds it ran (those this CPU runs).
+    fn builds_match<F>(
+        what: &str,
+        n: usize,
+        reference: &(Vec<Vec3>, Vec<Vec3>),
+        mut job: F,
+    ) -> Vec<&'static str>
+    where
+        F: FnMut(Build, &mut [Vec3], &mut [Vec3]) -> Option<Result<(), SkinError>>,
+    {
+        let mut ran = Vec::new();
+        for build in Build::ALL {
+            let (mut p, mut q) = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+            match job(build, &mut p, &mut q) {
+                None => assert!(!build.runs_here(), "{what}: {} runs here but was not run", build.name()),
+                Some(result) => {
+                    assert_eq!(result, Ok(()), "{what} {}", build.name());
+                    let name = format!("{what} {}", build.name());
+                    assert_close(&name, "position", &p, &reference.0);
+                    assert_close(&name, "normal", &q, &reference.1);
+                    ran.push(build.name());
+                }
+            }
+        }
+        ran
+    }
+
+    /// Every job's fast kernels in every build this CPU runs (portable everywhere; AVX2+FMA and
+    /// AVX-512VL where the CPU has them) against the job's reference path, with 4 and 8
+    /// influences, on lengths with every remainder after the SIMD kernels' groups of 4 and 8.
+    /// The test prints the builds it checked and fails if it checked none, or missed one the
+    /// CPU runs.
+    fn every_build_matches_the_reference<const N: usize>() -> Vec<&'static str> {
+        use glam::Quat;
+
+        use crate::influences::{BonesBlendBindings, BonesBlendVertex};
+        use crate::pose::{JointPalette, Pose};
+        use crate::skeleton::{RestJoint, RestSkeleton};
+
+        let mut rng = Lcg(0x5EED + N as u64);
+        let joint_count = 37;
+        let random_rotation = |rng: &mut Lcg| {
+            let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
+            Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0)
+        };
+        let rest: Vec<RestJoint> = (0..joint_count)
+            .map(|j| {
+                let parent = (j > 0).then(|| rng.index(j));
+                RestJoint::new(format!("j{j}"), parent, rng.vec3(2.0), random_rotation(&mut rng))
+            })
+            .collect();
+        let skeleton = RestSkeleton::new(&rest).unwrap();
+        let pose = Pose::from_rotations(
+            (0..joint_count).map(|_| random_rotation(&mut rng)).collect(),
+            rng.vec3(1.0),
+        );
+        let palette = JointPalette::new(&skeleton, &pose).unwrap();
+        assert!(palette.normal_skinning.is_none(), "a rigid palette, so the SIMD linear kernel runs");
+        let dqs = palette.dual_quaternions().unwrap();
+        let mut checked = Vec::new();
+        for n in [8 * 125 + 3, 8 + 4 + 1, 7, 2, 0] {
+            let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
+            let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            let influences = random_influences::<N>(&mut rng, n, joint_count);
+            let bones: Vec<u16> = (0..n).map(|_| rng.index(joint_count) as u16).collect();
+            let bindings = (0..n)
+                .map(|v| {
+                    let joint = rng.index(joint_count);
+                    let t =
+                        if v % 3 == 0 || skeleton.parents()[joint].is_none() { 1.0 } else { rng.next_f32() };
+                    BonesBlendVertex { joint: joint as u32, t }
+                })
+                .collect();
+            let bindings = BonesBlendBindings::new(bindings, skeleton.parents()).unwrap();
+            let (ps, ns) = (&positions[..], &normals[..]);
+            let (palette, skeleton, dqs) = (&palette, &skeleton, &dqs[..]);
+            let (influences, bindings, bones) = (&influences, &bindings, &bones[..]);
+            let reference = |job: &mut dyn FnMut(&mut [Vec3], &mut [Vec3])| {
+                let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+                job(&mut out.0, &mut out.1);
+                out
+            };
+            macro_rules! job {
+                ($make:expr) => {{
+                    let want =
+                        reference(&mut |op, on| run(&mut $make(op, on), Execution::Reference).unwrap());
+                    (want, move |build, op: &mut [Vec3], on: &mut [Vec3]| {
+                        run_build(&mut $make(op, on), build)
+                    })
+                }};
+            }
+            let (want, job) = job!(|out_positions, out_normals| RigidJob {
+                palette,
+                joints: bones,
+                positions: ps,
+                normals: ns,
+                out_positions,
+                out_normals,
+            });
+            checked.extend(builds_match("rigid", n, &want, job).into_iter().map(|b| ("rigid", b)));
+            let (want, job) = job!(|out_positions, out_normals| LinearBlendJob {
+                palette,
+                influences,
+                positions: ps,
+                normals: ns,
+                out_positions,
+                out_normals,
+            });
+            checked.extend(builds_match("linear", n, &want, job).into_iter().map(|b| ("linear", b)));
+            let (want, job) = job!(|out_positions, out_normals| DualQuatJob {
+                dual_quaternions: dqs,
+                influences,
+                positions: ps,
+                normals: ns,
+                out_positions,
+                out_normals,
+            });
+            checked.extend(builds_match("dual quaternion", n, &want, job).into_iter().map(|b| ("dual", b)));
+            let (want, job) = job!(|out_positions, out_normals| BonesBlendJob {
+                palette,
+                parents: skeleton.parents(),
+                bindings,
+                positions: ps,
+                normals: ns,
+                out_positions,
+                out_normals,
+            });
+            checked.extend(builds_match("bones blending", n, &want, job).into_iter().map(|b| ("bones", b)));
+        }
+        let mut builds: Vec<&'static str> = checked.iter().map(|&(_, b)| b).collect();
+        builds.dedup();
+        builds.sort_unstable();
+        builds.dedup();
+        // Every job ran in every build, on every length.
+        assert_eq!(checked.len(), 4 * 5 * builds.len(), "{checked:?}");
+        eprintln!("N = {N}: checked the builds {builds:?} of the rigid, linear, dual quaternion and bones-blending kernels");
+        builds
+    }
+
+    /// The builds the tests must have checked on this CPU, found independently of
+    /// [`Build::runs_here`].
+    fn builds_this_cpu_runs() -> Vec<&'static str> {
+        #[allow(unused_mut)]
+        let mut builds = vec!["portable"];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+                builds.push("avx2+fma");
+                if std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                {
+                    builds.push("avx512vl");
+                }
+            }
+        }
+        builds.sort_unstable();
+        builds
+    }
+
+    #[test]
+    fn every_build_this_cpu_runs_matches_the_reference_4() {
+        let checked = every_build_matches_the_reference::<4>();
+        assert!(checked.contains(&"portable"), "{checked:?}");
+        assert_eq!(checked, builds_this_cpu_runs());
+    }
+
+    #[test]
+    fn every_build_this_cpu_runs_matches_the_reference_8() {
+        let checked = every_build_matches_the_reference::<8>();
+        assert!(checked.contains(&"portable"), "{checked:?}");
+        assert_eq!(checked, builds_this_cpu_runs());
+    }
+
+    /// Rigid skinning in every build this CPU runs against the formula, on sub-slices that
+    /// start at every offset modulo 4 and have every remainder after the SIMD kernel's groups of
+    /// 4, with the palette's own linear part and with a separate normal palette; nothing outside
+    /// the slice is written.
+    #[test]
+    fn rigid_builds_match_the_formula_on_every_slice() {
+        use glam::{Affine3A, Quat};
+
+        use crate::pose::JointPalette;
+
+        let mut rng = Lcg(0x816D);
+        let skinning: Vec<Affine3A> = (0..9)
+            .map(|_| {
+                let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
+                let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(0.5) + rng.vec3(0.3).abs(),
+                    rotation,
+                    rng.vec3(3.0),
+                )
+            })
+            .collect();
+        let normal_palette: Vec<glam::Mat3A> =
+            skinning.iter().map(|m| m.matrix3.inverse().transpose()).collect();
+        let n = 23;
+        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
+        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+        let joints: Vec<u16> = (0..n).map(|_| rng.index(9) as u16).collect();
+        let mut checked = Vec::new();
+        for separate in [false, true] {
+            let palette = JointPalette {
+                skinning: skinning.clone(),
+                normal_skinning: separate.then(|| normal_palette.clone()),
+                ..JointPalette::default()
+            };
+            for build in Build::ALL {
+                for start in 0..4 {
+                    for len in 0..=n - start - 4 {
+                        let r = start..start + len;
+                        let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+                        let mut job = RigidJob {
+                            palette: &palette,
+                            joints: &joints[r.clone()],
+                            positions: &positions[r.clone()],
+                            normals: &normals[r.clone()],
+                            out_positions: &mut out.0[r.clone()],
+                            out_normals: &mut out.1[r.clone()],
+                        };
+                        match run_build(&mut job, build) {
+                            None => {
+                                assert!(!build.runs_here());
+                                continue;
+                            }
+                            Some(result) => assert_eq!(result, Ok(())),
+                        }
+                        for v in 0..n {
+                            if !r.contains(&v) {
+                                assert!(
+                                    out.0[v].is_nan() && out.1[v].is_nan(),
+                                    "vertex {v} of {r:?} written"
+                                );
+                                continue;
+                            }
+                            let j = joints[v] as usize;
+                            let p = skinning[j].transform_point3(positions[v]);
+                            let nm = palette.normal_skinning.as_ref().map_or(skinning[j].matrix3, |np| np[j])
+                                * normals[v];
+                            let (dp, dn) =
+                                ((out.0[v] - p).abs().max_element(), (out.1[v] - nm).abs().max_element());
+                            assert!(
+                                dp < 1e-4 && dn < 1e-5,
+                                "{}: {r:?}, vertex {v}, separate normals {separate}: {dp} {dn}",
+                                build.name()
+                            );
+                        }
+                    }
+                }
+                if build.runs_here() {
+                    checked.push(build.name());
+                }
+            }
+        }
+        checked.sort_unstable();
+        checked.dedup();
+        eprintln!("rigid: checked the builds {checked:?}");
+        assert_eq!(checked, builds_this_cpu_runs());
+    }
+
+    /// `Execution` picks the best build the CPU runs, or the portable one when asked.
+    #[test]
+    fn executions_pick_the_best_build_or_the_portable_one() {
+        let best = *builds_this_cpu_runs()
+            .iter()
+            .max_by_key(|b| ["portable", "avx2+fma", "avx512vl"].iter().position(|n| n == *b))
+            .unwrap();
+        eprintln!("this CPU runs the {best} build");
+        for execution in [Execution::SingleThreaded, Execution::Parallel] {
+            assert_eq!(execution.build().name(), best);
+        }
+        assert_eq!(Execution::Portable.build(), Build::Portable);
+        assert!(Build::Portable.runs_here());
     }
 
     #[test]
