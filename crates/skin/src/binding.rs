@@ -19,9 +19,8 @@
 
 use glam::{Vec3, Vec3A};
 
-use crate::deform::validate_influences;
 use crate::error::SkinError;
-use crate::influences::BonesBlendVertex;
+use crate::influences::{validate_influences, BonesBlendVertex};
 use crate::skeleton::RestSkeleton;
 
 /// The bones-blending zone around each joint, as fractions of the parent bone's and the child

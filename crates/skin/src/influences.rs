@@ -11,11 +11,122 @@ use std::ops::Deref;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::deform::validate_influences;
-use crate::error::SkinError;
+use crate::deform::parallel::all_chunks;
+use crate::error::{check_len, SkinError};
+
+/// Largest allowed |Σw − 1| for a vertex's weights.
+pub const WEIGHT_SUM_TOLERANCE: f32 = 1e-3;
+
+/// Checks N-influence joint indices and weights: indices in range, weights finite,
+/// non-negative, not all zero and summing to 1 within [`WEIGHT_SUM_TOLERANCE`].
+pub fn validate_influences<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+) -> Result<(), SkinError> {
+    validate_influences_with(joints, weights, joint_count, true)
+}
+
+/// [`validate_influences`], on the calling thread or in parallel chunks. A branch-free pass
+/// over all vertices answers "all good?" cheaply (it runs every frame); only when it fails does
+/// a second pass look for the first bad vertex to report.
+pub(crate) fn validate_influences_with<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+    parallel: bool,
+) -> Result<(), SkinError> {
+    check_len("weights", joints.len(), weights.len())?;
+    let all_good =
+        all_chunks(parallel, joints.len(), |r| influences_pass(&joints[r.clone()], &weights[r], joint_count));
+    if all_good {
+        Ok(())
+    } else {
+        first_bad_influence(joints, weights, joint_count)
+    }
+}
+
+/// True when every vertex passes; written without early exits so that it vectorizes: the
+/// largest joint index must be in range, the largest weight bit pattern must be that of a
+/// finite non-negative float (≤ 0x7F7F_FFFF: negative numbers have the sign bit set, NaN and
+/// infinity an all-ones exponent), and every vertex's sum must be 1 within the tolerance.
+pub(crate) fn influences_pass<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+) -> bool {
+    let mut max_joint = 0u16;
+    let mut max_bits = 0u32;
+    let mut sums_ok = true;
+    for (js, ws) in joints.iter().zip(weights) {
+        let mut sum = 0.0f32;
+        for i in 0..N {
+            max_joint = max_joint.max(js[i]);
+            max_bits = max_bits.max(ws[i].to_bits());
+            sum += ws[i];
+        }
+        sums_ok &= (sum - 1.0).abs() <= WEIGHT_SUM_TOLERANCE;
+    }
+    (max_joint as usize) < joint_count && max_bits <= 0x7F7F_FFFF && sums_ok
+}
+
+fn first_bad_influence<const N: usize>(
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    joint_count: usize,
+) -> Result<(), SkinError> {
+    for (vertex, (js, ws)) in joints.iter().zip(weights).enumerate() {
+        let mut sum = 0.0f32;
+        for influence in 0..N {
+            let joint = js[influence] as usize;
+            if joint >= joint_count {
+                return Err(SkinError::JointOutOfRange { vertex, influence, joint, joint_count });
+            }
+            let weight = ws[influence];
+            if !weight.is_finite() {
+                return Err(SkinError::NonFiniteWeight { vertex, influence, weight });
+            }
+            if weight < 0.0 {
+                return Err(SkinError::NegativeWeight { vertex, influence, weight });
+            }
+            sum += weight;
+        }
+        if sum == 0.0 {
+            return Err(SkinError::ZeroWeights { vertex });
+        }
+        if (sum - 1.0).abs() > WEIGHT_SUM_TOLERANCE {
+            return Err(SkinError::WeightSum { vertex, sum });
+        }
+    }
+    Ok(())
+}
+
+/// Scales each vertex's weights to sum to 1. Fails on the same bad weights as
+/// [`validate_influences`] (non-finite, negative, all zero); use it in importers.
+pub fn normalize_weights<const N: usize>(weights: &mut [[f32; N]]) -> Result<(), SkinError> {
+    for (vertex, ws) in weights.iter_mut().enumerate() {
+        let mut sum = 0.0f32;
+        for (influence, &weight) in ws.iter().enumerate() {
+            if !weight.is_finite() {
+                return Err(SkinError::NonFiniteWeight { vertex, influence, weight });
+            }
+            if weight < 0.0 {
+                return Err(SkinError::NegativeWeight { vertex, influence, weight });
+            }
+            sum += weight;
+        }
+        if sum == 0.0 {
+            return Err(SkinError::ZeroWeights { vertex });
+        }
+        for w in ws.iter_mut() {
+            *w /= sum;
+        }
+    }
+    Ok(())
+}
 
 /// `N` joint indices and weights per vertex, valid by construction: every weight finite and
-/// ≥ 0, each vertex's weights summing to 1 within [`crate::deform::WEIGHT_SUM_TOLERANCE`], and
+/// ≥ 0, each vertex's weights summing to 1 within [`WEIGHT_SUM_TOLERANCE`], and
 /// every joint index below the joint count it was checked against. Immutable after
 /// construction (take it apart with [`Influences::into_parts`] to edit, and build it again).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -41,13 +152,13 @@ impl<const N: usize> Influences<N> {
     }
 
     /// [`Influences::new`] after scaling each vertex's weights to sum to 1
-    /// ([`crate::deform::normalize_weights`]); for importers.
+    /// ([`normalize_weights`]); for importers.
     pub fn normalized(
         joints: Vec<[u16; N]>,
         mut weights: Vec<[f32; N]>,
         joint_count: usize,
     ) -> Result<Self, SkinError> {
-        crate::deform::normalize_weights(&mut weights)?;
+        normalize_weights(&mut weights)?;
         Self::new(joints, weights, joint_count)
     }
 
@@ -202,6 +313,46 @@ impl Deref for BonesBlendBindings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn influence_errors_name_vertex_and_influence() {
+        let joints = [[0u16, 1], [0, 5]];
+        let good = [[0.5f32, 0.5], [1.0, 0.0]];
+        assert_eq!(
+            validate_influences(&joints, &good, 2),
+            Err(SkinError::JointOutOfRange { vertex: 1, influence: 1, joint: 5, joint_count: 2 })
+        );
+        let joints = [[0u16, 1], [0, 1]];
+        assert_eq!(validate_influences(&joints, &good, 2), Ok(()));
+        assert!(matches!(
+            validate_influences(&joints, &[[0.5, 0.5], [f32::NAN, 1.0]], 2),
+            Err(SkinError::NonFiniteWeight { vertex: 1, influence: 0, .. })
+        ));
+        assert!(matches!(
+            validate_influences(&joints, &[[1.5, -0.5], [1.0, 0.0]], 2),
+            Err(SkinError::NegativeWeight { vertex: 0, influence: 1, .. })
+        ));
+        assert_eq!(
+            validate_influences(&joints, &[[0.5, 0.5], [0.0, 0.0]], 2),
+            Err(SkinError::ZeroWeights { vertex: 1 })
+        );
+        assert!(matches!(
+            validate_influences(&joints, &[[0.5, 0.4], [1.0, 0.0]], 2),
+            Err(SkinError::WeightSum { vertex: 0, .. })
+        ));
+        assert!(matches!(
+            validate_influences(&joints, &good[..1], 2),
+            Err(SkinError::LengthMismatch { expected: 2, found: 1, .. })
+        ));
+    }
+
+    #[test]
+    fn normalize_scales_to_one() {
+        let mut ws = [[2.0f32, 2.0], [0.0, 3.0]];
+        normalize_weights(&mut ws).unwrap();
+        assert_eq!(ws, [[0.5, 0.5], [0.0, 1.0]]);
+        assert_eq!(normalize_weights(&mut [[0.0f32, 0.0]]), Err(SkinError::ZeroWeights { vertex: 0 }));
+    }
 
     #[test]
     fn only_valid_influences_are_built_and_errors_name_the_vertex() {
