@@ -213,41 +213,52 @@ fn dump(data: &support::Data, dir: &std::path::Path) -> Result<(), Box<dyn std::
     Ok(())
 }
 
-/// Linear blend with unorm16 weights against f32 weights (see the module docs).
+/// Linear blend with unorm16 weights against f32 weights (see the module docs), with two ways
+/// of making the four 16-bit weights sum to exactly 65535: the fourth gets the remainder (as
+/// ozz-animation restores its last weight), or the largest does (the smallest relative error).
 fn weight_precision(data: &support::Data) -> Result<(), Box<dyn std::error::Error>> {
     let n = data.positions.len();
-    let quantized: Vec<[f32; 4]> = data
-        .weights
-        .iter()
-        .map(|ws| {
-            let q: [u32; 3] = [0, 1, 2].map(|i| (ws[i] * 65535.0).round() as u32);
-            let last = 65535u32.saturating_sub(q.iter().sum());
-            [q[0], q[1], q[2], last].map(|q| q as f32 / 65535.0)
-        })
-        .collect();
-    let influences = keyrig_skin::Influences::new(data.joints.clone(), quantized, data.palette.len())?;
     let (mut exact, mut exact_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-    let (mut q, mut q_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
     deform(1, data, Execution::Reference, &mut exact, &mut exact_n)?;
-    LinearBlendJob {
-        palette: &data.palette,
-        influences: &influences,
-        positions: &data.positions,
-        normals: &data.normals,
-        out_positions: &mut q,
-        out_normals: &mut q_n,
-    }
-    .run_with(Execution::Reference)?;
     let min = exact.iter().fold(Vec3::MAX, |a, &b| a.min(b));
     let max = exact.iter().fold(Vec3::MIN, |a, &b| a.max(b));
     let size = (max - min).length();
-    let worst = exact.iter().zip(&q).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
-    let mean = exact.iter().zip(&q).map(|(a, b)| a.distance(*b) as f64).sum::<f64>() / n as f64;
-    println!(
-        "{n} vertices, unorm16 weights: model size {size:.3}, largest position error {worst:.3e} \
-         ({:.2e} of the size), mean {mean:.3e} ({:.2e} of the size)",
-        worst / size,
-        mean / size as f64
-    );
+    for remainder_on_largest in [false, true] {
+        let quantized: Vec<[f32; 4]> = data
+            .weights
+            .iter()
+            .map(|ws| {
+                let last = if remainder_on_largest {
+                    (0..4).max_by(|&a, &b| ws[a].total_cmp(&ws[b])).unwrap_or(3)
+                } else {
+                    3
+                };
+                let mut q = ws.map(|w| (w * 65535.0).round() as u32);
+                let others: u32 = (0..4).filter(|&i| i != last).map(|i| q[i]).sum();
+                q[last] = 65535u32.saturating_sub(others);
+                q.map(|q| q as f32 / 65535.0)
+            })
+            .collect();
+        let influences = keyrig_skin::Influences::new(data.joints.clone(), quantized, data.palette.len())?;
+        let (mut q, mut q_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        LinearBlendJob {
+            palette: &data.palette,
+            influences: &influences,
+            positions: &data.positions,
+            normals: &data.normals,
+            out_positions: &mut q,
+            out_normals: &mut q_n,
+        }
+        .run_with(Execution::Reference)?;
+        let worst = exact.iter().zip(&q).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
+        let mean = exact.iter().zip(&q).map(|(a, b)| a.distance(*b) as f64).sum::<f64>() / n as f64;
+        let scheme = if remainder_on_largest { "largest weight" } else { "fourth weight" };
+        println!(
+            "{n} vertices, unorm16 weights, remainder on the {scheme}: model size {size:.3}, largest position \
+             error {worst:.3e} ({:.2e} of the size), mean {mean:.3e} ({:.2e} of the size)",
+            worst / size,
+            mean / size as f64
+        );
+    }
     Ok(())
 }
