@@ -354,6 +354,20 @@ mod tests {
         assert_eq!(normalize_weights(&mut [[0.0f32, 0.0]]), Err(SkinError::ZeroWeights { vertex: 0 }));
     }
 
+    /// The branch-free "all good?" pass answers true exactly for valid influences (when it
+    /// answers false, the slow pass that names the vertex runs instead: the results would be
+    /// the same, only slower, so it is checked on its own).
+    #[test]
+    fn the_quick_pass_accepts_valid_influences_only() {
+        let joints = [[0u16, 1], [1, 2]];
+        assert!(influences_pass(&joints, &[[0.5f32, 0.5], [0.9995, 0.0]], 3));
+        assert!(influences_pass::<2>(&[], &[], 1));
+        assert!(!influences_pass(&joints, &[[0.5f32, 0.5], [0.9985, 0.0]], 3), "sum off by 1.5e-3");
+        assert!(!influences_pass(&joints, &[[0.5f32, 0.5], [1.0, 0.0]], 2), "joint 2 of 2");
+        assert!(!influences_pass(&joints, &[[1.5f32, -0.5], [1.0, 0.0]], 3), "negative");
+        assert!(!influences_pass(&joints, &[[0.5f32, 0.5], [f32::INFINITY, 0.0]], 3), "infinite");
+    }
+
     #[test]
     fn only_valid_influences_are_built_and_errors_name_the_vertex() {
         let joints = vec![[0u16, 1], [0, 3]];

@@ -137,6 +137,13 @@ mod tests {
             *p = arm.skeleton.rest_position(2);
         }
         assert_eq!(joint_cross_section(&arm, &palette, 2, &collapsed).unwrap().ratio(), 0.0);
+        // The section takes the vertices within a thousandth of the bone (0.04 cm here) of the
+        // nearest ring: a vertex of the next ring moved to 0.02 cm from the joint joins it.
+        let mut near = arm.clone();
+        near.positions[42].x = arm.skeleton.rest_position(2).x + 0.02;
+        assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 7);
+        near.positions[42].x = arm.skeleton.rest_position(2).x + 0.06;
+        assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 6);
     }
 
     #[test]
@@ -146,6 +153,17 @@ mod tests {
         assert_eq!(
             joint_cross_section(&arm, &palette, 9, &arm.positions),
             Err(SkinError::NoSuchJoint { joint: 9, joint_count: 4 })
+        );
+        // A joint of the mesh's skeleton that the palette (of another, smaller skeleton) lacks.
+        let short = JointPalette::new(&arm.skeleton, &Pose::rest(4)).map(|mut p| {
+            p.model_from_joint.truncate(2);
+            p.skinning.truncate(2);
+            p.bones_blending.truncate(2);
+            p
+        });
+        assert_eq!(
+            joint_cross_section(&arm, &short.unwrap(), 3, &arm.positions),
+            Err(SkinError::NoSuchJoint { joint: 3, joint_count: 2 })
         );
         assert!(matches!(
             joint_cross_section(&arm, &palette, 1, &arm.positions[..10]),

@@ -286,6 +286,13 @@ mod tests {
     }
 
     #[test]
+    fn rest_poses_have_one_entry_per_joint() {
+        let pose = Pose::rest(3);
+        assert_eq!((pose.len(), pose.is_empty()), (3, false));
+        assert!(Pose::rest(0).is_empty());
+    }
+
+    #[test]
     fn bad_poses_are_typed_errors() {
         let skeleton = chain();
         assert!(matches!(
@@ -299,5 +306,25 @@ mod tests {
         let mut pose = Pose::rest(3);
         pose.root_translation.y = f32::INFINITY;
         assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadRootTranslation));
+        let mut pose = Pose::rest(3);
+        pose.local_translations[1].x = f32::NAN;
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadPoseTransform { joint: 1 }));
+        let mut pose = Pose::rest(3);
+        pose.local_scales[2].z = f32::INFINITY;
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadPoseTransform { joint: 2 }));
+        for (what, edit) in [
+            (
+                "pose translations",
+                &(|p: &mut Pose| p.local_translations.pop()) as &dyn Fn(&mut Pose) -> Option<Vec3>,
+            ),
+            ("pose scales", &|p: &mut Pose| p.local_scales.pop()),
+        ] {
+            let mut pose = Pose::rest(3);
+            edit(&mut pose);
+            assert_eq!(
+                JointPalette::new(&skeleton, &pose),
+                Err(SkinError::LengthMismatch { what, expected: 3, found: 2 })
+            );
+        }
     }
 }

@@ -594,3 +594,98 @@ fn multi_weight_meshes_get_bones_blending_bindings() {
         max_difference(&a.positions, &b.positions)
     );
 }
+
+/// Every job checks every buffer's length against the positions' and names the one that is
+/// off (one vertex short), before writing anything.
+#[test]
+fn every_job_names_the_buffer_of_the_wrong_length() {
+    let skeleton = chain();
+    let palette = JointPalette::new(&skeleton, &Pose::rest(3)).unwrap();
+    let dqs = palette.dual_quaternions().unwrap();
+    let n = 3;
+    let positions = vec![Vec3::ONE; n];
+    let normals = vec![Vec3::Y; n];
+    let joints = vec![1u16; n];
+    let influences = Influences::new(vec![[0u16, 1, 0, 0]; n], vec![[0.5f32, 0.5, 0.0, 0.0]; n], 3).unwrap();
+    let bindings =
+        BonesBlendBindings::new(vec![BonesBlendVertex { joint: 1, t: 0.5 }; n], skeleton.parents()).unwrap();
+    let short_influences =
+        Influences::new(influences.joints()[1..].to_vec(), influences.weights()[1..].to_vec(), 3).unwrap();
+    let short_bindings = BonesBlendBindings::new(bindings[1..].to_vec(), skeleton.parents()).unwrap();
+    let poison = Vec3::splat(-7.0);
+    // Which buffer is one short: 0 positions (so every other buffer is one too long), 1 normals,
+    // 2 output positions, 3 output normals, 4 the per-vertex joints, influences or bindings.
+    let expected = |short: usize, per_vertex: &'static str| {
+        let (what, expected, found) = match short {
+            0 => (per_vertex, n - 1, n),
+            1 => ("normals", n, n - 1),
+            2 => ("output positions", n, n - 1),
+            3 => ("output normals", n, n - 1),
+            _ => (per_vertex, n, n - 1),
+        };
+        Err(SkinError::LengthMismatch { what, expected, found })
+    };
+    let cut = |short: usize, which: usize, len: usize| if short == which { len - 1 } else { len };
+    for short in 0..5 {
+        let (mut op, mut on) = (vec![poison; n], vec![poison; n]);
+        let (p, nr) = (&positions[..cut(short, 0, n)], &normals[..cut(short, 1, n)]);
+        let (op, on) = (&mut op[..cut(short, 2, n)], &mut on[..cut(short, 3, n)]);
+        let rigid = RigidJob {
+            palette: &palette,
+            joints: &joints[..cut(short, 4, n)],
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(rigid, expected(short, "joints"), "rigid, buffer {short} short");
+        let influences = if short == 4 { &short_influences } else { &influences };
+        let linear = LinearBlendJob {
+            palette: &palette,
+            influences,
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(linear, expected(short, "influences"), "linear, buffer {short} short");
+        let dual = DualQuatJob {
+            dual_quaternions: &dqs,
+            influences,
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(dual, expected(short, "influences"), "dual quaternion, buffer {short} short");
+        let bindings = if short == 4 { &short_bindings } else { &bindings };
+        let blend = BonesBlendJob {
+            palette: &palette,
+            parents: skeleton.parents(),
+            bindings,
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(blend, expected(short, "bones-blending bindings"), "bones blending, buffer {short} short");
+        assert!(op.iter().chain(on.iter()).all(|v| *v == poison));
+    }
+    // Bones blending also needs one parent entry per palette joint.
+    let (mut op, mut on) = (vec![poison; n], vec![poison; n]);
+    let blend = BonesBlendJob {
+        palette: &palette,
+        parents: &skeleton.parents()[..2],
+        bindings: &bindings,
+        positions: &positions,
+        normals: &normals,
+        out_positions: &mut op,
+        out_normals: &mut on,
+    }
+    .run();
+    assert_eq!(blend, Err(SkinError::LengthMismatch { what: "joint parents", expected: 3, found: 2 }));
+}

@@ -582,6 +582,78 @@ mod tests {
         assert_eq!(checked, builds_this_cpu_runs());
     }
 
+    /// With non-uniform scale the palette carries separate normal matrices: rigid and linear
+    /// blend read them (the SIMD builds hand such palettes to the portable kernels) and match
+    /// the reference in every build.
+    #[test]
+    fn scaled_palettes_use_their_normal_matrices_in_every_build() {
+        use glam::Quat;
+
+        use crate::pose::{JointPalette, Pose};
+        use crate::skeleton::{RestJoint, RestSkeleton};
+
+        let mut rng = Lcg(0x5CA1E);
+        let joint_count = 9;
+        let rest: Vec<RestJoint> = (0..joint_count)
+            .map(|j| RestJoint::new(format!("j{j}"), (j > 0).then(|| j - 1), rng.vec3(2.0), Quat::IDENTITY))
+            .collect();
+        let skeleton = RestSkeleton::new(&rest).unwrap();
+        let mut pose = Pose::from_rotations(
+            (0..joint_count).map(|_| Quat::from_axis_angle(Vec3::Z, rng.next_f32() * 3.0)).collect(),
+            Vec3::ZERO,
+        );
+        pose.local_scales = (0..joint_count).map(|_| Vec3::splat(0.5) + rng.vec3(0.4).abs()).collect();
+        let palette = JointPalette::new(&skeleton, &pose).unwrap();
+        assert!(palette.normal_skinning.is_some(), "non-uniform scale needs normal matrices");
+        let n = 37;
+        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
+        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+        let influences = random_influences::<4>(&mut rng, n, joint_count);
+        let bones: Vec<u16> = (0..n).map(|_| rng.index(joint_count) as u16).collect();
+        let (ps, ns, palette, influences, bones) =
+            (&positions[..], &normals[..], &palette, &influences, &bones[..]);
+        let reference = |job: &mut dyn FnMut(&mut [Vec3], &mut [Vec3])| {
+            let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+            job(&mut out.0, &mut out.1);
+            out
+        };
+        macro_rules! check {
+            ($what:expr, $make:expr) => {{
+                let want = reference(&mut |op, on| run(&mut $make(op, on), Execution::Reference).unwrap());
+                let mut ran =
+                    builds_match($what, n, &want, |build, op, on| run_build(&mut $make(op, on), build));
+                ran.sort_unstable();
+                assert_eq!(ran, builds_this_cpu_runs());
+            }};
+        }
+        check!("scaled linear", |out_positions, out_normals| LinearBlendJob {
+            palette,
+            influences,
+            positions: ps,
+            normals: ns,
+            out_positions,
+            out_normals,
+        });
+        check!("scaled rigid", |out_positions, out_normals| RigidJob {
+            palette,
+            joints: bones,
+            positions: ps,
+            normals: ns,
+            out_positions,
+            out_normals,
+        });
+    }
+
+    /// Only `Parallel` shares the work out (the results are the same either way, so this is
+    /// checked on its own).
+    #[test]
+    fn only_parallel_execution_runs_in_parallel() {
+        assert!(Execution::Parallel.parallel());
+        for execution in [Execution::Reference, Execution::SingleThreaded, Execution::Portable] {
+            assert!(!execution.parallel(), "{execution:?}");
+        }
+    }
+
     /// `Execution` picks the best build the CPU runs, or the portable one when asked.
     #[test]
     fn executions_pick_the_best_build_or_the_portable_one() {

@@ -260,6 +260,19 @@ mod tests {
     /// sees exactly those: consecutive, each `chunk_len` long but the last.
     #[test]
     fn chunk_length_grows_with_the_job() {
+        // all_chunks checks consecutive chunks of chunk_len vertices that cover the job once.
+        for (n, parallel) in [(100_000, true), (100_000, false), (3 * CHUNK, true)] {
+            let seen = Mutex::new(Vec::new());
+            assert!(all_chunks(parallel, n, |r| {
+                seen.lock().unwrap().push(r);
+                true
+            }));
+            let mut seen = seen.into_inner().unwrap();
+            seen.sort_unstable_by_key(|r| r.start);
+            let len = if parallel && n > chunk_len(n) { chunk_len(n) } else { n };
+            let expected: Vec<Range<usize>> = (0..n).step_by(len).map(|s| s..(s + len).min(n)).collect();
+            assert_eq!(seen, expected, "{n} vertices, parallel {parallel}");
+        }
         assert_eq!(chunk_len(0), CHUNK);
         assert_eq!(chunk_len(16 * CHUNK), CHUNK);
         assert_eq!(chunk_len(16 * CHUNK + 16), CHUNK + 1);
@@ -286,6 +299,10 @@ mod tests {
     fn a_lingering_pool_thread_takes_the_next_job_then_sleeps() {
         let n = 7 * CHUNK + 3;
         let (mut p, mut q) = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+        // Every parallel job is counted (the lingering threads restart their clock on it).
+        let before = JOBS_DONE.load(Ordering::SeqCst);
+        for_each_chunk(true, &mut p, &mut q, |_, _, _| {});
+        assert!(JOBS_DONE.load(Ordering::SeqCst) > before);
         for round in 0..20 {
             for_each_chunk(true, &mut p, &mut q, |start, p, q| {
                 for (i, (p, q)) in p.iter_mut().zip(q).enumerate() {

@@ -655,7 +655,7 @@ dual_quaternion_kernel!(
 
 /// `_MM_SHUFFLE(z, y, x, w)` (not yet stable as a const fn).
 const fn shuffle_imm(z: i32, y: i32, x: i32, w: i32) -> i32 {
-    (z << 6) | (y << 4) | (x << 2) | w
+    (z << 6) + (y << 4) + (x << 2) + w
 }
 
 /// Packs four results (x, y, z, _) into the three registers x₀y₀z₀x₁, y₁z₁x₂y₂, z₂x₃y₃z₃: four
