@@ -271,6 +271,16 @@ mod tests {
             bind_single_weights(&s, &positions, &[0, 9, 1], BlendZone::default()),
             Err(SkinError::JointOutOfRange { vertex: 1, joint: 9, .. })
         ));
+        assert_eq!(
+            bind_single_weights(&s, &positions, &[0, 0], BlendZone::default()),
+            Err(SkinError::LengthMismatch { what: "single-weight joints", expected: 3, found: 2 })
+        );
+        let mut far = positions;
+        far[2].z = f32::INFINITY;
+        assert_eq!(
+            bind_single_weights(&s, &far, &[0, 0, 1], BlendZone::default()),
+            Err(SkinError::NonFiniteVertex { vertex: 2, what: "position" })
+        );
         let (joints, weights) = weights_from_bindings(&s, &b);
         assert_eq!(joints[1], [1, 0, 0, 0]);
         assert!((weights[1][0] - 0.25).abs() < 1e-6 && (weights[1][1] - 0.75).abs() < 1e-6);

@@ -137,13 +137,19 @@ mod tests {
             *p = arm.skeleton.rest_position(2);
         }
         assert_eq!(joint_cross_section(&arm, &palette, 2, &collapsed).unwrap().ratio(), 0.0);
-        // The section takes the vertices within a thousandth of the bone (0.04 cm here) of the
-        // nearest ring: a vertex of the next ring moved to 0.02 cm from the joint joins it.
+        // The section takes the vertices of the joint's bone and its parent's within a
+        // thousandth of the bone (0.04 cm here) of the nearest ring: vertices of the next ring
+        // (bone 2) and the previous one (bone 1) moved to 0.02 cm from the joint join it, two
+        // of the child bone's (3) do not.
+        let bones = arm.bones.as_ref().unwrap();
+        assert_eq!([bones[30], bones[42], bones[60], bones[61]], [1, 2, 3, 3]);
+        let x = arm.skeleton.rest_position(2).x;
         let mut near = arm.clone();
-        near.positions[42].x = arm.skeleton.rest_position(2).x + 0.02;
+        (near.positions[42].x, near.positions[30].x) = (x + 0.02, x - 0.02);
+        (near.positions[60].x, near.positions[61].x) = (x + 0.01, x - 0.01);
+        assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 8);
+        near.positions[42].x = x + 0.06;
         assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 7);
-        near.positions[42].x = arm.skeleton.rest_position(2).x + 0.06;
-        assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 6);
     }
 
     #[test]

@@ -415,13 +415,13 @@ fn cube() -> SkinnedMesh {
     let mut normals = Vec::with_capacity(24);
     let mut indices = Vec::with_capacity(36);
     for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let n = Vec3::AXES[axis] * sign;
+        for n in [-Vec3::AXES[axis], Vec3::AXES[axis]] {
+            // (n, u, v) right-handed: the corners below go counter-clockwise seen from outside.
             let u = Vec3::AXES[(axis + 1) % 3];
-            let v = Vec3::AXES[(axis + 2) % 3] * sign;
+            let v = n.cross(u);
             let base = positions.len() as u32;
-            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                positions.push(0.5 * (n + u * a + v * b));
+            for corner in [-u - v, u - v, u + v, v - u] {
+                positions.push(0.5 * (n + corner));
                 normals.push(n);
             }
             indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
@@ -487,13 +487,21 @@ mod tests {
             assert_eq!(p.dot(*n), 0.5, "{p} on the face of {n}");
             assert_eq!(p.abs(), Vec3::splat(0.5), "{p} is a corner");
         }
+        // Four different corners on each face.
+        for (i, (p, n)) in cube.positions.iter().zip(&cube.normals).enumerate() {
+            for (q, m) in cube.positions.iter().zip(&cube.normals).skip(i + 1) {
+                assert!(p != q || n != m, "corner {p} twice on the face of {n}");
+            }
+        }
     }
 
     /// Normals are the area-weighted sums of the adjacent triangles' normals, normalized; a
     /// triangle with an index past the positions is skipped and an unused vertex gets zero.
     #[test]
     fn vertex_normals_weight_triangles_by_area() {
-        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, -2.0), Vec3::ONE];
+        // Away from the origin: normals do not depend on where the mesh lies.
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, -2.0), Vec3::ONE]
+            .map(|p| p + Vec3::new(1.0, 2.0, 3.0));
         // (0, 1, 2): normal +Z, twice its area 1; (0, 3, 1): normal −Y, twice its area 2.
         let normals = vertex_normals(&positions, &[0, 1, 2, 0, 3, 1, 0, 1, 9]);
         let shared = Vec3::new(0.0, -2.0, 1.0).normalize();
@@ -601,8 +609,11 @@ mod tests {
             RestSkeleton::from_scene(&scene),
             Err(SkinError::NonUnitRestRotation { joint: 2, name: ARM_JOINT_NAMES[2].into(), length: 2.0 })
         );
-        scene.joints[2].rest_rotation = Quat::from_xyzw(0.0, 0.0, 0.0, 1.0 + 1e-6);
-        assert!(RestSkeleton::from_scene(&scene).is_ok());
+        // Within the tolerance (1e-3), the rotation is normalized.
+        scene.joints[2].rest_rotation = Quat::from_xyzw(0.0, 0.6, 0.0, 0.8) * 1.0005;
+        let rest = RestSkeleton::from_scene(&scene).unwrap();
+        let det = rest.parent_from_joint()[2].matrix3.determinant();
+        assert!((det - 1.0).abs() < 1e-5, "determinant {det}");
     }
 
     #[test]

@@ -285,6 +285,20 @@ mod tests {
         assert!(moved.abs_diff_eq(Vec3::new(3.0, 3.0, 0.0), 1e-5));
     }
 
+    /// Rotation times a uniform scale is uniform; any scale that differs along one axis, a
+    /// shear or a zero matrix is not.
+    #[test]
+    fn uniform_scale_is_recognised() {
+        let rotation = Mat3A::from_quat(Quat::from_rotation_y(0.7));
+        assert!(is_uniform_scale(&(rotation * 2.0)));
+        for scale in [Vec3::new(1.0, 1.0, 2.0), Vec3::new(1.0, 2.0, 1.0), Vec3::new(2.0, 1.0, 1.0)] {
+            assert!(!is_uniform_scale(&(rotation * Mat3A::from_diagonal(scale))), "{scale}");
+        }
+        let shear = Mat3A::from_cols(Vec3A::X, Vec3A::new(0.5, 1.0, 0.0), Vec3A::Z);
+        assert!(!is_uniform_scale(&shear));
+        assert!(!is_uniform_scale(&Mat3A::ZERO));
+    }
+
     #[test]
     fn rest_poses_have_one_entry_per_joint() {
         let pose = Pose::rest(3);

@@ -399,6 +399,19 @@ fn bad_inputs_are_typed_errors_and_leave_outputs_alone() {
         rigid(&[0, 3]),
         Err(SkinError::JointOutOfRange { vertex: 1, influence: 0, joint: 3, joint_count: 3 })
     );
+    let (mut vp, mut vn) = ([poison; 2], [poison; 2]);
+    let job = RigidJob {
+        palette: &palette,
+        joints: &[0, 3],
+        positions: &positions,
+        normals: &normals,
+        out_positions: &mut vp,
+        out_normals: &mut vn,
+    };
+    assert_eq!(
+        job.validate(),
+        Err(SkinError::JointOutOfRange { vertex: 1, influence: 0, joint: 3, joint_count: 3 })
+    );
     assert!(matches!(rigid(&[0]), Err(SkinError::LengthMismatch { what: "joints", expected: 2, found: 1 })));
     assert_eq!(op, [poison; 2]);
 

@@ -66,7 +66,9 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
             let mut dual = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
             for i in 0..N {
                 let q = self.dual_quaternions[js[i] as usize];
-                let w = if q.real.dot(pivot) < 0.0 { -ws[i] } else { ws[i] };
+                // The weight takes the sign of the dot product (−0.0 included, as the fast
+                // paths take it).
+                let w = ws[i].copysign(q.real.dot(pivot));
                 real += q.real * w;
                 dual += q.dual * w;
             }

@@ -312,12 +312,13 @@ const fn lanes_of(r: i32, c: i32) -> i32 {
     mask
 }
 
-/// Permutation for [`load_deinterleaved`]: lane l of component c takes lane (3l + c) % 8.
+/// Permutation for [`load_deinterleaved`]: lane l of component c takes lane (3l + c) mod 8
+/// (the low three bits: `_mm256_permutevar8x32_ps` reads no others).
 const fn load_order(c: i32) -> [i32; 8] {
     let mut order = [0; 8];
     let mut l = 0;
     while l < 8 {
-        order[l as usize] = (3 * l + c) % 8;
+        order[l as usize] = (3 * l + c) & 7;
         l += 1;
     }
     order
