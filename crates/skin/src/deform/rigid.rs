@@ -135,3 +135,20 @@ impl Job for RigidJob<'_> {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The branch-free pass accepts exactly the ranges whose joints are all in the palette
+    /// (when it refuses, the slow pass that names the vertex runs instead: the result would be
+    /// the same, only slower, so it is checked on its own).
+    #[test]
+    fn the_quick_check_accepts_in_range_joints_only() {
+        let joints = [0u16, 2, 1, 3];
+        assert!(RigidJob::quick_check(&joints, 4)(0..4));
+        assert!(RigidJob::quick_check(&joints, 3)(0..3));
+        assert!(!RigidJob::quick_check(&joints, 3)(0..4));
+        assert!(!RigidJob::quick_check(&joints, 3)(3..4));
+    }
+}
