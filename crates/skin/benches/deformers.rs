@@ -1,14 +1,8 @@
 //! Each deformer on 1 000, 100 000 and 1 000 000 vertices with 4 influences (positions and
-//! normals), single-threaded and on all cores, beside two peers measured in the same run:
+//! normals), single-threaded and on all cores, beside the memory-bandwidth bound measured in
+//! the same run (the real peer, ozz-animation's C++ `SkinningJob`, is timed by
+//! `tools/ozz-driver`, interleaved with `examples/deformer_timing.rs`: docs/skinning-vs-ozz.md):
 //!
-//! - `ozz_port`: an in-tree Rust port (not the peer: the real ozz-animation C++ `SkinningJob`
-//!   is measured outside this repository, see docs/benchmarks.md) of ozz-animation-rs 0.11's `SkinningJob` loop for 4 influences with normals
-//!   (`skinning_impl!` in its src/skinning_job.rs), re-implemented here on identical data: a
-//!   Mat4 palette blended column by column with the last weight rebuilt as 1 − Σw, palette
-//!   lookups through bounds-checked `get`, `transform_point3` / `transform_vector3`, normals not
-//!   renormalized. The crate itself cannot be a dependency: it enables glam's `core-simd`
-//!   (nightly `portable_simd`), which rustc 1.95 refuses, and its SIMD code no longer compiles
-//!   against today's `std::simd` even with RUSTC_BOOTSTRAP.
 //! - `memcpy`: a plain copy moving as many bytes (read + write) as linear blend does — the
 //!   memory-bandwidth bound.
 //!
@@ -22,9 +16,11 @@ use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criteri
 use glam::Vec3;
 use keyrig_skin::{BonesBlendJob, DualQuatJob, Execution, LinearBlendJob, RigidJob};
 
+// The data in ozz's layout is for the example that feeds the C++ driver.
+#[allow(dead_code)]
 mod support;
 
-use support::{data, ozz_port};
+use support::data;
 
 fn bench_deformers(c: &mut Criterion) {
     for n in [1_000usize, 100_000, 1_000_000] {
@@ -48,9 +44,6 @@ fn bench_deformers(c: &mut Criterion) {
                 black_box(&mut dst);
             })
         });
-        group.bench_function("ozz_port/1-thread", |b| {
-            b.iter(|| ozz_port(black_box(&d), &mut out_p, &mut out_n).unwrap())
-        });
 
         // Checking the 4 joints and weights of every vertex: once, when the influences are
         // built (`Influences::new`), not in every run.
@@ -58,6 +51,15 @@ fn bench_deformers(c: &mut Criterion) {
         group.bench_function("build_influences/1-thread", |b| {
             b.iter(|| {
                 keyrig_skin::Influences::new(black_box(d.joints.clone()), d.weights.clone(), support::JOINTS)
+                    .unwrap()
+            })
+        });
+        // The same for bones-blending bindings (`BonesBlendBindings::new`).
+        group.throughput(Throughput::Bytes(8 * n as u64));
+        let bindings = d.bindings.to_vec();
+        group.bench_function("build_bones_blending/1-thread", |b| {
+            b.iter(|| {
+                keyrig_skin::BonesBlendBindings::new(black_box(bindings.clone()), d.skeleton.parents())
                     .unwrap()
             })
         });

@@ -1,11 +1,9 @@
 //! Interleaved minimum-time measurement of the four deformers on the same data as
-//! `benches/deformers.rs`, beside `ozz_rs_port`: an in-tree Rust port of ozz-animation-rs's
-//! loop, **not** ozz-animation's C++ `SkinningJob` (it ran ~1.4× slower than the real one on
-//! the benchmark machine). The comparison with the real peer runs the C++ library built from
-//! source on data this example writes (`KEYRIG_SKIN_DUMP=DIR`, below); docs/benchmarks.md says
-//! how. On a shared machine the minimum over many interleaved
-//! rounds is far less sensitive to other processes than criterion's mean; use it for the
-//! ratios, and criterion for the full statistics.
+//! `benches/deformers.rs`. The peer, ozz-animation's C++ `SkinningJob`, is timed by
+//! `tools/ozz-driver/driver.cc` on data this example writes (`KEYRIG_SKIN_DUMP=DIR`, below);
+//! run the two alternately, as docs/skinning-vs-ozz.md shows. On a shared machine the minimum
+//! over many interleaved rounds is far less sensitive to other processes than criterion's
+//! mean; use it for the ratios, and criterion for the full statistics.
 //!
 //! Two plain copies are the memory-bandwidth reference: `copy_50` moves as many bytes as rigid
 //! (50 per vertex, read + written), `copy_72` as many as linear blend and dual quaternion (72);
@@ -14,39 +12,22 @@
 //! one deformer and the next.
 //!
 //! A last pass runs each deformer after sleeping 16.7 ms (one job per frame at 60 fps), on one
-//! thread and then on all cores: jobs that start cold, with the pool asleep unless the linger
-//! covers the gap.
+//! thread and then on all cores: jobs that start cold, with the pool asleep.
 //!
-//! The optional third argument sets how long a pool thread lingers awake after a parallel job,
-//! in microseconds (`keyrig_skin::set_pool_linger`; default 1000, 0 turns it off), to compare
-//! both in one build.
+//! cargo run --release -p keyrig-skin --example deformer_timing -- [VERTICES] [ROUNDS]
 //!
-//! cargo run --release -p keyrig-skin --example deformer_timing -- [VERTICES] [ROUNDS] [LINGER_US]
-//!
-//! `KEYRIG_SKIN_FORCE_AVX2=1` makes dual quaternion jobs run the AVX2 build of their kernel
-//! even on a CPU with AVX-512VL (what AVX2-only CPUs run), `KEYRIG_SKIN_FORCE_AVX2=unplaced`
-//! the same without the placed palette copy (the AVX2 build as it was before). This goes
-//! through `keyrig_skin::deform::force_avx2_dual_quaternion`, a hidden timing knob.
-//!
-//! `KEYRIG_SKIN_DUMP=DIR` also writes the data in ozz-animation's layout for an outside C++
-//! driver: `palette.f32` (16 floats per joint, column-major), `joints.u16` (4 per vertex),
+//! `KEYRIG_SKIN_DUMP=DIR` also writes the data in ozz-animation's layout for the C++ driver:
+//! `palette.f32` (16 floats per joint, column-major), `joints.u16` (4 per vertex),
 //! `weights3.f32` (3 per vertex; ozz restores the fourth as 1 − Σ), `positions.f32`,
 //! `normals.f32` (3 per vertex) and `keyrig_positions.f32` (linear blend's output, to check).
 //!
 //! `KEYRIG_SKIN_WEIGHT_PRECISION=1` runs only an accuracy check instead: the weights stored
 //! as normalized 16-bit integers (as glTF allows; three rounded, the fourth 65535 − their sum)
 //! against the f32 weights, linear blend's largest position error relative to the posed
-//! model's size (bounding-box diagonal). No kernel reads such weights yet; this measures
-//! whether one could.
+//! model's size (bounding-box diagonal). No kernel reads such weights; this measures whether
+//! one could.
 //!
-//! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64 (the AVX2 dual
-//! quaternion build copies palettes of up to 64 joints beside the stack and reads larger ones
-//! in place, so its speed above 64 joints is measured with this).
-//!
-//! `KEYRIG_SKIN_STACK_SWEEP=1` runs only a stack-offset sweep instead: linear blend and the
-//! AVX2 dual quaternion build with and without the placed palette (interleaved), one thread,
-//! each called under 0, 1, ..., 47 nested frames of 128 bytes of padding (the offsets modulo
-//! 4096 are printed), to show whether the kernel's time depends on where the stack lies.
+//! `KEYRIG_SKIN_JOINTS=COUNT` gives the skeleton COUNT joints instead of 64.
 
 use std::time::{Duration, Instant};
 
@@ -61,15 +42,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let n: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(100_000);
     let rounds: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(40);
-    if let Some(us) = args.next().map(|a| a.parse::<u64>()).transpose()? {
-        keyrig_skin::set_pool_linger(Duration::from_micros(us));
-    }
-    match std::env::var("KEYRIG_SKIN_FORCE_AVX2").as_deref() {
-        Ok("1") => keyrig_skin::deform::force_avx2_dual_quaternion(true, true),
-        Ok("unplaced") => keyrig_skin::deform::force_avx2_dual_quaternion(true, false),
-        Ok(other) => return Err(format!("KEYRIG_SKIN_FORCE_AVX2={other:?}: expected 1 or unplaced").into()),
-        Err(_) => {}
-    }
     let data = match std::env::var("KEYRIG_SKIN_JOINTS") {
         Ok(joints) => match joints.parse::<usize>() {
             Ok(count) if (4..=u16::MAX as usize).contains(&count) => support::data_with_joints(n, count),
@@ -87,20 +59,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if std::env::var_os("KEYRIG_SKIN_WEIGHT_PRECISION").is_some() {
         return weight_precision(&data);
     }
-    if std::env::var_os("KEYRIG_SKIN_STACK_SWEEP").is_some() {
-        return stack_sweep(&data, n, rounds);
-    }
     let mut op = vec![Vec3::ZERO; n];
     let mut on = vec![Vec3::ZERO; n];
-    let names = ["ozz_rs_port", "rigid", "linear", "bones_blending", "dual_quaternion", "copy_50", "copy_72"];
+    let names = ["rigid", "linear", "bones_blending", "dual_quaternion", "copy_50", "copy_72"];
     // Bytes read + written per vertex (positions, normals, influences in; positions, normals out).
-    let bytes_per_vertex = [68, 50, 72, 56, 72, 50, 72];
+    let bytes_per_vertex = [50, 72, 56, 72, 50, 72];
     let copy_source = vec![1.0f32; n * 72 / 8];
     let mut copy_target = vec![0.0f32; n * 72 / 8];
     for execution in [Execution::SingleThreaded, Execution::Parallel] {
-        let mut best = [Duration::MAX; 7];
+        let mut best = [Duration::MAX; 6];
         for _ in 0..rounds {
-            for (d, slot) in best.iter_mut().enumerate().take(5) {
+            for (d, slot) in best.iter_mut().enumerate().take(4) {
                 let start = Instant::now();
                 deform(d, &data, execution, &mut op, &mut on)?;
                 std::hint::black_box(&op);
@@ -108,7 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         for _ in 0..rounds {
-            for (d, slot) in best.iter_mut().enumerate().skip(5) {
+            for (d, slot) in best.iter_mut().enumerate().skip(4) {
                 // Half the bytes read, half written.
                 let floats = n * bytes_per_vertex[d] / 8;
                 let (from, to) = (&copy_source[..floats], &mut copy_target[..floats]);
@@ -124,11 +93,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 *slot = (*slot).min(start.elapsed());
             }
         }
-        println!(
-            "{n} vertices, {execution:?}, minimum of {rounds} interleaved rounds (pool linger {} µs):",
-            keyrig_skin::pool_linger().as_micros()
-        );
-        let lbs = best[2].as_secs_f64();
+        println!("{n} vertices, {execution:?}, minimum of {rounds} interleaved rounds:");
+        let lbs = best[1].as_secs_f64();
         for ((name, t), bytes) in names.iter().zip(best).zip(bytes_per_vertex) {
             let t = t.as_secs_f64();
             println!(
@@ -139,25 +105,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 (n * bytes) as f64 / t / 1e9
             );
         }
-        if execution == Execution::SingleThreaded {
-            println!(
-                "  linear vs ozz_rs_port (in-tree Rust port) throughput: {:.2}x",
-                best[0].as_secs_f64() / lbs
-            );
-        }
     }
     // One job per frame at 60 frames per second: each deformer after an idle gap of 16.7 ms, on
-    // one thread and on all cores. Unless the linger (third argument) is longer than the gap,
-    // the pool threads are asleep when the job starts, as for an editor skinning one mesh per
-    // frame.
+    // one thread and on all cores. The pool threads are asleep when the job starts (the gap is
+    // longer than their linger), as for an editor skinning one mesh per frame.
     let gap = Duration::from_micros(16_667);
     let gap_rounds = rounds.min(20);
-    // The 1-thread rounds first, then the all-cores rounds, so that consecutive parallel jobs
-    // are one gap apart and a linger longer than the gap keeps the pool awake between them.
-    let mut best = [[Duration::MAX; 2]; 5];
+    let mut best = [[Duration::MAX; 2]; 4];
     for (e, execution) in [Execution::SingleThreaded, Execution::Parallel].into_iter().enumerate() {
         for _ in 0..gap_rounds {
-            for (d, slots) in best.iter_mut().enumerate().skip(1) {
+            for (d, slots) in best.iter_mut().enumerate() {
                 std::thread::sleep(gap);
                 let start = Instant::now();
                 deform(d, &data, execution, &mut op, &mut on)?;
@@ -171,7 +128,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
          {gap_rounds} rounds:",
         gap.as_secs_f64() * 1e3
     );
-    for (name, [one, all]) in names.iter().zip(best).skip(1) {
+    for (name, [one, all]) in names.iter().zip(best) {
         let (one, all) = (one.as_secs_f64(), all.as_secs_f64());
         println!(
             "  {name:16} {:9.3} ms 1 thread  {:9.3} ms all cores  {:5.2}x",
@@ -183,7 +140,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Runs deformer `d` (0 ozz_rs_port, 1 rigid, 2 linear blend, 3 bones blending, 4 dual quaternion).
+/// Runs deformer `d` (0 rigid, 1 linear blend, 2 bones blending, 3 dual quaternion).
 fn deform(
     d: usize,
     data: &support::Data,
@@ -192,8 +149,7 @@ fn deform(
     on: &mut [Vec3],
 ) -> Result<(), Box<dyn std::error::Error>> {
     match d {
-        0 => support::ozz_port(data, op, on)?,
-        1 => RigidJob {
+        0 => RigidJob {
             palette: &data.palette,
             joints: &data.bones,
             positions: &data.positions,
@@ -202,7 +158,7 @@ fn deform(
             out_normals: on,
         }
         .run_with(execution)?,
-        2 => LinearBlendJob {
+        1 => LinearBlendJob {
             palette: &data.palette,
             influences: &data.influences,
             positions: &data.positions,
@@ -211,7 +167,7 @@ fn deform(
             out_normals: on,
         }
         .run_with(execution)?,
-        3 => BonesBlendJob {
+        2 => BonesBlendJob {
             palette: &data.palette,
             parents: data.skeleton.parents(),
             bindings: &data.bindings,
@@ -234,71 +190,6 @@ fn deform(
     Ok(())
 }
 
-/// Times linear blend and the AVX2 dual quaternion build (placed palette and unplaced,
-/// interleaved) on one thread at stack depths 0..48 × (128 bytes + a frame's overhead).
-fn stack_sweep(data: &support::Data, n: usize, rounds: usize) -> Result<(), Box<dyn std::error::Error>> {
-    let mut op = vec![Vec3::ZERO; n];
-    let mut on = vec![Vec3::ZERO; n];
-    let top = 0u8;
-    let top = std::hint::black_box(&top) as *const u8 as usize;
-    println!(
-        "{n} vertices, 1 thread, minimum of {rounds} rounds per depth; AVX2 dual quaternion build forced"
-    );
-    // "stack offset": bytes between this frame and the deepest pad; "mod 4096": the deepest
-    // pad's address modulo 4096 (the jobs' frames lie just below it).
-    println!(
-        "depth  stack offset  mod 4096   linear ms  dq placed ms  dq unplaced ms  placed/linear  \
-         unplaced/linear"
-    );
-    for depth in 0..48 {
-        let mut best = [Duration::MAX; 3];
-        let mut offset = 0;
-        for _ in 0..rounds {
-            for (k, slot) in best.iter_mut().enumerate() {
-                let mut run = |at: usize| -> Result<(), Box<dyn std::error::Error>> {
-                    offset = top - at;
-                    let d = if k == 0 { 2 } else { 4 };
-                    keyrig_skin::deform::force_avx2_dual_quaternion(true, k == 1);
-                    let start = Instant::now();
-                    deform(d, data, Execution::SingleThreaded, &mut op, &mut on)?;
-                    std::hint::black_box(&op);
-                    *slot = (*slot).min(start.elapsed());
-                    Ok(())
-                };
-                padded(depth, &mut run)?;
-            }
-        }
-        let [lb, placed, unplaced] = best.map(|t| t.as_secs_f64());
-        println!(
-            "{depth:5}  {offset:12}  {:8}  {:10.3}  {:12.3}  {:14.3}  {:13.2}  {:15.2}",
-            (top - offset) % 4096,
-            lb * 1e3,
-            placed * 1e3,
-            unplaced * 1e3,
-            placed / lb,
-            unplaced / lb
-        );
-    }
-    Ok(())
-}
-
-/// Calls `f` with the address of a local `depth` frames of 128 padding bytes below this one.
-#[inline(never)]
-fn padded(
-    depth: usize,
-    f: &mut dyn FnMut(usize) -> Result<(), Box<dyn std::error::Error>>,
-) -> Result<(), Box<dyn std::error::Error>> {
-    let pad = [depth as u8; 128];
-    let pad = std::hint::black_box(pad);
-    if depth == 0 {
-        f(pad.as_ptr() as usize)
-    } else {
-        padded(depth - 1, f)?;
-        std::hint::black_box(&pad);
-        Ok(())
-    }
-}
-
 /// Writes the data in ozz-animation's layout (see the module docs) for the C++ driver.
 fn dump(data: &support::Data, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     fn floats(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
@@ -307,7 +198,7 @@ fn dump(data: &support::Data, dir: &std::path::Path) -> Result<(), Box<dyn std::
     std::fs::create_dir_all(dir)?;
     let n = data.positions.len();
     let (mut op, mut on) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-    deform(2, data, Execution::SingleThreaded, &mut op, &mut on)?;
+    deform(1, data, Execution::SingleThreaded, &mut op, &mut on)?;
     let files: [(&str, Vec<u8>); 6] = [
         ("palette.f32", floats(data.ozz_palette.iter().flat_map(|m| m.to_cols_array()))),
         ("joints.u16", data.ozz_joints.iter().flat_map(|j| j.to_le_bytes()).collect()),
@@ -322,41 +213,52 @@ fn dump(data: &support::Data, dir: &std::path::Path) -> Result<(), Box<dyn std::
     Ok(())
 }
 
-/// Linear blend with unorm16 weights against f32 weights (see the module docs).
+/// Linear blend with unorm16 weights against f32 weights (see the module docs), with two ways
+/// of making the four 16-bit weights sum to exactly 65535: the fourth gets the remainder (as
+/// ozz-animation restores its last weight), or the largest does (the smallest relative error).
 fn weight_precision(data: &support::Data) -> Result<(), Box<dyn std::error::Error>> {
     let n = data.positions.len();
-    let quantized: Vec<[f32; 4]> = data
-        .weights
-        .iter()
-        .map(|ws| {
-            let q: [u32; 3] = [0, 1, 2].map(|i| (ws[i] * 65535.0).round() as u32);
-            let last = 65535u32.saturating_sub(q.iter().sum());
-            [q[0], q[1], q[2], last].map(|q| q as f32 / 65535.0)
-        })
-        .collect();
-    let influences = keyrig_skin::Influences::new(data.joints.clone(), quantized, data.palette.len())?;
     let (mut exact, mut exact_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-    let (mut q, mut q_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-    deform(2, data, Execution::Reference, &mut exact, &mut exact_n)?;
-    LinearBlendJob {
-        palette: &data.palette,
-        influences: &influences,
-        positions: &data.positions,
-        normals: &data.normals,
-        out_positions: &mut q,
-        out_normals: &mut q_n,
-    }
-    .run_with(Execution::Reference)?;
+    deform(1, data, Execution::Reference, &mut exact, &mut exact_n)?;
     let min = exact.iter().fold(Vec3::MAX, |a, &b| a.min(b));
     let max = exact.iter().fold(Vec3::MIN, |a, &b| a.max(b));
     let size = (max - min).length();
-    let worst = exact.iter().zip(&q).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
-    let mean = exact.iter().zip(&q).map(|(a, b)| a.distance(*b) as f64).sum::<f64>() / n as f64;
-    println!(
-        "{n} vertices, unorm16 weights: model size {size:.3}, largest position error {worst:.3e} \
-         ({:.2e} of the size), mean {mean:.3e} ({:.2e} of the size)",
-        worst / size,
-        mean / size as f64
-    );
+    for remainder_on_largest in [false, true] {
+        let quantized: Vec<[f32; 4]> = data
+            .weights
+            .iter()
+            .map(|ws| {
+                let last = if remainder_on_largest {
+                    (0..4).max_by(|&a, &b| ws[a].total_cmp(&ws[b])).unwrap_or(3)
+                } else {
+                    3
+                };
+                let mut q = ws.map(|w| (w * 65535.0).round() as u32);
+                let others: u32 = (0..4).filter(|&i| i != last).map(|i| q[i]).sum();
+                q[last] = 65535u32.saturating_sub(others);
+                q.map(|q| q as f32 / 65535.0)
+            })
+            .collect();
+        let influences = keyrig_skin::Influences::new(data.joints.clone(), quantized, data.palette.len())?;
+        let (mut q, mut q_n) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        LinearBlendJob {
+            palette: &data.palette,
+            influences: &influences,
+            positions: &data.positions,
+            normals: &data.normals,
+            out_positions: &mut q,
+            out_normals: &mut q_n,
+        }
+        .run_with(Execution::Reference)?;
+        let worst = exact.iter().zip(&q).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
+        let mean = exact.iter().zip(&q).map(|(a, b)| a.distance(*b) as f64).sum::<f64>() / n as f64;
+        let scheme = if remainder_on_largest { "largest weight" } else { "fourth weight" };
+        println!(
+            "{n} vertices, unorm16 weights, remainder on the {scheme}: model size {size:.3}, largest position \
+             error {worst:.3e} ({:.2e} of the size), mean {mean:.3e} ({:.2e} of the size)",
+            worst / size,
+            mean / size as f64
+        );
+    }
     Ok(())
 }

@@ -19,8 +19,8 @@
 
 use glam::{Vec3, Vec3A};
 
-use crate::deform::{validate_influences, BonesBlendVertex};
 use crate::error::SkinError;
+use crate::influences::{validate_influences, BonesBlendVertex};
 use crate::skeleton::RestSkeleton;
 
 /// The bones-blending zone around each joint, as fractions of the parent bone's and the child
@@ -141,7 +141,7 @@ pub fn bind_from_weights<const N: usize>(
         .zip(weights)
         .map(|(js, ws)| {
             // The two largest influences, summing weights of repeated joints.
-            let mut best: [(usize, f32); 2] = [(0, -1.0), (0, -1.0)];
+            let mut best: [(usize, f32); 2] = [(0, -1.0); 2];
             for i in 0..N {
                 let j = js[i] as usize;
                 if js[..i].contains(&js[i]) {
@@ -231,6 +231,28 @@ mod tests {
         assert_eq!(blend_parameter(&s, 1, hard, Vec3::new(4.1, 0.0, 0.0)), 1.0);
         assert!(BlendZone::new(f32::NAN, 0.2).is_err());
         assert!(BlendZone::new(0.2, 1.5).is_err());
+        assert!(BlendZone::new(-0.1, 0.2).is_err());
+        assert!(BlendZone::new(0.2, f32::INFINITY).is_err());
+        assert_eq!(BlendZone::new(1.0, 0.0), Ok(BlendZone { parent_fraction: 1.0, child_fraction: 0.0 }));
+    }
+
+    /// An object's deformer settings give its zone, and bad fractions there are refused.
+    #[test]
+    fn zones_come_from_deformer_settings() {
+        let mut settings = keyrig_core::DeformerSettings {
+            blend_parent_fraction: 0.1,
+            blend_child_fraction: 0.6,
+            ..Default::default()
+        };
+        assert_eq!(
+            BlendZone::from_settings(&settings),
+            Ok(BlendZone { parent_fraction: 0.1, child_fraction: 0.6 })
+        );
+        settings.blend_child_fraction = 2.0;
+        assert_eq!(
+            BlendZone::from_settings(&settings),
+            Err(SkinError::BadBlendZone { parent_fraction: 0.1, child_fraction: 2.0 })
+        );
     }
 
     #[test]
@@ -249,6 +271,16 @@ mod tests {
             bind_single_weights(&s, &positions, &[0, 9, 1], BlendZone::default()),
             Err(SkinError::JointOutOfRange { vertex: 1, joint: 9, .. })
         ));
+        assert_eq!(
+            bind_single_weights(&s, &positions, &[0, 0], BlendZone::default()),
+            Err(SkinError::LengthMismatch { what: "single-weight joints", expected: 3, found: 2 })
+        );
+        let mut far = positions;
+        far[2].z = f32::INFINITY;
+        assert_eq!(
+            bind_single_weights(&s, &far, &[0, 0, 1], BlendZone::default()),
+            Err(SkinError::NonFiniteVertex { vertex: 2, what: "position" })
+        );
         let (joints, weights) = weights_from_bindings(&s, &b);
         assert_eq!(joints[1], [1, 0, 0, 0]);
         assert!((weights[1][0] - 0.25).abs() < 1e-6 && (weights[1][1] - 0.75).abs() < 1e-6);

@@ -85,3 +85,37 @@ pub fn deform_mesh(
     deform_mesh_into(mesh, bindings, palette, kind, Execution::Parallel, &mut out)?;
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Quat;
+    use keyrig_core::ProceduralMesh;
+
+    use super::*;
+    use crate::binding::BlendZone;
+    use crate::mesh::mesh_for;
+    use crate::pose::Pose;
+
+    /// `deform_mesh` gives what `deform_mesh_into` gives, on all cores, for every deformer.
+    #[test]
+    fn deform_mesh_is_deform_mesh_into_on_all_cores() {
+        let arm = mesh_for(ProceduralMesh::ArmLowPoly);
+        let bindings = arm.bindings(BlendZone::default()).unwrap();
+        let pose = Pose::rest(4).with_rotation(2, Quat::from_rotation_x(2.0));
+        let palette = JointPalette::new(&arm.skeleton, &pose).unwrap();
+        for kind in [
+            DeformerKind::Rigid,
+            DeformerKind::LinearBlend,
+            DeformerKind::BonesBlending,
+            DeformerKind::DualQuaternion,
+        ] {
+            let out = deform_mesh(&arm, &bindings, &palette, kind).unwrap();
+            let mut into = Deformed::default();
+            deform_mesh_into(&arm, &bindings, &palette, kind, Execution::Reference, &mut into).unwrap();
+            assert_eq!(out.positions.len(), arm.vertex_count());
+            for (a, b) in out.positions.iter().zip(&into.positions) {
+                assert!((*a - *b).length() < 1e-3, "{kind:?}: {a} vs {b}");
+            }
+        }
+    }
+}

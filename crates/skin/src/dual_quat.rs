@@ -123,7 +123,10 @@ mod tests {
     #[test]
     fn scale_is_rejected() {
         let m = Affine3A::from_scale(Vec3::new(1.0, 2.0, 1.0));
-        assert!(matches!(DualQuat::try_from_affine(&m), Err(NotRigid::Scale(_))));
+        assert_eq!(DualQuat::try_from_affine(&m), Err(NotRigid::Scale(2.0)));
+        // The error reports the x scale when it is (one of) the worst, else the largest.
+        let m = Affine3A::from_scale(Vec3::new(0.5, 1.0, 1.2));
+        assert_eq!(DualQuat::try_from_affine(&m), Err(NotRigid::Scale(0.5)));
         let mut m = Affine3A::IDENTITY;
         m.translation.x = f32::NAN;
         assert_eq!(DualQuat::try_from_affine(&m), Err(NotRigid::NonFinite));

@@ -63,3 +63,12 @@ pub enum SkinError {
     #[error("triangle {triangle}: vertex index {index} is out of range ({vertex_count} vertices)")]
     TriangleIndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
 }
+
+/// [`SkinError::LengthMismatch`] unless `found == expected`.
+pub(crate) fn check_len(what: &'static str, expected: usize, found: usize) -> Result<(), SkinError> {
+    if expected == found {
+        Ok(())
+    } else {
+        Err(SkinError::LengthMismatch { what, expected, found })
+    }
+}

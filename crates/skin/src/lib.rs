@@ -20,14 +20,14 @@ pub mod pose;
 pub mod skeleton;
 
 pub use binding::{bind_from_weights, bind_single_weights, smooth_weights, weights_from_bindings, BlendZone};
-pub use deform::{
-    normalize_weights, pool_linger, set_pool_linger, validate_influences, BonesBlendJob, BonesBlendVertex,
-    DualQuatJob, Execution, LinearBlendJob, RigidJob, DEFAULT_POOL_LINGER, MAX_POOL_LINGER,
-};
+pub use deform::{BonesBlendJob, DualQuatJob, Execution, LinearBlendJob, RigidJob};
 pub use deformer::{deform_mesh, deform_mesh_into, Deformed};
 pub use dual_quat::DualQuat;
 pub use error::SkinError;
-pub use influences::Influences;
+pub use influences::{
+    normalize_weights, validate_influences, BonesBlendBindings, BonesBlendVertex, Influences,
+    WEIGHT_SUM_TOLERANCE,
+};
 pub use measure::{enclosed_volume, joint_cross_section, CrossSection};
 pub use mesh::{
     mesh_for, scene_skeleton_for, MeshBindings, SkinnedMesh, ARM_BONES, ARM_JOINT_NAMES, ARM_LENGTH_CM,

@@ -137,6 +137,19 @@ mod tests {
             *p = arm.skeleton.rest_position(2);
         }
         assert_eq!(joint_cross_section(&arm, &palette, 2, &collapsed).unwrap().ratio(), 0.0);
+        // The section takes the vertices of the joint's bone and its parent's within a
+        // thousandth of the bone (0.04 cm here) of the nearest ring: vertices of the next ring
+        // (bone 2) and the previous one (bone 1) moved to 0.02 cm from the joint join it, two
+        // of the child bone's (3) do not.
+        let bones = arm.bones.as_ref().unwrap();
+        assert_eq!([bones[30], bones[42], bones[60], bones[61]], [1, 2, 3, 3]);
+        let x = arm.skeleton.rest_position(2).x;
+        let mut near = arm.clone();
+        (near.positions[42].x, near.positions[30].x) = (x + 0.02, x - 0.02);
+        (near.positions[60].x, near.positions[61].x) = (x + 0.01, x - 0.01);
+        assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 8);
+        near.positions[42].x = x + 0.06;
+        assert_eq!(joint_cross_section(&near, &palette, 2, &near.positions).unwrap().vertex_count, 7);
     }
 
     #[test]
@@ -146,6 +159,17 @@ mod tests {
         assert_eq!(
             joint_cross_section(&arm, &palette, 9, &arm.positions),
             Err(SkinError::NoSuchJoint { joint: 9, joint_count: 4 })
+        );
+        // A joint of the mesh's skeleton that the palette (of another, smaller skeleton) lacks.
+        let short = JointPalette::new(&arm.skeleton, &Pose::rest(4)).map(|mut p| {
+            p.model_from_joint.truncate(2);
+            p.skinning.truncate(2);
+            p.bones_blending.truncate(2);
+            p
+        });
+        assert_eq!(
+            joint_cross_section(&arm, &short.unwrap(), 3, &arm.positions),
+            Err(SkinError::NoSuchJoint { joint: 3, joint_count: 2 })
         );
         assert!(matches!(
             joint_cross_section(&arm, &palette, 1, &arm.positions[..10]),

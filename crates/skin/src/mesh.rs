@@ -8,9 +8,8 @@ use glam::{Quat, Vec2, Vec3};
 use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
 
 use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
-use crate::deform::BonesBlendVertex;
 use crate::error::SkinError;
-use crate::influences::Influences;
+use crate::influences::{BonesBlendBindings, Influences};
 use crate::skeleton::RestSkeleton;
 
 /// Length of the paper's arms along X, in centimetres.
@@ -51,8 +50,8 @@ pub struct SkinnedMesh {
 pub struct MeshBindings {
     /// The rigid deformer's joint per vertex: the single weight, or the dominant influence.
     pub rigid: Vec<u16>,
-    /// Bones-blending (joint, t) per vertex.
-    pub bones_blending: Vec<BonesBlendVertex>,
+    /// Bones-blending (joint, t) per vertex, checked against the mesh's skeleton.
+    pub bones_blending: BonesBlendBindings,
 }
 
 impl SkinnedMesh {
@@ -199,16 +198,18 @@ impl SkinnedMesh {
         match &self.bones {
             Some(bones) => Ok(MeshBindings {
                 rigid: bones.clone(),
-                bones_blending: bind_single_weights(&self.skeleton, &self.positions, bones, zone)?,
+                bones_blending: BonesBlendBindings::new(
+                    bind_single_weights(&self.skeleton, &self.positions, bones, zone)?,
+                    self.skeleton.parents(),
+                )?,
             }),
             None => Ok(MeshBindings {
                 rigid: (self.influences.joints().iter().zip(self.influences.weights()))
                     .map(|(js, ws)| js[dominant(ws)])
                     .collect(),
-                bones_blending: bind_from_weights(
-                    &self.skeleton,
-                    self.influences.joints(),
-                    self.influences.weights(),
+                bones_blending: BonesBlendBindings::new(
+                    bind_from_weights(&self.skeleton, self.influences.joints(), self.influences.weights())?,
+                    self.skeleton.parents(),
                 )?,
             }),
         }
@@ -414,13 +415,13 @@ fn cube() -> SkinnedMesh {
     let mut normals = Vec::with_capacity(24);
     let mut indices = Vec::with_capacity(36);
     for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let n = Vec3::AXES[axis] * sign;
+        for n in [-Vec3::AXES[axis], Vec3::AXES[axis]] {
+            // (n, u, v) right-handed: the corners below go counter-clockwise seen from outside.
             let u = Vec3::AXES[(axis + 1) % 3];
-            let v = Vec3::AXES[(axis + 2) % 3] * sign;
+            let v = n.cross(u);
             let base = positions.len() as u32;
-            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                positions.push(0.5 * (n + u * a + v * b));
+            for corner in [-u - v, u - v, u + v, v - u] {
+                positions.push(0.5 * (n + corner));
                 normals.push(n);
             }
             indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
@@ -460,10 +461,159 @@ pub fn mesh_for(kind: ProceduralMesh) -> SkinnedMesh {
 mod tests {
     use super::*;
 
+    /// The hand: a palm tube of 7 rings of 12 vertices along x ∈ [0, 9] and three finger tubes
+    /// of 9 rings of 8 vertices from x = 8 (1 cm inside the palm) to x = 17; finger vertices
+    /// inside the palm follow the palm (joint 0), the next 4 cm the finger's first joint, the
+    /// rest its second. The cube: 24 vertices on the faces of [−0.5, 0.5]³ with their faces'
+    /// normals.
+    #[test]
+    fn hand_and_cube_have_their_shapes() {
+        let hand = mesh_for(ProceduralMesh::Hand);
+        assert_eq!(hand.vertex_count(), 7 * 12 + 3 * 9 * 8);
+        let xs = hand.positions.iter().map(|p| p.x);
+        let (min, max) = xs.fold((f32::MAX, f32::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        assert!(min.abs() < 1e-5 && (max - 17.0).abs() < 1e-5, "x from {min} to {max}");
+        let bones = hand.bones.as_ref().unwrap();
+        let count = |j: u16| bones.iter().filter(|&&b| b == j).count();
+        assert_eq!(count(0), 7 * 12 + 3 * 8);
+        for j in 1..=6 {
+            assert_eq!(count(j), 4 * 8, "joint {j}");
+        }
+        let cube = mesh_for(ProceduralMesh::Cube);
+        assert_eq!((cube.vertex_count(), cube.indices.len()), (24, 36));
+        for (p, n) in cube.positions.iter().zip(&cube.normals) {
+            assert_eq!(n.abs().max_element(), 1.0, "{n}");
+            assert_eq!(n.length(), 1.0, "{n}");
+            assert_eq!(p.dot(*n), 0.5, "{p} on the face of {n}");
+            assert_eq!(p.abs(), Vec3::splat(0.5), "{p} is a corner");
+        }
+        // Four different corners on each face.
+        for (i, (p, n)) in cube.positions.iter().zip(&cube.normals).enumerate() {
+            for (q, m) in cube.positions.iter().zip(&cube.normals).skip(i + 1) {
+                assert!(p != q || n != m, "corner {p} twice on the face of {n}");
+            }
+        }
+    }
+
+    /// Normals are the area-weighted sums of the adjacent triangles' normals, normalized; a
+    /// triangle with an index past the positions is skipped and an unused vertex gets zero.
+    #[test]
+    fn vertex_normals_weight_triangles_by_area() {
+        // Away from the origin: normals do not depend on where the mesh lies.
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, -2.0), Vec3::ONE]
+            .map(|p| p + Vec3::new(1.0, 2.0, 3.0));
+        // (0, 1, 2): normal +Z, twice its area 1; (0, 3, 1): normal −Y, twice its area 2.
+        let normals = vertex_normals(&positions, &[0, 1, 2, 0, 3, 1, 0, 1, 9]);
+        let shared = Vec3::new(0.0, -2.0, 1.0).normalize();
+        let expected = [shared, shared, Vec3::Z, Vec3::NEG_Y, Vec3::ZERO];
+        for (v, (n, e)) in normals.iter().zip(expected).enumerate() {
+            assert!((*n - e).length() < 1e-6, "vertex {v}: {n} vs {e}");
+        }
+        assert_eq!(normals.len(), 5);
+    }
+
+    /// Every invariant of a mesh is checked, and each error names what and where.
+    #[test]
+    fn bad_meshes_are_typed_errors() {
+        let cube = mesh_for(ProceduralMesh::Cube);
+        let n = cube.vertex_count();
+        let (joints, weights) = (cube.influences.joints().to_vec(), cube.influences.weights().to_vec());
+        let build = |edit: &dyn Fn(&mut SkinnedMesh)| {
+            let mut mesh = cube.clone();
+            edit(&mut mesh);
+            mesh.validate()
+        };
+        assert_eq!(build(&|_| {}), Ok(()));
+        let length = |what, found| Err(SkinError::LengthMismatch { what, expected: n, found });
+        assert_eq!(build(&|m| m.normals.truncate(n - 1)), length("normals", n - 1));
+        assert_eq!(
+            build(
+                &|m| m.influences = Influences::new(joints[1..].to_vec(), weights[1..].to_vec(), 1).unwrap()
+            ),
+            length("influences", n - 1)
+        );
+        assert_eq!(build(&|m| m.uvs = Some(vec![Vec2::ZERO; 2])), length("texture coordinates", 2));
+        assert_eq!(build(&|m| m.bones = Some(vec![0; 3])), length("single-weight joints", 3));
+        assert_eq!(
+            build(&|m| m.bones.as_mut().unwrap()[5] = 1),
+            Err(SkinError::JointOutOfRange { vertex: 5, influence: 0, joint: 1, joint_count: 1 })
+        );
+        assert_eq!(
+            build(&|m| m.positions[4].y = f32::NAN),
+            Err(SkinError::NonFiniteVertex { vertex: 4, what: "position" })
+        );
+        assert_eq!(
+            build(&|m| m.normals[6].z = f32::INFINITY),
+            Err(SkinError::NonFiniteVertex { vertex: 6, what: "normal" })
+        );
+        assert_eq!(
+            build(&|m| m.indices.push(0)),
+            Err(SkinError::LengthMismatch {
+                what: "triangle indices (a multiple of 3)",
+                expected: 36,
+                found: 37
+            })
+        );
+        assert_eq!(
+            build(&|m| m.indices[7] = n as u32),
+            Err(SkinError::TriangleIndexOutOfRange { triangle: 2, index: n as u32, vertex_count: n })
+        );
+        // The same checks when a mesh is made or given texture coordinates or a skeleton.
+        assert_eq!(
+            cube.clone().with_uvs(vec![Vec2::ZERO; n + 1]).map(|_| ()),
+            length("texture coordinates", n + 1)
+        );
+        assert_eq!(
+            cube.clone().with_uvs(vec![Vec2::ONE; n]).map(|m| m.uvs.map(|uvs| uvs.len())),
+            Ok(Some(n))
+        );
+        let two = RestSkeleton::new(&[
+            crate::skeleton::RestJoint::new("root", None, Vec3::ZERO, Quat::IDENTITY),
+            crate::skeleton::RestJoint::new("tip", Some(0), Vec3::X, Quat::IDENTITY),
+        ])
+        .unwrap();
+        let mut on_two = cube.clone().with_skeleton(two.clone()).unwrap();
+        on_two.bones = Some(vec![1; n]);
+        assert_eq!(
+            on_two.with_skeleton(cube.skeleton.clone()).map(|_| ()),
+            Err(SkinError::JointOutOfRange { vertex: 0, influence: 0, joint: 1, joint_count: 1 })
+        );
+        assert_eq!(
+            SkinnedMesh::new(
+                cube.positions.clone(),
+                cube.normals[1..].to_vec(),
+                cube.indices.clone(),
+                joints,
+                weights,
+                None,
+                two
+            )
+            .map(|_| ()),
+            length("normals", n - 1)
+        );
+    }
+
     fn extent(mesh: &SkinnedMesh) -> Vec3 {
         let min = mesh.positions.iter().fold(Vec3::MAX, |a, &b| a.min(b));
         let max = mesh.positions.iter().fold(Vec3::MIN, |a, &b| a.max(b));
         max - min
+    }
+
+    /// A scene skeleton's rest rotations must be unit quaternions (within the tolerance, then
+    /// normalized); the error names the joint and the length.
+    #[test]
+    fn scene_skeletons_need_unit_rest_rotations() {
+        let mut scene = arm_scene_skeleton();
+        scene.joints[2].rest_rotation = Quat::from_xyzw(0.0, 0.0, 0.0, 2.0);
+        assert_eq!(
+            RestSkeleton::from_scene(&scene),
+            Err(SkinError::NonUnitRestRotation { joint: 2, name: ARM_JOINT_NAMES[2].into(), length: 2.0 })
+        );
+        // Within the tolerance (1e-3), the rotation is normalized.
+        scene.joints[2].rest_rotation = Quat::from_xyzw(0.0, 0.6, 0.0, 0.8) * 1.0005;
+        let rest = RestSkeleton::from_scene(&scene).unwrap();
+        let det = rest.parent_from_joint()[2].matrix3.determinant();
+        assert!((det - 1.0).abs() < 1e-5, "determinant {det}");
     }
 
     #[test]

@@ -285,6 +285,27 @@ mod tests {
         assert!(moved.abs_diff_eq(Vec3::new(3.0, 3.0, 0.0), 1e-5));
     }
 
+    /// Rotation times a uniform scale is uniform; any scale that differs along one axis, a
+    /// shear or a zero matrix is not.
+    #[test]
+    fn uniform_scale_is_recognised() {
+        let rotation = Mat3A::from_quat(Quat::from_rotation_y(0.7));
+        assert!(is_uniform_scale(&(rotation * 2.0)));
+        for scale in [Vec3::new(1.0, 1.0, 2.0), Vec3::new(1.0, 2.0, 1.0), Vec3::new(2.0, 1.0, 1.0)] {
+            assert!(!is_uniform_scale(&(rotation * Mat3A::from_diagonal(scale))), "{scale}");
+        }
+        let shear = Mat3A::from_cols(Vec3A::X, Vec3A::new(0.5, 1.0, 0.0), Vec3A::Z);
+        assert!(!is_uniform_scale(&shear));
+        assert!(!is_uniform_scale(&Mat3A::ZERO));
+    }
+
+    #[test]
+    fn rest_poses_have_one_entry_per_joint() {
+        let pose = Pose::rest(3);
+        assert_eq!((pose.len(), pose.is_empty()), (3, false));
+        assert!(Pose::rest(0).is_empty());
+    }
+
     #[test]
     fn bad_poses_are_typed_errors() {
         let skeleton = chain();
@@ -299,5 +320,25 @@ mod tests {
         let mut pose = Pose::rest(3);
         pose.root_translation.y = f32::INFINITY;
         assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadRootTranslation));
+        let mut pose = Pose::rest(3);
+        pose.local_translations[1].x = f32::NAN;
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadPoseTransform { joint: 1 }));
+        let mut pose = Pose::rest(3);
+        pose.local_scales[2].z = f32::INFINITY;
+        assert_eq!(JointPalette::new(&skeleton, &pose), Err(SkinError::BadPoseTransform { joint: 2 }));
+        for (what, edit) in [
+            (
+                "pose translations",
+                &(|p: &mut Pose| p.local_translations.pop()) as &dyn Fn(&mut Pose) -> Option<Vec3>,
+            ),
+            ("pose scales", &|p: &mut Pose| p.local_scales.pop()),
+        ] {
+            let mut pose = Pose::rest(3);
+            edit(&mut pose);
+            assert_eq!(
+                JointPalette::new(&skeleton, &pose),
+                Err(SkinError::LengthMismatch { what, expected: 3, found: 2 })
+            );
+        }
     }
 }

@@ -306,12 +306,20 @@ mod tests {
             assert!(product.abs_diff_eq(Affine3A::IDENTITY, 1e-6));
         }
         assert_eq!(skeleton.children(1), &[2]);
+        assert_eq!(skeleton.names(), &["j0", "j1", "j2", "j3"]);
         assert_eq!(skeleton.bone_lengths(), &[2.0, 2.0, 2.0, 2.0]);
     }
 
     #[test]
     fn invalid_hierarchies_are_typed_errors() {
         assert_eq!(RestSkeleton::new(&[]), Err(SkinError::EmptySkeleton));
+        let many: Vec<RestJoint> = (0..=MAX_JOINTS)
+            .map(|j| RestJoint::new("j", j.checked_sub(1), Vec3::X, Quat::IDENTITY))
+            .collect();
+        assert_eq!(
+            RestSkeleton::new(&many),
+            Err(SkinError::TooManyJoints { count: MAX_JOINTS + 1, max: MAX_JOINTS })
+        );
         let mut joints = chain(3);
         joints[1].parent = Some(1);
         assert!(matches!(
@@ -352,6 +360,26 @@ mod tests {
         assert!(matches!(
             RestSkeleton::with_inverse_bind_matrices(&joints, &singular),
             Err(SkinError::BadInverseBind { joint: 1, .. })
+        ));
+        // Non-finite, not affine (fourth row), singular 3×3 part: each refused, naming the joint.
+        let mut not_finite = ibm;
+        not_finite[1].w_axis.x = f32::NAN;
+        let mut not_affine = ibm;
+        not_affine[0].x_axis.w = 0.5;
+        let mut flat = ibm;
+        flat[1].z_axis = glam::Vec4::ZERO;
+        for (bad, joint) in [(not_finite, 1), (not_affine, 0), (flat, 1)] {
+            assert!(matches!(
+                RestSkeleton::with_inverse_bind_matrices(&joints, &bad),
+                Err(SkinError::BadInverseBind { joint: j, .. }) if j == joint
+            ));
+        }
+        // The hierarchy is checked first.
+        let mut orphan = chain(2);
+        orphan[1].parent = Some(5);
+        assert!(matches!(
+            RestSkeleton::with_inverse_bind_matrices(&orphan, &ibm),
+            Err(SkinError::ParentOutOfRange { joint: 1, parent: 5, .. })
         ));
     }
 }

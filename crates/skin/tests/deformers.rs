@@ -4,8 +4,9 @@
 use glam::{Quat, Vec3};
 use keyrig_core::{DeformerKind, ProceduralMesh};
 use keyrig_skin::{
-    deform_mesh_into, mesh_for, BlendZone, BonesBlendJob, BonesBlendVertex, Deformed, DualQuatJob, Execution,
-    Influences, JointPalette, LinearBlendJob, Pose, RestJoint, RestSkeleton, RigidJob, SkinError,
+    deform_mesh_into, mesh_for, BlendZone, BonesBlendBindings, BonesBlendJob, BonesBlendVertex, Deformed,
+    DualQuatJob, Execution, Influences, JointPalette, LinearBlendJob, Pose, RestJoint, RestSkeleton,
+    RigidJob, SkinError,
 };
 use proptest::prelude::*;
 
@@ -161,11 +162,12 @@ fn agreement(joint_count: usize, n: usize) {
             .run_with(e)
         });
         assert_all_equal(&linear, &format!("linear, round {round}"));
+        let bindings = BonesBlendBindings::new(d.bindings.clone(), skeleton.parents()).unwrap();
         let bones = run_all(n, |e, op, on| {
             BonesBlendJob {
                 palette: &palette,
                 parents: skeleton.parents(),
-                bindings: &d.bindings,
+                bindings: &bindings,
                 positions: &d.positions,
                 normals: &d.normals,
                 out_positions: op,
@@ -269,6 +271,7 @@ fn bones_blend(
     bindings: &[BonesBlendVertex],
     p: &[Vec3],
 ) -> Vec<Vec3> {
+    let bindings = &BonesBlendBindings::new(bindings.to_vec(), skeleton.parents()).unwrap();
     let normals = vec![Vec3::Y; p.len()];
     let mut out = vec![Vec3::NAN; p.len()];
     let mut out_n = vec![Vec3::NAN; p.len()];
@@ -396,6 +399,19 @@ fn bad_inputs_are_typed_errors_and_leave_outputs_alone() {
         rigid(&[0, 3]),
         Err(SkinError::JointOutOfRange { vertex: 1, influence: 0, joint: 3, joint_count: 3 })
     );
+    let (mut vp, mut vn) = ([poison; 2], [poison; 2]);
+    let job = RigidJob {
+        palette: &palette,
+        joints: &[0, 3],
+        positions: &positions,
+        normals: &normals,
+        out_positions: &mut vp,
+        out_normals: &mut vn,
+    };
+    assert_eq!(
+        job.validate(),
+        Err(SkinError::JointOutOfRange { vertex: 1, influence: 0, joint: 3, joint_count: 3 })
+    );
     assert!(matches!(rigid(&[0]), Err(SkinError::LengthMismatch { what: "joints", expected: 2, found: 1 })));
     assert_eq!(op, [poison; 2]);
 
@@ -495,7 +511,16 @@ fn bad_inputs_are_typed_errors_and_leave_outputs_alone() {
             SkinError::RootBlend { vertex: 1, joint: 0, t: 0.5 },
         ),
     ];
-    for (bindings, expected) in bb_cases {
+    for (bindings, expected) in &bb_cases {
+        // Bad bindings are refused when they are built, naming the vertex.
+        let built = BonesBlendBindings::new(bindings.to_vec(), skeleton.parents());
+        assert_eq!(built.unwrap_err().to_string(), expected.to_string());
+    }
+    // Bindings built for another skeleton (5 joints, joint 0 with a parent) reach the job, which
+    // refuses them against its own before writing anything.
+    let other_parents = [Some(1), Some(0), Some(1), Some(2), Some(3)];
+    for (bindings, expected) in [&bb_cases[0], &bb_cases[3]] {
+        let bindings = BonesBlendBindings::new(bindings.to_vec(), &other_parents).unwrap();
         let r = BonesBlendJob {
             palette: &palette,
             parents: skeleton.parents(),
@@ -581,4 +606,99 @@ fn multi_weight_meshes_get_bones_blending_bindings() {
         "{}",
         max_difference(&a.positions, &b.positions)
     );
+}
+
+/// Every job checks every buffer's length against the positions' and names the one that is
+/// off (one vertex short), before writing anything.
+#[test]
+fn every_job_names_the_buffer_of_the_wrong_length() {
+    let skeleton = chain();
+    let palette = JointPalette::new(&skeleton, &Pose::rest(3)).unwrap();
+    let dqs = palette.dual_quaternions().unwrap();
+    let n = 3;
+    let positions = vec![Vec3::ONE; n];
+    let normals = vec![Vec3::Y; n];
+    let joints = vec![1u16; n];
+    let influences = Influences::new(vec![[0u16, 1, 0, 0]; n], vec![[0.5f32, 0.5, 0.0, 0.0]; n], 3).unwrap();
+    let bindings =
+        BonesBlendBindings::new(vec![BonesBlendVertex { joint: 1, t: 0.5 }; n], skeleton.parents()).unwrap();
+    let short_influences =
+        Influences::new(influences.joints()[1..].to_vec(), influences.weights()[1..].to_vec(), 3).unwrap();
+    let short_bindings = BonesBlendBindings::new(bindings[1..].to_vec(), skeleton.parents()).unwrap();
+    let poison = Vec3::splat(-7.0);
+    // Which buffer is one short: 0 positions (so every other buffer is one too long), 1 normals,
+    // 2 output positions, 3 output normals, 4 the per-vertex joints, influences or bindings.
+    let expected = |short: usize, per_vertex: &'static str| {
+        let (what, expected, found) = match short {
+            0 => (per_vertex, n - 1, n),
+            1 => ("normals", n, n - 1),
+            2 => ("output positions", n, n - 1),
+            3 => ("output normals", n, n - 1),
+            _ => (per_vertex, n, n - 1),
+        };
+        Err(SkinError::LengthMismatch { what, expected, found })
+    };
+    let cut = |short: usize, which: usize, len: usize| if short == which { len - 1 } else { len };
+    for short in 0..5 {
+        let (mut op, mut on) = (vec![poison; n], vec![poison; n]);
+        let (p, nr) = (&positions[..cut(short, 0, n)], &normals[..cut(short, 1, n)]);
+        let (op, on) = (&mut op[..cut(short, 2, n)], &mut on[..cut(short, 3, n)]);
+        let rigid = RigidJob {
+            palette: &palette,
+            joints: &joints[..cut(short, 4, n)],
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(rigid, expected(short, "joints"), "rigid, buffer {short} short");
+        let influences = if short == 4 { &short_influences } else { &influences };
+        let linear = LinearBlendJob {
+            palette: &palette,
+            influences,
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(linear, expected(short, "influences"), "linear, buffer {short} short");
+        let dual = DualQuatJob {
+            dual_quaternions: &dqs,
+            influences,
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(dual, expected(short, "influences"), "dual quaternion, buffer {short} short");
+        let bindings = if short == 4 { &short_bindings } else { &bindings };
+        let blend = BonesBlendJob {
+            palette: &palette,
+            parents: skeleton.parents(),
+            bindings,
+            positions: p,
+            normals: nr,
+            out_positions: op,
+            out_normals: on,
+        }
+        .run();
+        assert_eq!(blend, expected(short, "bones-blending bindings"), "bones blending, buffer {short} short");
+        assert!(op.iter().chain(on.iter()).all(|v| *v == poison));
+    }
+    // Bones blending also needs one parent entry per palette joint.
+    let (mut op, mut on) = (vec![poison; n], vec![poison; n]);
+    let blend = BonesBlendJob {
+        palette: &palette,
+        parents: &skeleton.parents()[..2],
+        bindings: &bindings,
+        positions: &positions,
+        normals: &normals,
+        out_positions: &mut op,
+        out_normals: &mut on,
+    }
+    .run();
+    assert_eq!(blend, Err(SkinError::LengthMismatch { what: "joint parents", expected: 3, found: 2 }));
 }

@@ -1,10 +1,12 @@
-//! Data and an in-tree Rust port of ozz-animation-rs's loop shared by `benches/deformers.rs` (criterion) and
+//! Data shared by `benches/deformers.rs` (criterion) and
 //! `examples/deformer_timing.rs` (interleaved minimum times), so both measure the same thing:
 //! a random branching skeleton of [`JOINTS`] joints, a random pose, and vertices with 4
 //! influences on neighbouring joints.
 
-use glam::{Mat4, Quat, Vec3, Vec4};
-use keyrig_skin::{BonesBlendVertex, DualQuat, Influences, JointPalette, Pose, RestJoint, RestSkeleton};
+use glam::{Mat4, Quat, Vec3};
+use keyrig_skin::{
+    BonesBlendBindings, BonesBlendVertex, DualQuat, Influences, JointPalette, Pose, RestJoint, RestSkeleton,
+};
 
 pub const JOINTS: usize = 64;
 
@@ -40,8 +42,9 @@ pub struct Data {
     /// `joints` and `weights`, validated once (what the jobs take).
     pub influences: Influences,
     pub bones: Vec<u16>,
-    pub bindings: Vec<BonesBlendVertex>,
-    // The same data in ozz's layout.
+    /// Bones-blending bindings, validated once (what the job takes).
+    pub bindings: BonesBlendBindings,
+    // The same data in ozz's layout (for the C++ driver, tools/ozz-driver).
     pub ozz_palette: Vec<Mat4>,
     pub ozz_joints: Vec<u16>,
     pub ozz_weights: Vec<f32>,
@@ -80,10 +83,11 @@ pub fn data_with_joints(n: usize, joint_count: usize) -> Data {
         weights: Vec::with_capacity(n),
         influences: Influences::default(),
         bones: Vec::with_capacity(n),
-        bindings: Vec::with_capacity(n),
+        bindings: BonesBlendBindings::default(),
         ozz_joints: Vec::with_capacity(4 * n),
         ozz_weights: Vec::with_capacity(3 * n),
     };
+    let mut bindings = Vec::with_capacity(n);
     for _ in 0..n {
         d.positions.push(rng.vec3(10.0));
         d.normals.push(rng.vec3(1.0).try_normalize().unwrap_or(Vec3::Y));
@@ -97,40 +101,11 @@ pub fn data_with_joints(n: usize, joint_count: usize) -> Data {
         d.weights.push(ws);
         d.bones.push(js[0]);
         let k = base + 1;
-        d.bindings.push(BonesBlendVertex { joint: k as u32, t: rng.next_f32() });
+        bindings.push(BonesBlendVertex { joint: k as u32, t: rng.next_f32() });
         d.ozz_joints.extend_from_slice(&js);
         d.ozz_weights.extend_from_slice(&ws[..3]);
     }
     d.influences = Influences::new(d.joints.clone(), d.weights.clone(), joint_count).unwrap();
+    d.bindings = BonesBlendBindings::new(bindings, d.skeleton.parents()).unwrap();
     d
-}
-
-/// An in-tree Rust port of ozz-animation-rs's 4-influence, positions-and-normals skinning loop
-/// (the Rust rewrite of ozz, on glam `Mat4`). It is **not** ozz-animation's C++ `SkinningJob`:
-/// on the benchmark machine it ran about 1.4× slower than the real one, so it is a loop to
-/// compare shapes of code against, not the peer. The real comparison is in
-/// `docs/benchmarks.md` (ozz-animation 0.16.0 C++ built from source, run interleaved).
-pub fn ozz_port(d: &Data, out_positions: &mut [Vec3], out_normals: &mut [Vec3]) -> Result<(), &'static str> {
-    #[inline(always)]
-    fn col_mul(m: &Mat4, w: Vec4) -> Mat4 {
-        Mat4::from_cols(m.x_axis * w, m.y_axis * w, m.z_axis * w, m.w_axis * w)
-    }
-    let (matrices, indices, weights) = (&d.ozz_palette, &d.ozz_joints, &d.ozz_weights);
-    for i in 0..d.positions.len() {
-        let wo = i * 3;
-        let io = i * 4;
-        let w = Vec4::splat(weights[wo]);
-        let mut sum = w;
-        let mut transform = col_mul(matrices.get(indices[io] as usize).ok_or("index")?, w);
-        for j in 1..3 {
-            let w = Vec4::splat(weights[wo + j]);
-            sum += w;
-            transform += col_mul(matrices.get(indices[io + j] as usize).ok_or("index")?, w);
-        }
-        let w = Vec4::ONE - sum;
-        transform += col_mul(matrices.get(indices[io + 3] as usize).ok_or("index")?, w);
-        out_positions[i] = transform.transform_point3(d.positions[i]);
-        out_normals[i] = transform.transform_vector3(d.normals[i]);
-    }
-    Ok(())
 }

@@ -7,7 +7,7 @@
 
 use glam::{BVec4A, Mat4, Quat, Vec3, Vec3A, Vec4};
 
-use super::{check_buffers, check_len, for_each_chunk, Execution};
+use super::{check_buffers, check_len, for_each_chunk, Build, Execution, Job};
 use crate::dual_quat::DualQuat;
 use crate::error::SkinError;
 use crate::influences::Influences;
@@ -43,12 +43,13 @@ impl<const N: usize> DualQuatJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate()?;
-        match execution {
-            Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
-        }
-        Ok(())
+        super::run(self, execution)
+    }
+}
+
+impl<const N: usize> Job for DualQuatJob<'_, N> {
+    fn check(&self, _parallel: bool) -> Result<(), SkinError> {
+        self.validate()
     }
 
     fn reference(&mut self) {
@@ -65,7 +66,9 @@ impl<const N: usize> DualQuatJob<'_, N> {
             let mut dual = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
             for i in 0..N {
                 let q = self.dual_quaternions[js[i] as usize];
-                let w = if q.real.dot(pivot) < 0.0 { -ws[i] } else { ws[i] };
+                // The weight takes the sign of the dot product (−0.0 included, as the fast
+                // paths take it).
+                let w = ws[i].copysign(q.real.dot(pivot));
                 real += q.real * w;
                 dual += q.dual * w;
             }
@@ -76,35 +79,33 @@ impl<const N: usize> DualQuatJob<'_, N> {
         }
     }
 
-    /// The fast path.
-    fn fast(&mut self, execution: Execution) {
-        let parallel = execution.parallel();
+    fn fast(&mut self, parallel: bool, build: Build) {
         let dqs = self.dual_quaternions;
         let (joints, weights) = (self.influences.joints(), self.influences.weights());
         let (positions, normals) = (self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
-        if execution.simd() {
-            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked that the
-            // palette holds every joint index of the influences.
+        if build != Build::Portable {
+            // SAFETY: the CPU has AVX2 and FMA (the caller runs only builds that run here);
+            // validate() checked that the palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
-            let avx512 = super::simd::avx512_available()
-                && !super::simd::FORCE_AVX2.load(std::sync::atomic::Ordering::Relaxed);
-            for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
                 let end = start + out_p.len();
                 let (js, ws) = (&joints[start..end], &weights[start..end]);
                 let (ps, ns) = (&positions[start..end], &normals[start..end]);
                 // SAFETY: as above; the AVX-512VL build only where the CPU has it.
                 unsafe {
-                    if avx512 {
+                    if build == Build::Avx512Vl {
                         super::simd::dual_quaternion_chunk_soa_avx512(&packed, js, ws, ps, ns, out_p, out_n)
                     } else {
-                        super::simd::dual_quaternion_chunk_soa_placed(&packed, js, ws, ps, ns, out_p, out_n)
+                        super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
                     }
                 }
             });
             return;
         }
-        for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = build;
+        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
                 .iter()

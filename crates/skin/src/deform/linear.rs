@@ -4,7 +4,7 @@
 
 use glam::{Mat3, Mat3A, Mat4, Vec3, Vec3A};
 
-use super::{check_buffers, check_len, for_each_chunk, Execution};
+use super::{check_buffers, check_len, for_each_chunk, Build, Execution, Job};
 use crate::error::SkinError;
 use crate::influences::Influences;
 use crate::pose::JointPalette;
@@ -41,12 +41,13 @@ impl<const N: usize> LinearBlendJob<'_, N> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        self.validate()?;
-        match execution {
-            Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => self.fast(execution),
-        }
-        Ok(())
+        super::run(self, execution)
+    }
+}
+
+impl<const N: usize> Job for LinearBlendJob<'_, N> {
+    fn check(&self, _parallel: bool) -> Result<(), SkinError> {
+        self.validate()
     }
 
     fn reference(&mut self) {
@@ -69,19 +70,17 @@ impl<const N: usize> LinearBlendJob<'_, N> {
         }
     }
 
-    /// The fast path.
-    fn fast(&mut self, execution: Execution) {
-        let parallel = execution.parallel();
+    fn fast(&mut self, parallel: bool, build: Build) {
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let (joints, weights) = (self.influences.joints(), self.influences.weights());
         let (positions, normals) = (self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
-        if normal_palette.is_none() && execution.simd() {
-            // SAFETY: the CPU has AVX2 and FMA (checked above); validate() checked that the
-            // palette holds every joint index of the influences.
+        if normal_palette.is_none() && build != Build::Portable {
+            // SAFETY: the CPU has AVX2 and FMA (the caller runs only builds that run here);
+            // validate() checked that the palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_palette(palette) };
-            for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
                 let end = start + out_p.len();
                 // SAFETY: as above.
                 unsafe {
@@ -98,7 +97,9 @@ impl<const N: usize> LinearBlendJob<'_, N> {
             });
             return;
         }
-        for_each_chunk(parallel, None, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = build;
+        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end]
                 .iter()

@@ -5,7 +5,7 @@ use std::ops::Range;
 
 use glam::{Mat3, Mat4, Vec3, Vec3A};
 
-use super::{all_chunks, check_buffers, check_len, for_each_chunk, Check, Execution};
+use super::{all_chunks, check_buffers, check_len, for_each_chunk, Build, Execution, Job};
 use crate::error::SkinError;
 use crate::pose::JointPalette;
 
@@ -67,23 +67,15 @@ impl RigidJob<'_> {
 
     /// Validates, then deforms the chosen way.
     pub fn run_with(&mut self, execution: Execution) -> Result<(), SkinError> {
-        if execution.parallel() {
-            // The quick per-chunk check runs in the same dispatch as the kernel (see
-            // `for_each_chunk`); when it fails nothing was written, and the full validation
-            // below names the error.
-            self.check_lengths()?;
-            if self.fast(execution, true) {
-                return Ok(());
-            }
-        }
-        self.validate_with(false)?;
-        match execution {
-            Execution::Reference => self.reference(),
-            Execution::SingleThreaded | Execution::Parallel | Execution::Portable => {
-                self.fast(execution, false);
-            }
-        }
-        Ok(())
+        super::run(self, execution)
+    }
+}
+
+impl Job for RigidJob<'_> {
+    /// Rigid joints are a plain slice, not a validated type: every index is checked, in
+    /// parallel chunks for a parallel run.
+    fn check(&self, parallel: bool) -> Result<(), SkinError> {
+        self.validate_with(parallel)
     }
 
     fn reference(&mut self) {
@@ -99,44 +91,36 @@ impl RigidJob<'_> {
         }
     }
 
-    /// The fast path; with `check`, only if every chunk passes the quick check (returns
-    /// whether it ran).
-    fn fast(&mut self, execution: Execution, check: bool) -> bool {
-        let parallel = execution.parallel();
+    fn fast(&mut self, parallel: bool, build: Build) {
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let joints = self.joints;
         let positions = self.positions;
         let normals = self.normals;
-        let quick_check = Self::quick_check(self.joints, self.palette.len());
-        let check: Option<Check> = check.then_some(&quick_check);
         #[cfg(target_arch = "x86_64")]
-        if execution.simd() {
-            return for_each_chunk(
-                parallel,
-                check,
-                self.out_positions,
-                self.out_normals,
-                |start, out_p, out_n| {
-                    let end = start + out_p.len();
-                    // SAFETY: the CPU has AVX2 and FMA (`Execution::simd`); every joint index was
-                    // checked against the palette (validate, or this chunk's quick check); the
-                    // slices are one chunk of buffers whose lengths were checked equal.
-                    unsafe {
-                        super::simd::rigid_chunk(
-                            palette,
-                            normal_palette,
-                            &joints[start..end],
-                            &positions[start..end],
-                            &normals[start..end],
-                            out_p,
-                            out_n,
-                        )
-                    }
-                },
-            );
+        if build != Build::Portable {
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                // SAFETY: the CPU has AVX2 and FMA (the caller runs only builds that run here);
+                // validate() checked every joint index against the palette; the slices are one
+                // chunk of buffers whose lengths were checked equal.
+                unsafe {
+                    super::simd::rigid_chunk(
+                        palette,
+                        normal_palette,
+                        &joints[start..end],
+                        &positions[start..end],
+                        &normals[start..end],
+                        out_p,
+                        out_n,
+                    )
+                }
+            });
+            return;
         }
-        for_each_chunk(parallel, check, self.out_positions, self.out_normals, |start, out_p, out_n| {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = build;
+        for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
             let end = start + out_p.len();
             let inputs = joints[start..end].iter().zip(&positions[start..end]).zip(&normals[start..end]);
             for (((&j, &p), &n), (op, on)) in inputs.zip(out_p.iter_mut().zip(out_n.iter_mut())) {
@@ -148,6 +132,23 @@ impl RigidJob<'_> {
                 };
                 *on = nm.into();
             }
-        })
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The branch-free pass accepts exactly the ranges whose joints are all in the palette
+    /// (when it refuses, the slow pass that names the vertex runs instead: the result would be
+    /// the same, only slower, so it is checked on its own).
+    #[test]
+    fn the_quick_check_accepts_in_range_joints_only() {
+        let joints = [0u16, 2, 1, 3];
+        assert!(RigidJob::quick_check(&joints, 4)(0..4));
+        assert!(RigidJob::quick_check(&joints, 3)(0..3));
+        assert!(!RigidJob::quick_check(&joints, 3)(0..4));
+        assert!(!RigidJob::quick_check(&joints, 3)(3..4));
     }
 }

@@ -4,14 +4,12 @@
 //! blending one influence is two FMAs instead of eight SSE multiplies and adds.
 
 use std::arch::x86_64::*;
-use std::cell::RefCell;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Affine3A, Mat3A, Vec3, Vec3A, Vec4};
 
-use super::bones_blending::sin_cos_quarter_turn;
-use super::BonesBlendVertex;
+use super::trig::sin_cos_quarter_turn;
 use crate::dual_quat::DualQuat;
+use crate::influences::BonesBlendVertex;
 use crate::pose::BonesBlendJoint;
 
 /// Whether this CPU can run the kernels below.
@@ -258,18 +256,9 @@ fn sin_cos_quarter_turn_x8(x: __m256) -> (__m256, __m256) {
     };
     let s = _mm256_mul_ps(
         x,
-        horner(&[
-            1.0 / 6_227_020_800.0,
-            -1.0 / 39_916_800.0,
-            1.0 / 362_880.0,
-            -1.0 / 5040.0,
-            1.0 / 120.0,
-            -1.0 / 6.0,
-            1.0,
-        ]),
+        horner(&[-1.0 / 39_916_800.0, 1.0 / 362_880.0, -1.0 / 5040.0, 1.0 / 120.0, -1.0 / 6.0, 1.0]),
     );
     let c = horner(&[
-        -1.0 / 87_178_291_200.0,
         1.0 / 479_001_600.0,
         -1.0 / 3_628_800.0,
         1.0 / 40_320.0,
@@ -314,12 +303,13 @@ const fn lanes_of(r: i32, c: i32) -> i32 {
     mask
 }
 
-/// Permutation for [`load_deinterleaved`]: lane l of component c takes lane (3l + c) % 8.
+/// Permutation for [`load_deinterleaved`]: lane l of component c takes lane (3l + c) mod 8
+/// (the low three bits: `_mm256_permutevar8x32_ps` reads no others).
 const fn load_order(c: i32) -> [i32; 8] {
     let mut order = [0; 8];
     let mut l = 0;
     while l < 8 {
-        order[l as usize] = (3 * l + c) % 8;
+        order[l as usize] = (3 * l + c) & 7;
         l += 1;
     }
     order
@@ -655,77 +645,9 @@ dual_quaternion_kernel!(
     dual_quaternion_chunk_soa_avx512
 );
 
-/// Test and timing knobs (see [`super::force_avx2_dual_quaternion`]): run the AVX2 build of the
-/// dual quaternion kernel even where AVX-512VL exists, and whether that build gets the placed
-/// palette copy ([`dual_quaternion_chunk_soa_placed`]).
-pub(crate) static FORCE_AVX2: AtomicBool = AtomicBool::new(false);
-pub(crate) static PLACE_PALETTE: AtomicBool = AtomicBool::new(true);
-
-/// Largest palette (bytes) that is copied beside the stack: the spill area takes ~1.2 KiB of a
-/// 4 KiB window, so a palette of up to 2 KiB (64 joints) fits in the rest.
-pub(crate) const PLACED_PALETTE_MAX_BYTES: usize = 2048;
-
-thread_local! {
-    /// Per-thread scratch for the placed palette: one 4 KiB window of slack plus the palette,
-    /// allocated on first use and grown only if a larger palette comes (at most 2 KiB).
-    static PLACED: RefCell<Vec<PackedDualQuat>> = const { RefCell::new(Vec::new()) };
-}
-
-/// The AVX2 build of the dual quaternion kernel with its palette at a deterministic place
-/// relative to the stack. The kernel spills ~25 `ymm` values and ~20 pointers per group of 8
-/// vertices into its frame (1 112 bytes in the release build, below the stack pointer at entry); when a spill
-/// slot and a palette entry share address bits 11..0 the palette load waits for the spill
-/// store (4K aliasing), and since the stack lies at a random place modulo 4096 in each process
-/// the kernel ran at one of two speeds. Here a palette of at most
-/// [`PLACED_PALETTE_MAX_BYTES`] is copied into a thread-local buffer so that, modulo 4096, it
-/// starts at this function's own frame and extends *upwards* (away from the spill area below
-/// it); larger palettes are used in place, as before. The copy is 32 bytes per joint per call
-/// (2 KiB for 64 joints, against ~60 µs of work for a chunk of 4096 vertices).
-///
-/// # Safety
-/// As [`dual_quaternion_chunk_soa`].
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn dual_quaternion_chunk_soa_placed<const N: usize>(
-    dqs: &[PackedDualQuat],
-    joints: &[[u16; N]],
-    weights: &[[f32; N]],
-    positions: &[Vec3],
-    normals: &[Vec3],
-    out_positions: &mut [Vec3],
-    out_normals: &mut [Vec3],
-) {
-    let bytes = std::mem::size_of_val(dqs);
-    if bytes > PLACED_PALETTE_MAX_BYTES || !PLACE_PALETTE.load(Ordering::Relaxed) {
-        // SAFETY: the caller's contract.
-        return unsafe {
-            dual_quaternion_chunk_soa(dqs, joints, weights, positions, normals, out_positions, out_normals)
-        };
-    }
-    // The stack pointer, approximately: a local of this frame; the kernel's frame lies below.
-    let marker = 0u8;
-    let stack = std::hint::black_box(&marker) as *const u8 as usize;
-    PLACED.with_borrow_mut(|buffer| {
-        let entry = std::mem::size_of::<PackedDualQuat>();
-        let slack = 4096 / entry;
-        if buffer.len() < slack + dqs.len() {
-            buffer.resize(slack + dqs.len(), _mm256_setzero_ps());
-        }
-        // First entry k with (buffer + k·32) ≡ stack rounded up to 32 (mod 4096).
-        let target = stack.div_ceil(entry) * entry % 4096;
-        let k = (target + 4096 - buffer.as_ptr() as usize % 4096) % 4096 / entry;
-        let placed = &mut buffer[k..k + dqs.len()];
-        placed.copy_from_slice(dqs);
-        // SAFETY: the caller's contract; `placed` holds the same entries as `dqs`.
-        unsafe {
-            dual_quaternion_chunk_soa(placed, joints, weights, positions, normals, out_positions, out_normals)
-        }
-    })
-}
-
 /// `_MM_SHUFFLE(z, y, x, w)` (not yet stable as a const fn).
 const fn shuffle_imm(z: i32, y: i32, x: i32, w: i32) -> i32 {
-    (z << 6) | (y << 4) | (x << 2) | w
+    (z << 6) + (y << 4) + (x << 2) + w
 }
 
 /// Packs four results (x, y, z, _) into the three registers x₀y₀z₀x₁, y₁z₁x₂y₂, z₂x₃y₃z₃: four
@@ -814,220 +736,5 @@ pub(crate) unsafe fn rigid_chunk(
         *out_positions.get_unchecked_mut(v) = Vec3A::from(pos).into();
         *out_normals.get_unchecked_mut(v) = Vec3A::from(nor).into();
         v += 1;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use glam::{Quat, Vec3};
-
-    use super::*;
-    use crate::deform::{DualQuatJob, Execution};
-
-    /// A small deterministic generator (the tests need no statistics, only varied data).
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn next_f32(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            ((self.0 >> 40) as f32) / ((1u64 << 24) as f32)
-        }
-        fn vec3(&mut self, r: f32) -> Vec3 {
-            Vec3::new(self.next_f32() - 0.5, self.next_f32() - 0.5, self.next_f32() - 0.5) * 2.0 * r
-        }
-    }
-
-    /// Both builds of the dual quaternion kernel (AVX2, and AVX-512VL where the CPU has it)
-    /// against the job's reference path, with ties and zero weights, and a remainder of 3
-    /// vertices after the groups of 8.
-    fn both_builds_match_the_reference<const N: usize>() {
-        // 37 joints: the AVX2 build's palette is copied beside the stack; 100 joints (3 200
-        // bytes, over PLACED_PALETTE_MAX_BYTES): it is used in place.
-        for joint_count in [37, 100] {
-            builds_match_the_reference::<N>(joint_count);
-        }
-    }
-
-    /// These tests check the AVX2+FMA kernels, which run on CPUs that have them; on one that
-    /// has not, they fail (rather than pass having checked nothing) and say so.
-    fn require_avx2(test: &str) {
-        assert!(
-            available(),
-            "{test}: this CPU lacks AVX2+FMA, so the SIMD kernel under test cannot run here \
-             (keyrig runs the portable path on such CPUs, which tests/deformers.rs checks)"
-        );
-    }
-
-    fn builds_match_the_reference<const N: usize>(joint_count: usize) {
-        require_avx2("dual quaternion kernels");
-        let mut rng = Lcg(0x5EED + N as u64);
-        let dqs: Vec<DualQuat> = (0..joint_count)
-            .map(|_| {
-                let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
-                let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
-                DualQuat::from_rotation_translation(rotation, rng.vec3(3.0))
-            })
-            .collect();
-        let n = 8 * 125 + 3;
-        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
-        let joints: Vec<[u16; N]> = (0..n)
-            .map(|_| {
-                [0; N].map(|_| ((rng.next_f32() * joint_count as f32) as usize).min(joint_count - 1) as u16)
-            })
-            .collect();
-        let weights: Vec<[f32; N]> = (0..n)
-            .map(|v| {
-                let mut ws = [0.0f32; N].map(|_| rng.next_f32() + 0.01);
-                match v % 5 {
-                    0 => ws = [1.0; N], // all tied: the first influence is the pivot
-                    1 => ws[N - 1] = 0.0,
-                    2 => ws[1] = ws[0], // a tie for the largest weight is possible
-                    _ => {}
-                }
-                let sum: f32 = ws.iter().sum();
-                ws.map(|w| w / sum)
-            })
-            .collect();
-        let mut expected = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
-        let influences =
-            crate::influences::Influences::new(joints.clone(), weights.clone(), joint_count).unwrap();
-        DualQuatJob {
-            dual_quaternions: &dqs,
-            influences: &influences,
-            positions: &positions,
-            normals: &normals,
-            out_positions: &mut expected.0,
-            out_normals: &mut expected.1,
-        }
-        .run_with(Execution::Reference)
-        .unwrap();
-        // SAFETY: available() checked above.
-        let packed = unsafe { pack_dual_quaternions(&dqs) };
-        // The placed build at several stack depths, so the copy lands at different places in
-        // its buffer (and, for the second depth on, the thread's buffer is reused).
-        let mut builds = vec!["avx2", "avx2_placed_0", "avx2_placed_1", "avx2_placed_7", "avx2_placed_40"];
-        if avx512_available() {
-            builds.push("avx512");
-        }
-        eprintln!("dual quaternion kernels, {joint_count} joints: testing the builds {builds:?}");
-        for build in builds {
-            let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
-            let (op, on) = (&mut out.0, &mut out.1);
-            // SAFETY: the features were checked; every joint index is below 37.
-            unsafe {
-                match build {
-                    "avx2" => {
-                        dual_quaternion_chunk_soa(&packed, &joints, &weights, &positions, &normals, op, on)
-                    }
-                    placed if placed.starts_with("avx2_placed_") => {
-                        let depth = placed["avx2_placed_".len()..].parse().unwrap();
-                        under_stack_pad(depth, &mut || {
-                            dual_quaternion_chunk_soa_placed(
-                                &packed, &joints, &weights, &positions, &normals, op, on,
-                            )
-                        })
-                    }
-                    _ => dual_quaternion_chunk_soa_avx512(
-                        &packed, &joints, &weights, &positions, &normals, op, on,
-                    ),
-                }
-            }
-            let build = format!("{build} ({joint_count} joints)");
-            for (got, want, what) in [(&out.0, &expected.0, "position"), (&out.1, &expected.1, "normal")] {
-                for (v, (g, w)) in got.iter().zip(want).enumerate() {
-                    let diff = (*g - *w).abs().max_element();
-                    assert!(
-                        diff <= 1e-4 * (1.0 + w.abs().max_element()),
-                        "{build} N={N} {what} {v}: {g} vs {w}"
-                    );
-                }
-            }
-        }
-    }
-
-    /// Calls `f` `depth` frames of 104 padding bytes further down the stack.
-    #[inline(never)]
-    fn under_stack_pad(depth: usize, f: &mut dyn FnMut()) {
-        let pad = std::hint::black_box([depth as u8; 104]);
-        if depth == 0 {
-            f();
-        } else {
-            under_stack_pad(depth - 1, f);
-        }
-        std::hint::black_box(&pad);
-    }
-
-    #[test]
-    fn dual_quaternion_builds_match_the_reference_4() {
-        both_builds_match_the_reference::<4>();
-    }
-
-    #[test]
-    fn dual_quaternion_builds_match_the_reference_8() {
-        both_builds_match_the_reference::<8>();
-    }
-
-    /// The rigid kernel against the portable formula, on sub-slices that start at every offset
-    /// modulo 4 and have every remainder after the groups of 4, with the palette's own linear
-    /// part and with a separate normal palette.
-    #[test]
-    fn rigid_kernel_matches_the_formula() {
-        require_avx2("rigid kernel");
-        eprintln!("rigid kernel: testing the AVX2+FMA build");
-        let mut rng = Lcg(0x816D);
-        let palette: Vec<Affine3A> = (0..9)
-            .map(|_| {
-                let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
-                let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
-                Affine3A::from_scale_rotation_translation(
-                    Vec3::splat(0.5) + rng.vec3(0.3).abs(),
-                    rotation,
-                    rng.vec3(3.0),
-                )
-            })
-            .collect();
-        let normal_palette: Vec<Mat3A> = palette.iter().map(|m| m.matrix3.inverse().transpose()).collect();
-        let n = 23;
-        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
-        let joints: Vec<u16> = (0..n).map(|_| ((rng.next_f32() * 9.0) as u16).min(8)).collect();
-        for separate in [false, true] {
-            let normal_palette = separate.then_some(normal_palette.as_slice());
-            for start in 0..4 {
-                for len in 0..=n - start - 4 {
-                    let r = start..start + len;
-                    let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
-                    // SAFETY: AVX2 and FMA checked; joints < 9; equal lengths.
-                    unsafe {
-                        rigid_chunk(
-                            &palette,
-                            normal_palette,
-                            &joints[r.clone()],
-                            &positions[r.clone()],
-                            &normals[r.clone()],
-                            &mut out.0[r.clone()],
-                            &mut out.1[r.clone()],
-                        )
-                    };
-                    for v in 0..n {
-                        if !r.contains(&v) {
-                            // Nothing outside the slice is written.
-                            assert!(out.0[v].is_nan() && out.1[v].is_nan(), "vertex {v} of {r:?} written");
-                            continue;
-                        }
-                        let j = joints[v] as usize;
-                        let p = palette[j].transform_point3(positions[v]);
-                        let nm = normal_palette.map_or(palette[j].matrix3, |np| np[j]) * normals[v];
-                        let (dp, dn) =
-                            ((out.0[v] - p).abs().max_element(), (out.1[v] - nm).abs().max_element());
-                        assert!(
-                            dp < 1e-4 && dn < 1e-5,
-                            "{r:?}, vertex {v}, separate normals {separate}: {dp} {dn}"
-                        );
-                    }
-                }
-            }
-        }
     }
 }
