@@ -51,6 +51,13 @@ const BY_HAND: &[(&str, &str, &str)] = &[
         "cargo install cargo-mutants",
         "installs a tool and mutation-tests for most of an hour",
     ),
+    ("docs/testing.md", "# the full eighth", "mutation-tests keyrig-io for hours"),
+    ("docs/testing.md", "export CARGO_TARGET_DIR", "mutation-tests keyrig-skin for minutes"),
+    (
+        "docs/skinning-vs-ozz.md",
+        "# keyrig: build the example",
+        "builds ozz-animation from its source outside the repository and times both",
+    ),
 ];
 
 struct Block {
