@@ -9,21 +9,32 @@ use crate::commands::Command;
 /// The help window: every command with its shortcuts and tooltip.
 pub fn help_ui(ctx: &Context, app: &mut EditorApp) {
     let mut open = app.view.show_help;
-    egui::Window::new("Keyboard shortcuts").open(&mut open).resizable(true).default_width(520.0).show(
-        ctx,
-        |ui| {
-            egui::ScrollArea::vertical().show(ui, |ui| {
-                egui::Grid::new("help_grid").striped(true).num_columns(3).show(ui, |ui| {
-                    for command in Command::ALL {
-                        ui.label(command.label());
-                        ui.monospace(command.shortcut_text(ctx));
-                        ui.weak(command.tooltip());
-                        ui.end_row();
-                    }
-                });
+    // Sized to the window (every row of the list fits on a 1280×800 window; a smaller one
+    // scrolls), with the explanations wrapping rather than running off the edge.
+    let screen = ctx.content_rect().size();
+    egui::Window::new("Keyboard shortcuts")
+        .open(&mut open)
+        .resizable(true)
+        .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+        .default_size(egui::vec2((screen.x * 0.8).min(900.0), screen.y * 0.97))
+        .show(ctx, |ui| {
+            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                egui::Grid::new("help_grid").striped(true).num_columns(3).spacing([12.0, 0.0]).show(
+                    ui,
+                    |ui| {
+                        for command in Command::ALL {
+                            ui.label(command.label());
+                            ui.monospace(command.shortcut_text(ctx));
+                            ui.add(
+                                egui::Label::new(egui::RichText::new(command.tooltip()).weak().small())
+                                    .wrap(),
+                            );
+                            ui.end_row();
+                        }
+                    },
+                );
             });
-        },
-    );
+        });
     app.view.show_help = open && app.view.show_help;
 }
 
