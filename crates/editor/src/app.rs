@@ -32,6 +32,23 @@ type CachedEvaluator = ((u64, u64, u64), Arc<SceneEvaluator>);
 pub struct Status {
     pub text: String,
     pub is_error: bool,
+    /// When it was shown: the status bar lets a message go after [`Status::INFO_SECONDS`]
+    /// (an error after [`Status::ERROR_SECONDS`]), so it never describes an older state.
+    pub at: std::time::Instant,
+}
+
+impl Status {
+    /// How long a message stays in the status bar.
+    pub const INFO_SECONDS: f32 = 8.0;
+    /// How long an error stays.
+    pub const ERROR_SECONDS: f32 = 30.0;
+
+    /// Seconds it has left in the status bar (0 when it is gone).
+    #[must_use]
+    pub fn seconds_left(&self) -> f32 {
+        let lasts = if self.is_error { Self::ERROR_SECONDS } else { Self::INFO_SECONDS };
+        (lasts - self.at.elapsed().as_secs_f32()).max(0.0)
+    }
 }
 
 /// What to do once unsaved changes have been dealt with.
@@ -254,12 +271,12 @@ impl EditorApp {
 
     /// Shows a message in the status bar.
     pub fn info(&mut self, text: impl Into<String>) {
-        self.status = Some(Status { text: text.into(), is_error: false });
+        self.status = Some(Status { text: text.into(), is_error: false, at: std::time::Instant::now() });
     }
 
     /// Shows an error in the status bar.
     pub fn error(&mut self, text: impl Into<String>) {
-        self.status = Some(Status { text: text.into(), is_error: true });
+        self.status = Some(Status { text: text.into(), is_error: true, at: std::time::Instant::now() });
     }
 
     /// Moves the clock to a whole frame; pose overrides are dropped.
@@ -1191,4 +1208,21 @@ pub fn unique_name<'a>(name: &str, taken: impl Iterator<Item = &'a str>) -> Stri
         .map(|n| format!("{base}.{n:03}"))
         .find(|candidate| !taken.contains(candidate.as_str()))
         .expect("a free name")
+}
+
+#[cfg(test)]
+mod status_tests {
+    use super::Status;
+
+    #[test]
+    fn messages_leave_the_status_bar_after_their_time() {
+        let now = std::time::Instant::now();
+        let info = Status { text: "Saved".into(), is_error: false, at: now };
+        assert!(info.seconds_left() > Status::INFO_SECONDS - 1.0);
+        let old = std::time::Duration::from_secs_f32(Status::INFO_SECONDS + 1.0);
+        let then = now.checked_sub(old).expect("the monotonic clock started more than nine seconds ago");
+        assert_eq!(Status { at: then, ..info.clone() }.seconds_left(), 0.0, "an old message is gone");
+        let error = Status { text: "Cannot save".into(), is_error: true, at: then };
+        assert!(error.seconds_left() > 0.0, "an error stays longer");
+    }
 }

@@ -1,4 +1,4 @@
-//! The status bar: the last message or error, the undo step, record mode and the frame, and
+//! The status bar: the last message (for a few seconds) or error (half a minute), the undo step, record mode and the frame, and
 //! the model imports running in the background (file, stage, a progress bar where the
 //! fraction is known or a spinner where it is not, elapsed time).
 
@@ -26,7 +26,12 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 ui.separator();
                 import_ui(ui, import);
             }
-            if let Some(status) = &app.status {
+            let left = app.status.as_ref().map_or(0.0, crate::app::Status::seconds_left);
+            if left > 0.0 {
+                // Wake up to take the message away when it is due, drawing or not.
+                ui.ctx().request_repaint_after(std::time::Duration::from_secs_f32(left));
+            }
+            if let Some(status) = app.status.as_ref().filter(|_| left > 0.0) {
                 ui.separator();
                 let text = RichText::new(&status.text);
                 if status.is_error {
