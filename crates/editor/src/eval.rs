@@ -57,13 +57,31 @@ impl ObjectPose {
 #[must_use]
 pub fn euler_degrees(q: Quat) -> Vec3 {
     let (x, y, z) = q.to_euler(glam::EulerRot::XYZ);
-    Vec3::new(x.to_degrees(), y.to_degrees(), z.to_degrees())
+    // Angles in (−180, 180]: a half turn reads 180 as the curve view shows it, not −180
+    // (within the f32 noise of the conversion).
+    let half_turn = |d: f32| if d <= -179.9995 { d + 360.0 } else { d };
+    Vec3::new(half_turn(x.to_degrees()), half_turn(y.to_degrees()), half_turn(z.to_degrees()))
 }
 
 /// The inverse of [`euler_degrees`].
 #[must_use]
 pub fn quat_from_euler_degrees(e: Vec3) -> Quat {
     Quat::from_euler(glam::EulerRot::XYZ, e.x.to_radians(), e.y.to_radians(), e.z.to_radians())
+}
+
+#[cfg(test)]
+mod half_turn_tests {
+    use super::*;
+
+    #[test]
+    fn a_half_turn_reads_180_not_minus_180() {
+        let e = euler_degrees(Quat::from_rotation_x(-std::f32::consts::PI));
+        assert!((e.x - 180.0).abs() < 1e-3, "{e:?}");
+        let back = quat_from_euler_degrees(e);
+        assert!(back.dot(Quat::from_rotation_x(std::f32::consts::PI)).abs() > 1.0 - 1e-6);
+        let e = euler_degrees(Quat::from_rotation_x(-1.0));
+        assert!((e.x + 1f32.to_degrees()).abs() < 1e-3, "other angles keep their sign: {e:?}");
+    }
 }
 
 #[cfg(test)]
