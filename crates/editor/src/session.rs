@@ -154,7 +154,7 @@ impl Selection {
         for item in self.items() {
             let ids = match item {
                 Selected::Object(o) if o < scene.objects.len() => ChannelId::of_object(scene, o),
-                other => Selection { item: Some(other), ..Selection::default() }.channels(scene),
+                other => item_channels(other, scene),
             };
             for id in ids {
                 if !out.contains(&id) {
@@ -169,61 +169,49 @@ impl Selection {
     /// channels).
     #[must_use]
     pub fn channels(&self, scene: &Scene) -> Vec<ChannelId> {
-        match self.item {
-            Some(Selected::Object(o)) => {
-                vec![ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)]
-                    .into_iter()
-                    .filter(|_| o < scene.objects.len())
-                    .collect()
-            }
-            Some(Selected::Joint { object, joint }) => {
-                let exists = scene
-                    .objects
-                    .get(object)
-                    .and_then(|o| o.skeleton.as_ref())
-                    .is_some_and(|s| joint < s.joints.len());
-                if exists {
-                    ChannelId::of_object(scene, object)
-                        .into_iter()
-                        .filter(|id| {
-                            matches!(id, ChannelId::JointTranslation { joint: j, .. }
-                                | ChannelId::JointRotation { joint: j, .. }
-                                | ChannelId::JointScale { joint: j, .. } if *j == joint)
-                        })
-                        .collect()
-                } else {
-                    Vec::new()
-                }
-            }
-            Some(Selected::Light(l)) if l < scene.lights.len() => ChannelId::of_light(l).to_vec(),
-            _ => Vec::new(),
-        }
-    }
-
-    /// Whether the active item exists in `scene` (true when there is none).
-    fn item_exists(&self, scene: &Scene) -> bool {
-        match self.item {
-            None => true,
-            Some(Selected::Object(o)) => o < scene.objects.len(),
-            Some(Selected::Joint { object, joint }) => scene
-                .objects
-                .get(object)
-                .and_then(|o| o.skeleton.as_ref())
-                .is_some_and(|s| joint < s.joints.len()),
-            Some(Selected::Light(l)) => l < scene.lights.len(),
-        }
+        self.item.map_or_else(Vec::new, |item| item_channels(item, scene))
     }
 
     /// Drops selections that no longer exist in `scene` (after undo, open, delete).
     pub fn retain_valid(&mut self, scene: &Scene) {
-        let item_ok = self.item_exists(scene);
-        if !item_ok {
-            self.item = None;
-        }
-        let valid =
-            |item: &Selected| Selection { item: Some(*item), ..Selection::default() }.item_exists(scene);
-        self.others.retain(valid);
+        self.item = self.item.filter(|&item| item_exists(item, scene));
+        self.others.retain(|&item| item_exists(item, scene));
         self.keys.retain(|k| k.index < crate::channels::key_count(scene, k.channel));
+    }
+}
+
+/// Whether `item` exists in `scene`.
+fn item_exists(item: Selected, scene: &Scene) -> bool {
+    match item {
+        Selected::Object(o) => o < scene.objects.len(),
+        Selected::Joint { object, joint } => scene
+            .objects
+            .get(object)
+            .and_then(|o| o.skeleton.as_ref())
+            .is_some_and(|s| joint < s.joints.len()),
+        Selected::Light(l) => l < scene.lights.len(),
+    }
+}
+
+/// The channels `item` owns: an object's transform, a joint's channels (rotation, and
+/// translation and scale where used), a light's; none when it does not exist.
+fn item_channels(item: Selected, scene: &Scene) -> Vec<ChannelId> {
+    if !item_exists(item, scene) {
+        return Vec::new();
+    }
+    match item {
+        Selected::Object(o) => {
+            vec![ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)]
+        }
+        Selected::Joint { object, joint } => ChannelId::of_object(scene, object)
+            .into_iter()
+            .filter(|id| {
+                matches!(id, ChannelId::JointTranslation { joint: j, .. }
+                    | ChannelId::JointRotation { joint: j, .. }
+                    | ChannelId::JointScale { joint: j, .. } if *j == joint)
+            })
+            .collect(),
+        Selected::Light(l) => ChannelId::of_light(l).to_vec(),
     }
 }
 
