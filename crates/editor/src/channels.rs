@@ -116,6 +116,45 @@ pub fn key_times(scene: &Scene, id: ChannelId) -> Vec<f64> {
     }
 }
 
+/// The keys of a channel whose time lies in `[from, to]` (seconds): the index of the first and
+/// their times, found by binary search (tracks are sorted), so the cost follows the window,
+/// not the track. Also the number of keys before and after the window and the nearest time on
+/// each side (for the dope sheet's markers of keys out of view).
+#[must_use]
+pub fn keys_between(scene: &Scene, id: ChannelId, from: f64, to: f64) -> KeyWindow {
+    match channel(scene, id) {
+        Some(c) => with_track!(c, t => {
+            let keys: &[Key<_>] = &t.keys;
+            let first = keys.partition_point(|k| k.time < from);
+            let end = keys.partition_point(|k| k.time <= to).max(first);
+            KeyWindow {
+                first,
+                times: keys[first..end].iter().map(|k| k.time).collect(),
+                before: first,
+                after: keys.len() - end,
+                nearest_before: first.checked_sub(1).map(|i| keys[i].time),
+                nearest_after: keys.get(end).map(|k| k.time),
+            }
+        }),
+        None => KeyWindow::default(),
+    }
+}
+
+/// The keys of a channel inside a time window ([`keys_between`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct KeyWindow {
+    /// Index of the first key in the window.
+    pub first: usize,
+    /// Times of the keys in the window, seconds.
+    pub times: Vec<f64>,
+    /// Keys before and after the window.
+    pub before: usize,
+    pub after: usize,
+    /// The time of the last key before and the first key after the window.
+    pub nearest_before: Option<f64>,
+    pub nearest_after: Option<f64>,
+}
+
 /// Number of keys of a channel (0 when it does not exist).
 #[must_use]
 pub fn key_count(scene: &Scene, id: ChannelId) -> usize {
@@ -543,7 +582,11 @@ fn permute_in_track<T: Clone>(track: &mut RawTrack<T>, indices: &[usize], delta:
     if indices.iter().any(|&i| i >= track.keys.len()) {
         return None;
     }
-    let new_time = |i: usize, t: f64| if indices.contains(&i) { t + delta } else { t };
+    let mut moves = vec![false; track.keys.len()];
+    for &i in indices {
+        moves[i] = true;
+    }
+    let new_time = |i: usize, t: f64| if moves[i] { t + delta } else { t };
     let mut times: Vec<(f64, usize)> =
         track.keys.iter().enumerate().map(|(i, k)| (new_time(i, k.time), i)).collect();
     times.sort_by(|a, b| a.0.total_cmp(&b.0));

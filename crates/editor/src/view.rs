@@ -101,10 +101,14 @@ impl ViewState {
 /// Interaction state of the dope sheet that lives across frames.
 #[derive(Clone, Debug, Default)]
 pub struct TimelineState {
-    /// Frames already applied by the current key drag.
-    pub(crate) drag_applied: i32,
-    /// Where a box selection started.
-    pub(crate) box_start: Option<egui::Pos2>,
+    /// The pointer gesture in progress (moving keys, box selection, panning).
+    pub(crate) gesture: Option<crate::panels::dope_sheet::Gesture>,
+    /// The frames the dope sheet shows; `None` follows the scene's frame range.
+    pub view: Option<crate::panels::dope_sheet::TimeView>,
+    /// Collapsed groups (objects, lights, joints with several channels).
+    pub collapsed: std::collections::BTreeSet<crate::session::Selected>,
+    /// The name column's width, points, once resized.
+    pub name_width: Option<f32>,
     /// When the FPS changes, keys keep their frames (true) or their times in seconds (false).
     pub keep_frames: bool,
     /// (fps, start, end) when the current FPS drag started.

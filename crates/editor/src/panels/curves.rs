@@ -24,6 +24,9 @@ const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
 #[must_use]
 pub fn turn_axis(app: &EditorApp, id: ChannelId) -> Option<(keyrig_core::Track<glam::Quat>, glam::DVec3)> {
     let Some(channels::ChannelRef::Rotation(a)) = channels::channel(app.doc.scene(), id) else { return None };
+    if a.track.keys.iter().all(|k| k.spin.is_none()) {
+        return None;
+    }
     let track = keyrig_core::Track::new(&a.track).ok()?;
     let axis = (0..track.key_count()).find_map(|i| track.segment_spin(i))?.0;
     Some((track, axis))
@@ -218,15 +221,19 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
             };
             let points: Vec<Pos2> = curve.iter().map(|&(f, v)| to_screen(f, v)).collect();
             painter.add(Shape::line(points, Stroke::new(1.5, colour)));
-            // Key markers: the curve's value at each key time.
-            for time in channels::key_times(scene, *id) {
+            // Key markers: the curve's value at each key time in view, one per pixel column
+            // (a motion-capture track has more keys than the view has pixels).
+            let mut last_column = None;
+            for time in channels::keys_between(scene, *id, start / fps, end / fps).times {
                 let frame = time * fps;
-                if frame < start || frame > end {
-                    continue;
-                }
                 let i = (((frame - start) / (end - start)) * (curve.len() - 1) as f64).round() as usize;
                 if let Some(&(_, v)) = curve.get(i) {
-                    painter.circle_filled(to_screen(frame, v), 3.0, colour);
+                    let at = to_screen(frame, v);
+                    let column = at.x.round() as i32;
+                    if last_column != Some(column) {
+                        last_column = Some(column);
+                        painter.circle_filled(at, 3.0, colour);
+                    }
                 }
             }
         }

@@ -3,6 +3,7 @@
 
 pub mod curves;
 pub mod dialogs;
+pub mod dope_sheet;
 pub mod inspector;
 pub mod menu;
 pub mod outliner;
