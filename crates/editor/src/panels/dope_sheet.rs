@@ -28,8 +28,9 @@ use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
 
 const ROW_HEIGHT: f32 = 17.0;
 const RULER_HEIGHT: f32 = 20.0;
-/// Space between the name column and the keys, and at the keys' right end, points.
-const PAD: f32 = 8.0;
+/// Space between the name column and the keys, and at the keys' right end, points: room for
+/// a diamond at either end of the view and, beyond it, the count of keys out of view.
+const PAD: f32 = 24.0;
 /// Room kept for the scroll bar at the right.
 const SCROLL_BAR: f32 = 8.0;
 const INDENT: f32 = 12.0;
@@ -40,8 +41,6 @@ const DEFAULT_NAME_WIDTH: f32 = 170.0;
 const DENSE_SPACING: f32 = 3.0;
 /// The fewest frames the zoomed time axis shows.
 const MIN_SPAN: f64 = 4.0;
-/// Width of an out-of-view marker, points.
-const MARKER_WIDTH: f32 = 26.0;
 
 /// The frames shown at the left and right end of the dope sheet's keys.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -517,6 +516,7 @@ fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewp
             truncated = Some(r);
         }
         names_painter.galley(Pos2::new(text_left, rect.center().y - galley.size().y / 2.0), galley, colour);
+        publish_row(ui, row, Rect::from_min_max(rect.min, Pos2::new(geo.names.1, rect.bottom())), indent);
 
         // Keys.
         let y = rect.center().y;
@@ -558,7 +558,14 @@ fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewp
                 } else {
                     (Pos2::new(geo.keys.1 + PAD - 1.0, y), Align2::RIGHT_CENTER)
                 };
-                painter.text(pos, align, &text, FontId::proportional(10.0), Color32::from_rgb(255, 170, 60));
+                let drawn = painter.text(
+                    pos,
+                    align,
+                    &text,
+                    FontId::proportional(10.0),
+                    Color32::from_rgb(255, 170, 60),
+                );
+                publish_marker(ui, row, marker, left, drawn);
             }
         }
     }
@@ -724,6 +731,50 @@ fn publish_key(ui: &Ui, app: &EditorApp, row: &Row, bucket: &Bucket, centre: Pos
     });
 }
 
+/// Tells accessibility tools (and UI tests) about the count of a row's keys out of view:
+/// "r_foot rotation: 1 key after the view".
+fn publish_marker(ui: &Ui, row: &Row, marker: Marker, before: bool, rect: Rect) {
+    let key = (row.item, row.depth, row.shows.first().copied(), before);
+    ui.ctx().accesskit_node_builder(ui.id().with(("marker", key)), |node| {
+        let keys = if marker.count == 1 { "key" } else { "keys" };
+        let side = if before { "before" } else { "after" };
+        node.set_role(egui::accesskit::Role::Button);
+        node.set_label(format!("{}: {} {keys} {side} the view", row.label, marker.count));
+        node.set_bounds(egui::accesskit::Rect {
+            x0: rect.min.x.into(),
+            y0: rect.min.y.into(),
+            x1: rect.max.x.into(),
+            y1: rect.max.y.into(),
+        });
+    });
+}
+
+/// Tells accessibility tools (and UI tests) about a row's name, "dope sheet row elbow rotation",
+/// and a group's triangle, "collapse Arm" or "expand Arm".
+fn publish_row(ui: &Ui, row: &Row, name: Rect, indent: f32) {
+    let bounds = |r: Rect| egui::accesskit::Rect {
+        x0: r.min.x.into(),
+        y0: r.min.y.into(),
+        x1: r.max.x.into(),
+        y1: r.max.y.into(),
+    };
+    let key = (row.item, row.depth, matches!(row.kind, RowKind::Group { .. }), row.shows.first().copied());
+    ui.ctx().accesskit_node_builder(ui.id().with(("row", key)), |node| {
+        node.set_role(egui::accesskit::Role::Row);
+        node.set_label(format!("dope sheet row {}", row.label));
+        node.set_bounds(bounds(name));
+    });
+    if let RowKind::Group { collapsed } = row.kind {
+        let expander =
+            Rect::from_min_size(Pos2::new(indent - 1.0, name.top()), Vec2::new(11.0, name.height()));
+        ui.ctx().accesskit_node_builder(ui.id().with(("expander", key)), |node| {
+            node.set_role(egui::accesskit::Role::Button);
+            node.set_label(format!("{} {}", if collapsed { "expand" } else { "collapse" }, row.label));
+            node.set_bounds(bounds(expander));
+        });
+    }
+}
+
 /// What is at `pos` (screen points) in the rows laid out from `origin`.
 fn hit(app: &EditorApp, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -> Hit {
     let r = ((pos.y - origin.y) / ROW_HEIGHT).floor();
@@ -734,7 +785,7 @@ fn hit(app: &EditorApp, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -
     let row = &rows[r];
     if pos.x < geo.names.1 {
         let expander = geo.names.0 + 4.0 + INDENT * row.depth as f32;
-        if row.group() && pos.x >= expander - 2.0 && pos.x <= expander + 11.0 {
+        if row.group() && pos.x >= expander - 1.0 && pos.x <= expander + 10.0 {
             return Hit::Expander(r);
         }
         return Hit::Name(r);
@@ -748,10 +799,11 @@ fn hit(app: &EditorApp, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -
     if let Some((b, _)) = nearest {
         return Hit::Keys(r, keys_at(app, row, geo, b.px));
     }
-    if before.count > 0 && pos.x < geo.keys.0 - PAD + MARKER_WIDTH {
+    let beyond_diamonds = DIAMOND_RADIUS + 1.5;
+    if before.count > 0 && pos.x < geo.keys.0 - beyond_diamonds {
         return before.nearest.map_or(Hit::Empty, Hit::Marker);
     }
-    if after.count > 0 && pos.x > geo.keys.1 + PAD - MARKER_WIDTH {
+    if after.count > 0 && pos.x > geo.keys.1 + beyond_diamonds {
         return after.nearest.map_or(Hit::Empty, Hit::Marker);
     }
     Hit::Empty

@@ -1,0 +1,252 @@
+//! The dope sheet on a character, used as an animator does with real pointer and wheel events:
+//! rows in hierarchy order, collapsing groups, summary keys that select and move every key
+//! beneath them, keys out of view, zooming and panning the time axis, and a motion-capture
+//! track drawn one mark per pixel.
+
+mod common;
+
+use common::{drag, harness, press};
+
+use egui::{Event, Key, Modifiers, MouseWheelUnit, Pos2};
+use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::Harness;
+use glam::{Quat, Vec3};
+use keyrig_core::{FrameRange, Joint, Key as SceneKey, Object, RawTrack, Scene, Skeleton};
+use keyrig_editor::channels::{self, ChannelId};
+use keyrig_editor::panels::dope_sheet::time_view;
+use keyrig_editor::session::KeyRef;
+use keyrig_editor::EditorApp;
+
+/// Two legs whose joints are stored in an order that is not the hierarchy's (hip, both knees,
+/// then both feet): rotation keys at frames 0, 30 and 60 on every joint, the left knee's
+/// translation keyed too (a group of two channels), and a right-foot key at frame 120, after
+/// the 0–60 range.
+fn legs_scene() -> Scene {
+    let mut scene = Scene { fps: 30.0, frame_range: FrameRange { start: 0, end: 60 }, ..Scene::default() };
+    let names =
+        [("hip", None), ("l_knee", Some(0)), ("r_knee", Some(0)), ("l_foot", Some(1)), ("r_foot", Some(2))];
+    let mut joints: Vec<Joint> = names
+        .iter()
+        .map(|&(name, parent)| Joint::new(name, parent, Vec3::new(0.0, -1.0, 0.0), Quat::IDENTITY))
+        .collect();
+    for (j, joint) in joints.iter_mut().enumerate() {
+        let mut keys: Vec<SceneKey<Quat>> = [0.0, 1.0, 2.0]
+            .iter()
+            .map(|&t| SceneKey::new(t, Quat::from_rotation_x(0.2 * t as f32 + j as f32 * 0.1)))
+            .collect();
+        if joint.name == "r_foot" {
+            keys.push(SceneKey::new(4.0, Quat::from_rotation_x(0.9)));
+        }
+        joint.rotation.track = RawTrack::new(keys);
+    }
+    joints[1].translation.track = RawTrack::new(vec![
+        SceneKey::new(0.0, Vec3::ZERO),
+        SceneKey::new(1.0, Vec3::new(0.0, 0.1, 0.0)),
+        SceneKey::new(2.0, Vec3::ZERO),
+    ]);
+    let mut legs = Object::new("legs");
+    legs.skeleton = Some(Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) });
+    scene.objects.push(legs);
+    scene
+}
+
+fn open(dir: &std::path::Path, scene: &Scene) -> Harness<'static, EditorApp> {
+    let path = dir.join("scene.ron");
+    keyrig_io::scene_file::save(&path, scene).expect("write the scene");
+    harness(dir, Some(path))
+}
+
+/// The dope sheet's row names, top to bottom.
+fn row_labels(h: &Harness<'_, EditorApp>) -> Vec<String> {
+    let mut rows: Vec<(f32, String)> = h
+        .get_all_by_role(egui::accesskit::Role::Row)
+        .filter_map(|n| {
+            let label = n.accesskit_node().label()?;
+            Some((n.rect().top(), label.strip_prefix("dope sheet row ")?.to_owned()))
+        })
+        .collect();
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    rows.into_iter().map(|(_, l)| l).collect()
+}
+
+fn rotation(joint: usize) -> ChannelId {
+    ChannelId::JointRotation { object: 0, joint }
+}
+
+fn frames(h: &Harness<'_, EditorApp>, id: ChannelId) -> Vec<i64> {
+    let scene = h.state().doc.scene();
+    channels::key_times(scene, id).iter().map(|t| (t * scene.fps).round() as i64).collect()
+}
+
+#[test]
+fn rows_follow_the_hierarchy_and_groups_collapse() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &legs_scene());
+    assert_eq!(
+        row_labels(&h),
+        [
+            "legs",
+            "hip rotation",
+            "l_knee",
+            "translation",
+            "rotation",
+            "l_foot rotation",
+            "r_knee rotation",
+            "r_foot rotation"
+        ],
+        "children follow their parent, whatever the file's order"
+    );
+    h.get_by_label("collapse l_knee").click();
+    h.run();
+    assert_eq!(
+        row_labels(&h),
+        ["legs", "hip rotation", "l_knee", "l_foot rotation", "r_knee rotation", "r_foot rotation"]
+    );
+    // The collapsed group still shows its keys: two channels at frame 30.
+    assert!(h.query_by_label("keys l_knee frame 30 (2)").is_some());
+    h.get_by_label("collapse legs").click();
+    h.run();
+    assert_eq!(row_labels(&h), ["legs"]);
+    h.get_by_label("expand legs").click();
+    h.run();
+    h.get_by_label("expand l_knee").click();
+    h.run();
+    assert_eq!(row_labels(&h).len(), 8);
+}
+
+#[test]
+fn a_summary_key_selects_and_moves_every_key_beneath_it_in_one_undo_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &legs_scene());
+    let original = h.state().doc.scene().clone();
+    // Frame 30 holds six keys beneath the object: five rotations and the knee's translation.
+    h.get_by_label("keys legs frame 30 (6)").click();
+    h.run();
+    assert_eq!(h.state().session.selection.keys.len(), 6);
+    assert!(h.state().session.selection.keys.iter().all(|k| k.index == 1));
+
+    let at_30 = h.get_by_label("keys legs frame 30 (6)").rect().center();
+    let at_60 = h.get_by_label("keys legs frame 60 (6)").rect().center();
+    let per_frame = (at_60.x - at_30.x) / 30.0;
+    drag(&mut h, at_30, at_30 + egui::vec2(per_frame * 5.0, 0.0));
+    for joint in 0..5 {
+        assert_eq!(frames(&h, rotation(joint))[..3], [0, 35, 60], "joint {joint}");
+    }
+    assert_eq!(frames(&h, ChannelId::JointTranslation { object: 0, joint: 1 }), [0, 35, 60]);
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original, "the whole drag is one undo step");
+}
+
+#[test]
+fn keys_out_of_view_are_counted_and_a_click_brings_them_into_view() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &legs_scene());
+    // Frame 120 lies after the 0–60 range the sheet shows: counted, not drawn.
+    assert!(h.query_by_label("key r_foot rotation frame 120").is_none());
+    h.get_by_label("r_foot rotation: 1 key after the view").click();
+    h.run();
+    let view = time_view(h.state());
+    assert!(view.start < 120.0 && view.end > 120.0, "the key comes into view: {view:?}");
+    assert!(h.query_by_label("key r_foot rotation frame 120").is_some());
+
+    // View all shows the range and every key.
+    h.get_by_label("↔ View all").click();
+    h.run();
+    let view = time_view(h.state());
+    assert!(view.start <= 0.0 && view.end >= 120.0, "{view:?}");
+    assert!(h.query_by_label("key hip rotation frame 0").is_some());
+    assert!(h.query_by_label("key r_foot rotation frame 120").is_some());
+}
+
+fn wheel(h: &mut Harness<'_, EditorApp>, at: Pos2, delta: egui::Vec2, modifiers: Modifiers) {
+    h.event(Event::PointerMoved(at));
+    h.event(Event::MouseWheel {
+        unit: MouseWheelUnit::Line,
+        delta,
+        modifiers,
+        phase: egui::TouchPhase::Move,
+    });
+    h.run();
+}
+
+#[test]
+fn ctrl_wheel_zooms_about_the_pointer_and_shift_wheel_pans() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &legs_scene());
+    let before = time_view(h.state());
+    let at_30 = h.get_by_label("key hip rotation frame 30").rect().center();
+    let ctrl = Modifiers { ctrl: true, command: true, ..Modifiers::NONE };
+    wheel(&mut h, at_30, egui::vec2(0.0, 3.0), ctrl);
+    let zoomed = time_view(h.state());
+    assert!(zoomed.end - zoomed.start < 0.8 * (before.end - before.start), "{before:?} → {zoomed:?}");
+    // Frame 30 stays under the pointer.
+    let moved = h.get_by_label("key hip rotation frame 30").rect().center();
+    assert!((moved.x - at_30.x).abs() < 1.0, "frame 30 at {} then {}", at_30.x, moved.x);
+    // Zoomed in, frame 0 is out of view and counted instead.
+    assert!(h.query_by_label("key hip rotation frame 0").is_none());
+    assert!(h.query_by_label("hip rotation: 1 key before the view").is_some());
+
+    let shift = Modifiers { shift: true, ..Modifiers::NONE };
+    wheel(&mut h, at_30, egui::vec2(0.0, 2.0), shift);
+    let panned = time_view(h.state());
+    assert!((panned.end - panned.start - (zoomed.end - zoomed.start)).abs() < 1e-6, "panning keeps the zoom");
+    assert!(panned.start != zoomed.start, "Shift+wheel pans: {zoomed:?} → {panned:?}");
+}
+
+#[test]
+fn the_name_column_is_resized_by_dragging_its_border() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &legs_scene());
+    let row = h.get_by_label("dope sheet row hip rotation").rect();
+    let key_before = h.get_by_label("key hip rotation frame 0").rect().center();
+    let border = Pos2::new(row.right(), row.center().y);
+    drag(&mut h, border, border + egui::vec2(60.0, 0.0));
+    let wider = h.get_by_label("dope sheet row hip rotation").rect();
+    assert!((wider.width() - row.width() - 60.0).abs() < 2.0, "{} → {}", row.width(), wider.width());
+    let key_after = h.get_by_label("key hip rotation frame 0").rect().center();
+    assert!((key_after.x - key_before.x - 60.0).abs() < 2.0, "the keys move right with the border");
+}
+
+/// A 5,000-key track: more keys than pixels. Keys on one pixel are one mark (and one
+/// accessible node), and a click selects every key on that pixel.
+#[test]
+fn a_motion_capture_track_is_drawn_one_mark_per_pixel() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut scene = Scene { fps: 30.0, frame_range: FrameRange { start: 0, end: 4999 }, ..Scene::default() };
+    let mut cube = Object::new("mocap");
+    cube.translation.track = RawTrack::new(
+        (0..5000).map(|k| SceneKey::new(f64::from(k) / 30.0, Vec3::new(0.0, k as f32, 0.0))).collect(),
+    );
+    scene.objects.push(cube);
+    let mut h = open(dir.path(), &scene);
+    let marks: Vec<(String, egui::Rect)> = h
+        .get_all_by_role(egui::accesskit::Role::Button)
+        .filter_map(|n| {
+            let label = n.accesskit_node().label()?;
+            label.starts_with("keys mocap translation").then(|| (label, n.rect()))
+        })
+        .collect();
+    let ruler = h.get_by_label("dope sheet row translation").rect();
+    assert!(!marks.is_empty(), "the track's keys are drawn");
+    assert!(
+        marks.len() as f32 <= 1280.0 - ruler.right(),
+        "{} marks for 5,000 keys: at most one per pixel column",
+        marks.len()
+    );
+    // Every mark stands for the keys of its pixel; together they are every key in view.
+    let total: usize = marks
+        .iter()
+        .map(|(label, _)| {
+            label.rsplit('(').next().and_then(|n| n.trim_end_matches(')').parse::<usize>().ok()).unwrap_or(0)
+        })
+        .sum();
+    assert_eq!(total, 5000);
+    let (label, rect) = &marks[marks.len() / 2];
+    let count: usize = label.rsplit('(').next().unwrap().trim_end_matches(')').parse().unwrap();
+    h.get_by_label(label).click();
+    h.run();
+    let selected: Vec<KeyRef> = h.state().session.selection.keys.iter().copied().collect();
+    assert_eq!(selected.len(), count, "a click on {label} at {rect:?} selects its keys");
+    let indices: Vec<usize> = selected.iter().map(|k| k.index).collect();
+    assert!(indices.windows(2).all(|w| w[1] == w[0] + 1), "neighbouring keys: {indices:?}");
+}
