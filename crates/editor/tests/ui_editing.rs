@@ -307,3 +307,71 @@ fn dragging_a_key_diamond_moves_it_in_time_as_one_undo_step() {
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert_eq!(h.state().doc.scene(), &original);
 }
+
+/// A double click on a T/C/B slider (two presses and releases within egui's 0.3 s, as the
+/// window system sends them) resets it to 0; typing into its number box applies once, on
+/// Enter, as one undo step.
+#[test]
+fn double_click_resets_a_tcb_slider_and_its_number_box_commits_once() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    set_value(&mut h, Role::Slider, "Tension", 0.6);
+    assert_eq!(channels::key_params(h.state().doc.scene(), elbow, 2).expect("key").2.tension, 0.6);
+
+    let rail = h.get_by_role_and_label(Role::Slider, "Tension").rect();
+    let at = egui::pos2(rail.left() + rail.width() * 0.3, rail.center().y);
+    h.event(egui::Event::PointerMoved(at));
+    h.run();
+    for pressed in [true, false, true, false] {
+        h.input_mut().events.push(egui::Event::PointerButton {
+            pos: at,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.step();
+    h.run();
+    assert_eq!(
+        channels::key_params(h.state().doc.scene(), elbow, 2).expect("key").2.tension,
+        0.0,
+        "reset to 0"
+    );
+
+    // The number box beside the slider: typed text applies on Enter, not per keystroke.
+    let steps = h.state().doc.undo_len();
+    let boxes: Vec<egui::Rect> = h
+        .get_all_by_role(Role::SpinButton)
+        .filter(|n| (n.rect().center().y - rail.center().y).abs() < rail.height())
+        .map(|n| n.rect())
+        .collect();
+    let number_box = *boxes.first().expect("the slider's number box");
+    h.event(egui::Event::PointerMoved(number_box.center()));
+    for pressed in [true, false] {
+        h.event(egui::Event::PointerButton {
+            pos: number_box.center(),
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+    h.key_press_modifiers(Modifiers::COMMAND, Key::A);
+    h.run();
+    for text in ["0", ".", "3"] {
+        h.event(egui::Event::Text(text.to_owned()));
+        h.run();
+        assert_eq!(
+            channels::key_params(h.state().doc.scene(), elbow, 2).expect("key").2.tension,
+            0.0,
+            "nothing applies while typing"
+        );
+    }
+    press(&mut h, Modifiers::NONE, Key::Enter);
+    let tension = channels::key_params(h.state().doc.scene(), elbow, 2).expect("key").2.tension;
+    assert!((tension - 0.3).abs() < 1e-6, "Enter applies 0.3, got {tension}");
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step for the typed value");
+}
