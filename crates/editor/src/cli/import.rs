@@ -7,7 +7,7 @@
 //! relative to the scene's folder when the model lies in that folder or below it, else by its
 //! absolute path. The scene is written atomically and never over the model.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{bail, Context};
 
@@ -56,21 +56,9 @@ pub fn run(args: ImportArgs) -> anyhow::Result<()> {
         scene.objects = mapped.objects;
         scene.frame_range = mapped.frame_range;
     }
-    // Model paths relative to the scene's folder where the model lies below it.
-    let folder = keyrig_io::file_io::parent_or_dot(&args.output);
-    let folder = std::fs::canonicalize(&folder)
-        .with_context(|| format!("{}: cannot resolve the output folder", folder.display()))?;
-    let relative = relative_below(&absolute, &folder);
-    for object in &mut scene.objects {
-        if let Some(keyrig_core::MeshSource::File { path, .. }) = &mut object.mesh {
-            if Path::new(path.as_str()) == absolute {
-                if let Some(rel) = &relative {
-                    *path = rel.clone();
-                }
-            }
-        }
-    }
-    keyrig_io::scene_file::save(&args.output, &scene)?;
+    // Model paths relative to the scene's folder where the model lies below it, as the
+    // editor saves them.
+    keyrig_io::project::save_scene(&args.output, &scene)?;
     eprintln!(
         "keyrig: wrote {} ({} objects, {} lights, frames {}..={})",
         args.output.display(),
@@ -80,11 +68,4 @@ pub fn run(args: ImportArgs) -> anyhow::Result<()> {
         scene.frame_range.end
     );
     Ok(())
-}
-
-/// `path` relative to `folder` (with `/` separators) when it lies in it or below it.
-fn relative_below(path: &Path, folder: &Path) -> Option<String> {
-    let rel = path.strip_prefix(folder).ok()?;
-    let parts: Option<Vec<&str>> = rel.components().map(|c| c.as_os_str().to_str()).collect();
-    Some(parts?.join("/"))
 }
