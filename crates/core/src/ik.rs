@@ -55,6 +55,11 @@ const POLE_DEGENERATE_RATIO: f64 = 1e-9;
 /// ([`IkReport::reachable`]): the f32 inputs place a target no closer than that.
 pub const REACH_SLACK: f64 = 1e-6;
 
+/// FABRIK passes stop (and the finish takes over) once a pass shrinks the end's distance to the
+/// target by less than this factor: near the edges of the reach each pass gains only about
+/// `1 − c·(1 − d/L)` of it.
+const STALL_RATIO: f64 = 0.9;
+
 /// How many times the FABRIK finish may try (each try after the first makes one more pass).
 const FINISH_TRIES: usize = 16;
 
@@ -410,7 +415,8 @@ pub fn solve_two_bone(
 /// length (backward), then puts the root back and walks out again (forward):
 /// `p_i ← p_{i+1} + l_i·(p_i − p_{i+1})/|p_i − p_{i+1}|`, then
 /// `p_{i+1} ← p_i + l_i·(p_{i+1} − p_i)/|p_{i+1} − p_i|`. It stops when the end joint is within
-/// `settings.tolerance × chain length` of the target or after `settings.max_iterations` passes.
+/// `settings.tolerance × chain length` of the target, after `settings.max_iterations` passes, or
+/// once a pass gains less than 10 % of the distance.
 ///
 /// FABRIK converges slowly where the chain must be nearly straight or nearly folded; when the
 /// passes stop short of the tolerance, an exact finish closes the gap: a chain too curled to
@@ -496,11 +502,16 @@ pub fn solve_fabrik(
         };
         let tolerance = settings.tolerance * reach;
         let flattened = plane.is_some_and(|(u, v)| flatten_to_plane(&mut p, u, v, reach) > tolerance);
-        while (p[n].distance(t) > tolerance || (flattened && iterations == 0))
-            && iterations < settings.max_iterations
-        {
+        let mut gap = p[n].distance(t);
+        while (gap > tolerance || (flattened && iterations == 0)) && iterations < settings.max_iterations {
             pass(&mut p);
             iterations += 1;
+            let last = gap;
+            gap = p[n].distance(t);
+            // Converging slowly (near the edges of the reach): leave the rest to the finish.
+            if iterations > 1 && gap > STALL_RATIO * last {
+                break;
+            }
         }
         // The finish. A fold changes two joints only, and near the shortest reach, where the
         // chain must fold flat, one may not be enough: then one more pass and another fold, a
