@@ -29,7 +29,8 @@
 //!   plane (Maya's rotate-plane solver, Blender's IK constraint with a pole).
 //! * [`solve_fabrik`]: Forward And Backward Reaching Inverse Kinematics (Aristidou & Lasenby,
 //!   "FABRIK: A fast, iterative solver for the Inverse Kinematics problem", Graphical Models
-//!   73(5), 2011), with an optional pole that turns each inner joint towards it.
+//!   73(5), 2011), with an optional pole (the chain is laid into the pole's plane) and an
+//!   exact finish where the passes converge slowly, near the edges of the reach.
 //!
 //! Unreachable targets give the straight chain pointing at the target. Invalid input is refused
 //! with an [`IkError`]; no input panics.
@@ -610,7 +611,7 @@ fn flatten_to_plane(p: &mut [DVec3], u: DVec3, v: DVec3, reach: f64) -> f64 {
 fn unbend(p: &mut [DVec3], lengths: &[f64], d: f64) {
     let n = lengths.len();
     let root = p[0];
-    let dir = |i: usize| ((p[i + 1] - p[i]) / lengths[i]).normalize();
+    let dir = |i: usize| (p[i + 1] - p[i]).try_normalize().unwrap_or(DVec3::X);
     let first = dir(0);
     // Each bend as an axis and an angle: dir(i) = rotate(axis_i, angle_i)·dir(i − 1).
     let mut bends = Vec::with_capacity(n - 1);
