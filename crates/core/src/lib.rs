@@ -3,6 +3,7 @@
 
 pub mod channel;
 pub mod channel_id;
+pub mod ik;
 pub mod key;
 pub mod material;
 pub mod quat;
