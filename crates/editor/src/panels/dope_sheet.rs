@@ -522,6 +522,7 @@ fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewp
         let y = rect.center().y;
         let (buckets, before, after) = buckets(app, row, geo);
         let summary = row.group();
+        let mut band: Option<(f32, f32)> = None;
         for (i, b) in buckets.iter().enumerate() {
             let x = b.px as f32;
             let dense = [i.checked_sub(1), Some(i + 1)]
@@ -534,9 +535,24 @@ fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewp
             let outside = frame < f64::from(app.doc.scene().frame_range.start) - 1e-6
                 || frame > f64::from(app.doc.scene().frame_range.end) + 1e-6;
             if dense {
-                let colour = key_colour(selected, summary, outside);
-                keys_painter
-                    .line_segment([Pos2::new(x, y - 4.5), Pos2::new(x, y + 4.5)], Stroke::new(1.0, colour));
+                // A band: one rectangle per run of neighbouring unselected marks (a run of a
+                // motion-capture track is one shape), selected marks as their own ticks.
+                if selected || outside {
+                    let colour = key_colour(selected, summary, outside);
+                    keys_painter.rect_filled(
+                        Rect::from_min_max(Pos2::new(x - 0.5, y - 4.5), Pos2::new(x + 0.5, y + 4.5)),
+                        0.0,
+                        colour,
+                    );
+                } else {
+                    match &mut band {
+                        Some((_, end)) if (x - *end) <= DENSE_SPACING => *end = x,
+                        _ => {
+                            paint_band(&keys_painter, band.take(), y, key_colour(false, summary, false));
+                            band = Some((x, x));
+                        }
+                    }
+                }
             } else {
                 let radius = if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS };
                 let hovered = hover.is_some_and(|p| (p.x - x).abs() <= DIAMOND_RADIUS && rect.contains(p));
@@ -550,6 +566,7 @@ fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewp
             }
             publish_key(ui, app, row, b, Pos2::new(x, y));
         }
+        paint_band(&keys_painter, band, y, key_colour(false, summary, false));
         for (marker, left) in [(before, true), (after, false)] {
             if marker.count > 0 {
                 let text = if left { format!("◀{}", marker.count) } else { format!("{}▶", marker.count) };
@@ -676,6 +693,17 @@ fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewp
     }
     if !ui.input(|i| i.pointer.any_down()) && !body.drag_stopped() {
         app.view.timeline.gesture = None;
+    }
+}
+
+/// Paints a band of dense keys from `x0` to `x1` (one mark per pixel column between them).
+fn paint_band(painter: &egui::Painter, band: Option<(f32, f32)>, y: f32, colour: Color32) {
+    if let Some((x0, x1)) = band {
+        painter.rect_filled(
+            Rect::from_min_max(Pos2::new(x0 - 0.5, y - 4.5), Pos2::new(x1 + 0.5, y + 4.5)),
+            0.0,
+            colour,
+        );
     }
 }
 
