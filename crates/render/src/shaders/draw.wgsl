@@ -117,9 +117,12 @@ fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f3
     }
     var colour = albedo * diffuse + specular;
     if object.flags.x > 0.5 {
-        // Selection: an orange rim.
-        let rim = pow(1.0 - max(dot(n, to_eye), 0.0), 2.0);
-        colour = mix(colour, vec3<f32>(1.0, 0.45, 0.05), clamp(0.25 + 0.75 * rim, 0.0, 1.0));
+        // Selection: a light orange tint where the surface faces the eye, glowing towards the
+        // silhouette; never more than 70 %, so the shading, texture and pose stay visible (a
+        // thin, dark figure such as an MD2 model would otherwise turn into a flat silhouette).
+        let facing = abs(dot(n, to_eye));
+        let rim = (1.0 - facing) * (1.0 - facing);
+        colour = mix(colour, vec3<f32>(1.0, 0.45, 0.05), 0.12 + 0.58 * rim);
     }
     return vec4<f32>(colour, 1.0);
 }
