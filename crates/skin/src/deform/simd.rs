@@ -4,6 +4,7 @@
 //! blending one influence is two FMAs instead of eight SSE multiplies and adds.
 
 use std::arch::x86_64::*;
+use std::sync::OnceLock;
 
 use glam::{Affine3A, Mat3A, Vec3, Vec3A, Vec4};
 
@@ -20,6 +21,48 @@ pub(crate) fn available() -> bool {
 /// Whether this CPU can also run the AVX-512VL builds of the kernels (32 vector registers).
 pub(crate) fn avx512_available() -> bool {
     available() && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+}
+
+/// Whether a job that reads and writes `bytes` in all should write its outputs with streaming
+/// (non-temporal) stores: when the job is larger than the CPU's last-level cache, so that its
+/// first outputs are evicted before it ends and no reader finds them in the cache anyway. Then
+/// streaming stores save the read of every output cache line before it is written (a third of
+/// linear blend's memory traffic at 1 000 000 vertices). Smaller jobs keep their outputs cached
+/// for whoever reads them next. Never when the cache size is unknown.
+pub(crate) fn streams_outputs(bytes: usize) -> bool {
+    last_level_cache_bytes().is_some_and(|cache| bytes > cache)
+}
+
+/// The size of the largest-level data or unified cache, from CPUID's deterministic cache
+/// parameters (leaf 4 on Intel, 0x8000_001D on AMD and Hygon), read once.
+fn last_level_cache_bytes() -> Option<usize> {
+    static SIZE: OnceLock<Option<usize>> = OnceLock::new();
+    *SIZE.get_or_init(|| {
+        let vendor = __cpuid(0);
+        let amd = (vendor.ebx, vendor.edx, vendor.ecx) == (0x6874_7541, 0x6974_6E65, 0x444D_4163) // "AuthenticAMD"
+            || (vendor.ebx, vendor.edx, vendor.ecx) == (0x6F67_7948, 0x6E65_476E, 0x656E_6975); // "HygonGenuine"
+        let leaf = if amd {
+            let topology_extensions =
+                __cpuid(0x8000_0000).eax >= 0x8000_001D && __cpuid(0x8000_0001).ecx & (1 << 22) != 0;
+            topology_extensions.then_some(0x8000_001D)?
+        } else {
+            (vendor.eax >= 4).then_some(4)?
+        };
+        // Sub-leaf i describes one cache until its type (bits 4..0) is 0; level in bits 7..5,
+        // ways, partitions and line size minus one in EBX, sets minus one in ECX.
+        (0..16)
+            .map(|i| __cpuid_count(leaf, i))
+            .take_while(|c| c.eax & 0x1F != 0)
+            .filter(|c| matches!(c.eax & 0x1F, 1 | 3))
+            .map(|c| {
+                let ways = (c.ebx >> 22) as usize + 1;
+                let partitions = ((c.ebx >> 12) & 0x3FF) as usize + 1;
+                let line = (c.ebx & 0xFFF) as usize + 1;
+                ((c.eax >> 5) & 0x7, ways * partitions * line * (c.ecx as usize + 1))
+            })
+            .max()
+            .map(|(_, size)| size)
+    })
 }
 
 /// A palette matrix as ((x_axis | y_axis), (z_axis | translation)).
@@ -83,6 +126,211 @@ pub(crate) unsafe fn linear_blend_chunk<const N: usize>(
         );
         *op = Vec3A::from(pos).into();
         *on = Vec3A::from(nrm).into();
+    }
+}
+
+/// A palette matrix as one 512-bit register [x_axis | y_axis | z_axis | translation] (the four
+/// 16-byte columns of its `Affine3A`), 64-byte aligned.
+pub(crate) type PackedAffine512 = __m512;
+
+/// Packs a palette for [`linear_blend_chunk_avx512`] (O(joints), once per run).
+///
+/// # Safety
+/// The CPU must support AVX-512F ([`avx512_available`]).
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+pub(crate) unsafe fn pack_palette_avx512(palette: &[Affine3A]) -> Vec<PackedAffine512> {
+    // SAFETY: an Affine3A is 16 floats (four Vec3A columns).
+    palette.iter().map(|m| unsafe { _mm512_loadu_ps((m as *const Affine3A).cast::<f32>()) }).collect()
+}
+
+/// Σ wᵢ·M(jᵢ) of one vertex: N fused multiply-adds of whole 3×4 matrices.
+///
+/// # Safety
+/// Every index in `js` must be in `palette`; the CPU must support AVX-512F.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn blend_avx512<const N: usize>(palette: &[PackedAffine512], js: &[u16; N], ws: &[f32; N]) -> __m512 {
+    // SAFETY: the caller's contract.
+    let m = |i: usize| unsafe { *palette.get_unchecked(js[i] as usize) };
+    let mut blend = _mm512_mul_ps(m(0), _mm512_set1_ps(ws[0]));
+    // An index loop: LLVM unrolls it, while an iterator's `skip(1)` stayed a call per step.
+    #[allow(clippy::needless_range_loop)]
+    for i in 1..N {
+        blend = _mm512_fmadd_ps(m(i), _mm512_set1_ps(ws[i]), blend);
+    }
+    blend
+}
+
+/// One vertex of [`linear_blend_chunk_avx512`] (the groups' remainders): the blended matrix
+/// times (p, 1) and (n, 0), each product's four 128-bit lanes summed.
+///
+/// # Safety
+/// `v` must be a vertex of every slice; its joints must be in `palette`; the CPU must support
+/// AVX-512F and AVX-512VL.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn linear_blend_one_avx512<const N: usize>(
+    palette: &[PackedAffine512],
+    (joints, weights): (&[[u16; N]], &[[f32; N]]),
+    (positions, normals): (*const f32, *const f32),
+    (out_positions, out_normals): (*mut f32, *mut f32),
+    v: usize,
+) {
+    // SAFETY (all): the caller's contract; the masked loads and stores touch the vertex's three
+    // floats only.
+    unsafe {
+        let m = blend_avx512(palette, joints.get_unchecked(v), weights.get_unchecked(v));
+        // Lane l of each 128-bit quarter q: coordinate q of the vertex (the fourth: 1 or 0).
+        let spread = _mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3);
+        let p = _mm512_castps128_ps512(_mm_maskz_loadu_ps(0b0111, positions.add(3 * v)));
+        let n = _mm512_castps128_ps512(_mm_maskz_loadu_ps(0b0111, normals.add(3 * v)));
+        let p = _mm512_mask_permutexvar_ps(_mm512_set1_ps(1.0), 0x0FFF, spread, p);
+        let n = _mm512_maskz_permutexvar_ps(0x0FFF, spread, n);
+        let (pm, nm) = (_mm512_mul_ps(m, p), _mm512_mul_ps(m, n));
+        // [pm₀ + pm₂, pm₁ + pm₃, nm₀ + nm₂, nm₁ + nm₃], then quarters 0 and 2 summed with 1 and 3.
+        let s = _mm512_add_ps(
+            _mm512_shuffle_f32x4::<0b01_00_01_00>(pm, nm),
+            _mm512_shuffle_f32x4::<0b11_10_11_10>(pm, nm),
+        );
+        let s = _mm512_add_ps(s, _mm512_shuffle_f32x4::<0b10_11_00_01>(s, s));
+        _mm_mask_storeu_ps(out_positions.add(3 * v), 0b0111, _mm512_castps512_ps128(s));
+        _mm_mask_storeu_ps(out_normals.add(3 * v), 0b0111, _mm512_extractf32x4_ps::<2>(s));
+    }
+}
+
+/// Linear blend of one chunk with 512-bit registers: v' = (Σ wᵢ·M(jᵢ))·v,
+/// n' = (Σ wᵢ·M(jᵢ))₃ₓ₃·n, four vertices at a time. A palette matrix is one register, so
+/// blending one influence is one FMA; the four blended matrices are transposed by their 128-bit
+/// lanes into the x axes, y axes, z axes and translations of the four vertices, which meet
+/// the four vertices' coordinates (spread from one 48-byte load by a permutation) in three
+/// FMAs per output; one permutation packs each output's twelve floats for one store.
+///
+/// `stream`: write the outputs with non-temporal (streaming) stores, which skip reading each
+/// output cache line before writing it and do not keep the outputs in the cache: for jobs
+/// larger than the last-level cache ([`streams_outputs`]), whose outputs would be evicted
+/// before anyone reads them anyway. Only when both outputs lie at the same offset modulo 16
+/// bytes (as separately allocated `Vec`s and their chunks do); otherwise ordinary stores.
+///
+/// # Safety
+/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
+/// index must be in `palette` (validated); all slices have the same length.
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn linear_blend_chunk_avx512<const N: usize>(
+    palette: &[PackedAffine512],
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+    stream: bool,
+) {
+    let n = positions.len();
+    debug_assert!([joints.len(), weights.len(), normals.len(), out_positions.len(), out_normals.len()]
+        .iter()
+        .all(|&l| l == n));
+    let inputs = (positions.as_ptr().cast::<f32>(), normals.as_ptr().cast::<f32>());
+    let outputs = (out_positions.as_mut_ptr().cast::<f32>(), out_normals.as_mut_ptr().cast::<f32>());
+    let (pp, np) = inputs;
+    let (opp, onp) = outputs;
+    let stream = stream && opp as usize % 16 == onp as usize % 16;
+    let mut v = 0;
+    if stream {
+        // Single vertices until the outputs are 16-byte aligned (at most three: 12 bytes per
+        // vertex step through the four 4-byte offsets).
+        while v < n && !(opp.wrapping_add(3 * v) as usize).is_multiple_of(16) {
+            // SAFETY: v < n; the caller's contract.
+            unsafe { linear_blend_one_avx512(palette, (joints, weights), inputs, outputs, v) };
+            v += 1;
+        }
+    }
+    // Lanes of one output's quarters: x₀x₀x₀x₀ | x₁… from the vertices' twelve floats, and back.
+    let coordinate = |c: i32| {
+        _mm512_setr_epi32(
+            c,
+            c,
+            c,
+            c,
+            c + 3,
+            c + 3,
+            c + 3,
+            c + 3,
+            c + 6,
+            c + 6,
+            c + 6,
+            c + 6,
+            c + 9,
+            c + 9,
+            c + 9,
+            c + 9,
+        )
+    };
+    let (ix, iy, iz) = (coordinate(0), coordinate(1), coordinate(2));
+    let compact = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 15, 15, 15, 15);
+    while v + 4 <= n {
+        // SAFETY: vertices v..v + 4 are in every slice; their joints are in the palette.
+        let [a, b, c, d] = std::array::from_fn(|k| unsafe {
+            blend_avx512(palette, joints.get_unchecked(v + k), weights.get_unchecked(v + k))
+        });
+        // Transpose by 128-bit lanes: x = [x_a | x_b | x_c | x_d], and so on.
+        let (ab_low, ab_high) =
+            (_mm512_shuffle_f32x4::<0b01_00_01_00>(a, b), _mm512_shuffle_f32x4::<0b11_10_11_10>(a, b));
+        let (cd_low, cd_high) =
+            (_mm512_shuffle_f32x4::<0b01_00_01_00>(c, d), _mm512_shuffle_f32x4::<0b11_10_11_10>(c, d));
+        let x = _mm512_shuffle_f32x4::<0b10_00_10_00>(ab_low, cd_low);
+        let y = _mm512_shuffle_f32x4::<0b11_01_11_01>(ab_low, cd_low);
+        let z = _mm512_shuffle_f32x4::<0b10_00_10_00>(ab_high, cd_high);
+        let t = _mm512_shuffle_f32x4::<0b11_01_11_01>(ab_high, cd_high);
+        // The four vertices' twelve floats: one 64-byte load while 16 floats remain in the
+        // slices (a masked load stops the hardware prefetcher's stream on some CPUs), else a
+        // masked one of twelve.
+        // SAFETY: floats 3v..3v + 16 (or 3v + 12, masked) of the 3n.
+        let (ps, ns) = unsafe {
+            if v + 6 <= n {
+                (_mm512_loadu_ps(pp.add(3 * v)), _mm512_loadu_ps(np.add(3 * v)))
+            } else {
+                (_mm512_maskz_loadu_ps(0x0FFF, pp.add(3 * v)), _mm512_maskz_loadu_ps(0x0FFF, np.add(3 * v)))
+            }
+        };
+        let spread = |xs: __m512, i: __m512i| _mm512_permutexvar_ps(i, xs);
+        let pos = _mm512_fmadd_ps(
+            x,
+            spread(ps, ix),
+            _mm512_fmadd_ps(y, spread(ps, iy), _mm512_fmadd_ps(z, spread(ps, iz), t)),
+        );
+        let nrm = _mm512_fmadd_ps(
+            x,
+            spread(ns, ix),
+            _mm512_fmadd_ps(y, spread(ns, iy), _mm512_mul_ps(z, spread(ns, iz))),
+        );
+        let (pos, nrm) = (_mm512_permutexvar_ps(compact, pos), _mm512_permutexvar_ps(compact, nrm));
+        // SAFETY: floats 3v..3v + 12 of the outputs; 16-byte aligned when streaming.
+        unsafe {
+            let (po, no) = (opp.add(3 * v), onp.add(3 * v));
+            if stream {
+                _mm_stream_ps(po, _mm512_castps512_ps128(pos));
+                _mm_stream_ps(po.add(4), _mm512_extractf32x4_ps::<1>(pos));
+                _mm_stream_ps(po.add(8), _mm512_extractf32x4_ps::<2>(pos));
+                _mm_stream_ps(no, _mm512_castps512_ps128(nrm));
+                _mm_stream_ps(no.add(4), _mm512_extractf32x4_ps::<1>(nrm));
+                _mm_stream_ps(no.add(8), _mm512_extractf32x4_ps::<2>(nrm));
+            } else {
+                _mm512_mask_storeu_ps(po, 0x0FFF, pos);
+                _mm512_mask_storeu_ps(no, 0x0FFF, nrm);
+            }
+        }
+        v += 4;
+    }
+    while v < n {
+        // SAFETY: v < n; the caller's contract.
+        unsafe { linear_blend_one_avx512(palette, (joints, weights), inputs, outputs, v) };
+        v += 1;
+    }
+    if stream {
+        // Streaming stores are weakly ordered: make them visible before the chunk is reported
+        // done (to another thread, through the chunk counter's release store).
+        _mm_sfence();
     }
 }
 
