@@ -65,8 +65,9 @@ pub(crate) enum Build {
     Portable,
     /// 256-bit kernels with fused multiply-adds (`deform/simd.rs`).
     Avx2Fma,
-    /// The same with AVX-512VL enabled: the dual quaternion kernel is compiled once more, to
-    /// use 32 vector registers instead of 16 (it spills none); the other kernels run their AVX2
+    /// CPUs with AVX-512F and AVX-512VL as well: 512-bit kernels for linear blend and dual
+    /// quaternion (whose 8-lane kernel, for the last vertices, is compiled once more to use 32
+    /// vector registers instead of 16 and spills none); rigid and bones blending run their AVX2
     /// build.
     Avx512Vl,
 }
