@@ -43,6 +43,7 @@ fn floor_frame(lights: Vec<LightInput>) -> FrameInput {
         deform: Deform::None,
         colour: Vec3::ONE,
         selected: false,
+        ghost: None,
     });
     frame
 }
