@@ -36,6 +36,7 @@ pub enum Command {
     NextKey,
     ToggleGrid,
     ToggleBones,
+    ToggleOnionSkin,
     SetDeformer(DeformerKind),
     CameraFront,
     CameraSide,
@@ -58,7 +59,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 40] = [
+    pub const ALL: [Command; 41] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -88,6 +89,7 @@ impl Command {
         Command::NextKey,
         Command::ToggleGrid,
         Command::ToggleBones,
+        Command::ToggleOnionSkin,
         Command::SetDeformer(DeformerKind::Rigid),
         Command::SetDeformer(DeformerKind::LinearBlend),
         Command::SetDeformer(DeformerKind::BonesBlending),
@@ -134,6 +136,7 @@ impl Command {
             Command::NextKey => "Next key",
             Command::ToggleGrid => "Grid",
             Command::ToggleBones => "Bones",
+            Command::ToggleOnionSkin => "Onion skin",
             Command::SetDeformer(k) => k.label(),
             Command::CameraFront => "Front view",
             Command::CameraSide => "Side view",
@@ -186,6 +189,10 @@ impl Command {
             Command::NextKey => "Go to the next key of the selection (of the scene when nothing is selected)",
             Command::ToggleGrid => "Show or hide the ground grid",
             Command::ToggleBones => "Show or hide the skeleton's bones",
+            Command::ToggleOnionSkin => {
+                "Ghosts of the selected object at frames before (warm) and after (cool) the \
+                 current one; how many and how far apart: View ▸ Onion skin settings"
+            }
             Command::SetDeformer(DeformerKind::Rigid) => "Skin each vertex to one bone (v' = M(j)·v)",
             Command::SetDeformer(DeformerKind::LinearBlend) => {
                 "Linear blend skinning; collapses under twist (candy wrapper)"
@@ -239,6 +246,7 @@ impl Command {
             Command::NextKey => vec![sc(NONE, Key::ArrowUp)],
             Command::ToggleGrid => vec![sc(NONE, Key::G)],
             Command::ToggleBones => vec![sc(NONE, Key::B)],
+            Command::ToggleOnionSkin => vec![sc(NONE, Key::O)],
             Command::SetDeformer(DeformerKind::Rigid) => vec![sc(NONE, Key::Num1)],
             Command::SetDeformer(DeformerKind::LinearBlend) => vec![sc(NONE, Key::Num2)],
             Command::SetDeformer(DeformerKind::BonesBlending) => vec![sc(NONE, Key::Num3)],

@@ -23,6 +23,7 @@ pub mod fonts;
 pub mod frame_bench;
 pub mod gpu_view;
 pub mod mirror;
+pub mod onion;
 pub mod panels;
 pub mod session;
 pub mod skinning;
