@@ -880,7 +880,19 @@ impl EditorApp {
             | Command::CameraTop
             | Command::CameraShoulder
             | Command::CameraElbow => self.camera_preset(command),
-            Command::FrameSelection => self.frame_selection(),
+            Command::FrameSelection => {
+                // Over the curve editor F frames its selected keys, as in Blender's graph editor
+                // (the curve view does it when it is next laid out).
+                let over_curves = ctx
+                    .input(|i| i.pointer.hover_pos())
+                    .zip(self.view.curves_rect)
+                    .is_some_and(|(p, r)| r.contains(p));
+                if over_curves {
+                    self.view.curves.frame_keys = true;
+                } else {
+                    self.frame_selection();
+                }
+            }
             Command::ShowHelp => self.view.show_help = !self.view.show_help,
         }
         ctx.request_repaint();

@@ -155,6 +155,16 @@ pub struct KeyWindow {
     pub nearest_after: Option<f64>,
 }
 
+/// The value of key `index` of a channel.
+#[must_use]
+pub fn key_value(scene: &Scene, id: ChannelId, index: usize) -> Option<ChannelValue> {
+    match channel(scene, id)? {
+        ChannelRef::Vec3(a) => a.track.keys.get(index).map(|k| ChannelValue::Vec3(k.value)),
+        ChannelRef::Rotation(a) => a.track.keys.get(index).map(|k| ChannelValue::Rotation(k.value)),
+        ChannelRef::Scalar(a) => a.track.keys.get(index).map(|k| ChannelValue::Scalar(k.value)),
+    }
+}
+
 /// Number of keys of a channel (0 when it does not exist).
 #[must_use]
 pub fn key_count(scene: &Scene, id: ChannelId) -> usize {

@@ -1,6 +1,7 @@
 //! The view: how the editor looks at the document — the orbit camera, viewport options and
 //! the panels' interaction state. Changing it never touches the document or its undo history.
 
+use egui::Pos2;
 use keyrig_core::Camera;
 
 use crate::camera::Bounds;
@@ -49,6 +50,10 @@ pub struct ViewState {
     pub box_select: Option<egui::Pos2>,
     /// Ghosts of the selected object at other frames (View ▸ Onion skin).
     pub onion: crate::onion::OnionSkin,
+    /// The curve editor's view and gesture.
+    pub curves: CurveViewState,
+    /// Where the curve editor was laid out in the last frame (F over it frames its keys).
+    pub curves_rect: Option<egui::Rect>,
 }
 
 /// An item being renamed in the outliner: Enter or leaving the field applies the name (one
@@ -83,6 +88,8 @@ impl ViewState {
             renaming: None,
             box_select: None,
             onion: crate::onion::OnionSkin::default(),
+            curves: CurveViewState::default(),
+            curves_rect: None,
         }
     }
 
@@ -105,9 +112,9 @@ impl ViewState {
 #[derive(Clone, Debug, Default)]
 pub struct TimelineState {
     /// The pointer gesture in progress (moving keys, box selection, panning).
-    pub(crate) gesture: Option<crate::panels::dope_sheet::Gesture>,
+    pub(crate) gesture: Option<Gesture>,
     /// The frames the dope sheet shows; `None` follows the scene's frame range.
-    pub view: Option<crate::panels::dope_sheet::TimeView>,
+    pub view: Option<TimeView>,
     /// Collapsed groups (objects, lights, joints with several channels).
     pub collapsed: std::collections::BTreeSet<crate::session::Selected>,
     /// The name column's width, points, once resized.
@@ -116,4 +123,55 @@ pub struct TimelineState {
     pub keep_frames: bool,
     /// (fps, start, end) when the current FPS drag started.
     pub(crate) fps_drag_origin: Option<(f64, i32, i32)>,
+}
+
+/// The frames shown at the left and right end of the dope sheet's keys
+/// ([`crate::panels::dope_sheet`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeView {
+    pub start: f64,
+    pub end: f64,
+}
+
+/// What the current pointer gesture in the dope sheet is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Gesture {
+    /// Moving the selected keys: whole frames already applied.
+    MoveKeys { applied: i32 },
+    /// A box selection from this point.
+    Box { start: Pos2 },
+    /// Panning the time axis with the middle button from this view.
+    Pan { from: TimeView },
+}
+
+/// The frames and values the curve view shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurveView {
+    pub start: f64,
+    pub end: f64,
+    pub low: f32,
+    pub high: f32,
+}
+
+/// What the current pointer gesture in the curve view is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CurveGesture {
+    /// Moving the selected keys: whole frames and value (of `component`) already applied.
+    MoveKeys { frames: i32, value: f32, component: usize },
+    /// A box selection from this point.
+    Box { start: Pos2 },
+    /// Panning with the middle button from this view.
+    Pan { from: CurveView },
+    /// Scrubbing the current frame on the frame ruler.
+    Scrub,
+}
+
+/// The curve view's own state (the view, a gesture); not saved, not undone.
+#[derive(Clone, Debug, Default)]
+pub struct CurveViewState {
+    /// `None`: the frame range and every shown value (*Fit*).
+    pub view: Option<CurveView>,
+    pub(crate) gesture: Option<CurveGesture>,
+    /// F was pressed over the curves: frame the selected keys when next laid out.
+    pub(crate) frame_keys: bool,
 }

@@ -1,6 +1,11 @@
-//! The curve view: the selected channels over the frame range, sampled through the same code
-//! as the viewport, so it updates live while a key or a T/C/B slider changes. Positions are
-//! drawn per component; rotations as XYZ Euler angles in degrees, unwrapped along the curve.
+//! The curve editor: the selected channels over time, sampled through the same code as the
+//! viewport, so it updates live while a key or a T/C/B slider changes. Positions are drawn per
+//! component; rotations as XYZ Euler angles in degrees, unwrapped along the curve; each curve
+//! has its own colour, named in the legend. Keys are clicked, box-selected and dragged in time
+//! (whole frames) and value, one undo step per drag; Delete, Ctrl+C and Ctrl+V work on them as
+//! in the dope sheet. The view zooms (wheel; Ctrl+wheel: time only) and pans (Shift+wheel,
+//! middle-drag) with rulers of frames and values; the frame ruler scrubs; *Fit* shows
+//! everything, F over the curves frames the selected keys (Home stays the first frame).
 //! A rotation channel with spin keys also gets its unwrapped turn (white): the twist about the
 //! first spin's axis through spin segments ([`crate::twist::unwrapped_twist`], which counts
 //! their turns with `Track::spin_degrees`), so a 720° segment climbs to 720 instead of
@@ -12,9 +17,8 @@ use egui::{Align2, Color32, FontId, Pos2, Sense, Shape, Stroke, Ui, Vec2};
 use crate::app::EditorApp;
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::eval::{euler_degrees, PoseOverrides};
-
-const COMPONENT_COLOURS: [Color32; 3] =
-    [Color32::from_rgb(230, 80, 80), Color32::from_rgb(90, 200, 90), Color32::from_rgb(90, 140, 240)];
+use crate::session::KeyRef;
+pub use crate::view::{CurveGesture, CurveView, CurveViewState};
 
 /// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
 const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
@@ -103,159 +107,671 @@ pub fn sample_curves(
     curves
 }
 
-pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
-    let ids = shown_channels(app);
-    let title = match ids.as_slice() {
-        [] => "Curves: select an animated object, joint or light".to_owned(),
-        [one] => format!("Curves: {}", one.label(app.doc.scene())),
-        many => format!("Curves: {} channels", many.len()),
-    };
-    ui.label(title);
-    let size = ui.available_size().max(Vec2::new(100.0, 60.0));
-    let (rect, _response) = ui.allocate_exact_size(size, Sense::hover());
-    // Painted at the end of the frame, after the inspector and the viewport had their say.
-    app.view.pending_curves = Some((ui.layer_id(), rect.intersect(ui.clip_rect())));
+/// Width of the value ruler and height of the frame ruler, points.
+const VALUE_RULER: f32 = 44.0;
+const FRAME_RULER: f32 = 16.0;
+/// How close (points) the pointer must be to a key to take it.
+const PICK_RADIUS: f32 = 6.0;
+
+/// One colour per shown curve (channel and component), distinct for up to twelve curves.
+const PALETTE: [Color32; 12] = [
+    Color32::from_rgb(235, 85, 85),
+    Color32::from_rgb(95, 205, 95),
+    Color32::from_rgb(95, 145, 245),
+    Color32::from_rgb(240, 200, 80),
+    Color32::from_rgb(215, 110, 230),
+    Color32::from_rgb(80, 210, 215),
+    Color32::from_rgb(245, 150, 70),
+    Color32::from_rgb(160, 230, 120),
+    Color32::from_rgb(150, 150, 255),
+    Color32::from_rgb(255, 140, 180),
+    Color32::from_rgb(190, 170, 120),
+    Color32::from_rgb(130, 200, 170),
+];
+
+/// The colour of component `c` of the `n`-th shown channel: a channel's X, Y, Z take three
+/// neighbouring colours, so two channels never share one (up to four channels).
+fn curve_colour(n: usize, c: usize, components: usize) -> Color32 {
+    if components == 4 && c == 3 {
+        return TURN_COLOUR;
+    }
+    PALETTE[(n * 3 + c) % PALETTE.len()]
 }
 
-/// Paints the curve view laid out by [`ui`] this frame, with the document as the rest of the
-/// frame left it (a value dragged in the inspector or the viewport shows at once).
-pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
-    let Some((layer, rect)) = app.view.pending_curves.take() else { return };
-    let painter = egui::Painter::new(ctx.clone(), layer, rect);
-    let visuals = ctx.global_style().visuals.clone();
-    painter.rect_filled(rect, 2.0, visuals.extreme_bg_color);
-    let ids = shown_channels(app);
-    if ids.is_empty() {
-        return;
+/// "X", "Y", "Z" for a vector or Euler angle component, "turn" for the unwrapped twist.
+fn component_name(id: ChannelId, c: usize) -> &'static str {
+    match (id.kind(), c) {
+        (channels::ChannelKind::Scalar, _) => "",
+        (_, 0) => "X",
+        (_, 1) => "Y",
+        (_, 2) => "Z",
+        _ => "turn",
     }
-    let scene = app.doc.scene();
-    let (start, end) = (
-        f64::from(scene.frame_range.start),
-        f64::from(scene.frame_range.end.max(scene.frame_range.start + 1)),
-    );
-    let samples = (rect.width() / 2.0).clamp(16.0, 800.0) as usize;
-    let all: Vec<(ChannelId, Vec<Curve>)> =
-        ids.iter().map(|&id| (id, sample_curves(app, id, start, end, samples))).collect();
+}
+
+/// Screen mapping of the plot: frames across, values up.
+#[derive(Clone, Copy, Debug)]
+struct Plot {
+    rect: egui::Rect,
+    view: CurveView,
+}
+
+impl Plot {
+    fn pos(&self, frame: f64, value: f32) -> Pos2 {
+        let v = self.view;
+        Pos2::new(
+            self.rect.left() + ((frame - v.start) / (v.end - v.start).max(1e-9)) as f32 * self.rect.width(),
+            self.rect.bottom() - (value - v.low) / (v.high - v.low).max(1e-9) * self.rect.height(),
+        )
+    }
+
+    fn frame(&self, x: f32) -> f64 {
+        let v = self.view;
+        v.start + f64::from((x - self.rect.left()) / self.rect.width().max(1.0)) * (v.end - v.start)
+    }
+
+    fn frames_per_point(&self) -> f64 {
+        (self.view.end - self.view.start) / f64::from(self.rect.width().max(1.0))
+    }
+
+    fn values_per_point(&self) -> f32 {
+        (self.view.high - self.view.low) / self.rect.height().max(1.0)
+    }
+}
+
+/// A key on one component's curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct KeyPoint {
+    key: KeyRef,
+    component: usize,
+    pos: Pos2,
+}
+
+/// The curves of the shown channels over `[start, end]`, and the range of their values.
+fn curves_over(
+    app: &EditorApp,
+    ids: &[ChannelId],
+    start: f64,
+    end: f64,
+    samples: usize,
+) -> Vec<(ChannelId, Vec<Curve>)> {
+    ids.iter().map(|&id| (id, sample_curves(app, id, start, end, samples))).collect()
+}
+
+fn value_extent(all: &[(ChannelId, Vec<Curve>)]) -> Option<(f32, f32)> {
     let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for (_, curves) in &all {
-        for curve in curves {
-            for &(_, v) in curve {
-                if v.is_finite() {
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
+    for (_, curves) in all {
+        for &(_, v) in curves.iter().flatten() {
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
             }
         }
     }
-    if !(lo.is_finite() && hi.is_finite()) {
-        return;
-    }
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
+/// The view that shows the frame range and every value of `ids` (with a margin).
+fn fit_view(app: &EditorApp, ids: &[ChannelId]) -> CurveView {
+    let range = app.doc.scene().frame_range;
+    let (start, end) = (f64::from(range.start), f64::from(range.end.max(range.start + 1)));
+    let all = curves_over(app, ids, start, end, 200);
+    let (mut lo, mut hi) = value_extent(&all).unwrap_or((-1.0, 1.0));
     if hi - lo < 1e-3 {
         lo -= 0.5;
         hi += 0.5;
     }
     let pad = (hi - lo) * 0.08;
-    let (lo, hi) = (lo - pad, hi + pad);
-    let plot = rect.shrink2(Vec2::new(28.0, 8.0));
-    let to_screen = |frame: f64, v: f32| {
-        Pos2::new(
-            plot.left() + ((frame - start) / (end - start)) as f32 * plot.width(),
-            plot.bottom() - (v - lo) / (hi - lo) * plot.height(),
-        )
-    };
-    // Zero line and value labels.
-    if lo < 0.0 && hi > 0.0 {
-        let y = to_screen(start, 0.0).y;
-        painter.line_segment(
-            [Pos2::new(plot.left(), y), Pos2::new(plot.right(), y)],
-            Stroke::new(1.0, visuals.faint_bg_color),
-        );
-    }
-    for v in [lo + pad, hi - pad] {
-        painter.text(
-            Pos2::new(rect.left() + 2.0, to_screen(start, v).y),
-            Align2::LEFT_CENTER,
-            format!("{v:.1}"),
-            FontId::proportional(9.0),
-            visuals.weak_text_color(),
-        );
-    }
+    CurveView { start, end, low: lo - pad, high: hi + pad }
+}
+
+/// The key points of the shown curves in view: each key of each channel on each of its
+/// components, at the curve's (unwrapped) value.
+fn key_points(app: &EditorApp, plot: &Plot, all: &[(ChannelId, Vec<Curve>)]) -> Vec<KeyPoint> {
+    let scene = app.doc.scene();
     let fps = scene.fps.max(1e-9);
-    // Cycles: the curves go on beyond the keys (sampled like everything else); the stretches
-    // outside the keys are shaded and named ("after: Repeat") so the repeats read as repeats.
-    for id in &ids {
-        let Some(cycles) = channels::cycles(scene, *id).filter(|c| !c.is_hold()) else { continue };
-        let times = channels::key_times(scene, *id);
-        let (Some(&first), Some(&last)) = (times.first(), times.last()) else { continue };
-        let (first, last) = ((first * fps).clamp(start, end), (last * fps).clamp(start, end));
-        for (from, to, cycle, text_at, align) in [
-            (start, first, cycles.before, first, Align2::RIGHT_TOP),
-            (last, end, cycles.after, last, Align2::LEFT_TOP),
-        ] {
-            if cycle.is_hold() || to <= from {
-                continue;
+    let eval = app.evaluator();
+    let none = PoseOverrides::new();
+    let mut out = Vec::new();
+    let mut last_column = std::collections::HashMap::new();
+    for (id, curves) in all {
+        let window =
+            channels::keys_between(scene, *id, plot.view.start / fps - 1e-9, plot.view.end / fps + 1e-9);
+        for (i, time) in window.times.iter().enumerate() {
+            let frame = time * fps;
+            let raw: Vec<f32> = match eval.value(*id, *time, &none) {
+                Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
+                Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
+                Some(ChannelValue::Scalar(s)) => vec![s],
+                None => continue,
+            };
+            for (c, raw) in raw.into_iter().enumerate() {
+                let Some(curve) = curves.get(c) else { continue };
+                // The sample nearest the key, to unwrap an Euler angle onto the curve.
+                let near = curve
+                    .iter()
+                    .min_by(|a, b| (a.0 - frame).abs().total_cmp(&(b.0 - frame).abs()))
+                    .map_or(raw, |&(_, v)| v);
+                let value = if id.kind() == channels::ChannelKind::Rotation {
+                    raw + 360.0 * ((near - raw) / 360.0).round()
+                } else {
+                    raw
+                };
+                let pos = plot.pos(frame, value);
+                // One point per pixel column and component (motion-capture density).
+                let column = (pos.x.round() as i32, *id, c);
+                if last_column.insert(column, ()).is_some() {
+                    continue;
+                }
+                out.push(KeyPoint {
+                    key: KeyRef { channel: *id, index: window.first + i },
+                    component: c,
+                    pos,
+                });
             }
-            let (a, b) = (to_screen(from, hi), to_screen(to, lo));
-            painter.rect_filled(
-                egui::Rect::from_min_max(Pos2::new(a.x, plot.top()), Pos2::new(b.x, plot.bottom())),
-                0.0,
-                visuals.faint_bg_color.gamma_multiply(0.6),
-            );
-            let end_name = if align == Align2::LEFT_TOP { "after" } else { "before" };
-            let text = format!("{end_name}: {}", cycle.label());
-            painter.text(
-                Pos2::new(to_screen(text_at, lo).x, plot.top()),
-                align,
-                text,
-                FontId::proportional(10.0),
-                visuals.weak_text_color(),
-            );
         }
     }
-    for (id, curves) in &all {
-        for (c, curve) in curves.iter().enumerate() {
-            let colour = match (curves.len(), c) {
-                (1, _) => Color32::from_rgb(230, 200, 90),
-                (_, 3) => TURN_COLOUR,
-                _ => COMPONENT_COLOURS[c % 3],
-            };
-            let points: Vec<Pos2> = curve.iter().map(|&(f, v)| to_screen(f, v)).collect();
-            painter.add(Shape::line(points, Stroke::new(1.5, colour)));
-            // Key markers: the curve's value at each key time in view, one per pixel column
-            // (a motion-capture track has more keys than the view has pixels).
-            let mut last_column = None;
-            for time in channels::keys_between(scene, *id, start / fps, end / fps).times {
-                let frame = time * fps;
-                let i = (((frame - start) / (end - start)) * (curve.len() - 1) as f64).round() as usize;
-                if let Some(&(_, v)) = curve.get(i) {
-                    let at = to_screen(frame, v);
-                    let column = at.x.round() as i32;
-                    if last_column != Some(column) {
-                        last_column = Some(column);
-                        painter.circle_filled(at, 3.0, colour);
+    out
+}
+
+/// Lays out the curve view: its header (title, legend, Fit), the plot and its rulers, and
+/// handles the pointer: click or box-select keys, drag them in time (whole frames) and value,
+/// scrub on the frame ruler, wheel to zoom (Ctrl: time only; Shift: pan), middle-drag to pan.
+/// Painting happens at the end of the frame ([`paint_pending`]).
+pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+    let ids = shown_channels(app);
+    let scene = app.doc.scene();
+    ui.horizontal(|ui| {
+        let title = match ids.as_slice() {
+            [] => "Curves: select an animated object, joint or light".to_owned(),
+            [one] => format!("Curves: {}", one.label(scene)),
+            many => format!("Curves: {} channels", many.len()),
+        };
+        ui.label(title);
+        let fit = "Show the frame range and every value (F over the curves frames the selected keys)";
+        if !ids.is_empty() && ui.small_button("Fit").on_hover_text(fit).clicked() {
+            app.view.curves.view = None;
+        }
+    });
+    if !ids.is_empty() {
+        legend_ui(ui, app, &ids);
+    }
+    let size = ui.available_size().max(Vec2::new(100.0, 60.0));
+    let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
+    app.view.pending_curves = Some((ui.layer_id(), rect.intersect(ui.clip_rect())));
+    app.view.curves_rect = Some(rect);
+    if ids.is_empty() {
+        return;
+    }
+    if std::mem::take(&mut app.view.curves.frame_keys) {
+        frame_selected_keys(app);
+    }
+    let view = app.view.curves.view.unwrap_or_else(|| fit_view(app, &ids));
+    let plot = Plot { rect: plot_rect(rect), view };
+    let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
+    let all = curves_over(app, &ids, view.start, view.end, samples);
+    let points = key_points(app, &plot, &all);
+    let pick = |pos: Pos2| {
+        points
+            .iter()
+            .map(|p| (p, p.pos.distance(pos)))
+            .filter(|(_, d)| *d <= PICK_RADIUS)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(p, _)| *p)
+    };
+    let additive = ui.input(|i| i.modifiers.shift || i.modifiers.command);
+    let on_ruler = |pos: Pos2| pos.y > plot.rect.bottom();
+
+    if let Some(pos) = response.interact_pointer_pos().filter(|_| response.clicked()) {
+        if on_ruler(pos) {
+            app.set_frame(plot.frame(pos.x).round() as i32);
+        } else if let Some(point) = pick(pos) {
+            select_key(app, point.key, additive);
+        } else if !additive {
+            app.session.selection.keys.clear();
+        }
+    }
+    let press = ui.input(|i| i.pointer.press_origin());
+    if let Some(origin) = press.filter(|_| response.drag_started_by(egui::PointerButton::Primary)) {
+        app.view.curves.gesture = if on_ruler(origin) {
+            Some(CurveGesture::Scrub)
+        } else if let Some(point) = pick(origin) {
+            if !app.session.selection.keys.contains(&point.key) {
+                select_key(app, point.key, additive);
+            }
+            Some(CurveGesture::MoveKeys { frames: 0, value: 0.0, component: point.component })
+        } else {
+            Some(CurveGesture::Box { start: origin })
+        };
+    }
+    if response.drag_started_by(egui::PointerButton::Middle) {
+        app.view.curves.gesture = Some(CurveGesture::Pan { from: view });
+    }
+    // Only while the pointer drags: the frame of the release reports no movement.
+    let delta = response.total_drag_delta().filter(|_| response.dragged());
+    match app.view.curves.gesture {
+        Some(CurveGesture::Scrub) => {
+            if let Some(pos) = response.interact_pointer_pos() {
+                app.set_frame(plot.frame(pos.x).round() as i32);
+            }
+        }
+        Some(CurveGesture::MoveKeys { frames, value, component }) if delta.is_some() => {
+            let delta = delta.unwrap_or_default();
+            // The keys keep the view they were grabbed in, so a drag moves them by what the
+            // pointer moved.
+            app.view.curves.view.get_or_insert(view);
+            let wanted_frames = (f64::from(delta.x) * plot.frames_per_point()).round() as i32;
+            let wanted_value = -delta.y * plot.values_per_point();
+            let mut applied = (frames, value);
+            if wanted_frames != frames
+                && crate::panels::dope_sheet::move_selected_keys(
+                    app,
+                    f64::from(wanted_frames - frames) / scene_fps(app),
+                )
+            {
+                applied.0 = wanted_frames;
+            }
+            if (wanted_value - value).abs() > f32::EPSILON {
+                shift_selected_values(app, component, wanted_value - value);
+                applied.1 = wanted_value;
+            }
+            app.view.curves.gesture =
+                Some(CurveGesture::MoveKeys { frames: applied.0, value: applied.1, component });
+        }
+        Some(CurveGesture::Box { start }) => {
+            if response.drag_stopped() {
+                if let Some(end) = response.interact_pointer_pos().or(ui.input(|i| i.pointer.latest_pos())) {
+                    let area = egui::Rect::from_two_pos(start, end);
+                    if !additive {
+                        app.session.selection.keys.clear();
+                    }
+                    for p in points.iter().filter(|p| area.contains(p.pos)) {
+                        app.session.selection.keys.insert(p.key);
                     }
                 }
             }
         }
+        Some(CurveGesture::Pan { from }) if delta.is_some() => {
+            let delta = delta.unwrap_or_default();
+            let frames = -f64::from(delta.x) * plot.frames_per_point();
+            let values = delta.y * plot.values_per_point();
+            app.view.curves.view = Some(CurveView {
+                start: from.start + frames,
+                end: from.end + frames,
+                low: from.low + values,
+                high: from.high + values,
+            });
+        }
+        Some(CurveGesture::MoveKeys { .. } | CurveGesture::Pan { .. }) | None => {}
     }
-    if let Some((_, axis)) = ids.iter().find_map(|&id| turn_axis(app, id)) {
-        painter.text(
-            Pos2::new(plot.right(), plot.top()),
-            Align2::RIGHT_TOP,
-            format!(
-                "white: turn about ({:.2}, {:.2}, {:.2}) through spin keys, unwrapped; X/Y/Z: Euler {}",
-                axis.x,
-                axis.y,
-                axis.z,
-                crate::panels::inspector::EULER_ORDER
-            ),
-            FontId::proportional(10.0),
-            visuals.weak_text_color(),
+    if response.drag_stopped() {
+        if matches!(app.view.curves.gesture, Some(CurveGesture::MoveKeys { .. })) {
+            app.doc.close_group();
+        }
+        app.view.curves.gesture = None;
+    }
+    if !ui.input(|i| i.pointer.any_down()) && !response.drag_stopped() {
+        app.view.curves.gesture = None;
+    }
+    if let Some(pointer) = response.hover_pos() {
+        zoom_and_pan(ui, app, &plot, pointer);
+    }
+}
+
+fn scene_fps(app: &EditorApp) -> f64 {
+    app.doc.scene().fps.max(1e-9)
+}
+
+/// The plot inside the curve view's rect, beside the value ruler and above the frame ruler.
+fn plot_rect(rect: egui::Rect) -> egui::Rect {
+    egui::Rect::from_min_max(
+        Pos2::new(rect.left() + VALUE_RULER, rect.top() + 6.0),
+        Pos2::new(rect.right() - 6.0, rect.bottom() - FRAME_RULER),
+    )
+}
+
+/// A click on a key: selects it alone with its owner, or with Shift/Ctrl adds or removes it.
+fn select_key(app: &mut EditorApp, key: KeyRef, additive: bool) {
+    let selection = &mut app.session.selection;
+    if additive {
+        if !selection.keys.remove(&key) {
+            selection.keys.insert(key);
+        }
+    } else {
+        selection.keys = std::collections::BTreeSet::from([key]);
+    }
+}
+
+/// Adds `delta` to component `component` of every selected key (an Euler angle for
+/// rotations, degrees) as one continuous edit.
+fn shift_selected_values(app: &mut EditorApp, component: usize, delta: f32) {
+    let keys: Vec<KeyRef> = app.session.selection.keys.iter().copied().collect();
+    let label =
+        if keys.len() == 1 { "move key value".to_owned() } else { format!("move {} key values", keys.len()) };
+    app.doc.edit_continuous("curve value", &label, |scene| {
+        for k in &keys {
+            let Some(&time) = channels::key_times(scene, k.channel).get(k.index) else { continue };
+            let Some(value) = channels::key_value(scene, k.channel, k.index) else { continue };
+            let moved = match value {
+                ChannelValue::Vec3(mut v) if component < 3 => {
+                    v[component] += delta;
+                    ChannelValue::Vec3(v)
+                }
+                ChannelValue::Scalar(s) if component == 0 => ChannelValue::Scalar(s + delta),
+                ChannelValue::Rotation(q) if component < 3 => {
+                    let mut e = euler_degrees(q);
+                    e[component] += delta;
+                    ChannelValue::Rotation(crate::eval::quat_from_euler_degrees(e))
+                }
+                _ => continue,
+            };
+            channels::set_key(scene, k.channel, time, moved);
+        }
+    });
+}
+
+/// Wheel over the curves zooms both axes about the pointer, Ctrl+wheel the time axis only,
+/// Shift+wheel (or a horizontal wheel) pans in time.
+fn zoom_and_pan(ui: &Ui, app: &mut EditorApp, plot: &Plot, pointer: Pos2) {
+    let (zoom, scroll) = ui.input(|i| (i.zoom_delta(), i.smooth_scroll_delta));
+    let mut view = plot.view;
+    let anchor_frame = plot.frame(pointer.x);
+    let anchor_value =
+        view.low + (plot.rect.bottom() - pointer.y) / plot.rect.height().max(1.0) * (view.high - view.low);
+    let zoom_time = |view: &mut CurveView, factor: f64| {
+        let span = ((view.end - view.start) / factor).max(2.0);
+        let t = (anchor_frame - view.start) / (view.end - view.start).max(1e-9);
+        view.start = anchor_frame - t * span;
+        view.end = view.start + span;
+    };
+    if (zoom - 1.0).abs() > 1e-4 {
+        zoom_time(&mut view, f64::from(zoom));
+    }
+    if scroll.y.abs() > 0.0 {
+        let factor = (scroll.y * 0.004).exp();
+        zoom_time(&mut view, f64::from(factor));
+        let span = ((view.high - view.low) / factor).max(1e-3);
+        let t = (anchor_value - view.low) / (view.high - view.low).max(1e-9);
+        view.low = anchor_value - t * span;
+        view.high = view.low + span;
+    }
+    if scroll.x.abs() > 0.0 {
+        let shift = -f64::from(scroll.x) * plot.frames_per_point();
+        view.start += shift;
+        view.end += shift;
+    }
+    if view != plot.view {
+        app.view.curves.view = Some(view);
+    }
+}
+
+/// The legend: a swatch and name per shown curve.
+fn legend_ui(ui: &mut Ui, app: &EditorApp, ids: &[ChannelId]) {
+    let scene = app.doc.scene();
+    ui.horizontal_wrapped(|ui| {
+        for (n, &id) in ids.iter().enumerate() {
+            let components = match id.kind() {
+                channels::ChannelKind::Scalar => 1,
+                _ if turn_axis(app, id).is_some() => 4,
+                _ => 3,
+            };
+            for c in 0..components {
+                let colour = curve_colour(n, c, components);
+                let (swatch, _) = ui.allocate_exact_size(Vec2::new(10.0, 10.0), Sense::hover());
+                ui.painter().rect_filled(swatch, 2.0, colour);
+                let name = format!("{} {}", id.label(scene), component_name(id, c)).trim_end().to_owned();
+                ui.label(egui::RichText::new(name).small());
+            }
+        }
+        if ids.iter().any(|id| id.kind() == channels::ChannelKind::Rotation) {
+            ui.label(
+                egui::RichText::new(format!(
+                    "(rotations: Euler {}, degrees)",
+                    crate::panels::inspector::EULER_ORDER
+                ))
+                .small()
+                .weak(),
+            );
+        }
+    });
+}
+
+/// Frames the selected keys (all shown keys when none is selected): F over the curve view.
+pub fn frame_selected_keys(app: &mut EditorApp) {
+    let ids = shown_channels(app);
+    if ids.is_empty() {
+        return;
+    }
+    let fit = fit_view(app, &ids);
+    let scene = app.doc.scene();
+    let fps = scene.fps.max(1e-9);
+    let eval = app.evaluator();
+    let none = PoseOverrides::new();
+    let (mut f0, mut f1, mut v0, mut v1) =
+        (f64::INFINITY, f64::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
+    for k in &app.session.selection.keys {
+        let Some(&time) = channels::key_times(scene, k.channel).get(k.index) else { continue };
+        f0 = f0.min(time * fps);
+        f1 = f1.max(time * fps);
+        let values: Vec<f32> = match eval.value(k.channel, time, &none) {
+            Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
+            Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
+            Some(ChannelValue::Scalar(s)) => vec![s],
+            None => continue,
+        };
+        for v in values {
+            v0 = v0.min(v);
+            v1 = v1.max(v);
+        }
+    }
+    if !f0.is_finite() {
+        app.view.curves.view = Some(fit);
+        return;
+    }
+    let (df, dv) = ((f1 - f0).max(4.0) * 0.1, (v1 - v0).max(1e-2) * 0.1);
+    app.view.curves.view = Some(CurveView { start: f0 - df, end: f1 + df, low: v0 - dv, high: v1 + dv });
+}
+
+/// Labelled ticks about `min_points` apart along a span: the step (1, 2 or 5 × 10ⁿ).
+fn nice_step(span: f64, length: f32, min_points: f32) -> f64 {
+    let raw = span.abs().max(1e-9) * f64::from(min_points) / f64::from(length.max(1.0));
+    let base = 10f64.powf(raw.log10().floor());
+    for m in [1.0, 2.0, 5.0, 10.0] {
+        if base * m >= raw {
+            return base * m;
+        }
+    }
+    base * 10.0
+}
+
+/// Paints the curve view laid out by [`ui`] this frame, with the document as the rest of the
+/// frame left it (a value dragged in the inspector or the viewport shows at once).
+pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
+    let Some((layer, clip)) = app.view.pending_curves.take() else { return };
+    // Laid out at `rect` (the plot's geometry, as the pointer saw it), shown within `clip`.
+    let rect = app.view.curves_rect.unwrap_or(clip);
+    let painter = egui::Painter::new(ctx.clone(), layer, clip);
+    let visuals = ctx.global_style().visuals.clone();
+    painter.rect_filled(clip, 2.0, visuals.extreme_bg_color);
+    let ids = shown_channels(app);
+    if ids.is_empty() {
+        return;
+    }
+    let view = app.view.curves.view.unwrap_or_else(|| fit_view(app, &ids));
+    let plot = Plot { rect: plot_rect(rect), view };
+    let scene = app.doc.scene();
+    let fps = scene.fps.max(1e-9);
+    let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
+    let all = curves_over(app, &ids, view.start, view.end, samples);
+    let weak = visuals.weak_text_color();
+    let grid = Stroke::new(1.0, visuals.faint_bg_color);
+    let plot_painter = painter.with_clip_rect(plot.rect.intersect(clip));
+
+    // Frames outside the scene's range, shaded.
+    let range = scene.frame_range;
+    let (a, b) = (plot.pos(f64::from(range.start), 0.0).x, plot.pos(f64::from(range.end), 0.0).x);
+    let shade = visuals.faint_bg_color.gamma_multiply(0.7);
+    if a > plot.rect.left() {
+        plot_painter.rect_filled(
+            egui::Rect::from_min_max(plot.rect.min, Pos2::new(a, plot.rect.bottom())),
+            0.0,
+            shade,
         );
     }
-    let x = to_screen(app.session.playback.frame, lo).x;
-    painter.line_segment(
-        [Pos2::new(x, plot.top()), Pos2::new(x, plot.bottom())],
-        Stroke::new(1.5, Color32::from_rgb(90, 170, 255)),
-    );
+    if b < plot.rect.right() {
+        plot_painter.rect_filled(
+            egui::Rect::from_min_max(Pos2::new(b, plot.rect.top()), plot.rect.max),
+            0.0,
+            shade,
+        );
+    }
+
+    // Rulers: frames under the plot, values beside it, with grid lines.
+    let step = nice_step(view.end - view.start, plot.rect.width(), 45.0).max(1.0);
+    let mut f = (view.start / step).ceil() * step;
+    while f <= view.end {
+        let x = plot.pos(f, 0.0).x;
+        plot_painter.line_segment([Pos2::new(x, plot.rect.top()), Pos2::new(x, plot.rect.bottom())], grid);
+        painter.text(
+            Pos2::new(x, plot.rect.bottom() + 2.0),
+            Align2::CENTER_TOP,
+            format!("{f:.0}"),
+            FontId::proportional(9.5),
+            weak,
+        );
+        f += step;
+    }
+    let vstep = nice_step(f64::from(view.high - view.low), plot.rect.height(), 28.0);
+    let mut v = (f64::from(view.low) / vstep).ceil() * vstep;
+    while v <= f64::from(view.high) {
+        let y = plot.pos(view.start, v as f32).y;
+        plot_painter.line_segment([Pos2::new(plot.rect.left(), y), Pos2::new(plot.rect.right(), y)], grid);
+        let text = if vstep >= 1.0 {
+            format!("{v:.0}")
+        } else {
+            format!("{v:.*}", (-vstep.log10()).ceil() as usize)
+        };
+        painter.text(
+            Pos2::new(plot.rect.left() - 4.0, y),
+            Align2::RIGHT_CENTER,
+            text,
+            FontId::proportional(9.5),
+            weak,
+        );
+        v += vstep;
+    }
+
+    // Cycles: the curves go on beyond the keys (sampled like everything else); the stretches
+    // outside the keys are shaded and named ("after: Repeat") so the repeats read as repeats.
+    for id in &ids {
+        let Some(cycles) = channels::cycles(scene, *id).filter(|c| !c.is_hold()) else { continue };
+        let window = channels::keys_between(scene, *id, f64::NEG_INFINITY, f64::INFINITY);
+        let (Some(&first), Some(&last)) = (window.times.first(), window.times.last()) else { continue };
+        let (first, last) =
+            ((first * fps).clamp(view.start, view.end), (last * fps).clamp(view.start, view.end));
+        for (from, to, cycle, text_at, align) in [
+            (view.start, first, cycles.before, first, Align2::RIGHT_TOP),
+            (last, view.end, cycles.after, last, Align2::LEFT_TOP),
+        ] {
+            if cycle.is_hold() || to <= from {
+                continue;
+            }
+            let (x0, x1) = (plot.pos(from, 0.0).x, plot.pos(to, 0.0).x);
+            plot_painter.rect_filled(
+                egui::Rect::from_min_max(Pos2::new(x0, plot.rect.top()), Pos2::new(x1, plot.rect.bottom())),
+                0.0,
+                visuals.faint_bg_color.gamma_multiply(0.6),
+            );
+            let end_name = if align == Align2::LEFT_TOP { "after" } else { "before" };
+            plot_painter.text(
+                Pos2::new(plot.pos(text_at, 0.0).x, plot.rect.top()),
+                align,
+                format!("{end_name}: {}", cycle.label()),
+                FontId::proportional(10.0),
+                weak,
+            );
+        }
+    }
+
+    // Curves and their keys.
+    for (n, (_, curves)) in all.iter().enumerate() {
+        for (c, curve) in curves.iter().enumerate() {
+            let colour = curve_colour(n, c, curves.len());
+            let points: Vec<Pos2> = curve.iter().map(|&(f, v)| plot.pos(f, v)).collect();
+            plot_painter.add(Shape::line(points, Stroke::new(1.5, colour)));
+        }
+    }
+    let points = key_points(app, &plot, &all);
+    for p in &points {
+        let n = ids.iter().position(|&id| id == p.key.channel).unwrap_or(0);
+        let components = all.get(n).map_or(3, |(_, c)| c.len());
+        let colour = curve_colour(n, p.component, components);
+        if app.session.selection.keys.contains(&p.key) {
+            plot_painter.circle(
+                p.pos,
+                4.0,
+                Color32::from_rgb(255, 200, 60),
+                Stroke::new(1.0, Color32::WHITE),
+            );
+        } else {
+            plot_painter.circle_filled(p.pos, 3.0, colour);
+        }
+    }
+    if let Some((_, axis)) = ids.iter().find_map(|&id| turn_axis(app, id)) {
+        plot_painter.text(
+            Pos2::new(plot.rect.right(), plot.rect.top()),
+            Align2::RIGHT_TOP,
+            format!(
+                "white: turn about ({:.2}, {:.2}, {:.2}) through spin keys, unwrapped",
+                axis.x, axis.y, axis.z
+            ),
+            FontId::proportional(10.0),
+            weak,
+        );
+    }
+    // The current frame, and a box selection in progress.
+    let x = plot.pos(app.session.playback.frame, 0.0).x;
+    if x >= plot.rect.left() && x <= plot.rect.right() {
+        painter.line_segment(
+            [Pos2::new(x, plot.rect.top()), Pos2::new(x, rect.bottom())],
+            Stroke::new(1.5, Color32::from_rgb(90, 170, 255)),
+        );
+    }
+    if let (Some(CurveGesture::Box { start }), Some(now)) =
+        (app.view.curves.gesture, ctx.input(|i| i.pointer.latest_pos()))
+    {
+        plot_painter.rect_stroke(
+            egui::Rect::from_two_pos(start, now),
+            0.0,
+            Stroke::new(1.0, visuals.selection.stroke.color),
+            egui::StrokeKind::Inside,
+        );
+    }
+    // Accessibility tools (and UI tests) see each drawn key: "curve key elbow rotation X frame 30".
+    for p in &points {
+        let frame = channels::key_times(scene, p.key.channel)
+            .get(p.key.index)
+            .map_or(0, |t| (t * fps).round() as i64);
+        let r = egui::Rect::from_center_size(p.pos, Vec2::splat(2.0 * PICK_RADIUS));
+        ctx.accesskit_node_builder(
+            egui::Id::new(("curve key", p.key.channel, p.key.index, p.component)),
+            |node| {
+                node.set_role(egui::accesskit::Role::Button);
+                node.set_label(
+                    format!(
+                        "curve key {} {} frame {frame}",
+                        p.key.channel.label(scene),
+                        component_name(p.key.channel, p.component)
+                    )
+                    .replace("  ", " "),
+                );
+                node.set_bounds(egui::accesskit::Rect {
+                    x0: r.min.x.into(),
+                    y0: r.min.y.into(),
+                    x1: r.max.x.into(),
+                    y1: r.max.y.into(),
+                });
+            },
+        );
+    }
 }

@@ -24,6 +24,7 @@ use crate::app::EditorApp;
 use crate::channels::{self, ChannelId};
 use crate::panels::outliner::hierarchy;
 use crate::session::{KeyRef, Selected};
+pub use crate::view::{Gesture, TimeView};
 use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
 
 const ROW_HEIGHT: f32 = 17.0;
@@ -41,24 +42,6 @@ const DEFAULT_NAME_WIDTH: f32 = 170.0;
 const DENSE_SPACING: f32 = 3.0;
 /// The fewest frames the zoomed time axis shows.
 const MIN_SPAN: f64 = 4.0;
-
-/// The frames shown at the left and right end of the dope sheet's keys.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TimeView {
-    pub start: f64,
-    pub end: f64,
-}
-
-/// What the current pointer gesture in the dope sheet is doing.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Gesture {
-    /// Moving the selected keys: whole frames already applied.
-    MoveKeys { applied: i32 },
-    /// A box selection from this point.
-    Box { start: Pos2 },
-    /// Panning the time axis with the middle button from this view.
-    Pan { from: TimeView },
-}
 
 /// What a row stands for.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,143 @@
+//! The curve editor used with real pointer, wheel and key events: keys dragged in value and in
+//! time (one undo step per drag), box selection, scrubbing on the frame ruler, zoom and Fit,
+//! F over the curves framing the selected keys, a colour and legend entry per curve.
+
+mod common;
+
+use common::{drag, harness, press};
+
+use egui::{Event, Key, Modifiers, MouseWheelUnit, Pos2};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_editor::eval::euler_degrees;
+use keyrig_editor::EditorApp;
+
+const ELBOW: ChannelId = ChannelId::JointRotation { object: 0, joint: 1 };
+
+fn elbow_x_at_key(h: &Harness<'_, EditorApp>, index: usize) -> f32 {
+    match channels::key_value(h.state().doc.scene(), ELBOW, index) {
+        Some(ChannelValue::Rotation(q)) => euler_degrees(q).x,
+        other => panic!("a rotation key, got {other:?}"),
+    }
+}
+
+fn elbow_x_at_key_of(scene: &keyrig_core::Scene, index: usize) -> f32 {
+    match channels::key_value(scene, ELBOW, index) {
+        Some(ChannelValue::Rotation(q)) => euler_degrees(q).x,
+        other => panic!("a rotation key, got {other:?}"),
+    }
+}
+
+fn frames(h: &Harness<'_, EditorApp>) -> Vec<i64> {
+    let scene = h.state().doc.scene();
+    channels::key_times(scene, ELBOW).iter().map(|t| (t * scene.fps).round() as i64).collect()
+}
+
+/// The demo with the elbow's key at frame 30 selected (dope sheet click): its curves show.
+fn with_elbow_key() -> (tempfile::TempDir, Harness<'static, EditorApp>) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    (dir, h)
+}
+
+#[test]
+fn dragging_a_curve_key_changes_its_value_then_its_time_one_undo_step_each() {
+    let (_dir, mut h) = with_elbow_key();
+    let original = h.state().doc.scene().clone();
+    // The key at frame 15 (45° about Y: away from the XYZ order's gimbal lock at 90°).
+    let x_before = elbow_x_at_key(&h, 1);
+    let key = h.get_by_label("curve key elbow rotation X frame 15").rect().center();
+    // Up by 40 points: the X angle grows, the key stays at frame 15.
+    drag(&mut h, key, key + egui::vec2(0.0, -40.0));
+    let x_after = elbow_x_at_key(&h, 1);
+    assert!(x_after > x_before + 1.0, "X {x_before} → {x_after}");
+    assert_eq!(frames(&h), [0, 15, 30, 45, 75, 90]);
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original, "the value drag is one undo step");
+
+    // Sideways by five frames (measured on the curve's own keys): time only.
+    let at_30 = h.get_by_label("curve key elbow rotation X frame 30").rect().center();
+    let at_45 = h.get_by_label("curve key elbow rotation X frame 45").rect().center();
+    let per_frame = (at_45.x - at_30.x) / 15.0;
+    drag(&mut h, at_30, at_30 + egui::vec2(per_frame * 5.0, 0.0));
+    assert_eq!(frames(&h), [0, 15, 35, 45, 75, 90]);
+    assert!(
+        (elbow_x_at_key(&h, 2) - elbow_x_at_key_of(&original, 2)).abs() < 1e-3,
+        "a level drag leaves the value"
+    );
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original, "the time drag is one undo step");
+}
+
+#[test]
+fn box_selection_ruler_scrub_zoom_home_and_f() {
+    let (_dir, mut h) = with_elbow_key();
+    let k15 = h.get_by_label("curve key elbow rotation X frame 15").rect();
+    let k45 = h.get_by_label("curve key elbow rotation X frame 45").rect();
+    // A box from left of frame 15 to right of frame 45, over the whole height of the keys.
+    let top = k15.top().min(k45.top()) - 60.0;
+    let bottom = k15.bottom().max(k45.bottom()) + 60.0;
+    let plot = h.state().view.curves_rect.expect("the curve view is laid out");
+    let (top, bottom) = (top.max(plot.top() + 8.0), bottom.min(plot.bottom() - 20.0));
+    drag(&mut h, Pos2::new(k15.left() - 3.0, top), Pos2::new(k45.right() + 3.0, bottom));
+    let selected: Vec<usize> =
+        h.state().session.selection.keys.iter().filter(|k| k.channel == ELBOW).map(|k| k.index).collect();
+    assert_eq!(selected, [1, 2, 3], "frames 15, 30 and 45");
+
+    // The frame ruler under the plot scrubs.
+    let at_45 = k45.center();
+    let ruler = Pos2::new(at_45.x, plot.bottom() - 6.0);
+    h.event(Event::PointerMoved(ruler));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: ruler,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+    assert_eq!(h.state().session.playback.whole_frame(), 45);
+
+    // The wheel zooms about the pointer; Home fits everything again.
+    let centre = plot.center();
+    h.event(Event::PointerMoved(centre));
+    h.event(Event::MouseWheel {
+        unit: MouseWheelUnit::Line,
+        delta: egui::vec2(0.0, 3.0),
+        modifiers: Modifiers::NONE,
+        phase: egui::TouchPhase::Move,
+    });
+    h.run();
+    let zoomed = h.state().view.curves.view.expect("a zoomed view");
+    assert!(zoomed.end - zoomed.start < 90.0, "{zoomed:?}");
+    h.get_by_label("Fit").click();
+    h.run();
+    assert_eq!(h.state().view.curves.view, None, "Fit shows the range and values");
+
+    // F over the curves frames the selected keys (15–45), not the viewport.
+    let camera = h.state().view.camera;
+    h.event(Event::PointerMoved(centre));
+    press(&mut h, Modifiers::NONE, Key::F);
+    let framed = h.state().view.curves.view.expect("framed");
+    assert!(
+        framed.start > 5.0 && framed.start < 15.0 && framed.end > 45.0 && framed.end < 60.0,
+        "{framed:?}"
+    );
+    assert_eq!(h.state().view.camera, camera, "the viewport's camera stays");
+}
+
+#[test]
+fn every_curve_has_its_own_colour_and_a_legend_entry() {
+    let (_dir, mut h) = with_elbow_key();
+    // Add the shoulder's key at frame 45: two rotation channels, six curves.
+    h.get_by_label("key shoulder rotation frame 45").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    for name in ["elbow rotation X", "elbow rotation Y", "elbow rotation Z", "shoulder rotation X"] {
+        assert!(h.query_by_label(name).is_some(), "legend entry {name}");
+    }
+    assert!(h.query_by_label("Curves: 2 channels").is_some());
+}
