@@ -17,6 +17,7 @@ pub enum Command {
     Undo,
     Redo,
     ToggleRecord,
+    ToggleIk,
     InsertKey,
     Delete,
     DuplicateItem,
@@ -58,7 +59,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 40] = [
+    pub const ALL: [Command; 41] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -69,6 +70,7 @@ impl Command {
         Command::Redo,
         Command::Undo,
         Command::ToggleRecord,
+        Command::ToggleIk,
         Command::InsertKey,
         Command::Delete,
         Command::DuplicateItem,
@@ -115,6 +117,7 @@ impl Command {
             Command::Undo => "Undo",
             Command::Redo => "Redo",
             Command::ToggleRecord => "Record mode",
+            Command::ToggleIk => "IK posing",
             Command::InsertKey => "Insert key",
             Command::Delete => "Delete",
             Command::DuplicateItem => "Duplicate",
@@ -161,7 +164,14 @@ impl Command {
             Command::ToggleRecord => {
                 "Auto-key: a gizmo or inspector change writes a key at the current frame"
             }
-            Command::InsertKey => "Key the selection's current pose at the current frame",
+            Command::ToggleIk => {
+                "Drag a handle at the selected joint (a hand): the chain above it follows (two bones \
+                 by default; the inspector sets the length)"
+            }
+            Command::InsertKey => {
+                "Key the selection's current pose at the current frame (in IK posing, with the joints \
+                 of the selected joint's chain)"
+            }
             Command::Delete => "Delete the selected keys; with no key selected, the selected object or light",
             Command::DuplicateItem => "Copy the selected object or light, keys included, and select the copy",
             Command::RenameItem => {
@@ -220,6 +230,7 @@ impl Command {
             Command::Undo => vec![sc(CMD, Key::Z)],
             Command::Redo => vec![sc(CMD_SHIFT, Key::Z), sc(CMD, Key::Y)],
             Command::ToggleRecord => vec![sc(NONE, Key::R)],
+            Command::ToggleIk => vec![sc(Modifiers::SHIFT, Key::I)],
             Command::InsertKey => vec![sc(NONE, Key::I)],
             Command::Delete => vec![sc(NONE, Key::Delete), sc(NONE, Key::Backspace)],
             Command::DuplicateItem => vec![sc(Modifiers::SHIFT, Key::D)],
