@@ -208,28 +208,41 @@ fn a_longer_chain_set_in_the_inspector_drags_with_fabrik() {
     assert!(h.state().doc.scene() == &before, "one undo restores the scene exactly");
 }
 
-/// The bend side is kept from drag to drag: a drag that leaves the chain straight (out of reach)
-/// does not lose it, and the same target later gives the same elbow.
+/// Which way the elbow → forearm → wrist chain bends: the forearm joint's offset from the
+/// elbow → wrist line, unit.
+fn bend_side(app: &EditorApp) -> Vec3 {
+    let (elbow, forearm, wrist) =
+        (joint_world(app, 0, ELBOW), joint_world(app, 0, FOREARM), joint_world(app, 0, WRIST));
+    let axis = (wrist - elbow).normalize();
+    let offset = forearm - elbow;
+    (offset - axis * offset.dot(axis)).normalize()
+}
+
+/// The bend side is the pose's, and it is kept from drag to drag. At frame 0 the demo arm is
+/// straight along +X; the forearm is first bent 40° about +Z with the inspector, so the forearm
+/// joint sits below the elbow → wrist line (−Y), the opposite of the side a chain that never
+/// bent takes (its root's +Y). A drag keeps that side; a drag out of reach leaves the chain
+/// straight; the next drag back in bends it to the same side again (the stored pole), not to
+/// +Y.
 #[test]
 fn consecutive_drags_keep_the_bend_side() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
+    go_to_frame(&mut h, 0);
+    select_joint(&mut h, "forearm", FOREARM);
+    set_value(&mut h, Role::SpinButton, "Rotation (°) Z", 40.0);
+    assert!(bend_side(h.state()).dot(Vec3::NEG_Y) > 0.9, "bent down: {:?}", bend_side(h.state()));
     select_joint(&mut h, "wrist", WRIST);
     press(&mut h, Modifiers::SHIFT, Key::I);
-    go_to_frame(&mut h, FRAME);
-    let inward = towards_elbow(h.state(), 0.35, 0.0);
+
+    let inward = towards_elbow(h.state(), 0.2, 0.0);
     let start = on_screen(h.state(), joint_world(h.state(), 0, WRIST));
     drag_wrist_by(&mut h, inward);
-    let bend_side = |app: &EditorApp| {
-        let (elbow, forearm, wrist) =
-            (joint_world(app, 0, ELBOW), joint_world(app, 0, FOREARM), joint_world(app, 0, WRIST));
-        let axis = (wrist - elbow).normalize();
-        let offset = forearm - elbow;
-        (offset - axis * offset.dot(axis)).normalize()
-    };
     let bent = bend_side(h.state());
+    assert!(bent.dot(Vec3::NEG_Y) > 0.9, "the drag keeps the pose's bend side: {bent:?}");
+
     // Out of reach: the chain ends straight, pointing at the pointer.
-    drag_wrist_by(&mut h, -inward * 3.0);
+    drag_wrist_by(&mut h, -inward * 4.0);
     let (elbow, forearm, wrist) = (
         joint_world(h.state(), 0, ELBOW),
         joint_world(h.state(), 0, FOREARM),
@@ -237,6 +250,7 @@ fn consecutive_drags_keep_the_bend_side() {
     );
     let straightness = (forearm - elbow).normalize().dot((wrist - forearm).normalize());
     assert!(straightness > 1.0 - 1e-5, "out of reach the chain is straight: cos {straightness}");
+
     // Back to the first place: the same bend side.
     let here = on_screen(h.state(), joint_world(h.state(), 0, WRIST));
     drag_wrist_by(&mut h, (start + inward) - here);
