@@ -270,17 +270,20 @@ impl Command {
         self.shortcuts().iter().map(|s| ctx.format_shortcut(s)).collect::<Vec<_>>().join(", ")
     }
 
-    /// Whether the shortcut must not fire while a text field has the keyboard: plain keys, and
-    /// the clipboard and undo keys, which the text field uses itself.
+    /// Whether the shortcut must not fire while a text field has the keyboard: plain keys and
+    /// Shift with a key (a capital letter: Shift+I, Shift+D), and the clipboard and undo keys,
+    /// which the text field uses itself.
     #[must_use]
     pub fn yields_to_text_fields(shortcut: &KeyboardShortcut) -> bool {
-        shortcut.modifiers.is_none() || matches!(shortcut.logical_key, Key::C | Key::V | Key::Z | Key::Y)
+        let typed = shortcut.modifiers.is_none() || shortcut.modifiers == Modifiers::SHIFT;
+        typed || matches!(shortcut.logical_key, Key::C | Key::V | Key::Z | Key::Y)
     }
 }
 
 /// Finds the commands whose shortcuts were pressed this frame and consumes those key presses.
-/// While a text field has the keyboard, plain-key shortcuts (R, Space, arrows, 1–4) and the
-/// clipboard and undo keys are left to it, so typing a value does not toggle record mode.
+/// While a text field has the keyboard, plain-key shortcuts (R, Space, arrows, 1–4), Shift with a
+/// letter (Shift+I, Shift+D) and the clipboard and undo keys are left to it, so typing a value or
+/// a name does not toggle record mode or IK posing.
 #[must_use]
 pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
     let typing = ctx.text_edit_focused();
@@ -332,6 +335,15 @@ mod tests {
             let row = format!("| {} | {} |", command.label(), shortcuts.join(", "));
             assert!(guide.contains(&row), "docs/guide.md lacks the row `{row}`");
         }
+    }
+
+    /// Typing a capital I or D in a text field types it: Shift+letter shortcuts wait.
+    #[test]
+    fn shift_letters_yield_to_text_fields() {
+        for command in [Command::ToggleIk, Command::DuplicateItem] {
+            assert!(command.shortcuts().iter().all(Command::yields_to_text_fields), "{command:?}");
+        }
+        assert!(!Command::yields_to_text_fields(&sc(CMD_SHIFT, Key::S)), "Save as works while typing");
     }
 
     #[test]

@@ -324,3 +324,31 @@ fn ik_posing_is_in_the_shortcut_list() {
     h.get_by_label("IK posing");
     h.get_by_label("Shift+I");
 }
+
+/// Typing a capital I in a name field types it: Shift+I waits while a text field has the
+/// keyboard.
+#[test]
+fn a_capital_i_typed_in_a_name_field_does_not_toggle_ik_posing() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_joint(&mut h, "wrist", WRIST);
+    press(&mut h, Modifiers::COMMAND, Key::R);
+    assert!(h.state().view.renaming.is_some(), "Ctrl+R opens the name field");
+    h.key_press_modifiers(Modifiers::COMMAND, Key::A);
+    h.run();
+    h.input_mut().modifiers = Modifiers::SHIFT;
+    h.event(egui::Event::Key {
+        key: Key::I,
+        physical_key: None,
+        pressed: true,
+        repeat: false,
+        modifiers: Modifiers::SHIFT,
+    });
+    h.event(egui::Event::Text("I".to_owned()));
+    h.run();
+    h.input_mut().modifiers = Modifiers::NONE;
+    assert!(!h.state().session.ik.enabled, "Shift+I in a text field types I");
+    press(&mut h, Modifiers::NONE, Key::Enter);
+    let scene = h.state().doc.scene();
+    assert_eq!(scene.objects[0].skeleton.as_ref().expect("the arm").joints[WRIST].name, "I");
+}

@@ -268,6 +268,9 @@ fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
             .inner;
         if change.any() && bones != asked {
             app.session.ik.set_chain_bones(object, joint, bones);
+            if let Ok(chain) = app.ik_chain(object, joint) {
+                app.info(format!("IK chain: {} ({})", chain.describe(), chain.solver_label()));
+            }
         }
     }
     match app.ik_chain(object, joint) {
