@@ -13,6 +13,9 @@
 //!   the figure); the viewport texture at full or half resolution, with 4× MSAA or without
 //!   (View ▸ Anti-aliasing; the editor's default on a CPU rasterizer is half, no MSAA).
 //!
+//! - `gpu_viewport_arm_selected` and `…_onion_skin_4_ghosts`: the last at full resolution
+//!   without MSAA, with the arm selected, without and with onion skinning (four ghosts).
+//!
 //! Run: `cargo bench -p keyrig-editor --bench editor_frame -- --warm-up-time 1 --measurement-time 5`
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -72,11 +75,15 @@ fn frame_time(c: &mut Criterion) {
         });
     });
 
-    for (name, scale, antialiasing) in [
-        ("gpu_viewport_half_resolution_msaa4", 0.5, true),
-        ("gpu_viewport_half_resolution_no_msaa", 0.5, false),
-        ("gpu_viewport_full_resolution_msaa4", 1.0, true),
-        ("gpu_viewport_full_resolution_no_msaa", 1.0, false),
+    // The last two: the arm selected, without and with onion skinning (two ghosts before
+    // and two after, every 5 frames): what four ghosts cost.
+    for (name, scale, antialiasing, onion) in [
+        ("gpu_viewport_half_resolution_msaa4", 0.5, true, None),
+        ("gpu_viewport_half_resolution_no_msaa", 0.5, false, None),
+        ("gpu_viewport_full_resolution_msaa4", 1.0, true, None),
+        ("gpu_viewport_full_resolution_no_msaa", 1.0, false, None),
+        ("gpu_viewport_arm_selected", 1.0, false, Some(false)),
+        ("gpu_viewport_arm_selected_onion_skin_4_ghosts", 1.0, false, Some(true)),
     ] {
         let data_dir = dir.path().to_path_buf();
         let mut gpu = Harness::builder()
@@ -90,6 +97,10 @@ fn frame_time(c: &mut Criterion) {
                 }
                 app.view.resolution_scale = scale;
                 app.view.antialiasing = antialiasing;
+                if let Some(on) = onion {
+                    app.session.selection.select_only(Some(keyrig_editor::session::Selected::Object(0)));
+                    app.view.onion = keyrig_editor::onion::OnionSkin { enabled: on, ..Default::default() };
+                }
                 app
             });
         let adapter = gpu.state().gpu().map(GpuView::adapter_name).expect("the wgpu harness gives a device");

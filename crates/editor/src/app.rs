@@ -965,6 +965,7 @@ impl EditorApp {
             Command::PastePoseMirrored => self.paste_pose(true),
             Command::ToggleGrid => self.view.grid = !self.view.grid,
             Command::ToggleBones => self.view.bones = !self.view.bones,
+            Command::ToggleOnionSkin => self.view.onion.enabled = !self.view.onion.enabled,
             Command::SetDeformer(kind) => self.set_deformer(kind),
             Command::CameraFront
             | Command::CameraSide

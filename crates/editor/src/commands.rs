@@ -37,6 +37,7 @@ pub enum Command {
     NextKey,
     ToggleGrid,
     ToggleBones,
+    ToggleOnionSkin,
     SetDeformer(DeformerKind),
     CameraFront,
     CameraSide,
@@ -59,7 +60,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 41] = [
+    pub const ALL: [Command; 42] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -90,6 +91,7 @@ impl Command {
         Command::NextKey,
         Command::ToggleGrid,
         Command::ToggleBones,
+        Command::ToggleOnionSkin,
         Command::SetDeformer(DeformerKind::Rigid),
         Command::SetDeformer(DeformerKind::LinearBlend),
         Command::SetDeformer(DeformerKind::BonesBlending),
@@ -137,6 +139,7 @@ impl Command {
             Command::NextKey => "Next key",
             Command::ToggleGrid => "Grid",
             Command::ToggleBones => "Bones",
+            Command::ToggleOnionSkin => "Onion skin",
             Command::SetDeformer(k) => k.label(),
             Command::CameraFront => "Front view",
             Command::CameraSide => "Side view",
@@ -196,6 +199,10 @@ impl Command {
             Command::NextKey => "Go to the next key of the selection (of the scene when nothing is selected)",
             Command::ToggleGrid => "Show or hide the ground grid",
             Command::ToggleBones => "Show or hide the skeleton's bones",
+            Command::ToggleOnionSkin => {
+                "Ghosts of the selected object at frames before (warm) and after (cool) the \
+                 current one; how many and how far apart: View ▸ Onion skin settings"
+            }
             Command::SetDeformer(DeformerKind::Rigid) => "Skin each vertex to one bone (v' = M(j)·v)",
             Command::SetDeformer(DeformerKind::LinearBlend) => {
                 "Linear blend skinning; collapses under twist (candy wrapper)"
@@ -250,6 +257,7 @@ impl Command {
             Command::NextKey => vec![sc(NONE, Key::ArrowUp)],
             Command::ToggleGrid => vec![sc(NONE, Key::G)],
             Command::ToggleBones => vec![sc(NONE, Key::B)],
+            Command::ToggleOnionSkin => vec![sc(NONE, Key::O)],
             Command::SetDeformer(DeformerKind::Rigid) => vec![sc(NONE, Key::Num1)],
             Command::SetDeformer(DeformerKind::LinearBlend) => vec![sc(NONE, Key::Num2)],
             Command::SetDeformer(DeformerKind::BonesBlending) => vec![sc(NONE, Key::Num3)],

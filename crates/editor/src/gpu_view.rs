@@ -46,6 +46,9 @@ pub struct GpuFrame<'a> {
     /// Materials of skinned file meshes, by object (read, like `morph_meshes`, only when the
     /// rig is rebuilt).
     pub materials: std::collections::HashMap<usize, std::sync::Arc<keyrig_core::Material>>,
+    /// Onion-skin ghosts: an object's state at another frame and how to draw it (farthest
+    /// first).
+    pub ghosts: Vec<(usize, keyrig_eval::ObjectState, keyrig_render::Ghost)>,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -54,6 +57,8 @@ pub struct GpuView {
     renderer: Renderer,
     target: Option<(Viewport, TextureId)>,
     rig: Option<((u64, u64, u64), SceneRig)>,
+    /// The ghost meshes on the GPU: (object, count) for the current rig.
+    ghost_meshes: Option<(usize, usize)>,
     /// Statistics of the last rendered frame.
     pub last_stats: Option<FrameStats>,
     /// Wall-clock time of the last [`GpuView::render`] call (the frame benchmark's split).
@@ -109,6 +114,7 @@ impl GpuView {
             renderer,
             target: None,
             rig: None,
+            ghost_meshes: None,
             last_stats: None,
             last_render_time: std::time::Duration::ZERO,
             frame_log: FrameLog::from_env(),
@@ -199,9 +205,21 @@ impl GpuView {
             let previous = self.rig.take().map(|(_, rig)| rig);
             rig.upload_changed(&mut self.renderer, previous.as_ref())?;
             self.rig = Some((frame.rig_key, rig));
+            self.ghost_meshes = None;
         }
         let Some((_, rig)) = &self.rig else { return Err(GpuViewError::NoScene) };
         let mut input = rig.frame_from_state(frame.state, &frame.view)?;
+        if let Some(&(object, _, _)) = frame.ghosts.first() {
+            // Each ghost needs mesh buffers of its own; uploaded once per rig and object.
+            let count = frame.ghosts.len();
+            if !self.ghost_meshes.is_some_and(|(o, n)| o == object && n >= count) {
+                rig.upload_ghosts(&mut self.renderer, object, count)?;
+                self.ghost_meshes = Some((object, count));
+            }
+            for (g, (o, state, ghost)) in frame.ghosts.iter().enumerate() {
+                input.items.extend(rig.ghost_items(*o, g, state, &frame.view, *ghost)?);
+            }
+        }
         if frame.view.motion_path {
             if let Some(path) = rig.motion_path(frame.view.selection, frame.state.time, frame.overrides)? {
                 input.motion_paths.push(path);

@@ -25,6 +25,7 @@ pub mod frame_bench;
 pub mod gpu_view;
 pub mod ik_posing;
 pub mod mirror;
+pub mod onion;
 pub mod panels;
 pub mod session;
 pub mod skinning;

@@ -47,6 +47,8 @@ pub struct ViewState {
     pub renaming: Option<Renaming>,
     /// Where a Ctrl+drag box selection in the viewport started (screen points).
     pub box_select: Option<egui::Pos2>,
+    /// Ghosts of the selected object at other frames (View ▸ Onion skin).
+    pub onion: crate::onion::OnionSkin,
 }
 
 /// An item being renamed in the outliner: Enter or leaving the field applies the name (one
@@ -80,6 +82,7 @@ impl ViewState {
             show_help: false,
             renaming: None,
             box_select: None,
+            onion: crate::onion::OnionSkin::default(),
         }
     }
 

@@ -197,3 +197,20 @@ fn guide_full_turn_twist_with_the_twist_field() {
     assert!(bones_180 > 0.9 && dq_180 > 0.7, "bones {bones_180}, dq {dq_180}");
     assert!(bones_360 > 0.9 && dq_360 > 0.9, "bones {bones_360}, dq {dq_360}");
 }
+
+/// docs/guide.md, "Onion skinning": the forearm selected at frame 45, O shows two ghosts of
+/// the arm before and two after.
+#[test]
+fn guide_onion_skin() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = gpu_harness(dir.path(), SIZE);
+    h.get_by_label("forearm").click();
+    h.run();
+    go_to_frame(&mut h, 45);
+    let calls =
+        |h: &Harness<'_, EditorApp>| h.state().gpu().and_then(|g| g.last_stats).expect("drawn").draw_calls;
+    let before = calls(&h);
+    press(&mut h, Modifiers::NONE, Key::O);
+    assert_eq!(calls(&h), before + 4, "two ghosts before and two after");
+    screenshot(&mut h, "guide_onion_skin");
+}

@@ -41,11 +41,12 @@ pub use headless::{HeadlessRenderer, HEADLESS_FORMAT};
 pub use image;
 pub use overlay::{LightGizmo, MotionPath, SkeletonOverlay};
 pub use renderer::{
-    Deform, DrawItem, FrameInput, FrameStats, LightInput, MeshData, MeshId, RenderStyle, Renderer, Viewport,
-    SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
+    Deform, DrawItem, FrameInput, FrameStats, Ghost, LightInput, MeshData, MeshId, RenderStyle, Renderer,
+    Viewport, SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
 };
 pub use scene_frame::{
     MorphBlend, MorphClip, MorphError, MorphMesh, SceneFrameError, SceneRig, Selected, ViewOptions,
+    GHOST_MESHES, MAX_GHOSTS,
 };
 pub use skinning::{
     joint_poses, BlendBinding, GpuSkinner, JointPose, OwnedSkinInput, SkinMeshInput, SkinnedVertex,

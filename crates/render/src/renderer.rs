@@ -111,6 +111,17 @@ pub struct DrawItem {
     /// Linear RGB albedo.
     pub colour: Vec3,
     pub selected: bool,
+    /// Drawn as a translucent, tinted ghost (onion skinning) after the opaque items.
+    pub ghost: Option<Ghost>,
+}
+
+/// How a ghost (another frame's pose, for onion skinning) is drawn: its shaded colour mixed
+/// half-way towards `tint`, with `opacity` (0–1) over what lies behind it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ghost {
+    /// Linear RGB.
+    pub tint: Vec3,
+    pub opacity: f32,
 }
 
 /// A light's values at the frame's time (world space).
@@ -525,6 +536,8 @@ struct GpuObject {
     normal_from_model: [[f32; 4]; 4],
     colour: [f32; 4],
     flags: [f32; 4],
+    /// A ghost's tint (rgb) and opacity (w); unused for opaque items.
+    tint: [f32; 4],
 }
 
 fn gpu_light(light: &LightInput) -> GpuLight {
@@ -579,6 +592,8 @@ struct DrawPipelines {
     points: wgpu::RenderPipeline,
     lines_depth: wgpu::RenderPipeline,
     lines_on_top: wgpu::RenderPipeline,
+    /// Translucent ghosts: lit, blended over the scene, depth-tested without writing depth.
+    ghost: wgpu::RenderPipeline,
 }
 
 impl DrawPipelines {
@@ -614,7 +629,8 @@ impl DrawPipelines {
                         fs: &str,
                         topology: wgpu::PrimitiveTopology,
                         depth_compare: wgpu::CompareFunction,
-                        depth_write: bool| {
+                        depth_write: bool,
+                        blend: Option<wgpu::BlendState>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(layout),
@@ -643,7 +659,7 @@ impl DrawPipelines {
                     compilation_options: Default::default(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: color_format,
-                        blend: None,
+                        blend,
                         write_mask: wgpu::ColorWrites::ALL,
                     })],
                 }),
@@ -655,7 +671,16 @@ impl DrawPipelines {
         use wgpu::PrimitiveTopology::{LineList, PointList, TriangleList};
         DrawPipelines {
             samples,
-            solid: pipeline("keyrig solid", mesh_layout, "vs_mesh", "fs_lit", TriangleList, LessEqual, true),
+            solid: pipeline(
+                "keyrig solid",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit",
+                TriangleList,
+                LessEqual,
+                true,
+                None,
+            ),
             wireframe: pipeline(
                 "keyrig wireframe",
                 mesh_layout,
@@ -664,8 +689,18 @@ impl DrawPipelines {
                 LineList,
                 LessEqual,
                 true,
+                None,
             ),
-            points: pipeline("keyrig points", mesh_layout, "vs_mesh", "fs_flat", PointList, LessEqual, true),
+            points: pipeline(
+                "keyrig points",
+                mesh_layout,
+                "vs_mesh",
+                "fs_flat",
+                PointList,
+                LessEqual,
+                true,
+                None,
+            ),
             lines_depth: pipeline(
                 "keyrig grid",
                 line_layout,
@@ -674,6 +709,7 @@ impl DrawPipelines {
                 LineList,
                 LessEqual,
                 false,
+                None,
             ),
             lines_on_top: pipeline(
                 "keyrig overlays",
@@ -683,6 +719,17 @@ impl DrawPipelines {
                 LineList,
                 Always,
                 false,
+                None,
+            ),
+            ghost: pipeline(
+                "keyrig ghosts",
+                mesh_layout,
+                "vs_mesh",
+                "fs_ghost",
+                TriangleList,
+                LessEqual,
+                false,
+                Some(wgpu::BlendState::ALPHA_BLENDING),
             ),
         }
     }
@@ -1152,6 +1199,7 @@ impl Renderer {
                     .to_cols_array_2d(),
                 colour: item.colour.extend(1.0).to_array(),
                 flags: [if item.selected { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
+                tint: item.ghost.map_or([0.0; 4], |g| g.tint.extend(g.opacity.clamp(0.0, 1.0)).to_array()),
             };
             let start = i * OBJECT_STRIDE as usize;
             object_bytes[start..start + std::mem::size_of::<GpuObject>()]
@@ -1239,9 +1287,30 @@ impl Renderer {
                 RenderStyle::Wireframe => &pipelines.wireframe,
                 RenderStyle::Points => &pipelines.points,
             };
-            for (i, item) in frame.items.iter().enumerate() {
+            // Opaque items first, then ghosts blended over them (in the order given).
+            let order = frame
+                .items
+                .iter()
+                .enumerate()
+                .filter(|(_, item)| item.ghost.is_none())
+                .chain(frame.items.iter().enumerate().filter(|(_, item)| item.ghost.is_some()));
+            for (i, item) in order {
                 // Checked above.
                 let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
+                if item.ghost.is_some() {
+                    if mesh.triangle_index_count == 0 {
+                        continue;
+                    }
+                    pass.set_pipeline(&pipelines.ghost);
+                    pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
+                    pass.set_bind_group(2, &self.white_texture, &[]);
+                    pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
+                    pass.set_vertex_buffer(1, mesh.uvs.slice(..));
+                    pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
+                    stats.draw_calls += 1;
+                    continue;
+                }
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
                 let texture = match &mesh.texture {
@@ -1339,6 +1408,7 @@ mod tests {
             deform: Deform::None,
             colour: Vec3::new(0.9, 0.6, 0.3),
             selected: false,
+            ghost: None,
         });
         frame
     }

@@ -22,17 +22,24 @@ use glam::{Mat4, Vec2, Vec3};
 use keyrig_core::{Camera, DeformerKind, Material, MeshSource, Scene, TrackError};
 use keyrig_eval::morph::MorphClips;
 pub use keyrig_eval::morph::{MorphBlend, MorphClip, MorphError};
-use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator, SceneState};
+use keyrig_eval::{LoadedMesh, ObjectState, Overrides, SceneEvaluator, SceneState};
 use keyrig_skin::{SkinError, SkinnedMesh};
 use thiserror::Error;
 
 use crate::overlay::{grid_spacing_for, LightGizmo, MotionPath, SkeletonOverlay};
-use crate::renderer::{Deform, DrawItem, FrameInput, LightInput, MeshData, MeshId, RenderStyle, Renderer};
+use crate::renderer::{
+    Deform, DrawItem, FrameInput, Ghost, LightInput, MeshData, MeshId, RenderStyle, Renderer,
+};
 use crate::skinning::{joint_poses, OwnedSkinInput, SkinnedVertex};
 use crate::RenderError;
 
 /// Most samples a motion path takes over the frame range.
 const MAX_PATH_SAMPLES: i64 = 2000;
+
+/// The first mesh id of onion-skin ghosts ([`SceneRig::ghost_mesh`]).
+pub const GHOST_MESHES: MeshId = 1 << 32;
+/// The most ghosts one object can have.
+pub const MAX_GHOSTS: usize = 16;
 
 /// Albedo of the n-th mesh object (linear RGB), cycling.
 const OBJECT_COLOURS: [Vec3; 4] = [
@@ -432,8 +439,6 @@ impl SceneRig {
         renderer: &mut Renderer,
         previous: Option<&SceneRig>,
     ) -> Result<usize, SceneFrameError> {
-        let at =
-            |i: usize| move |source| SceneFrameError::Render { path: format!("objects[{i}].mesh"), source };
         let mut uploaded = 0;
         for (i, object) in self.objects.iter().enumerate() {
             if let Some(previous) = previous {
@@ -460,31 +465,93 @@ impl SceneRig {
                     continue;
                 }
             }
-            uploaded += 1;
-            if let Some(morph) = &object.morph {
-                renderer
-                    .upload_mesh_with_uvs(
-                        i as MeshId,
-                        &MeshData::Morph { frames: &morph.frames, indices: &morph.indices },
-                        morph.uvs(),
-                    )
-                    .map_err(at(i))?;
-            } else if let Some(skin) = self.eval.skin(i) {
-                let input = OwnedSkinInput::from_skinned_mesh(&skin.mesh, &skin.bindings);
-                renderer
-                    .upload_mesh_with_uvs(
-                        i as MeshId,
-                        &MeshData::Skinned { skin: input.as_input(), indices: &skin.mesh.indices },
-                        skin.mesh.uvs.as_deref(),
-                    )
-                    .map_err(at(i))?;
-            } else {
-                continue;
+            if self.upload_object(renderer, i, i as MeshId)? {
+                uploaded += 1;
             }
-            let texture = object.material.as_ref().and_then(|m| m.base_colour_texture.as_deref());
-            renderer.set_texture(i as MeshId, texture).map_err(at(i))?;
         }
         Ok(uploaded)
+    }
+
+    /// Uploads object `i`'s deformable mesh (skinned or morphing) as mesh `id`, with its
+    /// texture; false for an object without one.
+    fn upload_object(&self, renderer: &mut Renderer, i: usize, id: MeshId) -> Result<bool, SceneFrameError> {
+        let at = |source| SceneFrameError::Render { path: format!("objects[{i}].mesh"), source };
+        let Some(object) = self.objects.get(i) else { return Ok(false) };
+        if let Some(morph) = &object.morph {
+            renderer
+                .upload_mesh_with_uvs(
+                    id,
+                    &MeshData::Morph { frames: &morph.frames, indices: &morph.indices },
+                    morph.uvs(),
+                )
+                .map_err(at)?;
+        } else if let Some(skin) = self.eval.skin(i) {
+            let input = OwnedSkinInput::from_skinned_mesh(&skin.mesh, &skin.bindings);
+            renderer
+                .upload_mesh_with_uvs(
+                    id,
+                    &MeshData::Skinned { skin: input.as_input(), indices: &skin.mesh.indices },
+                    skin.mesh.uvs.as_deref(),
+                )
+                .map_err(at)?;
+        } else {
+            return Ok(false);
+        }
+        let texture = object.material.as_ref().and_then(|m| m.base_colour_texture.as_deref());
+        renderer.set_texture(id, texture).map_err(at)?;
+        Ok(true)
+    }
+
+    /// The mesh id of onion-skin ghost `g` of object `o` (ids from [`GHOST_MESHES`] on, above
+    /// every object's own).
+    #[must_use]
+    pub fn ghost_mesh(o: usize, g: usize) -> MeshId {
+        GHOST_MESHES + (o as MeshId) * MAX_GHOSTS as MeshId + g as MeshId
+    }
+
+    /// Uploads `count` (at most [`MAX_GHOSTS`]) copies of object `o`'s deformable mesh as its
+    /// ghost meshes, each with buffers of its own so that every ghost can show another pose in
+    /// the same frame. Returns false for an object without a deformable mesh.
+    ///
+    /// # Errors
+    /// [`SceneFrameError::Render`] naming the object.
+    pub fn upload_ghosts(
+        &self,
+        renderer: &mut Renderer,
+        o: usize,
+        count: usize,
+    ) -> Result<bool, SceneFrameError> {
+        for g in 0..count.min(MAX_GHOSTS) {
+            if !self.upload_object(renderer, o, Self::ghost_mesh(o, g))? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// Object `o` as it is in `state` (another frame's, e.g. from
+    /// [`SceneEvaluator::object_at`]) drawn as ghost `g` (uploaded by
+    /// [`SceneRig::upload_ghosts`]) with `ghost`'s tint and opacity.
+    ///
+    /// # Errors
+    /// As [`SceneRig::frame_from_state`] for that object.
+    pub fn ghost_items(
+        &self,
+        o: usize,
+        g: usize,
+        state: &ObjectState,
+        view: &ViewOptions,
+        ghost: Ghost,
+    ) -> Result<Vec<DrawItem>, SceneFrameError> {
+        if g >= MAX_GHOSTS || o >= self.objects.len() {
+            return Ok(Vec::new());
+        }
+        let mut items = self.object_items(o, state, view, Self::ghost_mesh(o, g))?;
+        for item in &mut items {
+            item.ghost = Some(ghost);
+            item.selected = false;
+        }
+        Ok(items)
     }
 
     /// The frame at `time` seconds, from the scene's tracks.
@@ -520,6 +587,60 @@ impl SceneRig {
                 selected: selection == Some(Selected::Light(i)),
             })
             .collect()
+    }
+
+    /// The draw items of object `i` in `state` on mesh `mesh` (its own, or a ghost's).
+    fn object_items(
+        &self,
+        i: usize,
+        state: &ObjectState,
+        view: &ViewOptions,
+        mesh: MeshId,
+    ) -> Result<Vec<DrawItem>, SceneFrameError> {
+        let object = &self.objects[i];
+        let mut items = Vec::new();
+        let colour = match (&object.material, view.textures) {
+            (Some(material), true) => {
+                let [r, g, b, _] = material.base_colour;
+                Vec3::new(r, g, b)
+            }
+            _ => object.colour,
+        };
+        let world_from_model = Mat4::from(state.world_from_object);
+        let selected = matches!(view.selection, Some(Selected::Object(o)) if o == i);
+        if let (Some(_), Some(blend)) = (&object.morph, &state.morph) {
+            let blend = blend
+                .clone()
+                .map_err(|source| SceneFrameError::Morph { path: format!("objects[{i}].mesh"), source })?;
+            items.push(DrawItem {
+                mesh,
+                world_from_model,
+                deform: Deform::Morph { frame_a: blend.frame_a, frame_b: blend.frame_b, t: blend.t },
+                colour,
+                selected,
+                ghost: None,
+            });
+        }
+        if let Some(error) = &state.palette_error {
+            return Err(SceneFrameError::Skin {
+                path: format!("objects[{i}].skeleton (pose)"),
+                source: error.clone(),
+            });
+        }
+        if let (Some(_), Some(palette)) = (self.eval.skin(i), &state.palette) {
+            items.push(DrawItem {
+                mesh,
+                world_from_model,
+                deform: Deform::Skin {
+                    deformer: view.deformer.unwrap_or(self.eval.deformer(i).unwrap_or_default()),
+                    joints: joint_poses(palette),
+                },
+                colour,
+                selected,
+                ghost: None,
+            });
+        }
+        Ok(items)
     }
 
     /// The frame for a state the evaluator produced (the editor's, with its pose overrides):
@@ -560,47 +681,9 @@ impl SceneRig {
             .collect();
         frame.grid_spacing = view.grid.then(|| grid_spacing_for(camera.distance));
         frame.textures = view.textures;
-        for (i, (object, state)) in self.objects.iter().zip(&state.objects).enumerate() {
-            let colour = match (&object.material, view.textures) {
-                (Some(material), true) => {
-                    let [r, g, b, _] = material.base_colour;
-                    Vec3::new(r, g, b)
-                }
-                _ => object.colour,
-            };
+        for (i, state) in state.objects.iter().enumerate() {
+            frame.items.extend(self.object_items(i, state, view, i as MeshId)?);
             let world_from_model = Mat4::from(state.world_from_object);
-            let selected = matches!(view.selection, Some(Selected::Object(o)) if o == i);
-            if let (Some(_), Some(blend)) = (&object.morph, &state.morph) {
-                let blend = blend.clone().map_err(|source| SceneFrameError::Morph {
-                    path: format!("objects[{i}].mesh"),
-                    source,
-                })?;
-                frame.items.push(DrawItem {
-                    mesh: i as MeshId,
-                    world_from_model,
-                    deform: Deform::Morph { frame_a: blend.frame_a, frame_b: blend.frame_b, t: blend.t },
-                    colour,
-                    selected,
-                });
-            }
-            if let Some(error) = &state.palette_error {
-                return Err(SceneFrameError::Skin {
-                    path: format!("objects[{i}].skeleton (pose)"),
-                    source: error.clone(),
-                });
-            }
-            if let (Some(_), Some(palette)) = (self.eval.skin(i), &state.palette) {
-                frame.items.push(DrawItem {
-                    mesh: i as MeshId,
-                    world_from_model,
-                    deform: Deform::Skin {
-                        deformer: view.deformer.unwrap_or(self.eval.deformer(i).unwrap_or_default()),
-                        joints: joint_poses(palette),
-                    },
-                    colour,
-                    selected,
-                });
-            }
             if view.skeletons {
                 if let (Some(_), Some(palette), Some(rest)) =
                     (&state.pose, &state.palette, self.eval.rest_skeleton(i))

@@ -43,6 +43,7 @@ fn floor_frame(lights: Vec<LightInput>) -> FrameInput {
         deform: Deform::None,
         colour: Vec3::ONE,
         selected: false,
+        ghost: None,
     });
     frame
 }
@@ -388,4 +389,28 @@ fn texture_coordinates_of_the_wrong_length_are_a_typed_error() {
         .expect_err("one uv for four vertices");
     assert!(matches!(err, RenderError::LengthMismatch { expected: 4, actual: 1, .. }), "{err}");
     assert!(matches!(r.renderer_mut().set_texture(9, None), Err(RenderError::UnknownMesh(9))));
+}
+
+/// A selected object is tinted, not painted over: where it faces the eye its shading stays
+/// (within a small tint), so a selected model's pose and texture can still be seen.
+#[test]
+fn selection_tints_without_hiding_the_shading() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let sun = light(LightKind::Directional, Vec3::ZERO, Vec3::NEG_Y, 0.5);
+    let render = |r: &mut HeadlessRenderer, selected: bool| {
+        let mut frame = floor_frame(vec![sun]);
+        frame.items[0].selected = selected;
+        let (image, _) = r.render_image(&frame, SIZE, SIZE).expect("render");
+        image.get_pixel(SIZE / 2, SIZE / 2).0
+    };
+    let plain = render(&mut r, false);
+    let selected = render(&mut r, true);
+    assert!(selected[0] >= plain[0], "tinted towards orange: {plain:?} → {selected:?}");
+    assert!(selected[2] < plain[2], "tinted: {plain:?} → {selected:?}");
+    assert!(
+        plain[2] - selected[2] <= 15,
+        "the shading shows through the tint where the surface faces the eye: {plain:?} → {selected:?}"
+    );
 }

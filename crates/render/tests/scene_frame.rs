@@ -254,3 +254,64 @@ fn rebuilt_rigs_upload_only_changed_meshes() {
     headless.render_image(&frame, 32, 32).expect("render");
     assert_eq!(frame.items.len(), 2);
 }
+
+/// Onion skinning: ghosts of the arm at other times are skinned into buffers of their own (each
+/// shows its own frame's pose in the same frame as the current one), drawn translucent over
+/// the opaque scene with their tint.
+#[test]
+fn ghosts_show_other_frames_poses_translucent_and_tinted() {
+    use keyrig_render::Ghost;
+    let scene = arm_scene();
+    let rig = SceneRig::new(&scene).expect("rig");
+    let view = ViewOptions::default();
+    let mut headless = keyrig_render::HeadlessRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    rig.upload(headless.renderer_mut()).expect("upload");
+    assert!(rig.upload_ghosts(headless.renderer_mut(), 0, 2).expect("ghosts"), "the arm has a skinned mesh");
+
+    // The pose at 0.5 s and at 1.5 s, rendered as the current frame.
+    let pose_at = |headless: &mut keyrig_render::HeadlessRenderer, time: f64| {
+        let frame = rig.frame(time, &view).expect("frame");
+        headless.render_image(&frame, 64, 64).expect("render");
+        headless.renderer().read_vertices(0).expect("readback")
+    };
+    let at_half = pose_at(&mut headless, 0.5);
+    let at_one_and_half = pose_at(&mut headless, 1.5);
+
+    // The frame at 1 s with ghosts at 0.5 s (red) and 1.5 s (green).
+    let eval = rig.evaluator();
+    let mut frame = rig.frame(1.0, &view).expect("frame");
+    let plain = frame.clone();
+    for (g, (time, tint)) in [(0.5, Vec3::X), (1.5, Vec3::Y)].into_iter().enumerate() {
+        let state = eval.object_at(0, time, &Overrides::new()).expect("state");
+        let ghost = Ghost { tint, opacity: 0.4 };
+        let items = rig.ghost_items(0, g, &state, &view, ghost).expect("ghost items");
+        assert_eq!(items.len(), 1);
+        assert_eq!(items[0].mesh, SceneRig::ghost_mesh(0, g));
+        frame.items.extend(items);
+    }
+    let (with_ghosts, stats) = headless.render_image(&frame, 64, 64).expect("render");
+    let close = |a: &[keyrig_render::SkinnedVertex], b: &[keyrig_render::SkinnedVertex]| {
+        a.iter().zip(b).all(|(u, v)| (u.position() - v.position()).length() < 1e-3)
+    };
+    let ghost_0 = headless.renderer().read_vertices(SceneRig::ghost_mesh(0, 0)).expect("ghost 0");
+    let ghost_1 = headless.renderer().read_vertices(SceneRig::ghost_mesh(0, 1)).expect("ghost 1");
+    let current = headless.renderer().read_vertices(0).expect("current");
+    assert!(close(&ghost_0, &at_half), "ghost 0 shows the pose at 0.5 s");
+    assert!(close(&ghost_1, &at_one_and_half), "ghost 1 shows the pose at 1.5 s");
+    assert!(!close(&current, &at_half) && !close(&current, &at_one_and_half), "the arm shows 1 s");
+
+    let (without, plain_stats) = headless.render_image(&plain, 64, 64).expect("render");
+    assert_eq!(stats.draw_calls, plain_stats.draw_calls + 2, "one draw per ghost");
+    let changed: Vec<(u32, u32)> = (0..64)
+        .flat_map(|y| (0..64).map(move |x| (x, y)))
+        .filter(|&(x, y)| with_ghosts.get_pixel(x, y) != without.get_pixel(x, y))
+        .collect();
+    assert!(!changed.is_empty(), "the ghosts are drawn");
+    // Translucent: no changed pixel takes the tint outright, and red or green rises where a
+    // ghost covers the background.
+    let tinted = changed.iter().any(|&(x, y)| {
+        let (a, b) = (with_ghosts.get_pixel(x, y).0, without.get_pixel(x, y).0);
+        a[0] > b[0] + 10 || a[1] > b[1] + 10
+    });
+    assert!(tinted, "ghost pixels take their tint");
+}

@@ -181,6 +181,7 @@ impl FrameSource for Md2Source {
             // The skin as it is (white × texture), or the plain colour.
             colour: if self.textured { Vec3::ONE } else { Vec3::new(0.7, 0.65, 0.6) },
             selected: false,
+            ghost: None,
         });
         Ok(input)
     }

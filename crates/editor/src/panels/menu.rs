@@ -97,6 +97,9 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 let (grid, bones) = (app.view.grid, app.view.bones);
                 command_button(ui, app, Command::ToggleGrid, Some(grid));
                 command_button(ui, app, Command::ToggleBones, Some(bones));
+                let onion = app.view.onion.enabled;
+                command_button(ui, app, Command::ToggleOnionSkin, Some(onion));
+                ui.menu_button("Onion skin settings", |ui| onion_settings_ui(ui, &mut app.view.onion));
                 ui.separator();
                 for c in [
                     Command::CameraFront,
@@ -153,6 +156,36 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         });
         toolbar_ui(ui, app);
     });
+}
+
+/// How many ghosts, and where: every n frames or at the object's keys.
+fn onion_settings_ui(ui: &mut Ui, onion: &mut crate::onion::OnionSkin) {
+    use crate::onion::{Spacing, MAX_PER_SIDE};
+    ui.horizontal(|ui| {
+        ui.label("Before");
+        ui.add(egui::DragValue::new(&mut onion.before).range(0..=MAX_PER_SIDE));
+        ui.label("After");
+        ui.add(egui::DragValue::new(&mut onion.after).range(0..=MAX_PER_SIDE));
+    });
+    let mut step = match onion.spacing {
+        Spacing::Frames(n) => n,
+        Spacing::Keys => 5,
+    };
+    ui.horizontal(|ui| {
+        if ui.radio(matches!(onion.spacing, Spacing::Frames(_)), "Every").clicked()
+            || ui.add(egui::DragValue::new(&mut step).range(1..=1000)).changed()
+        {
+            onion.spacing = Spacing::Frames(step);
+        }
+        ui.label("frames");
+    });
+    if ui
+        .radio(onion.spacing == Spacing::Keys, "At keys")
+        .on_hover_text("At the selected object's keys")
+        .clicked()
+    {
+        onion.spacing = Spacing::Keys;
+    }
 }
 
 fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {

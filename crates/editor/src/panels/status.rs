@@ -28,8 +28,11 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
             }
             let left = app.status.as_ref().map_or(0.0, crate::app::Status::seconds_left);
             if left > 0.0 {
-                // Wake up to take the message away when it is due, drawing or not.
-                ui.ctx().request_repaint_after(std::time::Duration::from_secs_f32(left));
+                // Wake up to take the message away when it is due, drawing or not. At least half
+                // a second ahead: egui repaints at once for a delay shorter than a frame, and a
+                // message in its last moments must not keep the editor repainting (the message
+                // goes at most half a second late).
+                ui.ctx().request_repaint_after(std::time::Duration::from_secs_f32(left.max(0.5)));
             }
             if let Some(status) = app.status.as_ref().filter(|_| left > 0.0) {
                 ui.separator();

@@ -400,6 +400,19 @@ fn gpu_ui(
             }
         }
     }
+    let ghosts = match app.session.selected_object() {
+        Some(o) if app.view.onion.enabled => {
+            crate::onion::ghost_frames(&app.view.onion, scene, o, app.session.playback.frame)
+                .into_iter()
+                .filter_map(|g| {
+                    let state =
+                        eval.object_at(o, g.frame / scene.fps.max(1e-9), &keyrig_eval::Overrides::new())?;
+                    Some((o, state, g.ghost))
+                })
+                .collect()
+        }
+        _ => Vec::new(),
+    };
     let frame = crate::gpu_view::GpuFrame {
         scene,
         rig_key,
@@ -409,6 +422,7 @@ fn gpu_ui(
         view,
         morph_meshes,
         materials,
+        ghosts,
     };
     if let Err(e) = gpu.set_antialiasing(app.view.antialiasing) {
         errors.push(format!("GPU viewport: {e}"));
@@ -503,6 +517,14 @@ fn overlay_ui(painter: &egui::Painter, rect: Rect, app: &EditorApp, errors: &[St
     }
     if let Some(text) = measure_text(app) {
         lines.push(text);
+    }
+    let onion = &app.view.onion;
+    if onion.enabled {
+        lines.push(match app.selected_object() {
+            Some(_) if app.gpu.is_none() => "Onion skin: shown in the GPU viewport only".to_owned(),
+            Some(_) => format!("Onion skin: {} before, {} after", onion.before, onion.after),
+            None => "Onion skin: select an object or joint".to_owned(),
+        });
     }
     let text = lines.join("\n");
     painter.text(

@@ -41,6 +41,8 @@ struct Object {
     colour: vec4<f32>,
     // x = selected (0/1)
     flags: vec4<f32>,
+    // a ghost's tint (rgb) and opacity (w)
+    tint: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -117,11 +119,42 @@ fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f3
     }
     var colour = albedo * diffuse + specular;
     if object.flags.x > 0.5 {
-        // Selection: an orange rim.
-        let rim = pow(1.0 - max(dot(n, to_eye), 0.0), 2.0);
-        colour = mix(colour, vec3<f32>(1.0, 0.45, 0.05), clamp(0.25 + 0.75 * rim, 0.0, 1.0));
+        // Selection: a light orange tint where the surface faces the eye, glowing towards the
+        // silhouette; never more than 70 %, so the shading, texture and pose stay visible (a
+        // thin, dark figure such as an MD2 model would otherwise turn into a flat silhouette).
+        let facing = abs(dot(n, to_eye));
+        let rim = (1.0 - facing) * (1.0 - facing);
+        colour = mix(colour, vec3<f32>(1.0, 0.45, 0.05), 0.12 + 0.58 * rim);
     }
     return vec4<f32>(colour, 1.0);
+}
+
+// Onion-skin ghosts: lit without the texture, mixed half-way towards the ghost's tint, and
+// blended over the scene with its opacity.
+@fragment
+fn fs_ghost(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    var n = normalize(in.normal);
+    if !front {
+        n = -n;
+    }
+    let to_eye = normalize(globals.camera_position.xyz - in.world_position);
+    var diffuse = globals.ambient.rgb;
+    let count = min(globals.counts.x, MAX_LIGHTS);
+    for (var i = 0u; i < count; i = i + 1u) {
+        let position = globals.lights[i].position;
+        let direction = globals.lights[i].direction.xyz;
+        let offset = in.world_position - position.xyz;
+        let inv_d = inverseSqrt(max(dot(offset, offset), 1e-8));
+        let is_directional = u32(position.w) == KIND_DIRECTIONAL;
+        let l = select(-offset * inv_d, -direction, is_directional);
+        let falloff = select(inv_d * inv_d, 1.0, is_directional);
+        diffuse = diffuse + globals.lights[i].radiance.rgb * falloff * max(dot(n, l), 0.0);
+    }
+    // A rim keeps the ghost's outline readable where it overlaps the current pose.
+    let rim = 1.0 - abs(dot(n, to_eye));
+    let shaded = object.colour.rgb * clamp(diffuse, vec3<f32>(0.25), vec3<f32>(1.0));
+    let colour = mix(shaded, object.tint.rgb, 0.55 + 0.3 * rim);
+    return vec4<f32>(colour, object.tint.w);
 }
 
 // Wireframe and points: the object's colour (orange when selected), unlit.

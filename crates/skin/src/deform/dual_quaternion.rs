@@ -95,7 +95,7 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
                 // SAFETY: as above; the AVX-512VL build only where the CPU has it.
                 unsafe {
                     if build == Build::Avx512Vl {
-                        super::simd::dual_quaternion_chunk_soa_avx512(&packed, js, ws, ps, ns, out_p, out_n)
+                        super::simd::dual_quaternion_chunk_avx512_x16(&packed, js, ws, ps, ns, out_p, out_n)
                     } else {
                         super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
                     }

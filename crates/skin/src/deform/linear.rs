@@ -76,6 +76,33 @@ impl<const N: usize> Job for LinearBlendJob<'_, N> {
         let (joints, weights) = (self.influences.joints(), self.influences.weights());
         let (positions, normals) = (self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
+        if normal_palette.is_none() && build == Build::Avx512Vl {
+            // Bytes read and written per vertex: position and normal in and out, N joint
+            // indices and N weights.
+            let bytes = positions.len() * (4 * 12 + N * (2 + 4));
+            let stream = super::simd::streams_outputs(bytes);
+            // SAFETY: the CPU has AVX2, FMA, AVX-512F and AVX-512VL (the caller runs only builds
+            // that run here); validate() checked that the palette holds every joint index.
+            let packed = unsafe { super::simd::pack_palette_avx512(palette) };
+            for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
+                let end = start + out_p.len();
+                // SAFETY: as above.
+                unsafe {
+                    super::simd::linear_blend_chunk_avx512(
+                        &packed,
+                        &joints[start..end],
+                        &weights[start..end],
+                        &positions[start..end],
+                        &normals[start..end],
+                        out_p,
+                        out_n,
+                        stream,
+                    )
+                }
+            });
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
         if normal_palette.is_none() && build != Build::Portable {
             // SAFETY: the CPU has AVX2 and FMA (the caller runs only builds that run here);
             // validate() checked that the palette holds every joint index of the influences.

@@ -65,8 +65,9 @@ pub(crate) enum Build {
     Portable,
     /// 256-bit kernels with fused multiply-adds (`deform/simd.rs`).
     Avx2Fma,
-    /// The same with AVX-512VL enabled: the dual quaternion kernel is compiled once more, to
-    /// use 32 vector registers instead of 16 (it spills none); the other kernels run their AVX2
+    /// CPUs with AVX-512F and AVX-512VL as well: 512-bit kernels for linear blend and dual
+    /// quaternion (whose 8-lane kernel, for the last vertices, is compiled once more to use 32
+    /// vector registers instead of 16 and spills none); rigid and bones blending run their AVX2
     /// build.
     Avx512Vl,
 }
@@ -492,6 +493,125 @@ mod tests {
         let checked = every_build_matches_the_reference::<8>();
         assert!(checked.contains(&"portable"), "{checked:?}");
         assert_eq!(checked, builds_this_cpu_runs());
+    }
+
+    /// The AVX-512 linear blend kernel with ordinary and with streaming stores against the
+    /// formula, on sub-slices that start at every offset modulo 4 vertices (so every 16-byte
+    /// alignment of the outputs, which decides the streaming stores' single-vertex head) and
+    /// have every remainder after its groups of 4, with outputs at equal and at different
+    /// offsets modulo 16 bytes (which falls back to ordinary stores), 4 and 8 influences;
+    /// nothing outside the slice is written. Runs where the CPU has AVX-512F and AVX-512VL and
+    /// says so; fails if it did not run on such a CPU.
+    #[test]
+    fn linear_blend_avx512_kernel_matches_the_formula_with_either_store() {
+        #[cfg(target_arch = "x86_64")]
+        fn check<const N: usize>(rng: &mut Lcg) -> usize {
+            use glam::{Affine3A, Quat};
+
+            let joint_count = 11;
+            let palette: Vec<Affine3A> = (0..joint_count)
+                .map(|_| {
+                    let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
+                    let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                    Affine3A::from_rotation_translation(rotation, rng.vec3(3.0))
+                })
+                .collect();
+            let n = 41;
+            let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
+            let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            let influences = random_influences::<N>(rng, n, joint_count);
+            let (joints, weights) = (influences.joints(), influences.weights());
+            // SAFETY (both): only on CPUs with AVX-512F and AVX-512VL.
+            let packed = unsafe { simd::pack_palette_avx512(&palette) };
+            let mut runs = 0;
+            for stream in [false, true] {
+                // Normals one vertex further into their buffer: a different offset modulo 16.
+                for shift in [0, 1] {
+                    for start in 0..4 {
+                        for len in 0..=n - start - 5 {
+                            let r = start..start + len;
+                            let rn = start + shift..start + shift + len;
+                            let mut out = (vec![Vec3::NAN; n], vec![Vec3::NAN; n]);
+                            unsafe {
+                                simd::linear_blend_chunk_avx512(
+                                    &packed,
+                                    &joints[r.clone()],
+                                    &weights[r.clone()],
+                                    &positions[r.clone()],
+                                    &normals[r.clone()],
+                                    &mut out.0[r.clone()],
+                                    &mut out.1[rn.clone()],
+                                    stream,
+                                );
+                            }
+                            for v in 0..n {
+                                assert_eq!(!r.contains(&v), out.0[v].is_nan(), "position {v} of {r:?}");
+                                assert_eq!(!rn.contains(&v), out.1[v].is_nan(), "normal {v} of {rn:?}");
+                            }
+                            for (k, v) in r.clone().enumerate() {
+                                let (mut m, mut t) = (glam::Mat3A::ZERO, glam::Vec3A::ZERO);
+                                for i in 0..N {
+                                    let (a, w) = (palette[joints[v][i] as usize], weights[v][i]);
+                                    m += a.matrix3 * w;
+                                    t += a.translation * w;
+                                }
+                                let p = Vec3::from(m * glam::Vec3A::from(positions[v]) + t);
+                                let q = Vec3::from(m * glam::Vec3A::from(normals[v]));
+                                let (dp, dn) = (
+                                    (out.0[v] - p).abs().max_element(),
+                                    (out.1[start + shift + k] - q).abs().max_element(),
+                                );
+                                assert!(
+                                    dp < 1e-4 && dn < 1e-5,
+                                    "N = {N}, stream {stream}, shift {shift}, {r:?}, vertex {v}: {dp} {dn}"
+                                );
+                            }
+                            runs += 1;
+                        }
+                    }
+                }
+            }
+            runs
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        {
+            let has_avx512 = std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+                && std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl");
+            assert_eq!(has_avx512, Build::Avx512Vl.runs_here());
+            if has_avx512 {
+                let mut rng = Lcg(0x512);
+                let runs = check::<4>(&mut rng) + check::<8>(&mut rng);
+                eprintln!(
+                    "avx512vl linear blend kernel: checked {runs} slices with ordinary and streaming stores"
+                );
+                // Per N, store and shift: lengths 0..=36 from start 0, 0..=35 from 1, and so on.
+                assert_eq!(runs, 2 * 2 * 2 * (37 + 36 + 35 + 34));
+            } else {
+                eprintln!("no AVX-512F/VL on this CPU: the AVX-512 linear blend kernel was not checked");
+            }
+        }
+    }
+
+    /// Streaming stores only for jobs larger than a last-level cache this CPU reports.
+    #[test]
+    fn outputs_stream_only_past_the_last_level_cache() {
+        #[cfg(target_arch = "x86_64")]
+        {
+            assert!(!simd::streams_outputs(0));
+            match (1..=usize::BITS).map(|b| 1usize << (b - 1)).find(|&bytes| simd::streams_outputs(bytes)) {
+                // The first power of two past the cache: at least 256 KiB (no x86-64 CPU has a
+                // smaller last level) and no more than 4 GiB.
+                Some(bytes) => {
+                    eprintln!("outputs stream from {} KiB", bytes >> 10);
+                    assert!((256 << 10..=4 << 30).contains(&bytes), "{bytes}");
+                    assert!(simd::streams_outputs(usize::MAX));
+                }
+                None => eprintln!("last-level cache size unknown: outputs never stream"),
+            }
+        }
     }
 
     /// Rigid skinning in every build this CPU runs against the formula, on sub-slices that

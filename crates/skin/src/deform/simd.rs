@@ -4,6 +4,7 @@
 //! blending one influence is two FMAs instead of eight SSE multiplies and adds.
 
 use std::arch::x86_64::*;
+use std::sync::OnceLock;
 
 use glam::{Affine3A, Mat3A, Vec3, Vec3A, Vec4};
 
@@ -20,6 +21,48 @@ pub(crate) fn available() -> bool {
 /// Whether this CPU can also run the AVX-512VL builds of the kernels (32 vector registers).
 pub(crate) fn avx512_available() -> bool {
     available() && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+}
+
+/// Whether a job that reads and writes `bytes` in all should write its outputs with streaming
+/// (non-temporal) stores: when the job is larger than the CPU's last-level cache, so that its
+/// first outputs are evicted before it ends and no reader finds them in the cache anyway. Then
+/// streaming stores save the read of every output cache line before it is written (a third of
+/// linear blend's memory traffic at 1 000 000 vertices). Smaller jobs keep their outputs cached
+/// for whoever reads them next. Never when the cache size is unknown.
+pub(crate) fn streams_outputs(bytes: usize) -> bool {
+    last_level_cache_bytes().is_some_and(|cache| bytes > cache)
+}
+
+/// The size of the largest-level data or unified cache, from CPUID's deterministic cache
+/// parameters (leaf 4 on Intel, 0x8000_001D on AMD and Hygon), read once.
+fn last_level_cache_bytes() -> Option<usize> {
+    static SIZE: OnceLock<Option<usize>> = OnceLock::new();
+    *SIZE.get_or_init(|| {
+        let vendor = __cpuid(0);
+        let amd = (vendor.ebx, vendor.edx, vendor.ecx) == (0x6874_7541, 0x6974_6E65, 0x444D_4163) // "AuthenticAMD"
+            || (vendor.ebx, vendor.edx, vendor.ecx) == (0x6F67_7948, 0x6E65_476E, 0x656E_6975); // "HygonGenuine"
+        let leaf = if amd {
+            let topology_extensions =
+                __cpuid(0x8000_0000).eax >= 0x8000_001D && __cpuid(0x8000_0001).ecx & (1 << 22) != 0;
+            topology_extensions.then_some(0x8000_001D)?
+        } else {
+            (vendor.eax >= 4).then_some(4)?
+        };
+        // Sub-leaf i describes one cache until its type (bits 4..0) is 0; level in bits 7..5,
+        // ways, partitions and line size minus one in EBX, sets minus one in ECX.
+        (0..16)
+            .map(|i| __cpuid_count(leaf, i))
+            .take_while(|c| c.eax & 0x1F != 0)
+            .filter(|c| matches!(c.eax & 0x1F, 1 | 3))
+            .map(|c| {
+                let ways = (c.ebx >> 22) as usize + 1;
+                let partitions = ((c.ebx >> 12) & 0x3FF) as usize + 1;
+                let line = (c.ebx & 0xFFF) as usize + 1;
+                ((c.eax >> 5) & 0x7, ways * partitions * line * (c.ecx as usize + 1))
+            })
+            .max()
+            .map(|(_, size)| size)
+    })
 }
 
 /// A palette matrix as ((x_axis | y_axis), (z_axis | translation)).
@@ -83,6 +126,211 @@ pub(crate) unsafe fn linear_blend_chunk<const N: usize>(
         );
         *op = Vec3A::from(pos).into();
         *on = Vec3A::from(nrm).into();
+    }
+}
+
+/// A palette matrix as one 512-bit register [x_axis | y_axis | z_axis | translation] (the four
+/// 16-byte columns of its `Affine3A`), 64-byte aligned.
+pub(crate) type PackedAffine512 = __m512;
+
+/// Packs a palette for [`linear_blend_chunk_avx512`] (O(joints), once per run).
+///
+/// # Safety
+/// The CPU must support AVX-512F ([`avx512_available`]).
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+pub(crate) unsafe fn pack_palette_avx512(palette: &[Affine3A]) -> Vec<PackedAffine512> {
+    // SAFETY: an Affine3A is 16 floats (four Vec3A columns).
+    palette.iter().map(|m| unsafe { _mm512_loadu_ps((m as *const Affine3A).cast::<f32>()) }).collect()
+}
+
+/// Σ wᵢ·M(jᵢ) of one vertex: N fused multiply-adds of whole 3×4 matrices.
+///
+/// # Safety
+/// Every index in `js` must be in `palette`; the CPU must support AVX-512F.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn blend_avx512<const N: usize>(palette: &[PackedAffine512], js: &[u16; N], ws: &[f32; N]) -> __m512 {
+    // SAFETY: the caller's contract.
+    let m = |i: usize| unsafe { *palette.get_unchecked(js[i] as usize) };
+    let mut blend = _mm512_mul_ps(m(0), _mm512_set1_ps(ws[0]));
+    // An index loop: LLVM unrolls it, while an iterator's `skip(1)` stayed a call per step.
+    #[allow(clippy::needless_range_loop)]
+    for i in 1..N {
+        blend = _mm512_fmadd_ps(m(i), _mm512_set1_ps(ws[i]), blend);
+    }
+    blend
+}
+
+/// One vertex of [`linear_blend_chunk_avx512`] (the groups' remainders): the blended matrix
+/// times (p, 1) and (n, 0), each product's four 128-bit lanes summed.
+///
+/// # Safety
+/// `v` must be a vertex of every slice; its joints must be in `palette`; the CPU must support
+/// AVX-512F and AVX-512VL.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn linear_blend_one_avx512<const N: usize>(
+    palette: &[PackedAffine512],
+    (joints, weights): (&[[u16; N]], &[[f32; N]]),
+    (positions, normals): (*const f32, *const f32),
+    (out_positions, out_normals): (*mut f32, *mut f32),
+    v: usize,
+) {
+    // SAFETY (all): the caller's contract; the masked loads and stores touch the vertex's three
+    // floats only.
+    unsafe {
+        let m = blend_avx512(palette, joints.get_unchecked(v), weights.get_unchecked(v));
+        // Lane l of each 128-bit quarter q: coordinate q of the vertex (the fourth: 1 or 0).
+        let spread = _mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3);
+        let p = _mm512_castps128_ps512(_mm_maskz_loadu_ps(0b0111, positions.add(3 * v)));
+        let n = _mm512_castps128_ps512(_mm_maskz_loadu_ps(0b0111, normals.add(3 * v)));
+        let p = _mm512_mask_permutexvar_ps(_mm512_set1_ps(1.0), 0x0FFF, spread, p);
+        let n = _mm512_maskz_permutexvar_ps(0x0FFF, spread, n);
+        let (pm, nm) = (_mm512_mul_ps(m, p), _mm512_mul_ps(m, n));
+        // [pm₀ + pm₂, pm₁ + pm₃, nm₀ + nm₂, nm₁ + nm₃], then quarters 0 and 2 summed with 1 and 3.
+        let s = _mm512_add_ps(
+            _mm512_shuffle_f32x4::<0b01_00_01_00>(pm, nm),
+            _mm512_shuffle_f32x4::<0b11_10_11_10>(pm, nm),
+        );
+        let s = _mm512_add_ps(s, _mm512_shuffle_f32x4::<0b10_11_00_01>(s, s));
+        _mm_mask_storeu_ps(out_positions.add(3 * v), 0b0111, _mm512_castps512_ps128(s));
+        _mm_mask_storeu_ps(out_normals.add(3 * v), 0b0111, _mm512_extractf32x4_ps::<2>(s));
+    }
+}
+
+/// Linear blend of one chunk with 512-bit registers: v' = (Σ wᵢ·M(jᵢ))·v,
+/// n' = (Σ wᵢ·M(jᵢ))₃ₓ₃·n, four vertices at a time. A palette matrix is one register, so
+/// blending one influence is one FMA; the four blended matrices are transposed by their 128-bit
+/// lanes into the x axes, y axes, z axes and translations of the four vertices, which meet
+/// the four vertices' coordinates (spread from one 48-byte load by a permutation) in three
+/// FMAs per output; one permutation packs each output's twelve floats for one store.
+///
+/// `stream`: write the outputs with non-temporal (streaming) stores, which skip reading each
+/// output cache line before writing it and do not keep the outputs in the cache: for jobs
+/// larger than the last-level cache ([`streams_outputs`]), whose outputs would be evicted
+/// before anyone reads them anyway. Only when both outputs lie at the same offset modulo 16
+/// bytes (as separately allocated `Vec`s and their chunks do); otherwise ordinary stores.
+///
+/// # Safety
+/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
+/// index must be in `palette` (validated); all slices have the same length.
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn linear_blend_chunk_avx512<const N: usize>(
+    palette: &[PackedAffine512],
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+    stream: bool,
+) {
+    let n = positions.len();
+    debug_assert!([joints.len(), weights.len(), normals.len(), out_positions.len(), out_normals.len()]
+        .iter()
+        .all(|&l| l == n));
+    let inputs = (positions.as_ptr().cast::<f32>(), normals.as_ptr().cast::<f32>());
+    let outputs = (out_positions.as_mut_ptr().cast::<f32>(), out_normals.as_mut_ptr().cast::<f32>());
+    let (pp, np) = inputs;
+    let (opp, onp) = outputs;
+    let stream = stream && opp as usize % 16 == onp as usize % 16;
+    let mut v = 0;
+    if stream {
+        // Single vertices until the outputs are 16-byte aligned (at most three: 12 bytes per
+        // vertex step through the four 4-byte offsets).
+        while v < n && !(opp.wrapping_add(3 * v) as usize).is_multiple_of(16) {
+            // SAFETY: v < n; the caller's contract.
+            unsafe { linear_blend_one_avx512(palette, (joints, weights), inputs, outputs, v) };
+            v += 1;
+        }
+    }
+    // Lanes of one output's quarters: x₀x₀x₀x₀ | x₁… from the vertices' twelve floats, and back.
+    let coordinate = |c: i32| {
+        _mm512_setr_epi32(
+            c,
+            c,
+            c,
+            c,
+            c + 3,
+            c + 3,
+            c + 3,
+            c + 3,
+            c + 6,
+            c + 6,
+            c + 6,
+            c + 6,
+            c + 9,
+            c + 9,
+            c + 9,
+            c + 9,
+        )
+    };
+    let (ix, iy, iz) = (coordinate(0), coordinate(1), coordinate(2));
+    let compact = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 15, 15, 15, 15);
+    while v + 4 <= n {
+        // SAFETY: vertices v..v + 4 are in every slice; their joints are in the palette.
+        let [a, b, c, d] = std::array::from_fn(|k| unsafe {
+            blend_avx512(palette, joints.get_unchecked(v + k), weights.get_unchecked(v + k))
+        });
+        // Transpose by 128-bit lanes: x = [x_a | x_b | x_c | x_d], and so on.
+        let (ab_low, ab_high) =
+            (_mm512_shuffle_f32x4::<0b01_00_01_00>(a, b), _mm512_shuffle_f32x4::<0b11_10_11_10>(a, b));
+        let (cd_low, cd_high) =
+            (_mm512_shuffle_f32x4::<0b01_00_01_00>(c, d), _mm512_shuffle_f32x4::<0b11_10_11_10>(c, d));
+        let x = _mm512_shuffle_f32x4::<0b10_00_10_00>(ab_low, cd_low);
+        let y = _mm512_shuffle_f32x4::<0b11_01_11_01>(ab_low, cd_low);
+        let z = _mm512_shuffle_f32x4::<0b10_00_10_00>(ab_high, cd_high);
+        let t = _mm512_shuffle_f32x4::<0b11_01_11_01>(ab_high, cd_high);
+        // The four vertices' twelve floats: one 64-byte load while 16 floats remain in the
+        // slices (a masked load stops the hardware prefetcher's stream on some CPUs), else a
+        // masked one of twelve.
+        // SAFETY: floats 3v..3v + 16 (or 3v + 12, masked) of the 3n.
+        let (ps, ns) = unsafe {
+            if v + 6 <= n {
+                (_mm512_loadu_ps(pp.add(3 * v)), _mm512_loadu_ps(np.add(3 * v)))
+            } else {
+                (_mm512_maskz_loadu_ps(0x0FFF, pp.add(3 * v)), _mm512_maskz_loadu_ps(0x0FFF, np.add(3 * v)))
+            }
+        };
+        let spread = |xs: __m512, i: __m512i| _mm512_permutexvar_ps(i, xs);
+        let pos = _mm512_fmadd_ps(
+            x,
+            spread(ps, ix),
+            _mm512_fmadd_ps(y, spread(ps, iy), _mm512_fmadd_ps(z, spread(ps, iz), t)),
+        );
+        let nrm = _mm512_fmadd_ps(
+            x,
+            spread(ns, ix),
+            _mm512_fmadd_ps(y, spread(ns, iy), _mm512_mul_ps(z, spread(ns, iz))),
+        );
+        let (pos, nrm) = (_mm512_permutexvar_ps(compact, pos), _mm512_permutexvar_ps(compact, nrm));
+        // SAFETY: floats 3v..3v + 12 of the outputs; 16-byte aligned when streaming.
+        unsafe {
+            let (po, no) = (opp.add(3 * v), onp.add(3 * v));
+            if stream {
+                _mm_stream_ps(po, _mm512_castps512_ps128(pos));
+                _mm_stream_ps(po.add(4), _mm512_extractf32x4_ps::<1>(pos));
+                _mm_stream_ps(po.add(8), _mm512_extractf32x4_ps::<2>(pos));
+                _mm_stream_ps(no, _mm512_castps512_ps128(nrm));
+                _mm_stream_ps(no.add(4), _mm512_extractf32x4_ps::<1>(nrm));
+                _mm_stream_ps(no.add(8), _mm512_extractf32x4_ps::<2>(nrm));
+            } else {
+                _mm512_mask_storeu_ps(po, 0x0FFF, pos);
+                _mm512_mask_storeu_ps(no, 0x0FFF, nrm);
+            }
+        }
+        v += 4;
+    }
+    while v < n {
+        // SAFETY: v < n; the caller's contract.
+        unsafe { linear_blend_one_avx512(palette, (joints, weights), inputs, outputs, v) };
+        v += 1;
+    }
+    if stream {
+        // Streaming stores are weakly ordered: make them visible before the chunk is reported
+        // done (to another thread, through the chunk counter's release store).
+        _mm_sfence();
     }
 }
 
@@ -644,6 +892,315 @@ dual_quaternion_kernel!(
     #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
     dual_quaternion_chunk_soa_avx512
 );
+
+/// Four floats at each of 16 addresses (lane l's row at `rows[l]`) in structure-of-arrays
+/// form: register c holds float c of every row, in lane order. Each register is first filled
+/// with the rows k, k + 4, k + 8 and k + 12 (one per 128-bit lane, by inserts from memory),
+/// then a 4×4 transpose inside each 128-bit lane puts lane 4q + k's float c at lane 4q + k.
+///
+/// # Safety
+/// Every address must be valid for reading 4 floats; the CPU must support AVX-512F.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn rows4_soa16(rows: &[*const f32; 16]) -> [__m512; 4] {
+    // SAFETY: the caller's contract.
+    let row = |l: usize| unsafe { _mm_loadu_ps(rows[l]) };
+    let quarters = |k: usize| {
+        let r = _mm512_castps128_ps512(row(k));
+        let r = _mm512_insertf32x4::<1>(r, row(k + 4));
+        let r = _mm512_insertf32x4::<2>(r, row(k + 8));
+        _mm512_insertf32x4::<3>(r, row(k + 12))
+    };
+    transpose4_in_lanes([quarters(0), quarters(1), quarters(2), quarters(3)])
+}
+
+/// A 4×4 transpose inside each 128-bit lane of four registers.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+fn transpose4_in_lanes([r0, r1, r2, r3]: [__m512; 4]) -> [__m512; 4] {
+    let t0 = _mm512_unpacklo_ps(r0, r1);
+    let t1 = _mm512_unpackhi_ps(r0, r1);
+    let t2 = _mm512_unpacklo_ps(r2, r3);
+    let t3 = _mm512_unpackhi_ps(r2, r3);
+    [
+        _mm512_shuffle_ps::<0x44>(t0, t2),
+        _mm512_shuffle_ps::<0xEE>(t0, t2),
+        _mm512_shuffle_ps::<0x44>(t1, t3),
+        _mm512_shuffle_ps::<0xEE>(t1, t3),
+    ]
+}
+
+/// Influence `i`'s dual quaternions of 16 vertices in structure-of-arrays form: real x, y, z,
+/// w, then dual x, y, z, w, each register in vertex order. Each 32-byte palette entry is one
+/// load; two entries share a register (vertices k and k + 4, or k + 8 and k + 12), a 4×4
+/// transpose inside each 128-bit lane of four such registers gathers one component of four
+/// vertices per lane, and a shuffle of 128-bit lanes puts them in vertex order.
+///
+/// # Safety
+/// `joints` must hold 16 rows whose index `i` is in `dqs`; the CPU must support AVX-512F.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn dual_quaternions_soa16<const N: usize>(
+    dqs: &[PackedDualQuat],
+    joints: &[[u16; N]],
+    i: usize,
+) -> [__m512; 8] {
+    // SAFETY: the caller's contract.
+    let entry = |l: usize| unsafe { *dqs.get_unchecked(joints.get_unchecked(l)[i] as usize) };
+    let pair = |a: usize, b: usize| {
+        let low = _mm512_castpd256_pd512(_mm256_castps_pd(entry(a)));
+        _mm512_castpd_ps(_mm512_insertf64x4::<1>(low, _mm256_castps_pd(entry(b))))
+    };
+    // t[c]: lanes 0 and 2 hold component c of the real parts of vertices 0..4 and 4..8, lanes 1
+    // and 3 of their dual parts; u[c] the same for vertices 8..16.
+    let t = transpose4_in_lanes([pair(0, 4), pair(1, 5), pair(2, 6), pair(3, 7)]);
+    let u = transpose4_in_lanes([pair(8, 12), pair(9, 13), pair(10, 14), pair(11, 15)]);
+    let mut out = [_mm512_setzero_ps(); 8];
+    for c in 0..4 {
+        out[c] = _mm512_shuffle_f32x4::<0b10_00_10_00>(t[c], u[c]);
+        out[c + 4] = _mm512_shuffle_f32x4::<0b11_01_11_01>(t[c], u[c]);
+    }
+    out
+}
+
+/// Permutation indices for [`load_deinterleaved16`]: lane l of component c is float 3l + c
+/// of the 48, taken from the first two registers (index < 32) or, `third`, from the third.
+const fn deinterleave16_order(c: i32, third: bool) -> [i32; 16] {
+    let mut order = [0; 16];
+    let mut l = 0;
+    while l < 16 {
+        let f = 3 * l + c;
+        order[l as usize] = if third { (f - 32) & 15 } else { f & 31 };
+        l += 1;
+    }
+    order
+}
+
+/// The lanes of component `c` that come from the third register.
+const fn deinterleave16_third(c: i32) -> u16 {
+    let mut mask = 0;
+    let mut l = 0;
+    while l < 16 {
+        if 3 * l + c >= 32 {
+            mask |= 1 << l;
+        }
+        l += 1;
+    }
+    mask
+}
+
+/// Permutation indices for [`store_interleaved16`]: float 16r + k of the output is component
+/// (16r + k) mod 3 of vertex (16r + k) / 3, from x (index l) or y (16 + l), or, `from_z`, z.
+const fn interleave16_order(r: i32, from_z: bool) -> [i32; 16] {
+    let mut order = [0; 16];
+    let mut k = 0;
+    while k < 16 {
+        let f = 16 * r + k;
+        let (l, c) = (f / 3, f % 3);
+        order[k as usize] = if from_z || c == 0 { l } else { 16 + l };
+        k += 1;
+    }
+    order
+}
+
+/// The lanes of output register `r` that hold a z component.
+const fn interleave16_z(r: i32) -> u16 {
+    let mut mask = 0;
+    let mut k = 0;
+    while k < 16 {
+        if (16 * r + k) % 3 == 2 {
+            mask |= 1 << k;
+        }
+        k += 1;
+    }
+    mask
+}
+
+const DEINTERLEAVE16: [[[i32; 16]; 3]; 2] = [
+    [deinterleave16_order(0, false), deinterleave16_order(1, false), deinterleave16_order(2, false)],
+    [deinterleave16_order(0, true), deinterleave16_order(1, true), deinterleave16_order(2, true)],
+];
+const DEINTERLEAVE16_THIRD: [u16; 3] =
+    [deinterleave16_third(0), deinterleave16_third(1), deinterleave16_third(2)];
+const INTERLEAVE16: [[[i32; 16]; 3]; 2] = [
+    [interleave16_order(0, false), interleave16_order(1, false), interleave16_order(2, false)],
+    [interleave16_order(0, true), interleave16_order(1, true), interleave16_order(2, true)],
+];
+const INTERLEAVE16_Z: [u16; 3] = [interleave16_z(0), interleave16_z(1), interleave16_z(2)];
+
+/// A 512-bit index register from a table.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+fn indices16(table: &[i32; 16]) -> __m512i {
+    // SAFETY: 16 i32s.
+    unsafe { _mm512_loadu_si512(table.as_ptr().cast()) }
+}
+
+/// Reads 16 interleaved Vec3s (48 floats x₀y₀z₀x₁… at `at`) as x, y and z registers: per
+/// component, one two-register permutation and one masked permutation of the third.
+///
+/// # Safety
+/// `at` must be valid for reading 48 floats; the CPU must support AVX-512F.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn load_deinterleaved16(at: *const f32) -> [__m512; 3] {
+    // SAFETY: floats 0..48 of the caller's 48.
+    let (v0, v1, v2) =
+        unsafe { (_mm512_loadu_ps(at), _mm512_loadu_ps(at.add(16)), _mm512_loadu_ps(at.add(32))) };
+    std::array::from_fn(|c| {
+        let low = _mm512_permutex2var_ps(v0, indices16(&DEINTERLEAVE16[0][c]), v1);
+        _mm512_mask_permutexvar_ps(low, DEINTERLEAVE16_THIRD[c], indices16(&DEINTERLEAVE16[1][c]), v2)
+    })
+}
+
+/// Writes 16 vertices given as x, y and z registers to 48 floats x₀y₀z₀x₁… at `out` (the
+/// inverse of [`load_deinterleaved16`]).
+///
+/// # Safety
+/// `out` must be valid for writing 48 floats; the CPU must support AVX-512F.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+unsafe fn store_interleaved16(out: *mut f32, x: __m512, y: __m512, z: __m512) {
+    for r in 0..3 {
+        let xy = _mm512_permutex2var_ps(x, indices16(&INTERLEAVE16[0][r]), y);
+        let xyz = _mm512_mask_permutexvar_ps(xy, INTERLEAVE16_Z[r], indices16(&INTERLEAVE16[1][r]), z);
+        // SAFETY: floats 16r..16r + 16 of the caller's 48.
+        unsafe { _mm512_storeu_ps(out.add(16 * r), xyz) };
+    }
+}
+
+/// m0·x + m1·y + m2·z + t, 16 lanes.
+#[inline]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+fn row16(m0: __m512, m1: __m512, m2: __m512, [x, y, z]: [__m512; 3], t: __m512) -> __m512 {
+    _mm512_fmadd_ps(m0, x, _mm512_fmadd_ps(m1, y, _mm512_fmadd_ps(m2, z, t)))
+}
+
+/// Dual quaternion skinning of one chunk with 512-bit registers, 16 vertices at a time in
+/// structure-of-arrays form: the same steps and formulas as the 8-lane kernels
+/// ([`dual_quaternion_chunk_soa_avx512`], which also does the remainder, and every N that is
+/// not a multiple of 4), with each palette entry loaded whole (32 bytes) and transposed by
+/// [`dual_quaternions_soa16`].
+///
+/// # Safety
+/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
+/// index must be in `dqs` (validated); all slices have the same length.
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
+    dqs: &[PackedDualQuat],
+    joints: &[[u16; N]],
+    weights: &[[f32; N]],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+) {
+    let full = if N.is_multiple_of(4) { out_positions.len() / 16 * 16 } else { 0 };
+    let sign_bit = _mm512_castps_si512(_mm512_set1_ps(-0.0));
+    let zero = _mm512_setzero_ps();
+    for base in (0..full).step_by(16) {
+        let js = &joints[base..base + 16];
+        // The weights, four influences at a time.
+        let rows = weights[base..base + 16].as_ptr().cast::<f32>();
+        let mut wv = [zero; N];
+        for g in 0..N / 4 {
+            // SAFETY: row l's floats 4g..4g + 4, inside its N.
+            let at: [*const f32; 16] = std::array::from_fn(|l| unsafe { rows.add(N * l + 4 * g) });
+            // SAFETY: as above.
+            let w = unsafe { rows4_soa16(&at) };
+            for c in 0..4 {
+                wv[4 * g + c] = w[c];
+            }
+        }
+        // Each influence's dual quaternions, and the pivot: the real part of each lane's
+        // largest-weight influence (first on ties).
+        let mut parts = [[zero; 8]; N];
+        let mut pivot = [zero; 4];
+        let mut best = wv[0];
+        // Index loops: LLVM unrolls them, while iterator adapters such as `skip` stayed calls.
+        #[allow(clippy::needless_range_loop)]
+        for i in 0..N {
+            // SAFETY: 16 rows; every index is in `dqs` (validated).
+            parts[i] = unsafe { dual_quaternions_soa16(dqs, js, i) };
+            if i == 0 {
+                pivot = [parts[0][0], parts[0][1], parts[0][2], parts[0][3]];
+            } else {
+                let larger = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(wv[i], best);
+                best = _mm512_mask_blend_ps(larger, best, wv[i]);
+                for c in 0..4 {
+                    pivot[c] = _mm512_mask_blend_ps(larger, pivot[c], parts[i][c]);
+                }
+            }
+        }
+        // Blend, each weight with the sign of its real part's dot product with the pivot.
+        let mut q = [zero; 8];
+        #[allow(clippy::needless_range_loop)]
+        for i in 0..N {
+            let (part, w) = (&parts[i], wv[i]);
+            let dot = _mm512_fmadd_ps(
+                part[3],
+                pivot[3],
+                _mm512_fmadd_ps(
+                    part[2],
+                    pivot[2],
+                    _mm512_fmadd_ps(part[1], pivot[1], _mm512_mul_ps(part[0], pivot[0])),
+                ),
+            );
+            let sign = _mm512_and_si512(_mm512_castps_si512(dot), sign_bit);
+            let w = _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(w), sign));
+            for c in 0..8 {
+                q[c] = _mm512_fmadd_ps(part[c], w, q[c]);
+            }
+        }
+        let [rx, ry, rz, rw, dx, dy, dz, dw] = q;
+        // s = 2/|r|², then R and t as in the 8-lane kernels.
+        let len2 =
+            _mm512_fmadd_ps(rw, rw, _mm512_fmadd_ps(rz, rz, _mm512_fmadd_ps(ry, ry, _mm512_mul_ps(rx, rx))));
+        let s = _mm512_div_ps(_mm512_set1_ps(2.0), len2);
+        let (sx, sy, sz) = (_mm512_mul_ps(s, rx), _mm512_mul_ps(s, ry), _mm512_mul_ps(s, rz));
+        let (xx, yy, zz) = (_mm512_mul_ps(sx, rx), _mm512_mul_ps(sy, ry), _mm512_mul_ps(sz, rz));
+        let (xy, xz, yz) = (_mm512_mul_ps(sx, ry), _mm512_mul_ps(sx, rz), _mm512_mul_ps(sy, rz));
+        let (wx, wy, wz) = (_mm512_mul_ps(sx, rw), _mm512_mul_ps(sy, rw), _mm512_mul_ps(sz, rw));
+        let one = _mm512_set1_ps(1.0);
+        let m00 = _mm512_sub_ps(one, _mm512_add_ps(yy, zz));
+        let m01 = _mm512_sub_ps(xy, wz);
+        let m02 = _mm512_add_ps(xz, wy);
+        let m10 = _mm512_add_ps(xy, wz);
+        let m11 = _mm512_sub_ps(one, _mm512_add_ps(xx, zz));
+        let m12 = _mm512_sub_ps(yz, wx);
+        let m20 = _mm512_sub_ps(xz, wy);
+        let m21 = _mm512_add_ps(yz, wx);
+        let m22 = _mm512_sub_ps(one, _mm512_add_ps(xx, yy));
+        let cross = |a: __m512, b: __m512, c: __m512, e: __m512| _mm512_fmsub_ps(a, b, _mm512_mul_ps(c, e));
+        let tx = _mm512_mul_ps(s, _mm512_fmadd_ps(rw, dx, _mm512_fnmadd_ps(dw, rx, cross(ry, dz, rz, dy))));
+        let ty = _mm512_mul_ps(s, _mm512_fmadd_ps(rw, dy, _mm512_fnmadd_ps(dw, ry, cross(rz, dx, rx, dz))));
+        let tz = _mm512_mul_ps(s, _mm512_fmadd_ps(rw, dz, _mm512_fnmadd_ps(dw, rz, cross(rx, dy, ry, dx))));
+        // SAFETY (all four): 16 Vec3s are 48 contiguous floats of their slices.
+        let p = unsafe { load_deinterleaved16(positions[base..base + 16].as_ptr().cast::<f32>()) };
+        let n = unsafe { load_deinterleaved16(normals[base..base + 16].as_ptr().cast::<f32>()) };
+        let (px, py, pz) =
+            (row16(m00, m01, m02, p, tx), row16(m10, m11, m12, p, ty), row16(m20, m21, m22, p, tz));
+        let (nx, ny, nz) =
+            (row16(m00, m01, m02, n, zero), row16(m10, m11, m12, n, zero), row16(m20, m21, m22, n, zero));
+        unsafe {
+            store_interleaved16(out_positions[base..base + 16].as_mut_ptr().cast::<f32>(), px, py, pz);
+            store_interleaved16(out_normals[base..base + 16].as_mut_ptr().cast::<f32>(), nx, ny, nz);
+        }
+    }
+    // SAFETY: the caller's contract (the same CPU features).
+    unsafe {
+        dual_quaternion_chunk_soa_avx512(
+            dqs,
+            &joints[full..],
+            &weights[full..],
+            &positions[full..],
+            &normals[full..],
+            &mut out_positions[full..],
+            &mut out_normals[full..],
+        );
+    }
+}
 
 /// `_MM_SHUFFLE(z, y, x, w)` (not yet stable as a const fn).
 const fn shuffle_imm(z: i32, y: i32, x: i32, w: i32) -> i32 {
