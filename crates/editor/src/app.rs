@@ -96,6 +96,8 @@ pub struct EditorApp {
     /// A drag on a rotation ring of a joint or object, turned by the editor itself
     /// ([`crate::twist::RingDrag`]) rather than by transform-gizmo.
     pub(crate) ring_drag: Option<crate::twist::RingDragState>,
+    /// A press on the IK handle (IK posing), until release.
+    pub(crate) ik_grab: Option<crate::ik_posing::IkGrab>,
     pub(crate) skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
     pub(crate) meshes: files::MeshStore,
@@ -145,6 +147,7 @@ impl EditorApp {
             gizmo: transform_gizmo_egui::Gizmo::default(),
             gizmo_drag: false,
             ring_drag: None,
+            ik_grab: None,
             skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
             imports: Vec::new(),
@@ -292,8 +295,10 @@ impl EditorApp {
             record: self.session.record,
             clipboard: std::mem::take(&mut self.session.clipboard),
             pose_clipboard: std::mem::take(&mut self.session.pose_clipboard),
+            ik: self.session.ik.for_new_document(),
             ..Session::at_start(scene.frame_range)
         };
+        self.ik_grab = None;
         self.doc = Document::new(scene, path);
         self.session = session;
     }
@@ -323,6 +328,82 @@ impl EditorApp {
             self.doc.edit_continuous(group, &label, |scene| {
                 channels::set_static_value(scene, id, value);
             });
+        }
+    }
+
+    /// Applies the rotations an IK drag solved for the joints of a chain, as
+    /// [`EditorApp::apply_pose`] applies a gizmo rotation, all joints in one edit: in record mode
+    /// each joint gets an ordinary rotation key at the current frame; otherwise keyed joints get
+    /// pose overrides and unkeyed ones change their value. Every call of one drag joins one undo
+    /// step ([`IK_DRAG_GROUP`], closed when the pointer is released), labelled `label`.
+    pub fn apply_ik_pose(&mut self, rotations: &[(ChannelId, Quat)], label: &str) {
+        let values: Vec<(ChannelId, ChannelValue)> =
+            rotations.iter().map(|&(id, q)| (id, ChannelValue::Rotation(q.normalize()))).collect();
+        if self.session.record {
+            let time = self.session.key_time(self.doc.scene().fps);
+            self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
+                for &(id, value) in &values {
+                    channels::set_key(scene, id, time, value);
+                }
+            });
+            for (id, _) in &values {
+                self.session.overrides.remove(id);
+            }
+            return;
+        }
+        let (animated, fixed): (Vec<_>, Vec<_>) =
+            values.into_iter().partition(|(id, _)| channels::key_count(self.doc.scene(), *id) > 0);
+        if !fixed.is_empty() {
+            self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
+                for &(id, value) in &fixed {
+                    channels::set_static_value(scene, id, value);
+                }
+            });
+        }
+        for (id, value) in animated {
+            self.session.overrides.insert(id, value);
+        }
+    }
+
+    /// The IK chain that ends at `joint` of `object` now (its length as chosen in the inspector),
+    /// or why that joint cannot be posed with IK.
+    pub fn ik_chain(
+        &self,
+        object: usize,
+        joint: usize,
+    ) -> Result<crate::ik_posing::PosedChain, crate::ik_posing::IkPoseError> {
+        let scene = self.doc.scene();
+        let name = scene.objects.get(object).map(|o| o.name.clone()).unwrap_or_default();
+        let pose =
+            self.object_pose_now(object).ok_or(crate::ik_posing::IkPoseError::NoPose { object: name })?;
+        let bones = self.session.ik.chain_bones(object, joint);
+        crate::ik_posing::PosedChain::new(scene, &pose, object, joint, bones)
+    }
+
+    /// Turns IK posing on or off and says what to do next (or why the selected joint cannot be
+    /// posed with IK).
+    pub fn toggle_ik_posing(&mut self) {
+        self.session.ik.enabled = !self.session.ik.enabled;
+        self.ik_grab = None;
+        if !self.session.ik.enabled {
+            self.info("IK posing off");
+            return;
+        }
+        match self.session.selection.item {
+            Some(Selected::Joint { object, joint }) => match self.ik_chain(object, joint) {
+                Ok(chain) => {
+                    let end = chain.names.last().cloned().unwrap_or_default();
+                    self.info(format!(
+                        "IK posing: drag the handle at {end}; chain {} ({})",
+                        chain.describe(),
+                        chain.solver_label()
+                    ));
+                }
+                Err(e) => self.error(e.to_string()),
+            },
+            _ => self.info(
+                "IK posing on: select the end joint of a chain (a hand) and drag the handle drawn at it",
+            ),
         }
     }
 
@@ -371,9 +452,19 @@ impl EditorApp {
         self.ring_drag.as_ref().map(|r| &r.drag)
     }
 
-    /// Keys the current values of the selection's channels at the current frame.
+    /// Keys the current values of the selection's channels at the current frame; in IK posing,
+    /// with a joint selected, also the joints of its chain (what an IK drag poses).
     pub fn insert_key(&mut self) {
-        let ids = self.session.selection.key_channels(self.doc.scene());
+        let mut ids = self.session.selection.key_channels(self.doc.scene());
+        if let (true, Some(Selected::Joint { object, joint })) =
+            (self.session.ik.enabled, self.session.selection.item)
+        {
+            for id in self.ik_chain(object, joint).map(|c| c.turned_channels()).unwrap_or_default() {
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+            }
+        }
         if ids.is_empty() {
             self.error("Insert key: select an object, joint or light first");
             return;
@@ -841,6 +932,7 @@ impl EditorApp {
             }
             Command::ToggleRecord => self.session.record = !self.session.record,
             Command::InsertKey => self.insert_key(),
+            Command::ToggleIk => self.toggle_ik_posing(),
             Command::Delete => {
                 if self.session.selection.keys.is_empty() && self.session.selection.item.is_some() {
                     self.delete_selected_item();
@@ -1192,6 +1284,9 @@ impl EditorApp {
         }
     }
 }
+
+/// The undo group of an IK handle drag: its edits are one undo step.
+pub const IK_DRAG_GROUP: &str = "ik drag";
 
 /// Longest name the editor's rename accepts, characters.
 pub const MAX_NAME_CHARS: usize = 256;

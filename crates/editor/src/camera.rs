@@ -248,6 +248,34 @@ impl Projection {
         };
         Some([self.project(a)?, self.project(b)?])
     }
+
+    /// The view ray through a screen point: the eye and the unit direction (world space) of
+    /// the points that [`Projection::project`] puts at `screen`. From the perspective matrix,
+    /// a point at camera-space depth −1 lands at NDC `(x, y)` when it is `(x / m₀₀, y / m₁₁, −1)`.
+    #[must_use]
+    pub fn ray(&self, screen: Pos2) -> Option<(Vec3, Vec3)> {
+        let ndc_x = (screen.x - self.rect.left()) / self.rect.width() * 2.0 - 1.0;
+        let ndc_y = 1.0 - (screen.y - self.rect.top()) / self.rect.height() * 2.0;
+        let (sx, sy) = (self.clip_from_camera.x_axis.x, self.clip_from_camera.y_axis.y);
+        let in_camera = Vec3::new(ndc_x / sx, ndc_y / sy, -1.0);
+        let world_from_camera = self.camera_from_world.inverse();
+        let eye = world_from_camera.transform_point3(Vec3::ZERO);
+        let dir = world_from_camera.transform_vector3(in_camera).try_normalize()?;
+        (eye.is_finite() && dir.is_finite()).then_some((eye, dir))
+    }
+
+    /// Where the view ray through `screen` meets the plane through `point` with the normal
+    /// `normal`; `None` when the ray runs parallel to the plane or meets it behind the eye.
+    #[must_use]
+    pub fn on_plane(&self, screen: Pos2, point: Vec3, normal: Vec3) -> Option<Vec3> {
+        let (eye, dir) = self.ray(screen)?;
+        let facing = dir.dot(normal);
+        if facing.abs() < 1e-6 {
+            return None;
+        }
+        let t = (point - eye).dot(normal) / facing;
+        (t > 0.0 && t.is_finite()).then(|| eye + dir * t)
+    }
 }
 
 #[cfg(test)]
@@ -292,6 +320,33 @@ mod tests {
         assert!(camera.distance > b.radius() / (22.5f32.to_radians().sin()));
         assert!((b.exit_distance(Vec3::ZERO + Vec3::Y, Vec3::X) - 1.0).abs() < 1e-6);
         assert_eq!(b.exit_distance(Vec3::new(5.0, 1.0, 0.0), Vec3::X), 0.0);
+    }
+
+    /// A point found on a plane from its screen position projects back to that position, and
+    /// lies on the plane.
+    #[test]
+    fn on_plane_inverts_project() {
+        let camera = Camera {
+            target: Vec3::new(0.3, 1.0, -0.2),
+            yaw_deg: 25.0,
+            pitch_deg: 15.0,
+            distance: 3.2,
+            fov_y_deg: 45.0,
+        };
+        let rect = Rect::from_min_size(Pos2::new(180.0, 40.0), egui::vec2(820.0, 470.0));
+        let projection = Projection::new(&camera, rect);
+        let point = Vec3::new(0.5, 0.9, 0.1);
+        let normal = (camera.target - camera.eye()).normalize();
+        for screen in [rect.center(), Pos2::new(200.0, 60.0), Pos2::new(950.0, 480.0)] {
+            let hit = projection.on_plane(screen, point, normal).expect("the plane faces the camera");
+            assert!((hit - point).dot(normal).abs() < 1e-5, "on the plane: {hit:?}");
+            let back = projection.project(hit).expect("in front");
+            assert!((back - screen).length() < 1e-3, "{screen:?} → {hit:?} → {back:?}");
+        }
+        assert!(
+            projection.on_plane(rect.center(), camera.eye() - normal, normal).is_none(),
+            "behind the eye"
+        );
     }
 
     #[test]

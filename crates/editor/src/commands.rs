@@ -17,6 +17,7 @@ pub enum Command {
     Undo,
     Redo,
     ToggleRecord,
+    ToggleIk,
     InsertKey,
     Delete,
     DuplicateItem,
@@ -59,7 +60,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 41] = [
+    pub const ALL: [Command; 42] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -70,6 +71,7 @@ impl Command {
         Command::Redo,
         Command::Undo,
         Command::ToggleRecord,
+        Command::ToggleIk,
         Command::InsertKey,
         Command::Delete,
         Command::DuplicateItem,
@@ -117,6 +119,7 @@ impl Command {
             Command::Undo => "Undo",
             Command::Redo => "Redo",
             Command::ToggleRecord => "Record mode",
+            Command::ToggleIk => "IK posing",
             Command::InsertKey => "Insert key",
             Command::Delete => "Delete",
             Command::DuplicateItem => "Duplicate",
@@ -164,7 +167,14 @@ impl Command {
             Command::ToggleRecord => {
                 "Auto-key: a gizmo or inspector change writes a key at the current frame"
             }
-            Command::InsertKey => "Key the selection's current pose at the current frame",
+            Command::ToggleIk => {
+                "Drag a handle at the selected joint (a hand): the chain above it follows (two bones \
+                 by default; the inspector sets the length)"
+            }
+            Command::InsertKey => {
+                "Key the selection's current pose at the current frame (in IK posing, with the joints \
+                 of the selected joint's chain)"
+            }
             Command::Delete => "Delete the selected keys; with no key selected, the selected object or light",
             Command::DuplicateItem => "Copy the selected object or light, keys included, and select the copy",
             Command::RenameItem => {
@@ -227,6 +237,7 @@ impl Command {
             Command::Undo => vec![sc(CMD, Key::Z)],
             Command::Redo => vec![sc(CMD_SHIFT, Key::Z), sc(CMD, Key::Y)],
             Command::ToggleRecord => vec![sc(NONE, Key::R)],
+            Command::ToggleIk => vec![sc(Modifiers::SHIFT, Key::I)],
             Command::InsertKey => vec![sc(NONE, Key::I)],
             Command::Delete => vec![sc(NONE, Key::Delete), sc(NONE, Key::Backspace)],
             Command::DuplicateItem => vec![sc(Modifiers::SHIFT, Key::D)],
@@ -267,17 +278,20 @@ impl Command {
         self.shortcuts().iter().map(|s| ctx.format_shortcut(s)).collect::<Vec<_>>().join(", ")
     }
 
-    /// Whether the shortcut must not fire while a text field has the keyboard: plain keys, and
-    /// the clipboard and undo keys, which the text field uses itself.
+    /// Whether the shortcut must not fire while a text field has the keyboard: plain keys and
+    /// Shift with a key (a capital letter: Shift+I, Shift+D), and the clipboard and undo keys,
+    /// which the text field uses itself.
     #[must_use]
     pub fn yields_to_text_fields(shortcut: &KeyboardShortcut) -> bool {
-        shortcut.modifiers.is_none() || matches!(shortcut.logical_key, Key::C | Key::V | Key::Z | Key::Y)
+        let typed = shortcut.modifiers.is_none() || shortcut.modifiers == Modifiers::SHIFT;
+        typed || matches!(shortcut.logical_key, Key::C | Key::V | Key::Z | Key::Y)
     }
 }
 
 /// Finds the commands whose shortcuts were pressed this frame and consumes those key presses.
-/// While a text field has the keyboard, plain-key shortcuts (R, Space, arrows, 1–4) and the
-/// clipboard and undo keys are left to it, so typing a value does not toggle record mode.
+/// While a text field has the keyboard, plain-key shortcuts (R, Space, arrows, 1–4), Shift with a
+/// letter (Shift+I, Shift+D) and the clipboard and undo keys are left to it, so typing a value or
+/// a name does not toggle record mode or IK posing.
 #[must_use]
 pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
     let typing = ctx.text_edit_focused();
@@ -329,6 +343,15 @@ mod tests {
             let row = format!("| {} | {} |", command.label(), shortcuts.join(", "));
             assert!(guide.contains(&row), "docs/guide.md lacks the row `{row}`");
         }
+    }
+
+    /// Typing a capital I or D in a text field types it: Shift+letter shortcuts wait.
+    #[test]
+    fn shift_letters_yield_to_text_fields() {
+        for command in [Command::ToggleIk, Command::DuplicateItem] {
+            assert!(command.shortcuts().iter().all(Command::yields_to_text_fields), "{command:?}");
+        }
+        assert!(!Command::yields_to_text_fields(&sc(CMD_SHIFT, Key::S)), "Save as works while typing");
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! - [`panels`]: outliner, inspector, timeline (dope sheet), curves, viewport, dialogs.
 //! - [`widgets`]: key diamond, TCB slider.
 //! - [`twist`]: ring drags, the spins of turned keys, the unwrapped twist about a bone.
+//! - [`ik_posing`]: IK posing — the chain of a dragged end joint, its pole, one drag's solves.
 //! - [`app`]: [`EditorApp`], which ties them together; [`run_editor`] opens the window.
 
 use std::path::PathBuf;
@@ -22,6 +23,7 @@ pub mod files;
 pub mod fonts;
 pub mod frame_bench;
 pub mod gpu_view;
+pub mod ik_posing;
 pub mod mirror;
 pub mod onion;
 pub mod panels;

@@ -1,5 +1,5 @@
 //! The session: what the animator is doing with the document now — the selection, the
-//! playback clock, record mode, pose overrides and the key clipboard. None of it is saved
+//! playback clock, record mode, IK posing, pose overrides and the key clipboard. None of it is saved
 //! with the scene or undone with it.
 
 use std::collections::BTreeSet;
@@ -9,6 +9,7 @@ use keyrig_core::Scene;
 use crate::channels::{ChannelId, ChannelValue, KeyCopy};
 
 use crate::eval::PoseOverrides;
+use crate::ik_posing::IkPosing;
 /// What can be selected in the scene: keyrig-render's one type (object, joint, light).
 pub use keyrig_render::Selected;
 
@@ -25,6 +26,8 @@ pub struct Session {
     pub clipboard: Vec<KeyCopy>,
     /// A pose copied with Copy pose: channel values at one frame.
     pub pose_clipboard: Vec<(ChannelId, ChannelValue)>,
+    /// IK posing: on or off, the chain length per end joint, the pole of each chain's last drag.
+    pub ik: IkPosing,
 }
 
 impl Session {
@@ -60,6 +63,7 @@ impl Session {
     pub fn forget_removed(&mut self, removed: Selected) {
         self.selection = Selection::default();
         self.overrides.clear();
+        self.ik.forget_joints();
         self.clipboard.retain_mut(|key| match shifted(key.channel, removed) {
             Some(id) => {
                 key.channel = id;

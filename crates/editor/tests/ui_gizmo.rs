@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{go_to_frame, harness, press};
+use common::{drag_along, drag_along_with, go_to_frame, harness, on_screen, pointer, press};
 
 use egui::accesskit::Role;
 use egui::{Event, Key, Modifiers, PointerButton, Pos2};
@@ -48,40 +48,6 @@ fn wrist_on_screen(app: &EditorApp) -> (Pos2, Vec3) {
     assert!(rect.shrink(VIEW_RING_RADIUS + 10.0).contains(screen), "the wrist's gizmo fits in the viewport");
     let forward = (app.view.camera.target - app.view.camera.eye()).normalize();
     (screen, forward)
-}
-
-fn pointer(harness: &mut Harness<'_, EditorApp>, event: Event) {
-    harness.event(event);
-    harness.run();
-}
-
-/// Hovers `path[0]`, presses the primary button there, moves through the rest of `path` one
-/// frame per point, releases at the last point and moves away, so the next frame neither
-/// hovers nor drags the gizmo.
-fn drag_along(harness: &mut Harness<'_, EditorApp>, path: &[Pos2]) {
-    drag_along_with(harness, path, Modifiers::NONE);
-}
-
-/// [`drag_along`] with `modifiers` held from the press to the release (as egui-winit reports
-/// a held Ctrl: in every frame's input).
-fn drag_along_with(harness: &mut Harness<'_, EditorApp>, path: &[Pos2], modifiers: Modifiers) {
-    let (Some(&start), Some(&end)) = (path.first(), path.last()) else { return };
-    let button = |pos: Pos2, pressed: bool| Event::PointerButton {
-        pos,
-        button: PointerButton::Primary,
-        pressed,
-        modifiers,
-    };
-    harness.input_mut().modifiers = modifiers;
-    pointer(harness, Event::PointerMoved(start));
-    pointer(harness, Event::PointerMoved(start));
-    pointer(harness, button(start, true));
-    for &p in &path[1..] {
-        pointer(harness, Event::PointerMoved(p));
-    }
-    pointer(harness, button(end, false));
-    harness.input_mut().modifiers = Modifiers::NONE;
-    pointer(harness, Event::PointerMoved(end + egui::vec2(0.0, -200.0)));
 }
 
 /// Presses on the view ring to the right of the gizmo's centre and drags a quarter turn
@@ -192,12 +158,6 @@ fn dragging_the_gizmo_without_record_mode_poses_until_i_keys_it() {
     assert_eq!(key_frames(h.state()), vec![15], "I keys the posed rotation at the current frame");
     let (angle, _) = world_turn(posed, rotation_of(wrist_world(h.state())));
     assert!(angle < 0.05, "the key holds the pose (off by {angle}°)");
-}
-
-/// Where a world point is on screen in the editor's viewport now.
-fn on_screen(app: &EditorApp, at: Vec3) -> Pos2 {
-    let rect = app.view.viewport_rect.expect("the viewport was laid out");
-    Projection::new(&app.view.camera, rect).project(at).expect("the point is in front of the camera")
 }
 
 /// Presses on the gizmo's centre (transform-gizmo's view-plane translation disc) at `centre`

@@ -220,6 +220,9 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
             if scales {
                 channel_editor(ui, app, ChannelId::JointScale { object, joint }, "Scale");
             }
+            if app.session.ik.enabled {
+                ik_chain_ui(ui, app, object, joint);
+            }
         }
         Some(Selected::Light(l)) => {
             let name = scene.lights.get(l).map(|x| x.name.clone()).unwrap_or_default();
@@ -229,6 +232,57 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
             {
                 channel_editor(ui, app, id, label);
             }
+        }
+    }
+}
+
+/// IK posing's chain for the selected joint: its length in bones ("IK chain (bones)", from two
+/// up to the skeleton's root), the joints it runs through and its solver, or why the joint
+/// cannot be posed with IK.
+fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
+    ui.separator();
+    ui.strong("IK posing");
+    let scene = app.doc.scene();
+    let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else { return };
+    // Joints above this one (parents come before their children in a valid skeleton).
+    let mut above = 0;
+    let mut j = joint;
+    while let Some(p) = skeleton.joints.get(j).and_then(|x| x.parent).filter(|&p| p < j) {
+        above += 1;
+        j = p;
+    }
+    let asked = app.session.ik.chain_bones(object, joint);
+    if above >= 2 {
+        let mut bones = asked.clamp(2, above);
+        let change = ui
+            .horizontal(|ui| {
+                ui.label("Chain (bones)");
+                let (response, change) =
+                    number_field(ui, &mut bones, "IK chain (bones)", |d| d.range(2..=above).speed(0.05));
+                response.on_hover_text(
+                    "How many bones above the selected joint the IK handle moves: 2 uses the \
+                     two-bone solver (shoulder–elbow–wrist), more use FABRIK",
+                );
+                change
+            })
+            .inner;
+        if change.any() && bones != asked {
+            app.session.ik.set_chain_bones(object, joint, bones);
+            if let Ok(chain) = app.ik_chain(object, joint) {
+                app.info(format!("IK chain: {} ({})", chain.describe(), chain.solver_label()));
+            }
+        }
+    }
+    match app.ik_chain(object, joint) {
+        Ok(chain) => {
+            ui.label(format!("{} · {}", chain.describe(), chain.solver_label()));
+            ui.weak(
+                "Drag the orange handle at the joint in the viewport. The chain keeps the side it \
+                 bends to when the drag starts; in record mode each of its joints is keyed.",
+            );
+        }
+        Err(e) => {
+            ui.colored_label(ui.visuals().error_fg_color, e.to_string());
         }
     }
 }

@@ -89,8 +89,9 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                     command_button(ui, app, c, None);
                 }
                 ui.separator();
-                let record = app.session.record;
+                let (record, ik) = (app.session.record, app.session.ik.enabled);
                 command_button(ui, app, Command::ToggleRecord, Some(record));
+                command_button(ui, app, Command::ToggleIk, Some(ik));
             });
             ui.menu_button("View", |ui| {
                 let (grid, bones) = (app.view.grid, app.view.bones);
@@ -208,6 +209,8 @@ fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
             app.run_command(&ui.ctx().clone(), Command::ToggleRecord);
         }
         tool_button(ui, app, Command::InsertKey, "◆ Key", false);
+        let ik = app.session.ik.enabled;
+        tool_button(ui, app, Command::ToggleIk, "IK", ik);
         ui.separator();
         let (grid, bones) = (app.view.grid, app.view.bones);
         tool_button(ui, app, Command::ToggleGrid, "# Grid", grid);

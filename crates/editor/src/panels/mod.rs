@@ -4,6 +4,7 @@
 pub mod curves;
 pub mod dialogs;
 pub mod dope_sheet;
+pub mod ik_handle;
 pub mod inspector;
 pub mod menu;
 pub mod outliner;

@@ -1,6 +1,7 @@
 //! The 3D viewport: orbit (left drag on empty space), pan (right or middle drag, or
 //! Shift+left drag), zoom (scroll); the ground grid, the skeleton's bones, objects, lights, the
-//! transform gizmo of the selection, and click-to-select on joints, objects and lights.
+//! transform gizmo of the selection (or, in IK posing, the IK handle of a selected joint:
+//! [`crate::panels::ik_handle`]), and click-to-select on joints, objects and lights.
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};
 use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
@@ -63,10 +64,15 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         paint_lights(&painter, &projection, app, &frame.state);
         let pick_targets = pick_targets(&projection, app, &frame);
 
-        // Gizmo for the selection (drawn last, on top). It owns the primary button only on
-        // one of its handles; scroll, right/middle drags and drags that start elsewhere stay
-        // with the camera, as in Blender's viewport.
-        let gizmo_owns_primary = gizmo_ui(ui, app, &projection, rect, &response, &frame.poses);
+        // Gizmo for the selection (drawn last, on top); in IK posing a selected joint shows its
+        // IK handle instead. Either owns the primary button only on one of its handles; scroll,
+        // right/middle drags and drags that start elsewhere stay with the camera, as in
+        // Blender's viewport.
+        let gizmo_owns_primary =
+            match crate::panels::ik_handle::handle_ui(ui, app, &projection, rect, &response, &frame.poses) {
+                Some(owns) => owns,
+                None => gizmo_ui(ui, app, &projection, rect, &response, &frame.poses),
+            };
         let boxing = box_select(ui, app, &response, &painter, &pick_targets, gizmo_owns_primary);
         navigate(ui, app, &response, rect, gizmo_owns_primary || boxing);
         if response.clicked() && !gizmo_owns_primary {

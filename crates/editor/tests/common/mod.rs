@@ -126,3 +126,53 @@ pub fn drag(h: &mut Harness<'_, EditorApp>, from: egui::Pos2, to: egui::Pos2) {
     h.event(button(to, false));
     h.run();
 }
+
+/// Sends one pointer event and runs the frame.
+pub fn pointer(h: &mut Harness<'_, EditorApp>, event: Event) {
+    h.event(event);
+    h.run();
+}
+
+/// Hovers `path[0]`, presses the primary button there, moves through the rest of `path` one
+/// frame per point, releases at the last point and moves away, so the next frame neither
+/// hovers nor drags what was grabbed (a gizmo ring, an IK handle).
+pub fn drag_along(h: &mut Harness<'_, EditorApp>, path: &[egui::Pos2]) {
+    drag_along_with(h, path, Modifiers::NONE);
+}
+
+/// [`drag_along`] with `modifiers` held from the press to the release (as egui-winit reports
+/// a held Ctrl: in every frame's input).
+pub fn drag_along_with(h: &mut Harness<'_, EditorApp>, path: &[egui::Pos2], modifiers: Modifiers) {
+    let (Some(&start), Some(&end)) = (path.first(), path.last()) else { return };
+    let button = |pos: egui::Pos2, pressed: bool| Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers,
+    };
+    h.input_mut().modifiers = modifiers;
+    pointer(h, Event::PointerMoved(start));
+    pointer(h, Event::PointerMoved(start));
+    pointer(h, button(start, true));
+    for &p in &path[1..] {
+        pointer(h, Event::PointerMoved(p));
+    }
+    pointer(h, button(end, false));
+    h.input_mut().modifiers = Modifiers::NONE;
+    pointer(h, Event::PointerMoved(end + egui::vec2(0.0, -200.0)));
+}
+
+/// Where a world point is on screen in the editor's viewport now.
+pub fn on_screen(app: &EditorApp, at: glam::Vec3) -> egui::Pos2 {
+    let rect = app.view.viewport_rect.expect("the viewport was laid out");
+    keyrig_editor::camera::Projection::new(&app.view.camera, rect)
+        .project(at)
+        .expect("the point is in front of the camera")
+}
+
+/// World position of joint `joint` of object `object` as the editor evaluates it now (keys and
+/// pose overrides).
+pub fn joint_world(app: &EditorApp, object: usize, joint: usize) -> glam::Vec3 {
+    let pose = app.object_pose_now(object).expect("the object has a pose");
+    (pose.world_from_object * pose.object_from_joint[joint]).translation.into()
+}
