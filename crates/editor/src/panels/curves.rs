@@ -644,12 +644,14 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
     let vstep = nice_step(f64::from(view.high - view.low), plot.rect.height(), 28.0);
     let mut v = (f64::from(view.low) / vstep).ceil() * vstep;
     while v <= f64::from(view.high) {
-        let y = plot.pos(view.start, v as f32).y;
+        // A tick at zero reads 0, not "-0" (the running sum lands a rounding error below it).
+        let tick = if v.abs() < vstep * 1e-6 { 0.0 } else { v };
+        let y = plot.pos(view.start, tick as f32).y;
         plot_painter.line_segment([Pos2::new(plot.rect.left(), y), Pos2::new(plot.rect.right(), y)], grid);
         let text = if vstep >= 1.0 {
-            format!("{v:.0}")
+            format!("{tick:.0}")
         } else {
-            format!("{v:.*}", (-vstep.log10()).ceil() as usize)
+            format!("{tick:.*}", (-vstep.log10()).ceil() as usize)
         };
         painter.text(
             Pos2::new(plot.rect.left() - 4.0, y),
