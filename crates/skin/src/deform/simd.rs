@@ -1060,12 +1060,18 @@ unsafe fn load_deinterleaved16(at: *const f32) -> [__m512; 3] {
 /// `out` must be valid for writing 48 floats; the CPU must support AVX-512F.
 #[inline]
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
-unsafe fn store_interleaved16(out: *mut f32, x: __m512, y: __m512, z: __m512) {
+unsafe fn store_interleaved16(out: *mut f32, x: __m512, y: __m512, z: __m512, stream: bool) {
     for r in 0..3 {
         let xy = _mm512_permutex2var_ps(x, indices16(&INTERLEAVE16[0][r]), y);
         let xyz = _mm512_mask_permutexvar_ps(xy, INTERLEAVE16_Z[r], indices16(&INTERLEAVE16[1][r]), z);
-        // SAFETY: floats 16r..16r + 16 of the caller's 48.
-        unsafe { _mm512_storeu_ps(out.add(16 * r), xyz) };
+        // SAFETY: floats 16r..16r + 16 of the caller's 48, 64-byte aligned when streaming.
+        unsafe {
+            if stream {
+                _mm512_stream_ps(out.add(16 * r), xyz);
+            } else {
+                _mm512_storeu_ps(out.add(16 * r), xyz);
+            }
+        }
     }
 }
 
@@ -1082,6 +1088,14 @@ fn row16(m0: __m512, m1: __m512, m2: __m512, [x, y, z]: [__m512; 3], t: __m512) 
 /// not a multiple of 4), with each palette entry loaded whole (32 bytes) and transposed by
 /// [`dual_quaternions_soa16`].
 ///
+/// `stream`: write the outputs with 64-byte streaming stores, for jobs larger than the
+/// last-level cache ([`streams_outputs`], as linear blend does): a group of 16 vertices is 192
+/// bytes per output, three whole cache lines once the outputs are 64-byte aligned, so the
+/// interleaved registers are stored as they are (the vertices before the first line boundary,
+/// at most 15, go to the 8-lane kernel). Only when both outputs lie at the same offset modulo
+/// 64 bytes (as separately allocated large `Vec`s and their chunks do); otherwise ordinary
+/// stores.
+///
 /// # Safety
 /// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
 /// index must be in `dqs` (validated); all slices have the same length.
@@ -1095,11 +1109,34 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
     normals: &[Vec3],
     out_positions: &mut [Vec3],
     out_normals: &mut [Vec3],
+    stream: bool,
 ) {
-    let full = if N.is_multiple_of(4) { out_positions.len() / 16 * 16 } else { 0 };
+    let n = out_positions.len();
+    let (opp, onp) = (out_positions.as_mut_ptr() as usize, out_normals.as_mut_ptr() as usize);
+    // Streaming: 64-byte stores of whole cache lines, from the first vertex whose outputs start
+    // a line (at most 15 vertices in: 12 bytes per vertex step through every 4-byte offset
+    // modulo 64), when both outputs lie at the same offset modulo 64.
+    let stream = stream && N.is_multiple_of(4) && opp % 64 == onp % 64;
+    let head =
+        if stream { (0..16).find(|k| (opp + 12 * k).is_multiple_of(64)).unwrap_or(n).min(n) } else { 0 };
+    if head > 0 {
+        // SAFETY: the caller's contract (the same CPU features).
+        unsafe {
+            dual_quaternion_chunk_soa_avx512(
+                dqs,
+                &joints[..head],
+                &weights[..head],
+                &positions[..head],
+                &normals[..head],
+                &mut out_positions[..head],
+                &mut out_normals[..head],
+            );
+        }
+    }
+    let full = if N.is_multiple_of(4) { head + (n - head) / 16 * 16 } else { 0 };
     let sign_bit = _mm512_castps_si512(_mm512_set1_ps(-0.0));
     let zero = _mm512_setzero_ps();
-    for base in (0..full).step_by(16) {
+    for base in (head..full).step_by(16) {
         let js = &joints[base..base + 16];
         // The weights, four influences at a time.
         let rows = weights[base..base + 16].as_ptr().cast::<f32>();
@@ -1184,8 +1221,14 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
         let (nx, ny, nz) =
             (row16(m00, m01, m02, n, zero), row16(m10, m11, m12, n, zero), row16(m20, m21, m22, n, zero));
         unsafe {
-            store_interleaved16(out_positions[base..base + 16].as_mut_ptr().cast::<f32>(), px, py, pz);
-            store_interleaved16(out_normals[base..base + 16].as_mut_ptr().cast::<f32>(), nx, ny, nz);
+            store_interleaved16(
+                out_positions[base..base + 16].as_mut_ptr().cast::<f32>(),
+                px,
+                py,
+                pz,
+                stream,
+            );
+            store_interleaved16(out_normals[base..base + 16].as_mut_ptr().cast::<f32>(), nx, ny, nz, stream);
         }
     }
     // SAFETY: the caller's contract (the same CPU features).
@@ -1199,6 +1242,11 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
             &mut out_positions[full..],
             &mut out_normals[full..],
         );
+    }
+    if stream {
+        // Streaming stores are weakly ordered: make them visible before the chunk is reported
+        // done (to another thread, through the chunk counter's release store).
+        _mm_sfence();
     }
 }
 
