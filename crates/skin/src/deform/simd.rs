@@ -1136,6 +1136,18 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
     let full = if N.is_multiple_of(4) { head + (n - head) / 16 * 16 } else { 0 };
     let sign_bit = _mm512_castps_si512(_mm512_set1_ps(-0.0));
     let zero = _mm512_setzero_ps();
+    // The N influences' dual quaternions of one group wait here until the pivot is known (it
+    // is the real part of whichever has the largest weight). Held in registers, they were more
+    // than the 32 there are, and the compiler's spills to the stack made the kernel's speed
+    // depend on where the stack lay modulo 4 KiB: a palette load that shares its address bits
+    // 11..0 with a spill store in flight waits for it ("4K aliasing"; 2.38 to 2.76 ns per vertex
+    // at 100 000 vertices across stack offsets on Zen 5). Written and read explicitly
+    // (volatile, so that the compiler keeps them in memory rather than in registers it then
+    // spills), they leave the kernel with no spills. Where this memory lies relative to the
+    // palette changed the time by 2 % at most (the scratch at the palette's own offsets
+    // modulo 4 KiB against after its end), so nothing places it.
+    let mut scratch: Vec<__m512> = Vec::with_capacity(8 * N);
+    let sp = scratch.as_mut_ptr();
     for base in (head..full).step_by(16) {
         let js = &joints[base..base + 16];
         // The weights, four influences at a time.
@@ -1150,23 +1162,26 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
                 wv[4 * g + c] = w[c];
             }
         }
-        // Each influence's dual quaternions, and the pivot: the real part of each lane's
-        // largest-weight influence (first on ties).
-        let mut parts = [[zero; 8]; N];
+        // Each influence's dual quaternions, kept in the scratch until the pivot is known, and
+        // the pivot: the real part of each lane's largest-weight influence (first on ties).
         let mut pivot = [zero; 4];
         let mut best = wv[0];
         // Index loops: LLVM unrolls them, while iterator adapters such as `skip` stayed calls.
         #[allow(clippy::needless_range_loop)]
         for i in 0..N {
             // SAFETY: 16 rows; every index is in `dqs` (validated).
-            parts[i] = unsafe { dual_quaternions_soa16(dqs, js, i) };
+            let part = unsafe { dual_quaternions_soa16(dqs, js, i) };
+            for c in 0..8 {
+                // SAFETY: register 8i + c of the scratch's capacity of 8N.
+                unsafe { std::ptr::write_volatile(sp.add(8 * i + c), part[c]) };
+            }
             if i == 0 {
-                pivot = [parts[0][0], parts[0][1], parts[0][2], parts[0][3]];
+                pivot = [part[0], part[1], part[2], part[3]];
             } else {
                 let larger = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(wv[i], best);
                 best = _mm512_mask_blend_ps(larger, best, wv[i]);
                 for c in 0..4 {
-                    pivot[c] = _mm512_mask_blend_ps(larger, pivot[c], parts[i][c]);
+                    pivot[c] = _mm512_mask_blend_ps(larger, pivot[c], part[c]);
                 }
             }
         }
@@ -1174,7 +1189,10 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
         let mut q = [zero; 8];
         #[allow(clippy::needless_range_loop)]
         for i in 0..N {
-            let (part, w) = (&parts[i], wv[i]);
+            // SAFETY: registers the loop above wrote.
+            let part: [__m512; 8] =
+                std::array::from_fn(|c| unsafe { std::ptr::read_volatile(sp.add(8 * i + c)) });
+            let w = wv[i];
             let dot = _mm512_fmadd_ps(
                 part[3],
                 pivot[3],
