@@ -88,6 +88,9 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
             // SAFETY: the CPU has AVX2 and FMA (the caller runs only builds that run here);
             // validate() checked that the palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
+            // Bytes read and written per vertex: position and normal in and out, N joint
+            // indices and N weights.
+            let stream = super::simd::streams_outputs(positions.len() * (4 * 12 + N * (2 + 4)));
             for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
                 let end = start + out_p.len();
                 let (js, ws) = (&joints[start..end], &weights[start..end]);
@@ -95,7 +98,9 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
                 // SAFETY: as above; the AVX-512VL build only where the CPU has it.
                 unsafe {
                     if build == Build::Avx512Vl {
-                        super::simd::dual_quaternion_chunk_avx512_x16(&packed, js, ws, ps, ns, out_p, out_n)
+                        super::simd::dual_quaternion_chunk_avx512_x16(
+                            &packed, js, ws, ps, ns, out_p, out_n, stream,
+                        )
                     } else {
                         super::simd::dual_quaternion_chunk_soa(&packed, js, ws, ps, ns, out_p, out_n)
                     }

@@ -595,6 +595,114 @@ mod tests {
         }
     }
 
+    /// The 16-lane AVX-512 dual quaternion kernel with ordinary and with streaming stores
+    /// against the reference, on sub-slices that start at every offset modulo 16 vertices (so
+    /// every 64-byte alignment of the outputs, which decides the streaming stores' head) and
+    /// have every remainder after their groups of 16, with outputs at equal and at different
+    /// offsets modulo 64 bytes (which falls back to ordinary stores), 4 and 8 influences;
+    /// nothing outside the slice is written. Runs where the CPU has AVX-512F and AVX-512VL and
+    /// says so; fails if it did not run on such a CPU.
+    #[test]
+    fn dual_quaternion_avx512_kernel_matches_the_reference_with_either_store() {
+        #[cfg(target_arch = "x86_64")]
+        fn check<const N: usize>(rng: &mut Lcg) -> usize {
+            use glam::Quat;
+
+            use crate::dual_quat::DualQuat;
+            use crate::DualQuatJob;
+
+            let joint_count = 11;
+            let dqs: Vec<DualQuat> = (0..joint_count)
+                .map(|_| {
+                    let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
+                    let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                    DualQuat::from_rotation_translation(rotation, rng.vec3(3.0))
+                })
+                .collect();
+            let n = 70;
+            let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
+            let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            let influences = random_influences::<N>(rng, n, joint_count);
+            let mut expected = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+            DualQuatJob {
+                dual_quaternions: &dqs,
+                influences: &influences,
+                positions: &positions,
+                normals: &normals,
+                out_positions: &mut expected.0,
+                out_normals: &mut expected.1,
+            }
+            .run_with(Execution::Reference)
+            .unwrap();
+            let (joints, weights) = (influences.joints(), influences.weights());
+            // SAFETY (both): only on CPUs with AVX-512F and AVX-512VL.
+            let packed = unsafe { simd::pack_dual_quaternions(&dqs) };
+            let mut runs = 0;
+            for stream in [false, true] {
+                // Normals one vertex further into their buffer: a different offset modulo 64.
+                for shift in [0, 1] {
+                    for start in 0..16 {
+                        for len in (0..=n - start - 17).step_by(3) {
+                            let r = start..start + len;
+                            let rn = start + shift..start + shift + len;
+                            // One buffer, the normals 80 vertices (15 cache lines) after the
+                            // positions: both outputs at the same offset modulo 64 bytes.
+                            let mut buffer = vec![Vec3::NAN; 80 + n];
+                            let (positions_out, normals_out) = buffer.split_at_mut(80);
+                            let out = (&mut positions_out[..n], normals_out);
+                            unsafe {
+                                simd::dual_quaternion_chunk_avx512_x16(
+                                    &packed,
+                                    &joints[r.clone()],
+                                    &weights[r.clone()],
+                                    &positions[r.clone()],
+                                    &normals[r.clone()],
+                                    &mut out.0[r.clone()],
+                                    &mut out.1[rn.clone()],
+                                    stream,
+                                );
+                            }
+                            for v in 0..n {
+                                assert_eq!(!r.contains(&v), out.0[v].is_nan(), "position {v} of {r:?}");
+                                assert_eq!(!rn.contains(&v), out.1[v].is_nan(), "normal {v} of {rn:?}");
+                            }
+                            assert!(buffer[n..80].iter().all(|p| p.is_nan()), "positions past {r:?}");
+                            let (positions_out, normals_out) = buffer.split_at(80);
+                            for (k, v) in r.clone().enumerate() {
+                                let (dp, dn) = (
+                                    (positions_out[v] - expected.0[v]).abs().max_element(),
+                                    (normals_out[start + shift + k] - expected.1[v]).abs().max_element(),
+                                );
+                                assert!(
+                                    dp < 1e-4 && dn < 1e-5,
+                                    "N = {N}, stream {stream}, shift {shift}, {r:?}, vertex {v}: {dp} {dn}"
+                                );
+                            }
+                            runs += 1;
+                        }
+                    }
+                }
+            }
+            runs
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        {
+            if Build::Avx512Vl.runs_here() {
+                let mut rng = Lcg(0xD0A);
+                let runs = check::<4>(&mut rng) + check::<8>(&mut rng);
+                eprintln!(
+                    "avx512vl dual quaternion kernel: checked {runs} slices with ordinary and streaming stores"
+                );
+                // Per N, store and shift: lengths 0, 3, … up to 53 − start for each start 0..16.
+                let per: usize = (0..16).map(|start: usize| (53 - start) / 3 + 1).sum();
+                assert_eq!(runs, 2 * 2 * 2 * per);
+            } else {
+                eprintln!("no AVX-512F/VL on this CPU: the AVX-512 dual quaternion kernel was not checked");
+            }
+        }
+    }
+
     /// Streaming stores only for jobs larger than a last-level cache this CPU reports.
     #[test]
     fn outputs_stream_only_past_the_last_level_cache() {

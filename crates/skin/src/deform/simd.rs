@@ -1060,12 +1060,18 @@ unsafe fn load_deinterleaved16(at: *const f32) -> [__m512; 3] {
 /// `out` must be valid for writing 48 floats; the CPU must support AVX-512F.
 #[inline]
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
-unsafe fn store_interleaved16(out: *mut f32, x: __m512, y: __m512, z: __m512) {
+unsafe fn store_interleaved16(out: *mut f32, x: __m512, y: __m512, z: __m512, stream: bool) {
     for r in 0..3 {
         let xy = _mm512_permutex2var_ps(x, indices16(&INTERLEAVE16[0][r]), y);
         let xyz = _mm512_mask_permutexvar_ps(xy, INTERLEAVE16_Z[r], indices16(&INTERLEAVE16[1][r]), z);
-        // SAFETY: floats 16r..16r + 16 of the caller's 48.
-        unsafe { _mm512_storeu_ps(out.add(16 * r), xyz) };
+        // SAFETY: floats 16r..16r + 16 of the caller's 48, 64-byte aligned when streaming.
+        unsafe {
+            if stream {
+                _mm512_stream_ps(out.add(16 * r), xyz);
+            } else {
+                _mm512_storeu_ps(out.add(16 * r), xyz);
+            }
+        }
     }
 }
 
@@ -1082,6 +1088,14 @@ fn row16(m0: __m512, m1: __m512, m2: __m512, [x, y, z]: [__m512; 3], t: __m512) 
 /// not a multiple of 4), with each palette entry loaded whole (32 bytes) and transposed by
 /// [`dual_quaternions_soa16`].
 ///
+/// `stream`: write the outputs with 64-byte streaming stores, for jobs larger than the
+/// last-level cache ([`streams_outputs`], as linear blend does): a group of 16 vertices is 192
+/// bytes per output, three whole cache lines once the outputs are 64-byte aligned, so the
+/// interleaved registers are stored as they are (the vertices before the first line boundary,
+/// at most 15, go to the 8-lane kernel). Only when both outputs lie at the same offset modulo
+/// 64 bytes (as separately allocated large `Vec`s and their chunks do); otherwise ordinary
+/// stores.
+///
 /// # Safety
 /// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
 /// index must be in `dqs` (validated); all slices have the same length.
@@ -1095,11 +1109,46 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
     normals: &[Vec3],
     out_positions: &mut [Vec3],
     out_normals: &mut [Vec3],
+    stream: bool,
 ) {
-    let full = if N.is_multiple_of(4) { out_positions.len() / 16 * 16 } else { 0 };
+    let n = out_positions.len();
+    let (opp, onp) = (out_positions.as_mut_ptr() as usize, out_normals.as_mut_ptr() as usize);
+    // Streaming: 64-byte stores of whole cache lines, from the first vertex whose outputs start
+    // a line (at most 15 vertices in: 12 bytes per vertex step through every 4-byte offset
+    // modulo 64), when both outputs lie at the same offset modulo 64.
+    let stream = stream && N.is_multiple_of(4) && opp % 64 == onp % 64;
+    let head =
+        if stream { (0..16).find(|k| (opp + 12 * k).is_multiple_of(64)).unwrap_or(n).min(n) } else { 0 };
+    if head > 0 {
+        // SAFETY: the caller's contract (the same CPU features).
+        unsafe {
+            dual_quaternion_chunk_soa_avx512(
+                dqs,
+                &joints[..head],
+                &weights[..head],
+                &positions[..head],
+                &normals[..head],
+                &mut out_positions[..head],
+                &mut out_normals[..head],
+            );
+        }
+    }
+    let full = if N.is_multiple_of(4) { head + (n - head) / 16 * 16 } else { 0 };
     let sign_bit = _mm512_castps_si512(_mm512_set1_ps(-0.0));
     let zero = _mm512_setzero_ps();
-    for base in (0..full).step_by(16) {
+    // The N influences' dual quaternions of one group wait here until the pivot is known (it
+    // is the real part of whichever has the largest weight). Held in registers, they were more
+    // than the 32 there are, and the compiler's spills to the stack made the kernel's speed
+    // depend on where the stack lay modulo 4 KiB: a palette load that shares its address bits
+    // 11..0 with a spill store in flight waits for it ("4K aliasing"; 2.38 to 2.76 ns per vertex
+    // at 100 000 vertices across stack offsets on Zen 5). Written and read explicitly
+    // (volatile, so that the compiler keeps them in memory rather than in registers it then
+    // spills), they leave the kernel with no spills. Where this memory lies relative to the
+    // palette changed the time by 2 % at most (the scratch at the palette's own offsets
+    // modulo 4 KiB against after its end), so nothing places it.
+    let mut scratch: Vec<__m512> = Vec::with_capacity(8 * N);
+    let sp = scratch.as_mut_ptr();
+    for base in (head..full).step_by(16) {
         let js = &joints[base..base + 16];
         // The weights, four influences at a time.
         let rows = weights[base..base + 16].as_ptr().cast::<f32>();
@@ -1113,23 +1162,26 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
                 wv[4 * g + c] = w[c];
             }
         }
-        // Each influence's dual quaternions, and the pivot: the real part of each lane's
-        // largest-weight influence (first on ties).
-        let mut parts = [[zero; 8]; N];
+        // Each influence's dual quaternions, kept in the scratch until the pivot is known, and
+        // the pivot: the real part of each lane's largest-weight influence (first on ties).
         let mut pivot = [zero; 4];
         let mut best = wv[0];
         // Index loops: LLVM unrolls them, while iterator adapters such as `skip` stayed calls.
         #[allow(clippy::needless_range_loop)]
         for i in 0..N {
             // SAFETY: 16 rows; every index is in `dqs` (validated).
-            parts[i] = unsafe { dual_quaternions_soa16(dqs, js, i) };
+            let part = unsafe { dual_quaternions_soa16(dqs, js, i) };
+            for c in 0..8 {
+                // SAFETY: register 8i + c of the scratch's capacity of 8N.
+                unsafe { std::ptr::write_volatile(sp.add(8 * i + c), part[c]) };
+            }
             if i == 0 {
-                pivot = [parts[0][0], parts[0][1], parts[0][2], parts[0][3]];
+                pivot = [part[0], part[1], part[2], part[3]];
             } else {
                 let larger = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(wv[i], best);
                 best = _mm512_mask_blend_ps(larger, best, wv[i]);
                 for c in 0..4 {
-                    pivot[c] = _mm512_mask_blend_ps(larger, pivot[c], parts[i][c]);
+                    pivot[c] = _mm512_mask_blend_ps(larger, pivot[c], part[c]);
                 }
             }
         }
@@ -1137,7 +1189,10 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
         let mut q = [zero; 8];
         #[allow(clippy::needless_range_loop)]
         for i in 0..N {
-            let (part, w) = (&parts[i], wv[i]);
+            // SAFETY: registers the loop above wrote.
+            let part: [__m512; 8] =
+                std::array::from_fn(|c| unsafe { std::ptr::read_volatile(sp.add(8 * i + c)) });
+            let w = wv[i];
             let dot = _mm512_fmadd_ps(
                 part[3],
                 pivot[3],
@@ -1184,8 +1239,14 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
         let (nx, ny, nz) =
             (row16(m00, m01, m02, n, zero), row16(m10, m11, m12, n, zero), row16(m20, m21, m22, n, zero));
         unsafe {
-            store_interleaved16(out_positions[base..base + 16].as_mut_ptr().cast::<f32>(), px, py, pz);
-            store_interleaved16(out_normals[base..base + 16].as_mut_ptr().cast::<f32>(), nx, ny, nz);
+            store_interleaved16(
+                out_positions[base..base + 16].as_mut_ptr().cast::<f32>(),
+                px,
+                py,
+                pz,
+                stream,
+            );
+            store_interleaved16(out_normals[base..base + 16].as_mut_ptr().cast::<f32>(), nx, ny, nz, stream);
         }
     }
     // SAFETY: the caller's contract (the same CPU features).
@@ -1199,6 +1260,11 @@ pub(crate) unsafe fn dual_quaternion_chunk_avx512_x16<const N: usize>(
             &mut out_positions[full..],
             &mut out_normals[full..],
         );
+    }
+    if stream {
+        // Streaming stores are weakly ordered: make them visible before the chunk is reported
+        // done (to another thread, through the chunk counter's release store).
+        _mm_sfence();
     }
 }
 
