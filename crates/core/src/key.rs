@@ -32,15 +32,32 @@ pub struct Tcb {
     pub tension: f32,
     pub continuity: f32,
     pub bias: f32,
+    /// Clamped (as Blender's auto-clamped handles): at a key that is a peak, a dip or level
+    /// with a neighbour the tangent is flat, and elsewhere it is limited so that the segments
+    /// on either side of the key do not overshoot it (per component; for rotations per
+    /// component of the logarithm). Two keys of equal value then hold that value between them.
+    /// Left out of scene files while false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub clamped: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 impl Tcb {
     /// T = C = B = 0: Catmull–Rom for positions, Shoemake's squad for rotations.
-    pub const ZERO: Tcb = Tcb { tension: 0.0, continuity: 0.0, bias: 0.0 };
+    pub const ZERO: Tcb = Tcb { tension: 0.0, continuity: 0.0, bias: 0.0, clamped: false };
 
     #[must_use]
     pub const fn new(tension: f32, continuity: f32, bias: f32) -> Self {
-        Tcb { tension, continuity, bias }
+        Tcb { tension, continuity, bias, clamped: false }
+    }
+
+    /// The same tension, continuity and bias, clamped or not.
+    #[must_use]
+    pub const fn with_clamped(self, clamped: bool) -> Self {
+        Tcb { clamped, ..self }
     }
 }
 

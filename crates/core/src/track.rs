@@ -722,16 +722,48 @@ pub trait Vector:
     Copy + Debug + PartialEq + Add<Output = Self> + Sub<Output = Self> + Mul<f64, Output = Self>
 {
     const ZERO: Self;
+
+    /// Applies `f` to every component.
+    #[must_use]
+    fn map3(self, other_a: Self, other_b: Self, f: impl Fn(f64, f64, f64) -> f64) -> Self;
 }
 
 impl Vector for f64 {
     const ZERO: Self = 0.0;
+
+    fn map3(self, a: Self, b: Self, f: impl Fn(f64, f64, f64) -> f64) -> Self {
+        f(self, a, b)
+    }
 }
 impl Vector for DVec3 {
     const ZERO: Self = DVec3::ZERO;
+
+    fn map3(self, a: Self, b: Self, f: impl Fn(f64, f64, f64) -> f64) -> Self {
+        DVec3::new(f(self.x, a.x, b.x), f(self.y, a.y, b.y), f(self.z, a.z, b.z))
+    }
 }
 impl Vector for DVec4 {
     const ZERO: Self = DVec4::ZERO;
+
+    fn map3(self, a: Self, b: Self, f: impl Fn(f64, f64, f64) -> f64) -> Self {
+        DVec4::new(f(self.x, a.x, b.x), f(self.y, a.y, b.y), f(self.z, a.z, b.z), f(self.w, a.w, b.w))
+    }
+}
+
+/// A clamped key's tangent component `m` (value per segment) for the chord `d` of the segment
+/// it shapes, given the chords `d_prev` and `d_next` on either side of the key: flat at a peak,
+/// a dip or a level neighbour (the chords do not share a strict sign), else of the chord's sign
+/// and at most three times it — inside the box where a cubic Hermite segment stays monotone
+/// (Fritsch & Carlson 1980), so it cannot overshoot its keys.
+fn clamp_tangent(m: f64, d: f64, d_prev: f64, d_next: f64) -> f64 {
+    if d_prev * d_next <= 0.0 {
+        return 0.0;
+    }
+    if d > 0.0 {
+        m.clamp(0.0, 3.0 * d)
+    } else {
+        m.clamp(3.0 * d, 0.0)
+    }
 }
 
 /// The Kochanek–Bartels tangents of every key: `(D_i, S_i)` (incoming, outgoing), in value units
@@ -765,7 +797,15 @@ fn kb_tangents<W: Vector>(
             let inc = d_prev * ((1.0 - t) * (1.0 + b) * (1.0 - c) / 2.0)
                 + d_next * ((1.0 - t) * (1.0 - b) * (1.0 + c) / 2.0);
             let sum = dt_prev + dt_next;
-            (inc * (2.0 * dt_prev / sum), out * (2.0 * dt_next / sum))
+            let (inc, out) = (inc * (2.0 * dt_prev / sum), out * (2.0 * dt_next / sum));
+            if tcb.clamped {
+                // The incoming tangent shapes the segment from the previous key (chord
+                // d_prev), the outgoing one the segment to the next (chord d_next).
+                let inc = inc.map3(d_prev, d_next, |m, a, b| clamp_tangent(m, a, a, b));
+                let out = out.map3(d_prev, d_next, |m, a, b| clamp_tangent(m, b, a, b));
+                return (inc, out);
+            }
+            (inc, out)
         })
         .collect()
 }

@@ -741,7 +741,7 @@ mod tests {
                             Interpolation::Tcb,
                             Interpolation::Hermite,
                         ][mode as usize],
-                        tcb: Tcb { tension, continuity, bias },
+                        tcb: Tcb::new(tension, continuity, bias),
                         in_tangent,
                         out_tangent,
                         spin,

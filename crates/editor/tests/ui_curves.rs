@@ -141,3 +141,35 @@ fn every_curve_has_its_own_colour_and_a_legend_entry() {
     }
     assert!(h.query_by_label("Curves: 2 channels").is_some());
 }
+
+/// The curve view's context menu sets the interpolation of the selected keys in one undo step;
+/// "TCB spline, clamped" keeps the elbow's held 90° (frames 30 and 45) from dipping between
+/// its keys.
+#[test]
+fn the_context_menu_clamps_the_selected_keys() {
+    let (_dir, mut h) = with_elbow_key();
+    h.get_by_label("key elbow rotation frame 45").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    let steps = h.state().doc.undo_len();
+    let plot = h.state().view.curves_rect.expect("laid out");
+    h.event(Event::PointerMoved(plot.center()));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: plot.center(),
+            button: egui::PointerButton::Secondary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+    h.get_by_label("TCB spline, clamped").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    for index in [2, 3] {
+        let (_, mode, tcb) = channels::key_params(scene, ELBOW, index).expect("key");
+        assert_eq!(mode, keyrig_core::Interpolation::Tcb);
+        assert!(tcb.clamped, "key {index} clamped");
+    }
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step");
+    assert_eq!(h.state().doc.undo_label(), Some("interpolation TCB spline, clamped"));
+}

@@ -416,6 +416,43 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     if let Some(pointer) = response.hover_pos() {
         zoom_and_pan(ui, app, &plot, pointer);
     }
+    response.context_menu(|ui| key_menu_ui(ui, app));
+}
+
+/// The curve view's context menu: the interpolation of the selected keys (one undo step), and
+/// deleting them.
+fn key_menu_ui(ui: &mut Ui, app: &mut EditorApp) {
+    use keyrig_core::Interpolation;
+    let keys: Vec<KeyRef> = app.session.selection.keys.iter().copied().collect();
+    if keys.is_empty() {
+        ui.label("Select keys first (click, or drag a box)");
+        return;
+    }
+    ui.label(format!("{} selected key(s)", keys.len()));
+    let choices = [
+        ("Step", Interpolation::Step, false),
+        ("Linear", Interpolation::Linear, false),
+        ("TCB spline", Interpolation::Tcb, false),
+        ("TCB spline, clamped", Interpolation::Tcb, true),
+    ];
+    for (label, mode, clamped) in choices {
+        if ui.button(label).clicked() {
+            app.doc.close_group();
+            app.doc.edit(&format!("interpolation {label}"), |scene| {
+                for k in &keys {
+                    if let Some((_, _, tcb)) = channels::key_params(scene, k.channel, k.index) {
+                        channels::set_key_params(scene, k.channel, k.index, mode, tcb.with_clamped(clamped));
+                    }
+                }
+            });
+            ui.close();
+        }
+    }
+    ui.separator();
+    if ui.button("Delete keys").clicked() {
+        app.delete_selected_keys();
+        ui.close();
+    }
 }
 
 fn scene_fps(app: &EditorApp) -> f64 {

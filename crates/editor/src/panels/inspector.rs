@@ -411,6 +411,7 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
     let mixed_tension = mixed(&|p| p.2.tension);
     let mixed_continuity = mixed(&|p| p.2.continuity);
     let mixed_bias = mixed(&|p| p.2.bias);
+    let mixed_clamped = params.iter().any(|p| p.2.clamped != params[0].2.clamped);
     let before = (mode, tcb);
     let shown_mode = if mixed_mode { "— mixed —" } else { mode_label(mode) };
     egui::ComboBox::from_label("Interpolation").selected_text(shown_mode).show_ui(ui, |ui| {
@@ -443,6 +444,12 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
             if mixed_bias { "Bias (mixed)" } else { "Bias" },
             "Bias: −1 anticipates (overshoots before), +1 overshoots after the key",
         );
+        ui.checkbox(&mut tcb.clamped, if mixed_clamped { "Clamped (mixed)" } else { "Clamped" })
+            .on_hover_text(
+                "Keep the curve from overshooting this key: flat at a peak, a dip or a neighbour of \
+             the same value (two equal keys hold their value between them), limited elsewhere \
+             (Blender's auto-clamped handles)",
+            );
         if ui.button("Reset T/C/B").on_hover_text("Catmull–Rom / Shoemake squad").clicked() {
             tcb = Tcb::ZERO;
         }
@@ -464,6 +471,7 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
                         old_tcb.continuity
                     },
                     bias: if tcb.bias != before.1.bias { tcb.bias } else { old_tcb.bias },
+                    clamped: if tcb.clamped != before.1.clamped { tcb.clamped } else { old_tcb.clamped },
                 };
                 channels::set_key_params(scene, k.channel, k.index, m, t);
             }
