@@ -194,6 +194,113 @@ pub fn set_key_params(scene: &mut Scene, id: ChannelId, index: usize, mode: Inte
     })
 }
 
+/// Turns the keys `indices` of a position or scalar channel into Hermite keys with explicit
+/// tangents equal to those their curve has now, so it keeps its shape: the segment starting at
+/// key i takes `(S_i, D_{i+1})` per second ([`Track::segment_tangents`]) as key i's out-tangent
+/// and key i+1's in-tangent, and key i gets the in-tangent of the segment ending at it. Returns
+/// false (scene unchanged) for rotations (Squad has no per-second Hermite form that keeps its
+/// shape), a channel without two keys, or a track that does not evaluate.
+pub fn convert_to_hermite(scene: &mut Scene, id: ChannelId, indices: &[usize]) -> bool {
+    /// `segments[i]`: the per-second tangents of segment i (`None` for Step).
+    fn convert<T: Clone>(track: &mut RawTrack<T>, segments: &[Option<(T, T)>], indices: &[usize]) -> bool {
+        let n = track.keys.len();
+        if n < 2 {
+            return false;
+        }
+        for &i in indices.iter().filter(|&&i| i < n) {
+            // The segment before the key (its in-tangent) and after it (out-tangent, and the
+            // next key's in-tangent).
+            let before = i.checked_sub(1).and_then(|p| segments.get(p).cloned().flatten());
+            let after = segments.get(i).cloned().flatten();
+            let key = &mut track.keys[i];
+            key.interpolation = Interpolation::Hermite;
+            if let Some((_, inn)) = before.clone() {
+                key.in_tangent = Some(inn);
+            }
+            match after {
+                Some((out, next_in)) => {
+                    key.out_tangent = Some(out);
+                    track.keys[i + 1].in_tangent = Some(next_in);
+                }
+                // The last key starts no segment; its out-tangent continues the curve.
+                None => key.out_tangent = before.map(|(_, inn)| inn).or_else(|| key.out_tangent.clone()),
+            }
+        }
+        true
+    }
+    let Some(cycles) = cycles(scene, id) else { return false };
+    match channel_mut(scene, id) {
+        Some(ChannelMut::Vec3(a)) => {
+            let Ok(evaluated) = Track::with_cycles(&a.track, cycles) else { return false };
+            let segments: Vec<_> = (0..a.track.keys.len()).map(|i| evaluated.segment_tangents(i)).collect();
+            convert(&mut a.track, &segments, indices)
+        }
+        Some(ChannelMut::Scalar(a)) => {
+            let Ok(evaluated) = Track::with_cycles(&a.track, cycles) else { return false };
+            let segments: Vec<_> = (0..a.track.keys.len()).map(|i| evaluated.segment_tangents(i)).collect();
+            convert(&mut a.track, &segments, indices)
+        }
+        _ => false,
+    }
+}
+
+/// Sets component `component` of key `index`'s in- or out-tangent (value units per second) of
+/// a Hermite position or scalar key. Returns false when there is no such tangent.
+pub fn set_tangent_component(
+    scene: &mut Scene,
+    id: ChannelId,
+    index: usize,
+    outgoing: bool,
+    component: usize,
+    value: f32,
+) -> bool {
+    if !value.is_finite() {
+        return false;
+    }
+    match channel_mut(scene, id) {
+        Some(ChannelMut::Vec3(a)) => {
+            let Some(key) = a.track.keys.get_mut(index) else { return false };
+            let tangent = if outgoing { &mut key.out_tangent } else { &mut key.in_tangent };
+            match tangent {
+                Some(t) if component < 3 => {
+                    t[component] = value;
+                    true
+                }
+                _ => false,
+            }
+        }
+        Some(ChannelMut::Scalar(a)) => {
+            let Some(key) = a.track.keys.get_mut(index) else { return false };
+            let tangent = if outgoing { &mut key.out_tangent } else { &mut key.in_tangent };
+            match tangent {
+                Some(t) if component == 0 => {
+                    *t = value;
+                    true
+                }
+                _ => false,
+            }
+        }
+        _ => false,
+    }
+}
+
+/// The in- and out-tangents (per second) of key `index` of a position or scalar channel, as
+/// component lists.
+#[must_use]
+pub fn key_tangents(scene: &Scene, id: ChannelId, index: usize) -> (Option<Vec<f32>>, Option<Vec<f32>>) {
+    match channel(scene, id) {
+        Some(ChannelRef::Vec3(a)) => a.track.keys.get(index).map_or((None, None), |k| {
+            (k.in_tangent.map(|t| t.to_array().to_vec()), k.out_tangent.map(|t| t.to_array().to_vec()))
+        }),
+        Some(ChannelRef::Scalar(a)) => a
+            .track
+            .keys
+            .get(index)
+            .map_or((None, None), |k| (k.in_tangent.map(|t| vec![t]), k.out_tangent.map(|t| vec![t]))),
+        _ => (None, None),
+    }
+}
+
 /// Multiplies every key time of the scene by `factor` (> 0); Hermite tangents, stored per
 /// second, are divided by it so the curves keep their shape in frames.
 pub fn scale_key_times(scene: &mut Scene, factor: f64) {

@@ -164,6 +164,8 @@ pub enum CurveGesture {
     Pan { from: CurveView },
     /// Scrubbing the current frame on the frame ruler.
     Scrub,
+    /// Dragging a Hermite handle: the key, the component and which tangent.
+    Handle { key: crate::session::KeyRef, component: usize, outgoing: bool },
 }
 
 /// The curve view's own state (the view, a gesture); not saved, not undone.

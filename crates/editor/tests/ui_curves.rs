@@ -173,3 +173,54 @@ fn the_context_menu_clamps_the_selected_keys() {
     assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step");
     assert_eq!(h.state().doc.undo_label(), Some("interpolation TCB spline, clamped"));
 }
+
+/// "Hermite handles" turns a TCB key into explicit tangents without changing the curve; its
+/// handles then shape the curve, one undo step per drag.
+#[test]
+fn hermite_handles_keep_the_shape_and_then_shape_the_curve() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let cube = ChannelId::ObjectTranslation(1);
+    h.get_by_label("key Cube translation frame 30").click();
+    h.run();
+    let sample = |h: &Harness<'_, EditorApp>| -> Vec<glam::Vec3> {
+        let scene = h.state().doc.scene();
+        (0..=90)
+            .map(|f| match keyrig_editor::eval::channel_value(scene, cube, f64::from(f) / scene.fps, &Default::default()) {
+                Some(ChannelValue::Vec3(v)) => v,
+                other => panic!("a position, got {other:?}"),
+            })
+            .collect()
+    };
+    let before = sample(&h);
+    let plot = h.state().view.curves_rect.expect("laid out");
+    h.event(Event::PointerMoved(plot.center()));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: plot.center(),
+            button: egui::PointerButton::Secondary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+    h.get_by_label("Hermite handles (keeps the shape)").click();
+    h.run();
+    let (_, mode, _) = channels::key_params(h.state().doc.scene(), cube, 1).expect("key");
+    assert_eq!(mode, keyrig_core::Interpolation::Hermite);
+    let after = sample(&h);
+    for (f, (a, b)) in before.iter().zip(&after).enumerate() {
+        assert!((*a - *b).length() < 1e-4, "frame {f}: {a} became {b}");
+    }
+
+    // Drag the key's outgoing Y handle up: the curve after the key rises, one undo step.
+    let steps = h.state().doc.undo_len();
+    let handle = h.get_by_label("out handle Cube translation Y key 1").rect().center();
+    drag(&mut h, handle, handle + egui::vec2(0.0, -30.0));
+    let (_, out) = channels::key_tangents(h.state().doc.scene(), cube, 1);
+    assert!(out.is_some(), "the key keeps an out-tangent");
+    let shaped = sample(&h);
+    let later = (31..45).any(|f| shaped[f].y > after[f].y + 1e-3);
+    assert!(later, "the curve after frame 30 rises with the handle");
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step for the handle drag");
+}

@@ -187,6 +187,70 @@ struct KeyPoint {
     pos: Pos2,
 }
 
+/// A Bézier-style handle of a selected Hermite key: a third of the way to the neighbouring key
+/// in time, along the key's tangent (value per second) of `component`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Handle {
+    key: KeyRef,
+    component: usize,
+    /// The out-tangent (towards the next key), or the in-tangent (towards the previous one).
+    outgoing: bool,
+    pos: Pos2,
+    /// The key's own point, and the seconds the handle spans (a third of the segment).
+    key_pos: Pos2,
+    seconds: f64,
+}
+
+/// The handles of the selected Hermite keys of position and scalar channels.
+fn handles(app: &EditorApp, plot: &Plot) -> Vec<Handle> {
+    let scene = app.doc.scene();
+    let fps = scene.fps.max(1e-9);
+    let mut out = Vec::new();
+    for &key in &app.session.selection.keys {
+        if key.channel.kind() == channels::ChannelKind::Rotation {
+            continue;
+        }
+        let times = channels::key_times(scene, key.channel);
+        let (Some(&t), Some(value)) =
+            (times.get(key.index), channels::key_value(scene, key.channel, key.index))
+        else {
+            continue;
+        };
+        let values: Vec<f32> = match value {
+            ChannelValue::Vec3(v) => v.to_array().to_vec(),
+            ChannelValue::Scalar(s) => vec![s],
+            ChannelValue::Rotation(_) => continue,
+        };
+        let (inn, outt) = channels::key_tangents(scene, key.channel, key.index);
+        let hermite = |i: usize| {
+            channels::key_params(scene, key.channel, i)
+                .is_some_and(|p| p.1 == keyrig_core::Interpolation::Hermite)
+        };
+        let mut add = |tangent: Option<Vec<f32>>, neighbour: Option<f64>, outgoing: bool| {
+            let (Some(tangent), Some(n)) = (tangent, neighbour) else { return };
+            let seconds = (n - t).abs() / 3.0;
+            let sign = if outgoing { 1.0 } else { -1.0 };
+            for (c, (&v, &m)) in values.iter().zip(&tangent).enumerate() {
+                out.push(Handle {
+                    key,
+                    component: c,
+                    outgoing,
+                    pos: plot.pos((t + sign * seconds) * fps, v + sign as f32 * m * seconds as f32),
+                    key_pos: plot.pos(t * fps, v),
+                    seconds,
+                });
+            }
+        };
+        if hermite(key.index) {
+            add(outt, times.get(key.index + 1).copied(), true);
+        }
+        if key.index > 0 && hermite(key.index - 1) {
+            add(inn, times.get(key.index - 1).copied(), false);
+        }
+    }
+    out
+}
+
 /// The curves of the shown channels over `[start, end]`, and the range of their values.
 fn curves_over(
     app: &EditorApp,
@@ -332,9 +396,20 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
         }
     }
     let press = ui.input(|i| i.pointer.press_origin());
+    let grips = handles(app, &plot);
+    let grip_at = |pos: Pos2| {
+        grips
+            .iter()
+            .map(|h| (h, h.pos.distance(pos)))
+            .filter(|(_, d)| *d <= PICK_RADIUS)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(h, _)| *h)
+    };
     if let Some(origin) = press.filter(|_| response.drag_started_by(egui::PointerButton::Primary)) {
         app.view.curves.gesture = if on_ruler(origin) {
             Some(CurveGesture::Scrub)
+        } else if let Some(grip) = grip_at(origin) {
+            Some(CurveGesture::Handle { key: grip.key, component: grip.component, outgoing: grip.outgoing })
         } else if let Some(point) = pick(origin) {
             if !app.session.selection.keys.contains(&point.key) {
                 select_key(app, point.key, additive);
@@ -402,10 +477,36 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 high: from.high + values,
             });
         }
-        Some(CurveGesture::MoveKeys { .. } | CurveGesture::Pan { .. }) | None => {}
+        Some(CurveGesture::Handle { key, component, outgoing }) if delta.is_some() => {
+            // The handle follows the pointer's value; its time stays a third of the segment.
+            let grip =
+                grips.iter().find(|h| h.key == key && h.component == component && h.outgoing == outgoing);
+            if let (Some(grip), Some(pointer)) = (grip, response.interact_pointer_pos()) {
+                let value_at = |y: f32| {
+                    view.low + (plot.rect.bottom() - y) / plot.rect.height().max(1.0) * (view.high - view.low)
+                };
+                let rise = value_at(pointer.y) - value_at(grip.key_pos.y);
+                let tangent = rise / grip.seconds.max(1e-9) as f32 * if outgoing { 1.0 } else { -1.0 };
+                app.doc.edit_continuous("curve handle", "drag tangent handle", |scene| {
+                    channels::set_tangent_component(
+                        scene,
+                        key.channel,
+                        key.index,
+                        outgoing,
+                        component,
+                        tangent,
+                    );
+                });
+            }
+        }
+        Some(CurveGesture::MoveKeys { .. } | CurveGesture::Pan { .. } | CurveGesture::Handle { .. })
+        | None => {}
     }
     if response.drag_stopped() {
-        if matches!(app.view.curves.gesture, Some(CurveGesture::MoveKeys { .. })) {
+        if matches!(
+            app.view.curves.gesture,
+            Some(CurveGesture::MoveKeys { .. } | CurveGesture::Handle { .. })
+        ) {
             app.doc.close_group();
         }
         app.view.curves.gesture = None;
@@ -447,6 +548,24 @@ fn key_menu_ui(ui: &mut Ui, app: &mut EditorApp) {
             });
             ui.close();
         }
+    }
+    let shapeable = keys.iter().any(|k| k.channel.kind() != channels::ChannelKind::Rotation);
+    if ui
+        .add_enabled(shapeable, egui::Button::new("Hermite handles (keeps the shape)"))
+        .on_hover_text("Explicit tangents to drag, equal to the curve's now (positions and scalars)")
+        .clicked()
+    {
+        app.doc.close_group();
+        app.doc.edit("interpolation Hermite handles", |scene| {
+            let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
+            for k in &keys {
+                by_channel.entry(k.channel).or_default().push(k.index);
+            }
+            for (id, indices) in by_channel {
+                channels::convert_to_hermite(scene, id, &indices);
+            }
+        });
+        ui.close();
     }
     ui.separator();
     if ui.button("Delete keys").clicked() {
@@ -755,6 +874,35 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
         } else {
             plot_painter.circle_filled(p.pos, 3.0, colour);
         }
+    }
+    for grip in handles(app, &plot) {
+        plot_painter.line_segment([grip.key_pos, grip.pos], Stroke::new(1.0, Color32::from_gray(200)));
+        plot_painter.circle(
+            grip.pos,
+            3.5,
+            Color32::from_gray(40),
+            Stroke::new(1.5, Color32::from_rgb(255, 200, 60)),
+        );
+        let side = if grip.outgoing { "out" } else { "in" };
+        let r = egui::Rect::from_center_size(grip.pos, Vec2::splat(2.0 * PICK_RADIUS));
+        ctx.accesskit_node_builder(
+            egui::Id::new(("curve handle", grip.key.channel, grip.key.index, grip.component, grip.outgoing)),
+            |node| {
+                node.set_role(egui::accesskit::Role::Button);
+                node.set_label(format!(
+                    "{side} handle {} {} key {}",
+                    grip.key.channel.label(scene),
+                    component_name(grip.key.channel, grip.component),
+                    grip.key.index
+                ));
+                node.set_bounds(egui::accesskit::Rect {
+                    x0: r.min.x.into(),
+                    y0: r.min.y.into(),
+                    x1: r.max.x.into(),
+                    y1: r.max.y.into(),
+                });
+            },
+        );
     }
     if let Some((_, axis)) = ids.iter().find_map(|&id| turn_axis(app, id)) {
         plot_painter.text(
