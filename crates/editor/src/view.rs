@@ -176,4 +176,6 @@ pub struct CurveViewState {
     pub(crate) gesture: Option<CurveGesture>,
     /// F was pressed over the curves: frame the selected keys when next laid out.
     pub(crate) frame_keys: bool,
+    /// Rotations drawn as their unwrapped twist about the bone axis instead of Euler angles.
+    pub rotation_as_twist: bool,
 }

@@ -186,9 +186,16 @@ fn hermite_handles_keep_the_shape_and_then_shape_the_curve() {
     let sample = |h: &Harness<'_, EditorApp>| -> Vec<glam::Vec3> {
         let scene = h.state().doc.scene();
         (0..=90)
-            .map(|f| match keyrig_editor::eval::channel_value(scene, cube, f64::from(f) / scene.fps, &Default::default()) {
-                Some(ChannelValue::Vec3(v)) => v,
-                other => panic!("a position, got {other:?}"),
+            .map(|f| {
+                match keyrig_editor::eval::channel_value(
+                    scene,
+                    cube,
+                    f64::from(f) / scene.fps,
+                    &Default::default(),
+                ) {
+                    Some(ChannelValue::Vec3(v)) => v,
+                    other => panic!("a position, got {other:?}"),
+                }
             })
             .collect()
     };
@@ -223,4 +230,26 @@ fn hermite_handles_keep_the_shape_and_then_shape_the_curve() {
     let later = (31..45).any(|f| shaped[f].y > after[f].y + 1e-3);
     assert!(later, "the curve after frame 30 rises with the handle");
     assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step for the handle drag");
+}
+
+/// "Twist about X" draws a rotation as one curve, its unwrapped twist about the bone axis: the
+/// demo forearm's half turn climbs to 180° (Euler X would read the same here, but a twist
+/// past a half turn keeps climbing instead of wrapping).
+#[test]
+fn rotations_can_be_drawn_as_their_twist() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let forearm = ChannelId::JointRotation { object: 0, joint: 2 };
+    h.get_by_label("key forearm rotation frame 60").click();
+    h.run();
+    assert_eq!(keyrig_editor::panels::curves::sample_curves(h.state(), forearm, 0.0, 90.0, 91).len(), 3);
+    h.get_by_label("Twist about X").click();
+    h.run();
+    assert!(h.state().view.curves.rotation_as_twist);
+    assert!(h.query_by_label("forearm rotation twist").is_some(), "the legend names the twist curve");
+    let curves = keyrig_editor::panels::curves::sample_curves(h.state(), forearm, 0.0, 90.0, 91);
+    assert_eq!(curves.len(), 1, "one curve: the twist");
+    let peak = curves[0].iter().map(|&(_, v)| v.abs()).fold(0.0f32, f32::max);
+    assert!((peak - 180.0).abs() < 0.5, "the twist peaks at a half turn: {peak}");
+    assert!(curves[0].windows(2).all(|w| (w[1].1 - w[0].1).abs() < 20.0), "continuous");
 }

@@ -13,6 +13,7 @@
 //! whole range, its repeats included; the stretches beyond its keys are shaded and named.
 
 use egui::{Align2, Color32, FontId, Pos2, Sense, Shape, Stroke, Ui, Vec2};
+use glam::Quat;
 
 use crate::app::EditorApp;
 use crate::channels::{self, ChannelId, ChannelValue};
@@ -72,12 +73,7 @@ pub fn sample_curves(
     let mut curves: Vec<Curve> = Vec::new();
     for i in 0..n {
         let frame = start + (end - start) * i as f64 / (n - 1) as f64;
-        let values: Vec<f32> = match tracks.value(id, frame / fps, &none) {
-            Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
-            Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
-            Some(ChannelValue::Scalar(s)) => vec![s],
-            None => Vec::new(),
-        };
+        let values = shown_components(app, tracks.value(id, frame / fps, &none));
         if curves.is_empty() {
             curves = vec![Vec::with_capacity(n); values.len()];
         }
@@ -94,7 +90,8 @@ pub fn sample_curves(
             curves[c].push((frame, v));
         }
     }
-    if let Some((track, axis)) = turn_axis(app, id) {
+    let twist_only = app.view.curves.rotation_as_twist;
+    if let Some((track, axis)) = turn_axis(app, id).filter(|_| !twist_only) {
         curves.push(
             (0..n)
                 .map(|i| {
@@ -105,6 +102,21 @@ pub fn sample_curves(
         );
     }
     curves
+}
+
+/// The numbers the curve view draws for a value: a vector's components, a scalar, and a
+/// rotation's XYZ Euler angles in degrees — or, with *Twist* chosen, its twist about the bone
+/// axis (X) in degrees (wrapped here; the curves unwrap it along time).
+fn shown_components(app: &EditorApp, value: Option<ChannelValue>) -> Vec<f32> {
+    match value {
+        Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
+        Some(ChannelValue::Rotation(q)) if app.view.curves.rotation_as_twist => {
+            vec![crate::twist::twist_degrees(q.as_dquat(), crate::twist::BONE_AXIS.as_dvec3()) as f32]
+        }
+        Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
+        Some(ChannelValue::Scalar(s)) => vec![s],
+        None => Vec::new(),
+    }
 }
 
 /// Width of the value ruler and height of the frame ruler, points.
@@ -303,12 +315,10 @@ fn key_points(app: &EditorApp, plot: &Plot, all: &[(ChannelId, Vec<Curve>)]) -> 
             channels::keys_between(scene, *id, plot.view.start / fps - 1e-9, plot.view.end / fps + 1e-9);
         for (i, time) in window.times.iter().enumerate() {
             let frame = time * fps;
-            let raw: Vec<f32> = match eval.value(*id, *time, &none) {
-                Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
-                Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
-                Some(ChannelValue::Scalar(s)) => vec![s],
-                None => continue,
-            };
+            let raw = shown_components(app, eval.value(*id, *time, &none));
+            if raw.is_empty() {
+                continue;
+            }
             for (c, raw) in raw.into_iter().enumerate() {
                 let Some(curve) = curves.get(c) else { continue };
                 // The sample nearest the key, to unwrap an Euler angle onto the curve.
@@ -602,6 +612,7 @@ fn select_key(app: &mut EditorApp, key: KeyRef, additive: bool) {
 /// rotations, degrees) as one continuous edit.
 fn shift_selected_values(app: &mut EditorApp, component: usize, delta: f32) {
     let keys: Vec<KeyRef> = app.session.selection.keys.iter().copied().collect();
+    let twist = app.view.curves.rotation_as_twist;
     let label =
         if keys.len() == 1 { "move key value".to_owned() } else { format!("move {} key values", keys.len()) };
     app.doc.edit_continuous("curve value", &label, |scene| {
@@ -614,7 +625,12 @@ fn shift_selected_values(app: &mut EditorApp, component: usize, delta: f32) {
                     ChannelValue::Vec3(v)
                 }
                 ChannelValue::Scalar(s) if component == 0 => ChannelValue::Scalar(s + delta),
-                ChannelValue::Rotation(q) if component < 3 => {
+                ChannelValue::Rotation(q) if twist && component == 0 => {
+                    // A twist about the bone axis, in the key's own frame.
+                    let turn = Quat::from_axis_angle(crate::twist::BONE_AXIS, delta.to_radians());
+                    ChannelValue::Rotation((q * turn).normalize())
+                }
+                ChannelValue::Rotation(q) if component < 3 && !twist => {
                     let mut e = euler_degrees(q);
                     e[component] += delta;
                     ChannelValue::Rotation(crate::eval::quat_from_euler_degrees(e))
@@ -662,31 +678,42 @@ fn zoom_and_pan(ui: &Ui, app: &mut EditorApp, plot: &Plot, pointer: Pos2) {
 }
 
 /// The legend: a swatch and name per shown curve.
-fn legend_ui(ui: &mut Ui, app: &EditorApp, ids: &[ChannelId]) {
-    let scene = app.doc.scene();
-    ui.horizontal_wrapped(|ui| {
-        for (n, &id) in ids.iter().enumerate() {
+fn legend_ui(ui: &mut Ui, app: &mut EditorApp, ids: &[ChannelId]) {
+    let entries: Vec<(ChannelId, String, usize)> = ids
+        .iter()
+        .map(|&id| {
             let components = match id.kind() {
                 channels::ChannelKind::Scalar => 1,
+                channels::ChannelKind::Rotation if app.view.curves.rotation_as_twist => 1,
                 _ if turn_axis(app, id).is_some() => 4,
                 _ => 3,
             };
+            (id, id.label(app.doc.scene()), components)
+        })
+        .collect();
+    ui.horizontal_wrapped(|ui| {
+        for (n, (id, label, components)) in entries.iter().enumerate() {
+            let (id, components) = (*id, *components);
             for c in 0..components {
                 let colour = curve_colour(n, c, components);
                 let (swatch, _) = ui.allocate_exact_size(Vec2::new(10.0, 10.0), Sense::hover());
                 ui.painter().rect_filled(swatch, 2.0, colour);
-                let name = format!("{} {}", id.label(scene), component_name(id, c)).trim_end().to_owned();
+                let name = if components == 1 && id.kind() == channels::ChannelKind::Rotation {
+                    format!("{label} twist")
+                } else {
+                    format!("{label} {}", component_name(id, c)).trim_end().to_owned()
+                };
                 ui.label(egui::RichText::new(name).small());
             }
         }
         if ids.iter().any(|id| id.kind() == channels::ChannelKind::Rotation) {
-            ui.label(
-                egui::RichText::new(format!(
-                    "(rotations: Euler {}, degrees)",
-                    crate::panels::inspector::EULER_ORDER
-                ))
-                .small()
-                .weak(),
+            let twist = &mut app.view.curves.rotation_as_twist;
+            let euler = format!("Euler {}", crate::panels::inspector::EULER_ORDER);
+            ui.label(egui::RichText::new("rotations:").small().weak());
+            ui.selectable_value(twist, false, egui::RichText::new(euler).small())
+                .on_hover_text("Rotations as Euler angles in this order, degrees, unwrapped along the curve");
+            ui.selectable_value(twist, true, egui::RichText::new("Twist about X").small()).on_hover_text(
+                "Rotations as their twist about the bone axis (X), degrees, unwrapped: a 720° twist climbs to 720",
             );
         }
     });
@@ -709,13 +736,7 @@ pub fn frame_selected_keys(app: &mut EditorApp) {
         let Some(&time) = channels::key_times(scene, k.channel).get(k.index) else { continue };
         f0 = f0.min(time * fps);
         f1 = f1.max(time * fps);
-        let values: Vec<f32> = match eval.value(k.channel, time, &none) {
-            Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
-            Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
-            Some(ChannelValue::Scalar(s)) => vec![s],
-            None => continue,
-        };
-        for v in values {
+        for v in shown_components(app, eval.value(k.channel, time, &none)) {
             v0 = v0.min(v);
             v1 = v1.max(v);
         }
