@@ -379,3 +379,81 @@ fn guide_screenshots_of_imported_models() {
         session.screenshot(name);
     }
 }
+
+/// How many pixels of `rect` differ between two screenshots.
+fn changed_pixels(a: &Path, b: &Path, rect: egui::Rect) -> usize {
+    let (a, b) = (image::open(a).expect("screenshot").to_rgb8(), image::open(b).expect("screenshot").to_rgb8());
+    let mut n = 0;
+    for y in rect.top().max(0.0) as u32..(rect.bottom() as u32).min(a.height()) {
+        for x in rect.left().max(0.0) as u32..(rect.right() as u32).min(a.width()) {
+            let (p, q) = (a.get_pixel(x, y).0, b.get_pixel(x, y).0);
+            if p.iter().zip(q).any(|(u, v)| u.abs_diff(v) > 24) {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// The animator's tools in the real window with real X input (docs/guide.md's screenshots):
+/// O shows onion-skin ghosts of the selected forearm's arm (the viewport changes), a click on a
+/// dope-sheet diamond shows its curves in the curve editor, and Shift+I then a drag of the
+/// wrist's handle poses the arm by IK (the viewport changes where the arm was).
+#[test]
+fn onion_skin_curve_editor_and_ik_posing_in_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+
+    // The forearm at frame 45.
+    let forearm = h.get_by_label("forearm").rect().center();
+    session.click(forearm);
+    h.get_by_label("forearm").click();
+    h.run();
+    session.xdo(&["key", "--clearmodifiers", "--delay", "60", "--repeat", "45", "Right"]);
+    common::go_to_frame(&mut h, 45);
+    let viewport = h.state().view.viewport_rect.expect("laid out");
+    let plain = session.screenshot("probe-onion-off");
+
+    // O: ghosts two and one frame steps before and after.
+    session.key("o");
+    std::thread::sleep(Duration::from_millis(400));
+    let ghosts = session.screenshot("guide_onion_skin");
+    let changed = changed_pixels(&plain, &ghosts, viewport);
+    assert!(changed > 2000, "O draws ghosts in the viewport: {changed} pixels changed");
+    session.key("o");
+    common::press(&mut h, Modifiers::NONE, egui::Key::O);
+    common::press(&mut h, Modifiers::NONE, egui::Key::O);
+
+    // The elbow's key at frame 30: its curves, in the curve editor.
+    let diamond = h.get_by_label("key elbow rotation frame 30").rect().center();
+    session.click(diamond);
+    h.get_by_label("key elbow rotation frame 30").click();
+    h.run();
+    std::thread::sleep(Duration::from_millis(300));
+    let curves_rect = h.state().view.curves_rect.expect("the curve editor is laid out");
+    let with_curves = session.screenshot("guide_curve_editor");
+    let drawn = changed_pixels(&ghosts, &with_curves, curves_rect);
+    assert!(drawn > 500, "the curve editor draws the elbow's curves: {drawn} pixels changed");
+
+    // IK: the wrist, Shift+I, and a drag of its handle towards the elbow and across.
+    let wrist = h.get_by_label("wrist").rect().center();
+    session.click(wrist);
+    h.get_by_label("wrist").click();
+    h.run();
+    session.key("shift+i");
+    common::press(&mut h, Modifiers::SHIFT, egui::Key::I);
+    assert!(h.state().session.ik.enabled);
+    let before_ik = session.screenshot("probe-ik-before");
+    let start = wrist_on_screen(h.state());
+    let path: Vec<Pos2> = (0..=10).map(|i| start + egui::vec2(-6.0, -9.0) * i as f32).collect();
+    session.drag(&path);
+    model_drag(&mut h, &path);
+    std::thread::sleep(Duration::from_millis(300));
+    let after_ik = session.screenshot("guide_ik_posing");
+    let moved = changed_pixels(&before_ik, &after_ik, viewport);
+    assert!(moved > 1000, "the arm follows the IK handle: {moved} pixels changed");
+    let landed = wrist_on_screen(h.state());
+    assert!((landed - path[10]).length() < 1.0, "the model's wrist is under the pointer: {landed:?}");
+}
