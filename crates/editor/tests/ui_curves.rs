@@ -47,7 +47,7 @@ fn with_elbow_key() -> (tempfile::TempDir, Harness<'static, EditorApp>) {
 fn dragging_a_curve_key_changes_its_value_then_its_time_one_undo_step_each() {
     let (_dir, mut h) = with_elbow_key();
     let original = h.state().doc.scene().clone();
-    // The key at frame 15 (45° about Y: away from the XYZ order's gimbal lock at 90°).
+    // The key at frame 15 (the elbow bent 45° about −Z).
     let x_before = elbow_x_at_key(&h, 1);
     let key = h.get_by_label("curve key elbow rotation X frame 15").rect().center();
     // Up by 40 points: the X angle grows, the key stays at frame 15.
