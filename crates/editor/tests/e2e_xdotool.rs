@@ -382,7 +382,8 @@ fn guide_screenshots_of_imported_models() {
 
 /// How many pixels of `rect` differ between two screenshots.
 fn changed_pixels(a: &Path, b: &Path, rect: egui::Rect) -> usize {
-    let (a, b) = (image::open(a).expect("screenshot").to_rgb8(), image::open(b).expect("screenshot").to_rgb8());
+    let (a, b) =
+        (image::open(a).expect("screenshot").to_rgb8(), image::open(b).expect("screenshot").to_rgb8());
     let mut n = 0;
     for y in rect.top().max(0.0) as u32..(rect.bottom() as u32).min(a.height()) {
         for x in rect.left().max(0.0) as u32..(rect.right() as u32).min(a.width()) {
