@@ -458,3 +458,27 @@ fn onion_skin_curve_editor_and_ik_posing_in_a_real_x_window() {
     let landed = wrist_on_screen(h.state());
     assert!((landed - path[10]).length() < 1.0, "the model's wrist is under the pointer: {landed:?}");
 }
+
+/// assets/cycle.ron in the real window: a click on the elbow's key at frame 15 shows its
+/// channel in the curve editor, repeated before and after its keys (docs/guide.md, "Cycles").
+#[test]
+fn a_cycle_in_the_curve_editor_of_a_real_x_window() {
+    let session = Session::new();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cycle.ron");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", scene.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(scene.clone()));
+    let before = session.screenshot("probe-cycle-before");
+    let diamond = h.get_by_label("key elbow rotation frame 15").rect().center();
+    session.click(diamond);
+    h.get_by_label("key elbow rotation frame 15").click();
+    h.run();
+    std::thread::sleep(Duration::from_millis(300));
+    let after = session.screenshot("guide_cycles");
+    let curves = h.state().view.curves_rect.expect("the curve editor is laid out");
+    let drawn = changed_pixels(&before, &after, curves);
+    assert!(drawn > 500, "the curve editor draws the cycled channel: {drawn} pixels changed");
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let cycles = channels::cycles(h.state().doc.scene(), elbow).expect("the elbow's channel");
+    assert!(!cycles.is_hold(), "the elbow's keys repeat: {cycles:?}");
+}
