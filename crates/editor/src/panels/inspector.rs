@@ -444,15 +444,18 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
             if mixed_bias { "Bias (mixed)" } else { "Bias" },
             "Bias: −1 anticipates (overshoots before), +1 overshoots after the key",
         );
-        ui.checkbox(&mut tcb.clamped, if mixed_clamped { "Clamped (mixed)" } else { "Clamped" })
-            .on_hover_text(
-                "Keep the curve from overshooting this key: flat at a peak, a dip or a neighbour of \
-             the same value (two equal keys hold their value between them), limited elsewhere \
-             (Blender's auto-clamped handles)",
-            );
-        if ui.button("Reset T/C/B").on_hover_text("Catmull–Rom / Shoemake squad").clicked() {
-            tcb = Tcb::ZERO;
-        }
+        // On one line with the reset, so the key section keeps its height.
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut tcb.clamped, if mixed_clamped { "Clamped (mixed)" } else { "Clamped" })
+                .on_hover_text(
+                    "Keep the curve from overshooting this key: flat at a peak, a dip or a neighbour \
+                     of the same value (two equal keys hold their value between them), limited \
+                     elsewhere (Blender's auto-clamped handles)",
+                );
+            if ui.button("Reset T/C/B").on_hover_text("Catmull–Rom / Shoemake squad").clicked() {
+                tcb = Tcb::ZERO;
+            }
+        });
     });
     if (mode, tcb) != before {
         let label = if keys.len() == 1 { "edit key".to_owned() } else { format!("edit {} keys", keys.len()) };
