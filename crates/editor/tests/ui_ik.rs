@@ -287,7 +287,7 @@ fn zero_bone_scene() -> Scene {
         Joint::new("hand", Some(1), Vec3::ZERO, Quat::IDENTITY),
     ];
     let mut rig = Object::new("Rig");
-    rig.skeleton = Some(Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) });
+    rig.skeleton = Some(Skeleton::new(joints));
     Scene { objects: vec![rig], ..Scene::default() }
 }
 

@@ -73,7 +73,7 @@ pub fn arm_rest_skeleton() -> Skeleton {
             Joint::new(*name, i.checked_sub(1), rest_translation, Quat::IDENTITY)
         })
         .collect();
-    Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
+    Skeleton::new(joints)
 }
 
 /// Builds the demo scene (frames 0–90 at 30 fps, 3 s).
