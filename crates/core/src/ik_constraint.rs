@@ -199,10 +199,28 @@ impl ConstraintChain {
             ik::solve_fabrik(&chain, target, Some(pole), &FabrikSettings::default(), &mut out)?
         };
         for (i, &j) in self.turned_joints().iter().enumerate() {
-            pose.rotations[j] = if w >= 1.0 { out[i] } else { fk[i].slerp(out[i], w).normalize() };
+            pose.rotations[j] = if w >= 1.0 { out[i] } else { slerp(fk[i], out[i], w) };
         }
         Ok(Some(report))
     }
+}
+
+/// `slerp(a, b, w)` the short way, in f64 and by the relative rotation's angle from `atan2`:
+/// glam's f32 slerp takes that angle from an approximate `acos` of the dot product, which is off
+/// by a good part of it for angles below ~1e-3 rad.
+fn slerp(a: Quat, b: Quat, w: f32) -> Quat {
+    let (a, b) = (a.as_dquat(), b.as_dquat());
+    let mut d = a.conjugate() * b;
+    if d.w < 0.0 {
+        d = -d;
+    }
+    let xyz = glam::DVec3::new(d.x, d.y, d.z);
+    let sin_half = xyz.length();
+    if sin_half == 0.0 {
+        return a.as_quat();
+    }
+    let angle = 2.0 * sin_half.atan2(d.w);
+    (a * glam::DQuat::from_axis_angle(xyz / sin_half, angle * f64::from(w))).normalize().as_quat()
 }
 
 /// The side the chain bends to in its FK pose (target space, unit): the sum of the inner

@@ -68,3 +68,25 @@ fn the_wrist_follows_the_repeating_target() {
         assert!(a.distance(b) < 1e-5, "t = {t}: {a:?} vs {b:?}");
     }
 }
+
+/// A skeleton without constraints writes no `ik_constraints` field (every older file saves
+/// byte-for-byte as before); the blend may be left out of a file (it is then 1, fully IK), and
+/// the fast reader and `ron` read a constraint to the same value.
+#[test]
+fn constraints_are_written_only_when_present() {
+    let mut scene = ik_scene();
+    let text = scene_file::to_string(&scene).expect("serializes");
+    let reach = &scene.objects[0].skeleton.as_ref().expect("a skeleton").ik_constraints[0];
+    let short = text.replace(
+        "                            blend: (\n                                value: 0.0,\n                                track: [\n                                    (time: 0.0, value: 0.0, interpolation: Linear),\n                                    (time: 0.5, value: 1.0),\n                                ],\n                            ),\n",
+        "",
+    );
+    assert_ne!(short, text);
+    let read = scene_file::from_str(&short, Path::new("short.ron")).expect("reads without a blend");
+    let read_reach = &read.objects[0].skeleton.as_ref().expect("a skeleton").ik_constraints[0];
+    assert_eq!(read_reach.blend, keyrig_core::Animated::constant(1.0));
+    assert_eq!(read_reach.target, reach.target);
+    scene.objects[0].skeleton.as_mut().expect("a skeleton").ik_constraints.clear();
+    let plain = scene_file::to_string(&scene).expect("serializes");
+    assert!(!plain.contains("ik_constraints"), "{plain}");
+}
