@@ -106,7 +106,7 @@ impl ConstraintChain {
         let lengths: Vec<f32> = chain[1..].iter().map(|&j| rest[j].0.length()).collect();
         let longest = lengths.iter().copied().fold(0.0, f32::max);
         for (i, &length) in lengths.iter().enumerate() {
-            if !(length > longest * ik::MIN_BONE_LENGTH_RATIO as f32) {
+            if length.is_nan() || length <= longest * ik::MIN_BONE_LENGTH_RATIO as f32 {
                 let joint = chain[i + 1];
                 return Err(ConstraintError::ZeroLengthBone {
                     joint,

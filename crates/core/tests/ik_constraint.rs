@@ -35,10 +35,13 @@ fn a_valid_constraint_has_no_problems() {
     assert_eq!(problems(&scene()), Vec::<String>::new());
 }
 
+/// A change that breaks one thing of the scene.
+type Breaker = Box<dyn Fn(&mut Scene)>;
+
 #[test]
 fn every_problem_names_its_field() {
     let at = "objects[0].skeleton.ik_constraints[0]";
-    let cases: Vec<(Box<dyn Fn(&mut Scene)>, String)> = vec![
+    let cases: Vec<(Breaker, String)> = vec![
         (Box::new(|s| reach(s).end = 9), format!("{at}.end: end joint 9 is outside the skeleton (4 joints)")),
         (
             Box::new(|s| reach(s).bones = 1),

@@ -572,7 +572,7 @@ impl SceneEvaluator {
                     Some(ChannelValue::Scalar(v)) => *v,
                     _ => constraint.blend.sample(time),
                 };
-                if !(blend > 0.0) {
+                if blend.is_nan() || blend <= 0.0 {
                     continue;
                 }
                 let target = vec3(ChannelId::IkTarget { object: o, constraint: c }, &constraint.target);
