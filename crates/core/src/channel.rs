@@ -9,6 +9,8 @@
 //! object/<object>/joint/<joint>/rotation     Quat   the rotation of a joint's local transform T(j)
 //! object/<object>/joint/<joint>/translation  Vec3   the translation of T(j) (imported characters)
 //! object/<object>/joint/<joint>/scale        Vec3   the scale of T(j)
+//! object/<object>/ik/<constraint>/target     Vec3   an IK constraint's target (object space)
+//! object/<object>/ik/<constraint>/blend      f32    an IK constraint's IK/FK blend (0 FK, 1 IK)
 //! light/<light>/position             Vec3
 //! light/<light>/direction            Vec3
 //! light/<light>/colour               Vec3   linear RGB
@@ -30,9 +32,12 @@ use crate::track::{AnimatedTrack, TrackError};
 use crate::validate::track_error_path;
 
 /// Properties of an object.
-pub const OBJECT_PROPERTIES: [&str; 5] = ["translation", "rotation", "scale", "root_translation", "joint"];
+pub const OBJECT_PROPERTIES: [&str; 6] =
+    ["translation", "rotation", "scale", "root_translation", "joint", "ik"];
 /// Properties of a joint.
 pub const JOINT_PROPERTIES: [&str; 3] = ["translation", "rotation", "scale"];
+/// Properties of an IK constraint.
+pub const IK_PROPERTIES: [&str; 2] = ["target", "blend"];
 /// Properties of a light.
 pub const LIGHT_PROPERTIES: [&str; 4] = ["position", "direction", "colour", "intensity"];
 
@@ -76,6 +81,23 @@ impl JointProperty {
     }
 }
 
+/// One animated value of an IK constraint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum IkProperty {
+    Target,
+    Blend,
+}
+
+impl IkProperty {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            IkProperty::Target => "target",
+            IkProperty::Blend => "blend",
+        }
+    }
+}
+
 /// One animated value of a light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LightProperty {
@@ -102,6 +124,7 @@ impl LightProperty {
 pub enum ChannelPath {
     Object { object: String, property: ObjectProperty },
     Joint { object: String, joint: String, property: JointProperty },
+    Ik { object: String, constraint: String, property: IkProperty },
     Light { light: String, property: LightProperty },
 }
 
@@ -111,6 +134,9 @@ impl fmt::Display for ChannelPath {
             ChannelPath::Object { object, property } => write!(f, "object/{object}/{}", property.name()),
             ChannelPath::Joint { object, joint, property } => {
                 write!(f, "object/{object}/joint/{joint}/{}", property.name())
+            }
+            ChannelPath::Ik { object, constraint, property } => {
+                write!(f, "object/{object}/ik/{constraint}/{}", property.name())
             }
             ChannelPath::Light { light, property } => write!(f, "light/{light}/{}", property.name()),
         }
@@ -133,7 +159,7 @@ pub enum ChannelError {
     UnknownObject { path: String, name: String, available: Vec<String> },
 
     #[error(
-        "channel path {path:?}: object {object:?} has no skeleton, so it has no joints or root_translation"
+        "channel path {path:?}: object {object:?} has no skeleton, so it has no joints, root_translation or IK constraints"
     )]
     NoSkeleton { path: String, object: String },
 
@@ -142,6 +168,12 @@ pub enum ChannelError {
         listing("joints", available)
     )]
     UnknownJoint { path: String, object: String, name: String, available: Vec<String> },
+
+    #[error(
+        "channel path {path:?}: object {object:?} has no IK constraint named {name:?}; {}",
+        listing("IK constraints", available)
+    )]
+    UnknownConstraint { path: String, object: String, name: String, available: Vec<String> },
 
     #[error("channel path {path:?}: no light named {name:?}; {}", listing("lights", available))]
     UnknownLight { path: String, name: String, available: Vec<String> },
@@ -161,8 +193,8 @@ fn listing(what: &str, names: &[String]) -> String {
 }
 
 impl ChannelPath {
-    /// Parses `object/<name>/<property>`, `object/<name>/joint/<joint>/<property>` or
-    /// `light/<name>/<property>`. Names cannot contain `/`.
+    /// Parses `object/<name>/<property>`, `object/<name>/joint/<joint>/<property>`,
+    /// `object/<name>/ik/<constraint>/<property>` or `light/<name>/<property>`. Names cannot contain `/`.
     ///
     /// # Errors
     /// [`ChannelError::Syntax`] or [`ChannelError::UnknownProperty`], naming what is wrong.
@@ -196,6 +228,28 @@ impl ChannelPath {
             }
             ["object", _, "joint", ..] => {
                 Err(syntax("a joint channel is object/<name>/joint/<joint>/<property>"))
+            }
+            ["object", object, "ik", constraint, property] => {
+                let property = match *property {
+                    "target" => IkProperty::Target,
+                    "blend" => IkProperty::Blend,
+                    other => {
+                        return Err(ChannelError::UnknownProperty {
+                            path: path.to_string(),
+                            owner: "IK constraint",
+                            property: other.to_string(),
+                            expected: IK_PROPERTIES.to_vec(),
+                        })
+                    }
+                };
+                Ok(ChannelPath::Ik {
+                    object: (*object).to_string(),
+                    constraint: (*constraint).to_string(),
+                    property,
+                })
+            }
+            ["object", _, "ik", ..] => {
+                Err(syntax("an IK constraint channel is object/<name>/ik/<constraint>/<property>"))
             }
             ["object", object, property] => {
                 let property = match *property {
@@ -285,6 +339,23 @@ impl ChannelPath {
                     JointProperty::Scale => ChannelId::JointScale { object: i, joint: j },
                 }
             }
+            ChannelPath::Ik { object, constraint, property } => {
+                let (i, o) = find_object(object)?;
+                let skeleton = o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
+                let c =
+                    skeleton.ik_constraints.iter().position(|c| c.name == *constraint).ok_or_else(|| {
+                        ChannelError::UnknownConstraint {
+                            path: path.clone(),
+                            object: o.name.clone(),
+                            name: constraint.clone(),
+                            available: skeleton.ik_constraints.iter().map(|c| c.name.clone()).collect(),
+                        }
+                    })?;
+                match property {
+                    IkProperty::Target => ChannelId::IkTarget { object: i, constraint: c },
+                    IkProperty::Blend => ChannelId::IkBlend { object: i, constraint: c },
+                }
+            }
             ChannelPath::Light { light, property } => {
                 let i = scene.lights.iter().position(|l| l.name == *light).ok_or_else(|| {
                     ChannelError::UnknownLight {
@@ -350,6 +421,15 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
                 out.push(joint(JointProperty::Rotation));
                 if j.scale.is_animated() || j.scale.value != Vec3::ONE {
                     out.push(joint(JointProperty::Scale));
+                }
+            }
+            for c in &skeleton.ik_constraints {
+                for property in [IkProperty::Target, IkProperty::Blend] {
+                    out.push(ChannelPath::Ik {
+                        object: o.name.clone(),
+                        constraint: c.name.clone(),
+                        property,
+                    });
                 }
             }
         }
@@ -514,6 +594,7 @@ mod tests {
                 ..Joint::new("elbow", None, Vec3::ZERO, Quat::IDENTITY)
             }],
             root_translation: Animated::constant(Vec3::ZERO),
+            ik_constraints: Vec::new(),
         });
         let mut scene = Scene::default();
         scene.objects.push(arm);

@@ -45,6 +45,16 @@ pub enum ChannelId {
     LightDirection(usize),
     LightColour(usize),
     LightIntensity(usize),
+    /// The target of a skeleton's IK constraint (object space).
+    IkTarget {
+        object: usize,
+        constraint: usize,
+    },
+    /// The IK/FK blend of a skeleton's IK constraint (0 = FK, 1 = IK).
+    IkBlend {
+        object: usize,
+        constraint: usize,
+    },
 }
 
 /// What kind of value a channel holds.
@@ -60,7 +70,7 @@ impl ChannelId {
     pub fn kind(self) -> ChannelKind {
         match self {
             ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } => ChannelKind::Rotation,
-            ChannelId::LightIntensity(_) => ChannelKind::Scalar,
+            ChannelId::LightIntensity(_) | ChannelId::IkBlend { .. } => ChannelKind::Scalar,
             _ => ChannelKind::Vec3,
         }
     }
@@ -77,6 +87,8 @@ impl ChannelId {
             ChannelId::LightDirection(_) => "direction",
             ChannelId::LightColour(_) => "colour",
             ChannelId::LightIntensity(_) => "intensity",
+            ChannelId::IkTarget { .. } => "IK target",
+            ChannelId::IkBlend { .. } => "IK blend",
         }
     }
 
@@ -102,6 +114,12 @@ impl ChannelId {
             ChannelId::LightDirection(l) => format!("lights[{l}].direction"),
             ChannelId::LightColour(l) => format!("lights[{l}].colour"),
             ChannelId::LightIntensity(l) => format!("lights[{l}].intensity"),
+            ChannelId::IkTarget { object, constraint } => {
+                format!("objects[{object}].skeleton.ik_constraints[{constraint}].target")
+            }
+            ChannelId::IkBlend { object, constraint } => {
+                format!("objects[{object}].skeleton.ik_constraints[{constraint}].blend")
+            }
         }
     }
 
@@ -114,7 +132,7 @@ impl ChannelId {
     /// The channels of an object (its transform, skeleton root and joints), in display order.
     /// Every joint has its rotation; its translation and scale are listed only where they are
     /// keyed or not the identity (imported characters), so keyrig's own rigs show one row per
-    /// joint.
+    /// joint. Each IK constraint adds its target and blend after the joints.
     #[must_use]
     pub fn of_object(scene: &Scene, object: usize) -> Vec<ChannelId> {
         let mut out = vec![
@@ -132,6 +150,10 @@ impl ChannelId {
                 if j.scale.is_animated() || j.scale.value != Vec3::ONE {
                     out.push(ChannelId::JointScale { object, joint });
                 }
+            }
+            for constraint in 0..skeleton.ik_constraints.len() {
+                out.push(ChannelId::IkTarget { object, constraint });
+                out.push(ChannelId::IkBlend { object, constraint });
             }
         }
         out
@@ -177,6 +199,9 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
         | ChannelId::LightDirection(l)
         | ChannelId::LightColour(l)
         | ChannelId::LightIntensity(l) => scene.lights.get(l)?.name.clone(),
+        ChannelId::IkTarget { object, constraint } | ChannelId::IkBlend { object, constraint } => {
+            scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.name.clone()
+        }
     })
 }
 
@@ -244,6 +269,12 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::LightDirection(l) => ChannelRef::Vec3(&scene.lights.get(l)?.direction),
         ChannelId::LightColour(l) => ChannelRef::Vec3(&scene.lights.get(l)?.colour),
         ChannelId::LightIntensity(l) => ChannelRef::Scalar(&scene.lights.get(l)?.intensity),
+        ChannelId::IkTarget { object, constraint } => ChannelRef::Vec3(
+            &scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.target,
+        ),
+        ChannelId::IkBlend { object, constraint } => ChannelRef::Scalar(
+            &scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.blend,
+        ),
     })
 }
 
@@ -270,5 +301,11 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::LightDirection(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.direction),
         ChannelId::LightColour(l) => ChannelMut::Vec3(&mut scene.lights.get_mut(l)?.colour),
         ChannelId::LightIntensity(l) => ChannelMut::Scalar(&mut scene.lights.get_mut(l)?.intensity),
+        ChannelId::IkTarget { object, constraint } => ChannelMut::Vec3(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.ik_constraints.get_mut(constraint)?.target,
+        ),
+        ChannelId::IkBlend { object, constraint } => ChannelMut::Scalar(
+            &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.ik_constraints.get_mut(constraint)?.blend,
+        ),
     })
 }

@@ -4,6 +4,7 @@
 pub mod channel;
 pub mod channel_id;
 pub mod ik;
+pub mod ik_constraint;
 pub mod key;
 pub mod material;
 pub mod quat;
@@ -14,8 +15,8 @@ pub mod validate;
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use scene::{
-    Camera, DeformerKind, DeformerSettings, FrameRange, Joint, Light, LightKind, MeshSource, Object, Problem,
-    ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
+    Camera, DeformerKind, DeformerSettings, FrameRange, IkConstraint, Joint, Light, LightKind, MeshSource,
+    Object, Problem, ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
 };
 pub use track::{
     check_cycles, AnimatedTrack, SpinProblem, TangentSide, Track, TrackEnd, TrackError, TrackValue,

@@ -142,6 +142,67 @@ pub struct Skeleton {
     /// translation.
     #[serde(default = "zero_translation")]
     pub root_translation: Animated<Vec3>,
+    /// IK constraints solved every frame after forward kinematics, in order (docs/ik.md, "IK
+    /// constraints"). Left out of a scene file while empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ik_constraints: Vec<IkConstraint>,
+}
+
+impl Skeleton {
+    /// A skeleton with these joints, no root translation and no IK constraints.
+    #[must_use]
+    pub fn new(joints: Vec<Joint>) -> Self {
+        Skeleton { joints, root_translation: zero_translation(), ik_constraints: Vec::new() }
+    }
+}
+
+/// An IK constraint (Blender's IK constraint, Maya's IK handle): the chain of `bones` bones that
+/// ends at joint `end` is solved every frame so that `end` reaches `target`, and the solved
+/// local rotations are blended with the keyed (FK) ones by `blend`.
+///
+/// The chain's joints are `end`, its parent, … up `bones` parents; every joint of the chain but
+/// `end` is turned (the end joint keeps its own rotation, so the hand turns with the forearm).
+/// Two bones are solved analytically, longer chains by FABRIK (`keyrig_core::ik`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IkConstraint {
+    /// Shown in the editor and used in channel paths (`object/Arm/ik/<name>/target`).
+    pub name: String,
+    /// Index of the joint put on the target (the hand).
+    pub end: usize,
+    /// Bones of the chain (at least 2): 2 is shoulder–elbow–wrist, solved analytically.
+    pub bones: usize,
+    /// Where the end joint goes, in the object's space (before the object's transform, the
+    /// space the skeleton's root translation is in).
+    pub target: Animated<Vec3>,
+    /// A point in the object's space the chain bends towards (Maya's pole vector, Blender's pole
+    /// target); `None` bends the chain the way its keyed pose bends.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pole: Option<Vec3>,
+    /// IK/FK blend in [0, 1]: 0 shows the keyed rotations (FK), 1 the solved ones, in between
+    /// each joint's rotation is the slerp of the two.
+    #[serde(default = "full_blend")]
+    pub blend: Animated<f32>,
+}
+
+fn full_blend() -> Animated<f32> {
+    Animated::constant(1.0)
+}
+
+impl IkConstraint {
+    /// A constraint named `name` on the chain of `bones` bones ending at `end`, with a fixed
+    /// target, no pole and the blend at 1 (fully IK).
+    #[must_use]
+    pub fn new(name: impl Into<String>, end: usize, bones: usize, target: Vec3) -> Self {
+        IkConstraint {
+            name: name.into(),
+            end,
+            bones,
+            target: Animated::constant(target),
+            pole: None,
+            blend: full_blend(),
+        }
+    }
 }
 
 fn zero_translation() -> Animated<Vec3> {
@@ -390,6 +451,11 @@ impl Scene {
             if let Some(skeleton) = &object.skeleton {
                 let their_skeleton = theirs.and_then(|t| t.skeleton.as_ref());
                 bytes += cost(&skeleton.root_translation, their_skeleton.map(|s| &s.root_translation));
+                for (c, constraint) in skeleton.ik_constraints.iter().enumerate() {
+                    let theirs = their_skeleton.and_then(|s| s.ik_constraints.get(c));
+                    bytes += cost(&constraint.target, theirs.map(|t| &t.target))
+                        + cost(&constraint.blend, theirs.map(|t| &t.blend));
+                }
                 for (j, joint) in skeleton.joints.iter().enumerate() {
                     let their_joint = their_skeleton.and_then(|s| s.joints.get(j));
                     bytes += cost(&joint.translation, their_joint.map(|t| &t.translation))

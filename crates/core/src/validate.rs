@@ -24,14 +24,19 @@
 //! 8. Camera: distance > 0, 0 < fov < 180; deformer blend fractions in [0, 1].
 //! 9. A model file mesh: a non-empty path; an MD2 clip name, when given, not empty; an MD2
 //!    playback rate, when given, finite and > 0.
+//! 10. IK constraints: a unique, non-empty name per skeleton; an end joint inside the skeleton
+//!     with at least `bones` ≥ 2 joints above it and no zero-length bone at rest
+//!     ([`crate::ik_constraint::ConstraintChain::new`]); a finite target and pole; the blend's
+//!     value and keys in [0, 1].
 
 use std::collections::HashMap;
 
 use glam::{Quat, Vec3};
 
+use crate::ik_constraint::{ConstraintChain, ConstraintError};
 use crate::key::{Animated, Interpolation, RawTrack, Spin};
 use crate::scene::{
-    Camera, DeformerSettings, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
+    Camera, DeformerSettings, IkConstraint, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
 };
 #[cfg(doc)]
 use crate::track::AnimatedTrack;
@@ -392,6 +397,43 @@ impl Checker {
             skeleton.joints.iter().enumerate().map(|(i, j)| (join(&jp(i), "name"), j.name.as_str())),
         );
         self.animated(&join(path, "root_translation"), &skeleton.root_translation);
+        let cp = |i: usize| format!("{path}.ik_constraints[{i}]");
+        for (i, constraint) in skeleton.ik_constraints.iter().enumerate() {
+            self.ik_constraint(&cp(i), skeleton, constraint);
+        }
+        self.unique_names(
+            "IK constraint",
+            skeleton.ik_constraints.iter().enumerate().map(|(i, c)| (join(&cp(i), "name"), c.name.as_str())),
+        );
+    }
+
+    fn ik_constraint(&mut self, path: &str, skeleton: &Skeleton, c: &IkConstraint) {
+        if let Err(e) = ConstraintChain::new(skeleton, c) {
+            let field = match e {
+                ConstraintError::EndOutOfRange { .. } => "end",
+                ConstraintError::TooFewBones { .. } | ConstraintError::ChainTooLong { .. } => "bones",
+                _ => "",
+            };
+            self.push(join(path, field), e.to_string());
+        }
+        self.animated(&join(path, "target"), &c.target);
+        if let Some(pole) = &c.pole {
+            self.value(&join(path, "pole"), pole);
+        }
+        self.animated(&join(path, "blend"), &c.blend);
+        let blends = std::iter::once((join(path, "blend.value"), c.blend.value)).chain(
+            c.blend
+                .track
+                .keys
+                .iter()
+                .enumerate()
+                .map(|(i, k)| (format!("{path}.blend.track[{i}].value"), k.value)),
+        );
+        for (p, v) in blends {
+            if v.is_finite() && !(0.0..=1.0).contains(&v) {
+                self.push(p, format!("IK/FK blend {v} is outside [0, 1] (0 = keyed FK, 1 = IK)"));
+            }
+        }
     }
 
     fn deformer(&mut self, path: &str, d: &DeformerSettings) {
@@ -647,6 +689,7 @@ mod tests {
                 joint("d", None),
             ],
             root_translation: Animated::constant(Vec3::ZERO),
+            ik_constraints: Vec::new(),
         });
         s.objects.push(o);
         s.objects.push(Object::new("Arm"));

@@ -17,7 +17,7 @@ fn twist() -> Scene {
         ]),
     );
     let mut arm = Object::new("Arm");
-    arm.skeleton = Some(Skeleton { joints: vec![forearm], root_translation: Animated::constant(Vec3::ZERO) });
+    arm.skeleton = Some(Skeleton::new(vec![forearm]));
     arm.translation.track = RawTrack::new(vec![Key::new(1.0, Vec3::ZERO), Key::new(3.0, Vec3::X)]);
     let mut scene = Scene::default();
     scene.objects.push(arm);
@@ -64,6 +64,7 @@ fn joint_translation_and_scale_are_listed_when_keyed_or_not_at_rest() {
     arm.skeleton = Some(Skeleton {
         joints: vec![Joint::new("root", None, Vec3::ZERO, Quat::IDENTITY), keyed, moved],
         root_translation: Animated::constant(Vec3::ZERO),
+        ik_constraints: Vec::new(),
     });
     let mut scene = Scene::default();
     scene.objects.push(arm);

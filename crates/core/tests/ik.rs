@@ -800,7 +800,7 @@ fn chain_joints_walks_from_the_end_up_to_the_root() {
     for (name, parent) in [("spine", 0), ("shoulder", 1), ("elbow", 2), ("hand", 3), ("thigh", 0)] {
         joints.push(Joint::new(name, Some(parent), Vec3::X, Quat::IDENTITY));
     }
-    let skeleton = Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) };
+    let skeleton = Skeleton::new(joints);
     assert_eq!(chain_joints(&skeleton, 2, 4), Ok(vec![2, 3, 4]));
     assert_eq!(chain_joints(&skeleton, 0, 4), Ok(vec![0, 1, 2, 3, 4]));
     assert_eq!(chain_joints(&skeleton, 3, 4), Err(IkError::ChainTooShort { joints: 2 }));

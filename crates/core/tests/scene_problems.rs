@@ -19,6 +19,7 @@ fn base() -> Scene {
             Joint::new("lower", Some(0), Vec3::X, Quat::IDENTITY),
         ],
         root_translation: Animated::constant(Vec3::ZERO),
+        ik_constraints: Vec::new(),
     });
     scene.objects.push(arm);
     scene.lights.push(Light {

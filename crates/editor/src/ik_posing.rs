@@ -435,7 +435,7 @@ mod tests {
         joints[1].rotation = Animated::constant(Quat::from_rotation_z(-std::f32::consts::FRAC_PI_2));
         let mut object = Object::new("Arm");
         object.translation = Animated::constant(at);
-        object.skeleton = Some(Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) });
+        object.skeleton = Some(Skeleton::new(joints));
         Scene { objects: vec![object], ..Scene::default() }
     }
 

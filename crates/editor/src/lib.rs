@@ -23,6 +23,7 @@ pub mod files;
 pub mod fonts;
 pub mod frame_bench;
 pub mod gpu_view;
+pub mod ik_constraints;
 pub mod ik_posing;
 pub mod mirror;
 pub mod onion;

@@ -316,6 +316,7 @@ pub fn owner_of(channel: ChannelId) -> Selected {
         | ChannelId::LightDirection(l)
         | ChannelId::LightColour(l)
         | ChannelId::LightIntensity(l) => Selected::Light(l),
+        ChannelId::IkTarget { object, .. } | ChannelId::IkBlend { object, .. } => Selected::Object(object),
     }
 }
 
@@ -347,6 +348,12 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         (C::LightDirection(l), Selected::Light(r)) => C::LightDirection(shift(l, r)?),
         (C::LightColour(l), Selected::Light(r)) => C::LightColour(shift(l, r)?),
         (C::LightIntensity(l), Selected::Light(r)) => C::LightIntensity(shift(l, r)?),
+        (C::IkTarget { object, constraint }, Selected::Object(r)) => {
+            C::IkTarget { object: shift(object, r)?, constraint }
+        }
+        (C::IkBlend { object, constraint }, Selected::Object(r)) => {
+            C::IkBlend { object: shift(object, r)?, constraint }
+        }
         (id, _) => id,
     })
 }

@@ -401,6 +401,15 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
             let animated: Animated<glam::Quat> = ron.from_str(value).map_err(|e| e.to_string())?;
             AnimatedTrack::new(&animated).map(drop).map_err(|e| e.to_string())
         }
+        "ik_constraints" => {
+            let constraints: Vec<keyrig_core::IkConstraint> =
+                ron.from_str(value).map_err(|e| e.to_string())?;
+            for c in &constraints {
+                AnimatedTrack::new(&c.target).map_err(|e| e.to_string())?;
+                AnimatedTrack::new(&c.blend).map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        }
         // The keys of a rotation track (the format's examples of spins).
         "track" => check_fragment("rotation", &format!("(value: (0.0, 0.0, 0.0, 1.0), track: {value})")),
         other => Err(format!("no rule for a fragment of field `{other}`: add one to docs_run.rs")),

@@ -45,7 +45,7 @@ fn legs_scene() -> Scene {
         SceneKey::new(2.0, Vec3::ZERO),
     ]);
     let mut legs = Object::new("legs");
-    legs.skeleton = Some(Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) });
+    legs.skeleton = Some(Skeleton::new(joints));
     scene.objects.push(legs);
     scene
 }

@@ -27,7 +27,7 @@ use egui::{Key, Modifiers, Pos2};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use glam::{Quat, Vec3};
-use keyrig_core::{Animated, Joint, Object, Scene, Skeleton};
+use keyrig_core::{Joint, Object, Scene, Skeleton};
 use keyrig_editor::camera::OrbitCamera as _;
 use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
@@ -287,7 +287,7 @@ fn zero_bone_scene() -> Scene {
         Joint::new("hand", Some(1), Vec3::ZERO, Quat::IDENTITY),
     ];
     let mut rig = Object::new("Rig");
-    rig.skeleton = Some(Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) });
+    rig.skeleton = Some(Skeleton::new(joints));
     Scene { objects: vec![rig], ..Scene::default() }
 }
 

@@ -86,6 +86,7 @@ fn two_armed_scene() -> Scene {
             joint("arm.R", Some(0), Vec3::new(-0.3, 0.5, 0.0)),
         ],
         root_translation: keyrig_core::Animated::constant(Vec3::ZERO),
+        ik_constraints: Vec::new(),
     };
     let mut rig = Object::new("Rig");
     let lift = Quat::from_rotation_z(0.8) * Quat::from_rotation_y(0.3);

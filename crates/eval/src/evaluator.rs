@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
+use keyrig_core::ik_constraint::{ConstraintChain, LocalPose};
 use keyrig_core::track::TrackValue;
 use keyrig_core::{
     Animated, AnimatedTrack, DeformerKind, DeformerSettings, Keys, LightKind, MeshSource, Scene,
@@ -131,10 +132,65 @@ struct JointSlots {
     scale: Slot<Vec3>,
 }
 
+/// An IK constraint: its chain (`None` when the skeleton cannot hold it; the problem is
+/// listed), what the chain was built from, its pole and its two channels.
+#[derive(Clone, Debug)]
+struct ConstraintRig {
+    chain: Option<ConstraintChain>,
+    end: usize,
+    bones: usize,
+    pole: Option<Vec3>,
+    target: Slot<Vec3>,
+    blend: Slot<f32>,
+    problem: Option<EvalProblem>,
+}
+
+impl ConstraintRig {
+    fn new(skeleton: &keyrig_core::Skeleton, o: usize, c: usize) -> Self {
+        let constraint = &skeleton.ik_constraints[c];
+        let (chain, problem) = match ConstraintChain::new(skeleton, constraint) {
+            Ok(chain) => (Some(chain), None),
+            Err(e) => (
+                None,
+                Some(EvalProblem {
+                    path: format!("objects[{o}].skeleton.ik_constraints[{c}]"),
+                    message: e.to_string(),
+                }),
+            ),
+        };
+        ConstraintRig {
+            chain,
+            end: constraint.end,
+            bones: constraint.bones,
+            pole: constraint.pole,
+            target: Slot::new(&constraint.target, ChannelId::IkTarget { object: o, constraint: c }),
+            blend: Slot::new(&constraint.blend, ChannelId::IkBlend { object: o, constraint: c }),
+            problem,
+        }
+    }
+
+    /// Rebuilds what changed (the skeleton's rest data is known to be the same); returns the
+    /// number of channels rebuilt.
+    fn refresh(&mut self, skeleton: &keyrig_core::Skeleton, o: usize, c: usize) -> usize {
+        let constraint = &skeleton.ik_constraints[c];
+        if (constraint.end, constraint.bones) != (self.end, self.bones) {
+            *self = ConstraintRig::new(skeleton, o, c);
+            return 2;
+        }
+        self.pole = constraint.pole;
+        usize::from(self.target.refresh(&constraint.target, ChannelId::IkTarget { object: o, constraint: c }))
+            + usize::from(
+                self.blend.refresh(&constraint.blend, ChannelId::IkBlend { object: o, constraint: c }),
+            )
+    }
+}
+
 #[derive(Clone, Debug)]
 struct SkeletonRig {
     root_translation: Slot<Vec3>,
     joints: Vec<JointSlots>,
+    /// IK constraints, solved in order after forward kinematics.
+    constraints: Vec<ConstraintRig>,
     /// The skeleton the palette is evaluated on: the skinned mesh's (a glTF file's inverse bind
     /// matrices) or the scene's rest skeleton; `None` when neither is valid.
     rest: Option<RestSkeleton>,
@@ -418,6 +474,12 @@ impl SceneEvaluator {
             ChannelId::LightIntensity(l) => {
                 Some(ChannelValue::Scalar(self.lights.get(l)?.intensity.sample(time)))
             }
+            ChannelId::IkTarget { object, constraint } => {
+                vec3(&self.objects.get(object)?.skeleton.as_ref()?.constraints.get(constraint)?.target)
+            }
+            ChannelId::IkBlend { object, constraint } => Some(ChannelValue::Scalar(
+                self.objects.get(object)?.skeleton.as_ref()?.constraints.get(constraint)?.blend.sample(time),
+            )),
         }
     }
 
@@ -449,9 +511,24 @@ impl SceneEvaluator {
         }
     }
 
-    /// Object `o` at `time` seconds; `None` when there is no such object.
+    /// Object `o` at `time` seconds; `None` when there is no such object. The skeleton's pose
+    /// is its keyed local transforms (with the overrides), then every IK constraint solved on
+    /// it in order and blended by its blend channel; the palette is computed from the result.
     #[must_use]
     pub fn object_at(&self, o: usize, time: f64, overrides: &Overrides) -> Option<ObjectState> {
+        self.object_at_solving(o, time, overrides, usize::MAX)
+    }
+
+    /// Object `o` at `time` seconds with only its first `constraints` IK constraints solved
+    /// (0: forward kinematics alone); [`SceneEvaluator::object_at`] solves them all.
+    #[must_use]
+    pub fn object_at_solving(
+        &self,
+        o: usize,
+        time: f64,
+        overrides: &Overrides,
+        constraints: usize,
+    ) -> Option<ObjectState> {
         let rig = self.objects.get(o)?;
         let vec3 = |id: ChannelId, slot: &Slot<Vec3>| match overrides.get(&id) {
             Some(ChannelValue::Vec3(v)) => *v,
@@ -488,6 +565,26 @@ impl SceneEvaluator {
                     .push(vec3(ChannelId::JointTranslation { object, joint }, &slots.translation));
                 pose.local_rotations.push(quat(ChannelId::JointRotation { object, joint }, &slots.rotation));
                 pose.local_scales.push(vec3(ChannelId::JointScale { object, joint }, &slots.scale));
+            }
+            for (c, constraint) in skeleton.constraints.iter().enumerate().take(constraints) {
+                let Some(chain) = &constraint.chain else { continue };
+                let blend = match overrides.get(&ChannelId::IkBlend { object: o, constraint: c }) {
+                    Some(ChannelValue::Scalar(v)) => *v,
+                    _ => constraint.blend.sample(time),
+                };
+                if blend.is_nan() || blend <= 0.0 {
+                    continue;
+                }
+                let target = vec3(ChannelId::IkTarget { object: o, constraint: c }, &constraint.target);
+                let mut local = LocalPose {
+                    translations: &pose.local_translations,
+                    rotations: &mut pose.local_rotations,
+                    scales: &pose.local_scales,
+                    root_translation: pose.root_translation,
+                };
+                // A chain that cannot be solved at this time (a non-finite target, a
+                // non-uniform scale) keeps its keyed pose.
+                let _ = chain.solve(&mut local, target, constraint.pole, blend);
             }
             if let Some(rest) = &skeleton.rest {
                 match JointPalette::new(rest, &pose) {
@@ -568,6 +665,7 @@ impl ObjectRig {
         });
         let mut skeleton = object.skeleton.as_ref().map(|s| SkeletonRig {
             root_translation: Slot::new(&s.root_translation, ChannelId::RootTranslation(o)),
+            constraints: (0..s.ik_constraints.len()).map(|c| ConstraintRig::new(s, o, c)).collect(),
             joints: s
                 .joints
                 .iter()
@@ -681,12 +779,22 @@ impl ObjectRig {
                     slots.scale.refresh(&j.scale, ChannelId::JointScale { object: o, joint }),
                 );
             }
+            rig.constraints.truncate(skeleton.ik_constraints.len());
+            for c in 0..skeleton.ik_constraints.len() {
+                match rig.constraints.get_mut(c) {
+                    Some(constraint) => n += constraint.refresh(skeleton, o, c),
+                    None => {
+                        rig.constraints.push(ConstraintRig::new(skeleton, o, c));
+                        n += 2;
+                    }
+                }
+            }
         }
         n
     }
 
     fn channel_count(&self) -> usize {
-        3 + self.skeleton.as_ref().map_or(0, |s| 1 + 3 * s.joints.len())
+        3 + self.skeleton.as_ref().map_or(0, |s| 1 + 3 * s.joints.len() + 2 * s.constraints.len())
     }
 
     fn for_each_problem(&self, f: &mut dyn FnMut(&EvalProblem)) {
@@ -704,6 +812,11 @@ impl ObjectRig {
                 visit(&j.translation.problem);
                 visit(&j.rotation.problem);
                 visit(&j.scale.problem);
+            }
+            for c in &s.constraints {
+                visit(&c.problem);
+                visit(&c.target.problem);
+                visit(&c.blend.problem);
             }
         }
     }

@@ -9,12 +9,17 @@
 //! (values being dragged but not keyed) take part in the same evaluation, so the viewport, the
 //! motion path and the curve view all see them.
 //!
+//! IK constraints are solved after forward kinematics, blended by their IK/FK blend channel;
+//! [`bake`] writes their result as rotation keys.
+//!
 //! Pure: no files, GPU or UI. Model files are loaded by keyrig-io and handed in as
 //! [`LoadedMesh`]es.
 
+pub mod bake;
 mod evaluator;
 pub mod morph;
 
+pub use bake::{bake_all_ik, bake_ik_constraint, BakeError, Baked};
 pub use evaluator::{
     EvalProblem, LightState, LoadedMesh, MorphRig, ObjectState, Overrides, Rebuilt, SceneEvaluator,
     SceneState, SkinRig,

@@ -504,10 +504,24 @@ impl Document {
 ///   frame, weights keyed at every frame boundary over the scene's frame range so that the
 ///   LINEAR weights reproduce keyrig's looping playback, the skin image as base-colour texture.
 ///
+/// glTF has no IK: IK constraints are baked first (`keyrig_eval::bake_all_ik` over the scene's
+/// frame range, a rotation key per frame on each chain joint), so the file shows the solved
+/// chains as keyrig evaluates them at every frame.
+///
 /// # Errors
 /// A track that does not validate, a skeleton that does not fit its mesh, a mesh file that
 /// cannot be loaded: each with the path of the scene field.
 pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGltf, ExportError> {
+    let baked;
+    let scene = if has_ik(scene) {
+        let mut copy = scene.clone();
+        keyrig_eval::bake_all_ik(&mut copy, scene.frame_range.start, scene.frame_range.end)
+            .map_err(|e| scene_err("ik_constraints", e.to_string()))?;
+        baked = copy;
+        &baked
+    } else {
+        scene
+    };
     let mut doc = Document::default();
     // Tracks with cycles are written as keys over the scene's frame range.
     let range =
@@ -770,6 +784,14 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
 /// translate(t)·rotate(q)·scale(s)` is that TRS. A root joint adds the skeleton's root
 /// translation: folded into its translation when at most one of the two is animated, else
 /// written on a node of its own between the object and the joint.
+/// Whether any IK constraint of `scene` moves its chain (its blend is keyed or not 0).
+fn has_ik(scene: &Scene) -> bool {
+    scene.objects.iter().enumerate().any(|(o, object)| {
+        let count = object.skeleton.as_ref().map_or(0, |s| s.ik_constraints.len());
+        (0..count).any(|c| keyrig_eval::bake::has_effect(scene, o, c))
+    })
+}
+
 fn export_joints(
     doc: &mut Document,
     object_node: usize,

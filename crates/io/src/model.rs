@@ -713,7 +713,7 @@ impl ImportedModel {
             }
             joints.push(joint);
         }
-        keyrig_core::Skeleton { joints, root_translation: keyrig_core::Animated::constant(Vec3::ZERO) }
+        keyrig_core::Skeleton::new(joints)
     }
 
     /// The mesh on `node` as a keyrig-skin [`keyrig_skin::SkinnedMesh`] bound to the skeleton

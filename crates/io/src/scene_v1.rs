@@ -78,6 +78,7 @@ impl ObjectV1 {
             skeleton: self.skeleton.map(|s| keyrig_core::Skeleton {
                 joints: s.joints.into_iter().map(JointV1::into_current).collect(),
                 root_translation: s.root_translation,
+                ik_constraints: Vec::new(),
             }),
             deformer: self.deformer,
         }

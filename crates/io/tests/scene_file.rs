@@ -419,6 +419,7 @@ fn object() -> impl Strategy<Value = Object> {
                         })
                         .collect(),
                     root_translation: Animated::constant(Vec3::ZERO),
+                    ik_constraints: Vec::new(),
                 });
             }
             o

@@ -5,7 +5,7 @@
 //! ([`ARM_JOINT_NAMES`]) at x = 0, L, 2L, 3L with L = 160.158 / 4 = 40.0395 cm.
 
 use glam::{Quat, Vec2, Vec3};
-use keyrig_core::{Animated, Joint, ProceduralMesh, Skeleton};
+use keyrig_core::{Joint, ProceduralMesh, Skeleton};
 
 use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
 use crate::error::SkinError;
@@ -300,7 +300,7 @@ pub fn arm_scene_skeleton() -> Skeleton {
             Joint::new(ARM_JOINT_NAMES[j], j.checked_sub(1), rest_translation, Quat::IDENTITY)
         })
         .collect();
-    Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
+    Skeleton::new(joints)
 }
 
 /// Palm length (cm) of the hand and the finger geometry.
@@ -328,7 +328,7 @@ pub fn hand_scene_skeleton() -> Skeleton {
             Quat::IDENTITY,
         ));
     }
-    Skeleton { joints, root_translation: Animated::constant(Vec3::ZERO) }
+    Skeleton::new(joints)
 }
 
 /// The rest skeleton of a procedural mesh as a scene skeleton, for building scenes; `None` for

@@ -262,6 +262,16 @@ fn channel_keys(scene: &Scene, channel: &ChannelPath) -> (usize, Option<(f64, f6
                 keyrig_core::channel::JointProperty::Rotation => span(&j.rotation.track.keys),
                 keyrig_core::channel::JointProperty::Scale => span(&j.scale.track.keys),
             }),
+        ChannelPath::Ik { object, constraint, property } => scene
+            .objects
+            .iter()
+            .find(|o| &o.name == object)
+            .and_then(|o| o.skeleton.as_ref())
+            .and_then(|s| s.ik_constraints.iter().find(|c| &c.name == constraint))
+            .map_or((0, None), |c| match property {
+                keyrig_core::channel::IkProperty::Target => span(&c.target.track.keys),
+                keyrig_core::channel::IkProperty::Blend => span(&c.blend.track.keys),
+            }),
         ChannelPath::Light { light, property } => {
             let Some(l) = scene.lights.iter().find(|l| &l.name == light) else { return (0, None) };
             match property {

@@ -220,6 +220,7 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
             if scales {
                 channel_editor(ui, app, ChannelId::JointScale { object, joint }, "Scale");
             }
+            ik_constraints_ui(ui, app, object, joint);
             if app.session.ik.enabled {
                 ik_chain_ui(ui, app, object, joint);
             }
@@ -232,6 +233,43 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
             {
                 channel_editor(ui, app, id, label);
             }
+        }
+    }
+}
+
+/// The IK constraints that end at the selected joint: name and chain, their target and blend
+/// (keyable like any channel) and "Bake IK to keys".
+fn ik_constraints_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
+    for c in app.ik_constraints_ending_at(object, joint) {
+        let Some(constraint) = app
+            .doc
+            .scene()
+            .objects
+            .get(object)
+            .and_then(|o| o.skeleton.as_ref())
+            .and_then(|s| s.ik_constraints.get(c))
+            .cloned()
+        else {
+            continue;
+        };
+        ui.separator();
+        ui.strong(format!("IK constraint: {}", constraint.name));
+        ui.label(format!(
+            "{} bones, {}",
+            constraint.bones,
+            if constraint.bones == 2 { "two-bone solver" } else { "FABRIK" }
+        ));
+        channel_editor(ui, app, ChannelId::IkTarget { object, constraint: c }, "Target");
+        channel_editor(ui, app, ChannelId::IkBlend { object, constraint: c }, "IK/FK blend");
+        if ui
+            .button("Bake IK to keys")
+            .on_hover_text(
+                "Key the solved rotations of the chain's joints at every frame of the range and set \
+                 the blend to 0 (one undo step)",
+            )
+            .clicked()
+        {
+            app.bake_ik_constraint(object, c);
         }
     }
 }
@@ -280,6 +318,16 @@ fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
                 "Drag the orange handle at the joint in the viewport. The chain keeps the side it \
                  bends to when the drag starts; in record mode each of its joints is keyed.",
             );
+            if ui
+                .button("Keep as IK constraint")
+                .on_hover_text(
+                    "Add an IK constraint on this chain, its target keyed here at the current frame: \
+                     the evaluator then solves the chain every frame",
+                )
+                .clicked()
+            {
+                app.keep_ik_constraint(object, joint);
+            }
         }
         Err(e) => {
             ui.colored_label(ui.visuals().error_fg_color, e.to_string());

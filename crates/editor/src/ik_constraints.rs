@@ -1,0 +1,79 @@
+//! IK constraints in the editor (issue 19): keeping the chain of IK posing as a constraint whose
+//! target is keyed at the current frame ("Keep as IK constraint"), and baking a constraint to
+//! rotation keys ("Bake IK to keys"), each one undo step. The inspector shows a selected joint's
+//! constraints with their target and blend channels (`panels::inspector`); the evaluator solves
+//! them (docs/ik.md, "IK constraints").
+
+use keyrig_core::{Animated, IkConstraint, Key, RawTrack};
+
+use crate::app::EditorApp;
+
+impl EditorApp {
+    /// Indices of object `object`'s IK constraints whose end joint is `joint`.
+    #[must_use]
+    pub fn ik_constraints_ending_at(&self, object: usize, joint: usize) -> Vec<usize> {
+        let scene = self.doc.scene();
+        let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else {
+            return Vec::new();
+        };
+        (0..skeleton.ik_constraints.len()).filter(|&c| skeleton.ik_constraints[c].end == joint).collect()
+    }
+
+    /// Adds an IK constraint on the IK posing chain that ends at `joint` (its length as chosen
+    /// in the inspector): its target keyed at the current frame where the joint is now (object
+    /// space), no pole (the chain bends as its keyed pose does), blend 1. One undo step.
+    pub fn keep_ik_constraint(&mut self, object: usize, joint: usize) {
+        let chain = match self.ik_chain(object, joint) {
+            Ok(chain) => chain,
+            Err(e) => {
+                self.error(e.to_string());
+                return;
+            }
+        };
+        let Some(target) = self.object_pose_now(object).and_then(|p| p.object_from_joint.get(joint).copied())
+        else {
+            return;
+        };
+        let target = glam::Vec3::from(target.translation);
+        let time = f64::from(self.session.playback.whole_frame()) / self.doc.scene().fps.max(1e-9);
+        let Some(skeleton) = self.doc.scene().objects.get(object).and_then(|o| o.skeleton.as_ref()) else {
+            return;
+        };
+        let base = format!("IK {}", chain.names.last().cloned().unwrap_or_default());
+        let taken = |name: &str| skeleton.ik_constraints.iter().any(|c| c.name == name);
+        let name = (1..)
+            .map(|i| if i == 1 { base.clone() } else { format!("{base} {i}") })
+            .find(|n| !taken(n))
+            .unwrap_or(base);
+        let mut constraint = IkConstraint::new(name.clone(), joint, chain.bones(), target);
+        constraint.target = Animated::new(target, RawTrack::new(vec![Key::new(time, target)]));
+        self.doc.edit("Keep as IK constraint", |scene| {
+            if let Some(skeleton) = scene.objects.get_mut(object).and_then(|o| o.skeleton.as_mut()) {
+                skeleton.ik_constraints.push(constraint);
+            }
+        });
+        self.info(format!("IK constraint \"{name}\": {} follows its target", chain.describe()));
+    }
+
+    /// Bakes IK constraint `constraint` of `object` to rotation keys on its chain at every frame
+    /// of the scene's range and sets its blend to 0 ([`keyrig_eval::bake_ik_constraint`]). One
+    /// undo step.
+    pub fn bake_ik_constraint(&mut self, object: usize, constraint: usize) {
+        let range = self.doc.scene().frame_range;
+        let mut result = None;
+        self.doc.edit("Bake IK to keys", |scene| {
+            result = Some(keyrig_eval::bake_ik_constraint(scene, object, constraint, range.start, range.end));
+        });
+        match result {
+            Some(Ok(baked)) => {
+                self.info(format!(
+                    "Baked IK to keys: {} joint(s), {} frame(s); the constraint's blend is now 0",
+                    baked.joints.len(),
+                    baked.frames
+                ));
+            }
+            Some(Err(e)) => self.error(format!("Bake IK to keys: {e}")),
+            None => {}
+        }
+    }
+}
