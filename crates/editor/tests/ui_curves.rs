@@ -253,3 +253,17 @@ fn rotations_can_be_drawn_as_their_twist() {
     assert!((peak - 180.0).abs() < 0.5, "the twist peaks at a half turn: {peak}");
     assert!(curves[0].windows(2).all(|w| (w[1].1 - w[0].1).abs() < 20.0), "continuous");
 }
+
+/// A over the curves selects every key shown, Alt+A none, as in Blender's graph editor.
+#[test]
+fn a_and_alt_a_over_the_curves_select_all_and_none() {
+    let (_dir, mut h) = with_elbow_key();
+    let plot = h.state().view.curves_rect.expect("laid out");
+    h.event(Event::PointerMoved(plot.center()));
+    press(&mut h, Modifiers::NONE, Key::A);
+    let count = channels::key_count(h.state().doc.scene(), ELBOW);
+    assert_eq!(h.state().session.selection.keys.len(), count, "every elbow key");
+    h.event(Event::PointerMoved(plot.center()));
+    press(&mut h, Modifiers::ALT, Key::A);
+    assert!(h.state().session.selection.keys.is_empty());
+}

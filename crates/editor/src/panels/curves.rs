@@ -395,6 +395,24 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
     };
     let additive = ui.input(|i| i.modifiers.shift || i.modifiers.command);
     let on_ruler = |pos: Pos2| pos.y > plot.rect.bottom();
+    // Blender's graph editor: A selects every key shown, Alt+A none (over the curves, and not
+    // while a text field has the keyboard).
+    if response.hovered() && !ui.ctx().text_edit_focused() {
+        let (all, none) = ui.input(|i| {
+            (
+                i.key_pressed(egui::Key::A) && i.modifiers.is_none(),
+                i.key_pressed(egui::Key::A) && i.modifiers.alt,
+            )
+        });
+        if all {
+            for &id in &ids {
+                let count = channels::key_count(app.doc.scene(), id);
+                app.session.selection.keys.extend((0..count).map(|index| KeyRef { channel: id, index }));
+            }
+        } else if none {
+            app.session.selection.keys.clear();
+        }
+    }
 
     if let Some(pos) = response.interact_pointer_pos().filter(|_| response.clicked()) {
         if on_ruler(pos) {
@@ -708,7 +726,7 @@ fn legend_ui(ui: &mut Ui, app: &mut EditorApp, ids: &[ChannelId]) {
         }
         if ids.iter().any(|id| id.kind() == channels::ChannelKind::Rotation) {
             let twist = &mut app.view.curves.rotation_as_twist;
-            let euler = format!("Euler {}", crate::panels::inspector::EULER_ORDER);
+            let euler = format!("Euler angles ({})", crate::panels::inspector::EULER_ORDER);
             ui.label(egui::RichText::new("rotations:").small().weak());
             ui.selectable_value(twist, false, egui::RichText::new(euler).small())
                 .on_hover_text("Rotations as Euler angles in this order, degrees, unwrapped along the curve");
