@@ -90,3 +90,64 @@ fn constraints_are_written_only_when_present() {
     let plain = scene_file::to_string(&scene).expect("serializes");
     assert!(!plain.contains("ik_constraints"), "{plain}");
 }
+
+/// glTF has no IK: export bakes the constraint, so the exported joint rotations at every frame
+/// are the solved ones (rest rotation · solved local rotation), read straight from the file's
+/// JSON and binary buffer.
+#[test]
+fn export_writes_the_solved_rotations_at_every_frame() {
+    use keyrig_io::gltf_export::{export_scene, ExportOptions, ExportedGltf};
+    let scene = ik_scene();
+    let gltf = export_scene(&scene, &ExportOptions::default()).expect("export the IK scene");
+
+    let floats = |gltf: &ExportedGltf, index: usize| -> Vec<f32> {
+        let accessor = &gltf.json["accessors"][index];
+        let width = match accessor["type"].as_str().expect("type") {
+            "SCALAR" => 1,
+            "VEC3" => 3,
+            "VEC4" => 4,
+            other => panic!("type {other}"),
+        };
+        let count = accessor["count"].as_u64().expect("count") as usize;
+        let view = &gltf.json["bufferViews"][accessor["bufferView"].as_u64().expect("view") as usize];
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize
+            + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+        (0..count * width)
+            .map(|i| f32::from_le_bytes(gltf.bin[start + 4 * i..start + 4 * i + 4].try_into().expect("4 bytes")))
+            .collect()
+    };
+    let eval = SceneEvaluator::new(&scene, &HashMap::new());
+    let skeleton = scene.objects[0].skeleton.as_ref().expect("a skeleton");
+    let nodes = gltf.json["nodes"].as_array().expect("nodes");
+    let animation = &gltf.json["animations"][0];
+    let mut checked = 0;
+    // The chain's joints (shoulder, elbow, forearm): the constraint turns them.
+    for j in 0..3 {
+        let name = &skeleton.joints[j].name;
+        let node = nodes.iter().position(|n| n["name"] == name.as_str()).unwrap_or_else(|| panic!("node {name}"));
+        let channel = animation["channels"]
+            .as_array()
+            .expect("channels")
+            .iter()
+            .find(|c| c["target"]["node"] == node && c["target"]["path"] == "rotation")
+            .unwrap_or_else(|| panic!("no rotation channel for {name}"));
+        let sampler = &animation["samplers"][channel["sampler"].as_u64().expect("sampler") as usize];
+        let times = floats(&gltf, sampler["input"].as_u64().expect("input") as usize);
+        let values = floats(&gltf, sampler["output"].as_u64().expect("output") as usize);
+        for frame in scene.frame_range.start..=scene.frame_range.end {
+            let t = f64::from(frame) / scene.fps;
+            let Some(k) = times.iter().position(|&kt| (f64::from(kt) - t).abs() < 1e-4) else {
+                panic!("{name}: no exported key at frame {frame}")
+            };
+            let q = &values[4 * k..4 * k + 4];
+            let exported = glam::Quat::from_xyzw(q[0], q[1], q[2], q[3]).normalize();
+            let state = eval.object_at(0, t, &Overrides::new()).expect("the arm");
+            let solved = state.pose.as_ref().expect("a pose").local_rotations[j];
+            let want = (skeleton.joints[j].rest_rotation * solved).normalize();
+            let angle = 2.0 * f64::from(exported.dot(want).abs().min(1.0)).acos();
+            assert!(angle < 2e-4, "{name} at frame {frame}: exported {exported:?}, solved {want:?} ({angle} rad)");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 3 * (scene.frame_range.end - scene.frame_range.start + 1) as usize);
+}
