@@ -250,3 +250,23 @@ fn a_motion_capture_track_is_drawn_one_mark_per_pixel() {
     let indices: Vec<usize> = selected.iter().map(|k| k.index).collect();
     assert!(indices.windows(2).all(|w| w[1] == w[0] + 1), "neighbouring keys: {indices:?}");
 }
+
+/// assets/ik.ron: the IK constraint's keyed target and IK/FK blend have dope-sheet rows under
+/// the arm, and a click on a blend key shows the blend's curve.
+#[test]
+fn ik_constraint_channels_have_rows_and_curves() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &keyrig_io::demo::ik_scene());
+    let labels = row_labels(&h);
+    assert!(labels.iter().any(|l| l == "Reach IK target"), "{labels:?}");
+    assert!(labels.iter().any(|l| l == "Reach IK blend"), "{labels:?}");
+    let blend = ChannelId::IkBlend { object: 0, constraint: 0 };
+    let frame = {
+        let scene = h.state().doc.scene();
+        (channels::key_times(scene, blend)[0] * scene.fps).round() as i64
+    };
+    h.get_by_label(&format!("key Reach IK blend frame {frame}")).click();
+    h.run();
+    assert_eq!(h.state().session.selection.keys.iter().next().map(|k| k.channel), Some(blend));
+    assert!(h.query_by_label("Curves: Reach IK blend").is_some(), "the curve view shows the blend");
+}

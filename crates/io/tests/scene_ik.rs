@@ -113,7 +113,9 @@ fn export_writes_the_solved_rotations_at_every_frame() {
         let start = view["byteOffset"].as_u64().unwrap_or(0) as usize
             + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
         (0..count * width)
-            .map(|i| f32::from_le_bytes(gltf.bin[start + 4 * i..start + 4 * i + 4].try_into().expect("4 bytes")))
+            .map(|i| {
+                f32::from_le_bytes(gltf.bin[start + 4 * i..start + 4 * i + 4].try_into().expect("4 bytes"))
+            })
             .collect()
     };
     let eval = SceneEvaluator::new(&scene, &HashMap::new());
@@ -124,7 +126,8 @@ fn export_writes_the_solved_rotations_at_every_frame() {
     // The chain's joints (shoulder, elbow, forearm): the constraint turns them.
     for j in 0..3 {
         let name = &skeleton.joints[j].name;
-        let node = nodes.iter().position(|n| n["name"] == name.as_str()).unwrap_or_else(|| panic!("node {name}"));
+        let node =
+            nodes.iter().position(|n| n["name"] == name.as_str()).unwrap_or_else(|| panic!("node {name}"));
         let channel = animation["channels"]
             .as_array()
             .expect("channels")
@@ -145,7 +148,10 @@ fn export_writes_the_solved_rotations_at_every_frame() {
             let solved = state.pose.as_ref().expect("a pose").local_rotations[j];
             let want = (skeleton.joints[j].rest_rotation * solved).normalize();
             let angle = 2.0 * f64::from(exported.dot(want).abs().min(1.0)).acos();
-            assert!(angle < 2e-4, "{name} at frame {frame}: exported {exported:?}, solved {want:?} ({angle} rad)");
+            assert!(
+                angle < 2e-4,
+                "{name} at frame {frame}: exported {exported:?}, solved {want:?} ({angle} rad)"
+            );
             checked += 1;
         }
     }

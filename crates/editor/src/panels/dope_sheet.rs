@@ -108,6 +108,17 @@ fn rows(app: &EditorApp) -> Vec<Row> {
         if keyed(root) {
             out.push(channel_row(root, root.channel_name().to_owned(), 1, item));
         }
+        // IK constraints: their target and IK/FK blend, where keyed (or the object selected).
+        for (c, constraint) in skeleton.ik_constraints.iter().enumerate() {
+            for id in [
+                ChannelId::IkTarget { object: o, constraint: c },
+                ChannelId::IkBlend { object: o, constraint: c },
+            ] {
+                if keyed(id) || selected {
+                    out.push(channel_row(id, format!("{} {}", constraint.name, id.channel_name()), 1, item));
+                }
+            }
+        }
         for (j, depth) in hierarchy(skeleton) {
             let joint = &skeleton.joints[j];
             let item = Selected::Joint { object: o, joint: j };
