@@ -199,10 +199,7 @@ impl Command {
             Command::NextKey => "Go to the next key of the selection (of the scene when nothing is selected)",
             Command::ToggleGrid => "Show or hide the ground grid",
             Command::ToggleBones => "Show or hide the skeleton's bones",
-            Command::ToggleOnionSkin => {
-                "Ghosts of the selected object at frames before (warm) and after (cool) the \
-                 current one; how many and how far apart: View ▸ Onion skin settings"
-            }
+            Command::ToggleOnionSkin => "Ghosts of the selection before (warm) and after (cool) the frame",
             Command::SetDeformer(DeformerKind::Rigid) => "Skin each vertex to one bone (v' = M(j)·v)",
             Command::SetDeformer(DeformerKind::LinearBlend) => {
                 "Linear blend skinning; collapses under twist (candy wrapper)"

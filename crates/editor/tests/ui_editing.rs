@@ -185,10 +185,18 @@ fn shortcuts_do_what_the_help_window_says() {
     assert!(h.state().view.show_help);
     // Every command is listed with its shortcut text.
     let ctx = h.ctx.clone();
+    let window = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::Vec2::from(common::WINDOW));
     for command in Command::ALL {
         let text = command.shortcut_text(&ctx);
         assert!(h.query_all_by_label(&text).next().is_some(), "help lists {text} for {command:?}");
-        assert!(h.query_all_by_label(command.tooltip()).next().is_some(), "help explains {command:?}");
+        let explained = h.query_all_by_label(command.tooltip()).next();
+        let explained = explained.unwrap_or_else(|| panic!("help explains {command:?}"));
+        // Every line of the list is in the 1280×800 window, explanation included.
+        assert!(
+            window.contains_rect(explained.rect()),
+            "{command:?}'s line is cut off: {:?}",
+            explained.rect()
+        );
     }
     press(&mut h, Modifiers::NONE, Key::Escape);
     assert!(!h.state().view.show_help);
