@@ -88,7 +88,7 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
             // SAFETY: the CPU has AVX2 and FMA (the caller runs only builds that run here);
             // validate() checked that the palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
-            let stream = super::simd::streams_outputs(positions.len() * super::simd::bytes_per_vertex(N));
+            let stream = super::simd::streams_outputs(positions.len(), N);
             for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
                 let end = start + out_p.len();
                 let (js, ws) = (&joints[start..end], &weights[start..end]);

@@ -77,7 +77,7 @@ impl<const N: usize> Job for LinearBlendJob<'_, N> {
         let (positions, normals) = (self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
         if normal_palette.is_none() && build == Build::Avx512Vl {
-            let stream = super::simd::streams_outputs(positions.len() * super::simd::bytes_per_vertex(N));
+            let stream = super::simd::streams_outputs(positions.len(), N);
             // SAFETY: the CPU has AVX2, FMA, AVX-512F and AVX-512VL (the caller runs only builds
             // that run here); validate() checked that the palette holds every joint index.
             let packed = unsafe { super::simd::pack_palette_avx512(palette) };

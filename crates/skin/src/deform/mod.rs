@@ -708,14 +708,18 @@ mod tests {
     fn outputs_stream_only_past_the_last_level_cache() {
         #[cfg(target_arch = "x86_64")]
         {
-            assert!(!simd::streams_outputs(0));
-            match (1..=usize::BITS).map(|b| 1usize << (b - 1)).find(|&bytes| simd::streams_outputs(bytes)) {
-                // The first power of two past the cache: at least 256 KiB (no x86-64 CPU has a
-                // smaller last level) and no more than 4 GiB.
-                Some(bytes) => {
-                    eprintln!("outputs stream from {} KiB", bytes >> 10);
-                    assert!((256 << 10..=4 << 30).contains(&bytes), "{bytes}");
-                    assert!(simd::streams_outputs(usize::MAX));
+            assert!(!simd::streams_outputs(0, 4));
+            let streams = |vertices: usize| simd::streams_outputs(vertices, 4);
+            match (0..usize::BITS).map(|b| 1usize << b).find(|&vertices| streams(vertices)) {
+                // The first power of two past the cache (72 bytes a vertex): at least 256 KiB
+                // (no x86-64 CPU has a smaller last level) and no more than 4 GiB.
+                Some(vertices) => {
+                    let bytes = vertices * simd::bytes_per_vertex(4);
+                    eprintln!("outputs stream from {vertices} vertices ({} KiB)", bytes >> 10);
+                    assert!((256 << 10..=8 << 30).contains(&bytes), "{bytes}");
+                    // Eight influences move more bytes a vertex.
+                    assert!(simd::streams_outputs(vertices, 8));
+                    assert!(streams(usize::MAX));
                 }
                 None => eprintln!("last-level cache size unknown: outputs never stream"),
             }

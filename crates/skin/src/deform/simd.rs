@@ -31,14 +31,16 @@ pub(crate) const fn bytes_per_vertex(influences: usize) -> usize {
     4 * 12 + influences * (2 + 4)
 }
 
-/// Whether a job that reads and writes `bytes` in all should write its outputs with streaming
+/// Whether a job of `vertices` vertices with `influences` influences each, which reads and writes
+/// [`bytes_per_vertex`] per vertex, should write its outputs with streaming
 /// (non-temporal) stores: when the job is larger than the CPU's last-level cache, so that its
 /// first outputs are evicted before it ends and no reader finds them in the cache anyway. Then
 /// streaming stores save the read of every output cache line before it is written (a third of
 /// linear blend's memory traffic at 1 000 000 vertices). Smaller jobs keep their outputs cached
 /// for whoever reads them next. Never when the cache size is unknown.
-pub(crate) fn streams_outputs(bytes: usize) -> bool {
-    last_level_cache_bytes().is_some_and(|cache| bytes > cache)
+pub(crate) fn streams_outputs(vertices: usize, influences: usize) -> bool {
+    last_level_cache_bytes()
+        .is_some_and(|cache| vertices.saturating_mul(bytes_per_vertex(influences)) > cache)
 }
 
 /// The size of the largest-level data or unified cache, from CPUID's deterministic cache
@@ -1374,6 +1376,36 @@ pub(crate) unsafe fn rigid_chunk(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The last-level cache size read from CPUID is the one Linux reports in sysfs (which the
+    /// kernel reads from the same CPUID leaves): the largest-level data or unified cache.
+    #[test]
+    fn the_last_level_cache_size_is_the_one_linux_reports() {
+        let dir = std::path::Path::new("/sys/devices/system/cpu/cpu0/cache");
+        let read = |path: std::path::PathBuf| std::fs::read_to_string(path).ok().map(|s| s.trim().to_owned());
+        let mut largest: Option<(u32, usize)> = None;
+        for entry in std::fs::read_dir(dir).expect("sysfs lists the CPU's caches (Linux)") {
+            let path = entry.expect("a cache entry").path();
+            let (Some(level), Some(kind), Some(size)) =
+                (read(path.join("level")), read(path.join("type")), read(path.join("size")))
+            else {
+                continue;
+            };
+            if kind == "Instruction" {
+                continue;
+            }
+            let level: u32 = level.parse().expect("a cache level");
+            let bytes: usize = match size.strip_suffix('K') {
+                Some(k) => k.parse::<usize>().expect("a size in KiB") << 10,
+                None => size.parse().expect("a size in bytes"),
+            };
+            if largest.is_none_or(|(l, _)| level > l) {
+                largest = Some((level, bytes));
+            }
+        }
+        let (level, bytes) = largest.expect("sysfs reports a data or unified cache");
+        assert_eq!(last_level_cache_bytes(), Some(bytes), "level {level} cache");
+    }
 
     #[test]
     fn a_four_influence_vertex_moves_72_bytes() {
