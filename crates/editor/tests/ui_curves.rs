@@ -29,6 +29,21 @@ fn elbow_x_at_key_of(scene: &keyrig_core::Scene, index: usize) -> f32 {
     }
 }
 
+/// A right click in the middle of the curve view, as the mouse gives it: its context menu.
+fn open_context_menu(h: &mut Harness<'_, EditorApp>) {
+    let plot = h.state().view.curves_rect.expect("the curve view is laid out");
+    h.event(Event::PointerMoved(plot.center()));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: plot.center(),
+            button: egui::PointerButton::Secondary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+}
+
 fn frames(h: &Harness<'_, EditorApp>) -> Vec<i64> {
     let scene = h.state().doc.scene();
     channels::key_times(scene, ELBOW).iter().map(|t| (t * scene.fps).round() as i64).collect()
@@ -151,17 +166,7 @@ fn the_context_menu_clamps_the_selected_keys() {
     h.get_by_label("key elbow rotation frame 45").click_modifiers(Modifiers::SHIFT);
     h.run();
     let steps = h.state().doc.undo_len();
-    let plot = h.state().view.curves_rect.expect("laid out");
-    h.event(Event::PointerMoved(plot.center()));
-    for pressed in [true, false] {
-        h.event(Event::PointerButton {
-            pos: plot.center(),
-            button: egui::PointerButton::Secondary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-    }
-    h.run();
+    open_context_menu(&mut h);
     h.get_by_label("TCB spline, clamped").click();
     h.run();
     let scene = h.state().doc.scene();
@@ -200,17 +205,7 @@ fn hermite_handles_keep_the_shape_and_then_shape_the_curve() {
             .collect()
     };
     let before = sample(&h);
-    let plot = h.state().view.curves_rect.expect("laid out");
-    h.event(Event::PointerMoved(plot.center()));
-    for pressed in [true, false] {
-        h.event(Event::PointerButton {
-            pos: plot.center(),
-            button: egui::PointerButton::Secondary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-    }
-    h.run();
+    open_context_menu(&mut h);
     h.get_by_label("Hermite handles (keeps the shape)").click();
     h.run();
     let (_, mode, _) = channels::key_params(h.state().doc.scene(), cube, 1).expect("key");

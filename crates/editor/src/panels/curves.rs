@@ -20,6 +20,8 @@ use crate::channels::{self, ChannelId, ChannelValue};
 use crate::eval::{euler_degrees, PoseOverrides};
 use crate::session::KeyRef;
 pub use crate::view::{CurveGesture, CurveView, CurveViewState};
+use crate::widgets::publish_painted;
+use egui::accesskit::Role;
 
 /// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
 const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
@@ -222,9 +224,9 @@ fn handles(app: &EditorApp, plot: &Plot) -> Vec<Handle> {
         if key.channel.kind() == channels::ChannelKind::Rotation {
             continue;
         }
-        let times = channels::key_times(scene, key.channel);
-        let (Some(&t), Some(value)) =
-            (times.get(key.index), channels::key_value(scene, key.channel, key.index))
+        // Per key, not the whole track's times: A can select every key of a long track.
+        let time_of = |i: usize| channels::key_params(scene, key.channel, i).map(|p| p.0);
+        let (Some(t), Some(value)) = (time_of(key.index), channels::key_value(scene, key.channel, key.index))
         else {
             continue;
         };
@@ -254,10 +256,10 @@ fn handles(app: &EditorApp, plot: &Plot) -> Vec<Handle> {
             }
         };
         if hermite(key.index) {
-            add(outt, times.get(key.index + 1).copied(), true);
+            add(outt, time_of(key.index + 1), true);
         }
         if key.index > 0 && hermite(key.index - 1) {
-            add(inn, times.get(key.index - 1).copied(), false);
+            add(inn, time_of(key.index - 1), false);
         }
     }
     out
@@ -635,7 +637,7 @@ fn shift_selected_values(app: &mut EditorApp, component: usize, delta: f32) {
         if keys.len() == 1 { "move key value".to_owned() } else { format!("move {} key values", keys.len()) };
     app.doc.edit_continuous("curve value", &label, |scene| {
         for k in &keys {
-            let Some(&time) = channels::key_times(scene, k.channel).get(k.index) else { continue };
+            let Some((time, _, _)) = channels::key_params(scene, k.channel, k.index) else { continue };
             let Some(value) = channels::key_value(scene, k.channel, k.index) else { continue };
             let moved = match value {
                 ChannelValue::Vec3(mut v) if component < 3 => {
@@ -751,7 +753,7 @@ pub fn frame_selected_keys(app: &mut EditorApp) {
     let (mut f0, mut f1, mut v0, mut v1) =
         (f64::INFINITY, f64::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
     for k in &app.session.selection.keys {
-        let Some(&time) = channels::key_times(scene, k.channel).get(k.index) else { continue };
+        let Some((time, _, _)) = channels::key_params(scene, k.channel, k.index) else { continue };
         f0 = f0.min(time * fps);
         f1 = f1.max(time * fps);
         for v in shown_components(app, eval.value(k.channel, time, &none)) {
@@ -924,24 +926,18 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
         );
         let side = if grip.outgoing { "out" } else { "in" };
         let r = egui::Rect::from_center_size(grip.pos, Vec2::splat(2.0 * PICK_RADIUS));
-        ctx.accesskit_node_builder(
-            egui::Id::new(("curve handle", grip.key.channel, grip.key.index, grip.component, grip.outgoing)),
-            |node| {
-                node.set_role(egui::accesskit::Role::Button);
-                node.set_label(format!(
-                    "{side} handle {} {} key {}",
-                    grip.key.channel.label(scene),
-                    component_name(grip.key.channel, grip.component),
-                    grip.key.index
-                ));
-                node.set_bounds(egui::accesskit::Rect {
-                    x0: r.min.x.into(),
-                    y0: r.min.y.into(),
-                    x1: r.max.x.into(),
-                    y1: r.max.y.into(),
-                });
-            },
-        );
+        let id =
+            egui::Id::new(("curve handle", grip.key.channel, grip.key.index, grip.component, grip.outgoing));
+        let label = || {
+            let (channel, component) = (grip.key.channel, grip.component);
+            format!(
+                "{side} handle {} {} key {}",
+                channel.label(scene),
+                component_name(channel, component),
+                grip.key.index
+            )
+        };
+        publish_painted(ctx, id, Role::Button, r, label, None);
     }
     if let Some((_, axis)) = ids.iter().find_map(|&id| turn_axis(app, id)) {
         plot_painter.text(
@@ -975,29 +971,15 @@ pub fn paint_pending(ctx: &egui::Context, app: &mut EditorApp) {
     }
     // Accessibility tools (and UI tests) see each drawn key: "curve key elbow rotation X frame 30".
     for p in &points {
-        let frame = channels::key_times(scene, p.key.channel)
-            .get(p.key.index)
-            .map_or(0, |t| (t * fps).round() as i64);
         let r = egui::Rect::from_center_size(p.pos, Vec2::splat(2.0 * PICK_RADIUS));
-        ctx.accesskit_node_builder(
-            egui::Id::new(("curve key", p.key.channel, p.key.index, p.component)),
-            |node| {
-                node.set_role(egui::accesskit::Role::Button);
-                node.set_label(
-                    format!(
-                        "curve key {} {} frame {frame}",
-                        p.key.channel.label(scene),
-                        component_name(p.key.channel, p.component)
-                    )
-                    .replace("  ", " "),
-                );
-                node.set_bounds(egui::accesskit::Rect {
-                    x0: r.min.x.into(),
-                    y0: r.min.y.into(),
-                    x1: r.max.x.into(),
-                    y1: r.max.y.into(),
-                });
-            },
-        );
+        let id = egui::Id::new(("curve key", p.key.channel, p.key.index, p.component));
+        let label = || {
+            let frame = channels::key_params(scene, p.key.channel, p.key.index)
+                .map_or(0, |k| (k.0 * fps).round() as i64);
+            let (channel, component) = (p.key.channel, p.component);
+            format!("curve key {} {} frame {frame}", channel.label(scene), component_name(channel, component))
+                .replace("  ", " ")
+        };
+        publish_painted(ctx, id, Role::Button, r, label, None);
     }
 }

@@ -26,6 +26,8 @@ use crate::panels::outliner::hierarchy;
 use crate::session::{KeyRef, Selected};
 pub use crate::view::{Gesture, TimeView};
 use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
+use crate::widgets::publish_painted;
+use egui::accesskit::Role;
 
 const ROW_HEIGHT: f32 = 17.0;
 const RULER_HEIGHT: f32 = 20.0;
@@ -725,75 +727,48 @@ fn row_path(app: &EditorApp, row: &Row) -> String {
 }
 
 /// Tells accessibility tools (and UI tests) about a drawn key: "key elbow rotation frame 15",
-/// or for several keys on one pixel or a summary "keys Arm frame 15 (4)". Nothing is built
-/// (not even the label) while no accessibility client listens.
+/// or for several keys on one pixel or a summary "keys Arm frame 15 (4)".
 fn publish_key(ui: &Ui, app: &EditorApp, row: &Row, bucket: &Bucket, centre: Pos2) {
     let id = match (bucket.single, &row.kind) {
         (Some(key), RowKind::Channel(_)) => ui.id().with(("key", key.channel, key.index)),
         _ => ui.id().with(("keys", row.item, row.shows.first().copied(), bucket.px)),
     };
     let rect = Rect::from_center_size(centre, Vec2::splat(DIAMOND_RADIUS * 2.0 + 2.0));
-    ui.ctx().accesskit_node_builder(id, |node| {
+    let label = || {
         let frame = bucket.frame.round() as i64;
-        let label = match (bucket.single, &row.kind) {
+        match (bucket.single, &row.kind) {
             (Some(key), RowKind::Channel(_)) => {
                 format!("key {} frame {frame}", key.channel.label(app.doc.scene()))
             }
             _ => format!("keys {} frame {frame} ({})", row_path(app, row), bucket.count),
-        };
-        node.set_role(egui::accesskit::Role::Button);
-        node.set_label(label);
-        node.set_selected(bucket.selected > 0);
-        node.set_bounds(egui::accesskit::Rect {
-            x0: rect.min.x.into(),
-            y0: rect.min.y.into(),
-            x1: rect.max.x.into(),
-            y1: rect.max.y.into(),
-        });
-    });
+        }
+    };
+    publish_painted(ui.ctx(), id, Role::Button, rect, label, Some(bucket.selected > 0));
 }
 
 /// Tells accessibility tools (and UI tests) about the count of a row's keys out of view:
 /// "r_foot rotation: 1 key after the view".
 fn publish_marker(ui: &Ui, row: &Row, marker: Marker, before: bool, rect: Rect) {
     let key = (row.item, row.depth, row.shows.first().copied(), before);
-    ui.ctx().accesskit_node_builder(ui.id().with(("marker", key)), |node| {
+    let label = || {
         let keys = if marker.count == 1 { "key" } else { "keys" };
         let side = if before { "before" } else { "after" };
-        node.set_role(egui::accesskit::Role::Button);
-        node.set_label(format!("{}: {} {keys} {side} the view", row.label, marker.count));
-        node.set_bounds(egui::accesskit::Rect {
-            x0: rect.min.x.into(),
-            y0: rect.min.y.into(),
-            x1: rect.max.x.into(),
-            y1: rect.max.y.into(),
-        });
-    });
+        format!("{}: {} {keys} {side} the view", row.label, marker.count)
+    };
+    publish_painted(ui.ctx(), ui.id().with(("marker", key)), Role::Button, rect, label, None);
 }
 
 /// Tells accessibility tools (and UI tests) about a row's name, "dope sheet row elbow rotation",
 /// and a group's triangle, "collapse Arm" or "expand Arm".
 fn publish_row(ui: &Ui, row: &Row, name: Rect, indent: f32) {
-    let bounds = |r: Rect| egui::accesskit::Rect {
-        x0: r.min.x.into(),
-        y0: r.min.y.into(),
-        x1: r.max.x.into(),
-        y1: r.max.y.into(),
-    };
     let key = (row.item, row.depth, matches!(row.kind, RowKind::Group { .. }), row.shows.first().copied());
-    ui.ctx().accesskit_node_builder(ui.id().with(("row", key)), |node| {
-        node.set_role(egui::accesskit::Role::Row);
-        node.set_label(format!("dope sheet row {}", row.label));
-        node.set_bounds(bounds(name));
-    });
+    let label = || format!("dope sheet row {}", row.label);
+    publish_painted(ui.ctx(), ui.id().with(("row", key)), Role::Row, name, label, None);
     if let RowKind::Group { collapsed } = row.kind {
         let expander =
             Rect::from_min_size(Pos2::new(indent - 1.0, name.top()), Vec2::new(11.0, name.height()));
-        ui.ctx().accesskit_node_builder(ui.id().with(("expander", key)), |node| {
-            node.set_role(egui::accesskit::Role::Button);
-            node.set_label(format!("{} {}", if collapsed { "expand" } else { "collapse" }, row.label));
-            node.set_bounds(bounds(expander));
-        });
+        let label = || format!("{} {}", if collapsed { "expand" } else { "collapse" }, row.label);
+        publish_painted(ui.ctx(), ui.id().with(("expander", key)), Role::Button, expander, label, None);
     }
 }
 

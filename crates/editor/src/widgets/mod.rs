@@ -5,3 +5,31 @@
 pub mod field;
 pub mod key_diamond;
 pub mod tcb_slider;
+
+/// Tells accessibility tools (and UI tests) about something painted rather than laid out as a
+/// widget — a key diamond, a curve point, a dope-sheet row — at `rect` (screen points), with the
+/// role, the label `label()` gives and, where given, whether it is selected. Nothing is built,
+/// not even the label, while no accessibility client listens (the window's usual case), so a
+/// panel can publish every mark it draws.
+pub fn publish_painted(
+    ctx: &egui::Context,
+    id: egui::Id,
+    role: egui::accesskit::Role,
+    rect: egui::Rect,
+    label: impl FnOnce() -> String,
+    selected: Option<bool>,
+) {
+    ctx.accesskit_node_builder(id, |node| {
+        node.set_role(role);
+        node.set_label(label());
+        if let Some(selected) = selected {
+            node.set_selected(selected);
+        }
+        node.set_bounds(egui::accesskit::Rect {
+            x0: rect.min.x.into(),
+            y0: rect.min.y.into(),
+            x1: rect.max.x.into(),
+            y1: rect.max.y.into(),
+        });
+    });
+}

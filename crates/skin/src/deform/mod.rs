@@ -292,6 +292,17 @@ mod tests {
         fn index(&mut self, n: usize) -> usize {
             ((self.next_f32() * n as f32) as usize).min(n - 1)
         }
+        /// A rotation by up to ±3 radians about a random axis.
+        fn rotation(&mut self) -> glam::Quat {
+            let axis = self.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
+            glam::Quat::from_axis_angle(axis, (self.next_f32() - 0.5) * 6.0)
+        }
+        /// `n` positions within 10 of the origin and `n` unit normals (positions first).
+        fn points(&mut self, n: usize) -> (Vec<Vec3>, Vec<Vec3>) {
+            let positions = (0..n).map(|_| self.vec3(10.0)).collect();
+            let normals = (0..n).map(|_| self.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            (positions, normals)
+        }
     }
 
     fn assert_close(build: &str, what: &str, got: &[Vec3], want: &[Vec3]) {
@@ -355,36 +366,26 @@ mod tests {
     /// The test prints the builds it checked and fails if it checked none, or missed one the
     /// CPU runs.
     fn every_build_matches_the_reference<const N: usize>() -> Vec<&'static str> {
-        use glam::Quat;
-
         use crate::influences::{BonesBlendBindings, BonesBlendVertex};
         use crate::pose::{JointPalette, Pose};
         use crate::skeleton::{RestJoint, RestSkeleton};
 
         let mut rng = Lcg(0x5EED + N as u64);
         let joint_count = 37;
-        let random_rotation = |rng: &mut Lcg| {
-            let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
-            Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0)
-        };
         let rest: Vec<RestJoint> = (0..joint_count)
             .map(|j| {
                 let parent = (j > 0).then(|| rng.index(j));
-                RestJoint::new(format!("j{j}"), parent, rng.vec3(2.0), random_rotation(&mut rng))
+                RestJoint::new(format!("j{j}"), parent, rng.vec3(2.0), rng.rotation())
             })
             .collect();
         let skeleton = RestSkeleton::new(&rest).unwrap();
-        let pose = Pose::from_rotations(
-            (0..joint_count).map(|_| random_rotation(&mut rng)).collect(),
-            rng.vec3(1.0),
-        );
+        let pose = Pose::from_rotations((0..joint_count).map(|_| rng.rotation()).collect(), rng.vec3(1.0));
         let palette = JointPalette::new(&skeleton, &pose).unwrap();
         assert!(palette.normal_skinning.is_none(), "a rigid palette, so the SIMD linear kernel runs");
         let dqs = palette.dual_quaternions().unwrap();
         let mut checked = Vec::new();
         for n in [8 * 125 + 3, 8 + 4 + 1, 7, 2, 0] {
-            let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-            let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            let (positions, normals) = rng.points(n);
             let influences = random_influences::<N>(&mut rng, n, joint_count);
             let bones: Vec<u16> = (0..n).map(|_| rng.index(joint_count) as u16).collect();
             let bindings = (0..n)
@@ -506,19 +507,17 @@ mod tests {
     fn linear_blend_avx512_kernel_matches_the_formula_with_either_store() {
         #[cfg(target_arch = "x86_64")]
         fn check<const N: usize>(rng: &mut Lcg) -> usize {
-            use glam::{Affine3A, Quat};
+            use glam::Affine3A;
 
             let joint_count = 11;
             let palette: Vec<Affine3A> = (0..joint_count)
                 .map(|_| {
-                    let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
-                    let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                    let rotation = rng.rotation();
                     Affine3A::from_rotation_translation(rotation, rng.vec3(3.0))
                 })
                 .collect();
             let n = 41;
-            let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-            let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            let (positions, normals) = rng.points(n);
             let influences = random_influences::<N>(rng, n, joint_count);
             let (joints, weights) = (influences.joints(), influences.weights());
             // SAFETY (both): only on CPUs with AVX-512F and AVX-512VL.
@@ -606,22 +605,18 @@ mod tests {
     fn dual_quaternion_avx512_kernel_matches_the_reference_with_either_store() {
         #[cfg(target_arch = "x86_64")]
         fn check<const N: usize>(rng: &mut Lcg) -> usize {
-            use glam::Quat;
-
             use crate::dual_quat::DualQuat;
             use crate::DualQuatJob;
 
             let joint_count = 11;
             let dqs: Vec<DualQuat> = (0..joint_count)
                 .map(|_| {
-                    let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
-                    let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                    let rotation = rng.rotation();
                     DualQuat::from_rotation_translation(rotation, rng.vec3(3.0))
                 })
                 .collect();
             let n = 70;
-            let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-            let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+            let (positions, normals) = rng.points(n);
             let influences = random_influences::<N>(rng, n, joint_count);
             let mut expected = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
             DualQuatJob {
@@ -734,15 +729,14 @@ mod tests {
     /// the slice is written.
     #[test]
     fn rigid_builds_match_the_formula_on_every_slice() {
-        use glam::{Affine3A, Quat};
+        use glam::Affine3A;
 
         use crate::pose::JointPalette;
 
         let mut rng = Lcg(0x816D);
         let skinning: Vec<Affine3A> = (0..9)
             .map(|_| {
-                let axis = rng.vec3(1.0).try_normalize().unwrap_or(Vec3::X);
-                let rotation = Quat::from_axis_angle(axis, (rng.next_f32() - 0.5) * 6.0);
+                let rotation = rng.rotation();
                 Affine3A::from_scale_rotation_translation(
                     Vec3::splat(0.5) + rng.vec3(0.3).abs(),
                     rotation,
@@ -753,8 +747,7 @@ mod tests {
         let normal_palette: Vec<glam::Mat3A> =
             skinning.iter().map(|m| m.matrix3.inverse().transpose()).collect();
         let n = 23;
-        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+        let (positions, normals) = rng.points(n);
         let joints: Vec<u16> = (0..n).map(|_| rng.index(9) as u16).collect();
         let mut checked = Vec::new();
         for separate in [false, true] {
@@ -840,8 +833,7 @@ mod tests {
         let palette = JointPalette::new(&skeleton, &pose).unwrap();
         assert!(palette.normal_skinning.is_some(), "non-uniform scale needs normal matrices");
         let n = 37;
-        let positions: Vec<Vec3> = (0..n).map(|_| rng.vec3(10.0)).collect();
-        let normals: Vec<Vec3> = (0..n).map(|_| rng.vec3(1.0).normalize_or(Vec3::Y)).collect();
+        let (positions, normals) = rng.points(n);
         let influences = random_influences::<4>(&mut rng, n, joint_count);
         let bones: Vec<u16> = (0..n).map(|_| rng.index(joint_count) as u16).collect();
         let (ps, ns, palette, influences, bones) =
