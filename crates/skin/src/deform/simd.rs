@@ -13,14 +13,46 @@ use crate::dual_quat::DualQuat;
 use crate::influences::BonesBlendVertex;
 use crate::pose::BonesBlendJoint;
 
-/// Whether this CPU can run the kernels below.
-pub(crate) fn available() -> bool {
-    is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
+/// The CPU features the kernels' builds need: as this CPU reports them ([`Features::detect`]),
+/// or as a test states them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Features {
+    pub(crate) avx2: bool,
+    pub(crate) fma: bool,
+    pub(crate) avx512f: bool,
+    pub(crate) avx512vl: bool,
 }
 
-/// Whether this CPU can also run the AVX-512VL builds of the kernels (32 vector registers).
+impl Features {
+    /// This CPU's features (std caches the detection).
+    pub(crate) fn detect() -> Features {
+        Features {
+            avx2: is_x86_feature_detected!("avx2"),
+            fma: is_x86_feature_detected!("fma"),
+            avx512f: is_x86_feature_detected!("avx512f"),
+            avx512vl: is_x86_feature_detected!("avx512vl"),
+        }
+    }
+
+    /// Whether a CPU with these features can run the AVX2 + FMA kernels below.
+    pub(crate) fn run_avx2_fma(self) -> bool {
+        self.avx2 && self.fma
+    }
+
+    /// Whether it can also run the AVX-512VL builds of the kernels (32 vector registers).
+    pub(crate) fn run_avx512vl(self) -> bool {
+        self.run_avx2_fma() && self.avx512f && self.avx512vl
+    }
+}
+
+/// Whether this CPU can run the kernels below.
+pub(crate) fn available() -> bool {
+    Features::detect().run_avx2_fma()
+}
+
+/// Whether this CPU can also run the AVX-512VL builds of the kernels.
 pub(crate) fn avx512_available() -> bool {
-    available() && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl")
+    Features::detect().run_avx512vl()
 }
 
 /// Bytes a linear-blend or dual-quaternion job reads and writes per vertex with `influences`
@@ -43,36 +75,47 @@ pub(crate) fn streams_outputs(vertices: usize, influences: usize) -> bool {
         .is_some_and(|cache| vertices.saturating_mul(bytes_per_vertex(influences)) > cache)
 }
 
-/// The size of the largest-level data or unified cache, from CPUID's deterministic cache
-/// parameters (leaf 4 on Intel, 0x8000_001D on AMD and Hygon), read once.
+/// The size of this CPU's last-level cache ([`last_level_cache_from`] on its CPUID), read once.
 fn last_level_cache_bytes() -> Option<usize> {
     static SIZE: OnceLock<Option<usize>> = OnceLock::new();
     *SIZE.get_or_init(|| {
-        let vendor = __cpuid(0);
-        let amd = (vendor.ebx, vendor.edx, vendor.ecx) == (0x6874_7541, 0x6974_6E65, 0x444D_4163) // "AuthenticAMD"
-            || (vendor.ebx, vendor.edx, vendor.ecx) == (0x6F67_7948, 0x6E65_476E, 0x656E_6975); // "HygonGenuine"
-        let leaf = if amd {
-            let topology_extensions =
-                __cpuid(0x8000_0000).eax >= 0x8000_001D && __cpuid(0x8000_0001).ecx & (1 << 22) != 0;
-            topology_extensions.then_some(0x8000_001D)?
-        } else {
-            (vendor.eax >= 4).then_some(4)?
-        };
-        // Sub-leaf i describes one cache until its type (bits 4..0) is 0; level in bits 7..5,
-        // ways, partitions and line size minus one in EBX, sets minus one in ECX.
-        (0..16)
-            .map(|i| __cpuid_count(leaf, i))
-            .take_while(|c| c.eax & 0x1F != 0)
-            .filter(|c| matches!(c.eax & 0x1F, 1 | 3))
-            .map(|c| {
-                let ways = (c.ebx >> 22) as usize + 1;
-                let partitions = ((c.ebx >> 12) & 0x3FF) as usize + 1;
-                let line = (c.ebx & 0xFFF) as usize + 1;
-                ((c.eax >> 5) & 0x7, ways * partitions * line * (c.ecx as usize + 1))
-            })
-            .max()
-            .map(|(_, size)| size)
+        last_level_cache_from(|leaf, sub_leaf| {
+            let r = __cpuid_count(leaf, sub_leaf);
+            [r.eax, r.ebx, r.ecx, r.edx]
+        })
     })
+}
+
+/// The size of the highest-level data or unified cache, from CPUID's deterministic cache
+/// parameters (leaf 4 on Intel, 0x8000_001D on AMD and Hygon when they have topology
+/// extensions); `None` when the CPU does not report them. `cpuid(leaf, sub_leaf)` returns EAX,
+/// EBX, ECX and EDX.
+fn last_level_cache_from(cpuid: impl Fn(u32, u32) -> [u32; 4]) -> Option<usize> {
+    const AMD: [u32; 3] = [0x6874_7541, 0x6974_6E65, 0x444D_4163]; // "AuthenticAMD" in EBX, EDX, ECX
+    const HYGON: [u32; 3] = [0x6F67_7948, 0x6E65_476E, 0x656E_6975]; // "HygonGenuine"
+    let [max_leaf, b, c, d] = cpuid(0, 0);
+    let leaf = if [b, d, c] == AMD || [b, d, c] == HYGON {
+        let topology_extensions =
+            cpuid(0x8000_0000, 0)[0] >= 0x8000_001D && cpuid(0x8000_0001, 0)[2] & (1 << 22) != 0;
+        topology_extensions.then_some(0x8000_001D)?
+    } else {
+        (max_leaf >= 4).then_some(4)?
+    };
+    // Sub-leaf i describes one cache until its type (bits 4..0 of EAX) is 0: 1 data, 2
+    // instruction, 3 unified; level in bits 7..5; ways, partitions and line size minus one in
+    // EBX's bits 31..22, 21..12 and 11..0; sets minus one in ECX.
+    (0..16)
+        .map(|i| cpuid(leaf, i))
+        .take_while(|[eax, ..]| eax & 0x1F != 0)
+        .filter(|[eax, ..]| matches!(eax & 0x1F, 1 | 3))
+        .map(|[eax, ebx, ecx, _]| {
+            let ways = (ebx >> 22) as usize + 1;
+            let partitions = ((ebx >> 12) & 0x3FF) as usize + 1;
+            let line = (ebx & 0xFFF) as usize + 1;
+            ((eax >> 5) & 0x7, ways * partitions * line * (ecx as usize + 1))
+        })
+        .max()
+        .map(|(_, size)| size)
 }
 
 /// A palette matrix as ((x_axis | y_axis), (z_axis | translation)).
@@ -1405,6 +1448,167 @@ mod tests {
         }
         let (level, bytes) = largest.expect("sysfs reports a data or unified cache");
         assert_eq!(last_level_cache_bytes(), Some(bytes), "level {level} cache");
+    }
+
+    /// What the kernels are told this CPU has is what Linux reports in /proc/cpuinfo (read
+    /// from the same CPUID bits, independently of std's detection).
+    #[test]
+    fn detected_features_are_the_ones_linux_reports() {
+        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").expect("/proc/cpuinfo (Linux)");
+        let flags: Vec<&str> = cpuinfo
+            .lines()
+            .find_map(|line| line.strip_prefix("flags"))
+            .and_then(|rest| rest.split_once(':'))
+            .expect("a flags line in /proc/cpuinfo")
+            .1
+            .split_whitespace()
+            .collect();
+        let has = |flag: &str| flags.contains(&flag);
+        let expected = Features {
+            avx2: has("avx2"),
+            fma: has("fma"),
+            avx512f: has("avx512f"),
+            avx512vl: has("avx512vl"),
+        };
+        assert_eq!(Features::detect(), expected);
+        assert_eq!(available(), has("avx2") && has("fma"));
+        assert_eq!(avx512_available(), has("avx2") && has("fma") && has("avx512f") && has("avx512vl"));
+    }
+
+    /// Each build needs every feature its instructions use: a CPU that lacks any one of them
+    /// never runs it (it would fault on the first such instruction).
+    #[test]
+    fn a_build_runs_only_with_every_feature_it_uses() {
+        let all = Features { avx2: true, fma: true, avx512f: true, avx512vl: true };
+        assert!(all.run_avx2_fma() && all.run_avx512vl());
+        assert!(!Features::default().run_avx2_fma() && !Features::default().run_avx512vl());
+        for (without, features) in
+            [("avx2", Features { avx2: false, ..all }), ("fma", Features { fma: false, ..all })]
+        {
+            assert!(!features.run_avx2_fma(), "AVX2+FMA build without {without}");
+            assert!(!features.run_avx512vl(), "AVX-512VL build without {without}");
+        }
+        for (without, features) in [
+            ("avx512f", Features { avx512f: false, ..all }),
+            ("avx512vl", Features { avx512vl: false, ..all }),
+        ] {
+            assert!(features.run_avx2_fma(), "AVX2+FMA build needs no {without}");
+            assert!(!features.run_avx512vl(), "AVX-512VL build without {without}");
+        }
+    }
+
+    /// A made-up CPU for [`last_level_cache_from`]: its vendor string, highest standard and
+    /// extended leaves, and the caches its deterministic-cache-parameters leaf lists.
+    struct FakeCpu {
+        vendor: &'static [u8; 12],
+        max_leaf: u32,
+        max_extended_leaf: u32,
+        topology_extensions: bool,
+        /// (type: 1 data, 2 instruction, 3 unified; level; ways; partitions; line bytes; sets)
+        caches: Vec<(u32, u32, u32, u32, u32, u32)>,
+    }
+
+    impl FakeCpu {
+        fn cpuid(&self, leaf: u32, sub_leaf: u32) -> [u32; 4] {
+            let word = |i: usize| u32::from_le_bytes(self.vendor[4 * i..4 * i + 4].try_into().unwrap());
+            let cache_leaf = if self.vendor == b"GenuineIntel" { 4 } else { 0x8000_001D };
+            match leaf {
+                // The vendor string is EBX, EDX, ECX.
+                0 => [self.max_leaf, word(0), word(2), word(1)],
+                0x8000_0000 => [self.max_extended_leaf, 0, 0, 0],
+                0x8000_0001 => [0, 0, u32::from(self.topology_extensions) << 22, 0],
+                _ if leaf == cache_leaf => self.caches.get(sub_leaf as usize).map_or([0; 4], |c| {
+                    let (kind, level, ways, partitions, line, sets) = *c;
+                    // The layout of Intel's SDM (CPUID leaf 04H), which AMD's 8000_001DH shares.
+                    [kind | level << 5, (ways - 1) << 22 | (partitions - 1) << 12 | (line - 1), sets - 1, 0]
+                }),
+                _ => [0; 4],
+            }
+        }
+
+        fn last_level_cache(&self) -> Option<usize> {
+            last_level_cache_from(|leaf, sub_leaf| self.cpuid(leaf, sub_leaf))
+        }
+    }
+
+    const MIB: usize = 1 << 20;
+
+    /// An Intel client CPU: 48 KiB L1d (12 ways × 64 sets × 64 B), 32 KiB L1i, 1.25 MiB L2
+    /// (10 × 2048 × 64), 24 MiB L3 (12 × 32768 × 64).
+    fn intel() -> FakeCpu {
+        FakeCpu {
+            vendor: b"GenuineIntel",
+            max_leaf: 0x20,
+            max_extended_leaf: 0x8000_0008,
+            topology_extensions: false,
+            caches: vec![
+                (1, 1, 12, 1, 64, 64),
+                (2, 1, 8, 1, 64, 64),
+                (3, 2, 10, 1, 64, 2048),
+                (3, 3, 12, 1, 64, 32768),
+            ],
+        }
+    }
+
+    /// An AMD Zen CPU: 32 KiB L1d and L1i, 1 MiB L2, 32 MiB L3 (16 × 32768 × 64) per CCX.
+    fn amd(vendor: &'static [u8; 12]) -> FakeCpu {
+        FakeCpu {
+            vendor,
+            max_leaf: 0x10,
+            max_extended_leaf: 0x8000_0021,
+            topology_extensions: true,
+            caches: vec![
+                (1, 1, 8, 1, 64, 64),
+                (2, 1, 8, 1, 64, 64),
+                (3, 2, 8, 1, 64, 2048),
+                (3, 3, 16, 1, 64, 32768),
+            ],
+        }
+    }
+
+    #[test]
+    fn the_last_level_cache_is_read_from_each_vendors_leaf() {
+        assert_eq!(intel().last_level_cache(), Some(24 * MIB));
+        assert_eq!(amd(b"AuthenticAMD").last_level_cache(), Some(32 * MIB));
+        assert_eq!(amd(b"HygonGenuine").last_level_cache(), Some(32 * MIB));
+        // AMD's caches are not read from Intel's leaf, nor Intel's from AMD's.
+        assert_eq!(FakeCpu { vendor: b"AuthenticAMD", ..intel() }.last_level_cache(), None);
+        assert_eq!(
+            FakeCpu { vendor: b"GenuineIntel", ..amd(b"AuthenticAMD") }.last_level_cache(),
+            Some(32 * MIB)
+        );
+    }
+
+    #[test]
+    fn a_cpu_without_the_cache_leaf_has_no_known_cache_size() {
+        // Leaf 4 is beyond an old Intel CPU's highest leaf (whatever it would return).
+        assert_eq!(FakeCpu { max_leaf: 3, ..intel() }.last_level_cache(), None);
+        assert_eq!(FakeCpu { max_leaf: 4, ..intel() }.last_level_cache(), Some(24 * MIB));
+        // AMD: leaf 0x8000_001D needs both the extended leaf and the topology extensions bit.
+        let amd = || amd(b"AuthenticAMD");
+        assert_eq!(FakeCpu { max_extended_leaf: 0x8000_001C, ..amd() }.last_level_cache(), None);
+        assert_eq!(FakeCpu { max_extended_leaf: 0x8000_001D, ..amd() }.last_level_cache(), Some(32 * MIB));
+        assert_eq!(FakeCpu { topology_extensions: false, ..amd() }.last_level_cache(), None);
+        assert_eq!(FakeCpu { caches: Vec::new(), ..intel() }.last_level_cache(), None);
+    }
+
+    #[test]
+    fn the_last_level_is_the_highest_data_or_unified_cache_with_all_its_partitions() {
+        // A level-2 cache larger than the level-3 one: the level decides, not the size.
+        let caches = vec![(1, 1, 8, 1, 64, 64), (3, 2, 16, 1, 64, 4096), (3, 3, 16, 1, 64, 2048)];
+        assert_eq!(FakeCpu { caches, ..intel() }.last_level_cache(), Some(2 * MIB));
+        // A cache in two partitions holds twice what one does (16 ways × 2 × 64 B × 8192 sets).
+        let caches = vec![(1, 1, 8, 1, 64, 64), (3, 3, 16, 2, 64, 8192)];
+        assert_eq!(FakeCpu { caches, ..intel() }.last_level_cache(), Some(16 * MIB));
+        // An instruction cache is no place for outputs, even at the highest level.
+        let caches = vec![(1, 1, 8, 1, 64, 64), (3, 2, 8, 1, 64, 2048), (2, 3, 16, 1, 64, 32768)];
+        assert_eq!(FakeCpu { caches, ..intel() }.last_level_cache(), Some(MIB));
+        // The list ends at the first null entry (type 0); what follows it is not a cache.
+        let caches = vec![(1, 1, 8, 1, 64, 64), (0, 0, 1, 1, 1, 1), (3, 3, 16, 1, 64, 32768)];
+        assert_eq!(FakeCpu { caches, ..intel() }.last_level_cache(), Some(32 * 1024));
+        // Line size and sets count as well as ways.
+        let caches = vec![(3, 3, 1, 1, 128, 1)];
+        assert_eq!(FakeCpu { caches, ..intel() }.last_level_cache(), Some(128));
     }
 
     #[test]
