@@ -1815,3 +1815,66 @@ pub fn export_md2(
     root["accessors"] = json!(b.accessors);
     Ok(ExportedGltf { json: root, bin: b.bin })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::md2::{Md2Clip, Md2Frame, Md2Model, Md2Skin};
+
+    /// One triangle, one frame.
+    fn triangle_model() -> Md2Model {
+        Md2Model {
+            skin_width: 2,
+            skin_height: 2,
+            skin_names: Vec::new(),
+            vertex_xyz: vec![0, 1, 2],
+            texcoords: vec![Vec2::ZERO, Vec2::X, Vec2::Y],
+            indices: vec![0, 1, 2],
+            frames: vec![Md2Frame {
+                name: "stand1".into(),
+                positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+                normal_indices: vec![0, 0, 0],
+            }],
+            clips: vec![Md2Clip { name: "stand".into(), frames: 0..1 }],
+            skin: None,
+        }
+    }
+
+    fn export_object(model: &Md2Model, clip: Option<&str>) -> Result<Document, MeshFileError> {
+        let mut doc = Document::default();
+        doc.nodes.push(json!({"name": "model"}));
+        md2_object(&mut doc, &Scene::default(), model, Path::new("model.md2"), clip, 10.0, 0, "model")?;
+        Ok(doc)
+    }
+
+    /// `Md2Model`'s fields are public, so a model built or changed in memory can disagree with
+    /// itself; exporting it is refused with the reason, never a panic or a broken file.
+    #[test]
+    fn an_md2_model_that_disagrees_with_itself_is_refused() {
+        let model = triangle_model();
+        let doc = export_object(&model, Some("stand")).expect("a consistent model exports");
+        assert_eq!(doc.meshes.len(), 1);
+
+        let clip_past_the_frames =
+            Md2Model { clips: vec![Md2Clip { name: "run".into(), frames: 0..3 }], ..model.clone() };
+        match export_object(&clip_past_the_frames, Some("run")) {
+            Err(e @ MeshFileError::FrameMissing(1)) => assert_eq!(e.to_string(), "frame 1 is missing"),
+            other => panic!("expected frame 1 missing, got {:?}", other.map(|_| ())),
+        }
+        let clip_of_no_frame =
+            Md2Model { clips: vec![Md2Clip { name: "run".into(), frames: 5..6 }], ..model.clone() };
+        assert!(matches!(export_object(&clip_of_no_frame, Some("run")), Err(MeshFileError::FrameMissing(5))));
+
+        let short_skin = Md2Skin { path: "model.png".into(), width: 2, height: 2, rgba: vec![255; 15] };
+        let skin_of_wrong_size = Md2Model { skin: Some(short_skin), ..model.clone() };
+        match export_object(&skin_of_wrong_size, None) {
+            Err(e @ MeshFileError::SkinSize) => {
+                assert_eq!(e.to_string(), "skin image size does not match its pixels");
+            }
+            other => panic!("expected a skin size error, got {:?}", other.map(|_| ())),
+        }
+        let whole_skin = Md2Skin { path: "model.png".into(), width: 2, height: 2, rgba: vec![255; 16] };
+        let doc = export_object(&Md2Model { skin: Some(whole_skin), ..model }, None).expect("a 2×2 skin");
+        assert_eq!(doc.textures.len(), 1);
+    }
+}

@@ -71,7 +71,7 @@ fn scene_with(source: MeshSource) -> Scene {
 /// Exports `scene` with model paths relative to `dir`; the mesh-file error and its text.
 fn mesh_file_error(scene: &Scene, dir: &Path) -> (MeshFileError, String) {
     let options = ExportOptions { base_dir: Some(dir.to_path_buf()), ..ExportOptions::default() };
-    let err = export_scene(scene, &options).expect_err("export must fail");
+    let Err(err) = export_scene(scene, &options) else { panic!("export must fail") };
     let shown = err.to_string();
     assert!(shown.starts_with("objects[0].mesh: cannot load mesh file "), "{shown}");
     let ExportError::MeshFile { source, .. } = err else { panic!("{shown}") };
@@ -121,6 +121,24 @@ fn model_files_of_objects_are_checked() {
     });
     let (err, shown) = mesh_file_error(&scene_with(MeshSource::file("points.glb", Some(0))), dir);
     assert!(matches!(err, MeshFileError::NoTriangles(0)), "{shown}");
+
+    // A skinned mesh whose primitives lost their joints and weights: the skin cannot bind it.
+    // The scene was made from the file before it lost them (as `keyrig import` makes it).
+    let demo = keyrig_io::gltf_import::import_gltf_file(&dir.join("demo.glb")).expect("import demo.glb");
+    let scene = demo.to_scene("unweighted.glb", None).expect("scene of demo.glb");
+    assert!(scene.objects.iter().any(|o| o.skeleton.is_some()), "the demo's arm has a skeleton");
+    edited_demo_glb(dir, "unweighted.glb", |json| {
+        for mesh in json["meshes"].as_array_mut().expect("meshes") {
+            for primitive in mesh["primitives"].as_array_mut().expect("primitives") {
+                let attributes = primitive["attributes"].as_object_mut().expect("attributes");
+                attributes.remove("JOINTS_0");
+                attributes.remove("WEIGHTS_0");
+            }
+        }
+    });
+    let (err, shown) = mesh_file_error(&scene, dir);
+    assert!(matches!(err, MeshFileError::Skin(_)), "{shown}");
+    assert!(shown.ends_with("a primitive has no JOINTS_0/WEIGHTS_0"), "{shown}");
 }
 
 #[test]
