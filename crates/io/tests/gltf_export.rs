@@ -249,3 +249,130 @@ fn lights_survive_export_and_import() {
         }
     }
 }
+
+/// The characters scene (the arm, CesiumMan, the Fox and an MD2 model, the last three from
+/// their own files) exports to a file the validator accepts: every primitive keeps its normals,
+/// joints and weights for all its vertices, each material names its own texture, and the MD2
+/// model's morph weights are keyed at the scene range's ends and at every model frame between.
+#[test]
+fn characters_scene_export_passes_the_khronos_validator() {
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let scene = keyrig_io::scene_file::load(&assets.join("characters.ron")).expect("assets/characters.ron");
+    let options = ExportOptions { base_dir: Some(assets.clone()), ..ExportOptions::default() };
+    let exported = export_scene(&scene, &options).expect("export");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("characters.glb");
+    exported.write(&path).expect("write");
+    let (errors, warnings, report) = validate(&path);
+    assert_eq!(errors, 0, "{report}");
+    assert_eq!(warnings, 0, "{report}");
+
+    // Three textured models, three textures, each material its own one.
+    let json = &exported.json;
+    let textures = json["textures"].as_array().expect("textures");
+    assert_eq!(textures.len(), 3, "CesiumMan's, the Fox's and Sydney's skin");
+    let mut used: Vec<u64> = json["materials"]
+        .as_array()
+        .expect("materials")
+        .iter()
+        .filter_map(|m| m["pbrMetallicRoughness"]["baseColorTexture"]["index"].as_u64())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    assert_eq!(used, [0, 1, 2]);
+    let sources: Vec<u64> = textures.iter().map(|t| t["source"].as_u64().expect("source")).collect();
+    assert_eq!(sources, [0, 1, 2]);
+
+    // Sydney (10 model frames per second) in a 30 fps scene of frames 0..=90.
+    let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+    let sydney = scene.objects.iter().find(|o| o.name.to_lowercase().contains("sydney")).expect("Sydney");
+    let node = node_named(&model, &sydney.name);
+    let keys = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Weights(w) if c.node == node => Some(&w.keys),
+            _ => None,
+        })
+        .expect("Sydney's morph weights are animated");
+    let (t0, t1) =
+        (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
+    let mut expected = vec![t0];
+    expected.extend((1..30).map(|k| f64::from(k) / 10.0));
+    expected.push(t1);
+    let times: Vec<f64> = keys.iter().map(|k| k.time).collect();
+    assert_eq!(times.len(), expected.len(), "{times:?}");
+    for (got, want) in times.iter().zip(&expected) {
+        assert!((got - want).abs() < 1e-6, "key at {got}, expected {want}: {times:?}");
+    }
+}
+
+/// A spot light whose cone angles are not finite (a scene made in code: the scene file refuses
+/// them) is refused with the light's path, whichever of the two angles it is.
+#[test]
+fn spot_lights_need_finite_angles() {
+    let base = keyrig_io::demo::demo_scene();
+    let spot = base
+        .lights
+        .iter()
+        .position(|l| matches!(l.kind, keyrig_core::LightKind::Spot { .. }))
+        .expect("the demo has a spot light");
+    for (cutoff, inner) in [(f32::NAN, 10.0), (30.0, f32::INFINITY), (f32::NAN, f32::NAN)] {
+        let mut scene = base.clone();
+        let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = &mut scene.lights[spot].kind
+        else {
+            unreachable!()
+        };
+        (*cutoff_deg, *inner_angle_deg) = (cutoff, inner);
+        let Err(err) = export_scene(&scene, &ExportOptions::default()) else {
+            panic!("cutoff {cutoff}, inner {inner}: exported")
+        };
+        assert_eq!(err.to_string(), format!("lights[{spot}].kind: spot angles must be finite"));
+    }
+}
+
+/// The skin's `skeleton` is the arm's root joint (the common root of its joints).
+#[test]
+fn the_skins_skeleton_is_the_root_joint() {
+    let exported = export_scene(&keyrig_io::demo::demo_scene(), &ExportOptions::default()).expect("export");
+    let nodes = exported.json["nodes"].as_array().expect("nodes");
+    let shoulder = nodes.iter().position(|n| n["name"] == "shoulder").expect("a shoulder node");
+    assert_eq!(exported.json["skins"][0]["skeleton"].as_u64(), Some(shoulder as u64));
+}
+
+/// An object whose mesh is a morphing glTF model keeps the model's morph targets, default
+/// weights and first animation's weights keys (STEP, LINEAR or CUBICSPLINE as in the file).
+#[test]
+fn morph_weights_of_a_model_file_are_exported() {
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf/AnimatedMorphCube");
+    let file = "AnimatedMorphCube.glb";
+    let original = keyrig_io::gltf_import::import_gltf_file(&corpus.join(file)).expect("AnimatedMorphCube");
+    let mut object = keyrig_core::Object::new("cube");
+    object.mesh = Some(keyrig_core::MeshSource::file(file, Some(0)));
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let options = ExportOptions { base_dir: Some(corpus), ..ExportOptions::default() };
+    let exported = export_scene(&scene, &options).expect("export");
+    let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+    let weights = |m: &ImportedModel| {
+        m.animations[0]
+            .channels
+            .iter()
+            .find_map(|c| match &c.target {
+                ChannelTarget::Weights(w) => Some(w.clone()),
+                _ => None,
+            })
+            .expect("a weights channel")
+    };
+    let (got, want) = (weights(&model), weights(&original));
+    assert_eq!(got.targets, want.targets);
+    assert_eq!(got.keys.len(), want.keys.len());
+    for (g, w) in got.keys.iter().zip(&want.keys) {
+        assert!((g.time - w.time).abs() < 1e-6, "{} vs {}", g.time, w.time);
+        assert_eq!(g.interpolation, w.interpolation);
+        assert_eq!(g.value, w.value);
+    }
+    assert_eq!(
+        exported.json["meshes"][0]["primitives"][0]["targets"].as_array().map(Vec::len),
+        Some(want.targets)
+    );
+}
