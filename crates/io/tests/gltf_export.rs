@@ -305,6 +305,30 @@ fn characters_scene_export_passes_the_khronos_validator() {
     for (got, want) in times.iter().zip(&expected) {
         assert!((got - want).abs() < 1e-6, "key at {got}, expected {want}: {times:?}");
     }
+    // Between and at the keys, the file's morph plays Sydney as keyrig does (frames a and b of
+    // the looping playback, blended by t).
+    let md2 = keyrig_io::md2::load_md2_file(&assets.join("models/sydney/sydney.md2")).expect("sydney.md2");
+    let playback = md2.playback().expect("playback");
+    let track = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Weights(w) if c.node == node => Some(w),
+            _ => None,
+        })
+        .expect("weights");
+    let primitive = &model.meshes[model.nodes[node].mesh.expect("Sydney's mesh")].primitives[0];
+    let size = md2.frames[0].positions.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+    for t in [0.0, 0.05, 0.37, 1.0, 1.23, 2.95, 3.0] {
+        let weights = keyrig_io::model::sample_weights(track, t).expect("weights at t");
+        let got = ImportedModel::morphed_positions(primitive, &weights);
+        let blend = playback.blend_at(None, 10.0, t).expect("blend");
+        let want = md2
+            .blended_positions(blend.frame_a as usize, blend.frame_b as usize, blend.t)
+            .expect("frames of the model");
+        let worst = got.iter().zip(&want).map(|(g, w)| (*g - *w).length()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-4 * size, "t {t}: {worst}");
+    }
 }
 
 /// A spot light whose cone angles are not finite (a scene made in code: the scene file refuses
