@@ -106,3 +106,31 @@ fn channel_ids_know_their_kind_of_value() {
         assert_eq!(id.kind(), kind, "{id:?}");
     }
 }
+
+/// A joint lists its translation (scale) channel when that is keyed or not the identity, so an
+/// imported character's bone offsets show, and keyrig's own rigs keep one row per joint.
+#[test]
+fn joint_translations_and_scales_are_listed_where_keyed_or_not_identity() {
+    use keyrig_core::channel_id::ChannelId;
+    let joint = |name: &str| Joint::new(name, None, Vec3::ZERO, Quat::IDENTITY);
+    let keys = |v: Vec3| Animated::new(v, RawTrack::new(vec![Key::new(0.0, v), Key::new(1.0, v)]));
+    let mut offset = joint("offset");
+    offset.translation.value = Vec3::new(0.0, 0.3, 0.0);
+    offset.scale.value = Vec3::splat(2.0);
+    let mut keyed = joint("keyed");
+    keyed.translation = keys(Vec3::ZERO);
+    keyed.scale = keys(Vec3::ONE);
+    let mut arm = Object::new("Arm");
+    arm.skeleton = Some(Skeleton::new(vec![offset, keyed, joint("plain")]));
+    let mut scene = Scene::default();
+    scene.objects.push(arm);
+    let ids = ChannelId::of_object(&scene, 0);
+    let object = 0;
+    for joint in [0, 1] {
+        assert!(ids.contains(&ChannelId::JointTranslation { object, joint }), "joint {joint}: {ids:?}");
+        assert!(ids.contains(&ChannelId::JointScale { object, joint }), "joint {joint}: {ids:?}");
+    }
+    assert!(!ids.contains(&ChannelId::JointTranslation { object, joint: 2 }), "{ids:?}");
+    assert!(!ids.contains(&ChannelId::JointScale { object, joint: 2 }), "{ids:?}");
+    assert!(ids.contains(&ChannelId::JointRotation { object, joint: 2 }), "{ids:?}");
+}

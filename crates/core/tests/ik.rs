@@ -13,7 +13,7 @@ use std::f64::consts::PI;
 
 use glam::{Affine3A, DAffine3, DQuat, DVec3, Quat, Vec3};
 use keyrig_core::ik::{
-    chain_joints, solve_fabrik, solve_two_bone, FabrikSettings, IkChain, IkError, IkReport, Pole,
+    chain_joints, solve_fabrik, solve_two_bone, FabrikSettings, IkChain, IkError, IkReport, Pole, REACH_SLACK,
 };
 use keyrig_core::{Joint, Skeleton};
 use proptest::collection::vec;
@@ -303,6 +303,52 @@ proptest! {
         let expected = v0 * a.cos() + direction.cross(v0) * a.sin();
         let bend = reject(p[1] - p[0], direction).normalize();
         prop_assert!(bend.distance(expected) <= 1e-5, "bend {bend} expected {expected}");
+    }
+}
+
+/// An arm in centimetres (upper arm 60, forearm 40, bent at the elbow): a chain whose length is
+/// far from 1, so that tolerances relative to it differ from absolute ones.
+fn long_arm() -> Rig {
+    Rig { translations: vec![Vec3::ZERO, Vec3::new(60.0, 0.0, 0.0), Vec3::new(40.0, 0.0, 0.0)], ..arm() }
+}
+
+/// The inner edge of the reach (a forearm shorter than the upper arm cannot bring the hand
+/// nearer the shoulder than their difference) has the same slack as the outer one: 1e-6 of the
+/// chain's length.
+#[test]
+fn two_bone_reach_slack_is_relative_to_the_chain_length() {
+    let rig = long_arm();
+    let (reach, shortest) = (rig.reach(), rig.shortest());
+    assert_eq!((reach, shortest), (100.0, 20.0));
+    let pole = Pole::Point(Vec3::new(0.0, 50.0, 0.0));
+    for (distance, reachable) in [
+        (shortest - 0.5 * REACH_SLACK * reach, true),
+        (shortest - 20.0 * REACH_SLACK * reach, false),
+        (reach + 0.5 * REACH_SLACK * reach, true),
+        (reach + 20.0 * REACH_SLACK * reach, false),
+    ] {
+        let (_, report) = two_bone(&rig, Vec3::new(distance as f32, 0.0, 0.0), pole);
+        assert_eq!(report.reachable, reachable, "target {distance} from the root");
+    }
+}
+
+/// A target on the root (within 1e-9 of the chain's length: no direction the solver can trust)
+/// folds the chain along its current root→end axis, wherever rounding put the target.
+#[test]
+fn two_bone_target_on_the_root_keeps_the_chains_direction() {
+    let rig = long_arm();
+    let before = rig.positions(&rig.rotations);
+    let axis = (before[2] - before[0]).normalize();
+    let upper = (before[1] - before[0]).normalize();
+    assert!(axis.angle_between(upper) > 0.1, "the arm is bent");
+    let across = axis.any_orthonormal_vector();
+    for offset in [DVec3::ZERO, across * 1e-8, -axis * 1e-8] {
+        let target = (before[0] + offset).as_vec3();
+        let (rotations, _) = two_bone(&rig, target, Pole::Point(Vec3::new(0.0, 0.0, 50.0)));
+        let after = rig.positions(&rotations);
+        let end = after[2] - after[0];
+        assert!((end.length() - rig.shortest()).abs() < 1e-4, "offset {offset}: end at {}", end.length());
+        assert!(end.normalize().angle_between(axis) < 1e-5, "offset {offset}: end {end}, axis {axis}");
     }
 }
 

@@ -400,3 +400,25 @@ fn morph_weights_of_a_model_file_are_exported() {
         Some(want.targets)
     );
 }
+
+/// An object's rotation is written on its node: its value when it has no keys, and its first
+/// key (what a viewer that does not play the animation shows) when it has some.
+#[test]
+fn static_object_rotations_are_written_on_their_nodes() {
+    let mut still = keyrig_core::Object::new("still");
+    still.rotation.value = glam::Quat::from_rotation_y(0.7);
+    let mut keyed = keyrig_core::Object::new("keyed");
+    keyed.rotation.track = RawTrack::new(vec![
+        Key::new(0.5, glam::Quat::from_rotation_x(0.4)),
+        Key::new(1.5, glam::Quat::from_rotation_x(1.2)),
+    ]);
+    let scene = Scene { objects: vec![still, keyed], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    for (name, want) in
+        [("still", glam::Quat::from_rotation_y(0.7)), ("keyed", glam::Quat::from_rotation_x(0.4))]
+    {
+        let got = model.nodes[node_named(&model, name)].rotation;
+        assert!(got.angle_between(want) < 1e-6, "{name}: {got} vs {want}");
+    }
+}
