@@ -422,3 +422,40 @@ fn static_object_rotations_are_written_on_their_nodes() {
         assert!(got.angle_between(want) < 1e-6, "{name}: {got} vs {want}");
     }
 }
+
+/// Blender mode (LINEAR keys only) writes a joint's translation through its rest transform,
+/// `t_rest + q_rest·t(t)`, within the position tolerance of keyrig's curve at every time.
+#[test]
+fn blender_mode_joint_translations_follow_keyrig_through_the_rest_transform() {
+    use keyrig_core::{Animated, Joint, Object, Skeleton};
+    use keyrig_io::gltf_export::BakeOptions;
+    let rest = glam::Quat::from_rotation_z(0.5);
+    let mut root = Joint::new("root", None, Vec3::new(0.0, 1.0, 0.0), rest);
+    root.translation = Animated::new(
+        Vec3::ZERO,
+        RawTrack::new(vec![
+            Key::new(0.0, Vec3::ZERO),
+            Key::new(1.0, Vec3::new(0.5, 0.0, 0.2)).with_tcb(Tcb::new(0.2, -0.3, 0.1)),
+            Key::new(2.0, Vec3::new(0.0, 0.3, 0.0)),
+        ]),
+    );
+    let mut object = Object::new("rig");
+    object.skeleton = Some(Skeleton::new(vec![
+        root,
+        keyrig_core::Joint::new("tip", Some(0), Vec3::X, glam::Quat::IDENTITY),
+    ]));
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let bake = BakeOptions::default();
+    let options = ExportOptions { bake: Some(bake), ..ExportOptions::default() };
+    let exported = export_scene(&scene, &options).expect("export");
+    let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+    let node = node_named(&model, "root");
+    let joint = &scene.objects[0].skeleton.as_ref().expect("skeleton").joints[0];
+    let track = AnimatedTrack::new(&joint.translation).expect("track");
+    for i in 0..=80 {
+        let t = f64::from(i) / 40.0;
+        let want = joint.rest_translation + rest * track.sample(t);
+        let got = model.pose_at(Some(0), t).translation[node];
+        assert!((got - want).length() as f64 <= bake.position_tolerance + 1e-5, "t {t}: {got} vs {want}");
+    }
+}
