@@ -459,3 +459,41 @@ fn blender_mode_joint_translations_follow_keyrig_through_the_rest_transform() {
         assert!((got - want).length() as f64 <= bake.position_tolerance + 1e-5, "t {t}: {got} vs {want}");
     }
 }
+
+/// A cycled track is written with a key at every repeat of its key times in the range, before
+/// its keys as well as after them, so that its corners stay exact.
+#[test]
+fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
+    use keyrig_core::{Cycle, Cycles};
+    let mut object = keyrig_core::Object::new("box");
+    let linear = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
+    object.translation.track = RawTrack::new(vec![
+        linear(0.5, Vec3::ZERO),
+        linear(1.0, Vec3::new(1.0, 0.0, 0.0)),
+        linear(1.25, Vec3::new(1.0, 1.0, 0.0)),
+    ]);
+    object.translation = object.translation.with_cycles(Cycles::new(Cycle::Repeat, Cycle::Repeat));
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let node = node_named(&model, "box");
+    let times: Vec<f64> = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Translation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| k.time).collect())
+            }
+            _ => None,
+        })
+        .expect("the box's translation is animated");
+    let end = f64::from(scene.frame_range.end) / scene.fps;
+    for k in -1..=(end / 0.75).ceil() as i32 {
+        for key in [0.5, 1.0, 1.25] {
+            let t = key + 0.75 * f64::from(k);
+            if (0.0..=end).contains(&t) {
+                assert!(times.iter().any(|&x| (x - t).abs() < 1e-6), "no key at {t}: {times:?}");
+            }
+        }
+    }
+}
