@@ -776,14 +776,6 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
     Ok(ExportedGltf { json: root, bin: b.bin })
 }
 
-/// Writes the joints of `skeleton` as nodes below the object node `object_node` and their
-/// channels, returning the node of each joint.
-///
-/// A joint's node carries R(j)·T(j) as glTF's `T·R·S`: translation `t_rest + q_rest·t(t)`,
-/// rotation `q_rest·q(t)`, scale `s(t)` — exact, as `translate(t_rest)·rotate(q_rest)·
-/// translate(t)·rotate(q)·scale(s)` is that TRS. A root joint adds the skeleton's root
-/// translation: folded into its translation when at most one of the two is animated, else
-/// written on a node of its own between the object and the joint.
 /// Whether any IK constraint of `scene` moves its chain (its blend is keyed or not 0).
 fn has_ik(scene: &Scene) -> bool {
     scene.objects.iter().enumerate().any(|(o, object)| {
@@ -792,6 +784,14 @@ fn has_ik(scene: &Scene) -> bool {
     })
 }
 
+/// Writes the joints of `skeleton` as nodes below the object node `object_node` and their
+/// channels, returning the node of each joint.
+///
+/// A joint's node carries R(j)·T(j) as glTF's `T·R·S`: translation `t_rest + q_rest·t(t)`,
+/// rotation `q_rest·q(t)`, scale `s(t)` — exact, as `translate(t_rest)·rotate(q_rest)·
+/// translate(t)·rotate(q)·scale(s)` is that TRS. A root joint adds the skeleton's root
+/// translation: folded into its translation when at most one of the two is animated, else
+/// written on a node of its own between the object and the joint.
 fn export_joints(
     doc: &mut Document,
     object_node: usize,
