@@ -79,7 +79,7 @@ impl Job for BonesBlendJob<'_> {
         }
     }
 
-    fn fast(&mut self, parallel: bool, build: Build) {
+    fn fast(&mut self, parallel: bool, build: Build) -> Build {
         let joints = &self.palette.bones_blending;
         let (bindings, positions, normals) = (&self.bindings[..], self.positions, self.normals);
         #[cfg(target_arch = "x86_64")]
@@ -101,7 +101,7 @@ impl Job for BonesBlendJob<'_> {
                     )
                 }
             });
-            return;
+            return Build::Avx2Fma;
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = build;
@@ -123,5 +123,6 @@ impl Job for BonesBlendJob<'_> {
                 *on = (x * n.x + y * n.y + z * n.z).into();
             }
         });
+        Build::Portable
     }
 }

@@ -79,7 +79,7 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
         }
     }
 
-    fn fast(&mut self, parallel: bool, build: Build) {
+    fn fast(&mut self, parallel: bool, build: Build) -> Build {
         let dqs = self.dual_quaternions;
         let (joints, weights) = (self.influences.joints(), self.influences.weights());
         let (positions, normals) = (self.positions, self.normals);
@@ -89,13 +89,14 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
             // validate() checked that the palette holds every joint index of the influences.
             let packed = unsafe { super::simd::pack_dual_quaternions(dqs) };
             let stream = super::simd::streams_outputs(positions.len(), N);
+            let avx512 = build == Build::Avx512Vl;
             for_each_chunk(parallel, self.out_positions, self.out_normals, |start, out_p, out_n| {
                 let end = start + out_p.len();
                 let (js, ws) = (&joints[start..end], &weights[start..end]);
                 let (ps, ns) = (&positions[start..end], &normals[start..end]);
                 // SAFETY: as above; the AVX-512VL build only where the CPU has it.
                 unsafe {
-                    if build == Build::Avx512Vl {
+                    if avx512 {
                         super::simd::dual_quaternion_chunk_avx512_x16(
                             &packed, js, ws, ps, ns, out_p, out_n, stream,
                         )
@@ -104,7 +105,7 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
                     }
                 }
             });
-            return;
+            return if avx512 { Build::Avx512Vl } else { Build::Avx2Fma };
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = build;
@@ -146,5 +147,6 @@ impl<const N: usize> Job for DualQuatJob<'_, N> {
                 *on = (n + 2.0 * r.cross(r.cross(n) + rw * n)).into();
             }
         });
+        Build::Portable
     }
 }

@@ -70,7 +70,7 @@ impl<const N: usize> Job for LinearBlendJob<'_, N> {
         }
     }
 
-    fn fast(&mut self, parallel: bool, build: Build) {
+    fn fast(&mut self, parallel: bool, build: Build) -> Build {
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let (joints, weights) = (self.influences.joints(), self.influences.weights());
@@ -97,7 +97,7 @@ impl<const N: usize> Job for LinearBlendJob<'_, N> {
                     )
                 }
             });
-            return;
+            return Build::Avx512Vl;
         }
         #[cfg(target_arch = "x86_64")]
         if normal_palette.is_none() && build != Build::Portable {
@@ -119,7 +119,7 @@ impl<const N: usize> Job for LinearBlendJob<'_, N> {
                     )
                 }
             });
-            return;
+            return Build::Avx2Fma;
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = build;
@@ -158,5 +158,6 @@ impl<const N: usize> Job for LinearBlendJob<'_, N> {
                 *on = nm.into();
             }
         });
+        Build::Portable
     }
 }

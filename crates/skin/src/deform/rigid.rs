@@ -91,7 +91,7 @@ impl Job for RigidJob<'_> {
         }
     }
 
-    fn fast(&mut self, parallel: bool, build: Build) {
+    fn fast(&mut self, parallel: bool, build: Build) -> Build {
         let palette = &self.palette.skinning;
         let normal_palette = self.palette.normal_skinning.as_deref();
         let joints = self.joints;
@@ -116,7 +116,7 @@ impl Job for RigidJob<'_> {
                     )
                 }
             });
-            return;
+            return Build::Avx2Fma;
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = build;
@@ -133,6 +133,7 @@ impl Job for RigidJob<'_> {
                 *on = nm.into();
             }
         });
+        Build::Portable
     }
 }
 

@@ -45,16 +45,6 @@ impl Features {
     }
 }
 
-/// Whether this CPU can run the kernels below.
-pub(crate) fn available() -> bool {
-    Features::detect().run_avx2_fma()
-}
-
-/// Whether this CPU can also run the AVX-512VL builds of the kernels.
-pub(crate) fn avx512_available() -> bool {
-    Features::detect().run_avx512vl()
-}
-
 /// Bytes a linear-blend or dual-quaternion job reads and writes per vertex with `influences`
 /// influences: position and normal in and out (4 × 12) and per influence a 16-bit joint index
 /// and an f32 weight — 72 with four influences, as docs/skinning-vs-ozz.md counts them.
@@ -71,8 +61,13 @@ pub(crate) const fn bytes_per_vertex(influences: usize) -> usize {
 /// linear blend's memory traffic at 1 000 000 vertices). Smaller jobs keep their outputs cached
 /// for whoever reads them next. Never when the cache size is unknown.
 pub(crate) fn streams_outputs(vertices: usize, influences: usize) -> bool {
-    last_level_cache_bytes()
-        .is_some_and(|cache| vertices.saturating_mul(bytes_per_vertex(influences)) > cache)
+    larger_than_cache(vertices, influences, last_level_cache_bytes())
+}
+
+/// Whether `vertices` vertices of `influences` influences move more bytes than a `cache` of
+/// that size holds; never when its size is unknown.
+fn larger_than_cache(vertices: usize, influences: usize, cache: Option<usize>) -> bool {
+    cache.is_some_and(|cache| vertices.saturating_mul(bytes_per_vertex(influences)) > cache)
 }
 
 /// The size of this CPU's last-level cache ([`last_level_cache_from`] on its CPUID), read once.
@@ -124,7 +119,7 @@ pub(crate) type PackedAffine = [__m256; 2];
 /// Packs a palette (O(joints), once per run).
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA ([`available`]).
+/// The CPU must support AVX2 and FMA ([`Features::run_avx2_fma`]).
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn pack_palette(palette: &[Affine3A]) -> Vec<PackedAffine> {
     palette
@@ -189,7 +184,7 @@ pub(crate) type PackedAffine512 = __m512;
 /// Packs a palette for [`linear_blend_chunk_avx512`] (O(joints), once per run).
 ///
 /// # Safety
-/// The CPU must support AVX-512F ([`avx512_available`]).
+/// The CPU must support AVX-512F ([`Features::run_avx512vl`]).
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
 pub(crate) unsafe fn pack_palette_avx512(palette: &[Affine3A]) -> Vec<PackedAffine512> {
     // SAFETY: an Affine3A is 16 floats (four Vec3A columns).
@@ -265,7 +260,7 @@ unsafe fn linear_blend_one_avx512<const N: usize>(
 /// bytes (as separately allocated `Vec`s and their chunks do); otherwise ordinary stores.
 ///
 /// # Safety
-/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
+/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`Features::run_avx512vl`]); every joint
 /// index must be in `palette` (validated); all slices have the same length.
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
 #[allow(clippy::too_many_arguments)]
@@ -391,7 +386,7 @@ pub(crate) unsafe fn linear_blend_chunk_avx512<const N: usize>(
 pub(crate) type PackedDualQuat = __m256;
 
 /// # Safety
-/// The CPU must support AVX2 and FMA ([`available`]).
+/// The CPU must support AVX2 and FMA ([`Features::run_avx2_fma`]).
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn pack_dual_quaternions(dqs: &[DualQuat]) -> Vec<PackedDualQuat> {
     dqs.iter().map(|q| _mm256_set_m128(Vec4::from(q.dual).into(), Vec4::from(q.real).into())).collect()
@@ -462,7 +457,7 @@ pub(crate) struct PackedBonesBlend {
 }
 
 /// # Safety
-/// The CPU must support AVX2 and FMA ([`available`]).
+/// The CPU must support AVX2 and FMA ([`Features::run_avx2_fma`]).
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn pack_bones_blending(joints: &[BonesBlendJoint]) -> Vec<PackedBonesBlend> {
     joints
@@ -1151,7 +1146,7 @@ fn row16(m0: __m512, m1: __m512, m2: __m512, [x, y, z]: [__m512; 3], t: __m512) 
 /// stores.
 ///
 /// # Safety
-/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`avx512_available`]); every joint
+/// The CPU must support AVX2, FMA, AVX-512F and AVX-512VL ([`Features::run_avx512vl`]); every joint
 /// index must be in `dqs` (validated); all slices have the same length.
 #[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
 #[allow(clippy::too_many_arguments)]
@@ -1344,7 +1339,7 @@ fn pack4(r0: __m128, r1: __m128, r2: __m128, r3: __m128) -> [__m128; 3] {
 /// and stored whole, instead of the portable loop's 12-byte stores.
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA ([`available`]); every joint index must be in `palette`
+/// The CPU must support AVX2 and FMA ([`Features::run_avx2_fma`]); every joint index must be in `palette`
 /// and in `normal_palette` (validated); all slices have the same length.
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn rigid_chunk(
@@ -1471,8 +1466,6 @@ mod tests {
             avx512vl: has("avx512vl"),
         };
         assert_eq!(Features::detect(), expected);
-        assert_eq!(available(), has("avx2") && has("fma"));
-        assert_eq!(avx512_available(), has("avx2") && has("fma") && has("avx512f") && has("avx512vl"));
     }
 
     /// Each build needs every feature its instructions use: a CPU that lacks any one of them
@@ -1495,6 +1488,18 @@ mod tests {
             assert!(features.run_avx2_fma(), "AVX2+FMA build needs no {without}");
             assert!(!features.run_avx512vl(), "AVX-512VL build without {without}");
         }
+    }
+
+    /// Outputs stream past the cache only when the job's bytes exceed it, never when its size is
+    /// unknown, and a vertex count whose bytes overflow is larger than any cache.
+    #[test]
+    fn outputs_stream_when_the_job_exceeds_the_cache() {
+        let cache = Some(72 * 1000);
+        assert!(!larger_than_cache(1000, 4, cache), "exactly the cache's size");
+        assert!(larger_than_cache(1001, 4, cache));
+        assert!(!larger_than_cache(1000, 8, Some(96 * 1000)) && larger_than_cache(1001, 8, Some(96 * 1000)));
+        assert!(!larger_than_cache(1 << 40, 4, None));
+        assert!(larger_than_cache(usize::MAX / 8, 4, Some(usize::MAX - 1)));
     }
 
     /// A made-up CPU for [`last_level_cache_from`]: its vendor string, highest standard and
@@ -1622,7 +1627,10 @@ mod tests {
     /// quarter turn, where the x¹¹ and x¹² terms matter (3.6e-6 at π/2).
     #[test]
     fn eight_lane_sin_cos_matches_the_scalar_polynomials() {
-        assert!(available(), "this test checks the AVX2+FMA build: the CPU has no AVX2 or FMA");
+        assert!(
+            Features::detect().run_avx2_fma(),
+            "this test checks the AVX2+FMA build: the CPU has no AVX2 or FMA"
+        );
         for i in 0..=125 {
             let xs: [f32; 8] = std::array::from_fn(|k| {
                 (std::f32::consts::FRAC_PI_2 * (8 * i + k) as f32 / 1000.0).min(std::f32::consts::FRAC_PI_2)
