@@ -472,8 +472,11 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
         linear(1.0, Vec3::new(1.0, 0.0, 0.0)),
         linear(1.25, Vec3::new(1.0, 1.0, 0.0)),
     ]);
+    let mut mirrored = object.clone();
+    mirrored.name = "mirrored".into();
+    mirrored.translation = mirrored.translation.with_cycles(Cycles::new(Cycle::PingPong, Cycle::PingPong));
     object.translation = object.translation.with_cycles(Cycles::new(Cycle::Repeat, Cycle::Repeat));
-    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let scene = Scene { objects: vec![object, mirrored], ..Scene::default() };
     let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
         .expect("re-import");
     let node = node_named(&model, "box");
@@ -488,6 +491,11 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
         })
         .expect("the box's translation is animated");
     let end = f64::from(scene.frame_range.end) / scene.fps;
+    // Where Repeat jumps back to the first key, the keys close in on the jump but stay at least
+    // 1e-4 s apart (closer keys would not change what plays).
+    for w in times.windows(2) {
+        assert!(w[1] - w[0] >= 0.5e-4, "keys at {} and {}: {times:?}", w[0], w[1]);
+    }
     for k in -1..=(end / 0.75).ceil() as i32 {
         for key in [0.5, 1.0, 1.25] {
             let t = key + 0.75 * f64::from(k);
@@ -496,4 +504,105 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
             }
         }
     }
+    // Ping-pong: the odd cycles play the keys backwards, so their keys sit mirrored in them
+    // (1.0 is 0.25 after the start of the cycle, so 0.25 before its end when mirrored).
+    let times: Vec<f64> = translation_keys(&model, "mirrored").iter().map(|k| k.0).collect();
+    for k in (-1..=(end / 0.75).ceil() as i32).filter(|k| k % 2 != 0) {
+        for key in [0.5, 1.0, 1.25] {
+            let t = 0.5 + 0.75 * f64::from(k) + (1.25 - key);
+            if (0.0..=end).contains(&t) {
+                assert!(times.iter().any(|&x| (x - t).abs() < 1e-6), "no mirrored key at {t}: {times:?}");
+            }
+        }
+    }
+}
+
+/// The corpus model whose cubes move, turn and scale with STEP, LINEAR and CUBICSPLINE keys
+/// comes back from import → scene → export → import playing as it did, one animation at a time.
+#[test]
+fn interpolation_test_round_trips_through_a_scene() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/corpus/gltf/InterpolationTest/InterpolationTest.glb");
+    let original = keyrig_io::gltf_import::import_gltf_file(&file).expect("InterpolationTest");
+    let tolerance = ExportOptions::default().rotation_tolerance_deg.to_radians() + 1e-4;
+    for a in 0..original.animations.len() {
+        let mut scene = original.to_scene("InterpolationTest.glb", Some(a)).expect("scene");
+        let duration = original.animations[a].duration();
+        scene.frame_range.end = (duration * scene.fps).ceil() as i32;
+        let options =
+            ExportOptions { base_dir: file.parent().map(Path::to_path_buf), ..ExportOptions::default() };
+        let exported = export_scene(&scene, &options).expect("export");
+        let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+        for node in original.animations[a].channels.iter().map(|c| c.node) {
+            let name = &original.nodes[node].name;
+            let back = node_named(&model, name);
+            // Just inside the keys: a STEP key's jump is written STEP_JUMP before it.
+            for i in 0..=100 {
+                let t = duration * f64::from(i) / 100.0 * 0.999;
+                let (want, got) = (original.pose_at(Some(a), t), model.pose_at(Some(0), t));
+                let label = format!("{} {name} t {t}", original.animations[a].name);
+                assert!((want.translation[node] - got.translation[back]).length() < 1e-4, "{label}");
+                assert!((want.scale[node] - got.scale[back]).length() < 1e-4, "{label}");
+                let angle = rotation_angle(want.rotation[node], got.rotation[back]);
+                assert!(angle <= tolerance, "{label}: {}°", angle.to_degrees());
+            }
+        }
+    }
+}
+
+/// Blender mode writes a linear track as exactly its own keys (more would follow it no closer).
+#[test]
+fn blender_mode_writes_a_linear_track_as_its_own_keys() {
+    use keyrig_io::gltf_export::BakeOptions;
+    let key = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
+    let keys = [(0.0, Vec3::ZERO), (1.0, Vec3::new(1.0, 0.0, 0.0)), (2.0, Vec3::new(1.0, 2.0, 0.0))];
+    let mut linear = keyrig_core::Object::new("linear");
+    linear.translation.track = RawTrack::new(keys.iter().map(|&(t, v)| key(t, v)).collect());
+    let scene = Scene { objects: vec![linear], ..Scene::default() };
+    let options = ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() };
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    let got = translation_keys(&model, "linear");
+    assert_eq!(got.len(), keys.len(), "{got:?}");
+    for ((t, v), (u, w)) in got.iter().zip(keys) {
+        assert!((t - u).abs() < 1e-6 && (*v - w).length() < 1e-6, "{got:?}");
+    }
+}
+
+/// Outside Blender mode a Step segment among spline ones is written as its key, a copy of it
+/// `STEP_JUMP` before the next key, and the next key.
+#[test]
+fn a_step_segment_in_a_spline_track_holds_until_just_before_the_next_key() {
+    use keyrig_io::gltf_export::STEP_JUMP;
+    let (a, b, c) = (Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 0.0));
+    let mut stepped = keyrig_core::Object::new("stepped");
+    stepped.translation.track = RawTrack::new(vec![
+        Key::new(0.0, a).with_interpolation(Interpolation::Step),
+        Key::new(0.75, b).with_tcb(Tcb::new(0.2, 0.0, 0.0)),
+        Key::new(2.0, c),
+    ]);
+    let scene = Scene { objects: vec![stepped], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let got = translation_keys(&model, "stepped");
+    let want = [(0.0, a), (0.75 - STEP_JUMP, a), (0.75, b), (2.0, c)];
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for ((t, v), (u, w)) in got.iter().zip(want) {
+        assert!((t - u).abs() < 1e-6 && (*v - w).length() < 1e-6, "{got:?}");
+    }
+}
+
+/// The translation keys of object `name` in the first animation: (time, value).
+fn translation_keys(model: &ImportedModel, name: &str) -> Vec<(f64, Vec3)> {
+    let node = node_named(model, name);
+    model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Translation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
+            }
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("{name}'s translation is animated"))
 }

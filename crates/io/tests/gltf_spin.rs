@@ -88,6 +88,9 @@ fn check_export(scene: &Scene, node: &str, rest: Quat, track: &AnimatedTrack<Qua
     for (k, w) in values.windows(2).enumerate() {
         let step = angle_deg(w[0], w[1]);
         assert!(step <= MAX_ROTATION_STEP_DEG + 1e-4, "{node}: step {k} turns {step}°");
+        // Signs kept consistent, so that component-wise blending (Blender's) takes the short way
+        // and never passes through zero.
+        assert!(w[0].dot(w[1]) >= 0.0, "{node}: keys {k} and {} have opposite signs", k + 1);
     }
     let track = track.track().expect("keyed");
     let (start, end) = track.domain();
