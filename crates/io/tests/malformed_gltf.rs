@@ -409,3 +409,60 @@ fn non_regular_files_are_refused_before_reading() {
         assert!(err.to_string().contains(what), "{}: {err}", path.display());
     }
 }
+
+/// Triangle strips and fans are imported as the triangles they stand for, each wound as the
+/// strip or fan winds its first one (glTF 2.0 § 3.7.2.1).
+#[test]
+fn triangle_strips_and_fans_become_triangles_in_order() {
+    let model = import_gltf_slice(&big_gltf::strip_and_fan()).expect("strip and fan");
+    let indices = |mesh: usize| model.meshes[mesh].primitives[0].indices.to_vec();
+    assert_eq!(indices(0), [0, 1, 2, 2, 1, 3, 2, 3, 4, 4, 3, 5], "strip");
+    assert_eq!(indices(1), [0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5], "fan");
+}
+
+/// The .glb container's own checks say where and what: a file shorter than its header, a
+/// second BIN chunk; paths with quoted keys become JSON pointers; a node's morph weights are
+/// kept.
+#[test]
+fn glb_structure_and_node_fields_are_read_as_written() {
+    let short = import_gltf_slice(b"glTF\x02\0\0\0").expect_err("8 bytes");
+    assert_eq!(short.location, Location::Byte(0), "{short}");
+    assert!(short.to_string().contains("shorter than the 12-byte header"), "{short}");
+
+    let data = std::fs::read(corpus("AnimatedMorphCube/AnimatedMorphCube.glb")).expect("read");
+    let (json, bin) = split_glb(&data);
+    let mut twice = pack_glb(&json, &bin);
+    let second = twice.len();
+    twice.extend_from_slice(&4u32.to_le_bytes());
+    twice.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+    twice.extend_from_slice(&[0; 4]);
+    let total = twice.len() as u32;
+    twice[8..12].copy_from_slice(&total.to_le_bytes());
+    let err = import_gltf_slice(&twice).expect_err("two BIN chunks");
+    assert_eq!(err.location, Location::Byte(second + 4), "{err}");
+    assert!(err.to_string().contains("BIN chunk must follow the JSON chunk, once"), "{err}");
+
+    let targets =
+        json.pointer("/meshes/0/primitives/0/targets").and_then(Value::as_array).expect("targets").len();
+    let weights: Vec<f64> = (0..targets).map(|i| 0.25 * (i + 1) as f64).collect();
+    let node = json["nodes"]
+        .as_array()
+        .expect("nodes")
+        .iter()
+        .position(|n| n.get("mesh").is_some())
+        .expect("mesh node");
+    let with_weights = set(&json, &format!("/nodes/{node}"), {
+        let mut n = json["nodes"][node].clone();
+        n["weights"] = json!(weights);
+        n
+    })
+    .expect("node");
+    let model = import_gltf_slice(&pack_glb(&with_weights, &bin)).expect("node weights are fine");
+    let expected: Vec<f32> = weights.iter().map(|&w| w as f32).collect();
+    assert_eq!(model.nodes[node].weights.as_deref(), Some(&expected[..]));
+
+    assert_eq!(
+        keyrig_io::gltf_import::json_pointer_from_path(r#"meshes[0].extras["a.b/c~d"].x"#),
+        "/meshes/0/extras/a.b~1c~0d/x"
+    );
+}

@@ -211,3 +211,31 @@ pub fn shared_accessors(vertices: usize, primitives: usize) -> Vec<u8> {
     });
     glb(root, bin.bytes)
 }
+
+/// Six vertices on a zig-zag, indexed 0..6 once as a triangle strip (mesh 0, on node 0) and
+/// once as a triangle fan (mesh 1, on node 1).
+pub fn strip_and_fan() -> Vec<u8> {
+    let mut bin = Bin::default();
+    let positions =
+        [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 2.0, 0.0, 0.0, 2.0, 1.0, 0.0];
+    let pos = bin.add(
+        &f32_bytes(positions),
+        5126,
+        6,
+        "VEC3",
+        Some((json!([0.0, 0.0, 0.0]), json!([2.0, 1.0, 0.0]))),
+    );
+    let indices: Vec<u8> = (0u16..6).flat_map(u16::to_le_bytes).collect();
+    let indices = bin.add(&indices, 5123, 6, "SCALAR", None);
+    let mesh = |mode: u32| json!({"primitives": [{"attributes": {"POSITION": pos}, "indices": indices, "mode": mode}]});
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"name": "strip", "mesh": 0}, {"name": "fan", "mesh": 1}],
+        "meshes": [mesh(5), mesh(6)],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    glb(root, bin.bytes)
+}
