@@ -606,3 +606,73 @@ fn translation_keys(model: &ImportedModel, name: &str) -> Vec<(f64, Vec3)> {
         })
         .unwrap_or_else(|| panic!("{name}'s translation is animated"))
 }
+
+/// A rotation that repeats jumps back to its first key at every cycle: the keys close in on
+/// the jump but stay at least 1e-4 s apart, and the rotation between them follows keyrig's.
+#[test]
+fn repeated_rotations_close_in_on_their_jumps_with_keys_1e4_apart() {
+    use keyrig_core::{Cycle, Cycles};
+    let mut object = keyrig_core::Object::new("turner");
+    object.rotation.track = RawTrack::new(vec![
+        Key::new(0.5, glam::Quat::IDENTITY).with_interpolation(Interpolation::Linear),
+        Key::new(1.25, glam::Quat::from_rotation_y(1.5)),
+    ]);
+    object.rotation = object.rotation.with_cycles(Cycles::new(Cycle::Repeat, Cycle::Repeat));
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let node = node_named(&model, "turner");
+    let times: Vec<f64> = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Rotation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| k.time).collect())
+            }
+            _ => None,
+        })
+        .expect("the rotation is animated");
+    for w in times.windows(2) {
+        assert!(w[1] - w[0] >= 0.5e-4, "keys at {} and {}: {times:?}", w[0], w[1]);
+    }
+    let track = AnimatedTrack::new(&scene.objects[0].rotation).expect("track");
+    let tol = ExportOptions::default().rotation_tolerance_deg.to_radians() + 1e-5;
+    for i in 0..=100 {
+        // Away from the jumps (at 0.5 + 0.75 k), where both curves are continuous.
+        let t = 0.55 + 0.65 * f64::from(i) / 100.0;
+        let angle = rotation_angle(model.pose_at(Some(0), t).rotation[node], track.sample(t));
+        assert!(angle <= tol, "t {t}: {}°", angle.to_degrees());
+    }
+}
+
+/// A procedural mesh that cannot be fitted to its object's skeleton (a rest rotation that is
+/// not a unit quaternion, and a joint the mesh does not have) is bound to the scene's rest
+/// pose: one inverse bind matrix per joint, each the inverse of the joint's rest transform.
+#[test]
+fn an_unfitted_procedural_mesh_binds_to_the_scenes_rest_pose() {
+    let mut scene = keyrig_io::demo::demo_scene();
+    let skeleton = scene.objects[0].skeleton.as_mut().expect("the arm");
+    let last = skeleton.joints.len() - 1;
+    skeleton.joints.push(keyrig_core::Joint::new(
+        "finger",
+        Some(last),
+        Vec3::new(0.1, 0.0, 0.0),
+        glam::Quat::from_xyzw(0.0, 0.0, 0.0, 2.0),
+    ));
+    let exported = export_scene(&scene, &ExportOptions::default()).expect("export");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("unfitted.glb");
+    exported.write(&path).expect("write");
+    let (errors, _, report) = validate(&path);
+    assert_eq!(errors, 0, "{report}");
+    let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+    let skin = &model.skins[0];
+    assert_eq!(skin.joints.len(), last + 2);
+    assert_eq!(skin.inverse_bind_matrices.len(), last + 2);
+    let world = model.world_matrices(&model.rest_pose());
+    let arm = world[node_named(&model, &scene.objects[0].name)];
+    for (&joint, ibm) in skin.joints.iter().zip(&skin.inverse_bind_matrices) {
+        let bind = *ibm * arm.inverse() * world[joint];
+        assert!(bind.abs_diff_eq(glam::Mat4::IDENTITY, 1e-4), "{}: {bind}", model.nodes[joint].name);
+    }
+}

@@ -150,3 +150,27 @@ fn header_checks_name_the_byte() {
     assert!(matches!(e.kind, Md2ErrorKind::FileSizeMismatch { .. }));
     assert!(e.to_string().starts_with("byte 64: "), "{e}");
 }
+
+/// The skin names stored in each header (64-byte NUL-terminated strings at `ofs_skins`), read
+/// here from the bytes as the format describes them.
+#[test]
+fn skin_names_are_read_from_the_header() {
+    let mut named = 0;
+    for (file, ..) in MODELS {
+        let data = std::fs::read(corpus(file)).expect("read");
+        let field =
+            |i: usize| u32::from_le_bytes(data[4 * i..4 * i + 4].try_into().expect("4 bytes")) as usize;
+        let (count, offset) = (field(5), field(11));
+        let expected: Vec<String> = (0..count)
+            .map(|i| {
+                let raw = &data[offset + 64 * i..offset + 64 * (i + 1)];
+                let end = raw.iter().position(|&b| b == 0).unwrap_or(64);
+                String::from_utf8_lossy(&raw[..end]).into_owned()
+            })
+            .collect();
+        let model = parse_md2(&data).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(model.skin_names, expected, "{file}");
+        named += expected.iter().filter(|n| !n.is_empty()).count();
+    }
+    assert!(named > 0, "no corpus model stores a skin name: the test checked nothing");
+}
