@@ -903,3 +903,18 @@ fn assert_swings(rig: &Rig, out: &[Quat]) -> Result<(), TestCaseError> {
     }
     Ok(())
 }
+
+/// A pole on the root→target line cannot tell a side: the chain keeps bending the way it bends
+/// now (the demo arm's elbow points up, +Y, in the plane z = 0).
+#[test]
+fn two_bone_pole_on_the_target_line_keeps_the_current_bend() {
+    let rig = arm();
+    let target = Vec3::new(1.2, 0.0, 0.0);
+    for pole in [Vec3::new(3.0, 0.0, 0.0), Vec3::new(0.6, 0.0, 0.0)] {
+        let (rotations, report) = two_bone(&rig, target, Pole::Point(pole));
+        assert!(report.reachable);
+        let p = rig.positions(&rotations);
+        assert!((p[2] - target.as_dvec3()).length() < 1e-5, "pole {pole}: end at {}", p[2]);
+        assert!(p[1].z.abs() < 1e-6 && p[1].y > 0.1, "pole {pole}: elbow at {}", p[1]);
+    }
+}
