@@ -716,8 +716,10 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             let breaks = if track.cycles().is_hold() { vec![start, end] } else { cycle_breaks(track, range) };
             let sampler = |t: f64| look_rotation(track.sample(t));
             let (times, values) = match &options.bake {
-                Some(bake) => resample_rotation(&sampler, &breaks, bake.rotation_tolerance(options), nlerp),
-                None => resample_rotation(&sampler, &breaks, tol, crate::model::slerp_short),
+                Some(bake) => {
+                    resample_rotation(&sampler, &breaks, &[], bake.rotation_tolerance(options), nlerp)
+                }
+                None => resample_rotation(&sampler, &breaks, &[], tol, crate::model::slerp_short),
             };
             doc.channels.push(linear_quat_channel(node, times, values));
         }
@@ -1119,7 +1121,7 @@ fn weights_channel(node: usize, w: &WeightsTrack, options: &ExportOptions) -> Ch
                 crate::model::sample_weights(w, t).unwrap_or_default().iter().map(|&x| f64::from(x)).collect()
             };
             let breaks: Vec<f64> = w.keys.iter().map(|k| k.time).collect();
-            let (t, v) = resample_linear(&f, &breaks, bake.weight_tolerance, max_abs);
+            let (t, v) = resample_linear(&f, &breaks, &[], bake.weight_tolerance, max_abs);
             channel(
                 "LINEAR",
                 t.iter().map(|&t| t as f32).collect(),
@@ -1289,7 +1291,7 @@ fn vec3_channel(
             (rotation * track.sample(t) + offset).to_array().iter().map(|&x| f64::from(x)).collect()
         };
         let tolerance = options.bake.map_or(CYCLE_POSITION_TOLERANCE, |b| b.position_tolerance);
-        let (t, v) = resample_linear(&f, &cycle_breaks(&track, range), tolerance, euclidean);
+        let (t, v) = resample_linear(&f, &cycle_breaks(&track, range), &[], tolerance, euclidean);
         return Ok(Some(Channel {
             node,
             path,
@@ -1307,8 +1309,8 @@ fn vec3_channel(
             let f = |t: f64| -> Vec<f64> {
                 (rotation * track.sample(t) + offset).to_array().iter().map(|&x| f64::from(x)).collect()
             };
-            let breaks = step_breaks(track.key_times(), |i| track.segment_interpolation(i));
-            let (t, v) = resample_linear(&f, &breaks, bake.position_tolerance, euclidean);
+            let (breaks, jumps) = step_breaks(track.key_times(), |i| track.segment_interpolation(i));
+            let (t, v) = resample_linear(&f, &breaks, &jumps, bake.position_tolerance, euclidean);
             return Ok(Some(Channel {
                 node,
                 path,
@@ -1369,17 +1371,26 @@ fn cycle_breaks<T: keyrig_core::TrackValue>(track: &Track<T>, range: (f64, f64))
 }
 
 /// Key times plus, for every Step segment, a break just before its end key (hold, then jump
-/// within [`STEP_JUMP`]).
-fn step_breaks(times: &[f64], mode: impl Fn(usize) -> Option<Interpolation>) -> Vec<f64> {
+/// within [`STEP_JUMP`]); and the jumps' start times, whose segments are written as they are
+/// (a jump is no curve that more keys would follow closer).
+fn step_breaks(times: &[f64], mode: impl Fn(usize) -> Option<Interpolation>) -> (Vec<f64>, Vec<f64>) {
     let mut breaks: Vec<f64> = times.to_vec();
+    let mut jumps = Vec::new();
     for i in 0..times.len().saturating_sub(1) {
         if mode(i) == Some(Interpolation::Step) {
-            breaks.push(times[i + 1] - STEP_JUMP.min((times[i + 1] - times[i]) / 2.0));
+            let jump = times[i + 1] - STEP_JUMP.min((times[i + 1] - times[i]) / 2.0);
+            breaks.push(jump);
+            jumps.push(jump);
         }
     }
     breaks.sort_by(f64::total_cmp);
     breaks.dedup();
-    breaks
+    (breaks, jumps)
+}
+
+/// Whether the segment from break `t0` is a Step segment's jump (`jumps` ascending).
+fn is_jump(jumps: &[f64], t0: f64) -> bool {
+    jumps.binary_search_by(|j| j.total_cmp(&t0)).is_ok()
 }
 
 fn euclidean(a: &[f64], b: &[f64]) -> f64 {
@@ -1392,10 +1403,11 @@ fn max_abs(a: &[f64], b: &[f64]) -> f64 {
 
 /// Resamples `f` on `[breaks]` into LINEAR keys: each interval is halved until linear
 /// interpolation between its end keys stays within `tol / 2` (by `distance`) of `f` at 15
-/// interior points.
+/// interior points; an interval that starts at one of `jumps` is written as it is.
 fn resample_linear(
     f: &dyn Fn(f64) -> Vec<f64>,
     breaks: &[f64],
+    jumps: &[f64],
     tol: f64,
     distance: fn(&[f64], &[f64]) -> f64,
 ) -> (Vec<f64>, Vec<Vec<f64>>) {
@@ -1426,6 +1438,11 @@ fn resample_linear(
     }
     let mut out = (vec![breaks[0]], vec![f(breaks[0])]);
     for w in breaks.windows(2) {
+        if is_jump(jumps, w[0]) {
+            out.0.push(w[1]);
+            out.1.push(f(w[1]));
+            continue;
+        }
         let v0 = out.1.last().cloned().unwrap_or_default();
         go(f, (w[0], w[1]), (&v0, f(w[1])), tol, distance, &mut out, 0);
     }
@@ -1506,10 +1523,11 @@ fn quat_channel(
         let sampler = |t: f64| (rest * track.sample(t)).normalize();
         let breaks = cycle_breaks(&track, range);
         let (t, v) = match &options.bake {
-            Some(bake) => resample_rotation(&sampler, &breaks, bake.rotation_tolerance(options), nlerp),
+            Some(bake) => resample_rotation(&sampler, &breaks, &[], bake.rotation_tolerance(options), nlerp),
             None => resample_rotation(
                 &sampler,
                 &breaks,
+                &[],
                 options.rotation_tolerance_deg.to_radians(),
                 crate::model::slerp_short,
             ),
@@ -1562,7 +1580,7 @@ fn quat_channel(
         }));
     }
     let sampler = |t: f64| (rest * track.sample(t)).normalize();
-    let mut breaks = step_breaks(times, |i| track.segment_interpolation(i));
+    let (mut breaks, jumps) = step_breaks(times, |i| track.segment_interpolation(i));
     // Spin segments: pieces of at most SPIN_PIECE_DEG of the unwrapped angle.
     for i in 0..modes.len() {
         if let (Some((_, degrees)), true) = (track.segment_spin(i), modes[i] != Interpolation::Step) {
@@ -1574,10 +1592,11 @@ fn quat_channel(
     breaks.sort_by(f64::total_cmp);
     breaks.dedup();
     let (t, v) = match &options.bake {
-        Some(bake) => resample_rotation(&sampler, &breaks, bake.rotation_tolerance(options), nlerp),
+        Some(bake) => resample_rotation(&sampler, &breaks, &jumps, bake.rotation_tolerance(options), nlerp),
         None => resample_rotation(
             &sampler,
             &breaks,
+            &jumps,
             options.rotation_tolerance_deg.to_radians(),
             crate::model::slerp_short,
         ),
@@ -1635,12 +1654,18 @@ type QuatLerp = fn(Quat, Quat, f32) -> Quat;
 fn resample_rotation(
     f: &dyn Fn(f64) -> Quat,
     breaks: &[f64],
+    jumps: &[f64],
     tol: f64,
     lerp: QuatLerp,
 ) -> (Vec<f64>, Vec<Quat>) {
     let mut times = vec![breaks[0]];
     let mut values = vec![f(breaks[0])];
     for w in breaks.windows(2) {
+        if is_jump(jumps, w[0]) {
+            times.push(w[1]);
+            values.push(f(w[1]));
+            continue;
+        }
         subdivide(f, w[0], w[1], tol, lerp, &mut times, &mut values, 0);
     }
     (times, values)

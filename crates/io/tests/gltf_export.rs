@@ -550,25 +550,6 @@ fn interpolation_test_round_trips_through_a_scene() {
     }
 }
 
-/// Blender mode writes a linear track as exactly its own keys (more would follow it no closer).
-#[test]
-fn blender_mode_writes_a_linear_track_as_its_own_keys() {
-    use keyrig_io::gltf_export::BakeOptions;
-    let key = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
-    let keys = [(0.0, Vec3::ZERO), (1.0, Vec3::new(1.0, 0.0, 0.0)), (2.0, Vec3::new(1.0, 2.0, 0.0))];
-    let mut linear = keyrig_core::Object::new("linear");
-    linear.translation.track = RawTrack::new(keys.iter().map(|&(t, v)| key(t, v)).collect());
-    let scene = Scene { objects: vec![linear], ..Scene::default() };
-    let options = ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() };
-    let model =
-        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
-    let got = translation_keys(&model, "linear");
-    assert_eq!(got.len(), keys.len(), "{got:?}");
-    for ((t, v), (u, w)) in got.iter().zip(keys) {
-        assert!((t - u).abs() < 1e-6 && (*v - w).length() < 1e-6, "{got:?}");
-    }
-}
-
 /// Outside Blender mode a Step segment among spline ones is written as its key, a copy of it
 /// `STEP_JUMP` before the next key, and the next key.
 #[test]
@@ -674,5 +655,74 @@ fn an_unfitted_procedural_mesh_binds_to_the_scenes_rest_pose() {
     for (&joint, ibm) in skin.joints.iter().zip(&skin.inverse_bind_matrices) {
         let bind = *ibm * arm.inverse() * world[joint];
         assert!(bind.abs_diff_eq(glam::Mat4::IDENTITY, 1e-4), "{}: {bind}", model.nodes[joint].name);
+    }
+}
+
+/// Blender mode writes no more keys than the curve needs: a linear track exactly its own keys,
+/// a Step segment its start key, a key `STEP_JUMP` before its end holding that value, and the
+/// end key.
+#[test]
+fn blender_mode_writes_linear_and_step_segments_with_the_fewest_keys() {
+    use keyrig_io::gltf_export::{BakeOptions, STEP_JUMP};
+    let key = |t: f64, v: Vec3, i: Interpolation| Key::new(t, v).with_interpolation(i);
+    let (a, b, c) = (Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 0.0));
+    let mut linear = keyrig_core::Object::new("linear");
+    linear.translation.track = RawTrack::new(vec![
+        key(0.0, a, Interpolation::Linear),
+        key(1.0, b, Interpolation::Linear),
+        key(2.0, c, Interpolation::Linear),
+    ]);
+    let mut stepped = keyrig_core::Object::new("stepped");
+    stepped.translation.track = RawTrack::new(vec![
+        key(0.0, a, Interpolation::Step),
+        key(1.0, b, Interpolation::Linear),
+        key(2.0, c, Interpolation::Linear),
+    ]);
+    let scene = Scene { objects: vec![linear, stepped], ..Scene::default() };
+    let options = ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() };
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    let close = |got: &[(f64, Vec3)], want: &[(f64, Vec3)]| {
+        got.len() == want.len()
+            && got.iter().zip(want).all(|((t, v), (u, w))| (t - u).abs() < 1e-6 && (*v - *w).length() < 1e-6)
+    };
+    let got = translation_keys(&model, "linear");
+    assert!(close(&got, &[(0.0, a), (1.0, b), (2.0, c)]), "{got:?}");
+    let got = translation_keys(&model, "stepped");
+    assert!(close(&got, &[(0.0, a), (1.0 - STEP_JUMP, a), (1.0, b), (2.0, c)]), "{got:?}");
+}
+
+/// A rotation track with a Step segment among others is written with the same keys: the
+/// held value until `STEP_JUMP` before the next key, then the next key (no keys inside the jump).
+#[test]
+fn a_step_segment_in_a_rotation_track_is_a_hold_and_one_jump() {
+    use keyrig_io::gltf_export::STEP_JUMP;
+    let key = |t: f64, angle: f32, i: Interpolation| {
+        Key::new(t, glam::Quat::from_rotation_y(angle)).with_interpolation(i)
+    };
+    let mut object = keyrig_core::Object::new("turner");
+    object.rotation.track = RawTrack::new(vec![
+        key(0.0, 0.0, Interpolation::Step),
+        key(1.0, 0.3, Interpolation::Linear),
+        key(2.0, 0.5, Interpolation::Linear),
+    ]);
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let node = node_named(&model, "turner");
+    let keys: Vec<(f64, f32)> = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Rotation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| (k.time, k.value.to_axis_angle().1)).collect())
+            }
+            _ => None,
+        })
+        .expect("the rotation is animated");
+    let want = [(0.0, 0.0), (1.0 - STEP_JUMP, 0.0), (1.0, 0.3), (2.0, 0.5)];
+    assert_eq!(keys.len(), want.len(), "{keys:?}");
+    for ((t, a), (u, b)) in keys.iter().zip(want) {
+        assert!((t - u).abs() < 1e-6 && (a - b).abs() < 1e-5, "{keys:?}");
     }
 }
