@@ -470,7 +470,7 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
     object.translation.track = RawTrack::new(vec![
         linear(0.5, Vec3::ZERO),
         linear(1.0, Vec3::new(1.0, 0.0, 0.0)),
-        linear(1.25, Vec3::new(1.0, 1.0, 0.0)),
+        linear(1.3, Vec3::new(1.0, 1.0, 0.0)),
     ]);
     let mut mirrored = object.clone();
     mirrored.name = "mirrored".into();
@@ -496,20 +496,22 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
     for w in times.windows(2) {
         assert!(w[1] - w[0] >= 0.5e-4, "keys at {} and {}: {times:?}", w[0], w[1]);
     }
-    for k in -1..=(end / 0.75).ceil() as i32 {
-        for key in [0.5, 1.0, 1.25] {
-            let t = key + 0.75 * f64::from(k);
+    // Key times whose repeats no halving of the intervals between other keys lands on.
+    let (keys, period) = ([0.5, 1.0, 1.3], 0.8);
+    for k in -1..=(end / period).ceil() as i32 {
+        for key in keys {
+            let t = key + period * f64::from(k);
             if (0.0..=end).contains(&t) {
                 assert!(times.iter().any(|&x| (x - t).abs() < 1e-6), "no key at {t}: {times:?}");
             }
         }
     }
     // Ping-pong: the odd cycles play the keys backwards, so their keys sit mirrored in them
-    // (1.0 is 0.25 after the start of the cycle, so 0.25 before its end when mirrored).
+    // (1.0 is 0.5 after the start of the cycle, so 0.5 before its end when mirrored).
     let times: Vec<f64> = translation_keys(&model, "mirrored").iter().map(|k| k.0).collect();
-    for k in (-1..=(end / 0.75).ceil() as i32).filter(|k| k % 2 != 0) {
-        for key in [0.5, 1.0, 1.25] {
-            let t = 0.5 + 0.75 * f64::from(k) + (1.25 - key);
+    for k in (-1..=(end / period).ceil() as i32).filter(|k| k % 2 != 0) {
+        for key in keys {
+            let t = 0.5 + period * f64::from(k) + (1.3 - key);
             if (0.0..=end).contains(&t) {
                 assert!(times.iter().any(|&x| (x - t).abs() < 1e-6), "no mirrored key at {t}: {times:?}");
             }
@@ -725,4 +727,66 @@ fn a_step_segment_in_a_rotation_track_is_a_hold_and_one_jump() {
     for ((t, a), (u, b)) in keys.iter().zip(want) {
         assert!((t - u).abs() < 1e-6 && (a - b).abs() < 1e-5, "{keys:?}");
     }
+}
+
+/// Outside Blender mode too, a rotation track's Step segment holds its key until exactly
+/// `STEP_JUMP` before the next key (a key there, with the held value), and exported rotation
+/// keys keep consistent signs even where the track's own keys do not (q and −q are one
+/// rotation).
+#[test]
+fn rotation_steps_hold_until_step_jump_and_keys_keep_their_signs() {
+    use keyrig_io::gltf_export::STEP_JUMP;
+    let q = |angle: f32| glam::Quat::from_rotation_y(angle);
+    let mut object = keyrig_core::Object::new("turner");
+    object.rotation.track = RawTrack::new(vec![
+        Key::new(0.0, q(0.0)).with_interpolation(Interpolation::Step),
+        Key::new(1.0, -q(0.3)).with_interpolation(Interpolation::Linear),
+        Key::new(2.0, q(2.5)).with_interpolation(Interpolation::Linear),
+        Key::new(3.0, -q(-2.0)),
+    ]);
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let exported = export_scene(&scene, &ExportOptions::default()).expect("export");
+    let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+    let node = node_named(&model, "turner");
+    let keys: Vec<(f64, glam::Quat)> = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Rotation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
+            }
+            _ => None,
+        })
+        .expect("the rotation is animated");
+    let hold = keys
+        .iter()
+        .find(|k| (k.0 - (1.0 - STEP_JUMP)).abs() < 1e-6)
+        .unwrap_or_else(|| panic!("no key at 1 − STEP_JUMP: {keys:?}"));
+    assert!(rotation_angle(hold.1, q(0.0)) < 1e-6, "{keys:?}");
+    for w in keys.windows(2) {
+        assert!(w[0].1.dot(w[1].1) >= 0.0, "keys at {} and {} have opposite signs", w[0].0, w[1].0);
+    }
+}
+
+/// In Blender mode a translation's Step segment holds its key until exactly `STEP_JUMP` before
+/// the next key (a key there, with the held value), then reaches the next key's value at it.
+#[test]
+fn blender_mode_steps_hold_until_step_jump() {
+    use keyrig_io::gltf_export::{BakeOptions, STEP_JUMP};
+    let (a, b) = (Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0));
+    let mut stepped = keyrig_core::Object::new("stepped");
+    stepped.translation.track = RawTrack::new(vec![
+        Key::new(0.0, a).with_interpolation(Interpolation::Step),
+        Key::new(0.7, b).with_interpolation(Interpolation::Linear),
+        Key::new(2.0, Vec3::new(1.0, 2.0, 0.0)),
+    ]);
+    let scene = Scene { objects: vec![stepped], ..Scene::default() };
+    let options = ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() };
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    let keys = translation_keys(&model, "stepped");
+    let at = |t: f64| keys.iter().find(|k| (k.0 - t).abs() < 1e-6).map(|k| k.1);
+    assert_eq!(at(0.7 - STEP_JUMP), Some(a), "{keys:?}");
+    assert_eq!(at(0.7), Some(b), "{keys:?}");
+    assert!(keys.iter().all(|k| k.0 > 0.7 - 1e-6 || k.1 == a), "{keys:?}");
 }
