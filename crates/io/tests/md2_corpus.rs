@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use keyrig_io::md2::{clip_name, load_md2_file, parse_md2, Md2ErrorKind};
+use keyrig_io::md2::{clip_name, frame_range_end, load_md2_file, parse_md2, Md2ErrorKind};
 
 fn corpus(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
@@ -104,9 +104,18 @@ fn playback_hits_frames_and_interpolates_between_them() {
     // Looping: the last frame blends into the first; t = 6 / fps is frame 0 again.
     let wrapped = model.sample_clip(run, fps, 6.0 / fps, true).expect("sample");
     assert_eq!(wrapped.positions, model.frame_pose(first).expect("frame").positions);
-    // Not looping: clamped at the last frame.
+    // Not looping: clamped at the last frame, and between frames a blend as when looping.
     let clamped = model.sample_clip(run, fps, 100.0, false).expect("sample");
     assert_eq!(clamped.positions, model.frame_pose(first + 5).expect("frame").positions);
+    let quarter = model.sample_clip(run, fps, 2.25 / fps, false).expect("sample");
+    for i in 0..quarter.positions.len() {
+        let expected = a.positions[i] * 0.75 + b.positions[i] * 0.25;
+        assert!((quarter.positions[i] - expected).length() < 1e-4, "vertex {i}");
+    }
+    // Six frames: 0.6 s looping (the last frame blends back into the first), 0.5 s once.
+    assert_eq!(model.clip_duration(run, fps, true), Some(0.6));
+    assert_eq!(model.clip_duration(run, fps, false), Some(0.5));
+    assert_eq!(model.clip_duration(99, fps, true), None);
     // Bad input is an error, not a panic.
     assert!(model.sample_clip(99, fps, 0.0, true).is_err());
     assert!(model.sample_clip(run, 0.0, 0.0, true).is_err());
@@ -173,4 +182,52 @@ fn skin_names_are_read_from_the_header() {
         named += expected.iter().filter(|n| !n.is_empty()).count();
     }
     assert!(named > 0, "no corpus model stores a skin name: the test checked nothing");
+}
+
+/// The 162 MD2 vertex normals (Quake 2's `anorms.h`): unit vectors, all different, and the
+/// set is symmetric under reflecting any axis — so an entry with a sign lost or flipped would
+/// duplicate another. The first rows are id Software's.
+#[test]
+fn the_normal_table_is_quake2s_symmetric_set_of_unit_vectors() {
+    use keyrig_io::md2::ANORMS;
+    assert_eq!(ANORMS[0], [-0.525731, 0.000000, 0.850651]);
+    assert_eq!(ANORMS[1], [-0.442863, 0.238856, 0.864188]);
+    assert_eq!(ANORMS[161], [-0.688191, -0.587785, -0.425325]);
+    let key = |v: [f32; 3]| v.map(|x| (x * 1e6).round() as i32);
+    let set: std::collections::HashSet<[i32; 3]> = ANORMS.iter().map(|&v| key(v)).collect();
+    assert_eq!(set.len(), ANORMS.len(), "two entries are the same vector");
+    for v in ANORMS {
+        let length = v.iter().map(|x| x * x).sum::<f32>().sqrt();
+        assert!((length - 1.0).abs() < 1e-5, "{v:?} has length {length}");
+        for axis in 0..3 {
+            let mut mirrored = v;
+            mirrored[axis] = -mirrored[axis];
+            assert!(set.contains(&key(mirrored)), "{v:?} mirrored in axis {axis} is not in the table");
+        }
+    }
+}
+
+/// The frame range that shows a looping clip once: its last frame is the one before the loop
+/// starts again; at least frame 1, at most a million, 60 when the length is not a number.
+#[test]
+fn a_looping_clip_fills_the_frame_range_once() {
+    assert_eq!(frame_range_end(4.0, 30.0), 119);
+    assert_eq!(frame_range_end(0.6, 24.0), 13);
+    assert_eq!(frame_range_end(0.0, 30.0), 1);
+    assert_eq!(frame_range_end(1e9, 30.0), 1_000_000);
+    assert_eq!(frame_range_end(f64::NAN, 30.0), 60);
+}
+
+/// A normal index past the 162 of the table is refused at its byte: the fourth byte of the
+/// packed vertex (x, y, z, normal) in the frame's data.
+#[test]
+fn a_normal_index_past_the_table_names_its_byte() {
+    let mut data = std::fs::read(corpus("sydney/sydney.md2")).expect("read");
+    let frames = u32::from_le_bytes(data[56..60].try_into().expect("4 bytes")) as usize;
+    // A frame: scale (12 bytes), translate (12), name (16), then 4 bytes per vertex.
+    let second_vertex_normal = frames + 40 + 4 + 3;
+    data[second_vertex_normal] = 200;
+    let err = parse_md2(&data).expect_err("normal index 200");
+    assert_eq!(err.offset, second_vertex_normal, "{err}");
+    assert!(matches!(err.kind, Md2ErrorKind::NormalIndex { index: 200 }), "{err}");
 }
