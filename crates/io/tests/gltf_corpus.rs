@@ -314,3 +314,25 @@ fn every_corpus_model_maps_onto_a_scene_that_saves_and_loads() {
         }
     }
 }
+
+/// An animation lasts until the last key of any of its channels, as the gltf crate reads the
+/// samplers' inputs.
+#[test]
+fn animation_durations_are_the_last_key_times() {
+    let mut checked = 0;
+    for (file, ..) in MODELS {
+        let (doc, buffers, _) = gltf::import(corpus(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let m = load(file);
+        for (a, anim) in doc.animations().enumerate() {
+            let last = anim
+                .channels()
+                .filter_map(|c| c.reader(|b| Some(&buffers[b.index()])).read_inputs())
+                .flat_map(|times| times.map(f64::from))
+                .fold(0.0, f64::max);
+            let duration = m.animations[a].duration();
+            assert!((duration - last).abs() < 1e-6, "{file} animation {a}: {duration} vs {last}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 10, "only {checked} animations checked");
+}
