@@ -336,3 +336,67 @@ fn animation_durations_are_the_last_key_times() {
     }
     assert!(checked > 10, "only {checked} animations checked");
 }
+
+/// CUBICSPLINE rotations and morph weights sample as glTF 2.0 Appendix C writes the Hermite
+/// curve (rotations normalized after it); slerp takes the short way for either sign of a key.
+#[test]
+fn cubic_spline_rotations_and_weights_follow_the_specification() {
+    use keyrig_core::{Interpolation, Key, RawTrack};
+    use keyrig_io::model::{sample_quat, sample_weights, slerp_short, WeightsTrack};
+    // Two keys two seconds apart; at u = 1/2 the basis is (1/2, 1/8, 1/2, −1/8).
+    let weights = WeightsTrack {
+        targets: 2,
+        keys: vec![
+            Key {
+                in_tangent: Some(vec![0.0, 0.0]),
+                out_tangent: Some(vec![1.0, -1.0]),
+                ..Key::new(0.0, vec![0.0, 1.0])
+            }
+            .with_interpolation(Interpolation::Hermite),
+            Key {
+                in_tangent: Some(vec![0.5, 0.0]),
+                out_tangent: Some(vec![0.0, 0.0]),
+                ..Key::new(2.0, vec![1.0, 0.0])
+            }
+            .with_interpolation(Interpolation::Hermite),
+        ],
+    };
+    // 0.5·0 + (1/8)·2·1 + 0.5·1 − (1/8)·2·0.5 = 0.625; 0.5·1 − (1/8)·2·1 + 0 − 0 = 0.25.
+    let got = sample_weights(&weights, 1.0).expect("weights");
+    assert!((got[0] - 0.625).abs() < 1e-6 && (got[1] - 0.25).abs() < 1e-6, "{got:?}");
+
+    let (a, b) = (Quat::from_rotation_z(0.2), Quat::from_rotation_z(1.0));
+    let tangent = Quat::from_xyzw(0.0, 0.0, 0.4, 0.0);
+    let rotations = RawTrack::new(vec![
+        Key { out_tangent: Some(tangent), ..Key::new(0.0, a) }.with_interpolation(Interpolation::Hermite),
+        Key { in_tangent: Some(tangent), ..Key::new(2.0, b) }.with_interpolation(Interpolation::Hermite),
+    ]);
+    let v = 0.5 * glam::Vec4::from(a) + 0.25 * glam::Vec4::from(tangent) + 0.5 * glam::Vec4::from(b)
+        - 0.25 * glam::Vec4::from(tangent);
+    let expected = Quat::from_vec4(v.normalize());
+    let got = sample_quat(&rotations, 1.0).expect("rotation");
+    let close = |p: Quat, q: Quat| (glam::Vec4::from(p) - glam::Vec4::from(q)).length() < 1e-5;
+    assert!(close(got, expected), "{got} vs {expected}");
+    let off_middle = sample_quat(&rotations, 0.5).expect("rotation");
+    let (u, td) = (0.25f32, 2.0f32);
+    let (u2, u3) = (u * u, u * u * u);
+    let v = (2.0 * u3 - 3.0 * u2 + 1.0) * glam::Vec4::from(a)
+        + td * (u3 - 2.0 * u2 + u) * glam::Vec4::from(tangent)
+        + (-2.0 * u3 + 3.0 * u2) * glam::Vec4::from(b)
+        + td * (u3 - u2) * glam::Vec4::from(tangent);
+    assert!(close(off_middle, Quat::from_vec4(v.normalize())), "{off_middle}");
+
+    let (c, d) = (Quat::from_rotation_y(0.3), Quat::from_rotation_y(1.3));
+    let half = slerp_short(c, -d, 0.5);
+    assert!(close(half, Quat::from_rotation_y(0.8)), "{half}");
+}
+
+/// CesiumMan's material is its base colour texture, decoded.
+#[test]
+fn materials_carry_their_base_colour_texture() {
+    let m = load("CesiumMan/CesiumMan.glb");
+    let mesh = m.nodes.iter().find_map(|n| n.mesh).expect("a mesh node");
+    let material = m.material(mesh).expect("decodes").expect("a material");
+    let texture = material.base_colour_texture.expect("a texture");
+    assert!(texture.width() > 0 && texture.height() > 0);
+}

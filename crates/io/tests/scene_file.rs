@@ -587,3 +587,36 @@ fn a_byte_order_mark_is_not_part_of_the_document() {
     fs::write(&path, text.as_bytes()).unwrap();
     assert_eq!(scene_file::load(&path).expect("from a file"), demo_scene());
 }
+
+/// A scene saved with `project::save_scene` names the models below its folder relative to it
+/// (`/`-separated) and others by their absolute path; `project::load_scene` makes them absolute
+/// again, so the folder can be moved.
+#[test]
+fn saved_scenes_name_their_models_relative_to_their_folder() {
+    use keyrig_core::{MeshSource, Object};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let models = dir.path().join("models");
+    fs::create_dir(&models).expect("models folder");
+    let inside = models.join("cube.glb");
+    fs::write(&inside, b"not read").expect("model");
+    let outside = tempfile::tempdir().expect("another folder");
+    let elsewhere = outside.path().join("far.glb");
+    let mut scene = Scene::default();
+    for (name, path) in [("inside", &inside), ("outside", &elsewhere)] {
+        let mut object = Object::new(name);
+        object.mesh = Some(MeshSource::file(path.to_str().expect("utf-8"), None));
+        scene.objects.push(object);
+    }
+    let file = dir.path().join("scene.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+    let text = fs::read_to_string(&file).expect("saved");
+    assert!(text.contains("\"models/cube.glb\""), "{text}");
+    assert!(text.contains(&format!("{:?}", elsewhere.to_str().expect("utf-8"))), "{text}");
+    let back = keyrig_io::project::load_scene(&file).expect("load");
+    let path = |o: usize| match &back.objects[o].mesh {
+        Some(MeshSource::File { path, .. }) => PathBuf::from(path),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(fs::canonicalize(path(0)).expect("inside"), fs::canonicalize(&inside).expect("inside"));
+    assert_eq!(path(1), elsewhere);
+}
