@@ -284,6 +284,8 @@ fn save_refuses_to_overwrite_newer_files() {
         "(version: 3, scene: (fps: 30.0))\n",
         // A newer file in syntax this keyrig cannot parse at all is still recognized.
         "(version: 4, scene: <<binary-ish future syntax>>)\n",
+        // Even when the syntax it cannot parse comes before the version.
+        "#![enable(teleportation)]\n(version: 5, scene: ())\n",
     ] {
         fs::write(&path, text).unwrap();
         let err = scene_file::save(&path, &demo_scene()).expect_err("newer file");
@@ -619,4 +621,15 @@ fn saved_scenes_name_their_models_relative_to_their_folder() {
     };
     assert_eq!(fs::canonicalize(path(0)).expect("inside"), fs::canonicalize(&inside).expect("inside"));
     assert_eq!(path(1), elsewhere);
+}
+
+/// A value with more elements than its type holds (a colour of four numbers where three are
+/// expected) is an error, as `ron` reports it, never read as its first three.
+#[test]
+fn extra_elements_are_an_error_not_dropped() {
+    let text = DEMO_RON.replacen("ambient: (0.08, 0.08, 0.08)", "ambient: (0.08, 0.08, 0.08, 0.5)", 1);
+    assert_ne!(text, DEMO_RON, "the demo's ambient colour is where the test expects it");
+    let line = 1 + text.lines().position(|l| l.contains("ambient:")).expect("ambient line");
+    let (_, shown) = parse_err(&text);
+    assert!(shown.contains(&format!(":{line}:")), "not placed on line {line}: {shown}");
 }
