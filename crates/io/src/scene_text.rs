@@ -1075,3 +1075,28 @@ mod writer_tests {
         assert_eq!(back, value, "{text}");
     }
 }
+
+#[cfg(test)]
+mod inline_layout_tests {
+    use super::*;
+
+    /// Inside a value written on one line (a key, a tuple), sequences and maps stay on that line;
+    /// at the top of a document they take a line per element.
+    #[test]
+    fn sequences_and_maps_inside_one_line_values_stay_on_it() {
+        #[derive(serde::Serialize)]
+        struct Doc {
+            pair: (u8, Vec<u8>, std::collections::BTreeMap<String, u8>),
+            list: Vec<u8>,
+        }
+        let map: std::collections::BTreeMap<String, u8> = [("a".to_string(), 1)].into();
+        let doc = Doc { pair: (1, vec![2, 3], map.clone()), list: vec![4, 5] };
+        let text = to_ron(&doc).unwrap();
+        assert_eq!(
+            text, "(\n    pair: (1, [2, 3], {\"a\": 1}),\n    list: [\n        4,\n        5,\n    ],\n)",
+            "{text}"
+        );
+        let top = to_ron(&map).unwrap();
+        assert_eq!(top, "{\n    \"a\": 1,\n}", "{top}");
+    }
+}

@@ -155,3 +155,33 @@ fn mixed_spin_keys_export_within_tolerance() {
     let keys = check_export(&scene, "Spinner", Quat::IDENTITY, &track);
     assert!(keys > 5, "{keys}");
 }
+
+/// A spin segment is cut into pieces of at most `SPIN_PIECE_DEG` of its unwrapped angle before
+/// the keys are placed, so that every piece's ends are keys (here 25 pieces of a 1108.6° turn,
+/// ends no halving of the segment lands on), and no more keys than the tolerance needs.
+#[test]
+fn spin_segments_have_a_key_at_every_piece_boundary() {
+    use keyrig_io::gltf_export::SPIN_PIECE_DEG;
+    let mut o = Object::new("Spinner");
+    o.rotation.track = RawTrack::new(vec![
+        Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
+        Key::new(2.0, Quat::from_rotation_y(0.5)).with_spin(Spin::Turns(3)),
+    ]);
+    let mut scene = Scene::default();
+    scene.frame_range.end = 60;
+    scene.objects.push(o);
+    let animated = AnimatedTrack::new(&scene.objects[0].rotation).unwrap();
+    let track = animated.track().expect("keyed");
+    let (_, degrees) = track.segment_spin(0).expect("a spin segment");
+    let pieces = (degrees.abs() / SPIN_PIECE_DEG).ceil() as usize;
+    assert_eq!(pieces, 25, "{degrees}°");
+    let keys = check_export(&scene, "Spinner", Quat::IDENTITY, &animated);
+    let gltf = export_scene(&scene, &ExportOptions::default()).expect("export");
+    let (times, _) = rotation_keys(&gltf, "Spinner");
+    for k in 1..pieces {
+        let t = 2.0 * k as f64 / pieces as f64;
+        assert!(times.iter().any(|&x| (x - t).abs() < 1e-6), "no key at {t}: {times:?}");
+    }
+    // A linear spin at a constant rate is exact between the pieces' ends: they are all its keys.
+    assert_eq!(keys, pieces + 1, "{times:?}");
+}
