@@ -790,3 +790,31 @@ fn blender_mode_steps_hold_until_step_jump() {
     assert_eq!(at(0.7), Some(b), "{keys:?}");
     assert!(keys.iter().all(|k| k.0 > 0.7 - 1e-6 || k.1 == a), "{keys:?}");
 }
+
+/// Repeats reach the end of a long range from keys that start late: every corner up to it is a
+/// key (keys at 2.5–3 s repeated to 10 s).
+#[test]
+fn repeats_reach_the_end_of_a_long_range() {
+    use keyrig_core::{Cycle, Cycles};
+    let linear = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
+    let mut object = keyrig_core::Object::new("late");
+    object.translation.track = RawTrack::new(vec![
+        linear(2.5, Vec3::ZERO),
+        linear(2.7, Vec3::new(1.0, 0.0, 0.0)),
+        linear(3.0, Vec3::new(1.0, 1.0, 0.0)),
+    ]);
+    object.translation = object.translation.with_cycles(Cycles::new(Cycle::Hold, Cycle::Repeat));
+    let mut scene = Scene { objects: vec![object], ..Scene::default() };
+    scene.frame_range.end = (10.0 * scene.fps) as i32;
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let times: Vec<f64> = translation_keys(&model, "late").iter().map(|k| k.0).collect();
+    for k in 0..=15 {
+        for key in [2.5, 2.7, 3.0] {
+            let t = key + 0.5 * f64::from(k);
+            if t <= 10.0 {
+                assert!(times.iter().any(|&x| (x - t).abs() < 1e-5), "no key at {t}: {times:?}");
+            }
+        }
+    }
+}
