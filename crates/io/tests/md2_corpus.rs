@@ -112,6 +112,11 @@ fn playback_hits_frames_and_interpolates_between_them() {
         let expected = a.positions[i] * 0.75 + b.positions[i] * 0.25;
         assert!((quarter.positions[i] - expected).length() < 1e-4, "vertex {i}");
     }
+    // The model's last clip, clamped at its end, blends nothing from beyond it.
+    let last = model.clips.len() - 1;
+    let end = model.clips[last].frames.end;
+    let held = model.sample_clip(last, fps, 100.0, false).expect("sample");
+    assert_eq!(held.positions, model.frame_pose(end - 1).expect("frame").positions);
     // Six frames: 0.6 s looping (the last frame blends back into the first), 0.5 s once.
     assert_eq!(model.clip_duration(run, fps, true), Some(0.6));
     assert_eq!(model.clip_duration(run, fps, false), Some(0.5));
