@@ -818,3 +818,37 @@ fn repeats_reach_the_end_of_a_long_range() {
         }
     }
 }
+
+/// Where a repeating rotation jumps from its last key back to its first, the two may lie in
+/// opposite hemispheres (here 286° about Y, then 0°): the exported keys still keep consistent
+/// signs, so that component-wise blending (Blender's) takes the short way.
+#[test]
+fn repeated_rotations_keep_consistent_signs_across_their_jumps() {
+    use keyrig_core::{Cycle, Cycles};
+    let q = |angle: f32| glam::Quat::from_rotation_y(angle);
+    let mut object = keyrig_core::Object::new("turner");
+    object.rotation.track = RawTrack::new(vec![
+        Key::new(0.5, q(0.0)).with_interpolation(Interpolation::Linear),
+        Key::new(1.0, q(2.5)).with_interpolation(Interpolation::Linear),
+        Key::new(1.5, q(5.0)),
+    ]);
+    object.rotation = object.rotation.with_cycles(Cycles::new(Cycle::Hold, Cycle::Repeat));
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let node = node_named(&model, "turner");
+    let keys: Vec<(f64, glam::Quat)> = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Rotation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
+            }
+            _ => None,
+        })
+        .expect("the rotation is animated");
+    assert!(keys.len() > 6, "{keys:?}");
+    for w in keys.windows(2) {
+        assert!(w[0].1.dot(w[1].1) >= 0.0, "keys at {} and {} have opposite signs", w[0].0, w[1].0);
+    }
+}

@@ -633,3 +633,16 @@ fn extra_elements_are_an_error_not_dropped() {
     let (_, shown) = parse_err(&text);
     assert!(shown.contains(&format!(":{line}:")), "not placed on line {line}: {shown}");
 }
+
+/// Saving over a file of this version is not refused because its text mentions a newer
+/// version somewhere (a comment): the version read is its `version` field.
+#[test]
+fn a_comment_that_mentions_a_version_is_not_the_files_version() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("noted.ron");
+    let text =
+        format!("// merged from a version: 9 draft\n{}", scene_file::to_string(&demo_scene()).unwrap());
+    fs::write(&path, &text).unwrap();
+    scene_file::save(&path, &demo_scene()).expect("a current file is overwritten");
+    assert_eq!(fs::read_to_string(scene_file::backup_path(&path)).unwrap(), text);
+}
