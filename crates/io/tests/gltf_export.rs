@@ -852,3 +852,25 @@ fn repeated_rotations_keep_consistent_signs_across_their_jumps() {
         assert!(w[0].1.dot(w[1].1) >= 0.0, "keys at {} and {} have opposite signs", w[0].0, w[1].0);
     }
 }
+
+/// Keys of a cycled track exactly 1e-4 s apart (the shortest segment the resampler writes) are
+/// both written.
+#[test]
+fn cycled_keys_1e4_apart_are_both_kept() {
+    use keyrig_core::{Cycle, Cycles};
+    let linear = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
+    let mut object = keyrig_core::Object::new("close");
+    object.translation.track = RawTrack::new(vec![
+        linear(0.0, Vec3::ZERO),
+        linear(1e-4, Vec3::new(0.5, 0.0, 0.0)),
+        linear(1.0, Vec3::new(1.0, 1.0, 0.0)),
+    ]);
+    object.translation = object.translation.with_cycles(Cycles::new(Cycle::Hold, Cycle::RepeatOffset));
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let times: Vec<f64> = translation_keys(&model, "close").iter().map(|k| k.0).collect();
+    for t in [0.0, 1e-4, 1.0, 1.0 + 1e-4] {
+        assert!(times.iter().any(|&x| (x - t).abs() < 1e-7), "no key at {t}: {times:?}");
+    }
+}
