@@ -527,6 +527,7 @@ fn interpolation_test_round_trips_through_a_scene() {
         .join("../../../shared/corpus/gltf/InterpolationTest/InterpolationTest.glb");
     let original = keyrig_io::gltf_import::import_gltf_file(&file).expect("InterpolationTest");
     let tolerance = ExportOptions::default().rotation_tolerance_deg.to_radians() + 1e-4;
+    let mut cubic = [0, 0];
     for a in 0..original.animations.len() {
         let mut scene = original.to_scene("InterpolationTest.glb", Some(a)).expect("scene");
         let duration = original.animations[a].duration();
@@ -535,9 +536,31 @@ fn interpolation_test_round_trips_through_a_scene() {
             ExportOptions { base_dir: file.parent().map(Path::to_path_buf), ..ExportOptions::default() };
         let exported = export_scene(&scene, &options).expect("export");
         let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+        // CUBICSPLINE channels come back as CUBICSPLINE (written exactly, not resampled).
+        let interpolation = |m: &ImportedModel, anim: usize, node: usize, rotation: bool| {
+            m.animations[anim].channels.iter().find_map(|c| match &c.target {
+                ChannelTarget::Rotation(t) if rotation && c.node == node => {
+                    t.keys.first().map(|k| k.interpolation)
+                }
+                ChannelTarget::Translation(t) if !rotation && c.node == node => {
+                    t.keys.first().map(|k| k.interpolation)
+                }
+                _ => None,
+            })
+        };
         for node in original.animations[a].channels.iter().map(|c| c.node) {
             let name = &original.nodes[node].name;
             let back = node_named(&model, name);
+            for rotation in [false, true] {
+                if interpolation(&original, a, node, rotation) == Some(Interpolation::Hermite) {
+                    assert_eq!(
+                        interpolation(&model, 0, back, rotation),
+                        Some(Interpolation::Hermite),
+                        "{name}"
+                    );
+                    cubic[usize::from(rotation)] += 1;
+                }
+            }
             // Just inside the keys: a STEP key's jump is written STEP_JUMP before it.
             for i in 0..=100 {
                 let t = duration * f64::from(i) / 100.0 * 0.999;
@@ -550,6 +573,7 @@ fn interpolation_test_round_trips_through_a_scene() {
             }
         }
     }
+    assert!(cubic[0] > 0 && cubic[1] > 0, "CUBICSPLINE translations and rotations checked: {cubic:?}");
 }
 
 /// Outside Blender mode a Step segment among spline ones is written as its key, a copy of it
