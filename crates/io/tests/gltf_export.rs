@@ -479,17 +479,7 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
     let scene = Scene { objects: vec![object, mirrored], ..Scene::default() };
     let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
         .expect("re-import");
-    let node = node_named(&model, "box");
-    let times: Vec<f64> = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Translation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| k.time).collect())
-            }
-            _ => None,
-        })
-        .expect("the box's translation is animated");
+    let times: Vec<f64> = translation_keys(&model, "box").iter().map(|k| k.0).collect();
     let end = f64::from(scene.frame_range.end) / scene.fps;
     // Where Repeat jumps back to the first key, the keys close in on the jump but stay at least
     // 1e-4 s apart (closer keys would not change what plays).
@@ -599,6 +589,21 @@ fn a_step_segment_in_a_spline_track_holds_until_just_before_the_next_key() {
     }
 }
 
+/// The rotation keys of object `name` in the first animation: (time, value).
+fn rotation_keys(model: &ImportedModel, name: &str) -> Vec<(f64, glam::Quat)> {
+    let node = node_named(model, name);
+    model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Rotation(track) if c.node == node => {
+                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
+            }
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("{name}'s rotation is animated"))
+}
+
 /// The translation keys of object `name` in the first animation: (time, value).
 fn translation_keys(model: &ImportedModel, name: &str) -> Vec<(f64, Vec3)> {
     let node = node_named(model, name);
@@ -628,17 +633,7 @@ fn repeated_rotations_close_in_on_their_jumps_with_keys_1e4_apart() {
     let scene = Scene { objects: vec![object], ..Scene::default() };
     let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
         .expect("re-import");
-    let node = node_named(&model, "turner");
-    let times: Vec<f64> = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Rotation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| k.time).collect())
-            }
-            _ => None,
-        })
-        .expect("the rotation is animated");
+    let times: Vec<f64> = rotation_keys(&model, "turner").iter().map(|k| k.0).collect();
     for w in times.windows(2) {
         assert!(w[1] - w[0] >= 0.5e-4, "keys at {} and {}: {times:?}", w[0], w[1]);
     }
@@ -647,7 +642,8 @@ fn repeated_rotations_close_in_on_their_jumps_with_keys_1e4_apart() {
     for i in 0..=100 {
         // Away from the jumps (at 0.5 + 0.75 k), where both curves are continuous.
         let t = 0.55 + 0.65 * f64::from(i) / 100.0;
-        let angle = rotation_angle(model.pose_at(Some(0), t).rotation[node], track.sample(t));
+        let angle =
+            rotation_angle(model.pose_at(Some(0), t).rotation[node_named(&model, "turner")], track.sample(t));
         assert!(angle <= tol, "t {t}: {}°", angle.to_degrees());
     }
 }
@@ -735,17 +731,8 @@ fn a_step_segment_in_a_rotation_track_is_a_hold_and_one_jump() {
     let scene = Scene { objects: vec![object], ..Scene::default() };
     let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
         .expect("re-import");
-    let node = node_named(&model, "turner");
-    let keys: Vec<(f64, f32)> = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Rotation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| (k.time, k.value.to_axis_angle().1)).collect())
-            }
-            _ => None,
-        })
-        .expect("the rotation is animated");
+    let keys: Vec<(f64, f32)> =
+        rotation_keys(&model, "turner").iter().map(|&(t, q)| (t, q.to_axis_angle().1)).collect();
     let want = [(0.0, 0.0), (1.0 - STEP_JUMP, 0.0), (1.0, 0.3), (2.0, 0.5)];
     assert_eq!(keys.len(), want.len(), "{keys:?}");
     for ((t, a), (u, b)) in keys.iter().zip(want) {
@@ -771,17 +758,7 @@ fn rotation_steps_hold_until_step_jump_and_keys_keep_their_signs() {
     let scene = Scene { objects: vec![object], ..Scene::default() };
     let exported = export_scene(&scene, &ExportOptions::default()).expect("export");
     let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
-    let node = node_named(&model, "turner");
-    let keys: Vec<(f64, glam::Quat)> = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Rotation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
-            }
-            _ => None,
-        })
-        .expect("the rotation is animated");
+    let keys = rotation_keys(&model, "turner");
     let hold = keys
         .iter()
         .find(|k| (k.0 - (1.0 - STEP_JUMP)).abs() < 1e-6)
@@ -860,17 +837,7 @@ fn repeated_rotations_keep_consistent_signs_across_their_jumps() {
     let scene = Scene { objects: vec![object], ..Scene::default() };
     let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
         .expect("re-import");
-    let node = node_named(&model, "turner");
-    let keys: Vec<(f64, glam::Quat)> = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Rotation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
-            }
-            _ => None,
-        })
-        .expect("the rotation is animated");
+    let keys = rotation_keys(&model, "turner");
     assert!(keys.len() > 6, "{keys:?}");
     for w in keys.windows(2) {
         assert!(w[0].1.dot(w[1].1) >= 0.0, "keys at {} and {} have opposite signs", w[0].0, w[1].0);
