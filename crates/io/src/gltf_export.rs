@@ -512,16 +512,11 @@ impl Document {
 /// A track that does not validate, a skeleton that does not fit its mesh, a mesh file that
 /// cannot be loaded: each with the path of the scene field.
 pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGltf, ExportError> {
-    let baked;
-    let scene = if has_ik(scene) {
-        let mut copy = scene.clone();
-        keyrig_eval::bake_all_ik(&mut copy, scene.frame_range.start, scene.frame_range.end)
-            .map_err(|e| scene_err("ik_constraints", e.to_string()))?;
-        baked = copy;
-        &baked
-    } else {
-        scene
-    };
+    // Constraints without effect are left alone, so a scene without IK is written as it is.
+    let mut baked = scene.clone();
+    keyrig_eval::bake_all_ik(&mut baked, scene.frame_range.start, scene.frame_range.end)
+        .map_err(|e| scene_err("ik_constraints", e.to_string()))?;
+    let scene = &baked;
     let mut doc = Document::default();
     // Tracks with cycles are written as keys over the scene's frame range.
     let range =
@@ -776,14 +771,6 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
         root["accessors"] = json!(b.accessors);
     }
     Ok(ExportedGltf { json: root, bin: b.bin })
-}
-
-/// Whether any IK constraint of `scene` moves its chain (its blend is keyed or not 0).
-fn has_ik(scene: &Scene) -> bool {
-    scene.objects.iter().enumerate().any(|(o, object)| {
-        let count = object.skeleton.as_ref().map_or(0, |s| s.ik_constraints.len());
-        (0..count).any(|c| keyrig_eval::bake::has_effect(scene, o, c))
-    })
 }
 
 /// Writes the joints of `skeleton` as nodes below the object node `object_node` and their
@@ -1192,7 +1179,7 @@ fn md2_object(
         return Err(MeshFileError::FrameRangeNotFinite);
     }
     let mut times = vec![t0];
-    let (k0, k1) = ((t0 * fps).floor() as i64 + 1, (t1 * fps).ceil() as i64 - 1);
+    let (k0, k1) = ((t0 * fps).floor() as i64, (t1 * fps).ceil() as i64);
     if k1 - k0 > 10_000_000 {
         return Err(MeshFileError::TooManyFrames);
     }
@@ -1303,8 +1290,7 @@ fn vec3_channel(
     }
     let track = Track::new(&a.track).map_err(|e| scene_err(format!("{here}.track"), e.to_string()))?;
     if let Some(bake) = &options.bake {
-        let n = track.key_count();
-        let all_step = (0..n - 1).all(|i| track.segment_interpolation(i) == Some(Interpolation::Step));
+        let all_step = segment_modes(&track).iter().all(|&m| m == Interpolation::Step);
         if !all_step {
             let f = |t: f64| -> Vec<f64> {
                 (rotation * track.sample(t) + offset).to_array().iter().map(|&x| f64::from(x)).collect()
@@ -1449,11 +1435,16 @@ fn resample_linear(
     out
 }
 
+/// The interpolation of each segment of `track`, in order.
+fn segment_modes<T: keyrig_core::TrackValue>(track: &Track<T>) -> Vec<Interpolation> {
+    (0..).map_while(|i| track.segment_interpolation(i)).collect()
+}
+
 fn cubic_or_simple_channel(node: usize, path: &'static str, track: &Track<Vec3>) -> Channel {
     let times = track.key_times();
     let values = track.key_values();
     let n = times.len();
-    let modes: Vec<Interpolation> = (0..n - 1).filter_map(|i| track.segment_interpolation(i)).collect();
+    let modes = segment_modes(track);
     let simple = |interpolation: &'static str| Channel {
         node,
         path,
@@ -1475,7 +1466,8 @@ fn cubic_or_simple_channel(node: usize, path: &'static str, track: &Track<Vec3>)
         let in_tangent =
             if k == 0 { Vec3::ZERO } else { track.segment_tangents(k - 1).map_or(Vec3::ZERO, |t| t.1) };
         let out_tangent = track.segment_tangents(k).map_or(Vec3::ZERO, |t| t.0);
-        let step_next = k + 1 < n && track.segment_interpolation(k) == Some(Interpolation::Step);
+        // Only segments have an interpolation: the last key has none.
+        let step_next = track.segment_interpolation(k) == Some(Interpolation::Step);
         out_times.push(times[k] as f32);
         out.push([in_tangent, values[k], out_tangent]);
         if step_next {
@@ -1536,8 +1528,7 @@ fn quat_channel(
     }
     let track = Track::new(&a.track).map_err(|e| scene_err(format!("{here}.track"), e.to_string()))?;
     let times = track.key_times();
-    let modes: Vec<Interpolation> =
-        (0..times.len() - 1).filter_map(|i| track.segment_interpolation(i)).collect();
+    let modes = segment_modes(&track);
     let values: Vec<Quat> = track.key_values().iter().map(|q| (rest * *q).normalize()).collect();
     let spin = track.has_spin();
     let all = |m: Interpolation| modes.iter().all(|&x| x == m);

@@ -457,9 +457,6 @@ fn check_accessor(
             }
         }
     }
-    if count.checked_mul(elem).is_none_or(|n| n > cx.budget) {
-        return Err(bad(format!("{count} elements of {elem} bytes are more than the file holds")));
-    }
     if let Some(sparse) = acc.sparse() {
         let n = sparse.count();
         if n == 0 || n > count {

@@ -345,7 +345,7 @@ impl ImportedModel {
             .enumerate()
             .map(|(v, &p)| {
                 let mut sum = Vec3::ZERO;
-                let mut total = 0.0;
+                let mut weighted = false;
                 for (joints, weights) in primitive.joint_sets.iter().zip(&primitive.weight_sets) {
                     for i in 0..4 {
                         let w = weights[v][i];
@@ -355,11 +355,11 @@ impl ImportedModel {
                                 .copied()
                                 .unwrap_or(Mat4::IDENTITY);
                             sum += w * m.transform_point3(p);
-                            total += w;
+                            weighted = true;
                         }
                     }
                 }
-                if total == 0.0 {
+                if !weighted {
                     p
                 } else {
                     sum
