@@ -865,3 +865,99 @@ fn cycled_keys_1e4_apart_are_both_kept() {
         assert!(times.iter().any(|&x| (x - t).abs() < 1e-7), "no key at {t}: {times:?}");
     }
 }
+
+/// A Step segment shorter than two `STEP_JUMP`s jumps at its middle, in every writer: the
+/// cubic translation channel, the resampled rotation and Blender mode's translation.
+#[test]
+fn a_step_segment_shorter_than_two_jumps_jumps_at_its_middle() {
+    use keyrig_io::gltf_export::BakeOptions;
+    let (a, b) = (Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0));
+    let mut object = keyrig_core::Object::new("quick");
+    object.translation.track = RawTrack::new(vec![
+        Key::new(0.0, a).with_interpolation(Interpolation::Step),
+        Key::new(0.0015, b).with_tcb(Tcb::new(0.2, 0.0, 0.0)),
+        Key::new(1.0, Vec3::new(1.0, 2.0, 0.0)),
+    ]);
+    object.rotation.track = RawTrack::new(vec![
+        Key::new(0.0, glam::Quat::IDENTITY).with_interpolation(Interpolation::Step),
+        Key::new(0.0015, glam::Quat::from_rotation_y(0.3)).with_interpolation(Interpolation::Linear),
+        Key::new(1.0, glam::Quat::from_rotation_y(0.5)),
+    ]);
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let hold_at = |keys: Vec<f64>| {
+        assert!(keys.iter().any(|&t| (t - 0.00075).abs() < 1e-7), "no key at the middle: {keys:?}");
+        assert!(keys.iter().all(|&t| t <= 0.0 || t >= 0.00075 - 1e-7), "a key before the middle: {keys:?}");
+    };
+    for options in [
+        ExportOptions::default(),
+        ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() },
+    ] {
+        let model =
+            import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+        hold_at(translation_keys(&model, "quick").iter().map(|k| k.0).collect());
+        hold_at(rotation_keys(&model, "quick").iter().map(|k| k.0).collect());
+    }
+}
+
+/// A linear rotation track is written as its keys (glTF's LINEAR rotations slerp, as keyrig
+/// does), even where keys are further apart than the resampler's largest step; a linear
+/// track that spins more than half a turn between keys cannot be, and is resampled.
+#[test]
+fn linear_rotations_are_written_as_their_keys_unless_they_spin() {
+    use keyrig_io::gltf_export::MAX_ROTATION_STEP_DEG;
+    let linear = |t: f64, q: glam::Quat| Key::new(t, q).with_interpolation(Interpolation::Linear);
+    let wide = 170f32.to_radians();
+    assert!(f64::from(wide).to_degrees() > MAX_ROTATION_STEP_DEG);
+    let mut turner = keyrig_core::Object::new("turner");
+    turner.rotation.track = RawTrack::new(vec![
+        linear(0.0, glam::Quat::IDENTITY),
+        linear(1.0, glam::Quat::from_rotation_y(wide)),
+    ]);
+    let mut spinner = keyrig_core::Object::new("spinner");
+    spinner.rotation.track = RawTrack::new(vec![
+        linear(0.0, glam::Quat::IDENTITY),
+        linear(1.0, glam::Quat::from_rotation_y(wide)).with_spin(keyrig_core::Spin::Turns(1)),
+    ]);
+    let scene = Scene { objects: vec![turner, spinner], ..Scene::default() };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let keys = rotation_keys(&model, "turner");
+    assert_eq!(keys.iter().map(|k| k.0).collect::<Vec<_>>(), [0.0, 1.0], "{keys:?}");
+    assert!(rotation_angle(keys[1].1, glam::Quat::from_rotation_y(wide)) < 1e-6);
+    let spun = rotation_keys(&model, "spinner");
+    assert!(
+        spun.len() >= 7,
+        "530° (one turn more than the short way) in steps of at most {MAX_ROTATION_STEP_DEG}°: {spun:?}"
+    );
+}
+
+/// A resampled segment exactly `MIN_SEGMENT` (1e-4 s) long is still halved when it is not
+/// within tolerance; its halves are not (rotations, and translations in Blender mode).
+#[test]
+fn segments_of_the_shortest_length_are_halved_once_more() {
+    use keyrig_io::gltf_export::BakeOptions;
+    let mut object = keyrig_core::Object::new("flick");
+    object.translation.track = RawTrack::new(vec![
+        Key::new(0.0, Vec3::ZERO),
+        Key::new(1e-4, Vec3::new(1.0, 0.0, 0.0)),
+        Key::new(2e-4, Vec3::new(1.0, 2.0, 0.0)),
+    ]);
+    object.rotation.track = RawTrack::new(vec![
+        Key::new(0.0, glam::Quat::IDENTITY),
+        Key::new(1e-4, glam::Quat::from_rotation_y(170f32.to_radians())),
+        Key::new(2e-4, glam::Quat::from_rotation_x(1.0)),
+    ]);
+    let scene = Scene { objects: vec![object], ..Scene::default() };
+    let options = ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() };
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    for times in [
+        translation_keys(&model, "flick").iter().map(|k| k.0).collect::<Vec<_>>(),
+        rotation_keys(&model, "flick").iter().map(|k| k.0).collect(),
+    ] {
+        assert!(times.iter().any(|&t| (t - 5e-5).abs() < 1e-9), "no key at 5e-5 s: {times:?}");
+        for w in times.windows(2) {
+            assert!(w[1] - w[0] > 4.9e-5, "keys at {} and {}: {times:?}", w[0], w[1]);
+        }
+    }
+}

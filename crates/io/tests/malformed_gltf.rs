@@ -421,13 +421,17 @@ fn triangle_strips_and_fans_become_triangles_in_order() {
 }
 
 /// The .glb container's own checks say where and what: a file shorter than its header, a
-/// second BIN chunk; paths with quoted keys become JSON pointers; a node's morph weights are
+/// header without chunks, a second BIN chunk; paths with quoted keys become JSON pointers; a node's morph weights are
 /// kept.
 #[test]
 fn glb_structure_and_node_fields_are_read_as_written() {
     let short = import_gltf_slice(b"glTF\x02\0\0\0").expect_err("8 bytes");
     assert_eq!(short.location, Location::Byte(0), "{short}");
     assert!(short.to_string().contains("shorter than the 12-byte header"), "{short}");
+    // A header and nothing else is long enough: what it lacks is its JSON chunk.
+    let bare = import_gltf_slice(b"glTF\x02\0\0\0\x0c\0\0\0").expect_err("12 bytes");
+    assert_eq!(bare.location, Location::Byte(12), "{bare}");
+    assert!(bare.to_string().contains("no JSON chunk"), "{bare}");
 
     let data = std::fs::read(corpus("AnimatedMorphCube/AnimatedMorphCube.glb")).expect("read");
     let (json, bin) = split_glb(&data);
