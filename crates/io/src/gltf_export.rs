@@ -610,7 +610,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
                     check_joints(&prim, joint_nodes.len(), &format!("{here}.skeleton"))?;
                     if mesh.skeleton.len() != joint_nodes.len() {
                         // The fit failed (a skeleton that does not build): bind to the scene's rest.
-                        let ibms = inverse_bind_matrices(object.skeleton.as_ref().expect("skeleton"), &here)?;
+                        let ibms = inverse_bind_matrices(object.skeleton.as_ref().expect("skeleton"));
                         skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
                     } else {
                         let ibms = ibms_of(&mesh.skeleton);
@@ -1693,24 +1693,16 @@ fn subdivide(
 }
 
 /// A(j)⁻¹ for every joint: the inverse of the product of rest transforms down the chain.
-fn inverse_bind_matrices(skeleton: &keyrig_core::Skeleton, here: &str) -> Result<Vec<Mat4>, ExportError> {
+/// Parents come before their joints ([`export_joints`] refuses the skeleton otherwise).
+fn inverse_bind_matrices(skeleton: &keyrig_core::Skeleton) -> Vec<Mat4> {
     let mut model_from_joint: Vec<Affine3A> = Vec::with_capacity(skeleton.joints.len());
-    for (j, joint) in skeleton.joints.iter().enumerate() {
+    for joint in &skeleton.joints {
         let local =
             Affine3A::from_rotation_translation(joint.rest_rotation.normalize(), joint.rest_translation);
-        let a = match joint.parent {
-            Some(p) if p < j => model_from_joint[p] * local,
-            Some(p) => {
-                return Err(scene_err(
-                    format!("{here}.skeleton.joints[{j}].parent"),
-                    format!("parent {p} is not before the joint"),
-                ))
-            }
-            None => local,
-        };
-        model_from_joint.push(a);
+        let parent = joint.parent.and_then(|p| model_from_joint.get(p));
+        model_from_joint.push(parent.map_or(local, |parent| *parent * local));
     }
-    Ok(model_from_joint.iter().map(|a| Mat4::from(a.inverse())).collect())
+    model_from_joint.iter().map(|a| Mat4::from(a.inverse())).collect()
 }
 
 /// Frame rates [`export_md2`] accepts. Key times are `k / fps` in f32 seconds: far above
