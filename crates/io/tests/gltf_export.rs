@@ -326,6 +326,7 @@ fn characters_scene_export_passes_the_khronos_validator() {
         let want = md2
             .blended_positions(blend.frame_a as usize, blend.frame_b as usize, blend.t)
             .expect("frames of the model");
+        assert_eq!(got.len(), want.len(), "t {t}");
         let worst = got.iter().zip(&want).map(|(g, w)| (*g - *w).length()).fold(0.0f32, f32::max);
         assert!(worst < 1e-4 * size, "t {t}: {worst}");
     }

@@ -236,3 +236,84 @@ fn a_normal_index_past_the_table_names_its_byte() {
     assert_eq!(err.offset, second_vertex_normal, "{err}");
     assert!(matches!(err.kind, Md2ErrorKind::NormalIndex { index: 200 }), "{err}");
 }
+
+/// Every header count and offset that is negative is refused at its own field's byte, and an
+/// array that reaches past the end of the file at its offset field's byte.
+#[test]
+fn negative_fields_and_arrays_past_the_end_name_their_header_field() {
+    let data = std::fs::read(corpus("dolphin/dolphin.md2")).expect("read");
+    let fields = [
+        (4, "framesize"),
+        (5, "num_skins"),
+        (6, "num_xyz"),
+        (7, "num_st"),
+        (8, "num_tris"),
+        (9, "num_glcmds"),
+        (10, "num_frames"),
+        (11, "ofs_skins"),
+        (12, "ofs_st"),
+        (13, "ofs_tris"),
+        (14, "ofs_frames"),
+        (15, "ofs_glcmds"),
+    ];
+    for (i, field) in fields {
+        let mut bad = data.clone();
+        bad[4 * i..4 * i + 4].copy_from_slice(&(-3i32).to_le_bytes());
+        let e = parse_md2(&bad).expect_err(field);
+        assert_eq!((e.offset, e.kind.clone()), (4 * i, Md2ErrorKind::Negative { field, value: -3 }), "{e}");
+    }
+    let len = data.len();
+    // (offset field, its count field, what)
+    for (i, count, what) in [
+        (11, 5, "skins"),
+        (12, 7, "texture coordinates"),
+        (13, 8, "triangles"),
+        (14, 10, "frames"),
+        (15, 9, "GL commands"),
+    ] {
+        let mut bad = data.clone();
+        bad[4 * i..4 * i + 4].copy_from_slice(&(len as i32 - 4).to_le_bytes());
+        if bad[4 * count..4 * count + 4] == [0; 4] {
+            bad[4 * count..4 * count + 4].copy_from_slice(&1i32.to_le_bytes());
+        }
+        let e = parse_md2(&bad).expect_err(what);
+        assert_eq!(e.offset, 4 * i, "{what}: {e}");
+        assert!(
+            matches!(e.kind, Md2ErrorKind::ArrayOutOfFile { what: w, start, file_len, .. } if w == what && start == len - 4 && file_len == len),
+            "{what}: {e}"
+        );
+    }
+}
+
+/// Looping playback at a time just below 0 (where `time · fps mod n` rounds up to `n`) is the
+/// clip's first frame, never a frame of the next clip.
+#[test]
+fn looping_just_before_zero_is_the_first_frame() {
+    let model = load_md2_file(&corpus("ratamahatta/ratamahatta.md2")).expect("load");
+    let run = model.clips.iter().position(|c| c.name == "run").expect("run clip");
+    let first = model.frame_pose(model.clips[run].frames.start).expect("frame");
+    let pose = model.sample_clip(run, 10.0, -1e-300, true).expect("sample");
+    assert_eq!(pose.positions.len(), first.positions.len());
+    for (got, want) in pose.positions.iter().zip(&first.positions) {
+        assert!((*got - *want).length() < 1e-4, "{got} against {want}");
+    }
+}
+
+/// The skin a project would list for an MD2 file is the image `load_md2_file` loads; a model's
+/// skin becomes a white material textured with its pixels.
+#[test]
+fn the_skin_beside_a_model_is_found_and_becomes_its_material() {
+    for (file, .., skin) in MODELS {
+        let path = corpus(file);
+        let found = keyrig_io::md2::skin_of_file(&path).unwrap_or_else(|| panic!("{file}: no skin"));
+        assert_eq!(found.file_name().and_then(|n| n.to_str()), Some(skin), "{file}");
+        let model = load_md2_file(&path).expect("load");
+        let image = model.skin.as_ref().expect("skin");
+        assert_eq!(found, image.path, "{file}");
+        let material = image.material().expect("material");
+        assert_eq!(material.base_colour, [1.0; 4]);
+        let texture = material.base_colour_texture.as_ref().expect("texture");
+        assert_eq!((texture.width(), texture.height()), (image.width, image.height), "{file}");
+    }
+    assert_eq!(keyrig_io::md2::skin_of_file(&corpus("no/such.md2")), None);
+}
