@@ -93,3 +93,17 @@ fn a_hundred_thousand_skinned_mesh_nodes_map_onto_a_scene_in_seconds() {
     let scene = timed("100k skinned nodes to_scene", || model.to_scene("many.glb", None).expect("scene"));
     assert_eq!(scene.objects.len(), 100_000);
 }
+
+/// A bare chain of 500,000 nodes, root first: the importer's cycle check walks each node up
+/// to the first node it has already finished, so this is linear too (walking to the root from
+/// every node would take 10¹¹ steps).
+#[test]
+fn a_chain_half_a_million_nodes_deep_imports() {
+    let bytes = big_gltf::chain(500_000);
+    let model = timed("500k chain import", || import_gltf_slice(&bytes).expect("import"));
+    assert_eq!(model.nodes.len(), 500_000);
+    assert_eq!(model.nodes[0].parent, None);
+    assert!(model.nodes.iter().enumerate().skip(1).all(|(k, n)| n.parent == Some(k - 1)));
+    let world = timed("500k chain world matrices", || model.world_matrices(&model.pose_at(None, 0.0)));
+    assert_eq!(world.len(), 500_000);
+}

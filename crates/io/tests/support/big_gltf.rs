@@ -239,3 +239,18 @@ pub fn strip_and_fan() -> Vec<u8> {
     });
     glb(root, bin.bytes)
 }
+
+/// `count` nodes and nothing else, each the child of the one before (listed root first, so
+/// every node's parent comes before it): a chain `count` deep.
+pub fn chain(count: usize) -> Vec<u8> {
+    let nodes: Vec<Value> = (0..count)
+        .map(|k| if k + 1 < count { json!({"children": [k + 1]}) } else { json!({}) })
+        .collect();
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": nodes,
+    });
+    glb(root, Vec::new())
+}
