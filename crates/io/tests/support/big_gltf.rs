@@ -15,20 +15,20 @@ pub enum Shape {
     Deep,
 }
 
-fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
+pub fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
     values.into_iter().flat_map(f32::to_le_bytes).collect()
 }
 
 /// Builds the binary buffer, buffer views and accessors.
 #[derive(Default)]
-struct Bin {
-    bytes: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+pub struct Bin {
+    pub bytes: Vec<u8>,
+    pub views: Vec<Value>,
+    pub accessors: Vec<Value>,
 }
 
 impl Bin {
-    fn add(
+    pub fn add(
         &mut self,
         data: &[u8],
         component: u32,
@@ -78,7 +78,7 @@ pub fn glb(mut root: Value, bin: Vec<u8>) -> Vec<u8> {
 
 /// One triangle whose three vertices are bound to joints 0, 1 and 2 (of a skin with at least
 /// three joints), with the accessors (position, joints, weights, indices) it needs.
-fn triangle(bin: &mut Bin) -> Value {
+pub fn triangle(bin: &mut Bin) -> Value {
     let pos = bin.add(
         &f32_bytes([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
         5126,
@@ -243,9 +243,8 @@ pub fn strip_and_fan() -> Vec<u8> {
 /// `count` nodes and nothing else, each the child of the one before (listed root first, so
 /// every node's parent comes before it): a chain `count` deep.
 pub fn chain(count: usize) -> Vec<u8> {
-    let nodes: Vec<Value> = (0..count)
-        .map(|k| if k + 1 < count { json!({"children": [k + 1]}) } else { json!({}) })
-        .collect();
+    let nodes: Vec<Value> =
+        (0..count).map(|k| if k + 1 < count { json!({"children": [k + 1]}) } else { json!({}) }).collect();
     let root = json!({
         "asset": {"version": "2.0"},
         "scene": 0,

@@ -1,0 +1,164 @@
+//! glTF features that no file of the corpus uses, read from small generated files: texture
+//! coordinates stored as normalized 16-bit integers, samplers other than the default, an image
+//! embedded as a `data:` URI in a .glb, a sparse accessor that replaces every element, and a
+//! skin with more inverse bind matrices than joints (glTF requires at least as many).
+
+#[path = "support/big_gltf.rs"]
+mod big_gltf;
+
+use big_gltf::{f32_bytes, glb, triangle, Bin};
+use glam::{Vec2, Vec3};
+use keyrig_core::{FilterMode, Sampler, WrapMode};
+use keyrig_io::gltf_import::import_gltf_slice;
+use serde_json::json;
+
+/// A 1×1 PNG (one opaque pixel), base64.
+const PIXEL_PNG: &str =
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==";
+
+/// A buffer view of `data` (4-byte aligned) without an accessor.
+fn view(bin: &mut Bin, data: &[u8]) -> usize {
+    while !bin.bytes.len().is_multiple_of(4) {
+        bin.bytes.push(0);
+    }
+    bin.views.push(json!({"buffer": 0, "byteOffset": bin.bytes.len(), "byteLength": data.len()}));
+    bin.bytes.extend_from_slice(data);
+    bin.views.len() - 1
+}
+
+fn u16_bytes(values: &[u16]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// Texture coordinates as normalized unsigned shorts (0 → 0, 65535 → 1), each primitive's
+/// texture with its own sampler, the image a `data:` URI.
+#[test]
+fn normalized_texture_coordinates_samplers_and_embedded_images() {
+    let mut bin = Bin::default();
+    let positions = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+    let pos = bin.add(
+        &f32_bytes(positions),
+        5126,
+        4,
+        "VEC3",
+        Some((json!([0.0, 0.0, 0.0]), json!([1.0, 1.0, 0.0]))),
+    );
+    let indices = bin.add(&u16_bytes(&[0, 1, 2, 0, 2, 3]), 5123, 6, "SCALAR", None);
+    let shorts: [u16; 8] = [0, 0, 65535, 0, 65535, 32768, 16384, 65535];
+    let uv16 = bin.add(&u16_bytes(&shorts), 5123, 4, "VEC2", None);
+    bin.accessors[uv16]["normalized"] = json!(true);
+    let uv32 = bin.add(&f32_bytes([0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]), 5126, 4, "VEC2", None);
+    let primitive = |uv: usize, material: usize| json!({"attributes": {"POSITION": pos, "TEXCOORD_0": uv}, "indices": indices, "material": material});
+    let material = |texture: usize| json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": texture}}});
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "quad", "mesh": 0}],
+        "meshes": [{"primitives": [primitive(uv16, 0), primitive(uv32, 1)]}],
+        "materials": [material(0), material(1)],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 0, "sampler": 1}],
+        "samplers": [
+            {"magFilter": 9728, "minFilter": 9986, "wrapS": 33071, "wrapT": 33648},
+            {"magFilter": 9729, "minFilter": 9985, "wrapS": 33648, "wrapT": 10497},
+        ],
+        "images": [{"uri": format!("data:image/png;base64,{PIXEL_PNG}")}],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    let model = import_gltf_slice(&glb(root, bin.bytes)).expect("import");
+    let prims = &model.meshes[0].primitives;
+
+    let uv = prims[0].texcoords.as_deref().expect("16-bit texture coordinates");
+    let want: Vec<Vec2> = shorts.chunks(2).map(|c| Vec2::new(c[0] as f32, c[1] as f32) / 65535.0).collect();
+    assert_eq!(uv, &want[..]);
+    assert_eq!(uv[2].y, 32768.0 / 65535.0);
+
+    let samplers: Vec<Sampler> =
+        prims.iter().map(|p| p.base_colour_texture.as_ref().expect("texture").sampler).collect();
+    assert_eq!(
+        samplers[0],
+        Sampler {
+            wrap_u: WrapMode::ClampToEdge,
+            wrap_v: WrapMode::MirroredRepeat,
+            mag_filter: FilterMode::Nearest,
+            min_filter: FilterMode::Nearest,
+            mipmap_filter: Some(FilterMode::Linear),
+        }
+    );
+    assert_eq!(
+        samplers[1],
+        Sampler {
+            wrap_u: WrapMode::MirroredRepeat,
+            wrap_v: WrapMode::Repeat,
+            mag_filter: FilterMode::Linear,
+            min_filter: FilterMode::Linear,
+            mipmap_filter: Some(FilterMode::Nearest),
+        }
+    );
+
+    let image = model.image_data[0].as_ref().expect("the embedded PNG is read");
+    assert_eq!(image.mime_type, "image/png");
+    assert_eq!(&image.bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // The whole PNG, up to its IEND chunk (the decoded URI is padded to 4 bytes).
+    assert_eq!(&image.bytes[62..70], b"IEND\xaeB`\x82");
+}
+
+/// A sparse accessor may replace every element of its base (`sparse.count` equal to `count`).
+#[test]
+fn a_sparse_accessor_may_replace_every_element() {
+    let mut bin = Bin::default();
+    let base = [0.0; 9];
+    let pos =
+        bin.add(&f32_bytes(base), 5126, 3, "VEC3", Some((json!([0.0, 0.0, 0.0]), json!([2.0, 2.0, 0.0]))));
+    let replaced = [2.0, 0.0, 0.0, 0.0, 2.0, 0.0, 2.0, 2.0, 0.0];
+    let sparse_indices = view(&mut bin, &u16_bytes(&[0, 1, 2]));
+    let sparse_values = view(&mut bin, &f32_bytes(replaced));
+    bin.accessors[pos]["sparse"] = json!({
+        "count": 3,
+        "indices": {"bufferView": sparse_indices, "componentType": 5123},
+        "values": {"bufferView": sparse_values},
+    });
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "triangle", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}}]}],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    let model = import_gltf_slice(&glb(root, bin.bytes)).expect("import");
+    let want: Vec<Vec3> = replaced.chunks(3).map(Vec3::from_slice).collect();
+    assert_eq!(&model.meshes[0].primitives[0].positions[..], &want[..]);
+}
+
+/// A skin may have more inverse bind matrices than joints: the first ones are the joints'.
+#[test]
+fn a_skin_may_have_more_inverse_bind_matrices_than_joints() {
+    let mut bin = Bin::default();
+    let primitive = triangle(&mut bin);
+    let translated = |y: f32| [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, y, 0.0, 1.0];
+    let ibm = bin.add(&f32_bytes((0..4).flat_map(|j| translated(-(j as f32)))), 5126, 4, "MAT4", None);
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 3]}],
+        "nodes": [
+            {"name": "j0", "children": [1]},
+            {"name": "j1", "translation": [0.0, 1.0, 0.0], "children": [2]},
+            {"name": "j2", "translation": [0.0, 1.0, 0.0]},
+            {"name": "mesh", "mesh": 0, "skin": 0},
+        ],
+        "meshes": [{"primitives": [primitive]}],
+        "skins": [{"joints": [0, 1, 2], "inverseBindMatrices": ibm}],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    let model = import_gltf_slice(&glb(root, bin.bytes)).expect("import");
+    let matrices = &model.skins[0].inverse_bind_matrices;
+    assert_eq!(matrices.len(), 4);
+    for (j, m) in matrices.iter().enumerate() {
+        assert_eq!(m.w_axis.y, -(j as f32), "matrix {j}");
+    }
+}
