@@ -1100,3 +1100,104 @@ mod inline_layout_tests {
         assert_eq!(top, "{\n    \"a\": 1,\n}", "{top}");
     }
 }
+
+#[cfg(test)]
+mod reader_tests {
+    use super::*;
+    use serde::{Deserialize, Serialize};
+
+    #[derive(Serialize, Deserialize, Debug, PartialEq)]
+    struct Marker;
+
+    #[derive(Serialize, Deserialize, Debug, PartialEq)]
+    struct Pair(u8, i8);
+
+    #[derive(Serialize, Deserialize, Debug, PartialEq)]
+    enum Shape {
+        Point,
+        Spot { cutoff: f32 },
+        Wrapped(u8),
+        Two(u8, u8),
+    }
+
+    #[derive(Serialize, Deserialize, Debug, PartialEq)]
+    struct Everything {
+        ints: (i8, i16, i32, i64, u8, u16, u32, u64),
+        floats: (f32, f64, f64),
+        flags: (bool, bool),
+        unit: (),
+        marker: Marker,
+        pair: Pair,
+        shapes: Vec<Shape>,
+        name: String,
+        maybe: Option<Option<u8>>,
+        nested: Vec<Vec<u8>>,
+    }
+
+    fn everything() -> Everything {
+        Everything {
+            ints: (-8, -16, -32, i64::MIN, 8, 16, 32, u64::MAX),
+            floats: (1.5e-3, -0.0, f64::INFINITY),
+            flags: (true, false),
+            unit: (),
+            marker: Marker,
+            pair: Pair(1, -1),
+            shapes: vec![Shape::Point, Shape::Spot { cutoff: 30.0 }, Shape::Wrapped(3), Shape::Two(4, 5)],
+            name: "tab\tnew\nline \"q\" \\ é".into(),
+            maybe: Some(None),
+            nested: vec![vec![1, 2], vec![]],
+        }
+    }
+
+    fn fast<'de, T: Deserialize<'de>>(text: &'de str) -> Result<T> {
+        from_str_seed(text, std::marker::PhantomData::<T>)
+    }
+
+    /// Every kind of value the reader supports, as the writer writes it, reads back to the
+    /// value written, as `ron` reads it.
+    #[test]
+    fn the_reader_reads_what_the_writer_writes_as_ron_does() {
+        let value = everything();
+        let text = to_ron(&value).unwrap();
+        let read: Everything = fast(&text).unwrap_or_else(|e| panic!("{e}:\n{text}"));
+        assert_eq!(read, value, "{text}");
+        assert_eq!(ron::from_str::<Everything>(&text).expect("ron"), value, "{text}");
+    }
+
+    /// Hand-written text: tabs, CRLF line ends, comments of both kinds, trailing commas and a
+    /// `\t` escape are read as `ron` reads them.
+    #[test]
+    fn hand_written_layout_and_comments_read_as_ron_reads_them() {
+        let text = "(\r\n\tints: (-8, -16, -32, -9223372036854775808, 8, 16, 32, 18446744073709551615),\r\n\
+                    \tfloats: (1.5e-3, -0.0, inf), // a comment\n\
+                    /* a block\n comment */ flags: (true, false), unit: (), marker: (),\n\
+                    pair: (1, -1), shapes: [Point, Spot(cutoff: 30.0), Wrapped(3), Two(4, 5),],\n\
+                    name: \"tab\\tnew\\nline \\\"q\\\" \\\\ é\", maybe: Some(None), nested: [[1, 2], []],\n)\n";
+        let read: Everything = fast(text).unwrap_or_else(|e| panic!("{e}:\n{text}"));
+        assert_eq!(read, everything());
+        assert_eq!(ron::from_str::<Everything>(text).expect("ron"), everything());
+    }
+
+    /// Where the text leaves the subset the reader gives up (and `ron` decides): a character,
+    /// a map, a unit variant with parentheses, text after the document, a raw control
+    /// character or a `\u{…}` escape in a string.
+    #[test]
+    fn the_reader_gives_up_outside_its_subset() {
+        assert!(fast::<char>("'a'").is_err());
+        assert!(fast::<std::collections::BTreeMap<String, u8>>("{\"a\": 1}").is_err());
+        assert!(fast::<Shape>("Point()").is_err());
+        assert!(fast::<u8>("1 2").is_err());
+        assert!(fast::<String>("\"a\u{1}b\"").is_err());
+        assert!(fast::<String>("\"a\\u{1}b\"").is_err());
+        assert_eq!(fast::<Shape>("Point").expect("unit variant"), Shape::Point);
+    }
+
+    /// 128-bit integers (no scene holds one) are written as their decimal numbers (`ron`
+    /// reads those only with its `integer128` feature, which keyrig leaves off).
+    #[test]
+    fn wide_integers_are_written_for_ron() {
+        let value = (i128::MIN, u128::MAX, -1i128);
+        let text = to_ron(&value).unwrap();
+        assert_eq!(text, format!("({}, {}, -1)", i128::MIN, u128::MAX));
+    }
+}
