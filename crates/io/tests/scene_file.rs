@@ -646,3 +646,41 @@ fn a_comment_that_mentions_a_version_is_not_the_files_version() {
     scene_file::save(&path, &demo_scene()).expect("a current file is overwritten");
     assert_eq!(fs::read_to_string(scene_file::backup_path(&path)).unwrap(), text);
 }
+
+/// A scene with many problems names the first ten, separated by `; `, and counts the rest;
+/// with one problem the word is singular.
+#[test]
+fn many_problems_show_the_first_ten_and_count_the_rest() {
+    let objects: Vec<String> = (0..12)
+        .map(|i| {
+            format!(
+                "(name: \"O{i}\", translation: (value: (NaN, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))"
+            )
+        })
+        .collect();
+    let (err, shown) = parse_err(&doc(&format!("{TIMING}\n        objects: [{}],", objects.join(", "))));
+    let SceneFileError::Invalid { problems, .. } = &err else { panic!("{err:?}") };
+    assert_eq!(problems.len(), 12, "{shown}");
+    assert!(shown.starts_with("test.ron: invalid scene, 12 problems: "), "{shown}");
+    assert!(shown.ends_with("; and 2 more"), "{shown}");
+    assert_eq!(shown.matches("; ").count(), 10, "{shown}");
+    assert!(
+        shown.contains("objects[9].translation") && !shown.contains("objects[10].translation"),
+        "{shown}"
+    );
+
+    let (_, one) = parse_err(&doc(&format!("{TIMING}\n        objects: [{}],", objects[0])));
+    assert!(one.starts_with("test.ron: invalid scene, 1 problem: "), "{one}");
+    assert!(!one.contains("; "), "{one}");
+}
+
+/// A document that is not a scene file at all is refused at its first character; errors
+/// outside the text have no position.
+#[test]
+fn a_document_that_is_not_a_scene_file_is_refused_at_its_start() {
+    let (err, shown) = parse_err("[1, 2]");
+    assert!(shown.starts_with("test.ron:1:1: "), "{shown}");
+    assert_eq!(err.position(), Some((1, 1)), "{shown}");
+    let missing = scene_file::load(Path::new("/no/such/folder/scene.ron")).expect_err("no file");
+    assert_eq!(missing.position(), None, "{missing}");
+}
