@@ -962,3 +962,97 @@ fn segments_of_the_shortest_length_are_halved_once_more() {
         }
     }
 }
+
+/// An MD2 morph whose scene range starts and ends between two of the model's frames has keys
+/// there that blend those two frames as keyrig plays them (not only keys at frame boundaries).
+#[test]
+fn md2_weights_at_range_ends_between_frames_blend_two_frames() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2/sydney");
+    let mut object = keyrig_core::Object::new("M");
+    object.mesh = Some(keyrig_core::MeshSource::File {
+        path: "sydney.md2".into(),
+        mesh: None,
+        clip: Some("run".into()),
+        fps: Some(10.0),
+    });
+    // 30 scene frames a second, the model at 10: frames 1 and 5 are a third of the way
+    // through model frame 0 and two thirds through model frame 1.
+    let scene = Scene {
+        objects: vec![object],
+        fps: 30.0,
+        frame_range: keyrig_core::FrameRange { start: 1, end: 5 },
+        ..Scene::default()
+    };
+    let options = ExportOptions { base_dir: Some(dir.clone()), ..ExportOptions::default() };
+    let model =
+        import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
+    let node = node_named(&model, "M");
+    let track = model.animations[0]
+        .channels
+        .iter()
+        .find_map(|c| match &c.target {
+            ChannelTarget::Weights(w) if c.node == node => Some(w),
+            _ => None,
+        })
+        .expect("weights");
+    let md2 = keyrig_io::md2::load_md2_file(&dir.join("sydney.md2")).expect("sydney.md2");
+    let run = md2.clip_frames(Some("run")).expect("run");
+    let playback = md2.playback().expect("playback");
+    for key in [track.keys.first().expect("first key"), track.keys.last().expect("last key")] {
+        let blend = playback.blend_at(Some("run"), 10.0, key.time).expect("blend");
+        assert!(blend.t > 0.1 && blend.t < 0.9, "t {}: between frames", key.time);
+        let mut want = vec![0.0f32; run.len()];
+        want[blend.frame_a as usize - run.start] += 1.0 - blend.t;
+        want[blend.frame_b as usize - run.start] += blend.t;
+        let worst = key.value.iter().zip(&want).map(|(g, w)| (g - w).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "t {}: {:?} against {want:?}", key.time, key.value);
+    }
+    assert!((track.keys[0].time - 1.0 / 30.0).abs() < 1e-6);
+    assert!((track.keys.last().expect("last").time - 5.0 / 30.0).abs() < 1e-6);
+}
+
+/// A root joint's node carries its rest translation, its turned translation and a static root
+/// translation, keyed or not; a joint whose rest translation is not finite is refused.
+#[test]
+fn a_static_root_translation_is_added_to_the_root_joint() {
+    use keyrig_core::{Animated, Joint, Skeleton};
+    let turn = glam::Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let object = |name: &str, translation: Animated<Vec3>| {
+        let mut joint = Joint::new(format!("{name}_root"), None, Vec3::new(1.0, 0.0, 0.0), turn);
+        joint.translation = translation;
+        let mut skeleton = Skeleton::new(vec![joint]);
+        skeleton.root_translation = Animated::constant(Vec3::new(0.0, 2.0, 0.0));
+        let mut object = keyrig_core::Object::new(name);
+        object.skeleton = Some(skeleton);
+        object
+    };
+    let mut moving = Animated::constant(Vec3::ZERO);
+    moving.track = RawTrack::new(vec![
+        Key::new(0.0, Vec3::ZERO).with_interpolation(Interpolation::Linear),
+        Key::new(1.0, Vec3::new(1.0, 0.0, 0.0)),
+    ]);
+    let scene = Scene {
+        objects: vec![
+            object("still", Animated::constant(Vec3::new(0.5, 0.0, 0.0))),
+            object("moving", moving),
+        ],
+        ..Scene::default()
+    };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    // rest (1, 0, 0) + a quarter turn about z of (0.5, 0, 0) + the root translation (0, 2, 0).
+    let still = model.nodes[node_named(&model, "still_root")].translation;
+    assert!((still - Vec3::new(1.0, 2.5, 0.0)).length() < 1e-6, "{still}");
+    let keys = translation_keys(&model, "moving_root");
+    let want = [(0.0, Vec3::new(1.0, 2.0, 0.0)), (1.0, Vec3::new(1.0, 3.0, 0.0))];
+    assert_eq!(keys.len(), want.len(), "{keys:?}");
+    for ((t, v), (u, w)) in keys.iter().zip(want) {
+        assert!((t - u).abs() < 1e-6 && (*v - w).length() < 1e-5, "{keys:?}");
+    }
+
+    let mut bad = scene.clone();
+    bad.objects[0].skeleton.as_mut().expect("skeleton").joints[0].rest_translation.y = f32::NAN;
+    let err = export_scene(&bad, &ExportOptions::default()).expect_err("a NaN rest translation");
+    assert!(err.to_string().contains("objects[0].skeleton.joints[0]"), "{err}");
+    assert!(err.to_string().contains("rest transform is not finite"), "{err}");
+}

@@ -168,8 +168,21 @@ fn md2_clips_and_rates_are_checked_on_export() {
     let (err, shown) = mesh_file_error(&scene, dir);
     assert!(matches!(err, MeshFileError::TooManyFrames), "{shown}");
 
+    // Too many frames counted from a range that starts far before 0, too.
+    let mut scene = scene_with(md2(Some("run"), Some(1.0)));
+    scene.fps = 1.0;
+    scene.frame_range.start = -6_000_000;
+    scene.frame_range.end = 6_000_000;
+    let (err, shown) = mesh_file_error(&scene, dir);
+    assert!(matches!(err, MeshFileError::TooManyFrames), "{shown}");
+
     let mut scene = scene_with(md2(None, None));
     scene.fps = 0.0;
+    let (err, shown) = mesh_file_error(&scene, dir);
+    assert!(matches!(err, MeshFileError::FrameRangeNotFinite), "{shown}");
+    // One end finite is not enough: a rate so small that the range's end is infinitely far.
+    let mut scene = scene_with(md2(None, None));
+    (scene.fps, scene.frame_range.start, scene.frame_range.end) = (1e-310, 0, 10);
     let (err, shown) = mesh_file_error(&scene, dir);
     assert!(matches!(err, MeshFileError::FrameRangeNotFinite), "{shown}");
 }
