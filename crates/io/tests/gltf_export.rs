@@ -5,6 +5,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "support/big_gltf.rs"]
+mod big_gltf;
+
 use glam::Vec3;
 use keyrig_core::{AnimatedTrack, DeformerKind, Interpolation, Key, RawTrack, Scene, Tcb};
 use keyrig_io::gltf_export::{export_scene, rotation_angle, ExportOptions};
@@ -1055,4 +1058,41 @@ fn a_static_root_translation_is_added_to_the_root_joint() {
     let err = export_scene(&bad, &ExportOptions::default()).expect_err("a NaN rest translation");
     assert!(err.to_string().contains("objects[0].skeleton.joints[0]"), "{err}");
     assert!(err.to_string().contains("rest transform is not finite"), "{err}");
+}
+
+/// A skinned mesh of several primitives from a model file is written back as its primitives,
+/// each with its own vertices; shown by an object without a skeleton, the same mesh is written
+/// unskinned, and without morph weights (it has no targets).
+#[test]
+fn a_skinned_model_files_primitives_keep_their_own_vertices() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("two.glb"), big_gltf::two_primitive_skin()).expect("write");
+    let file = keyrig_io::gltf_import::import_gltf_file(&dir.path().join("two.glb")).expect("import");
+    let skinned = file.to_scene("two.glb", None).expect("scene");
+    let options = ExportOptions { base_dir: Some(dir.path().to_path_buf()), ..ExportOptions::default() };
+    let mut unskinned = skinned.clone();
+    for object in &mut unskinned.objects {
+        object.skeleton = None;
+    }
+    let want = [
+        [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)],
+        [Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 0.0), Vec3::new(2.0, 1.0, 0.0)],
+    ];
+    for (scene, skin) in [(&skinned, true), (&unskinned, false)] {
+        let exported = export_scene(scene, &options).expect("export");
+        let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+        let shown = model.nodes.iter().find(|n| n.mesh.is_some()).expect("a node shows the mesh");
+        assert_eq!(shown.skin.is_some(), skin);
+        let mesh = &model.meshes[shown.mesh.expect("mesh")];
+        assert_eq!(mesh.primitives.len(), 2);
+        for (primitive, want) in mesh.primitives.iter().zip(&want) {
+            assert_eq!(&primitive.positions[..], want, "skinned: {skin}");
+            assert_eq!(&primitive.indices[..], [0, 1, 2], "skinned: {skin}");
+        }
+        assert!(exported.json["meshes"]
+            .as_array()
+            .expect("meshes")
+            .iter()
+            .all(|m| m.get("weights").is_none()));
+    }
 }

@@ -79,12 +79,17 @@ pub fn glb(mut root: Value, bin: Vec<u8>) -> Vec<u8> {
 /// One triangle whose three vertices are bound to joints 0, 1 and 2 (of a skin with at least
 /// three joints), with the accessors (position, joints, weights, indices) it needs.
 pub fn triangle(bin: &mut Bin) -> Value {
+    triangle_at(bin, 0.0)
+}
+
+/// [`triangle`] moved `x` along the x axis.
+pub fn triangle_at(bin: &mut Bin, x: f32) -> Value {
     let pos = bin.add(
-        &f32_bytes([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        &f32_bytes([x, 0.0, 0.0, x + 1.0, 0.0, 0.0, x, 1.0, 0.0]),
         5126,
         3,
         "VEC3",
-        Some((json!([0.0, 0.0, 0.0]), json!([1.0, 1.0, 0.0]))),
+        Some((json!([x, 0.0, 0.0]), json!([x + 1.0, 1.0, 0.0]))),
     );
     let joints: Vec<u8> =
         [0u16, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0].iter().flat_map(|j| j.to_le_bytes()).collect();
@@ -252,4 +257,27 @@ pub fn chain(count: usize) -> Vec<u8> {
         "nodes": nodes,
     });
     glb(root, Vec::new())
+}
+
+/// A three-joint chain and one skinned mesh of two primitives (a triangle at x = 0 and one at
+/// x = 2), on the node `two`.
+pub fn two_primitive_skin() -> Vec<u8> {
+    let mut bin = Bin::default();
+    let primitives = [triangle_at(&mut bin, 0.0), triangle_at(&mut bin, 2.0)];
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 3]}],
+        "nodes": [
+            {"name": "j0", "children": [1]},
+            {"name": "j1", "children": [2]},
+            {"name": "j2"},
+            {"name": "two", "mesh": 0, "skin": 0},
+        ],
+        "meshes": [{"primitives": primitives}],
+        "skins": [{"joints": [0, 1, 2]}],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    glb(root, bin.bytes)
 }
