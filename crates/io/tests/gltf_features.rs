@@ -162,3 +162,48 @@ fn a_skin_may_have_more_inverse_bind_matrices_than_joints() {
         assert_eq!(m.w_axis.y, -(j as f32), "matrix {j}");
     }
 }
+
+/// Accessors without a buffer view (zeros, then their sparse values) are read; together they
+/// may not decode to more bytes than the file holds.
+#[test]
+fn accessors_without_a_view_decode_within_the_files_size() {
+    let document = |count: usize| {
+        let mut bin = Bin::default();
+        let sparse_indices = view(&mut bin, &u16_bytes(&[1]));
+        let sparse_values = view(&mut bin, &f32_bytes([2.0, 3.0, 4.0]));
+        bin.accessors.push(json!({
+            "componentType": 5126,
+            "count": count,
+            "type": "VEC3",
+            "min": [0.0, 0.0, 0.0],
+            "max": [2.0, 3.0, 4.0],
+            "sparse": {
+                "count": 1,
+                "indices": {"bufferView": sparse_indices, "componentType": 5123},
+                "values": {"bufferView": sparse_values},
+            },
+        }));
+        let root = json!({
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"name": "triangle", "mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "bufferViews": bin.views,
+            "accessors": bin.accessors,
+        });
+        glb(root, bin.bytes)
+    };
+    let model = import_gltf_slice(&document(3)).expect("import");
+    assert_eq!(
+        &model.meshes[0].primitives[0].positions[..],
+        [Vec3::ZERO, Vec3::new(2.0, 3.0, 4.0), Vec3::ZERO]
+    );
+    // Twelve times as many bytes as the file holds.
+    let size = document(3).len();
+    let err = import_gltf_slice(&document(size)).expect_err("more than the file holds");
+    assert!(
+        err.to_string().contains("accessors without a bufferView would decode to more than the file's"),
+        "{err}"
+    );
+}

@@ -445,6 +445,17 @@ fn glb_structure_and_node_fields_are_read_as_written() {
     let err = import_gltf_slice(&twice).expect_err("two BIN chunks");
     assert_eq!(err.location, Location::Byte(second + 4), "{err}");
     assert!(err.to_string().contains("BIN chunk must follow the JSON chunk, once"), "{err}");
+    // A second JSON chunk, after the BIN chunk.
+    let mut two_json = pack_glb(&json, &bin);
+    let second = two_json.len();
+    two_json.extend_from_slice(&4u32.to_le_bytes());
+    two_json.extend_from_slice(b"JSON");
+    two_json.extend_from_slice(b"{}  ");
+    let total = two_json.len() as u32;
+    two_json[8..12].copy_from_slice(&total.to_le_bytes());
+    let err = import_gltf_slice(&two_json).expect_err("two JSON chunks");
+    assert_eq!(err.location, Location::Byte(second + 4), "{err}");
+    assert!(err.to_string().contains("JSON must be the first and only JSON chunk"), "{err}");
 
     let targets =
         json.pointer("/meshes/0/primitives/0/targets").and_then(Value::as_array).expect("targets").len();
