@@ -207,3 +207,80 @@ fn accessors_without_a_view_decode_within_the_files_size() {
         "{err}"
     );
 }
+
+fn corpus(rel: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+}
+
+/// CUBICSPLINE morph weights between keys two seconds apart: the tangents are per second, so
+/// the Hermite terms scale them by the key spacing (glTF 2.0, Appendix C).
+#[test]
+fn cubic_spline_weights_scale_their_tangents_by_the_key_spacing() {
+    let mut bin = Bin::default();
+    let positions = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let pos = bin.add(
+        &f32_bytes(positions),
+        5126,
+        3,
+        "VEC3",
+        Some((json!([0.0, 0.0, 0.0]), json!([1.0, 1.0, 0.0]))),
+    );
+    let target = bin.add(
+        &f32_bytes([0.0, 0.0, 1.0].repeat(3)),
+        5126,
+        3,
+        "VEC3",
+        Some((json!([0.0, 0.0, 1.0]), json!([0.0, 0.0, 1.0]))),
+    );
+    let times = bin.add(&f32_bytes([0.0, 2.0]), 5126, 2, "SCALAR", Some((json!([0.0]), json!([2.0]))));
+    // Per key: in-tangent, value, out-tangent (one target).
+    let values = bin.add(&f32_bytes([0.0, 0.0, 1.0, -0.5, 1.0, 0.0]), 5126, 6, "SCALAR", None);
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "morph", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "targets": [{"POSITION": target}]}], "weights": [0.0]}],
+        "animations": [{
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
+            "samplers": [{"input": times, "output": values, "interpolation": "CUBICSPLINE"}],
+        }],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    let model = import_gltf_slice(&glb(root, bin.bytes)).expect("import");
+    let keyrig_io::model::ChannelTarget::Weights(track) = &model.animations[0].channels[0].target else {
+        panic!("a weights channel")
+    };
+    // u = 1/2, t_d = 2: h00 p0 + h10 t_d m0 + h01 p1 + h11 t_d m1
+    //                 = 0 + (1/8)(2)(1) + (1/2)(1) + (−1/8)(2)(−0.5) = 0.875.
+    let w = keyrig_io::model::sample_weights(track, 1.0).expect("weights");
+    assert!((w[0] - 0.875).abs() < 1e-6, "{w:?}");
+}
+
+/// A skinned mesh keeps the texture coordinates of its file (CesiumMan's, in vertex order).
+#[test]
+fn a_skinned_mesh_keeps_its_texture_coordinates() {
+    let model = keyrig_io::gltf_import::import_gltf_file(&corpus("CesiumMan/CesiumMan.glb")).expect("import");
+    let node = model.nodes.iter().position(|n| n.skin.is_some() && n.mesh.is_some()).expect("skinned node");
+    let mesh = model.skinned_mesh(node).expect("skinned mesh");
+    let want: Vec<Vec2> = model.meshes[model.nodes[node].mesh.expect("mesh")]
+        .primitives
+        .iter()
+        .flat_map(|p| p.texcoords.as_deref().expect("texture coordinates").iter().copied())
+        .collect();
+    assert!(want.iter().any(|uv| *uv != Vec2::ZERO));
+    assert_eq!(mesh.uvs.as_deref(), Some(&want[..]));
+}
+
+/// A model changed in memory whose skin names a node that does not exist maps without a
+/// panic (the importer never makes one: this guards hand-made models).
+#[test]
+fn a_skin_joint_past_the_last_node_does_not_panic() {
+    let mut model =
+        keyrig_io::gltf_import::import_gltf_file(&corpus("RiggedSimple/RiggedSimple.glb")).expect("import");
+    let past = model.nodes.len();
+    model.skins[0].joints.push(past);
+    let mapped = std::panic::catch_unwind(|| model.to_scene("x.glb", None).map(|s| s.objects.len()));
+    assert!(mapped.is_ok(), "mapping panicked");
+}
