@@ -234,7 +234,7 @@ fn cubic_spline_weights_scale_their_tangents_by_the_key_spacing() {
     );
     let times = bin.add(&f32_bytes([0.0, 2.0]), 5126, 2, "SCALAR", Some((json!([0.0]), json!([2.0]))));
     // Per key: in-tangent, value, out-tangent (one target).
-    let values = bin.add(&f32_bytes([0.0, 0.0, 1.0, -0.5, 1.0, 0.0]), 5126, 6, "SCALAR", None);
+    let values = bin.add(&f32_bytes([0.0, 0.0, 2.0, -0.5, 1.0, 0.0]), 5126, 6, "SCALAR", None);
     let root = json!({
         "asset": {"version": "2.0"},
         "scene": 0,
@@ -253,9 +253,9 @@ fn cubic_spline_weights_scale_their_tangents_by_the_key_spacing() {
         panic!("a weights channel")
     };
     // u = 1/2, t_d = 2: h00 p0 + h10 t_d m0 + h01 p1 + h11 t_d m1
-    //                 = 0 + (1/8)(2)(1) + (1/2)(1) + (−1/8)(2)(−0.5) = 0.875.
+    //                 = 0 + (1/8)(2)(2) + (1/2)(1) + (−1/8)(2)(−0.5) = 1.125.
     let w = keyrig_io::model::sample_weights(track, 1.0).expect("weights");
-    assert!((w[0] - 0.875).abs() < 1e-6, "{w:?}");
+    assert!((w[0] - 1.125).abs() < 1e-6, "{w:?}");
 }
 
 /// A skinned mesh keeps the texture coordinates of its file (CesiumMan's, in vertex order).
