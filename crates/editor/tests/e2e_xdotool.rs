@@ -185,6 +185,29 @@ impl Session {
         path
     }
 
+    /// Waits (10 s at most) until two captures of the screen 150 ms apart are the same: the
+    /// window has drawn what the input so far asked for. On a loaded machine a frame can take
+    /// longer than [`SETTLE`], and egui hit-tests a press against the last frame drawn.
+    fn wait_idle(&self) {
+        let capture = || {
+            let path = self.home.path().join("idle.rgb");
+            self.run("import", &["-window", "root", "-depth", "8", &format!("rgb:{}", path.display())]);
+            std::fs::read(&path).unwrap_or_default()
+        };
+        let start = Instant::now();
+        let mut last = capture();
+        while start.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(150));
+            let now = capture();
+            if now == last && !now.is_empty() {
+                eprintln!("the window was idle after {:.2?}", start.elapsed());
+                return;
+            }
+            last = now;
+        }
+        eprintln!("the window was still drawing after {:.2?}", start.elapsed());
+    }
+
     fn mouse_to(&self, p: Pos2) {
         self.xdo(&["mousemove", &format!("{}", p.x.round()), &format!("{}", p.y.round())]);
     }
@@ -292,6 +315,7 @@ fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
 
     // 4. Key a rotation: drag a quarter turn along the gizmo's view ring.
     let centre = wrist_on_screen(h.state());
+    session.wait_idle();
     let ring: Vec<Pos2> = (0..=18)
         .map(|step| {
             let a = (step as f32 * 5.0).to_radians();
@@ -308,6 +332,7 @@ fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
 
     // 5. Copy the new key (click its diamond, Ctrl+C) and paste it at the last frame, 90
     // (End, Ctrl+V).
+    session.wait_idle();
     let diamond = h.get_by_label("key wrist rotation frame 10").rect().center();
     // The real window's dope sheet can sit a few points from the model's (panel sizes settle
     // differently): aim at the light grey diamond found in a screenshot near the model's spot.
