@@ -285,31 +285,41 @@ impl Command {
     }
 }
 
-/// Finds the commands whose shortcuts were pressed this frame and consumes those key presses.
-/// While a text field has the keyboard, plain-key shortcuts (R, Space, arrows, 1–4), Shift with a
-/// letter (Shift+I, Shift+D) and the clipboard and undo keys are left to it, so typing a value or
-/// a name does not toggle record mode or IK posing.
+/// Finds the commands whose shortcuts were pressed this frame, one per key press and in the
+/// order they were pressed, and consumes those key presses. A window that falls behind its
+/// input (a slow frame, a held key's repeats) gets several presses in one frame: each is a
+/// step (Right pressed three times moves three frames). While a text field has the keyboard,
+/// plain-key shortcuts (R, Space, arrows, 1–4), Shift with a letter (Shift+I, Shift+D) and the
+/// clipboard and undo keys are left to it, so typing a value or a name does not toggle record
+/// mode or IK posing.
 #[must_use]
 pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
     let typing = ctx.text_edit_focused();
     let mut out = Vec::new();
     ctx.input_mut(|input| {
-        for command in Command::ALL {
-            for shortcut in &command.shortcuts() {
-                if typing && Command::yields_to_text_fields(shortcut) {
-                    continue;
-                }
+        input.events.retain(|event| {
+            let egui::Event::Key { key, modifiers, pressed: true, .. } = event else { return true };
+            // The first command of `Command::ALL` whose shortcut matches: the more specific
+            // shortcuts (Ctrl+Shift+S) come before those they contain (Ctrl+S).
+            for command in Command::ALL {
                 // egui-winit delivers Ctrl+C / Ctrl+V as `Event::Copy` / `Event::Paste`, not as
                 // key presses; the editor handles those events (`EditorApp::ui`). Their
                 // shortcuts are listed for the menus and the help window only.
                 if matches!(command, Command::CopyKeys | Command::PasteKeys) {
                     continue;
                 }
-                if input.consume_shortcut(shortcut) {
+                let matched = command.shortcuts().iter().any(|shortcut| {
+                    !(typing && Command::yields_to_text_fields(shortcut))
+                        && shortcut.logical_key == *key
+                        && modifiers.matches_logically(shortcut.modifiers)
+                });
+                if matched {
                     out.push(command);
+                    return false;
                 }
             }
-        }
+            true
+        });
     });
     out
 }
@@ -349,6 +359,35 @@ mod tests {
             assert!(command.shortcuts().iter().all(Command::yields_to_text_fields), "{command:?}");
         }
         assert!(!Command::yields_to_text_fields(&sc(CMD_SHIFT, Key::S)), "Save as works while typing");
+    }
+
+    /// Key presses that reach one frame together (a window behind its input) are each a
+    /// command, in the order pressed; other events stay for the rest of the UI.
+    #[test]
+    fn presses_in_one_frame_are_each_a_command_in_order() {
+        let ctx = egui::Context::default();
+        let key = |key: Key, pressed: bool| egui::Event::Key {
+            key,
+            physical_key: None,
+            pressed,
+            repeat: false,
+            modifiers: Modifiers::NONE,
+        };
+        let mut events = Vec::new();
+        for k in [Key::ArrowRight, Key::ArrowRight, Key::R, Key::ArrowRight] {
+            events.push(key(k, true));
+            events.push(key(k, false));
+        }
+        events.push(egui::Event::Text("x".into()));
+        let input = egui::RawInput { events, ..Default::default() };
+        let mut got = Vec::new();
+        let mut left = 0;
+        let _ = ctx.run_ui(input, |ui| {
+            got = pressed_commands(ui.ctx());
+            left = ui.input(|i| i.events.len());
+        });
+        assert_eq!(got, [Command::NextFrame, Command::NextFrame, Command::ToggleRecord, Command::NextFrame]);
+        assert_eq!(left, 5, "the four releases and the text stay");
     }
 
     #[test]
