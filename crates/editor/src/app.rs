@@ -1135,33 +1135,11 @@ impl EditorApp {
         }
     }
 
-    /// Copy, cut and paste as the window system delivers them: egui-winit turns Ctrl+C,
-    /// Ctrl+X and Ctrl+V (and the Copy/Cut/Paste keys) into [`egui::Event::Copy`],
-    /// [`egui::Event::Cut`] and [`egui::Event::Paste`] with the system clipboard's text, not
-    /// into key presses. Left to a text field that has the keyboard.
-    pub(crate) fn clipboard_events(&mut self, ctx: &Context) {
-        if ctx.text_edit_focused() {
-            return;
-        }
-        let events: Vec<egui::Event> = ctx.input(|i| {
-            i.events
-                .iter()
-                .filter(|e| matches!(e, egui::Event::Copy | egui::Event::Cut | egui::Event::Paste(_)))
-                .cloned()
-                .collect()
-        });
-        for event in events {
-            match event {
-                egui::Event::Copy => self.run_command(ctx, Command::CopyKeys),
-                egui::Event::Cut => {
-                    self.run_command(ctx, Command::CopyKeys);
-                    if !self.session.clipboard.is_empty() {
-                        self.delete_selected_keys();
-                    }
-                }
-                egui::Event::Paste(text) => self.paste_text(&text),
-                _ => {}
-            }
+    /// Copies the selected keys and deletes them (Ctrl+X).
+    pub(crate) fn cut_keys(&mut self, ctx: &Context) {
+        self.run_command(ctx, Command::CopyKeys);
+        if !self.session.clipboard.is_empty() {
+            self.delete_selected_keys();
         }
     }
 

@@ -285,36 +285,62 @@ impl Command {
     }
 }
 
-/// Finds the commands whose shortcuts were pressed this frame, one per key press and in the
-/// order they were pressed, and consumes those key presses. A window that falls behind its
-/// input (a slow frame, a held key's repeats) gets several presses in one frame: each is a
-/// step (Right pressed three times moves three frames). While a text field has the keyboard,
-/// plain-key shortcuts (R, Space, arrows, 1–4), Shift with a letter (Shift+I, Shift+D) and the
-/// clipboard and undo keys are left to it, so typing a value or a name does not toggle record
-/// mode or IK posing.
+/// What the keyboard asked for in a frame: a command by its shortcut, or copy, cut and paste
+/// as the window system delivers them (egui-winit turns Ctrl+C, Ctrl+X and Ctrl+V, and the
+/// Copy/Cut/Paste keys, into [`egui::Event::Copy`], [`egui::Event::Cut`] and
+/// [`egui::Event::Paste`] with the system clipboard's text, not into key presses).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Pressed {
+    Command(Command),
+    Copy,
+    Cut,
+    Paste(String),
+}
+
+/// What the keyboard asked for this frame, one entry per key press and in the order pressed,
+/// consuming the key presses of commands. A window that falls behind its input (a slow frame,
+/// a held key's repeats) gets several presses in one frame: each is a step (Right pressed three
+/// times moves three frames, End then Ctrl+V pastes at the end). While a text field has the
+/// keyboard, plain-key shortcuts (R, Space, arrows, 1–4), Shift with a letter (Shift+I,
+/// Shift+D), the clipboard and undo keys are left to it, so typing a value or a name does not
+/// toggle record mode or IK posing.
 #[must_use]
-pub fn pressed_commands(ctx: &egui::Context) -> Vec<Command> {
+pub fn pressed(ctx: &egui::Context) -> Vec<Pressed> {
     let typing = ctx.text_edit_focused();
     let mut out = Vec::new();
     ctx.input_mut(|input| {
         input.events.retain(|event| {
-            let egui::Event::Key { key, modifiers, pressed: true, .. } = event else { return true };
+            let (key, modifiers) = match event {
+                egui::Event::Key { key, modifiers, pressed: true, .. } => (*key, *modifiers),
+                egui::Event::Copy if !typing => {
+                    out.push(Pressed::Copy);
+                    return true;
+                }
+                egui::Event::Cut if !typing => {
+                    out.push(Pressed::Cut);
+                    return true;
+                }
+                egui::Event::Paste(text) if !typing => {
+                    out.push(Pressed::Paste(text.clone()));
+                    return true;
+                }
+                _ => return true,
+            };
             // The first command of `Command::ALL` whose shortcut matches: the more specific
             // shortcuts (Ctrl+Shift+S) come before those they contain (Ctrl+S).
             for command in Command::ALL {
-                // egui-winit delivers Ctrl+C / Ctrl+V as `Event::Copy` / `Event::Paste`, not as
-                // key presses; the editor handles those events (`EditorApp::ui`). Their
-                // shortcuts are listed for the menus and the help window only.
+                // Ctrl+C / Ctrl+V arrive as the clipboard events above; their shortcuts are
+                // listed for the menus and the help window only.
                 if matches!(command, Command::CopyKeys | Command::PasteKeys) {
                     continue;
                 }
                 let matched = command.shortcuts().iter().any(|shortcut| {
                     !(typing && Command::yields_to_text_fields(shortcut))
-                        && shortcut.logical_key == *key
+                        && shortcut.logical_key == key
                         && modifiers.matches_logically(shortcut.modifiers)
                 });
                 if matched {
-                    out.push(command);
+                    out.push(Pressed::Command(command));
                     return false;
                 }
             }
@@ -361,10 +387,11 @@ mod tests {
         assert!(!Command::yields_to_text_fields(&sc(CMD_SHIFT, Key::S)), "Save as works while typing");
     }
 
-    /// Key presses that reach one frame together (a window behind its input) are each a
-    /// command, in the order pressed; other events stay for the rest of the UI.
+    /// Key presses and clipboard events that reach one frame together (a window behind its
+    /// input) are each an entry, in the order they came; other events stay for the rest of
+    /// the UI, and so do the clipboard events (a text field may want them).
     #[test]
-    fn presses_in_one_frame_are_each_a_command_in_order() {
+    fn presses_in_one_frame_are_each_an_entry_in_order() {
         let ctx = egui::Context::default();
         let key = |key: Key, pressed: bool| egui::Event::Key {
             key,
@@ -374,20 +401,35 @@ mod tests {
             modifiers: Modifiers::NONE,
         };
         let mut events = Vec::new();
-        for k in [Key::ArrowRight, Key::ArrowRight, Key::R, Key::ArrowRight] {
+        for k in [Key::ArrowRight, Key::ArrowRight, Key::R] {
             events.push(key(k, true));
             events.push(key(k, false));
         }
+        events.push(egui::Event::Copy);
+        events.push(key(Key::End, true));
+        events.push(egui::Event::Paste("text".into()));
+        events.push(egui::Event::Cut);
         events.push(egui::Event::Text("x".into()));
         let input = egui::RawInput { events, ..Default::default() };
         let mut got = Vec::new();
         let mut left = 0;
         let _ = ctx.run_ui(input, |ui| {
-            got = pressed_commands(ui.ctx());
+            got = pressed(ui.ctx());
             left = ui.input(|i| i.events.len());
         });
-        assert_eq!(got, [Command::NextFrame, Command::NextFrame, Command::ToggleRecord, Command::NextFrame]);
-        assert_eq!(left, 5, "the four releases and the text stay");
+        assert_eq!(
+            got,
+            [
+                Pressed::Command(Command::NextFrame),
+                Pressed::Command(Command::NextFrame),
+                Pressed::Command(Command::ToggleRecord),
+                Pressed::Copy,
+                Pressed::Command(Command::LastFrame),
+                Pressed::Paste("text".into()),
+                Pressed::Cut,
+            ]
+        );
+        assert_eq!(left, 7, "the three releases, the clipboard events and the text stay");
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use egui::{Key, Modifiers};
 
 use crate::app::{EditorApp, PendingAction};
-use crate::commands::pressed_commands;
+use crate::commands::{pressed, Command, Pressed};
 use crate::panels;
 
 impl EditorApp {
@@ -54,9 +54,13 @@ impl EditorApp {
             self.frame_time = None;
         }
 
-        self.clipboard_events(&ctx);
-        for command in pressed_commands(&ctx) {
-            self.run_command(&ctx, command);
+        for input in pressed(&ctx) {
+            match input {
+                Pressed::Command(command) => self.run_command(&ctx, command),
+                Pressed::Copy => self.run_command(&ctx, Command::CopyKeys),
+                Pressed::Cut => self.cut_keys(&ctx),
+                Pressed::Paste(text) => self.paste_text(&text),
+            }
         }
         // Escape closes the help window.
         if self.view.show_help && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {

@@ -337,15 +337,14 @@ fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
     // The real window's dope sheet can sit a few points from the model's (panel sizes settle
     // differently): aim at the light grey diamond found in a screenshot near the model's spot.
     let diamond = bright_centroid(&session.screenshot("probe-before-copy"), diamond, 16.0).unwrap_or(diamond);
-    // Each step in a frame of its own: a click and a shortcut handled in one frame (as on a
-    // loaded machine, where the window falls behind the input) copy before the click selects.
+    // The click in a frame of its own (egui selects on the click's frame, and a shortcut
+    // handled in that frame would copy before it selects); End and Ctrl+V as one quick
+    // sequence (presses that share a frame are handled in order: `commands::pressed`).
     session.click(diamond);
     session.wait_idle();
     session.key("ctrl+c");
     session.wait_idle();
-    session.key("End");
-    session.wait_idle();
-    session.key("ctrl+v");
+    session.xdo(&["key", "--clearmodifiers", "End", "ctrl+v"]);
     session.wait_idle();
 
     // 6. Save with Ctrl+S: the dialog proposes "Untitled.ron" with "Untitled" selected; the
