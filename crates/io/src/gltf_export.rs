@@ -707,14 +707,19 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
         let rest = look_rotation(dir.sample(t0));
         doc.nodes[node]["rotation"] = json!(rest.to_array());
         if let Some(track) = dir.track() {
-            let (start, end) = track.domain();
-            let breaks = if track.cycles().is_hold() { vec![start, end] } else { cycle_breaks(track, range) };
+            // Key times are breaks, and a Step segment is a hold and one jump, as for the
+            // other rotations.
+            let (breaks, jumps) = if track.cycles().is_hold() {
+                step_breaks(track.key_times(), |i| track.segment_interpolation(i))
+            } else {
+                (cycle_breaks(track, range), Vec::new())
+            };
             let sampler = |t: f64| look_rotation(track.sample(t));
             let (times, values) = match &options.bake {
                 Some(bake) => {
-                    resample_rotation(&sampler, &breaks, &[], bake.rotation_tolerance(options), nlerp)
+                    resample_rotation(&sampler, &breaks, &jumps, bake.rotation_tolerance(options), nlerp)
                 }
-                None => resample_rotation(&sampler, &breaks, &[], tol, crate::model::slerp_short),
+                None => resample_rotation(&sampler, &breaks, &jumps, tol, crate::model::slerp_short),
             };
             doc.channels.push(linear_quat_channel(node, times, values));
         }
@@ -1351,8 +1356,11 @@ fn cycle_breaks<T: keyrig_core::TrackValue>(track: &Track<T>, range: (f64, f64))
     breaks.retain(|&t| (start..=end).contains(&t));
     breaks.sort_by(f64::total_cmp);
     // Repeated key times differ from each other by rounding only: keep one (f32 key times
-    // must increase).
+    // must increase). The range's end stays: a break just before it gives way.
     breaks.dedup_by(|later, earlier| *later - *earlier < MIN_SEGMENT);
+    if let Some(last) = breaks.last_mut() {
+        *last = end;
+    }
     breaks
 }
 

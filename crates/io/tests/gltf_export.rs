@@ -1096,3 +1096,63 @@ fn a_skinned_model_files_primitives_keep_their_own_vertices() {
             .all(|m| m.get("weights").is_none()));
     }
 }
+
+/// A light's direction keyed with a Step segment is written as the other rotations are: the
+/// held direction until `STEP_JUMP` before the next key, then that key, with no keys closing in
+/// on the jump.
+#[test]
+fn a_light_directions_step_is_a_hold_and_one_jump() {
+    use keyrig_io::gltf_export::STEP_JUMP;
+    let mut scene = keyrig_io::demo::demo_scene();
+    scene.objects.clear();
+    scene.lights.truncate(1);
+    let name = scene.lights[0].name.clone();
+    let (a, b) = (Vec3::new(0.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0));
+    scene.lights[0].direction.track = RawTrack::new(vec![
+        Key::new(0.0, a).with_interpolation(Interpolation::Step),
+        Key::new(1.0, b).with_interpolation(Interpolation::Linear),
+        Key::new(2.0, b),
+    ]);
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let keys = rotation_keys(&model, &name);
+    let times: Vec<f64> = keys.iter().map(|k| k.0).collect();
+    assert!(
+        times.iter().all(|&t| t == 0.0 || (t - (1.0 - STEP_JUMP)).abs() < 1e-6 || t >= 1.0 - 1e-6),
+        "{times:?}"
+    );
+    let hold =
+        keys.iter().find(|k| (k.0 - (1.0 - STEP_JUMP)).abs() < 1e-6).unwrap_or_else(|| panic!("{times:?}"));
+    let down = hold.1 * Vec3::NEG_Z;
+    assert!(down.angle_between(a) < 1e-5, "held {down}");
+    assert!(keys.len() <= 4, "{times:?}");
+}
+
+/// A repeated track whose repeats put a key just before the end of the scene's range (within
+/// 1e-4 s) still ends at the range's end.
+#[test]
+fn a_repeat_just_before_the_range_end_keeps_the_end() {
+    use keyrig_core::{Cycle, Cycles};
+    let linear = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
+    let mut object = keyrig_core::Object::new("mover");
+    object.translation.track = RawTrack::new(vec![
+        linear(0.0, Vec3::ZERO),
+        linear(0.49995, Vec3::new(1.0, 0.0, 0.0)),
+        linear(1.0, Vec3::new(1.0, 1.0, 0.0)),
+    ]);
+    object.translation = object.translation.with_cycles(Cycles::new(Cycle::Repeat, Cycle::Repeat));
+    // 45 frames at 30 per second: the range ends at 1.5 s, 0.05 ms after the repeat of 0.49995.
+    let scene = Scene {
+        objects: vec![object],
+        fps: 30.0,
+        frame_range: keyrig_core::FrameRange { start: 0, end: 45 },
+        ..Scene::default()
+    };
+    let model = import_gltf_slice(&export_scene(&scene, &ExportOptions::default()).expect("export").to_glb())
+        .expect("re-import");
+    let keys = translation_keys(&model, "mover");
+    let (t, v) = *keys.last().expect("keys");
+    assert!((t - 1.5).abs() < 1e-6, "the last key is at {t}: {keys:?}");
+    let want = AnimatedTrack::new(&scene.objects[0].translation).expect("track").sample(1.5);
+    assert!((v - want).length() < 1e-4, "{v} against {want}");
+}
