@@ -290,14 +290,7 @@ fn characters_scene_export_passes_the_khronos_validator() {
     let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
     let sydney = scene.objects.iter().find(|o| o.name.to_lowercase().contains("sydney")).expect("Sydney");
     let node = node_named(&model, &sydney.name);
-    let keys = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Weights(w) if c.node == node => Some(&w.keys),
-            _ => None,
-        })
-        .expect("Sydney's morph weights are animated");
+    let keys = &weights_of(&model, node).expect("Sydney's morph weights are animated").keys;
     let (t0, t1) =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
     let mut expected = vec![t0];
@@ -312,14 +305,7 @@ fn characters_scene_export_passes_the_khronos_validator() {
     // the looping playback, blended by t).
     let md2 = keyrig_io::md2::load_md2_file(&assets.join("models/sydney/sydney.md2")).expect("sydney.md2");
     let playback = md2.playback().expect("playback");
-    let track = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Weights(w) if c.node == node => Some(w),
-            _ => None,
-        })
-        .expect("weights");
+    let track = weights_of(&model, node).expect("weights");
     let primitive = &model.meshes[model.nodes[node].mesh.expect("Sydney's mesh")].primitives[0];
     let size = md2.frames[0].positions.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
     for t in [0.0, 0.05, 0.37, 1.0, 1.23, 2.95, 3.0] {
@@ -593,34 +579,39 @@ fn a_step_segment_in_a_spline_track_holds_until_just_before_the_next_key() {
     }
 }
 
+/// What `pick` takes from the first channel of the first animation on `node` that it accepts.
+fn channel_of<'m, T>(
+    model: &'m ImportedModel,
+    node: usize,
+    pick: impl Fn(&'m ChannelTarget) -> Option<T>,
+) -> Option<T> {
+    model.animations[0].channels.iter().filter(|c| c.node == node).find_map(|c| pick(&c.target))
+}
+
 /// The rotation keys of object `name` in the first animation: (time, value).
 fn rotation_keys(model: &ImportedModel, name: &str) -> Vec<(f64, glam::Quat)> {
-    let node = node_named(model, name);
-    model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Rotation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
-            }
-            _ => None,
-        })
-        .unwrap_or_else(|| panic!("{name}'s rotation is animated"))
+    channel_of(model, node_named(model, name), |target| match target {
+        ChannelTarget::Rotation(track) => Some(track.keys.iter().map(|k| (k.time, k.value)).collect()),
+        _ => None,
+    })
+    .unwrap_or_else(|| panic!("{name}'s rotation is animated"))
 }
 
 /// The translation keys of object `name` in the first animation: (time, value).
 fn translation_keys(model: &ImportedModel, name: &str) -> Vec<(f64, Vec3)> {
-    let node = node_named(model, name);
-    model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Translation(track) if c.node == node => {
-                Some(track.keys.iter().map(|k| (k.time, k.value)).collect())
-            }
-            _ => None,
-        })
-        .unwrap_or_else(|| panic!("{name}'s translation is animated"))
+    channel_of(model, node_named(model, name), |target| match target {
+        ChannelTarget::Translation(track) => Some(track.keys.iter().map(|k| (k.time, k.value)).collect()),
+        _ => None,
+    })
+    .unwrap_or_else(|| panic!("{name}'s translation is animated"))
+}
+
+/// The morph weights track of node `node` in the first animation.
+fn weights_of(model: &ImportedModel, node: usize) -> Option<&keyrig_io::model::WeightsTrack> {
+    channel_of(model, node, |target| match target {
+        ChannelTarget::Weights(w) => Some(w),
+        _ => None,
+    })
 }
 
 /// A rotation that repeats jumps back to its first key at every cycle: the keys close in on
@@ -990,14 +981,7 @@ fn md2_weights_at_range_ends_between_frames_blend_two_frames() {
     let model =
         import_gltf_slice(&export_scene(&scene, &options).expect("export").to_glb()).expect("re-import");
     let node = node_named(&model, "M");
-    let track = model.animations[0]
-        .channels
-        .iter()
-        .find_map(|c| match &c.target {
-            ChannelTarget::Weights(w) if c.node == node => Some(w),
-            _ => None,
-        })
-        .expect("weights");
+    let track = weights_of(&model, node).expect("weights");
     let md2 = keyrig_io::md2::load_md2_file(&dir.join("sydney.md2")).expect("sydney.md2");
     let run = md2.clip_frames(Some("run")).expect("run");
     let playback = md2.playback().expect("playback");

@@ -16,6 +16,21 @@ use serde_json::json;
 const PIXEL_PNG: &str =
     "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==";
 
+/// A .glb of one node, `triangle`, whose mesh's one primitive has the positions of accessor
+/// `positions` (of `bin`).
+fn triangle_glb(bin: Bin, positions: usize) -> Vec<u8> {
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "triangle", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": positions}}]}],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    glb(root, bin.bytes)
+}
+
 /// A buffer view of `data` (4-byte aligned) without an accessor.
 fn view(bin: &mut Bin, data: &[u8]) -> usize {
     while !bin.bytes.len().is_multiple_of(4) {
@@ -119,16 +134,7 @@ fn a_sparse_accessor_may_replace_every_element() {
         "indices": {"bufferView": sparse_indices, "componentType": 5123},
         "values": {"bufferView": sparse_values},
     });
-    let root = json!({
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"name": "triangle", "mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}}]}],
-        "bufferViews": bin.views,
-        "accessors": bin.accessors,
-    });
-    let model = import_gltf_slice(&glb(root, bin.bytes)).expect("import");
+    let model = import_gltf_slice(&triangle_glb(bin, pos)).expect("import");
     let want: Vec<Vec3> = replaced.chunks(3).map(Vec3::from_slice).collect();
     assert_eq!(&model.meshes[0].primitives[0].positions[..], &want[..]);
 }
@@ -183,16 +189,7 @@ fn accessors_without_a_view_decode_within_the_files_size() {
                 "values": {"bufferView": sparse_values},
             },
         }));
-        let root = json!({
-            "asset": {"version": "2.0"},
-            "scene": 0,
-            "scenes": [{"nodes": [0]}],
-            "nodes": [{"name": "triangle", "mesh": 0}],
-            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-            "bufferViews": bin.views,
-            "accessors": bin.accessors,
-        });
-        glb(root, bin.bytes)
+        triangle_glb(bin, 0)
     };
     let model = import_gltf_slice(&document(3)).expect("import");
     assert_eq!(
