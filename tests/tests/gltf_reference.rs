@@ -1,6 +1,6 @@
 //! Imported characters move exactly as their glTF file says.
 //!
-//! For every skinned model of the external corpus (`../shared/corpus/gltf/`) and every
+//! For every skinned model of the external corpus (`tests/corpus/gltf/`) and every
 //! animation in it, the vertices keyrig shows (glTF import → keyrig scene → keyrig-core's
 //! tracks → keyrig-skin's joint palette → linear blend skinning → the object's transform) are
 //! compared at every frame (30 fps, the scene's rate) with an independent evaluation of the same

@@ -162,7 +162,7 @@ fn demo_scene_and_gltf_model_deform() {
     assert_eq!(json["object"], "Arm");
     assert_eq!(json["vertex_count"], 1250);
     let model = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     for kind in DeformerKind::ALL {
         let json = deform_json(&model, &["--time", "0.5"], kind.cli_name(), dir.path());
         let p = positions(&json, "positions");
@@ -178,7 +178,7 @@ fn demo_scene_and_gltf_model_deform() {
 #[test]
 fn gltf_linear_blend_is_the_specification_s_skinning() {
     let dir = tempfile::tempdir().unwrap();
-    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf");
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf");
     for (file, time) in
         [("CesiumMan/CesiumMan.glb", 0.7), ("Fox/Fox.glb", 1.3), ("RiggedFigure/RiggedFigure.glb", 0.4)]
     {
@@ -232,7 +232,7 @@ fn bad_arguments_and_files_are_clear_errors() {
 /// RiggedSimple.glb with the first vertex's four weights replaced by `weights`.
 fn glb_with_weights(dir: &Path, name: &str, weights: [f32; 4]) -> PathBuf {
     let source = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     let mut data = std::fs::read(source).unwrap();
     let u32_at = |d: &[u8], at: usize| u32::from_le_bytes(d[at..at + 4].try_into().unwrap()) as usize;
     let json_len = u32_at(&data, 12);
@@ -284,7 +284,7 @@ fn bad_weights_in_a_model_are_clear_errors() {
 }
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus").join(rel)
 }
 
 #[test]

@@ -323,9 +323,9 @@ fn sample_bad_arguments() {
     );
 }
 
-/// A skinned, animated glTF model of the shared corpus (see ../shared/corpus/SOURCES.md).
+/// A skinned, animated glTF model of the shared corpus (see tests/corpus/SOURCES.md).
 fn rigged_simple() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb")
 }
 
 #[test]
@@ -358,7 +358,7 @@ fn info_and_sample_read_gltf_models() {
 
 #[test]
 fn info_summarizes_md2_models() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2");
     let mut seen = 0;
     for entry in std::fs::read_dir(&dir).expect("corpus md2 folder") {
         let folder = entry.unwrap().path();
@@ -384,7 +384,7 @@ fn info_summarizes_md2_models() {
 }
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus").join(rel)
 }
 
 #[test]

@@ -11,7 +11,7 @@ fn demo() -> PathBuf {
 }
 
 fn md2(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2").join(rel)
 }
 
 fn keyrig(args: &[&std::ffi::OsStr]) -> Output {
@@ -66,7 +66,7 @@ fn export_writes_a_valid_glb_and_gltf_of_the_demo_scene() {
 }
 
 fn gltf(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf").join(rel)
 }
 
 #[test]
@@ -196,7 +196,7 @@ fn outputs_never_replace_an_input_or_a_model_the_scene_uses() {
     let model = dir.path().join("rigged.glb");
     std::fs::copy(
         Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb"),
+            .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb"),
         &model,
     )
     .expect("copy model");

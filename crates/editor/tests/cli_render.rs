@@ -84,7 +84,7 @@ fn renders_a_numbered_range_with_a_pattern() {
 
 #[test]
 fn renders_an_md2_model_through_gpu_morphing() {
-    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2");
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2");
     let model = std::fs::read_dir(&corpus)
         .unwrap_or_else(|e| {
             panic!("{}: {e} (the shared corpus must be beside the checkout)", corpus.display())
@@ -121,7 +121,7 @@ fn renders_an_md2_model_through_gpu_morphing() {
 #[test]
 fn renders_an_animated_gltf_model_with_its_skin() {
     let model =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf/CesiumMan/CesiumMan.glb");
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/CesiumMan/CesiumMan.glb");
     assert!(model.exists(), "{} is missing (the shared corpus must be beside the checkout)", model.display());
     let dir = tempfile::tempdir().expect("tempdir");
     let mut images = Vec::new();
@@ -180,7 +180,7 @@ fn render_model(model: &Path, dir: &Path, textures: bool) -> keyrig_render::imag
 
 #[test]
 fn models_render_with_their_textures_not_flat_grey() {
-    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus");
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus");
     let dir = tempfile::tempdir().expect("tempdir");
     // CesiumMan: a JPEG base-colour texture (white suit, green and blue panels); Fox: a PNG
     // one; ratamahatta: an MD2 model with its skin in skins/.

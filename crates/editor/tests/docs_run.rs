@@ -5,7 +5,7 @@
 //!
 //! | info | checked by |
 //! |---|---|
-//! | `sh` | each line is a `keyrig` command, run (the real binary, in a scratch folder with `assets/` and `../shared`) and must exit 0 |
+//! | `sh` | each line is a `keyrig` command, run (the real binary, in a scratch folder with `assets/` and `tests/corpus`) and must exit 0 |
 //! | `console` | `$ keyrig …` lines are run; the lines under each are its output (stdout, or stderr for `keyrig: error: …`, which must exit non-zero); JSON is compared as JSON |
 //! | `synopsis` | every `--flag` named must be one `keyrig help SUBCOMMAND` lists |
 //! | `ron` | a whole scene file loads and evaluates without problems; a `field: value` fragment parses as that field of the scene format and validates |
@@ -130,8 +130,8 @@ fn blocks() -> Vec<Block> {
     out
 }
 
-/// A scratch folder laid out like the repository for commands: `assets/` copied, `../shared`
-/// pointing at the real one (the corpus).
+/// A scratch folder laid out like the repository for commands: `assets/` copied, `tests/corpus`
+/// pointing at the repository's test models.
 struct Scratch {
     _dir: tempfile::TempDir,
     cwd: PathBuf,
@@ -141,10 +141,9 @@ fn scratch() -> Scratch {
     let dir = tempfile::tempdir().expect("temp dir");
     let cwd = dir.path().join("keyrig");
     copy_dir(&repo().join("assets"), &cwd.join("assets"));
-    let shared = repo().join("../shared");
-    if shared.exists() {
-        std::os::unix::fs::symlink(&shared, dir.path().join("shared")).expect("link ../shared");
-    }
+    std::fs::create_dir_all(cwd.join("tests")).expect("create tests folder");
+    std::os::unix::fs::symlink(repo().join("tests/corpus"), cwd.join("tests/corpus"))
+        .expect("link tests/corpus");
     Scratch { _dir: dir, cwd }
 }
 

@@ -42,7 +42,7 @@ fn an_imported_skinned_gltf_renders_on_the_gpu() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = gpu_harness(dir.path(), SIZE);
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     h.state_mut().import_path(model);
     h.state_mut().wait_for_background_work();
     h.run();

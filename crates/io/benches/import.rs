@@ -52,7 +52,7 @@ fn peak_of(f: impl FnOnce()) -> usize {
 }
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus").join(rel)
 }
 
 const GLTF: [&str; 9] = [

@@ -10,7 +10,7 @@ use keyrig_io::gltf_import::{import_gltf_file, import_gltf_slice};
 use keyrig_io::model::{sample_vec3, ChannelTarget, ImportedModel};
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf").join(rel)
 }
 
 /// (file, nodes, meshes, skins, joints of skin 0, animations)

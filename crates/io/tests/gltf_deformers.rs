@@ -13,7 +13,7 @@ use keyrig_io::gltf_import::import_gltf_file;
 use keyrig_skin::{deform_mesh, BlendZone, JointPalette};
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf").join(rel)
 }
 
 /// (file, largest linear-blend difference allowed, relative to the model's size). The

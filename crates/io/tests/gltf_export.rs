@@ -358,7 +358,7 @@ fn the_skins_skeleton_is_the_root_joint() {
 /// weights and first animation's weights keys (STEP, LINEAR or CUBICSPLINE as in the file).
 #[test]
 fn morph_weights_of_a_model_file_are_exported() {
-    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf/AnimatedMorphCube");
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/AnimatedMorphCube");
     let file = "AnimatedMorphCube.glb";
     let original = keyrig_io::gltf_import::import_gltf_file(&corpus.join(file)).expect("AnimatedMorphCube");
     let mut object = keyrig_core::Object::new("cube");
@@ -504,7 +504,7 @@ fn cycled_tracks_keep_a_key_at_every_repeat_of_their_keys() {
 #[test]
 fn interpolation_test_round_trips_through_a_scene() {
     let file = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/corpus/gltf/InterpolationTest/InterpolationTest.glb");
+        .join("../../tests/corpus/gltf/InterpolationTest/InterpolationTest.glb");
     let original = keyrig_io::gltf_import::import_gltf_file(&file).expect("InterpolationTest");
     let tolerance = ExportOptions::default().rotation_tolerance_deg.to_radians() + 1e-4;
     let mut cubic = [0, 0];
@@ -961,7 +961,7 @@ fn segments_of_the_shortest_length_are_halved_once_more() {
 /// there that blend those two frames as keyrig plays them (not only keys at frame boundaries).
 #[test]
 fn md2_weights_at_range_ends_between_frames_blend_two_frames() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2/sydney");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2/sydney");
     let mut object = keyrig_core::Object::new("M");
     object.mesh = Some(keyrig_core::MeshSource::File {
         path: "sydney.md2".into(),

@@ -206,7 +206,7 @@ fn accessors_without_a_view_decode_within_the_files_size() {
 }
 
 fn corpus(rel: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf").join(rel)
 }
 
 /// CUBICSPLINE morph weights between keys two seconds apart: the tangents are per second, so

@@ -17,7 +17,7 @@ use serde_json::{json, Value};
 static ALLOC: CountingAlloc = CountingAlloc;
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/gltf").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf").join(rel)
 }
 
 const GLBS: [&str; 6] = [

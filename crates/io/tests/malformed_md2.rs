@@ -12,7 +12,7 @@ use malformed_support::{byte_flips, overwrite_u32, run_suite, truncations, Count
 static ALLOC: CountingAlloc = CountingAlloc;
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2").join(rel)
 }
 
 const FILES: [&str; 5] = [

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use keyrig_io::md2::{clip_name, frame_range_end, load_md2_file, parse_md2, Md2ErrorKind};
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2").join(rel)
 }
 
 /// (file, MD2 vertices, triangles, frames, clips, skin file name)

@@ -11,7 +11,7 @@ use keyrig_io::gltf_import::import_gltf_file;
 use keyrig_io::md2::load_md2_file;
 
 fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2").join(rel)
 }
 
 /// Runs the Khronos glTF-Validator; fails with instructions when it is not installed.

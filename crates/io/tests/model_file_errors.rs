@@ -11,7 +11,7 @@ use keyrig_io::gltf_import::{import_gltf_file, import_gltf_slice, GltfErrorKind}
 use serde_json::{json, Value};
 
 fn md2_corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus/md2").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/md2").join(rel)
 }
 
 /// A glTF document whose one buffer is the external file `uri`.

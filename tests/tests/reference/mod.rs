@@ -23,10 +23,10 @@ use glam::{DMat4, DQuat, DVec3, Vec3};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
 
-/// A file of the external corpus (`../shared/corpus/`).
+/// A file of the external corpus (`tests/corpus/`).
 #[must_use]
 pub fn corpus(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/corpus").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus").join(rel)
 }
 
 /// How LINEAR and CUBICSPLINE samplers are read.

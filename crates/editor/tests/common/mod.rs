@@ -13,9 +13,9 @@ use keyrig_editor::{editor_for, EditorApp, EditorOptions};
 /// The window size of the painter-viewport tests.
 pub const WINDOW: [f32; 2] = [1280.0, 800.0];
 
-/// `../shared/corpus` beside the repository (CI always has it; see its SOURCES.md).
+/// `tests/corpus` in the repository (see its SOURCES.md).
 pub fn corpus(relative: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus").join(relative)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus").join(relative)
 }
 
 /// An editor on `file` (the demo scene when `None`) whose recovery and recent files live in
