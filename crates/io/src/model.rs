@@ -555,7 +555,7 @@ pub enum MappingError {
 
 /// How a skin maps onto a keyrig skeleton: the skin's joints and every ancestor node of them
 /// up to the scene root, parents first, so that the keyrig skeleton's F(j) is exactly the
-/// file's global transform of joint j's node (DESIGN.md §4; glTF 2.0 §3.7.3). When the nodes
+/// file's global transform of joint j's node (docs/design.md §4; glTF 2.0 §3.7.3). When the nodes
 /// have several scene roots, a synthetic identity root joint holds them together.
 struct SkeletonMap {
     /// glTF node of keyrig joint k (`None` for the synthetic root).

@@ -531,7 +531,7 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
     cycles_ui(ui, app, first.channel);
 }
 
-/// The channel's behaviour before its first key and after its last (cycles, DESIGN.md §9): two
+/// The channel's behaviour before its first key and after its last (cycles, docs/design.md §9): two
 /// combo boxes, "Before keys" and "After keys", each an undoable edit of the channel of the
 /// first selected key.
 fn cycles_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId) {

@@ -911,7 +911,7 @@ pub fn measure_ui(ui: &mut Ui, app: &EditorApp) {
     match measure_text(app) {
         Some(text) => {
             ui.label(text).on_hover_text(
-                "Mean distance of the limb's surface from the joint, posed / rest (DESIGN.md §6). \
+                "Mean distance of the limb's surface from the joint, posed / rest (docs/design.md §6). \
                  Near 0 is the candy-wrapper collapse of linear blending under twist.",
             );
         }
