@@ -8,7 +8,6 @@
 //! reused by the next run on the same machine.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use crate::{cargo, root, run_status};
 

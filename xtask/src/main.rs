@@ -23,10 +23,10 @@ use std::process::{Command, ExitCode};
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
-        Some("test") => setup::run(true).and_then(|env| test(&args[1..], &env)),
-        Some("setup") => setup::run(true).map(|_| ()),
+        Some("test") => setup::run(true).and_then(|()| test(&args[1..])),
+        Some("setup") => setup::run(true),
         Some("fuzz") => fuzz::run(&args[1..]),
-        Some("screenshots") => setup::run(false).and_then(|env| screenshots::run(&env)),
+        Some("screenshots") => setup::run(false).and_then(|()| screenshots::run()),
         Some("help" | "--help" | "-h") | None => {
             println!("{}", USAGE);
             Ok(())
@@ -50,13 +50,10 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().map(PathBuf::from).unwrap_or_default()
 }
 
-/// `cargo test --workspace ARGS…` with the environment the set-up chose.
-fn test(args: &[String], env: &[(String, String)]) -> Result<(), String> {
+/// `cargo test --workspace ARGS…`.
+fn test(args: &[String]) -> Result<(), String> {
     let mut command = cargo();
     command.current_dir(root()).arg("test").arg("--workspace").args(args);
-    for (key, value) in env {
-        command.env(key, value);
-    }
     run_status(&mut command, "cargo test --workspace")
 }
 

@@ -28,7 +28,7 @@ impl Drop for Guard {
     }
 }
 
-pub fn run(env: &[(String, String)]) -> Result<(), String> {
+pub fn run() -> Result<(), String> {
     let root = root();
     let mut build = cargo();
     build.current_dir(&root).args(["build", "--release", "-p", "keyrig-editor", "--bin", "keyrig"]);
@@ -51,9 +51,6 @@ pub fn run(env: &[(String, String)]) -> Result<(), String> {
             .env("XDG_CONFIG_HOME", home.join("config"))
             .stdout(Stdio::null())
             .stderr(Stdio::null());
-        for (key, value) in env {
-            command.env(key, value);
-        }
         let _editor = Guard(command.spawn().map_err(|e| format!("cannot start {}: {e}", keyrig.display()))?);
         let window = wait_for_window(&display)?;
         x(&display, "xdotool", &["windowmove", "--sync", &window, "0", "0"])?;

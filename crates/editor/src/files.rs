@@ -57,8 +57,6 @@ pub enum FileError {
     /// A file of an object of the scene (`at` names the object).
     #[error("{at}: {source}")]
     OfObject { at: String, source: Box<FileError> },
-    #[error("{at}: `{path}` has no skin; only skinned glTF meshes are drawn")]
-    NotSkinned { at: String, path: String },
 }
 
 impl From<keyrig_io::scene_file::SceneFileError> for FileError {
@@ -543,10 +541,9 @@ pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Resul
 /// A mesh read from a model file.
 #[derive(Clone, Debug)]
 pub enum FileMesh {
-    /// A skinned mesh, bound to its skin's skeleton.
+    /// A skinned mesh, bound to its skin's skeleton (a glTF mesh without a skin: bound rigidly
+    /// to one root joint, [`keyrig_io::model::ImportedModel::rigid_mesh`]).
     Skinned(std::sync::Arc<keyrig_skin::SkinnedMesh>),
-    /// A mesh without a skin: positions and triangles in its node's space.
-    Static { positions: Vec<glam::Vec3>, indices: Vec<u32> },
     /// A vertex-animated mesh (MD2): every frame, its triangles and clips.
     Morph(std::sync::Arc<MorphMesh>),
 }
@@ -557,7 +554,6 @@ impl FileMesh {
     pub fn rest_positions(&self) -> Vec<Vec3> {
         match self {
             FileMesh::Skinned(m) => m.positions.clone(),
-            FileMesh::Static { positions, .. } => positions.clone(),
             FileMesh::Morph(m) => m.frames()[0].iter().map(SkinnedVertex::position).collect(),
         }
     }
@@ -681,7 +677,6 @@ impl MeshStore {
                     Some(FileMesh::Morph(m)) => {
                         keyrig_eval::LoadedMesh::Morph(std::sync::Arc::clone(m.playback()))
                     }
-                    Some(FileMesh::Static { .. }) => keyrig_eval::LoadedMesh::Static,
                     None => continue,
                 };
                 out.insert(o, loaded);
@@ -726,17 +721,12 @@ fn load_file_mesh(
             .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), material))
             .map_err(|e| FileError::SkinnedMesh { path: path.to_path_buf(), source: Arc::new(e) });
     }
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for prim in model.meshes.get(index).map(|m| m.primitives.as_slice()).unwrap_or_default() {
-        if prim.mode != keyrig_io::model::PrimitiveMode::Triangles {
-            continue;
-        }
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&prim.positions);
-        indices.extend(prim.indices.iter().map(|i| i + base));
-    }
-    Ok((FileMesh::Static { positions, indices }, material))
+    // A mesh without a skin is bound rigidly to one root joint: drawn and posed like any
+    // skinned mesh, placed by its object.
+    model
+        .rigid_mesh(index)
+        .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), material))
+        .map_err(|e| FileError::SkinnedMesh { path: path.to_path_buf(), source: Arc::new(e) })
 }
 
 /// Skinned and vertex-animated (MD2) meshes of every object of `scene` whose mesh is a model
@@ -763,7 +753,6 @@ pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMes
             FileMesh::Morph(m) => {
                 morphs.insert(o, (**m).clone());
             }
-            FileMesh::Static { .. } => return Err(FileError::NotSkinned { at: at(), path: path.clone() }),
         }
     }
     let materials = store.materials_for(base_dir, scene);

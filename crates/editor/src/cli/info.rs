@@ -83,12 +83,6 @@ fn mesh_problems(scene: &Scene, base_dir: &Path) -> Vec<keyrig_core::Problem> {
                     ),
                     _ => {}
                 },
-                Ok(FileMesh::Static { .. }) => problem(
-                    "mesh",
-                    format!(
-                        "`{path}` has no skin; keyrig draws model meshes only skinned or vertex-animated"
-                    ),
-                ),
                 Ok(FileMesh::Morph(_)) => {}
             },
         }

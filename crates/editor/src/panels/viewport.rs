@@ -140,13 +140,6 @@ fn evaluate_frame(app: &mut EditorApp) -> ViewportFrame {
             (Some(crate::files::FileMesh::Morph(_)), Some(Err(e))) => {
                 errors.push(format!("{}: {e}", object.name))
             }
-            (Some(crate::files::FileMesh::Static { positions, indices }), _) => {
-                cpu_meshes.push((
-                    o,
-                    crate::skinning::to_world(world_from_object, positions),
-                    indices.clone(),
-                ));
-            }
             _ => {}
         }
     }
