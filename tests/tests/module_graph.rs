@@ -2,6 +2,9 @@
 //! graph of "module A names something in module B" (`crate::b::…`, `super::b::…`, grouped
 //! `use crate::{b, c}`) has no cycle. A module naming its own ancestors (a child using its
 //! parent's items) is not counted; `#[cfg(test)]` modules at the end of a file are left out.
+//!
+//! In the same graph, no panel of the editor (a module under `crates/editor/src/panels/`, with
+//! its submodules) names another panel: what two panels share lives outside them.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -189,4 +192,59 @@ fn the_cycle_check_sees_a_cycle() {
     assert_eq!(find_cycle(&edges(&modules(src))), None, "a child using its parent is not a cycle");
     std::fs::write(src.join("cli/x.rs"), "use crate::a;\n").expect("write");
     assert!(find_cycle(&edges(&modules(src))).is_some(), "a grouped use is an edge: a → cli::x → a");
+}
+
+/// The edges from one editor panel to another: `panels::a` (or a module under it) naming
+/// `panels::b` (or a module under it), as "a → b".
+fn panel_crossings(graph: &BTreeMap<Module, BTreeSet<Module>>) -> Vec<String> {
+    let panel = |m: &Module| (m.len() >= 2 && m[0] == "panels").then(|| m[1].clone());
+    let mut out = Vec::new();
+    for (from, targets) in graph {
+        let Some(a) = panel(from) else { continue };
+        for to in targets {
+            if panel(to).is_some_and(|b| b != a) {
+                out.push(format!("{} → {}", from.join("::"), to.join("::")));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_editor_panel_names_another_panel() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("the workspace");
+    let mods = modules(&root.join("crates/editor/src"));
+    let panels: BTreeSet<&String> =
+        mods.keys().filter(|m| m.len() == 2 && m[0] == "panels").map(|m| &m[1]).collect();
+    assert!(
+        panels.len() >= 6,
+        "only {panels:?} found under crates/editor/src/panels: is the layout as expected?"
+    );
+    let crossings = panel_crossings(&edges(&mods));
+    assert!(crossings.is_empty(), "panels that name another panel:\n{}", crossings.join("\n"));
+}
+
+#[test]
+fn the_panel_check_sees_a_panel_naming_another() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let src = dir.path();
+    std::fs::create_dir_all(src.join("panels/a")).expect("a folder");
+    std::fs::write(src.join("lib.rs"), "pub mod panels;\npub mod widgets;\n").expect("write");
+    std::fs::write(src.join("widgets.rs"), "pub fn shared() {}\n").expect("write");
+    std::fs::write(src.join("panels/mod.rs"), "pub mod a;\npub mod b;\n").expect("write");
+    std::fs::write(src.join("panels/a/mod.rs"), "mod inner;\nuse crate::widgets::shared;\n").expect("write");
+    std::fs::write(src.join("panels/a/inner.rs"), "fn f() { super::g() }\n").expect("write");
+    std::fs::write(src.join("panels/b.rs"), "pub fn thing() {}\n").expect("write");
+    assert_eq!(
+        panel_crossings(&edges(&modules(src))),
+        Vec::<String>::new(),
+        "shared code and a panel's own parts"
+    );
+    // A submodule of one panel naming another panel, through `super::super`.
+    std::fs::write(src.join("panels/a/inner.rs"), "fn f() { super::super::b::thing() }\n").expect("write");
+    assert_eq!(panel_crossings(&edges(&modules(src))), vec!["panels::a::inner → panels::b".to_owned()]);
+    // A grouped use.
+    std::fs::write(src.join("panels/a/inner.rs"), "fn f() {}\n").expect("write");
+    std::fs::write(src.join("panels/b.rs"), "use crate::panels::{a, b};\n").expect("write");
+    assert_eq!(panel_crossings(&edges(&modules(src))), vec!["panels::b → panels::a".to_owned()]);
 }

@@ -154,6 +154,30 @@ impl Skeleton {
     pub fn new(joints: Vec<Joint>) -> Self {
         Skeleton { joints, root_translation: zero_translation(), ik_constraints: Vec::new() }
     }
+
+    /// The joints in depth-first order — each joint followed by its children in index order,
+    /// each child by its own — with their depth (0 for a root), as an outliner or a dope sheet
+    /// lists a hierarchy. Linear in the joint count. A joint whose parent index is not below its
+    /// own (a broken file; validation reports it) is walked as a root, so the walk cannot loop.
+    #[must_use]
+    pub fn depth_first(&self) -> Vec<(usize, usize)> {
+        let n = self.joints.len();
+        let parent = |j: usize| self.joints[j].parent.filter(|&p| p < j);
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for j in 0..n {
+            if let Some(p) = parent(j) {
+                children[p].push(j);
+            }
+        }
+        let mut out = Vec::with_capacity(n);
+        let mut stack: Vec<(usize, usize)> =
+            (0..n).rev().filter(|&j| parent(j).is_none()).map(|j| (j, 0)).collect();
+        while let Some((j, depth)) = stack.pop() {
+            out.push((j, depth));
+            stack.extend(children[j].iter().rev().map(|&c| (c, depth + 1)));
+        }
+        out
+    }
 }
 
 /// An IK constraint (Blender's IK constraint, Maya's IK handle): the chain of `bones` bones that

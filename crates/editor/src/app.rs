@@ -1,8 +1,10 @@
 //! The editor application: the [`Document`], the [`Session`] and the [`ViewState`] together
-//! with the editor's caches (evaluator, meshes, GPU view), and the operations that span them
-//! (commands, keying, files). The frame's layout is in [`crate::window`].
+//! with the editor's caches (the prepared frame [`SceneFrame`], the mesh store), the panels
+//! ([`Panels`], each with its own state), the frame's queue of [`Action`]s, and the operations
+//! that span them (commands, keying, files). Every change the panels, menus and shortcuts ask
+//! for is applied here, in [`EditorApp::apply_actions`]. The frame's layout is in
+//! [`crate::window`].
 
-use std::cell::RefCell;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -13,51 +15,20 @@ use glam::Quat;
 use keyrig_core::{DeformerKind, Scene};
 use keyrig_eval::SceneEvaluator;
 
-use crate::camera::OrbitCamera;
+pub use crate::actions::PendingAction;
+use crate::actions::{Action, Actions, EditResults, SessionChange, Unsaved, ViewChange};
+use crate::camera::{Bounds, OrbitCamera};
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::commands::Command;
+pub use crate::context::Status;
 use crate::document::Document;
 use crate::eval::ObjectPose;
 pub use crate::files::DialogPurpose;
 use crate::files::{self, BackgroundImport, ImportPurpose, Recent, Recovery};
+use crate::panels::Panels;
+use crate::scene_frame::SceneFrame;
 use crate::session::{KeyRef, Selected, Session};
 use crate::view::ViewState;
-
-/// The scene evaluator and what it was built from: the document key (document, revision) and
-/// the mesh store's generation.
-type CachedEvaluator = ((u64, u64, u64), Arc<SceneEvaluator>);
-
-/// A status-bar message.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Status {
-    pub text: String,
-    pub is_error: bool,
-    /// When it was shown: the status bar lets a message go after [`Status::INFO_SECONDS`]
-    /// (an error after [`Status::ERROR_SECONDS`]), so it never describes an older state.
-    pub at: std::time::Instant,
-}
-
-impl Status {
-    /// How long a message stays in the status bar.
-    pub const INFO_SECONDS: f32 = 8.0;
-    /// How long an error stays.
-    pub const ERROR_SECONDS: f32 = 30.0;
-
-    /// Seconds it has left in the status bar (0 when it is gone).
-    #[must_use]
-    pub fn seconds_left(&self) -> f32 {
-        let lasts = if self.is_error { Self::ERROR_SECONDS } else { Self::INFO_SECONDS };
-        (lasts - self.at.elapsed().as_secs_f32()).max(0.0)
-    }
-}
-
-/// What to do once unsaved changes have been dealt with.
-#[derive(Clone, Debug, PartialEq)]
-pub enum PendingAction {
-    New,
-    Open(Option<PathBuf>),
-    Quit,
-}
 
 /// Start-up options (tests use a temporary folder for recovery and recent files).
 #[derive(Clone, Debug, Default)]
@@ -78,7 +49,7 @@ pub struct EditorApp {
     pub doc: Document,
     /// Selection, clock, record mode, overrides, clipboard.
     pub session: Session,
-    /// Camera, viewport options, panel state.
+    /// Camera and viewport options.
     pub view: ViewState,
     pub(crate) status: Option<Status>,
     pub(crate) pending: Option<PendingAction>,
@@ -90,28 +61,24 @@ pub struct EditorApp {
     pub(crate) recovery_offer: Option<Scene>,
     pub(crate) file_dialog: egui_file_dialog::FileDialog,
     pub(crate) dialog_purpose: Option<DialogPurpose>,
-    pub(crate) gizmo: transform_gizmo_egui::Gizmo,
-    /// The primary button went down on a gizmo handle: the gizmo owns the drag until release.
-    pub(crate) gizmo_drag: bool,
-    /// A drag on a rotation ring of a joint or object, turned by the editor itself
-    /// ([`crate::twist::RingDrag`]) rather than by transform-gizmo.
-    pub(crate) ring_drag: Option<crate::twist::RingDragState>,
-    /// A press on the IK handle (IK posing), until release.
-    pub(crate) ik_grab: Option<crate::ik_posing::IkGrab>,
-    pub(crate) skin: crate::skinning::SkinCache,
     /// Meshes of model files the scene refers to.
     pub(crate) meshes: files::MeshStore,
+    /// The frame's preparation: the evaluator, the evaluated scene, CPU skinning, bounds.
+    pub(crate) scene: SceneFrame,
+    /// The panels, each with its own gesture and view state.
+    pub(crate) panels: Panels,
+    /// What the panels, menus and shortcuts asked for this frame, applied at its end.
+    pub(crate) actions: Actions,
+    /// What the last applied edits reported back to the panels that pushed them.
+    pub(crate) results: EditResults,
+    /// The document (id, revision) the selection was last checked against.
+    pub(crate) selection_checked: (u64, u64),
     /// Model imports running on background threads (the status bar shows them).
     pub(crate) imports: Vec<files::BackgroundImport>,
-    /// What the viewport could not draw in the last frame (shown in red over it).
-    pub(crate) viewport_errors: Vec<String>,
     /// Smoothed time between frames while playing, seconds (shown in the status bar).
     pub(crate) frame_time: Option<f32>,
     /// `keyrig edit --benchmark-frames N`: plays, measures N frames, prints and quits.
     pub(crate) frame_benchmark: Option<crate::frame_bench::FrameBenchmark>,
-    /// keyrig-render on eframe's device; `None` without the wgpu backend (the painter draws).
-    pub(crate) gpu: Option<crate::gpu_view::GpuView>,
-    evaluator: RefCell<Option<CachedEvaluator>>,
     pub(crate) window_title: String,
     pub(crate) close_sent: bool,
     pub(crate) quit_confirmed: bool,
@@ -144,18 +111,15 @@ impl EditorApp {
             recovery_offer,
             file_dialog: egui_file_dialog::FileDialog::new(),
             dialog_purpose: None,
-            gizmo: transform_gizmo_egui::Gizmo::default(),
-            gizmo_drag: false,
-            ring_drag: None,
-            ik_grab: None,
-            skin: crate::skinning::SkinCache::default(),
             meshes: files::MeshStore::default(),
+            scene: SceneFrame::default(),
+            panels: Panels::default(),
+            actions: Actions::default(),
+            results: EditResults::default(),
+            selection_checked: (0, 0),
             imports: Vec::new(),
-            viewport_errors: Vec::new(),
             frame_time: None,
             frame_benchmark: None,
-            gpu: None,
-            evaluator: RefCell::new(None),
             window_title: String::new(),
             close_sent: false,
             quit_confirmed: false,
@@ -184,7 +148,59 @@ impl EditorApp {
     /// read them).
     #[must_use]
     pub fn skin_cache(&self) -> &crate::skinning::SkinCache {
-        &self.skin
+        self.scene.skin_cache()
+    }
+
+    /// The panels and their state.
+    #[must_use]
+    pub fn panels(&self) -> &Panels {
+        &self.panels
+    }
+
+    /// Where the viewport was laid out in the last frame (screen points).
+    #[must_use]
+    pub fn viewport_rect(&self) -> Option<egui::Rect> {
+        self.panels.viewport.rect()
+    }
+
+    /// Where the curve editor was laid out in the last frame (screen points).
+    #[must_use]
+    pub fn curves_rect(&self) -> Option<egui::Rect> {
+        self.panels.curves.rect()
+    }
+
+    /// Each object's deformed bounds (world space) as last computed: every frame the painter
+    /// draws, and whenever framing asked for them.
+    #[must_use]
+    pub fn object_bounds(&self) -> &[Option<Bounds>] {
+        self.scene.object_bounds()
+    }
+
+    /// The union of the last computed bounds of `objects` (all when `None`).
+    #[must_use]
+    pub fn bounds_of(&self, objects: Option<&[usize]>) -> Option<Bounds> {
+        self.scene.bounds_of(objects)
+    }
+
+    /// The frames the dope sheet shows now.
+    #[must_use]
+    pub fn dope_sheet_view(&self) -> crate::panels::dope_sheet::TimeView {
+        self.panels.dope_sheet.time_view(self.doc.scene())
+    }
+
+    /// Channel `id` sampled as the curve editor draws it (its rotation reading included) over
+    /// frames `start..=end` at `samples` points.
+    #[must_use]
+    pub fn sample_curves(&self, id: ChannelId, start: f64, end: f64, samples: usize) -> Vec<Vec<(f64, f32)>> {
+        let twist = self.panels.curves.rotation_as_twist;
+        crate::panels::curves::sample_curves(
+            &self.evaluator(),
+            self.doc.scene(),
+            id,
+            (start, end),
+            samples,
+            twist,
+        )
     }
 
     /// Model imports still running.
@@ -196,13 +212,13 @@ impl EditorApp {
     /// What the viewport could not draw in the last frame.
     #[must_use]
     pub fn viewport_errors(&self) -> &[String] {
-        &self.viewport_errors
+        self.panels.viewport.errors()
     }
 
     /// The GPU viewport, when the editor runs on eframe's wgpu backend.
     #[must_use]
     pub fn gpu(&self) -> Option<&crate::gpu_view::GpuView> {
-        self.gpu.as_ref()
+        self.panels.viewport.gpu()
     }
 
     /// Plays, measures `frames` frames, prints the figures and closes the window
@@ -211,37 +227,16 @@ impl EditorApp {
         self.frame_benchmark = Some(crate::frame_bench::FrameBenchmark::new(frames));
     }
 
-    /// The document's scene evaluator, rebuilt when the document or its loaded meshes change.
+    /// The document's scene evaluator, in step with the document and its loaded meshes.
     #[must_use]
     pub fn evaluator(&self) -> Arc<SceneEvaluator> {
-        let (document, revision) = self.doc.cache_key();
-        let key = (document, revision, self.meshes.generation());
-        let mut cache = self.evaluator.borrow_mut();
-        if let Some((k, eval)) = &*cache {
-            if *k == key {
-                return Arc::clone(eval);
-            }
-        }
-        let base_dir = self.doc.path().and_then(std::path::Path::parent);
-        let loaded = self.meshes.loaded_for(base_dir, self.doc.scene());
-        // After an edit of the same document only what it changed is rebuilt (the keys of
-        // untouched channels are still shared with the evaluator's copies).
-        let eval = match cache.take() {
-            Some(((document_before, _, _), mut eval)) if document_before == document => {
-                Arc::make_mut(&mut eval).update(self.doc.scene(), &loaded);
-                eval
-            }
-            _ => Arc::new(SceneEvaluator::new(self.doc.scene(), &loaded)),
-        };
-        *cache = Some((key, Arc::clone(&eval)));
-        eval
+        self.scene.evaluator(&self.doc, &self.meshes)
     }
 
     /// The key the evaluator was built for: the GPU view rebuilds its rig when it changes.
     #[must_use]
     pub fn evaluator_key(&self) -> (u64, u64, u64) {
-        let (document, revision) = self.doc.cache_key();
-        (document, revision, self.meshes.generation())
+        crate::scene_frame::evaluator_key(&self.doc, &self.meshes)
     }
 
     /// The value of a channel now (sampled, or its pose override).
@@ -263,7 +258,7 @@ impl EditorApp {
     pub fn attach_gpu(&mut self, render_state: &egui_wgpu::RenderState) {
         let gpu = crate::gpu_view::GpuView::new(render_state);
         self.view.antialiasing = gpu.antialiasing();
-        self.gpu = Some(gpu);
+        self.panels.viewport.attach_gpu(gpu);
     }
 
     /// Current time in seconds.
@@ -298,7 +293,7 @@ impl EditorApp {
             ik: self.session.ik.for_new_document(),
             ..Session::at_start(scene.frame_range)
         };
-        self.ik_grab = None;
+        self.panels.viewport.release_ik_handle();
         self.doc = Document::new(scene, path);
         self.session = session;
     }
@@ -307,62 +302,6 @@ impl EditorApp {
     #[must_use]
     pub fn selected_object(&self) -> Option<usize> {
         self.session.selected_object()
-    }
-
-    /// Applies a pose change made with a gizmo or the inspector. In record mode it writes a key
-    /// at the current frame; otherwise an animated channel gets a transient override (key it
-    /// with I) and a static one changes its value. `group` merges a drag into one undo step.
-    pub fn apply_pose(&mut self, id: ChannelId, value: ChannelValue, group: &str) {
-        let animated = channels::key_count(self.doc.scene(), id) > 0;
-        if self.session.record {
-            let time = self.session.key_time(self.doc.scene().fps);
-            let label = format!("key {}", id.label(self.doc.scene()));
-            self.doc.edit_continuous(group, &label, |scene| {
-                channels::set_key(scene, id, time, value);
-            });
-            self.session.overrides.remove(&id);
-        } else if animated {
-            self.session.overrides.insert(id, value);
-        } else {
-            let label = format!("pose {}", id.label(self.doc.scene()));
-            self.doc.edit_continuous(group, &label, |scene| {
-                channels::set_static_value(scene, id, value);
-            });
-        }
-    }
-
-    /// Applies the rotations an IK drag solved for the joints of a chain, as
-    /// [`EditorApp::apply_pose`] applies a gizmo rotation, all joints in one edit: in record mode
-    /// each joint gets an ordinary rotation key at the current frame; otherwise keyed joints get
-    /// pose overrides and unkeyed ones change their value. Every call of one drag joins one undo
-    /// step ([`IK_DRAG_GROUP`], closed when the pointer is released), labelled `label`.
-    pub fn apply_ik_pose(&mut self, rotations: &[(ChannelId, Quat)], label: &str) {
-        let values: Vec<(ChannelId, ChannelValue)> =
-            rotations.iter().map(|&(id, q)| (id, ChannelValue::Rotation(q.normalize()))).collect();
-        if self.session.record {
-            let time = self.session.key_time(self.doc.scene().fps);
-            self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
-                for &(id, value) in &values {
-                    channels::set_key(scene, id, time, value);
-                }
-            });
-            for (id, _) in &values {
-                self.session.overrides.remove(id);
-            }
-            return;
-        }
-        let (animated, fixed): (Vec<_>, Vec<_>) =
-            values.into_iter().partition(|(id, _)| channels::key_count(self.doc.scene(), *id) > 0);
-        if !fixed.is_empty() {
-            self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
-                for &(id, value) in &fixed {
-                    channels::set_static_value(scene, id, value);
-                }
-            });
-        }
-        for (id, value) in animated {
-            self.session.overrides.insert(id, value);
-        }
     }
 
     /// The IK chain that ends at `joint` of `object` now (its length as chosen in the inspector),
@@ -384,7 +323,7 @@ impl EditorApp {
     /// posed with IK).
     pub fn toggle_ik_posing(&mut self) {
         self.session.ik.enabled = !self.session.ik.enabled;
-        self.ik_grab = None;
+        self.panels.viewport.release_ik_handle();
         if !self.session.ik.enabled {
             self.info("IK posing off");
             return;
@@ -407,49 +346,10 @@ impl EditorApp {
         }
     }
 
-    /// Applies a rotation turned with a gizmo ring or the inspector's twist field: the value
-    /// `turn.value()` as [`EditorApp::apply_pose`] would, but in record mode the key also gets
-    /// the spin that makes its segment from the previous key turn the way the hand went, turns
-    /// included ([`channels::set_rotation_key`]).
-    pub fn apply_turn(&mut self, id: ChannelId, turn: channels::Turn, group: &str) {
-        let value = turn.value();
-        if !self.session.record {
-            self.apply_pose(id, ChannelValue::Rotation(value), group);
-            return;
-        }
-        let time = self.session.key_time(self.doc.scene().fps);
-        let label = format!("key {}", id.label(self.doc.scene()));
-        self.doc.edit_continuous(group, &label, |scene| {
-            channels::set_rotation_key(scene, id, time, value, Some(turn));
-        });
-        self.session.overrides.remove(&id);
-    }
-
-    /// The twist of a rotation channel about its bone axis ([`crate::twist::BONE_AXIS`]) now,
-    /// degrees, unwrapped through spin keys (720 after two turns); a pose override reads as
-    /// its twist nearest the track's.
-    #[must_use]
-    pub fn twist_now(&self, id: ChannelId) -> Option<f64> {
-        use crate::twist::{nearest_turn, twist_degrees, unwrapped_twist, BONE_AXIS};
-        let Some(ChannelValue::Rotation(q)) = self.value_now(id) else { return None };
-        let axis = BONE_AXIS.as_dvec3();
-        let wrapped = twist_degrees(q.as_dquat(), axis);
-        let track = match channels::channel(self.doc.scene(), id) {
-            Some(channels::ChannelRef::Rotation(a)) if !a.track.is_empty() => {
-                keyrig_core::Track::new(&a.track).ok()
-            }
-            _ => None,
-        };
-        Some(match track {
-            Some(track) => nearest_turn(wrapped, unwrapped_twist(&track, axis, self.time())),
-            None => wrapped,
-        })
-    }
-
     /// The rotation ring being dragged, if any (tests read which ring and mapping).
     #[must_use]
     pub fn ring_drag(&self) -> Option<&crate::twist::RingDrag> {
-        self.ring_drag.as_ref().map(|r| &r.drag)
+        self.panels.viewport.ring_drag()
     }
 
     /// Keys the current values of the selection's channels at the current frame; in IK posing,
@@ -511,7 +411,7 @@ impl EditorApp {
             }
         }
         self.session.forget_removed(item);
-        self.view.object_bounds.clear();
+        self.scene.forget_bounds();
         self.info(format!("Deleted {name}"));
     }
 
@@ -557,7 +457,7 @@ impl EditorApp {
         match self.session.selection.item {
             Some(item) => {
                 let name = item_name(self.doc.scene(), item).unwrap_or_default();
-                self.view.renaming = Some(crate::view::Renaming { item, text: name, focused: false });
+                self.panels.outliner.start_rename(item, name);
             }
             None => self.info("Rename: select an object, joint or light first"),
         }
@@ -788,20 +688,21 @@ impl EditorApp {
     /// static model on its own).
     #[must_use]
     pub fn deformer_targets(&self) -> Vec<usize> {
-        let objects = &self.doc.scene().objects;
-        let skinned = |o: &usize| objects.get(*o).is_some_and(|object| object.skeleton.is_some());
-        match self.selected_object().filter(skinned) {
-            Some(o) => vec![o],
-            None => (0..objects.len()).filter(skinned).collect(),
-        }
+        crate::commands::deformer_targets(self.doc.scene(), self.selected_object())
     }
 
     /// The deformer the menu and toolbar show as chosen: that of the first of
     /// [`EditorApp::deformer_targets`]; `None` without a skinned object.
     #[must_use]
     pub fn current_deformer(&self) -> Option<DeformerKind> {
-        let first = *self.deformer_targets().first()?;
-        Some(self.doc.scene().objects.get(first)?.deformer.kind)
+        crate::commands::current_deformer(self.doc.scene(), self.selected_object())
+    }
+
+    /// Brings the deformed bounds of every object in step with the document and the clock,
+    /// skinning on the CPU what the frame did not (framing asks for them).
+    fn bounds_now(&mut self) {
+        let time = self.time();
+        self.scene.ensure_bounds(&self.doc, &mut self.meshes, time, &self.session.overrides);
     }
 
     /// Frames the selection as Blender's View Selected does (keeping the view's angles): an
@@ -809,7 +710,8 @@ impl EditorApp {
     /// to its parent and children) in view; a light is centred at the current distance;
     /// with nothing selected the whole scene is framed.
     pub fn frame_selection(&mut self) {
-        let aspect = self.view.aspect();
+        self.bounds_now();
+        let aspect = self.panels.viewport.aspect();
         match self.session.selection.item {
             Some(Selected::Joint { object, joint }) => {
                 let Some(pose) = self.object_pose_now(object) else { return };
@@ -832,12 +734,12 @@ impl EditorApp {
                     .map(|(c, _)| world(c))
                     .chain(skeleton.joints[joint].parent.filter(|&p| p < joint).map(world));
                 let reach = neighbours.map(|p| p.distance(at)).fold(0.0f32, f32::max);
-                let object_radius = self.view.bounds_of(Some(&[object])).map_or(0.5, |b| b.radius());
+                let object_radius = self.scene.bounds_of(Some(&[object])).map_or(0.5, |b| b.radius());
                 let radius = if reach > 0.0 { reach } else { object_radius * 0.2 };
                 self.view.camera.target = at;
                 self.view.camera.distance = self.view.camera.distance_to_fit(radius, aspect);
             }
-            Some(Selected::Object(o)) => match self.view.bounds_of(Some(&[o])) {
+            Some(Selected::Object(o)) => match self.scene.bounds_of(Some(&[o])) {
                 Some(bounds) => self.view.camera.frame(bounds, aspect),
                 None => {
                     if let Some(pose) = self.object_pose_now(o) {
@@ -850,7 +752,7 @@ impl EditorApp {
                     self.view.camera.target = p;
                 }
             }
-            None => match self.view.bounds_of(None) {
+            None => match self.scene.bounds_of(None) {
                 Some(bounds) => self.view.camera.frame(bounds, aspect),
                 None => self.info("Nothing to frame: the scene is empty"),
             },
@@ -859,8 +761,9 @@ impl EditorApp {
 
     /// Frames `objects` (their deformed bounds from the last frame), as after an import.
     pub fn frame_objects(&mut self, objects: &[usize]) {
-        if let Some(bounds) = self.view.bounds_of(Some(objects)) {
-            let aspect = self.view.aspect();
+        self.bounds_now();
+        if let Some(bounds) = self.scene.bounds_of(Some(objects)) {
+            let aspect = self.panels.viewport.aspect();
             self.view.camera.frame(bounds, aspect);
         }
     }
@@ -888,8 +791,9 @@ impl EditorApp {
                 };
                 let world = pose.world_from_object * *f;
                 let target: glam::Vec3 = world.translation.into();
-                let aspect = self.view.aspect();
-                let bounds = self.view.bounds_of(Some(&[o]));
+                self.bounds_now();
+                let aspect = self.panels.viewport.aspect();
+                let bounds = self.scene.bounds_of(Some(&[o]));
                 let c = &mut self.view.camera;
                 c.target = target;
                 // Look along the bone (+X of the joint frame) from the child side, slightly above.
@@ -975,12 +879,10 @@ impl EditorApp {
             Command::FrameSelection => {
                 // Over the curve editor F frames its selected keys, as in Blender's graph editor
                 // (the curve view does it when it is next laid out).
-                let over_curves = ctx
-                    .input(|i| i.pointer.hover_pos())
-                    .zip(self.view.curves_rect)
-                    .is_some_and(|(p, r)| r.contains(p));
+                let over_curves =
+                    ctx.input(|i| i.pointer.hover_pos()).is_some_and(|p| self.panels.curves.contains(p));
                 if over_curves {
-                    self.view.curves.frame_keys = true;
+                    self.panels.curves.request_frame_keys();
                 } else {
                     self.frame_selection();
                 }
@@ -1082,12 +984,7 @@ impl EditorApp {
         self.file_dialog.update(ctx);
         if let Some(path) = self.file_dialog.take_picked() {
             self.dialog_purpose = None;
-            match purpose {
-                DialogPurpose::Open => self.open_path(path),
-                DialogPurpose::SaveAs => self.save_to(files::with_extension_if_missing(path, "ron")),
-                DialogPurpose::Import => self.import_path(path),
-                DialogPurpose::Export => self.export_to(files::with_extension_if_missing(path, "glb")),
-            }
+            self.actions.push(Action::FilePicked(purpose, path));
         } else if matches!(
             self.file_dialog.state(),
             egui_file_dialog::DialogState::Cancelled | egui_file_dialog::DialogState::Closed
@@ -1115,11 +1012,7 @@ impl EditorApp {
         let dropped: Vec<PathBuf> =
             ctx.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.path.clone()).collect());
         for path in dropped {
-            if files::is_scene_file(&path) {
-                self.request(PendingAction::Open(Some(path)));
-            } else {
-                self.import_path(path);
-            }
+            self.actions.push(Action::Dropped(path));
         }
     }
 
@@ -1180,14 +1073,14 @@ impl EditorApp {
         self.imports.push(BackgroundImport::start(path, purpose));
     }
 
-    /// Applies the imports that have finished; while some still run, asks for a repaint soon
-    /// (the status bar shows them).
+    /// Queues the imports that have finished (applied with the frame's other actions); while
+    /// some still run, asks for a repaint soon (the status bar shows them).
     pub fn poll_background_work(&mut self, ctx: &egui::Context) {
         let (done, running): (Vec<_>, Vec<_>) =
             std::mem::take(&mut self.imports).into_iter().partition(BackgroundImport::is_finished);
         self.imports = running;
         for import in done {
-            self.apply_import(import);
+            self.actions.push(Action::ImportFinished(import));
         }
         if !self.imports.is_empty() {
             ctx.request_repaint_after(Duration::from_millis(50));
@@ -1221,7 +1114,7 @@ impl EditorApp {
                 let n = imported.scene.objects.len();
                 self.replace_document(imported.scene, None);
                 // Frame what the viewport draws (deformed, in its own units) once it has.
-                self.view.frame_request = Some((0..n).collect());
+                self.actions.push(Action::FrameObjects((0..n).collect()));
                 self.recent.add(&path);
                 self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
             }
@@ -1229,7 +1122,7 @@ impl EditorApp {
                 let scene = imported.scene;
                 let n = scene.objects.len();
                 let first = self.doc.scene().objects.len();
-                self.view.frame_request = Some((first..first + n).collect());
+                self.actions.push(Action::FrameObjects((first..first + n).collect()));
                 // The model's animation (its keys, or the range its own scene gives it, as an
                 // MD2 loop) in seconds; the scene's range grows to cover it, in the same step.
                 let model_seconds = crate::channels::last_key_time(&scene)
@@ -1259,6 +1152,136 @@ impl EditorApp {
                     path.display()
                 ));
             }
+        }
+    }
+}
+
+impl EditorApp {
+    /// Applies every queued action in the order it was pushed, each once; an action may queue
+    /// more (an import frames its objects), which are applied after it. Returns whether any
+    /// changed something (the frame then asks for another, which draws the result): an edit
+    /// that left the document and the pose overrides as they were (a gizmo held still) did
+    /// not. The selection is checked against the document when the document changed.
+    pub fn apply_actions(&mut self, ctx: &Context) -> bool {
+        let mut changed = false;
+        while let Some(action) = self.actions.pop() {
+            if let Action::Edit(_) = action {
+                let key = self.doc.cache_key();
+                let overrides = self.session.overrides.clone();
+                self.apply(ctx, action);
+                changed |= key != self.doc.cache_key() || overrides != self.session.overrides;
+            } else {
+                self.apply(ctx, action);
+                changed = true;
+            }
+        }
+        let key = self.doc.cache_key();
+        if key != self.selection_checked {
+            self.session.selection.retain_valid(self.doc.scene());
+            self.selection_checked = key;
+        }
+        changed
+    }
+
+    /// Applies one action: the one place where the document, the session and the view change
+    /// at the panels' request.
+    fn apply(&mut self, ctx: &Context, action: Action) {
+        match action {
+            Action::Command(command) => self.run_command(ctx, command),
+            Action::Copy => self.run_command(ctx, Command::CopyKeys),
+            Action::Cut => self.cut_keys(ctx),
+            Action::Paste(text) => self.paste_text(&text),
+            Action::Edit(edit) => self.apply_edit(edit),
+            Action::CloseGroup => self.doc.close_group(),
+            Action::Session(change) => self.apply_session(change),
+            Action::View(change) => self.apply_view(change),
+            Action::Info(text) => self.info(text),
+            Action::Error(text) => self.error(text),
+            Action::Rename { item, name } => {
+                self.rename_item(item, &name);
+            }
+            Action::BakeIk { object, constraint } => self.bake_ik_constraint(object, constraint),
+            Action::KeepIk { object, joint } => self.keep_ik_constraint(object, joint),
+            Action::FrameObjects(objects) => self.frame_objects(&objects),
+            Action::Request(pending) => self.request(pending),
+            Action::ResolveUnsaved(choice) => {
+                let Some(action) = self.pending.take() else { return };
+                match choice {
+                    Unsaved::Save => {
+                        self.save();
+                        if !self.doc.is_dirty() {
+                            self.perform(action);
+                        }
+                    }
+                    Unsaved::Discard => self.perform(action),
+                    Unsaved::Cancel => {}
+                }
+            }
+            Action::Recover(true) => {
+                if let Some(scene) = self.recovery_offer.take() {
+                    let origin = self.recovery.origin();
+                    self.replace_document(scene, origin);
+                    self.doc.mark_dirty();
+                    self.info("Recovered the autosaved scene; save it to keep it");
+                }
+            }
+            Action::Recover(false) => {
+                self.recovery_offer = None;
+                self.autosave.clear();
+            }
+            Action::FilePicked(purpose, path) => match purpose {
+                DialogPurpose::Open => self.open_path(path),
+                DialogPurpose::SaveAs => self.save_to(files::with_extension_if_missing(path, "ron")),
+                DialogPurpose::Import => self.import_path(path),
+                DialogPurpose::Export => self.export_to(files::with_extension_if_missing(path, "glb")),
+            },
+            Action::Dropped(path) => {
+                if files::is_scene_file(&path) {
+                    self.request(PendingAction::Open(Some(path)));
+                } else {
+                    self.import_path(path);
+                }
+            }
+            Action::ImportFinished(import) => self.apply_import(import),
+        }
+    }
+
+    fn apply_session(&mut self, change: SessionChange) {
+        let selection = &mut self.session.selection;
+        match change {
+            SessionChange::SelectOnly(item) => selection.select_only(item),
+            SessionChange::Toggle(item) => selection.toggle(item),
+            SessionChange::Add(item) => {
+                if !selection.contains(item) {
+                    selection.toggle(item);
+                }
+            }
+            SessionChange::SetKeys(keys) => selection.keys = keys,
+            SessionChange::AddKeys(keys) => selection.keys.extend(keys),
+            SessionChange::RemoveKeys(keys) => {
+                for k in &keys {
+                    selection.keys.remove(k);
+                }
+            }
+            SessionChange::SetFrame(frame) => self.set_frame(frame),
+            SessionChange::EveryFrame(on) => self.session.playback.every_frame = on,
+            SessionChange::ChainBones { object, joint, bones } => {
+                self.session.ik.set_chain_bones(object, joint, bones);
+            }
+            SessionChange::RememberPole { chain, pole } => self.session.ik.remember_pole(&chain, pole),
+        }
+    }
+
+    fn apply_view(&mut self, change: ViewChange) {
+        let view = &mut self.view;
+        match change {
+            ViewChange::Camera(camera) => view.camera = camera,
+            ViewChange::Style(style) => view.style = style,
+            ViewChange::Textures(on) => view.textures = on,
+            ViewChange::ResolutionScale(scale) => view.resolution_scale = scale,
+            ViewChange::Antialiasing(on) => view.antialiasing = on,
+            ViewChange::Onion(onion) => view.onion = onion,
+            ViewChange::ShowHelp(on) => view.show_help = on,
         }
     }
 }

@@ -350,6 +350,27 @@ pub fn pressed(ctx: &egui::Context) -> Vec<Pressed> {
     out
 }
 
+/// The objects the deformer commands act on: the selected object (`selected`) when it is
+/// skinned (has a skeleton), otherwise every skinned object; empty when the scene has none (an
+/// MD2 or a static model on its own).
+#[must_use]
+pub fn deformer_targets(scene: &keyrig_core::Scene, selected: Option<usize>) -> Vec<usize> {
+    let objects = &scene.objects;
+    let skinned = |o: &usize| objects.get(*o).is_some_and(|object| object.skeleton.is_some());
+    match selected.filter(skinned) {
+        Some(o) => vec![o],
+        None => (0..objects.len()).filter(skinned).collect(),
+    }
+}
+
+/// The deformer the menu and toolbar show as chosen: that of the first of [`deformer_targets`];
+/// `None` without a skinned object.
+#[must_use]
+pub fn current_deformer(scene: &keyrig_core::Scene, selected: Option<usize>) -> Option<DeformerKind> {
+    let first = *deformer_targets(scene, selected).first()?;
+    Some(scene.objects.get(first)?.deformer.kind)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,9 +2,9 @@
 //! as the panels read it, and the Euler angles the inspector and curve view show.
 //!
 //! Every panel evaluates through the one [`keyrig_eval::SceneEvaluator`] that
-//! [`crate::app::EditorApp::evaluator`] keeps for the document (rebuilt when the document or its
-//! loaded meshes change): the viewport, the GPU view, the motion path and the curve view see
-//! the same values, overrides included.
+//! [`crate::scene_frame::SceneFrame`] keeps for the document (brought in step when the document
+//! or its loaded meshes change): the viewport, the GPU view, the motion path and the curve view
+//! see the same values, overrides included.
 
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::Scene;
@@ -53,7 +53,18 @@ impl ObjectPose {
     }
 }
 
-/// A rotation as XYZ Euler angles in degrees (what the curve view and inspector show).
+/// The rotation order of the Euler angles the inspector and the curve view show
+/// ([`euler_degrees`]).
+pub const EULER_ORDER: &str = "XYZ";
+
+/// What [`EULER_ORDER`] means, for tooltips.
+pub const EULER_ORDER_HELP: &str =
+    "Euler angles in the order XYZ, intrinsic: R = Rx·Ry·Rz (turn about X, then about \
+     the turned Y, then about the turned Z; glam's EulerRot::XYZ). Blender calls the same \
+     rotation order ZYX, Maya zyx.";
+
+/// A rotation as XYZ Euler angles in degrees (what the curve view and inspector show), in the
+/// order [`EULER_ORDER`].
 #[must_use]
 pub fn euler_degrees(q: Quat) -> Vec3 {
     let (x, y, z) = q.to_euler(glam::EulerRot::XYZ);
@@ -67,6 +78,26 @@ pub fn euler_degrees(q: Quat) -> Vec3 {
 #[must_use]
 pub fn quat_from_euler_degrees(e: Vec3) -> Quat {
     Quat::from_euler(glam::EulerRot::XYZ, e.x.to_radians(), e.y.to_radians(), e.z.to_radians())
+}
+
+/// The twist about the bone axis ([`crate::twist::BONE_AXIS`]) of rotation `q` shown for
+/// channel `id` at `time`, degrees, unwrapped through the channel's spin keys (720 after two
+/// turns); a value off the track (a pose override) reads as its twist nearest the track's.
+#[must_use]
+pub fn twist_now(scene: &Scene, id: ChannelId, q: Quat, time: f64) -> f64 {
+    use crate::twist::{nearest_turn, twist_degrees, unwrapped_twist, BONE_AXIS};
+    let axis = BONE_AXIS.as_dvec3();
+    let wrapped = twist_degrees(q.as_dquat(), axis);
+    let track = match crate::channels::channel(scene, id) {
+        Some(crate::channels::ChannelRef::Rotation(a)) if !a.track.is_empty() => {
+            keyrig_core::Track::new(&a.track).ok()
+        }
+        _ => None,
+    };
+    match track {
+        Some(track) => nearest_turn(wrapped, unwrapped_twist(&track, axis, time)),
+        None => wrapped,
+    }
 }
 
 #[cfg(test)]

@@ -3,8 +3,8 @@
 //! bones up follows the pointer. This module builds the chain's solver inputs from the
 //! evaluated pose ([`PosedChain`]), keeps IK posing's part of the session ([`IkPosing`]: the
 //! chain length per end joint and the pole of each chain's last drag) and runs one drag
-//! ([`IkDrag`]); the viewport's handle (`panels::ik_handle`) feeds it pointer positions and the
-//! app applies the solved rotations as gizmo rotations are applied
+//! ([`IkDrag`]); the viewport's handle (`panels::viewport::ik_handle`) feeds it pointer positions
+//! and the app applies the solved rotations as gizmo rotations are applied
 //! ([`crate::app::EditorApp::apply_ik_pose`]).
 //!
 //! # Solvers

@@ -12,12 +12,15 @@
 
 use std::path::PathBuf;
 
+pub mod actions;
 pub mod app;
 pub mod autosave;
 pub mod camera;
 pub mod channels;
 pub mod commands;
+pub mod context;
 pub mod document;
+pub mod edits;
 pub mod eval;
 pub mod files;
 pub mod fonts;
@@ -28,6 +31,7 @@ pub mod ik_posing;
 pub mod mirror;
 pub mod onion;
 pub mod panels;
+pub mod scene_frame;
 pub mod session;
 pub mod skinning;
 pub mod twist;

@@ -51,6 +51,15 @@ impl Session {
         f64::from(self.playback.whole_frame()) / fps.max(1e-9)
     }
 
+    /// Whether [`Session::set_frame`] with these arguments would change anything (the clock or
+    /// the pose overrides it drops).
+    #[must_use]
+    pub fn set_frame_changes(&self, frame: i32, range: keyrig_core::FrameRange) -> bool {
+        let mut clock = self.playback.clone();
+        clock.go_to(frame, range.start, range.end);
+        clock != self.playback || !self.overrides.is_empty()
+    }
+
     /// Moves the clock to a whole frame inside `range`; pose overrides are dropped.
     pub fn set_frame(&mut self, frame: i32, range: keyrig_core::FrameRange) {
         self.playback.go_to(frame, range.start, range.end);

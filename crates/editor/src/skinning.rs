@@ -110,6 +110,12 @@ impl SkinCache {
         self.morphs.entry(index).insert_entry(positions).into_mut()
     }
 
+    /// The triangles of object `index`'s last skinned mesh.
+    #[must_use]
+    pub fn indices(&self, index: usize) -> Option<&[u32]> {
+        self.entries.get(&index).map(|e| e.mesh.indices.as_slice())
+    }
+
     /// Deformed positions (object space) of the last skinned or morphed frame of an object.
     #[must_use]
     pub fn deformed_positions(&self, index: usize) -> Option<&[Vec3]> {

@@ -1,10 +1,17 @@
-//! One frame of the editor window: the playback clock, shortcuts, the panels in their order,
-//! dialogs and the window's title and close handling; and [`eframe::App`] for [`EditorApp`].
+//! One frame of the editor window, in order: the playback clock; shortcuts, finished imports
+//! and dropped files queued as actions; the frame's preparation ([`crate::scene_frame`]: the
+//! evaluator in step with the document, the scene evaluated at the clock's time, what the
+//! panels need skinned on the CPU); the panels laid out from the read-only
+//! [`FrameCtx`], each pushing what it wants changed; then every queued action applied in order
+//! ([`EditorApp::apply_actions`]), so the next frame draws from the state after them; the
+//! autosave, the window's title and close handling. Also [`eframe::App`] for [`EditorApp`].
 
-use egui::{Key, Modifiers};
+use egui::{Key, Modifiers, Vec2};
 
+use crate::actions::{Action, ViewChange};
 use crate::app::{EditorApp, PendingAction};
-use crate::commands::{pressed, Command, Pressed};
+use crate::commands::{pressed, Pressed};
+use crate::context::FrameCtx;
 use crate::panels;
 
 impl EditorApp {
@@ -17,10 +24,10 @@ impl EditorApp {
         });
         self.frame(ui, &ctx);
         if let (Some(bench), Some(start)) = (&mut self.frame_benchmark, benchmark_start) {
-            let gpu = self.gpu.as_ref().map_or(std::time::Duration::ZERO, |g| g.last_render_time);
+            let gpu = self.panels.viewport.gpu().map_or(std::time::Duration::ZERO, |g| g.last_render_time);
             bench.frame_prepared(start, gpu);
             if bench.is_done() {
-                let viewport = match &self.gpu {
+                let viewport = match self.panels.viewport.gpu() {
                     Some(gpu) => format!("GPU viewport on {}", gpu.adapter_name()),
                     None => "painter viewport".to_owned(),
                 };
@@ -55,38 +62,37 @@ impl EditorApp {
         }
 
         for input in pressed(&ctx) {
-            match input {
-                Pressed::Command(command) => self.run_command(&ctx, command),
-                Pressed::Copy => self.run_command(&ctx, Command::CopyKeys),
-                Pressed::Cut => self.cut_keys(&ctx),
-                Pressed::Paste(text) => self.paste_text(&text),
-            }
+            self.actions.push(match input {
+                Pressed::Command(command) => Action::Command(command),
+                Pressed::Copy => Action::Copy,
+                Pressed::Cut => Action::Cut,
+                Pressed::Paste(text) => Action::Paste(text),
+            });
         }
         // Escape closes the help window.
         if self.view.show_help && ctx.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {
-            self.view.show_help = false;
+            self.actions.view(ViewChange::ShowHelp(false));
         }
         self.poll_background_work(&ctx);
         self.handle_dropped_files(&ctx);
+        // What came with the frame's input is applied before anything is drawn, so this frame
+        // shows it (a shortcut's effect, a started import in the status bar).
+        self.apply_actions(&ctx);
 
-        panels::menu::ui(ui, self);
-        panels::status::ui(ui, self);
-        panels::timeline::ui(ui, self);
-        panels::outliner::ui(ui, self);
-        panels::inspector::ui(ui, self);
-        panels::viewport::ui(ui, self);
-        panels::curves::paint_pending(&ctx, self);
-
-        panels::dialogs::help_ui(&ctx, self);
-        panels::dialogs::confirm_ui(&ctx, self);
-        panels::dialogs::recovery_ui(&ctx, self);
+        self.prepare_frame();
+        self.layout(ui, &ctx);
         self.dialog_ui(&ctx);
 
-        // A drag (slider, gizmo, key drag) ends when the pointer is released.
+        // What the panels asked for: the next frame draws it, and is asked for now. The outcomes
+        // the panels read this frame are replaced by those of these edits.
+        self.results.clear();
+        if self.apply_actions(&ctx) {
+            ctx.request_repaint();
+        }
+        // A drag (slider, gizmo, key drag) ends when the pointer is released, after its edits.
         if !ctx.input(|i| i.pointer.any_down()) {
             self.doc.close_group();
         }
-        self.session.selection.retain_valid(self.doc.scene());
         self.note_autosave();
 
         // Viewport commands request a repaint: send the title only when it changes.
@@ -103,6 +109,62 @@ impl EditorApp {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.pending = Some(PendingAction::Quit);
         }
+    }
+}
+
+impl EditorApp {
+    /// The frame's preparation: what the panels draw from, brought in step with the document,
+    /// the clock and the overrides, with what the viewport needs skinned on the CPU. Every
+    /// frame runs it before laying out the panels; benchmarks call it alone.
+    pub fn prepare_frame(&mut self) {
+        let time = self.time();
+        let wanted = self.panels.viewport.wanted(self.session.selection.item);
+        self.scene.prepare(&self.doc, &mut self.meshes, time, &self.session.overrides, wanted);
+    }
+
+    /// The panels in their order, each drawn from the frame's read-only context and pushing its
+    /// actions: menu bar, status bar, the timeline's controls over the dope sheet and the curve
+    /// view, the outliner, the inspector, the viewport, the dialogs.
+    fn layout(&mut self, ui: &mut egui::Ui, egui_ctx: &egui::Context) {
+        let ctx = FrameCtx {
+            doc: &self.doc,
+            session: &self.session,
+            view: &self.view,
+            scene: &self.scene,
+            meshes: &self.meshes,
+            results: &self.results,
+            status: self.status.as_ref(),
+            imports: &self.imports,
+            frame_time: self.frame_time,
+            recent: &self.recent.paths,
+            pending: self.pending.as_ref(),
+            recovery: self.recovery_offer.as_ref().map(|_| &self.recovery),
+        };
+        let actions = &mut self.actions;
+        let panels = &mut self.panels;
+        panels::menu::ui(ui, &ctx, actions);
+        panels::status::ui(ui, &ctx, panels.viewport.gpu());
+        egui::Panel::bottom("timeline").resizable(true).default_size(310.0).show_inside(ui, |ui| {
+            panels.timeline.ui(ui, &ctx, actions);
+            ui.separator();
+            let available = ui.available_size();
+            let curves_width = (available.x * 0.38).max(200.0);
+            ui.horizontal_top(|ui| {
+                let sheet_size = Vec2::new((available.x - curves_width - 8.0).max(200.0), available.y);
+                let layout = egui::Layout::top_down(egui::Align::Min);
+                ui.allocate_ui_with_layout(sheet_size, layout, |ui| panels.dope_sheet.ui(ui, &ctx, actions));
+                ui.separator();
+                let size = Vec2::new(ui.available_width(), available.y);
+                ui.allocate_ui_with_layout(size, layout, |ui| panels.curves.ui(ui, &ctx, actions));
+            });
+        });
+        panels.outliner.ui(ui, &ctx, actions);
+        panels.inspector.ui(ui, &ctx, actions);
+        panels.viewport.ui(ui, &ctx, actions);
+
+        panels::dialogs::help_ui(egui_ctx, &ctx, actions);
+        panels::dialogs::confirm_ui(egui_ctx, &ctx, actions);
+        panels::dialogs::recovery_ui(egui_ctx, &ctx, actions);
     }
 }
 

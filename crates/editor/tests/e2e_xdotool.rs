@@ -274,7 +274,7 @@ fn bright_centroid(png: &Path, around: Pos2, radius: f32) -> Option<Pos2> {
 }
 
 fn wrist_on_screen(app: &EditorApp) -> Pos2 {
-    let rect = app.view.viewport_rect.expect("laid out");
+    let rect = app.viewport_rect().expect("laid out");
     let pose = app.object_pose_now(0).expect("the arm");
     let at: glam::Vec3 = (pose.world_from_object * pose.object_from_joint[3]).translation.into();
     Projection::new(&app.view.camera, rect).project(at).expect("the wrist is in view")
@@ -300,7 +300,7 @@ fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
     h.run();
 
     // 2. Orbit: a left drag on empty viewport space, 80 points to the right.
-    let rect = h.state().view.viewport_rect.expect("laid out");
+    let rect = h.state().viewport_rect().expect("laid out");
     let start = rect.left_bottom() + egui::vec2(rect.width() * 0.15, -rect.height() * 0.12);
     let orbit: Vec<Pos2> = (0..=8).map(|i| start + egui::vec2(10.0 * i as f32, 0.0)).collect();
     session.drag(&orbit);
@@ -424,7 +424,7 @@ fn onion_skin_curve_editor_and_ik_posing_in_a_real_x_window() {
     h.run();
     session.xdo(&["key", "--clearmodifiers", "--delay", "60", "--repeat", "45", "Right"]);
     common::go_to_frame(&mut h, 45);
-    let viewport = h.state().view.viewport_rect.expect("laid out");
+    let viewport = h.state().viewport_rect().expect("laid out");
     let plain = session.screenshot("probe-onion-off");
 
     // O: ghosts two and one frame steps before and after.
@@ -443,7 +443,7 @@ fn onion_skin_curve_editor_and_ik_posing_in_a_real_x_window() {
     h.get_by_label("key elbow rotation frame 30").click();
     h.run();
     std::thread::sleep(Duration::from_millis(300));
-    let curves_rect = h.state().view.curves_rect.expect("the curve editor is laid out");
+    let curves_rect = h.state().curves_rect().expect("the curve editor is laid out");
     let with_curves = session.screenshot("guide_curve_editor");
     let drawn = changed_pixels(&ghosts, &with_curves, curves_rect);
     assert!(drawn > 500, "the curve editor draws the elbow's curves: {drawn} pixels changed");
@@ -485,7 +485,7 @@ fn a_cycle_in_the_curve_editor_of_a_real_x_window() {
     h.run();
     std::thread::sleep(Duration::from_millis(300));
     let after = session.screenshot("guide_cycles");
-    let curves = h.state().view.curves_rect.expect("the curve editor is laid out");
+    let curves = h.state().curves_rect().expect("the curve editor is laid out");
     let drawn = changed_pixels(&before, &after, curves);
     assert!(drawn > 500, "the curve editor draws the cycled channel: {drawn} pixels changed");
     let elbow = ChannelId::JointRotation { object: 0, joint: 1 };

@@ -31,7 +31,7 @@ fn elbow_x_at_key_of(scene: &keyrig_core::Scene, index: usize) -> f32 {
 
 /// A right click in the middle of the curve view, as the mouse gives it: its context menu.
 fn open_context_menu(h: &mut Harness<'_, EditorApp>) {
-    let plot = h.state().view.curves_rect.expect("the curve view is laid out");
+    let plot = h.state().curves_rect().expect("the curve view is laid out");
     h.event(Event::PointerMoved(plot.center()));
     for pressed in [true, false] {
         h.event(Event::PointerButton {
@@ -95,7 +95,7 @@ fn box_selection_ruler_scrub_zoom_home_and_f() {
     // A box from left of frame 15 to right of frame 45, over the whole height of the keys.
     let top = k15.top().min(k45.top()) - 60.0;
     let bottom = k15.bottom().max(k45.bottom()) + 60.0;
-    let plot = h.state().view.curves_rect.expect("the curve view is laid out");
+    let plot = h.state().curves_rect().expect("the curve view is laid out");
     let (top, bottom) = (top.max(plot.top() + 8.0), bottom.min(plot.bottom() - 20.0));
     drag(&mut h, Pos2::new(k15.left() - 3.0, top), Pos2::new(k45.right() + 3.0, bottom));
     let selected: Vec<usize> =
@@ -127,17 +127,17 @@ fn box_selection_ruler_scrub_zoom_home_and_f() {
         phase: egui::TouchPhase::Move,
     });
     h.run();
-    let zoomed = h.state().view.curves.view.expect("a zoomed view");
+    let zoomed = h.state().panels().curves.view.expect("a zoomed view");
     assert!(zoomed.end - zoomed.start < 90.0, "{zoomed:?}");
     h.get_by_label("Fit").click();
     h.run();
-    assert_eq!(h.state().view.curves.view, None, "Fit shows the range and values");
+    assert_eq!(h.state().panels().curves.view, None, "Fit shows the range and values");
 
     // F over the curves frames the selected keys (15–45), not the viewport.
     let camera = h.state().view.camera;
     h.event(Event::PointerMoved(centre));
     press(&mut h, Modifiers::NONE, Key::F);
-    let framed = h.state().view.curves.view.expect("framed");
+    let framed = h.state().panels().curves.view.expect("framed");
     assert!(
         framed.start > 5.0 && framed.start < 15.0 && framed.end > 45.0 && framed.end < 60.0,
         "{framed:?}"
@@ -237,12 +237,12 @@ fn rotations_can_be_drawn_as_their_twist() {
     let forearm = ChannelId::JointRotation { object: 0, joint: 2 };
     h.get_by_label("key forearm rotation frame 60").click();
     h.run();
-    assert_eq!(keyrig_editor::panels::curves::sample_curves(h.state(), forearm, 0.0, 90.0, 91).len(), 3);
+    assert_eq!(h.state().sample_curves(forearm, 0.0, 90.0, 91).len(), 3);
     h.get_by_label("Twist about X").click();
     h.run();
-    assert!(h.state().view.curves.rotation_as_twist);
+    assert!(h.state().panels().curves.rotation_as_twist);
     assert!(h.query_by_label("forearm rotation twist").is_some(), "the legend names the twist curve");
-    let curves = keyrig_editor::panels::curves::sample_curves(h.state(), forearm, 0.0, 90.0, 91);
+    let curves = h.state().sample_curves(forearm, 0.0, 90.0, 91);
     assert_eq!(curves.len(), 1, "one curve: the twist");
     let peak = curves[0].iter().map(|&(_, v)| v.abs()).fold(0.0f32, f32::max);
     assert!((peak - 180.0).abs() < 0.5, "the twist peaks at a half turn: {peak}");
@@ -253,7 +253,7 @@ fn rotations_can_be_drawn_as_their_twist() {
 #[test]
 fn a_and_alt_a_over_the_curves_select_all_and_none() {
     let (_dir, mut h) = with_elbow_key();
-    let plot = h.state().view.curves_rect.expect("laid out");
+    let plot = h.state().curves_rect().expect("laid out");
     h.event(Event::PointerMoved(plot.center()));
     press(&mut h, Modifiers::NONE, Key::A);
     let count = channels::key_count(h.state().doc.scene(), ELBOW);

@@ -13,7 +13,6 @@ use egui_kittest::Harness;
 use glam::{Quat, Vec3};
 use keyrig_core::{FrameRange, Joint, Key as SceneKey, Object, RawTrack, Scene, Skeleton};
 use keyrig_editor::channels::{self, ChannelId};
-use keyrig_editor::panels::dope_sheet::time_view;
 use keyrig_editor::session::KeyRef;
 use keyrig_editor::EditorApp;
 
@@ -145,14 +144,14 @@ fn keys_out_of_view_are_counted_and_a_click_brings_them_into_view() {
     assert!(h.query_by_label("key r_foot rotation frame 120").is_none());
     h.get_by_label("r_foot rotation: 1 key after the view").click();
     h.run();
-    let view = time_view(h.state());
+    let view = h.state().dope_sheet_view();
     assert!(view.start < 120.0 && view.end > 120.0, "the key comes into view: {view:?}");
     assert!(h.query_by_label("key r_foot rotation frame 120").is_some());
 
     // View all shows the range and every key.
     h.get_by_label("↔ View all").click();
     h.run();
-    let view = time_view(h.state());
+    let view = h.state().dope_sheet_view();
     assert!(view.start <= 0.0 && view.end >= 120.0, "{view:?}");
     assert!(h.query_by_label("key hip rotation frame 0").is_some());
     assert!(h.query_by_label("key r_foot rotation frame 120").is_some());
@@ -173,11 +172,11 @@ fn wheel(h: &mut Harness<'_, EditorApp>, at: Pos2, delta: egui::Vec2, modifiers:
 fn ctrl_wheel_zooms_about_the_pointer_and_shift_wheel_pans() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = open(dir.path(), &legs_scene());
-    let before = time_view(h.state());
+    let before = h.state().dope_sheet_view();
     let at_30 = h.get_by_label("key hip rotation frame 30").rect().center();
     let ctrl = Modifiers { ctrl: true, command: true, ..Modifiers::NONE };
     wheel(&mut h, at_30, egui::vec2(0.0, 3.0), ctrl);
-    let zoomed = time_view(h.state());
+    let zoomed = h.state().dope_sheet_view();
     assert!(zoomed.end - zoomed.start < 0.8 * (before.end - before.start), "{before:?} → {zoomed:?}");
     // Frame 30 stays under the pointer.
     let moved = h.get_by_label("key hip rotation frame 30").rect().center();
@@ -188,7 +187,7 @@ fn ctrl_wheel_zooms_about_the_pointer_and_shift_wheel_pans() {
 
     let shift = Modifiers { shift: true, ..Modifiers::NONE };
     wheel(&mut h, at_30, egui::vec2(0.0, 2.0), shift);
-    let panned = time_view(h.state());
+    let panned = h.state().dope_sheet_view();
     assert!((panned.end - panned.start - (zoomed.end - zoomed.start)).abs() < 1e-6, "panning keeps the zoom");
     assert!(panned.start != zoomed.start, "Shift+wheel pans: {zoomed:?} → {panned:?}");
 }

@@ -16,7 +16,7 @@ use keyrig_editor::EditorApp;
 /// Every corner of `b` projects inside the viewport, and the box spans at least a third of
 /// its height or width (it is framed, not a speck).
 fn assert_framed(app: &EditorApp, b: Bounds, what: &str) {
-    let rect = app.view.viewport_rect.expect("laid out");
+    let rect = app.viewport_rect().expect("laid out");
     let projection = Projection::new(&app.view.camera, rect);
     let corners: Vec<egui::Pos2> = (0..8)
         .map(|i| {
@@ -48,22 +48,22 @@ fn an_imported_fox_is_framed_and_f_frames_selection_and_scene() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
     let fox = import(&mut h, corpus("gltf/Fox/Fox.glb"));
-    let bounds = h.state().view.object_bounds[fox].expect("the fox was drawn");
+    let bounds = h.state().object_bounds()[fox].expect("the fox was drawn");
     assert!(bounds.radius() > 20.0, "Fox is in centimetre-sized units: {bounds:?}");
     assert_framed(h.state(), bounds, "the imported fox");
     // The clip planes hold it.
-    let [near, far] = h.state().view.camera.depth_range(h.state().view.bounds_of(None));
+    let [near, far] = h.state().view.camera.depth_range(h.state().bounds_of(None));
     let d = h.state().view.camera.eye().distance(bounds.centre());
     assert!(near < d - bounds.radius() && far > d + bounds.radius(), "{near} {far} {d}");
 
     // F on the demo arm frames the arm; F with nothing selected frames everything.
     h.state_mut().session.selection.item = Some(Selected::Object(0));
     press(&mut h, Modifiers::NONE, Key::F);
-    let arm = h.state().view.object_bounds[0].expect("the arm was drawn");
+    let arm = h.state().object_bounds()[0].expect("the arm was drawn");
     assert_framed(h.state(), arm, "the arm after F");
     h.state_mut().session.selection.item = None;
     press(&mut h, Modifiers::NONE, Key::F);
-    let all = h.state().view.bounds_of(None).expect("scene bounds");
+    let all = h.state().bounds_of(None).expect("scene bounds");
     assert_framed(h.state(), all, "the scene after F with nothing selected");
 }
 
@@ -73,14 +73,14 @@ fn an_opened_md2_model_is_framed_and_joint_presets_look_from_outside_the_mesh() 
     let mut h = harness(dir.path(), Some(corpus("md2/ratamahatta/ratamahatta.md2")));
     h.state_mut().wait_for_background_work();
     h.run();
-    let bounds = h.state().view.object_bounds[0].expect("the model was drawn");
+    let bounds = h.state().object_bounds()[0].expect("the model was drawn");
     assert_framed(h.state(), bounds, "the opened MD2 model");
 
     // The demo arm: the shoulder and elbow views put the eye outside the arm's bounds.
     let mut h = harness(dir.path(), None);
     for key in [Key::F4, Key::F5] {
         press(&mut h, Modifiers::NONE, key);
-        let arm = h.state().view.object_bounds[0].expect("the arm was drawn");
+        let arm = h.state().object_bounds()[0].expect("the arm was drawn");
         let eye = h.state().view.camera.eye();
         let inside = eye.cmpge(arm.min).all() && eye.cmple(arm.max).all();
         assert!(!inside, "{key:?}: the eye {eye:?} is inside the arm's bounds {arm:?}");

@@ -41,7 +41,7 @@ fn rotation_of(a: Affine3A) -> Quat {
 
 /// Where the wrist is on screen, and the direction the camera looks along (world space).
 fn wrist_on_screen(app: &EditorApp) -> (Pos2, Vec3) {
-    let rect = app.view.viewport_rect.expect("the viewport was laid out");
+    let rect = app.viewport_rect().expect("the viewport was laid out");
     let projection = Projection::new(&app.view.camera, rect);
     let at: Vec3 = wrist_world(app).translation.into();
     let screen = projection.project(at).expect("the wrist is in front of the camera");
@@ -413,7 +413,7 @@ fn a_ring_seen_nearly_edge_on_turns_one_degree_per_point() {
     let eye = app.view.camera.eye();
     let forward = (centre_world - eye).normalize();
     assert!(bone.dot(forward).abs() < 0.3, "the X ring is seen nearly edge-on: cos {}", bone.dot(forward));
-    let rect = app.view.viewport_rect.expect("laid out");
+    let rect = app.viewport_rect().expect("laid out");
     let projection = Projection::new(&app.view.camera, rect);
     let centre = projection.project(centre_world).expect("in view");
     // The ring's world radius from its 75-point screen radius.

@@ -333,7 +333,7 @@ fn a_capital_i_typed_in_a_name_field_does_not_toggle_ik_posing() {
     let mut h = harness(dir.path(), None);
     select_joint(&mut h, "wrist", WRIST);
     press(&mut h, Modifiers::COMMAND, Key::R);
-    assert!(h.state().view.renaming.is_some(), "Ctrl+R opens the name field");
+    assert!(h.state().panels().outliner.renaming().is_some(), "Ctrl+R opens the name field");
     h.key_press_modifiers(Modifiers::COMMAND, Key::A);
     h.run();
     h.input_mut().modifiers = Modifiers::SHIFT;

@@ -26,7 +26,7 @@ fn select_elbow(h: &mut Harness<'_, EditorApp>) {
 
 /// A point of the viewport away from the selection's gizmo (its lower left).
 fn empty_viewport_point(h: &Harness<'_, EditorApp>) -> Pos2 {
-    let rect = h.state().view.viewport_rect.expect("the viewport was laid out");
+    let rect = h.state().viewport_rect().expect("the viewport was laid out");
     rect.left_bottom() + egui::vec2(rect.width() * 0.12, -rect.height() * 0.15)
 }
 

@@ -127,7 +127,7 @@ fn double_click_renames_with_typed_text_in_one_undo_step() {
     }
     h.step();
     h.run();
-    assert!(h.state().view.renaming.is_some(), "double-click opens the name field");
+    assert!(h.state().panels().outliner.renaming().is_some(), "double-click opens the name field");
     type_and(&mut h, "Box", Key::Enter);
     assert_eq!(object_names(&h), ["Arm", "Box"]);
     assert_eq!(h.state().doc.undo_len(), steps + 1, "typing is one step");

@@ -122,7 +122,7 @@ fn ctrl_drag_in_the_viewport_box_selects_joints() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
     let app = h.state();
-    let rect = app.view.viewport_rect.expect("laid out");
+    let rect = app.viewport_rect().expect("laid out");
     let projection = Projection::new(&app.view.camera, rect);
     let pose: ObjectPose = app.object_pose_now(0).expect("the arm");
     let on_screen: Vec<Pos2> = (0..4)

@@ -46,7 +46,7 @@ fn the_twist_field_reads_the_turns_of_twist_ron() {
         assert!((shown - expected).abs() < 0.05, "frame {frame}: the field reads {shown}, not {expected}");
     }
     // The curve view's fourth curve is the unwrapped turn: 0 → 360 without wrapping.
-    let curves = keyrig_editor::panels::curves::sample_curves(h.state(), FOREARM, 0.0, 60.0, 61);
+    let curves = h.state().sample_curves(FOREARM, 0.0, 60.0, 61);
     assert_eq!(curves.len(), 4, "X, Y, Z and the unwrapped turn");
     let turn = &curves[3];
     assert!(turn.windows(2).all(|w| w[1].1 >= w[0].1 - 1e-4), "monotonic: {turn:?}");

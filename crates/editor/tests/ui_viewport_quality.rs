@@ -54,7 +54,7 @@ fn antialiasing_follows_the_adapter_and_the_view_menu() {
 fn the_viewport_shows_srgb_encoded_colour() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = gpu_harness(dir.path());
-    let rect = h.state().view.viewport_rect.expect("the viewport was laid out");
+    let rect = h.state().viewport_rect().expect("the viewport was laid out");
     let image = h.render().expect("render the window");
     // Above the horizon, away from the text in the top-left corner: the background, linear
     // (0.018, 0.02, 0.025), which `keyrig render` writes as sRGB (36, 39, 44). Shown linear it

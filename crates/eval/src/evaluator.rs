@@ -298,6 +298,19 @@ pub struct ObjectState {
     pub morph: Option<Result<MorphBlend, MorphError>>,
 }
 
+impl ObjectState {
+    /// A state to evaluate into: at the origin, with no pose, palette or morph.
+    fn empty() -> Self {
+        ObjectState {
+            world_from_object: Affine3A::IDENTITY,
+            pose: None,
+            palette: None,
+            palette_error: None,
+            morph: None,
+        }
+    }
+}
+
 /// The state of one light at a time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightState {
@@ -504,11 +517,29 @@ impl SceneEvaluator {
     /// The whole scene at `time` seconds.
     #[must_use]
     pub fn evaluate(&self, time: f64, overrides: &Overrides) -> SceneState {
-        SceneState {
-            time,
-            objects: (0..self.objects.len()).filter_map(|o| self.object_at(o, time, overrides)).collect(),
-            lights: (0..self.lights.len()).filter_map(|l| self.light_at(l, time, overrides)).collect(),
+        let mut state = SceneState { time, objects: Vec::new(), lights: Vec::new() };
+        self.evaluate_into(time, overrides, &mut state);
+        state
+    }
+
+    /// [`SceneEvaluator::evaluate`] into `state`, reusing its allocations (each object's pose
+    /// and joint palette vectors): the same values, without allocating once the state has held
+    /// this scene. What a frame calls when the time, the overrides or the scene changed.
+    pub fn evaluate_into(&self, time: f64, overrides: &Overrides, state: &mut SceneState) {
+        state.time = time;
+        state.objects.truncate(self.objects.len());
+        for (o, rig) in self.objects.iter().enumerate() {
+            match state.objects.get_mut(o) {
+                Some(object) => Self::fill_object(rig, o, time, overrides, usize::MAX, object),
+                None => {
+                    let mut object = ObjectState::empty();
+                    Self::fill_object(rig, o, time, overrides, usize::MAX, &mut object);
+                    state.objects.push(object);
+                }
+            }
         }
+        state.lights.clear();
+        state.lights.extend((0..self.lights.len()).filter_map(|l| self.light_at(l, time, overrides)));
     }
 
     /// Object `o` at `time` seconds; `None` when there is no such object. The skeleton's pose
@@ -530,6 +561,21 @@ impl SceneEvaluator {
         constraints: usize,
     ) -> Option<ObjectState> {
         let rig = self.objects.get(o)?;
+        let mut state = ObjectState::empty();
+        Self::fill_object(rig, o, time, overrides, constraints, &mut state);
+        Some(state)
+    }
+
+    /// Object `o` (whose rig is `rig`) at `time` with its first `constraints` IK constraints
+    /// solved, written over `state` (its pose and palette vectors are reused).
+    fn fill_object(
+        rig: &ObjectRig,
+        o: usize,
+        time: f64,
+        overrides: &Overrides,
+        constraints: usize,
+        state: &mut ObjectState,
+    ) {
         let vec3 = |id: ChannelId, slot: &Slot<Vec3>| match overrides.get(&id) {
             Some(ChannelValue::Vec3(v)) => *v,
             _ => slot.sample(time),
@@ -550,11 +596,17 @@ impl SceneEvaluator {
             quat(ChannelId::ObjectRotation(o), &rig.rotation),
             vec3(ChannelId::ObjectTranslation(o), &rig.translation),
         );
-        let mut state =
-            ObjectState { world_from_object, pose: None, palette: None, palette_error: None, morph: None };
+        state.world_from_object = world_from_object;
+        state.palette_error = None;
+        state.morph = None;
+        let old_pose = state.pose.take();
+        let old_palette = state.palette.take();
         if let Some(skeleton) = &rig.skeleton {
             let n = skeleton.joints.len();
-            let mut pose = Pose::rest(0);
+            let mut pose = old_pose.unwrap_or_else(|| Pose::rest(0));
+            pose.local_translations.clear();
+            pose.local_rotations.clear();
+            pose.local_scales.clear();
             pose.local_translations.reserve(n);
             pose.local_rotations.reserve(n);
             pose.local_scales.reserve(n);
@@ -587,19 +639,21 @@ impl SceneEvaluator {
                 let _ = chain.solve(&mut local, target, constraint.pole, blend);
             }
             if let Some(rest) = &skeleton.rest {
-                match JointPalette::new(rest, &pose) {
-                    Ok(palette) => state.palette = Some(palette),
+                let mut palette = old_palette.unwrap_or_default();
+                match palette.update(rest, &pose) {
+                    Ok(()) => state.palette = Some(palette),
                     Err(e) => state.palette_error = Some(e),
                 }
             }
             state.pose = Some(pose);
-        } else if let Some(palette) = &rig.rest_palette {
-            state.palette = Some(palette.clone());
+        } else if let Some(rest_palette) = &rig.rest_palette {
+            let mut palette = old_palette.unwrap_or_default();
+            palette.clone_from(rest_palette);
+            state.palette = Some(palette);
         }
         if let Some(morph) = &rig.morph {
             state.morph = Some(morph.clips.blend_at(morph.clip.as_deref(), morph.fps, time));
         }
-        Some(state)
     }
 
     /// Light `l` at `time` seconds; `None` when there is no such light.

@@ -278,3 +278,35 @@ fn updates_rebuild_only_what_an_edit_changed() {
     assert_eq!(rebuilt.meshes, 1);
     same(&eval, &valid);
 }
+
+/// `evaluate_into` over a state that held other times, a failed pose and a larger scene gives
+/// exactly what a fresh `evaluate` gives (compared through `Debug`, which prints every float so
+/// that it reads back to the same bits).
+#[test]
+fn evaluating_into_a_reused_state_equals_a_fresh_evaluation() {
+    let scene = scene();
+    let eval = SceneEvaluator::new(&scene, &HashMap::new());
+    let none = Overrides::new();
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    // A zero quaternion cannot be normalized: the evaluator turns it into the identity, so the
+    // pose stays valid; a non-finite translation makes the palette fail.
+    let broken: Overrides =
+        [(ChannelId::JointTranslation { object: 0, joint: 2 }, ChannelValue::Vec3(Vec3::NAN))].into();
+    let turned: Overrides = [(elbow, ChannelValue::Rotation(Quat::from_rotation_y(0.5)))].into();
+    // Poison: a state of a larger scene (three objects, two lights) at another time.
+    let mut bigger = scene.clone();
+    bigger.objects.push(scene.objects[1].clone());
+    bigger.lights.push(scene.lights[0].clone());
+    let mut state = SceneEvaluator::new(&bigger, &HashMap::new()).evaluate(7.5, &none);
+    assert_eq!(state.objects.len(), 3);
+    for (time, overrides) in
+        [(0.25, &none), (1.5, &broken), (1.5, &none), (0.75, &turned), (2.0, &none), (0.0, &broken)]
+    {
+        eval.evaluate_into(time, overrides, &mut state);
+        let fresh = eval.evaluate(time, overrides);
+        assert_eq!(format!("{state:?}"), format!("{fresh:?}"), "t = {time}, overrides {overrides:?}");
+        assert_eq!((state.objects.len(), state.lights.len()), (2, 1));
+    }
+    eval.evaluate_into(1.5, &broken, &mut state);
+    assert!(state.objects[0].palette.is_none() && state.objects[0].palette_error.is_some());
+}

@@ -3,12 +3,14 @@
 
 use egui::{Context, Id, Modal};
 
-use crate::app::{EditorApp, PendingAction};
+use crate::actions::{Action, Actions, PendingAction, Unsaved, ViewChange};
 use crate::commands::Command;
+use crate::context::FrameCtx;
 
 /// The help window: every command with its shortcuts and tooltip.
-pub fn help_ui(ctx: &Context, app: &mut EditorApp) {
-    let mut open = app.view.show_help;
+pub fn help_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
+    let shown = frame.view.show_help;
+    let mut open = shown;
     // Sized to the window (every row of the list fits on a 1280×800 window; a smaller one
     // scrolls), with the explanations wrapping rather than running off the edge.
     let screen = ctx.content_rect().size();
@@ -35,12 +37,14 @@ pub fn help_ui(ctx: &Context, app: &mut EditorApp) {
                 );
             });
         });
-    app.view.show_help = open && app.view.show_help;
+    if shown && !open {
+        actions.view(ViewChange::ShowHelp(false));
+    }
 }
 
 /// Asks what to do with unsaved changes before a pending New, Open or Quit.
-pub fn confirm_ui(ctx: &Context, app: &mut EditorApp) {
-    let Some(action) = app.pending.clone() else { return };
+pub fn confirm_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
+    let Some(action) = frame.pending else { return };
     let what = match action {
         PendingAction::New => "starting a new scene",
         PendingAction::Open(_) => "opening another file",
@@ -49,42 +53,28 @@ pub fn confirm_ui(ctx: &Context, app: &mut EditorApp) {
     let mut choice = None;
     Modal::new(Id::new("confirm_unsaved")).show(ctx, |ui| {
         ui.heading("Unsaved changes");
-        ui.label(format!("{} has unsaved changes. Save them before {what}?", app.doc.display_name()));
+        ui.label(format!("{} has unsaved changes. Save them before {what}?", frame.doc.display_name()));
         ui.horizontal(|ui| {
             if ui.button("Save").clicked() {
-                choice = Some(0);
+                choice = Some(Unsaved::Save);
             }
             if ui.button("Discard changes").clicked() {
-                choice = Some(1);
+                choice = Some(Unsaved::Discard);
             }
             if ui.button("Cancel").clicked() {
-                choice = Some(2);
+                choice = Some(Unsaved::Cancel);
             }
         });
     });
-    match choice {
-        Some(0) => {
-            app.pending = None;
-            app.save();
-            if !app.doc.is_dirty() {
-                app.perform(action);
-            }
-        }
-        Some(1) => {
-            app.pending = None;
-            app.perform(action);
-        }
-        Some(2) => app.pending = None,
-        _ => {}
+    if let Some(choice) = choice {
+        actions.push(Action::ResolveUnsaved(choice));
     }
 }
 
 /// Offers the scene autosaved by a session that did not exit cleanly.
-pub fn recovery_ui(ctx: &Context, app: &mut EditorApp) {
-    if app.recovery_offer.is_none() {
-        return;
-    }
-    let origin = app.recovery.origin();
+pub fn recovery_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
+    let Some(recovery) = frame.recovery else { return };
+    let origin = recovery.origin();
     let mut choice = None;
     Modal::new(Id::new("offer_recovery")).show(ctx, |ui| {
         ui.heading("Recover unsaved work?");
@@ -100,18 +90,7 @@ pub fn recovery_ui(ctx: &Context, app: &mut EditorApp) {
             }
         });
     });
-    match choice {
-        Some(true) => {
-            if let Some(scene) = app.recovery_offer.take() {
-                app.replace_document(scene, origin);
-                app.doc.mark_dirty();
-                app.info("Recovered the autosaved scene; save it to keep it");
-            }
-        }
-        Some(false) => {
-            app.recovery_offer = None;
-            app.autosave.clear();
-        }
-        None => {}
+    if let Some(recover) = choice {
+        actions.push(Action::Recover(recover));
     }
 }

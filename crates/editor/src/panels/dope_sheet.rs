@@ -19,14 +19,15 @@
 use std::collections::BTreeSet;
 
 use egui::{Align2, Color32, CursorIcon, FontId, PointerButton, Pos2, Rect, Sense, Stroke, Ui, Vec2};
+use keyrig_core::Scene;
 
-use crate::app::EditorApp;
+use crate::actions::{Action, Actions, Edit, SessionChange, Ticket};
 use crate::channels::{self, ChannelId};
-use crate::panels::outliner::hierarchy;
-use crate::session::{KeyRef, Selected};
-pub use crate::view::{Gesture, TimeView};
+use crate::context::FrameCtx;
+use crate::session::{KeyRef, Selected, Selection};
 use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
 use crate::widgets::publish_painted;
+use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
 
 const ROW_HEIGHT: f32 = 17.0;
@@ -44,6 +45,41 @@ const DEFAULT_NAME_WIDTH: f32 = 170.0;
 const DENSE_SPACING: f32 = 3.0;
 /// The fewest frames the zoomed time axis shows.
 const MIN_SPAN: f64 = 4.0;
+
+/// The frames shown at the left and right end of the dope sheet's keys.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeView {
+    pub start: f64,
+    pub end: f64,
+}
+
+/// What the current pointer gesture in the dope sheet is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Gesture {
+    /// Moving the selected keys: whole frames already applied.
+    MoveKeys { applied: i32 },
+    /// A box selection from this point.
+    Box { start: Pos2 },
+    /// Panning the time axis with the middle button from this view.
+    Pan { from: TimeView },
+}
+
+/// The dope sheet and its own state: the view of the time axis, the gesture under way, the
+/// collapsed groups and the name column's width.
+#[derive(Debug, Default)]
+pub struct DopeSheet {
+    /// The pointer gesture in progress (moving keys, box selection, panning).
+    gesture: Option<Gesture>,
+    /// The frames the dope sheet shows; `None` follows the scene's frame range.
+    view: Option<TimeView>,
+    /// Collapsed groups (objects, lights, joints with several channels).
+    collapsed: BTreeSet<Selected>,
+    /// The name column's width, points, once resized.
+    name_width: Option<f32>,
+    /// The key move pushed in the last frame and the whole frames the gesture has applied once
+    /// it is taken (a move onto another key is refused).
+    pending_move: Option<(Ticket, i32)>,
+}
 
 /// What a row stands for.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,10 +109,7 @@ impl Row {
 }
 
 /// The rows in display order; collapsed groups hide what is beneath them.
-fn rows(app: &EditorApp) -> Vec<Row> {
-    let scene = app.doc.scene();
-    let collapsed = &app.view.timeline.collapsed;
-    let selection = &app.session.selection;
+fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) -> Vec<Row> {
     let keyed = |id: ChannelId| channels::key_count(scene, id) > 0;
     let mut out = Vec::new();
     let channel_row = |id: ChannelId, label: String, depth: usize, item: Selected| Row {
@@ -121,7 +154,7 @@ fn rows(app: &EditorApp) -> Vec<Row> {
                 }
             }
         }
-        for (j, depth) in hierarchy(skeleton) {
+        for (j, depth) in skeleton.depth_first() {
             let joint = &skeleton.joints[j];
             let item = Selected::Joint { object: o, joint: j };
             let mut ids = Vec::with_capacity(3);
@@ -187,17 +220,21 @@ struct Geometry {
 }
 
 impl Geometry {
+    /// The keys' time axis (shared with the curve view).
+    fn axis(&self) -> TimeAxis {
+        TimeAxis { left: self.keys.0, right: self.keys.1, start: self.view.start, end: self.view.end }
+    }
+
     fn x(&self, frame: f64) -> f32 {
-        let span = (self.view.end - self.view.start).max(1e-9);
-        self.keys.0 + ((frame - self.view.start) / span) as f32 * (self.keys.1 - self.keys.0)
+        self.axis().x(frame)
     }
 
     fn frame(&self, x: f32) -> f64 {
-        self.view.start + f64::from(x - self.keys.0) * self.frames_per_point()
+        self.axis().frame(x)
     }
 
     fn frames_per_point(&self) -> f64 {
-        (self.view.end - self.view.start) / f64::from((self.keys.1 - self.keys.0).max(1.0))
+        self.axis().frames_per_point()
     }
 
     /// The frames with room for half a diamond at either end (keys there are still drawn).
@@ -208,22 +245,15 @@ impl Geometry {
 }
 
 /// The default view: the scene's frame range.
-fn range_view(app: &EditorApp) -> TimeView {
-    let range = app.doc.scene().frame_range;
+fn range_view(scene: &Scene) -> TimeView {
+    let range = scene.frame_range;
     TimeView { start: f64::from(range.start), end: f64::from(range.end.max(range.start + 1)) }
 }
 
-/// The view of the time axis now (the frame range until the user zooms or pans).
-#[must_use]
-pub fn time_view(app: &EditorApp) -> TimeView {
-    app.view.timeline.view.unwrap_or_else(|| range_view(app))
-}
-
 /// The view that shows the frame range and every key of the scene.
-fn view_all(app: &EditorApp) -> TimeView {
-    let scene = app.doc.scene();
+fn view_all(scene: &Scene) -> TimeView {
     let fps = scene.fps.max(1e-9);
-    let mut view = range_view(app);
+    let mut view = range_view(scene);
     for id in ChannelId::all(scene) {
         let window = channels::keys_between(scene, id, f64::NEG_INFINITY, f64::INFINITY);
         if let (Some(first), Some(last)) = (window.times.first(), window.times.last()) {
@@ -231,7 +261,7 @@ fn view_all(app: &EditorApp) -> TimeView {
             view.end = view.end.max((last * fps).ceil());
         }
     }
-    if view == range_view(app) {
+    if view == range_view(scene) {
         return view;
     }
     let margin = (view.end - view.start) * 0.02;
@@ -253,8 +283,8 @@ struct Bucket {
 
 /// The row's keys in view, one bucket per pixel column, sorted by column; and the number of
 /// keys before and after the view with the nearest frame on each side.
-fn buckets(app: &EditorApp, row: &Row, geo: &Geometry) -> (Vec<Bucket>, Marker, Marker) {
-    let scene = app.doc.scene();
+fn buckets(ctx: &FrameCtx<'_>, row: &Row, geo: &Geometry) -> (Vec<Bucket>, Marker, Marker) {
+    let scene = ctx.scene();
     let (from, to) = geo.visible_seconds();
     let mut columns: Vec<Bucket> = Vec::new();
     let (mut before, mut after) = (Marker::default(), Marker::default());
@@ -266,7 +296,7 @@ fn buckets(app: &EditorApp, row: &Row, geo: &Geometry) -> (Vec<Bucket>, Marker, 
             let frame = time * geo.fps;
             let px = geo.x(frame).round() as i32;
             let key = KeyRef { channel: id, index: window.first + i };
-            let selected = usize::from(app.session.selection.keys.contains(&key));
+            let selected = usize::from(ctx.session.selection.keys.contains(&key));
             columns.push(Bucket { px, frame, count: 1, selected, single: Some(key) });
         }
     }
@@ -307,13 +337,12 @@ impl Marker {
 }
 
 /// Every key of `row` whose pixel column is `px`.
-fn keys_at(app: &EditorApp, row: &Row, geo: &Geometry, px: i32) -> Vec<KeyRef> {
-    keys_in(app, row, geo, px as f32 - 0.5, px as f32 + 0.5)
+fn keys_at(scene: &Scene, row: &Row, geo: &Geometry, px: i32) -> Vec<KeyRef> {
+    keys_in(scene, row, geo, px as f32 - 0.5, px as f32 + 0.5)
 }
 
 /// Every key of `row` drawn between `left` and `right` (points).
-fn keys_in(app: &EditorApp, row: &Row, geo: &Geometry, left: f32, right: f32) -> Vec<KeyRef> {
-    let scene = app.doc.scene();
+fn keys_in(scene: &Scene, row: &Row, geo: &Geometry, left: f32, right: f32) -> Vec<KeyRef> {
     let (from, to) = (geo.frame(left) / geo.fps, geo.frame(right) / geo.fps);
     let mut out = Vec::new();
     for &id in &row.shows {
@@ -341,99 +370,118 @@ enum Hit {
 }
 
 /// Draws the dope sheet into the space `ui` has left.
-pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
-    let rows = rows(app);
-    let full = ui.available_rect_before_wrap();
-    let max_name = (full.width() - 120.0).max(MIN_NAME_WIDTH);
-    let name_width =
-        app.view.timeline.name_width.unwrap_or(DEFAULT_NAME_WIDTH).clamp(MIN_NAME_WIDTH, max_name);
-    let scene = app.doc.scene();
-    let geo = Geometry {
-        names: (full.left(), full.left() + name_width),
-        keys: (
-            full.left() + name_width + PAD,
-            (full.right() - PAD - SCROLL_BAR).max(full.left() + name_width + PAD + 20.0),
-        ),
-        view: time_view(app),
-        fps: scene.fps.max(1e-9),
-    };
-
-    let (header, _) = ui.allocate_exact_size(Vec2::new(full.width(), RULER_HEIGHT), Sense::hover());
-    header_ui(ui, app, header, &geo);
-
-    let body_top = ui.cursor().top();
-    egui::ScrollArea::vertical()
-        .id_salt("dope_sheet_scroll")
-        .auto_shrink([false, false])
-        .scroll_source(egui::scroll_area::ScrollSource {
-            drag: false,
-            ..egui::scroll_area::ScrollSource::ALL
-        })
-        .show_viewport(ui, |ui, viewport| body_ui(ui, app, &rows, &geo, viewport));
-    let sheet = Rect::from_min_max(full.min, Pos2::new(full.right(), ui.min_rect().bottom().max(body_top)));
-
-    resize_names_ui(ui, app, sheet, &geo);
-    navigate(ui, app, sheet, &geo);
-}
-
-/// The fixed header: *View all* over the names, the frame ruler (click or drag to scrub) over
-/// the keys, with the frames outside the scene's range shaded.
-fn header_ui(ui: &mut Ui, app: &mut EditorApp, header: Rect, geo: &Geometry) {
-    let visuals = ui.visuals().clone();
-    let painter = ui.painter_at(header);
-    painter.rect_filled(header, 0.0, visuals.faint_bg_color);
-    let button = Rect::from_min_size(header.min + Vec2::new(2.0, 1.0), Vec2::new(70.0, RULER_HEIGHT - 2.0));
-    if ui
-        .put(button, egui::Button::new("↔ View all").small())
-        .on_hover_text("Show the whole frame range and every key (Ctrl+wheel zooms, Shift+wheel pans)")
-        .clicked()
-    {
-        app.view.timeline.view = Some(view_all(app));
+impl DopeSheet {
+    /// The view of the time axis now (the frame range until the user zooms or pans).
+    #[must_use]
+    pub fn time_view(&self, scene: &Scene) -> TimeView {
+        self.view.unwrap_or_else(|| range_view(scene))
     }
-    let ruler = Rect::from_min_max(
-        Pos2::new(geo.keys.0 - PAD, header.top()),
-        Pos2::new(geo.keys.1 + PAD, header.bottom()),
-    );
-    let response = ui.interact(ruler, ui.id().with("ruler"), Sense::click_and_drag());
-    let response = response.on_hover_text("Click or drag to scrub");
-    if response.clicked() || response.dragged_by(PointerButton::Primary) {
-        if let Some(p) = response.interact_pointer_pos() {
-            app.set_frame(geo.frame(p.x).round() as i32);
+
+    /// Draws the dope sheet into the space `ui` has left.
+    pub fn ui(&mut self, ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+        // The key move of the last frame: the gesture counts its frames once it was taken.
+        if let Some((ticket, wanted)) = self.pending_move.take() {
+            if let (true, Some(Gesture::MoveKeys { applied })) =
+                (ctx.results.moved(ticket), &mut self.gesture)
+            {
+                *applied = wanted;
+            }
         }
+        let scene = ctx.scene();
+        let rows = rows(scene, &ctx.session.selection, &self.collapsed);
+        let full = ui.available_rect_before_wrap();
+        let max_name = (full.width() - 120.0).max(MIN_NAME_WIDTH);
+        let name_width = self.name_width.unwrap_or(DEFAULT_NAME_WIDTH).clamp(MIN_NAME_WIDTH, max_name);
+        let geo = Geometry {
+            names: (full.left(), full.left() + name_width),
+            keys: (
+                full.left() + name_width + PAD,
+                (full.right() - PAD - SCROLL_BAR).max(full.left() + name_width + PAD + 20.0),
+            ),
+            view: self.time_view(scene),
+            fps: scene.fps.max(1e-9),
+        };
+
+        let (header, _) = ui.allocate_exact_size(Vec2::new(full.width(), RULER_HEIGHT), Sense::hover());
+        self.header_ui(ui, ctx, actions, header, &geo);
+
+        let body_top = ui.cursor().top();
+        egui::ScrollArea::vertical()
+            .id_salt("dope_sheet_scroll")
+            .auto_shrink([false, false])
+            .scroll_source(egui::scroll_area::ScrollSource {
+                drag: false,
+                ..egui::scroll_area::ScrollSource::ALL
+            })
+            .show_viewport(ui, |ui, viewport| self.body_ui(ui, ctx, actions, &rows, &geo, viewport));
+        let sheet =
+            Rect::from_min_max(full.min, Pos2::new(full.right(), ui.min_rect().bottom().max(body_top)));
+
+        self.resize_names_ui(ui, sheet, &geo);
+        self.navigate(ui, sheet, &geo);
     }
-    let painter = painter.with_clip_rect(ruler);
-    shade_outside_range(&painter, app, geo, ruler, visuals.extreme_bg_color.gamma_multiply(0.8));
-    let step = tick_step(geo.view.end - geo.view.start, geo.keys.1 - geo.keys.0);
-    let mut f = (geo.view.start / step as f64).floor() as i64 * step;
-    while (f as f64) <= geo.view.end {
-        let x = geo.x(f as f64);
-        if x >= geo.keys.0 - 1.0 {
-            painter.line_segment(
-                [Pos2::new(x, ruler.bottom() - 5.0), Pos2::new(x, ruler.bottom())],
-                Stroke::new(1.0, visuals.weak_text_color()),
-            );
-            painter.text(
-                Pos2::new(x, ruler.top() + 2.0),
-                Align2::CENTER_TOP,
-                f.to_string(),
-                FontId::proportional(10.0),
-                visuals.weak_text_color(),
-            );
+
+    /// The fixed header: *View all* over the names, the frame ruler (click or drag to scrub)
+    /// over the keys, with the frames outside the scene's range shaded.
+    fn header_ui(
+        &mut self,
+        ui: &mut Ui,
+        ctx: &FrameCtx<'_>,
+        actions: &mut Actions,
+        header: Rect,
+        geo: &Geometry,
+    ) {
+        let visuals = ui.visuals().clone();
+        let painter = ui.painter_at(header);
+        painter.rect_filled(header, 0.0, visuals.faint_bg_color);
+        let button =
+            Rect::from_min_size(header.min + Vec2::new(2.0, 1.0), Vec2::new(70.0, RULER_HEIGHT - 2.0));
+        if ui
+            .put(button, egui::Button::new("↔ View all").small())
+            .on_hover_text("Show the whole frame range and every key (Ctrl+wheel zooms, Shift+wheel pans)")
+            .clicked()
+        {
+            self.view = Some(view_all(ctx.scene()));
         }
-        f += step;
+        let ruler = Rect::from_min_max(
+            Pos2::new(geo.keys.0 - PAD, header.top()),
+            Pos2::new(geo.keys.1 + PAD, header.bottom()),
+        );
+        let response = ui.interact(ruler, ui.id().with("ruler"), Sense::click_and_drag());
+        let response = response.on_hover_text("Click or drag to scrub");
+        if response.clicked() || response.dragged_by(PointerButton::Primary) {
+            if let Some(p) = response.interact_pointer_pos() {
+                ctx.set_frame(actions, geo.frame(p.x).round() as i32);
+            }
+        }
+        let painter = painter.with_clip_rect(ruler);
+        shade_outside_range(&painter, ctx.scene(), geo, ruler, visuals.extreme_bg_color.gamma_multiply(0.8));
+        let step = tick_step(geo.view.end - geo.view.start, geo.keys.1 - geo.keys.0);
+        let mut f = (geo.view.start / step as f64).floor() as i64 * step;
+        while (f as f64) <= geo.view.end {
+            let x = geo.x(f as f64);
+            if x >= geo.keys.0 - 1.0 {
+                painter.line_segment(
+                    [Pos2::new(x, ruler.bottom() - 5.0), Pos2::new(x, ruler.bottom())],
+                    Stroke::new(1.0, visuals.weak_text_color()),
+                );
+                painter.text(
+                    Pos2::new(x, ruler.top() + 2.0),
+                    Align2::CENTER_TOP,
+                    f.to_string(),
+                    FontId::proportional(10.0),
+                    visuals.weak_text_color(),
+                );
+            }
+            f += step;
+        }
+        current_frame_line(&painter, ctx, geo, ruler);
     }
-    current_frame_line(&painter, app, geo, ruler);
 }
 
 /// Shades the frames of `rect` outside the scene's frame range.
-fn shade_outside_range(
-    painter: &egui::Painter,
-    app: &EditorApp,
-    geo: &Geometry,
-    rect: Rect,
-    colour: Color32,
-) {
-    let range = app.doc.scene().frame_range;
+fn shade_outside_range(painter: &egui::Painter, scene: &Scene, geo: &Geometry, rect: Rect, colour: Color32) {
+    let range = scene.frame_range;
     let (a, b) = (geo.x(f64::from(range.start)), geo.x(f64::from(range.end)));
     if a > rect.left() {
         painter.rect_filled(Rect::from_min_max(rect.min, Pos2::new(a, rect.bottom())), 0.0, colour);
@@ -443,8 +491,8 @@ fn shade_outside_range(
     }
 }
 
-fn current_frame_line(painter: &egui::Painter, app: &EditorApp, geo: &Geometry, rect: Rect) {
-    let x = geo.x(app.session.playback.frame);
+fn current_frame_line(painter: &egui::Painter, ctx: &FrameCtx<'_>, geo: &Geometry, rect: Rect) {
+    let x = geo.x(ctx.session.playback.frame);
     if x >= geo.keys.0 - PAD && x <= geo.keys.1 + PAD {
         painter.line_segment(
             [Pos2::new(x, rect.top()), Pos2::new(x, rect.bottom())],
@@ -453,242 +501,265 @@ fn current_frame_line(painter: &egui::Painter, app: &EditorApp, geo: &Geometry, 
     }
 }
 
-/// The rows: laid out as one area the height of every row, painted and hit-tested only where
-/// `viewport` (the visible part, in content coordinates) shows them.
-fn body_ui(ui: &mut Ui, app: &mut EditorApp, rows: &[Row], geo: &Geometry, viewport: Rect) {
-    let origin = ui.max_rect().min;
-    let height = ROW_HEIGHT * rows.len() as f32 + 4.0;
-    let content =
-        Rect::from_min_size(origin, Vec2::new(ui.max_rect().width(), height.max(viewport.height())));
-    let body = ui.allocate_rect(content, Sense::click_and_drag());
-    let visible = Rect::from_min_max(origin + viewport.min.to_vec2(), origin + viewport.max.to_vec2());
-    let first = ((viewport.min.y / ROW_HEIGHT).floor().max(0.0) as usize).min(rows.len());
-    let last = ((viewport.max.y / ROW_HEIGHT).ceil().max(0.0) as usize).min(rows.len());
-    let row_rect = |r: usize| {
-        let top = origin.y + r as f32 * ROW_HEIGHT;
-        Rect::from_min_max(Pos2::new(content.left(), top), Pos2::new(content.right(), top + ROW_HEIGHT))
-    };
-
-    let painter = ui.painter_at(visible);
-    let visuals = ui.visuals().clone();
-    painter.rect_filled(visible, 0.0, visuals.extreme_bg_color);
-    let keys_rect = Rect::from_min_max(
-        Pos2::new(geo.keys.0 - PAD, visible.top()),
-        Pos2::new(geo.keys.1 + PAD, visible.bottom()),
-    );
-    shade_outside_range(&painter, app, geo, keys_rect, visuals.faint_bg_color.gamma_multiply(0.5));
-    let keys_painter = painter.with_clip_rect(keys_rect.intersect(visible));
-    let names_painter = painter.with_clip_rect(Rect::from_min_max(
-        Pos2::new(geo.names.0, visible.top()),
-        Pos2::new(geo.names.1, visible.bottom()),
-    ));
-    let mut truncated: Option<usize> = None;
-    let hover = body.hover_pos();
-    for (r, row) in rows.iter().enumerate().take(last).skip(first) {
-        let rect = row_rect(r);
-        if app.session.selection.contains(row.item) {
-            painter.rect_filled(rect, 0.0, visuals.selection.bg_fill.gamma_multiply(0.35));
-        } else if r % 2 == 1 {
-            painter.rect_filled(rect, 0.0, visuals.faint_bg_color.gamma_multiply(0.5));
-        }
-        // Name, with the expander of a group.
-        let indent = geo.names.0 + 4.0 + INDENT * row.depth as f32;
-        if let RowKind::Group { collapsed } = row.kind {
-            let text = if collapsed { "▶" } else { "▼" };
-            names_painter.text(
-                Pos2::new(indent, rect.center().y),
-                Align2::LEFT_CENTER,
-                text,
-                FontId::proportional(9.0),
-                visuals.weak_text_color(),
-            );
-        }
-        let colour = if row.group() { visuals.strong_text_color() } else { visuals.text_color() };
-        let galley = names_painter.layout_no_wrap(row.label.clone(), FontId::proportional(12.0), colour);
-        let text_left = indent + 12.0;
-        if text_left + galley.size().x > geo.names.1
-            && hover.is_some_and(|p| rect.contains(p) && p.x < geo.names.1)
-        {
-            truncated = Some(r);
-        }
-        names_painter.galley(Pos2::new(text_left, rect.center().y - galley.size().y / 2.0), galley, colour);
-        publish_row(ui, row, Rect::from_min_max(rect.min, Pos2::new(geo.names.1, rect.bottom())), indent);
-
-        // Keys.
-        let y = rect.center().y;
-        let (buckets, before, after) = buckets(app, row, geo);
-        let summary = row.group();
-        let mut band: Option<(f32, f32)> = None;
-        for (i, b) in buckets.iter().enumerate() {
-            let x = b.px as f32;
-            let dense = [i.checked_sub(1), Some(i + 1)]
-                .into_iter()
-                .flatten()
-                .filter_map(|j| buckets.get(j))
-                .any(|n| (n.px - b.px).abs() as f32 <= DENSE_SPACING);
-            let selected = b.selected > 0;
-            let frame = b.frame;
-            let outside = frame < f64::from(app.doc.scene().frame_range.start) - 1e-6
-                || frame > f64::from(app.doc.scene().frame_range.end) + 1e-6;
-            if dense {
-                // A band: one rectangle per run of neighbouring unselected marks (a run of a
-                // motion-capture track is one shape), selected marks as their own ticks.
-                if selected || outside {
-                    let colour = key_colour(selected, summary, outside);
-                    keys_painter.rect_filled(
-                        Rect::from_min_max(Pos2::new(x - 0.5, y - 4.5), Pos2::new(x + 0.5, y + 4.5)),
-                        0.0,
-                        colour,
-                    );
-                } else {
-                    match &mut band {
-                        Some((_, end)) if (x - *end) <= DENSE_SPACING => *end = x,
-                        _ => {
-                            paint_band(&keys_painter, band.take(), y, key_colour(false, summary, false));
-                            band = Some((x, x));
-                        }
-                    }
-                }
-            } else {
-                let radius = if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS };
-                let hovered = hover.is_some_and(|p| (p.x - x).abs() <= DIAMOND_RADIUS && rect.contains(p));
-                paint_diamond(
-                    &keys_painter,
-                    Pos2::new(x, y),
-                    radius + if hovered { 1.0 } else { 0.0 },
-                    key_colour(selected, summary, outside),
-                    selected,
-                );
-            }
-            publish_key(ui, app, row, b, Pos2::new(x, y));
-        }
-        paint_band(&keys_painter, band, y, key_colour(false, summary, false));
-        for (marker, left) in [(before, true), (after, false)] {
-            if marker.count > 0 {
-                let text = if left { format!("◀{}", marker.count) } else { format!("{}▶", marker.count) };
-                let (pos, align) = if left {
-                    (Pos2::new(geo.keys.0 - PAD + 1.0, y), Align2::LEFT_CENTER)
-                } else {
-                    (Pos2::new(geo.keys.1 + PAD - 1.0, y), Align2::RIGHT_CENTER)
-                };
-                let drawn = painter.text(
-                    pos,
-                    align,
-                    &text,
-                    FontId::proportional(10.0),
-                    Color32::from_rgb(255, 170, 60),
-                );
-                publish_marker(ui, row, marker, left, drawn);
-            }
-        }
-    }
-    current_frame_line(&painter, app, geo, visible);
-
-    // Pointer.
-    let additive = ui.input(|i| i.modifiers.shift || i.modifiers.command);
-    let hit_at = |app: &EditorApp, pos: Pos2| -> Hit { hit(app, rows, geo, origin, pos) };
-    if let Some(r) = truncated {
-        body.clone().on_hover_text_at_pointer(row_path(app, &rows[r]));
-    } else if let Some(p) = hover {
-        if let Hit::Marker(frame) = hit_at(app, p) {
-            body.clone().on_hover_text_at_pointer(format!(
-                "Keys out of view, the nearest at frame {frame:.0}: click to show them"
-            ));
-        }
-    }
-    if let Some(pos) = body.interact_pointer_pos().filter(|_| body.clicked()) {
-        match hit_at(app, pos) {
-            Hit::Expander(r) => {
-                let item = rows[r].item;
-                if !app.view.timeline.collapsed.remove(&item) {
-                    app.view.timeline.collapsed.insert(item);
-                }
-            }
-            Hit::Name(r) => {
-                if additive {
-                    app.session.selection.toggle(rows[r].item);
-                } else {
-                    app.session.selection.select_only(Some(rows[r].item));
-                }
-            }
-            Hit::Keys(r, keys) => select_keys(app, &rows[r], keys, additive),
-            Hit::Marker(frame) => show_frame(app, geo, frame),
-            Hit::Empty => app.session.selection.keys.clear(),
-        }
-    }
-    let press = ui.input(|i| i.pointer.press_origin());
-    if let Some(origin_pos) = press.filter(|_| body.drag_started_by(PointerButton::Primary)) {
-        app.view.timeline.gesture = match hit_at(app, origin_pos) {
-            Hit::Keys(r, keys) => {
-                if !keys.iter().all(|k| app.session.selection.keys.contains(k)) {
-                    select_keys(app, &rows[r], keys, additive);
-                }
-                Some(Gesture::MoveKeys { applied: 0 })
-            }
-            Hit::Empty | Hit::Name(_) | Hit::Expander(_) => Some(Gesture::Box { start: origin_pos }),
-            Hit::Marker(_) => None,
+impl DopeSheet {
+    /// The rows: laid out as one area the height of every row, painted and hit-tested only
+    /// where `viewport` (the visible part, in content coordinates) shows them.
+    fn body_ui(
+        &mut self,
+        ui: &mut Ui,
+        ctx: &FrameCtx<'_>,
+        actions: &mut Actions,
+        rows: &[Row],
+        geo: &Geometry,
+        viewport: Rect,
+    ) {
+        let scene = ctx.scene();
+        let origin = ui.max_rect().min;
+        let height = ROW_HEIGHT * rows.len() as f32 + 4.0;
+        let content =
+            Rect::from_min_size(origin, Vec2::new(ui.max_rect().width(), height.max(viewport.height())));
+        let body = ui.allocate_rect(content, Sense::click_and_drag());
+        let visible = Rect::from_min_max(origin + viewport.min.to_vec2(), origin + viewport.max.to_vec2());
+        let first = ((viewport.min.y / ROW_HEIGHT).floor().max(0.0) as usize).min(rows.len());
+        let last = ((viewport.max.y / ROW_HEIGHT).ceil().max(0.0) as usize).min(rows.len());
+        let row_rect = |r: usize| {
+            let top = origin.y + r as f32 * ROW_HEIGHT;
+            Rect::from_min_max(Pos2::new(content.left(), top), Pos2::new(content.right(), top + ROW_HEIGHT))
         };
-    }
-    if body.drag_started_by(PointerButton::Middle) {
-        app.view.timeline.gesture = Some(Gesture::Pan { from: geo.view });
-    }
-    match app.view.timeline.gesture {
-        Some(Gesture::MoveKeys { applied }) => {
-            if let Some(delta) = body.total_drag_delta() {
-                let wanted = (f64::from(delta.x) * geo.frames_per_point()).round() as i32;
-                let step = wanted - applied;
-                if step != 0 && move_selected_keys(app, f64::from(step) / geo.fps) {
-                    app.view.timeline.gesture = Some(Gesture::MoveKeys { applied: wanted });
-                }
+
+        let painter = ui.painter_at(visible);
+        let visuals = ui.visuals().clone();
+        painter.rect_filled(visible, 0.0, visuals.extreme_bg_color);
+        let keys_rect = Rect::from_min_max(
+            Pos2::new(geo.keys.0 - PAD, visible.top()),
+            Pos2::new(geo.keys.1 + PAD, visible.bottom()),
+        );
+        shade_outside_range(&painter, scene, geo, keys_rect, visuals.faint_bg_color.gamma_multiply(0.5));
+        let keys_painter = painter.with_clip_rect(keys_rect.intersect(visible));
+        let names_painter = painter.with_clip_rect(Rect::from_min_max(
+            Pos2::new(geo.names.0, visible.top()),
+            Pos2::new(geo.names.1, visible.bottom()),
+        ));
+        let mut truncated: Option<usize> = None;
+        let hover = body.hover_pos();
+        for (r, row) in rows.iter().enumerate().take(last).skip(first) {
+            let rect = row_rect(r);
+            if ctx.session.selection.contains(row.item) {
+                painter.rect_filled(rect, 0.0, visuals.selection.bg_fill.gamma_multiply(0.35));
+            } else if r % 2 == 1 {
+                painter.rect_filled(rect, 0.0, visuals.faint_bg_color.gamma_multiply(0.5));
             }
-            if body.drag_stopped() {
-                app.doc.close_group();
-                app.view.timeline.gesture = None;
-            }
-        }
-        Some(Gesture::Box { start }) => {
-            if let Some(now) = ui.input(|i| i.pointer.interact_pos()) {
-                let rect = Rect::from_two_pos(start, now);
-                painter.rect_stroke(
-                    rect,
-                    0.0,
-                    Stroke::new(1.0, visuals.selection.stroke.color),
-                    egui::StrokeKind::Inside,
+            // Name, with the expander of a group.
+            let indent = geo.names.0 + 4.0 + INDENT * row.depth as f32;
+            if let RowKind::Group { collapsed } = row.kind {
+                let text = if collapsed { "▶" } else { "▼" };
+                names_painter.text(
+                    Pos2::new(indent, rect.center().y),
+                    Align2::LEFT_CENTER,
+                    text,
+                    FontId::proportional(9.0),
+                    visuals.weak_text_color(),
                 );
-                if body.drag_stopped() {
-                    if !additive {
-                        app.session.selection.keys.clear();
-                    }
-                    let top =
-                        (((rect.top() - origin.y) / ROW_HEIGHT).floor().max(0.0) as usize).min(rows.len());
-                    let bottom = (((rect.bottom() - origin.y) / ROW_HEIGHT).floor().max(0.0) as usize + 1)
-                        .min(rows.len());
-                    for (r, row) in rows.iter().enumerate().take(bottom).skip(top) {
-                        let y = row_rect(r).center().y;
-                        if y < rect.top() || y > rect.bottom() {
-                            continue;
+            }
+            let colour = if row.group() { visuals.strong_text_color() } else { visuals.text_color() };
+            let galley = names_painter.layout_no_wrap(row.label.clone(), FontId::proportional(12.0), colour);
+            let text_left = indent + 12.0;
+            if text_left + galley.size().x > geo.names.1
+                && hover.is_some_and(|p| rect.contains(p) && p.x < geo.names.1)
+            {
+                truncated = Some(r);
+            }
+            names_painter.galley(
+                Pos2::new(text_left, rect.center().y - galley.size().y / 2.0),
+                galley,
+                colour,
+            );
+            publish_row(ui, row, Rect::from_min_max(rect.min, Pos2::new(geo.names.1, rect.bottom())), indent);
+
+            // Keys.
+            let y = rect.center().y;
+            let (buckets, before, after) = buckets(ctx, row, geo);
+            let summary = row.group();
+            let mut band: Option<(f32, f32)> = None;
+            for (i, b) in buckets.iter().enumerate() {
+                let x = b.px as f32;
+                let dense = [i.checked_sub(1), Some(i + 1)]
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|j| buckets.get(j))
+                    .any(|n| (n.px - b.px).abs() as f32 <= DENSE_SPACING);
+                let selected = b.selected > 0;
+                let frame = b.frame;
+                let outside = frame < f64::from(scene.frame_range.start) - 1e-6
+                    || frame > f64::from(scene.frame_range.end) + 1e-6;
+                if dense {
+                    // A band: one rectangle per run of neighbouring unselected marks (a run of a
+                    // motion-capture track is one shape), selected marks as their own ticks.
+                    if selected || outside {
+                        let colour = key_colour(selected, summary, outside);
+                        keys_painter.rect_filled(
+                            Rect::from_min_max(Pos2::new(x - 0.5, y - 4.5), Pos2::new(x + 0.5, y + 4.5)),
+                            0.0,
+                            colour,
+                        );
+                    } else {
+                        match &mut band {
+                            Some((_, end)) if (x - *end) <= DENSE_SPACING => *end = x,
+                            _ => {
+                                paint_band(&keys_painter, band.take(), y, key_colour(false, summary, false));
+                                band = Some((x, x));
+                            }
                         }
-                        let keys = keys_in(app, row, geo, rect.left(), rect.right());
-                        app.session.selection.keys.extend(keys);
                     }
-                    app.view.timeline.gesture = None;
+                } else {
+                    let radius = if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS };
+                    let hovered =
+                        hover.is_some_and(|p| (p.x - x).abs() <= DIAMOND_RADIUS && rect.contains(p));
+                    paint_diamond(
+                        &keys_painter,
+                        Pos2::new(x, y),
+                        radius + if hovered { 1.0 } else { 0.0 },
+                        key_colour(selected, summary, outside),
+                        selected,
+                    );
+                }
+                publish_key(ui, scene, row, b, Pos2::new(x, y));
+            }
+            paint_band(&keys_painter, band, y, key_colour(false, summary, false));
+            for (marker, left) in [(before, true), (after, false)] {
+                if marker.count > 0 {
+                    let text =
+                        if left { format!("◀{}", marker.count) } else { format!("{}▶", marker.count) };
+                    let (pos, align) = if left {
+                        (Pos2::new(geo.keys.0 - PAD + 1.0, y), Align2::LEFT_CENTER)
+                    } else {
+                        (Pos2::new(geo.keys.1 + PAD - 1.0, y), Align2::RIGHT_CENTER)
+                    };
+                    let drawn = painter.text(
+                        pos,
+                        align,
+                        &text,
+                        FontId::proportional(10.0),
+                        Color32::from_rgb(255, 170, 60),
+                    );
+                    publish_marker(ui, row, marker, left, drawn);
                 }
             }
         }
-        Some(Gesture::Pan { from }) => {
-            if let Some(delta) = body.total_drag_delta() {
-                let shift = -f64::from(delta.x) * (from.end - from.start)
-                    / f64::from((geo.keys.1 - geo.keys.0).max(1.0));
-                app.view.timeline.view = Some(TimeView { start: from.start + shift, end: from.end + shift });
-            }
-            if body.drag_stopped() {
-                app.view.timeline.gesture = None;
+        current_frame_line(&painter, ctx, geo, visible);
+
+        // Pointer.
+        let additive = ui.input(|i| i.modifiers.shift || i.modifiers.command);
+        let hit_at = |pos: Pos2| -> Hit { hit(ctx, rows, geo, origin, pos) };
+        let selection = &ctx.session.selection;
+        if let Some(r) = truncated {
+            body.clone().on_hover_text_at_pointer(row_path(scene, &rows[r]));
+        } else if let Some(p) = hover {
+            if let Hit::Marker(frame) = hit_at(p) {
+                body.clone().on_hover_text_at_pointer(format!(
+                    "Keys out of view, the nearest at frame {frame:.0}: click to show them"
+                ));
             }
         }
-        None => {}
-    }
-    if !ui.input(|i| i.pointer.any_down()) && !body.drag_stopped() {
-        app.view.timeline.gesture = None;
+        if let Some(pos) = body.interact_pointer_pos().filter(|_| body.clicked()) {
+            match hit_at(pos) {
+                Hit::Expander(r) => {
+                    let item = rows[r].item;
+                    if !self.collapsed.remove(&item) {
+                        self.collapsed.insert(item);
+                    }
+                }
+                Hit::Name(r) => {
+                    if additive {
+                        actions.session(SessionChange::Toggle(rows[r].item));
+                    } else {
+                        actions.session(SessionChange::SelectOnly(Some(rows[r].item)));
+                    }
+                }
+                Hit::Keys(r, keys) => select_keys(selection, actions, &rows[r], keys, additive),
+                Hit::Marker(frame) => self.view = Some(show_frame(geo, frame)),
+                Hit::Empty => actions.session(SessionChange::SetKeys(BTreeSet::new())),
+            }
+        }
+        let press = ui.input(|i| i.pointer.press_origin());
+        if let Some(origin_pos) = press.filter(|_| body.drag_started_by(PointerButton::Primary)) {
+            self.gesture = match hit_at(origin_pos) {
+                Hit::Keys(r, keys) => {
+                    if !keys.iter().all(|k| selection.keys.contains(k)) {
+                        select_keys(selection, actions, &rows[r], keys, additive);
+                    }
+                    Some(Gesture::MoveKeys { applied: 0 })
+                }
+                Hit::Empty | Hit::Name(_) | Hit::Expander(_) => Some(Gesture::Box { start: origin_pos }),
+                Hit::Marker(_) => None,
+            };
+        }
+        if body.drag_started_by(PointerButton::Middle) {
+            self.gesture = Some(Gesture::Pan { from: geo.view });
+        }
+        match self.gesture {
+            Some(Gesture::MoveKeys { applied }) => {
+                if let Some(delta) = body.total_drag_delta() {
+                    let wanted = (f64::from(delta.x) * geo.frames_per_point()).round() as i32;
+                    let step = wanted - applied;
+                    if step != 0 && self.pending_move.is_none() {
+                        let ticket = actions.ticket();
+                        actions.edit(Edit::MoveSelectedKeys { seconds: f64::from(step) / geo.fps, ticket });
+                        self.pending_move = Some((ticket, wanted));
+                    }
+                }
+                if body.drag_stopped() {
+                    actions.push(Action::CloseGroup);
+                    self.gesture = None;
+                }
+            }
+            Some(Gesture::Box { start }) => {
+                if let Some(now) = ui.input(|i| i.pointer.interact_pos()) {
+                    let rect = Rect::from_two_pos(start, now);
+                    painter.rect_stroke(
+                        rect,
+                        0.0,
+                        Stroke::new(1.0, visuals.selection.stroke.color),
+                        egui::StrokeKind::Inside,
+                    );
+                    if body.drag_stopped() {
+                        if !additive {
+                            actions.session(SessionChange::SetKeys(BTreeSet::new()));
+                        }
+                        let top = (((rect.top() - origin.y) / ROW_HEIGHT).floor().max(0.0) as usize)
+                            .min(rows.len());
+                        let bottom = (((rect.bottom() - origin.y) / ROW_HEIGHT).floor().max(0.0) as usize
+                            + 1)
+                        .min(rows.len());
+                        for (r, row) in rows.iter().enumerate().take(bottom).skip(top) {
+                            let y = row_rect(r).center().y;
+                            if y < rect.top() || y > rect.bottom() {
+                                continue;
+                            }
+                            let keys = keys_in(scene, row, geo, rect.left(), rect.right());
+                            if !keys.is_empty() {
+                                actions.session(SessionChange::AddKeys(keys));
+                            }
+                        }
+                        self.gesture = None;
+                    }
+                }
+            }
+            Some(Gesture::Pan { from }) => {
+                if let Some(delta) = body.total_drag_delta() {
+                    let axis = TimeAxis { start: from.start, end: from.end, ..geo.axis() };
+                    let (start, end) = axis.panned(delta.x);
+                    self.view = Some(TimeView { start, end });
+                }
+                if body.drag_stopped() {
+                    self.gesture = None;
+                }
+            }
+            None => {}
+        }
+        if !ui.input(|i| i.pointer.any_down()) && !body.drag_stopped() {
+            self.gesture = None;
+        }
     }
 }
 
@@ -719,16 +790,16 @@ fn key_colour(selected: bool, summary: bool, outside: bool) -> Color32 {
 }
 
 /// "CesiumMan ▸ Skeleton_arm_joint_L ▸ rotation": where a row sits, for its tooltip.
-fn row_path(app: &EditorApp, row: &Row) -> String {
+fn row_path(scene: &Scene, row: &Row) -> String {
     match row.kind {
-        RowKind::Channel(id) => id.label(app.doc.scene()),
+        RowKind::Channel(id) => id.label(scene),
         RowKind::Group { .. } => row.label.clone(),
     }
 }
 
 /// Tells accessibility tools (and UI tests) about a drawn key: "key elbow rotation frame 15",
 /// or for several keys on one pixel or a summary "keys Arm frame 15 (4)".
-fn publish_key(ui: &Ui, app: &EditorApp, row: &Row, bucket: &Bucket, centre: Pos2) {
+fn publish_key(ui: &Ui, scene: &Scene, row: &Row, bucket: &Bucket, centre: Pos2) {
     let id = match (bucket.single, &row.kind) {
         (Some(key), RowKind::Channel(_)) => ui.id().with(("key", key.channel, key.index)),
         _ => ui.id().with(("keys", row.item, row.shows.first().copied(), bucket.px)),
@@ -738,9 +809,9 @@ fn publish_key(ui: &Ui, app: &EditorApp, row: &Row, bucket: &Bucket, centre: Pos
         let frame = bucket.frame.round() as i64;
         match (bucket.single, &row.kind) {
             (Some(key), RowKind::Channel(_)) => {
-                format!("key {} frame {frame}", key.channel.label(app.doc.scene()))
+                format!("key {} frame {frame}", key.channel.label(scene))
             }
-            _ => format!("keys {} frame {frame} ({})", row_path(app, row), bucket.count),
+            _ => format!("keys {} frame {frame} ({})", row_path(scene, row), bucket.count),
         }
     };
     publish_painted(ui.ctx(), id, Role::Button, rect, label, Some(bucket.selected > 0));
@@ -773,7 +844,7 @@ fn publish_row(ui: &Ui, row: &Row, name: Rect, indent: f32) {
 }
 
 /// What is at `pos` (screen points) in the rows laid out from `origin`.
-fn hit(app: &EditorApp, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -> Hit {
+fn hit(ctx: &FrameCtx<'_>, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -> Hit {
     let r = ((pos.y - origin.y) / ROW_HEIGHT).floor();
     if r < 0.0 || r as usize >= rows.len() {
         return Hit::Empty;
@@ -787,14 +858,14 @@ fn hit(app: &EditorApp, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -
         }
         return Hit::Name(r);
     }
-    let (buckets, before, after) = buckets(app, row, geo);
+    let (buckets, before, after) = buckets(ctx, row, geo);
     let nearest = buckets
         .iter()
         .map(|b| (b, (b.px as f32 - pos.x).abs()))
         .filter(|(_, d)| *d <= DIAMOND_RADIUS + 1.0)
         .min_by(|a, b| a.1.total_cmp(&b.1));
     if let Some((b, _)) = nearest {
-        return Hit::Keys(r, keys_at(app, row, geo, b.px));
+        return Hit::Keys(r, keys_at(ctx.scene(), row, geo, b.px));
     }
     let beyond_diamonds = DIAMOND_RADIUS + 1.5;
     if before.count > 0 && pos.x < geo.keys.0 - beyond_diamonds {
@@ -808,15 +879,12 @@ fn hit(app: &EditorApp, rows: &[Row], geo: &Geometry, origin: Pos2, pos: Pos2) -
 
 /// A click on keys: selects them (Shift/Ctrl adds them, or removes them when all were
 /// selected) and, on a plain click, the item they belong to.
-fn select_keys(app: &mut EditorApp, row: &Row, keys: Vec<KeyRef>, additive: bool) {
-    let selection = &mut app.session.selection;
+fn select_keys(selection: &Selection, actions: &mut Actions, row: &Row, keys: Vec<KeyRef>, additive: bool) {
     if additive {
         if keys.iter().all(|k| selection.keys.contains(k)) {
-            for k in &keys {
-                selection.keys.remove(k);
-            }
+            actions.session(SessionChange::RemoveKeys(keys));
         } else {
-            selection.keys.extend(keys);
+            actions.session(SessionChange::AddKeys(keys));
         }
         return;
     }
@@ -824,86 +892,67 @@ fn select_keys(app: &mut EditorApp, row: &Row, keys: Vec<KeyRef>, additive: bool
         (RowKind::Channel(_), Some(k)) => crate::session::owner_of(k.channel),
         _ => row.item,
     };
-    selection.keys = keys.into_iter().collect::<BTreeSet<_>>();
-    selection.select_only(Some(owner));
+    actions.session(SessionChange::SetKeys(keys.into_iter().collect::<BTreeSet<_>>()));
+    actions.session(SessionChange::SelectOnly(Some(owner)));
 }
 
-/// Pans (and if needed widens) the view so that `frame` shows.
-fn show_frame(app: &mut EditorApp, geo: &Geometry, frame: f64) {
+/// The view panned (and if needed widened) so that `frame` shows.
+fn show_frame(geo: &Geometry, frame: f64) -> TimeView {
     let view = geo.view;
     let span = view.end - view.start;
     let margin = span * 0.05;
-    let shown = if frame < view.start {
+    if frame < view.start {
         TimeView { start: frame - margin, end: frame - margin + span }
     } else {
         TimeView { start: frame + margin - span, end: frame + margin }
-    };
-    app.view.timeline.view = Some(shown);
+    }
 }
 
-/// Dragging the border between names and keys resizes the name column.
-fn resize_names_ui(ui: &mut Ui, app: &mut EditorApp, sheet: Rect, geo: &Geometry) {
-    let handle = Rect::from_min_max(
-        Pos2::new(geo.names.1 - 2.0, sheet.top()),
-        Pos2::new(geo.names.1 + 4.0, sheet.bottom()),
-    );
-    let response = ui.interact(handle, ui.id().with("resize_names"), Sense::drag());
-    let response = response.on_hover_cursor(CursorIcon::ResizeHorizontal);
-    if response.dragged() {
-        let width = geo.names.1 - geo.names.0 + response.drag_delta().x;
-        app.view.timeline.name_width = Some(width.max(MIN_NAME_WIDTH));
-    }
-    if response.hovered() || response.dragged() {
-        ui.painter().line_segment(
-            [Pos2::new(geo.names.1, sheet.top()), Pos2::new(geo.names.1, sheet.bottom())],
-            Stroke::new(2.0, ui.visuals().selection.stroke.color),
+impl DopeSheet {
+    /// Dragging the border between names and keys resizes the name column.
+    fn resize_names_ui(&mut self, ui: &mut Ui, sheet: Rect, geo: &Geometry) {
+        let handle = Rect::from_min_max(
+            Pos2::new(geo.names.1 - 2.0, sheet.top()),
+            Pos2::new(geo.names.1 + 4.0, sheet.bottom()),
         );
-    }
-}
-
-/// Ctrl+wheel zooms the time axis about the pointer; Shift+wheel or a horizontal wheel pans.
-fn navigate(ui: &mut Ui, app: &mut EditorApp, sheet: Rect, geo: &Geometry) {
-    let Some(pointer) = ui.input(|i| i.pointer.hover_pos()).filter(|p| sheet.contains(*p)) else { return };
-    if pointer.x < geo.keys.0 - PAD {
-        return;
-    }
-    let (zoom, scroll_x) = ui.input(|i| (i.zoom_delta(), i.smooth_scroll_delta.x));
-    let mut view = geo.view;
-    if (zoom - 1.0).abs() > 1e-4 {
-        let anchor = geo.frame(pointer.x);
-        let span = ((view.end - view.start) / f64::from(zoom)).max(MIN_SPAN);
-        let t = (anchor - view.start) / (view.end - view.start).max(1e-9);
-        view = TimeView { start: anchor - t * span, end: anchor - t * span + span };
-    }
-    if scroll_x.abs() > 0.0 {
-        let shift = -f64::from(scroll_x) * geo.frames_per_point();
-        view = TimeView { start: view.start + shift, end: view.end + shift };
-    }
-    if view != geo.view {
-        app.view.timeline.view = Some(view);
-    }
-}
-
-/// Moves every selected key by `delta` seconds as one continuous edit. Refused (returns false)
-/// when a key would land on another key.
-pub fn move_selected_keys(app: &mut EditorApp, delta: f64) -> bool {
-    let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
-    for k in &app.session.selection.keys {
-        by_channel.entry(k.channel).or_default().push(k.index);
-    }
-    let mut trial = app.doc.scene().clone();
-    let mut new_keys = BTreeSet::new();
-    for (id, indices) in &by_channel {
-        match channels::move_keys(&mut trial, *id, indices, delta) {
-            Some(new_indices) => {
-                new_keys.extend(new_indices.into_iter().map(|index| KeyRef { channel: *id, index }))
-            }
-            None => return false,
+        let response = ui.interact(handle, ui.id().with("resize_names"), Sense::drag());
+        let response = response.on_hover_cursor(CursorIcon::ResizeHorizontal);
+        if response.dragged() {
+            let width = geo.names.1 - geo.names.0 + response.drag_delta().x;
+            self.name_width = Some(width.max(MIN_NAME_WIDTH));
+        }
+        if response.hovered() || response.dragged() {
+            ui.painter().line_segment(
+                [Pos2::new(geo.names.1, sheet.top()), Pos2::new(geo.names.1, sheet.bottom())],
+                Stroke::new(2.0, ui.visuals().selection.stroke.color),
+            );
         }
     }
-    app.doc.edit_continuous("move keys", "move keys", |scene| *scene = trial);
-    app.session.selection.keys = new_keys;
-    true
+
+    /// Ctrl+wheel zooms the time axis about the pointer; Shift+wheel or a horizontal wheel pans.
+    fn navigate(&mut self, ui: &mut Ui, sheet: Rect, geo: &Geometry) {
+        let Some(pointer) = ui.input(|i| i.pointer.hover_pos()).filter(|p| sheet.contains(*p)) else {
+            return;
+        };
+        if pointer.x < geo.keys.0 - PAD {
+            return;
+        }
+        let (zoom, scroll_x) = ui.input(|i| (i.zoom_delta(), i.smooth_scroll_delta.x));
+        let mut axis = geo.axis();
+        if (zoom - 1.0).abs() > 1e-4 {
+            (axis.start, axis.end) = axis.zoomed(geo.frame(pointer.x), f64::from(zoom), MIN_SPAN);
+        }
+        if scroll_x.abs() > 0.0 {
+            // By the frames per point the sheet was drawn with (before a zoom of this frame).
+            let (start, _) = geo.axis().panned(scroll_x);
+            let shift = start - geo.view.start;
+            (axis.start, axis.end) = (axis.start + shift, axis.end + shift);
+        }
+        let view = TimeView { start: axis.start, end: axis.end };
+        if view != geo.view {
+            self.view = Some(view);
+        }
+    }
 }
 
 /// Frames between labelled ticks so that labels are at least ~40 points apart.

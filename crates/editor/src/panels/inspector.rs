@@ -7,32 +7,41 @@ use egui::Ui;
 use glam::Vec3;
 use keyrig_core::{Cycle, DeformerKind, Interpolation, Tcb};
 
-use crate::app::EditorApp;
+use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::channels::{self, ChannelId, ChannelValue};
-use crate::eval::{euler_degrees, quat_from_euler_degrees};
+use crate::context::FrameCtx;
+use crate::eval::{euler_degrees, quat_from_euler_degrees, EULER_ORDER, EULER_ORDER_HELP};
 use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
+use crate::widgets::measure::measure_ui;
 use crate::widgets::tcb_slider::tcb_slider_ui;
 
 /// Starts applying a field's change: a committed (typed) value is its own undo step, so any
 /// open continuous group is closed first; a drag continues its group until release.
-fn begin(app: &mut EditorApp, change: FieldChange) {
+fn begin(actions: &mut Actions, change: FieldChange) {
     if change == FieldChange::Committed {
-        app.doc.close_group();
+        actions.push(Action::CloseGroup);
     }
 }
 
-pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
-    egui::Panel::right("inspector").resizable(true).default_size(270.0).show_inside(ui, |ui| {
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            ui.heading("Inspector");
-            selection_ui(ui, app);
-            ui.separator();
-            key_inspector_ui(ui, app);
-            ui.separator();
-            deformer_ui(ui, app);
+/// The inspector. Its fields show the frame's values and push their changes; it keeps no
+/// state of its own beyond what egui keeps for its widgets.
+#[derive(Debug, Default)]
+pub struct Inspector;
+
+impl Inspector {
+    pub fn ui(&mut self, ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+        egui::Panel::right("inspector").resizable(true).default_size(270.0).show_inside(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                ui.heading("Inspector");
+                selection_ui(ui, ctx, actions);
+                ui.separator();
+                key_inspector_ui(ui, ctx, actions);
+                ui.separator();
+                deformer_ui(ui, ctx, actions);
+            });
         });
-    });
+    }
 }
 
 /// A row of three drag values. Each carries the accessible label "<label> X" (Y, Z), which is
@@ -82,15 +91,10 @@ fn colour_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3) -> bool {
     .inner
 }
 
-fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) {
-    let Some(value) = app.value_now(id) else { return };
-    let keyed_here = channels::key_at(
-        app.doc.scene(),
-        id,
-        f64::from(app.session.playback.whole_frame()) / app.doc.scene().fps.max(1e-9),
-    )
-    .is_some();
-    let marker = if app.session.overrides.contains_key(&id) {
+fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: ChannelId, label: &str) {
+    let Some(value) = ctx.value_now(id) else { return };
+    let keyed_here = ctx.keyed_here(id);
+    let marker = if ctx.session.overrides.contains_key(&id) {
         "posed, press I to key"
     } else if keyed_here {
         "(keyed)"
@@ -101,26 +105,27 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
     match value {
         ChannelValue::Vec3(mut v) if matches!(id, ChannelId::LightColour(_)) => {
             if colour_editor(ui, label, marker, &mut v) && v.is_finite() {
-                app.apply_pose(id, ChannelValue::Vec3(v), &group);
+                actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(v), group });
             }
         }
         ChannelValue::Vec3(mut v) => {
             let change = vec3_editor(ui, label, marker, &mut v, 0.01);
             if change.any() && v.is_finite() {
-                begin(app, change);
-                app.apply_pose(id, ChannelValue::Vec3(v), &group);
+                begin(actions, change);
+                actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(v), group });
             }
         }
         ChannelValue::Rotation(q) => {
             let mut e = euler_degrees(q);
             let change = vec3_editor(ui, label, marker, &mut e, 0.5);
             if change.any() && e.is_finite() {
-                begin(app, change);
-                app.apply_pose(id, ChannelValue::Rotation(quat_from_euler_degrees(e)), &group);
+                begin(actions, change);
+                let value = ChannelValue::Rotation(quat_from_euler_degrees(e));
+                actions.edit(Edit::Pose { id, value, group: group.clone() });
             }
             ui.weak(format!("Euler {EULER_ORDER}")).on_hover_text(EULER_ORDER_HELP);
             if matches!(id, ChannelId::JointRotation { .. }) {
-                twist_ui(ui, app, id, q, &group);
+                twist_ui(ui, ctx, actions, id, q, &group);
             }
         }
         ChannelValue::Scalar(mut s) => {
@@ -133,27 +138,25 @@ fn channel_editor(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, label: &str) 
                 })
                 .inner;
             if changed.any() && s.is_finite() {
-                begin(app, changed);
-                app.apply_pose(id, ChannelValue::Scalar(s), &group);
+                begin(actions, changed);
+                actions.edit(Edit::Pose { id, value: ChannelValue::Scalar(s), group });
             }
         }
     }
 }
 
-/// The rotation order of the inspector's and curve view's Euler angles.
-pub const EULER_ORDER: &str = "XYZ";
-
-/// What [`EULER_ORDER`] means.
-const EULER_ORDER_HELP: &str =
-    "Euler angles in the order XYZ, intrinsic: R = Rx·Ry·Rz (turn about X, then about \
-     the turned Y, then about the turned Z; glam's EulerRot::XYZ). Blender calls the same \
-     rotation order ZYX, Maya zyx.";
-
 /// The joint's twist about its bone axis (local +X) in degrees, unwrapped through spin keys
 /// (it reads 720 after two turns). Typing a value turns the joint about the bone by the
 /// difference; in record mode the key gets the spin that makes its segment turn that far.
-fn twist_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, q: glam::Quat, group: &str) {
-    let Some(twist) = app.twist_now(id) else { return };
+fn twist_ui(
+    ui: &mut Ui,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    id: ChannelId,
+    q: glam::Quat,
+    group: &str,
+) {
+    let Some(twist) = ctx.twist_now(id) else { return };
     let mut value = twist;
     let (response, change) = ui
         .horizontal(|ui| {
@@ -173,25 +176,26 @@ fn twist_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId, q: glam::Quat, grou
     );
     let delta = value - twist;
     if change.any() && delta.is_finite() && delta != 0.0 {
-        begin(app, change);
+        begin(actions, change);
         let axis = q * crate::twist::BONE_AXIS;
-        app.apply_turn(id, crate::channels::Turn { from: q, axis, degrees: delta }, group);
+        let turn = crate::channels::Turn { from: q, axis, degrees: delta };
+        actions.edit(Edit::Turn { id, turn, group: group.to_owned() });
     }
 }
 
-fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
-    let scene = app.doc.scene();
-    match app.session.selection.item {
+fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+    let scene = ctx.scene();
+    match ctx.session.selection.item {
         None => {
             ui.label("Nothing selected. Click an object, joint or light in the outliner or the viewport.");
         }
         Some(Selected::Object(o)) => {
             let name = scene.objects.get(o).map(|x| x.name.clone()).unwrap_or_default();
             ui.strong(format!("Object: {name}"));
-            channel_editor(ui, app, ChannelId::ObjectTranslation(o), "Translation");
-            channel_editor(ui, app, ChannelId::ObjectRotation(o), "Rotation (°)");
-            channel_editor(ui, app, ChannelId::ObjectScale(o), "Scale");
-            md2_ui(ui, app, o);
+            channel_editor(ui, ctx, actions, ChannelId::ObjectTranslation(o), "Translation");
+            channel_editor(ui, ctx, actions, ChannelId::ObjectRotation(o), "Rotation (°)");
+            channel_editor(ui, ctx, actions, ChannelId::ObjectScale(o), "Scale");
+            md2_ui(ui, ctx, actions, o);
         }
         Some(Selected::Joint { object, joint }) => {
             let name = scene
@@ -214,15 +218,21 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
                     )
                 });
             if moves {
-                channel_editor(ui, app, ChannelId::JointTranslation { object, joint }, "Translation");
+                channel_editor(
+                    ui,
+                    ctx,
+                    actions,
+                    ChannelId::JointTranslation { object, joint },
+                    "Translation",
+                );
             }
-            channel_editor(ui, app, ChannelId::JointRotation { object, joint }, "Rotation (°)");
+            channel_editor(ui, ctx, actions, ChannelId::JointRotation { object, joint }, "Rotation (°)");
             if scales {
-                channel_editor(ui, app, ChannelId::JointScale { object, joint }, "Scale");
+                channel_editor(ui, ctx, actions, ChannelId::JointScale { object, joint }, "Scale");
             }
-            ik_constraints_ui(ui, app, object, joint);
-            if app.session.ik.enabled {
-                ik_chain_ui(ui, app, object, joint);
+            ik_constraints_ui(ui, ctx, actions, object, joint);
+            if ctx.session.ik.enabled {
+                ik_chain_ui(ui, ctx, actions, object, joint);
             }
         }
         Some(Selected::Light(l)) => {
@@ -231,7 +241,7 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
             for (id, label) in
                 ChannelId::of_light(l).into_iter().zip(["Position", "Direction", "Colour", "Intensity"])
             {
-                channel_editor(ui, app, id, label);
+                channel_editor(ui, ctx, actions, id, label);
             }
         }
     }
@@ -239,10 +249,9 @@ fn selection_ui(ui: &mut Ui, app: &mut EditorApp) {
 
 /// The IK constraints that end at the selected joint: name and chain, their target and blend
 /// (keyable like any channel) and "Bake IK to keys".
-fn ik_constraints_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
-    for c in app.ik_constraints_ending_at(object, joint) {
-        let Some(constraint) = app
-            .doc
+fn ik_constraints_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, object: usize, joint: usize) {
+    for c in crate::ik_constraints::ending_at(ctx.scene(), object, joint) {
+        let Some(constraint) = ctx
             .scene()
             .objects
             .get(object)
@@ -259,8 +268,8 @@ fn ik_constraints_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usi
             constraint.bones,
             if constraint.bones == 2 { "two-bone solver" } else { "FABRIK" }
         ));
-        channel_editor(ui, app, ChannelId::IkTarget { object, constraint: c }, "Target");
-        channel_editor(ui, app, ChannelId::IkBlend { object, constraint: c }, "IK/FK blend");
+        channel_editor(ui, ctx, actions, ChannelId::IkTarget { object, constraint: c }, "Target");
+        channel_editor(ui, ctx, actions, ChannelId::IkBlend { object, constraint: c }, "IK/FK blend");
         if ui
             .button("Bake IK to keys")
             .on_hover_text(
@@ -269,7 +278,7 @@ fn ik_constraints_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usi
             )
             .clicked()
         {
-            app.bake_ik_constraint(object, c);
+            actions.push(Action::BakeIk { object, constraint: c });
         }
     }
 }
@@ -277,10 +286,10 @@ fn ik_constraints_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usi
 /// IK posing's chain for the selected joint: its length in bones ("IK chain (bones)", from two
 /// up to the skeleton's root), the joints it runs through and its solver, or why the joint
 /// cannot be posed with IK.
-fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
+fn ik_chain_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, object: usize, joint: usize) {
     ui.separator();
     ui.strong("IK posing");
-    let scene = app.doc.scene();
+    let scene = ctx.scene();
     let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else { return };
     // Joints above this one (parents come before their children in a valid skeleton).
     let mut above = 0;
@@ -289,7 +298,7 @@ fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
         above += 1;
         j = p;
     }
-    let asked = app.session.ik.chain_bones(object, joint);
+    let asked = ctx.session.ik.chain_bones(object, joint);
     if above >= 2 {
         let mut bones = asked.clamp(2, above);
         let change = ui
@@ -305,13 +314,20 @@ fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
             })
             .inner;
         if change.any() && bones != asked {
-            app.session.ik.set_chain_bones(object, joint, bones);
-            if let Ok(chain) = app.ik_chain(object, joint) {
-                app.info(format!("IK chain: {} ({})", chain.describe(), chain.solver_label()));
+            actions.session(SessionChange::ChainBones { object, joint, bones });
+            let chain = ctx
+                .pose(object)
+                .map(|pose| crate::ik_posing::PosedChain::new(scene, pose, object, joint, bones));
+            if let Some(Ok(chain)) = chain {
+                actions.push(Action::Info(format!(
+                    "IK chain: {} ({})",
+                    chain.describe(),
+                    chain.solver_label()
+                )));
             }
         }
     }
-    match app.ik_chain(object, joint) {
+    match ctx.ik_chain(object, joint) {
         Ok(chain) => {
             ui.label(format!("{} · {}", chain.describe(), chain.solver_label()));
             ui.weak(
@@ -326,7 +342,7 @@ fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
                 )
                 .clicked()
             {
-                app.keep_ik_constraint(object, joint);
+                actions.push(Action::KeepIk { object, joint });
             }
         }
         Err(e) => {
@@ -337,15 +353,15 @@ fn ik_chain_ui(ui: &mut Ui, app: &mut EditorApp, object: usize, joint: usize) {
 
 /// The clip and playback rate of a vertex-animated (MD2) object, edited through the document
 /// (one undo step per clip choice, one per fps drag).
-fn md2_ui(ui: &mut Ui, app: &mut EditorApp, o: usize) {
+fn md2_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
     let Some(keyrig_core::MeshSource::File { path, mesh, clip, fps }) =
-        app.doc.scene().objects.get(o).and_then(|x| x.mesh.clone())
+        ctx.scene().objects.get(o).and_then(|x| x.mesh.clone())
     else {
         return;
     };
-    let base_dir = app.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
-    let clips: Vec<(String, usize)> = match app.meshes.get(base_dir.as_deref(), &path, mesh) {
-        Ok(crate::files::FileMesh::Morph(m)) => {
+    // The frame's preparation loaded every model file the scene names.
+    let clips: Vec<(String, usize)> = match ctx.meshes.peek(ctx.base_dir(), &path, mesh) {
+        Some(crate::files::FileMesh::Morph(m)) => {
             m.clips().iter().map(|c| (c.name.clone(), c.frames.len())).collect()
         }
         _ => return,
@@ -379,33 +395,33 @@ fn md2_ui(ui: &mut Ui, app: &mut EditorApp, o: usize) {
         Some(name) => clips.iter().find(|(c, _)| c == name).map_or(0, |(_, n)| *n),
     };
     let seconds = frames as f64 / fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
-    let timeline_frames = seconds * app.doc.scene().fps;
+    let timeline_frames = seconds * ctx.scene().fps;
     ui.weak(format!("One loop: {frames} model frames, {seconds:.2} s, {timeline_frames:.0} timeline frames"));
-    let name = app.doc.scene().objects[o].name.clone();
+    let name = ctx.scene().objects[o].name.clone();
     if chosen != clip {
         let label = format!("{name} clip {}", chosen.as_deref().unwrap_or("all frames"));
-        app.doc.edit(&label, |scene| {
+        actions.edit(Edit::scene(label, move |scene| {
             if let Some(keyrig_core::MeshSource::File { clip, .. }) =
                 scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())
             {
                 *clip = chosen;
             }
-        });
+        }));
     }
     if rate_change == FieldChange::Dragged {
         rate = rate.clamp(0.1, 1000.0);
     }
     if rate_change.any() && !(rate.is_finite() && (0.1..=1000.0).contains(&rate)) {
-        app.error(format!("Model fps must be between 0.1 and 1000 (typed {rate})"));
+        actions.push(Action::Error(format!("Model fps must be between 0.1 and 1000 (typed {rate})")));
     } else if rate_change.any() && Some(rate) != fps {
-        begin(app, rate_change);
-        app.doc.edit_continuous("md2 fps", &format!("{name} model fps"), |scene| {
+        begin(actions, rate_change);
+        actions.edit(Edit::continuous("md2 fps", format!("{name} model fps"), move |scene| {
             if let Some(keyrig_core::MeshSource::File { fps, .. }) =
                 scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())
             {
                 *fps = Some(rate);
             }
-        });
+        }));
     }
 }
 
@@ -419,19 +435,18 @@ fn mode_label(mode: Interpolation) -> &'static str {
     }
 }
 
-fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
+fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     ui.strong("Key");
-    let keys: Vec<_> = app.session.selection.keys.iter().copied().collect();
+    let keys: Vec<_> = ctx.session.selection.keys.iter().copied().collect();
     let Some(first) = keys.first().copied() else {
         ui.weak("No key selected. Click a diamond in the dope sheet.");
         return;
     };
-    let Some((time, mut mode, mut tcb)) = channels::key_params(app.doc.scene(), first.channel, first.index)
-    else {
+    let scene = ctx.scene();
+    let Some((time, mut mode, mut tcb)) = channels::key_params(scene, first.channel, first.index) else {
         return;
     };
-    let fps = app.doc.scene().fps.max(1e-9);
-    let scene = app.doc.scene();
+    let fps = scene.fps.max(1e-9);
     let params: Vec<(f64, Interpolation, Tcb)> =
         keys.iter().filter_map(|k| channels::key_params(scene, k.channel, k.index)).collect();
     let describe = |k: &crate::session::KeyRef, time: f64| {
@@ -507,7 +522,8 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
     });
     if (mode, tcb) != before {
         let label = if keys.len() == 1 { "edit key".to_owned() } else { format!("edit {} keys", keys.len()) };
-        app.doc.edit_continuous("key inspector", &label, |scene| {
+        let keys = keys.clone();
+        actions.edit(Edit::continuous("key inspector", label, move |scene| {
             for k in &keys {
                 let Some((_, old_mode, old_tcb)) = channels::key_params(scene, k.channel, k.index) else {
                     continue;
@@ -526,16 +542,16 @@ fn key_inspector_ui(ui: &mut Ui, app: &mut EditorApp) {
                 };
                 channels::set_key_params(scene, k.channel, k.index, m, t);
             }
-        });
+        }));
     }
-    cycles_ui(ui, app, first.channel);
+    cycles_ui(ui, ctx, actions, first.channel);
 }
 
 /// The channel's behaviour before its first key and after its last (cycles, docs/design.md §9): two
 /// combo boxes, "Before keys" and "After keys", each an undoable edit of the channel of the
 /// first selected key.
-fn cycles_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId) {
-    let scene = app.doc.scene();
+fn cycles_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: ChannelId) {
+    let scene = ctx.scene();
     let Some(old) = channels::cycles(scene, id) else { return };
     let keyed = channels::key_count(scene, id) >= 2;
     let name = id.label(scene);
@@ -563,9 +579,9 @@ fn cycles_ui(ui: &mut Ui, app: &mut EditorApp, id: ChannelId) {
         let (end, cycle) =
             if cycles.before != old.before { ("before", cycles.before) } else { ("after", cycles.after) };
         let label = format!("{name}: {} {end} keys", cycle.label());
-        app.doc.edit(&label, |scene| {
+        actions.edit(Edit::scene(label, move |scene| {
             channels::set_cycles(scene, id, cycles);
-        });
+        }));
     }
 }
 
@@ -579,15 +595,15 @@ fn cycle_hover(cycle: Cycle) -> &'static str {
     }
 }
 
-fn deformer_ui(ui: &mut Ui, app: &mut EditorApp) {
+fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     ui.strong("Deformer");
     let Some(o) =
-        app.selected_object().or_else(|| app.doc.scene().objects.iter().position(|x| x.skeleton.is_some()))
+        ctx.selected_object().or_else(|| ctx.scene().objects.iter().position(|x| x.skeleton.is_some()))
     else {
         ui.weak("No skinned object.");
         return;
     };
-    let Some(object) = app.doc.scene().objects.get(o) else { return };
+    let Some(object) = ctx.scene().objects.get(o) else { return };
     if object.skeleton.is_none() {
         ui.weak(format!("{} has no skeleton.", object.name));
         return;
@@ -605,13 +621,13 @@ fn deformer_ui(ui: &mut Ui, app: &mut EditorApp) {
         ui.add(egui::Slider::new(&mut settings.blend_child_fraction, 0.0..=1.0).text("Zone into child"))
             .on_hover_text("How far the blend zone reaches into the child bone (fraction of its length)");
     }
-    crate::panels::viewport::measure_ui(ui, app);
+    measure_ui(ui, ctx);
     if settings != object.deformer {
         let label = format!("deformer {}", settings.kind.label());
-        app.doc.edit_continuous("deformer settings", &label, |scene| {
+        actions.edit(Edit::continuous("deformer settings", label, move |scene| {
             if let Some(obj) = scene.objects.get_mut(o) {
                 obj.deformer = settings;
             }
-        });
+        }));
     }
 }

@@ -1,26 +1,34 @@
 //! The menu bar and the toolbar under it. Menu items come from [`Command`]: label, tooltip and
-//! shortcut text.
+//! shortcut text; choosing one queues it.
 
 use egui::{Button, Ui};
 use keyrig_core::DeformerKind;
 
-use crate::app::{EditorApp, PendingAction};
-use crate::commands::Command;
+use crate::actions::{Action, Actions, PendingAction, ViewChange};
+use crate::commands::{current_deformer, Command};
+use crate::context::FrameCtx;
 use crate::view::RenderStyle;
+use crate::widgets::command_button::tool_button;
 
-/// A menu entry for `command`; runs it when clicked.
-fn command_button(ui: &mut Ui, app: &mut EditorApp, command: Command, checked: Option<bool>) {
-    let ctx = ui.ctx().clone();
-    let shortcut = command.shortcuts().first().map(|s| ctx.format_shortcut(s)).unwrap_or_default();
+/// A menu entry for `command`; queues it when clicked.
+fn command_button(
+    ui: &mut Ui,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    command: Command,
+    checked: Option<bool>,
+) {
+    let egui_ctx = ui.ctx().clone();
+    let shortcut = command.shortcuts().first().map(|s| egui_ctx.format_shortcut(s)).unwrap_or_default();
     let enabled = match command {
-        Command::Undo => app.doc.undo_label().is_some(),
-        Command::Redo => app.doc.redo_label().is_some(),
+        Command::Undo => ctx.doc.undo_label().is_some(),
+        Command::Redo => ctx.doc.redo_label().is_some(),
         _ => true,
     };
     // Undo and Redo say which step they revert or repeat ("Undo move key").
     let label = match command {
-        Command::Undo => app.doc.undo_label().map(|step| format!("{} {step}", command.label())),
-        Command::Redo => app.doc.redo_label().map(|step| format!("{} {step}", command.label())),
+        Command::Undo => ctx.doc.undo_label().map(|step| format!("{} {step}", command.label())),
+        Command::Redo => ctx.doc.redo_label().map(|step| format!("{} {step}", command.label())),
         _ => None,
     }
     .unwrap_or_else(|| command.label().to_owned());
@@ -30,53 +38,44 @@ fn command_button(ui: &mut Ui, app: &mut EditorApp, command: Command, checked: O
     };
     let response = ui.add_enabled(enabled, button.shortcut_text(shortcut)).on_hover_text(command.tooltip());
     if response.clicked() {
-        app.run_command(&ctx, command);
+        actions.command(command);
         ui.close();
     }
 }
 
-/// A toolbar button for `command` showing `text` (selected when `on`).
-pub fn tool_button(ui: &mut Ui, app: &mut EditorApp, command: Command, text: &str, on: bool) {
-    let ctx = ui.ctx().clone();
-    let tip = format!("{} ({})", command.tooltip(), command.shortcut_text(&ctx));
-    if ui.selectable_label(on, text).on_hover_text(tip).clicked() {
-        app.run_command(&ctx, command);
-    }
-}
-
 /// Draws the menu bar and toolbar as a top panel.
-pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     egui::Panel::top("menu_bar").show_inside(ui, |ui| {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
                 for c in [Command::New, Command::Open] {
-                    command_button(ui, app, c, None);
+                    command_button(ui, ctx, actions, c, None);
                 }
                 ui.menu_button("Open recent", |ui| {
-                    if app.recent.paths.is_empty() {
+                    if ctx.recent.is_empty() {
                         ui.label("No recent files");
                     }
-                    for path in app.recent.paths.clone() {
+                    for path in ctx.recent {
                         if ui.button(path.display().to_string()).clicked() {
-                            app.request(PendingAction::Open(Some(path)));
+                            actions.push(Action::Request(PendingAction::Open(Some(path.clone()))));
                             ui.close();
                         }
                     }
                 });
                 ui.separator();
                 for c in [Command::Save, Command::SaveAs] {
-                    command_button(ui, app, c, None);
+                    command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
                 for c in [Command::Import, Command::ExportGltf] {
-                    command_button(ui, app, c, None);
+                    command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
-                command_button(ui, app, Command::Quit, None);
+                command_button(ui, ctx, actions, Command::Quit, None);
             });
             ui.menu_button("Edit", |ui| {
-                command_button(ui, app, Command::Undo, None);
-                command_button(ui, app, Command::Redo, None);
+                command_button(ui, ctx, actions, Command::Undo, None);
+                command_button(ui, ctx, actions, Command::Redo, None);
                 ui.separator();
                 for c in [
                     Command::InsertKey,
@@ -86,20 +85,25 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                     Command::DuplicateItem,
                     Command::RenameItem,
                 ] {
-                    command_button(ui, app, c, None);
+                    command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
-                let (record, ik) = (app.session.record, app.session.ik.enabled);
-                command_button(ui, app, Command::ToggleRecord, Some(record));
-                command_button(ui, app, Command::ToggleIk, Some(ik));
+                let (record, ik) = (ctx.session.record, ctx.session.ik.enabled);
+                command_button(ui, ctx, actions, Command::ToggleRecord, Some(record));
+                command_button(ui, ctx, actions, Command::ToggleIk, Some(ik));
             });
             ui.menu_button("View", |ui| {
-                let (grid, bones) = (app.view.grid, app.view.bones);
-                command_button(ui, app, Command::ToggleGrid, Some(grid));
-                command_button(ui, app, Command::ToggleBones, Some(bones));
-                let onion = app.view.onion.enabled;
-                command_button(ui, app, Command::ToggleOnionSkin, Some(onion));
-                ui.menu_button("Onion skin settings", |ui| onion_settings_ui(ui, &mut app.view.onion));
+                let view = ctx.view;
+                command_button(ui, ctx, actions, Command::ToggleGrid, Some(view.grid));
+                command_button(ui, ctx, actions, Command::ToggleBones, Some(view.bones));
+                command_button(ui, ctx, actions, Command::ToggleOnionSkin, Some(view.onion.enabled));
+                ui.menu_button("Onion skin settings", |ui| {
+                    let mut onion = view.onion;
+                    onion_settings_ui(ui, &mut onion);
+                    if onion != view.onion {
+                        actions.view(ViewChange::Onion(onion));
+                    }
+                });
                 ui.separator();
                 for c in [
                     Command::CameraFront,
@@ -109,52 +113,60 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                     Command::CameraElbow,
                     Command::FrameSelection,
                 ] {
-                    command_button(ui, app, c, None);
+                    command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
                 for style in RenderStyle::ALL {
-                    if ui.radio(app.view.style == style, style.label()).clicked() {
-                        app.view.style = style;
+                    if ui.radio(view.style == style, style.label()).clicked() {
+                        actions.view(ViewChange::Style(style));
                         ui.close();
                     }
                 }
-                ui.checkbox(&mut app.view.textures, "Textures").on_hover_text(
+                let mut textures = view.textures;
+                let response = ui.checkbox(&mut textures, "Textures").on_hover_text(
                     "Draw imported models with their materials (glTF base colour and texture, MD2 \
                      skins) in the solid style; off shows plain per-object colours",
                 );
+                if response.changed() {
+                    actions.view(ViewChange::Textures(textures));
+                }
                 ui.separator();
                 for (scale, label) in [(1.0, "Full resolution"), (0.5, "Half resolution")] {
                     let tip = "Pixels the GPU viewport renders per screen pixel; half is four times cheaper \
                                on a CPU rasterizer";
-                    if ui.radio(app.view.resolution_scale == scale, label).on_hover_text(tip).clicked() {
-                        app.view.resolution_scale = scale;
+                    if ui.radio(view.resolution_scale == scale, label).on_hover_text(tip).clicked() {
+                        actions.view(ViewChange::ResolutionScale(scale));
                         ui.close();
                     }
                 }
-                ui.checkbox(&mut app.view.antialiasing, "Anti-aliasing (4× MSAA)").on_hover_text(
+                let mut antialiasing = view.antialiasing;
+                let response = ui.checkbox(&mut antialiasing, "Anti-aliasing (4× MSAA)").on_hover_text(
                     "Smooth edges in the GPU viewport; off by default on a CPU rasterizer such as \
                      lavapipe, where it costs more than drawing the scene",
                 );
+                if response.changed() {
+                    actions.view(ViewChange::Antialiasing(antialiasing));
+                }
             });
             ui.menu_button("Deformer", |ui| {
-                let current = app.current_deformer();
+                let current = current_deformer(ctx.scene(), ctx.selected_object());
                 for kind in DeformerKind::ALL {
-                    command_button(ui, app, Command::SetDeformer(kind), Some(current == Some(kind)));
+                    command_button(ui, ctx, actions, Command::SetDeformer(kind), Some(current == Some(kind)));
                 }
             });
             ui.menu_button("Playback", |ui| {
-                let (playing, looping) = (app.session.playback.playing, app.session.playback.looping);
-                command_button(ui, app, Command::PlayPause, Some(playing));
-                command_button(ui, app, Command::ToggleLoop, Some(looping));
+                let (playing, looping) = (ctx.session.playback.playing, ctx.session.playback.looping);
+                command_button(ui, ctx, actions, Command::PlayPause, Some(playing));
+                command_button(ui, ctx, actions, Command::ToggleLoop, Some(looping));
                 for c in [Command::FirstFrame, Command::PrevFrame, Command::NextFrame, Command::LastFrame] {
-                    command_button(ui, app, c, None);
+                    command_button(ui, ctx, actions, c, None);
                 }
             });
             ui.menu_button("Help", |ui| {
-                command_button(ui, app, Command::ShowHelp, None);
+                command_button(ui, ctx, actions, Command::ShowHelp, None);
             });
         });
-        toolbar_ui(ui, app);
+        toolbar_ui(ui, ctx, actions);
     });
 }
 
@@ -188,9 +200,9 @@ fn onion_settings_ui(ui: &mut Ui, onion: &mut crate::onion::OnionSkin) {
     }
 }
 
-fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
+fn toolbar_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     ui.horizontal(|ui| {
-        let record = app.session.record;
+        let record = ctx.session.record;
         let rec_text = "⏺ Record";
         let tip = format!(
             "{} ({})",
@@ -206,22 +218,22 @@ fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
             }),
         );
         if ui.add(rec).on_hover_text(tip).clicked() {
-            app.run_command(&ui.ctx().clone(), Command::ToggleRecord);
+            actions.command(Command::ToggleRecord);
         }
-        tool_button(ui, app, Command::InsertKey, "◆ Key", false);
-        let ik = app.session.ik.enabled;
-        tool_button(ui, app, Command::ToggleIk, "IK", ik);
+        tool_button(ui, actions, Command::InsertKey, "◆ Key", false);
+        let ik = ctx.session.ik.enabled;
+        tool_button(ui, actions, Command::ToggleIk, "IK", ik);
         ui.separator();
-        let (grid, bones) = (app.view.grid, app.view.bones);
-        tool_button(ui, app, Command::ToggleGrid, "# Grid", grid);
-        tool_button(ui, app, Command::ToggleBones, "Bones", bones);
+        let (grid, bones) = (ctx.view.grid, ctx.view.bones);
+        tool_button(ui, actions, Command::ToggleGrid, "# Grid", grid);
+        tool_button(ui, actions, Command::ToggleBones, "Bones", bones);
         ui.separator();
         ui.label("Deformer:");
-        let current = app.current_deformer();
+        let current = current_deformer(ctx.scene(), ctx.selected_object());
         for (i, kind) in DeformerKind::ALL.into_iter().enumerate() {
             tool_button(
                 ui,
-                app,
+                actions,
                 Command::SetDeformer(kind),
                 &format!("{} {}", i + 1, kind.label()),
                 current == Some(kind),
@@ -235,7 +247,7 @@ fn toolbar_ui(ui: &mut Ui, app: &mut EditorApp) {
             (Command::CameraShoulder, "Shoulder"),
             (Command::CameraElbow, "Elbow"),
         ] {
-            tool_button(ui, app, c, t, false);
+            tool_button(ui, actions, c, t, false);
         }
     });
 }

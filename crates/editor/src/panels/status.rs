@@ -4,29 +4,33 @@
 
 use egui::{Color32, RichText, Ui};
 
-use crate::app::EditorApp;
+use crate::context::{FrameCtx, Status};
+use crate::gpu_view::GpuView;
 
-pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
+/// The status bar; `gpu` is the viewport's GPU view, when there is one.
+pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, gpu: Option<&GpuView>) {
     egui::Panel::bottom("status_bar").show_inside(ui, |ui| {
         ui.horizontal(|ui| {
-            if app.session.record {
+            if ctx.session.record {
                 ui.label(RichText::new("● REC").color(Color32::from_rgb(255, 80, 80)).strong());
             }
-            ui.label(format!("Frame {}", app.session.playback.whole_frame()));
-            if let Some(t) = app.frame_time {
+            ui.label(format!("Frame {}", ctx.session.playback.whole_frame()));
+            if let Some(t) = ctx.frame_time {
                 ui.weak(format!("{:.1} ms/frame ({:.0} fps)", t * 1000.0, 1.0 / t.max(1e-6)));
             }
-            if let Some(gpu) = &app.gpu {
-                ui.weak("GPU viewport").on_hover_text(gpu.adapter_name());
+            if let Some(gpu) = gpu {
+                ui.weak("GPU viewport").on_hover_ui(|ui| {
+                    ui.label(gpu.adapter_name());
+                });
             }
-            if let Some(label) = app.doc.undo_label() {
+            if let Some(label) = ctx.doc.undo_label() {
                 ui.weak(format!("Last edit: {label}"));
             }
-            for import in &app.imports {
+            for import in ctx.imports {
                 ui.separator();
                 import_ui(ui, import);
             }
-            let left = app.status.as_ref().map_or(0.0, crate::app::Status::seconds_left);
+            let left = ctx.status.map_or(0.0, Status::seconds_left);
             if left > 0.0 {
                 // Wake up to take the message away when it is due, drawing or not. At least half
                 // a second ahead: egui repaints at once for a delay shorter than a frame, and a
@@ -34,7 +38,7 @@ pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
                 // goes at most half a second late).
                 ui.ctx().request_repaint_after(std::time::Duration::from_secs_f32(left.max(0.5)));
             }
-            if let Some(status) = app.status.as_ref().filter(|_| left > 0.0) {
+            if let Some(status) = ctx.status.filter(|_| left > 0.0) {
                 ui.separator();
                 let text = RichText::new(&status.text);
                 if status.is_error {

@@ -1,104 +1,107 @@
-//! The timeline at the bottom: playback controls (play/pause, loop, fps, range, frame), the
-//! dope sheet ([`crate::panels::dope_sheet`]) and the curve view beside it.
+//! The timeline's playback controls at the bottom of the window: play/pause, loop, every-frame
+//! playback, the frame, the frame range and the scene's fps (with "Keep key frames"). The dope
+//! sheet and the curve view sit beneath them ([`crate::window`] lays the three out).
 
-use egui::{Ui, Vec2};
+use egui::Ui;
 
-use crate::app::EditorApp;
+use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::channels;
 use crate::commands::Command;
-use crate::panels::menu::tool_button;
+use crate::context::FrameCtx;
+use crate::widgets::command_button::tool_button;
 use crate::widgets::field::{number_field, FieldChange};
 
-/// Draws the bottom panel: controls, dope sheet and curves.
-pub fn ui(ui: &mut Ui, app: &mut EditorApp) {
-    egui::Panel::bottom("timeline").resizable(true).default_size(310.0).show_inside(ui, |ui| {
-        controls_ui(ui, app);
-        ui.separator();
-        let available = ui.available_size();
-        let curves_width = (available.x * 0.38).max(200.0);
-        ui.horizontal_top(|ui| {
-            let sheet_size = Vec2::new((available.x - curves_width - 8.0).max(200.0), available.y);
-            let layout = egui::Layout::top_down(egui::Align::Min);
-            ui.allocate_ui_with_layout(sheet_size, layout, |ui| crate::panels::dope_sheet::ui(ui, app));
-            ui.separator();
-            let size = Vec2::new(ui.available_width(), available.y);
-            ui.allocate_ui_with_layout(size, layout, |ui| crate::panels::curves::ui(ui, app));
-        });
-    });
+/// The playback controls and their own state.
+#[derive(Debug, Default)]
+pub struct Timeline {
+    /// When the FPS changes, keys keep their frames (true) or their times in seconds (false).
+    pub keep_frames: bool,
+    /// (fps, start, end) when the current FPS drag started.
+    fps_drag_origin: Option<(f64, i32, i32)>,
 }
 
-fn controls_ui(ui: &mut Ui, app: &mut EditorApp) {
-    ui.horizontal(|ui| {
-        tool_button(ui, app, Command::FirstFrame, "⏮", false);
-        tool_button(ui, app, Command::PrevFrame, "⏴", false);
-        let playing = app.session.playback.playing;
-        tool_button(ui, app, Command::PlayPause, if playing { "⏸ Pause" } else { "▶ Play" }, playing);
-        tool_button(ui, app, Command::NextFrame, "⏵", false);
-        tool_button(ui, app, Command::LastFrame, "⏭", false);
-        let looping = app.session.playback.looping;
-        tool_button(ui, app, Command::ToggleLoop, "🔁 Loop", looping);
-        ui.checkbox(&mut app.session.playback.every_frame, "Every frame").on_hover_text(
-            "Checked: every frame is drawn, even when drawing is slower than the scene's fps \
-             (slow motion). Unchecked (the default): real time, dropping frames to keep time.",
-        );
-        if let Some(t) = app.frame_time.filter(|_| app.session.playback.playing) {
-            let fps = app.doc.scene().fps;
-            let achieved = app.session.playback.achieved_fps(f64::from(t), fps);
-            ui.weak(format!("{achieved:.1}/{fps} fps"))
-                .on_hover_text("Scene frames shown per second while playing, against the scene's fps");
-        }
-        ui.separator();
-
-        let scene = app.doc.scene();
-        let (mut start, mut end, mut fps) = (scene.frame_range.start, scene.frame_range.end, scene.fps);
-        let (old_start, old_end, old_fps) = (start, end, fps);
-        let mut frame = app.session.playback.whole_frame();
-        ui.label("Frame");
-        let (_, change) = number_field(ui, &mut frame, "Frame", |d| d.range(start..=end));
-        if change.any() {
-            app.set_frame(frame);
-        }
-        ui.label("Start");
-        let (_, start_change) = number_field(ui, &mut start, "Start", |d| d);
-        ui.label("End");
-        let (_, end_change) = number_field(ui, &mut end, "End", |d| d);
-        ui.label("FPS");
-        let (_, fps_change) = number_field(ui, &mut fps, "FPS", |d| d.speed(0.1).max_decimals(3));
-        ui.checkbox(&mut app.view.timeline.keep_frames, "Keep key frames").on_hover_text(
-            "When the FPS changes: checked, keys stay on their frames (the animation plays \
-             faster or slower, as Blender's time stretching); unchecked, keys keep their time \
-             in seconds and move to other frames. Either way the frame range follows the keys.",
-        );
-        if start_change.any() || end_change.any() {
-            apply_range(app, (old_start, old_end), (start, end), start_change, end_change);
-        }
-        match fps_change {
-            FieldChange::None => {}
-            FieldChange::Dragged => {
-                // Computed from the fps at the start of the drag, so the range does not
-                // drift by rounding as the drag goes on.
-                let origin = *app.view.timeline.fps_drag_origin.get_or_insert((old_fps, old_start, old_end));
-                let fps = if fps.is_finite() { fps.clamp(MIN_FPS, MAX_FPS) } else { old_fps };
-                let keep_frames = app.view.timeline.keep_frames;
-                app.doc.edit_continuous("fps", &fps_label(fps), |s| retime(s, origin, fps, keep_frames));
+impl Timeline {
+    /// The controls, on one row.
+    pub fn ui(&mut self, ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+        ui.horizontal(|ui| {
+            let playback = &ctx.session.playback;
+            tool_button(ui, actions, Command::FirstFrame, "⏮", false);
+            tool_button(ui, actions, Command::PrevFrame, "⏴", false);
+            let playing = playback.playing;
+            tool_button(ui, actions, Command::PlayPause, if playing { "⏸ Pause" } else { "▶ Play" }, playing);
+            tool_button(ui, actions, Command::NextFrame, "⏵", false);
+            tool_button(ui, actions, Command::LastFrame, "⏭", false);
+            tool_button(ui, actions, Command::ToggleLoop, "🔁 Loop", playback.looping);
+            let mut every_frame = playback.every_frame;
+            let response = ui.checkbox(&mut every_frame, "Every frame").on_hover_text(
+                "Checked: every frame is drawn, even when drawing is slower than the scene's fps \
+                 (slow motion). Unchecked (the default): real time, dropping frames to keep time.",
+            );
+            if response.changed() {
+                actions.session(SessionChange::EveryFrame(every_frame));
             }
-            FieldChange::Committed => {
-                if !(fps.is_finite() && (MIN_FPS..=MAX_FPS).contains(&fps)) {
-                    app.error(format!(
-                        "FPS must be between {MIN_FPS} and {MAX_FPS} (typed {fps}); it stays {old_fps}"
-                    ));
-                } else {
-                    let keep_frames = app.view.timeline.keep_frames;
-                    let origin = (old_fps, old_start, old_end);
-                    app.doc.close_group();
-                    app.doc.edit(&fps_label(fps), |s| retime(s, origin, fps, keep_frames));
+            if let Some(t) = ctx.frame_time.filter(|_| playback.playing) {
+                let fps = ctx.scene().fps;
+                let achieved = playback.achieved_fps(f64::from(t), fps);
+                ui.weak(format!("{achieved:.1}/{fps} fps"))
+                    .on_hover_text("Scene frames shown per second while playing, against the scene's fps");
+            }
+            ui.separator();
+
+            let scene = ctx.scene();
+            let (mut start, mut end, mut fps) = (scene.frame_range.start, scene.frame_range.end, scene.fps);
+            let (old_start, old_end, old_fps) = (start, end, fps);
+            let mut frame = playback.whole_frame();
+            ui.label("Frame");
+            let (_, change) = number_field(ui, &mut frame, "Frame", |d| d.range(start..=end));
+            if change.any() {
+                ctx.set_frame(actions, frame);
+            }
+            ui.label("Start");
+            let (_, start_change) = number_field(ui, &mut start, "Start", |d| d);
+            ui.label("End");
+            let (_, end_change) = number_field(ui, &mut end, "End", |d| d);
+            ui.label("FPS");
+            let (_, fps_change) = number_field(ui, &mut fps, "FPS", |d| d.speed(0.1).max_decimals(3));
+            ui.checkbox(&mut self.keep_frames, "Keep key frames").on_hover_text(
+                "When the FPS changes: checked, keys stay on their frames (the animation plays \
+                 faster or slower, as Blender's time stretching); unchecked, keys keep their time \
+                 in seconds and move to other frames. Either way the frame range follows the keys.",
+            );
+            if start_change.any() || end_change.any() {
+                let frame = playback.whole_frame();
+                apply_range(actions, frame, (old_start, old_end), (start, end), start_change, end_change);
+            }
+            let keep_frames = self.keep_frames;
+            match fps_change {
+                FieldChange::None => {}
+                FieldChange::Dragged => {
+                    // Computed from the fps at the start of the drag, so the range does not
+                    // drift by rounding as the drag goes on.
+                    let origin = *self.fps_drag_origin.get_or_insert((old_fps, old_start, old_end));
+                    let fps = if fps.is_finite() { fps.clamp(MIN_FPS, MAX_FPS) } else { old_fps };
+                    actions.edit(Edit::continuous("fps", fps_label(fps), move |s| {
+                        retime(s, origin, fps, keep_frames);
+                    }));
+                }
+                FieldChange::Committed => {
+                    if !(fps.is_finite() && (MIN_FPS..=MAX_FPS).contains(&fps)) {
+                        actions.push(Action::Error(format!(
+                            "FPS must be between {MIN_FPS} and {MAX_FPS} (typed {fps}); it stays {old_fps}"
+                        )));
+                    } else {
+                        let origin = (old_fps, old_start, old_end);
+                        actions.push(Action::CloseGroup);
+                        actions
+                            .edit(Edit::scene(fps_label(fps), move |s| retime(s, origin, fps, keep_frames)));
+                    }
                 }
             }
-        }
-        if !ui.input(|i| i.pointer.any_down()) {
-            app.view.timeline.fps_drag_origin = None;
-        }
-    });
+            if !ui.input(|i| i.pointer.any_down()) {
+                self.fps_drag_origin = None;
+            }
+        });
+    }
 }
 
 /// The lowest and highest scene frame rates the FPS field accepts.
@@ -132,9 +135,11 @@ pub fn retime(scene: &mut keyrig_core::Scene, origin: (f64, i32, i32), fps: f64,
 }
 
 /// Applies an edit of the Start or End field: a drag clamps to a valid range (one undo step per
-/// drag), a typed value is checked (Start before End) and refused with a status-bar error.
+/// drag), a typed value is checked (Start before End) and refused with a status-bar error. The
+/// playhead (at `frame`) stays where it was unless the new range leaves it out.
 fn apply_range(
-    app: &mut EditorApp,
+    actions: &mut Actions,
+    frame: i32,
     old: (i32, i32),
     new: (i32, i32),
     start_change: FieldChange,
@@ -145,12 +150,12 @@ fn apply_range(
     if dragged {
         start = start.clamp(-FRAME_LIMIT, old.1 - 1);
         end = end.clamp(old.0 + 1, FRAME_LIMIT);
-        app.doc.edit_continuous("frame range", "change frame range", |s| {
+        actions.edit(Edit::continuous("frame range", "change frame range", move |s| {
             s.frame_range.start = start;
             s.frame_range.end = end;
-        });
+        }));
     } else if start.abs() > FRAME_LIMIT || end.abs() > FRAME_LIMIT {
-        app.error(format!("Frames must lie between {} and {FRAME_LIMIT}", -FRAME_LIMIT));
+        actions.push(Action::Error(format!("Frames must lie between {} and {FRAME_LIMIT}", -FRAME_LIMIT)));
         return;
     } else if start >= end {
         let which = if start_change.any() {
@@ -158,18 +163,16 @@ fn apply_range(
         } else {
             format!("End ({end}) must be after Start ({start})")
         };
-        app.error(format!("{which}; the range stays {}–{}", old.0, old.1));
+        actions.push(Action::Error(format!("{which}; the range stays {}–{}", old.0, old.1)));
         return;
     } else {
-        app.doc.close_group();
-        app.doc.edit(&format!("frame range {start}–{end}"), |s| {
+        actions.push(Action::CloseGroup);
+        actions.edit(Edit::scene(format!("frame range {start}–{end}"), move |s| {
             s.frame_range.start = start;
             s.frame_range.end = end;
-        });
+        }));
     }
-    // The playhead stays where it was unless the new range leaves it out.
-    let frame = app.session.playback.whole_frame();
     if frame < start || frame > end {
-        app.set_frame(frame);
+        actions.session(SessionChange::SetFrame(frame));
     }
 }

@@ -2,9 +2,12 @@
 //! `impl Widget` wrapper (the egui demo's recipe: allocate, handle input, paint, report
 //! accessibility info).
 
+pub mod command_button;
 pub mod field;
 pub mod key_diamond;
+pub mod measure;
 pub mod tcb_slider;
+pub mod time_axis;
 
 /// Tells accessibility tools (and UI tests) about something painted rather than laid out as a
 /// widget — a key diamond, a curve point, a dope-sheet row — at `rect` (screen points), with the

@@ -164,7 +164,7 @@ pub fn drag_along_with(h: &mut Harness<'_, EditorApp>, path: &[egui::Pos2], modi
 
 /// Where a world point is on screen in the editor's viewport now.
 pub fn on_screen(app: &EditorApp, at: glam::Vec3) -> egui::Pos2 {
-    let rect = app.view.viewport_rect.expect("the viewport was laid out");
+    let rect = app.viewport_rect().expect("the viewport was laid out");
     keyrig_editor::camera::Projection::new(&app.view.camera, rect)
         .project(at)
         .expect("the point is in front of the camera")

@@ -3,16 +3,16 @@
 //! instead of the rotation gizmo. Dragging the handle moves its target in the plane through the
 //! joint that faces the camera (as Blender's grab moves in the view plane), and the chain follows
 //! ([`crate::ik_posing`]); the solved rotations are applied as gizmo rotations are
-//! ([`EditorApp::apply_ik_pose`]: keys in record mode, a pose otherwise, one undo step per drag).
+//! ([`Edit::IkPose`]: keys in record mode, a pose otherwise, one undo step per drag).
 //! A chain the solvers refuse is drawn red with their message; a press on it puts the message in
 //! the status bar.
 
 use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Stroke, Ui};
 use glam::Vec3;
 
-use crate::app::EditorApp;
+use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::camera::{OrbitCamera, Projection};
-use crate::eval::ObjectPose;
+use crate::context::FrameCtx;
 use crate::ik_posing::{IkDrag, IkGrab, PosedChain};
 use crate::session::Selected;
 
@@ -25,8 +25,8 @@ const ERROR_COLOUR: Color32 = Color32::from_rgb(255, 90, 90);
 /// The joint (object, joint) whose IK handle the viewport shows: IK posing is on and a joint is
 /// selected.
 #[must_use]
-pub fn handle_joint(app: &EditorApp) -> Option<(usize, usize)> {
-    match (app.session.ik.enabled, app.session.selection.item) {
+pub fn handle_joint(ctx: &FrameCtx<'_>) -> Option<(usize, usize)> {
+    match (ctx.session.ik.enabled, ctx.session.selection.item) {
         (true, Some(Selected::Joint { object, joint })) => Some((object, joint)),
         _ => None,
     }
@@ -35,43 +35,42 @@ pub fn handle_joint(app: &EditorApp) -> Option<(usize, usize)> {
 /// Draws the selected joint's chain and IK handle and runs drags of the handle. `None` when the
 /// viewport shows no handle (the gizmo's turn); otherwise whether the handle owns the primary
 /// button this frame (the pointer is on it, or a drag is under way), so that the camera neither
-/// orbits nor picks.
+/// orbits nor picks. `grab` is the viewport's press on the handle, kept until release.
 pub fn handle_ui(
     ui: &Ui,
-    app: &mut EditorApp,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    grab: &mut Option<IkGrab>,
     projection: &Projection,
     rect: Rect,
     response: &egui::Response,
-    poses: &[Option<ObjectPose>],
 ) -> Option<bool> {
-    let Some((object, joint)) = handle_joint(app) else {
-        app.ik_grab = None;
+    let Some((object, joint)) = handle_joint(ctx) else {
+        *grab = None;
         return None;
     };
-    app.gizmo_drag = false;
-    app.ring_drag = None;
     let painter = ui.painter().with_clip_rect(rect);
     let (hover, pressed, down, any_down) = ui.input(|i| {
         (i.pointer.hover_pos(), i.pointer.primary_pressed(), i.pointer.primary_down(), i.pointer.any_down())
     });
-    match app.ik_grab.take() {
+    match grab.take() {
         Some(IkGrab::Dragging(drag)) => {
-            continue_drag(app, *drag, projection, hover, down, &painter);
+            *grab = continue_drag(ctx, actions, *drag, projection, hover, down, &painter);
             return Some(true);
         }
         Some(IkGrab::Refused) => {
             if down {
-                app.ik_grab = Some(IkGrab::Refused);
+                *grab = Some(IkGrab::Refused);
             }
             return Some(true);
         }
         None => {}
     }
-    let pose = poses.get(object).and_then(Option::as_ref)?;
+    let pose = ctx.pose(object)?;
     let end: Vec3 = (pose.world_from_object * *pose.object_from_joint.get(joint)?).translation.into();
     let Some(at) = projection.project(end) else { return Some(false) };
-    let bones = app.session.ik.chain_bones(object, joint);
-    let chain = PosedChain::new(app.doc.scene(), pose, object, joint, bones);
+    let bones = ctx.session.ik.chain_bones(object, joint);
+    let chain = PosedChain::new(ctx.scene(), pose, object, joint, bones);
     let free = !any_down || pressed;
     let on_handle = free
         && response.contains_pointer()
@@ -86,17 +85,16 @@ pub fn handle_ui(
     if pressed && on_handle {
         match chain {
             Ok(chain) => {
-                let camera = &app.view.camera;
+                let camera = &ctx.view.camera;
                 let forward = (camera.target - camera.eye()).normalize_or_zero();
                 if let Some(pressed_at) = hover.and_then(|p| projection.on_plane(p, end, forward)) {
-                    let pole = chain.pole_for_drag(app.session.ik.pole(&chain));
-                    app.ik_grab =
-                        Some(IkGrab::Dragging(Box::new(IkDrag::new(chain, pressed_at, forward, pole))));
+                    let pole = chain.pole_for_drag(ctx.session.ik.pole(&chain));
+                    *grab = Some(IkGrab::Dragging(Box::new(IkDrag::new(chain, pressed_at, forward, pole))));
                 }
             }
             Err(e) => {
-                app.error(e.to_string());
-                app.ik_grab = Some(IkGrab::Refused);
+                actions.push(Action::Error(e.to_string()));
+                *grab = Some(IkGrab::Refused);
             }
         }
     }
@@ -104,37 +102,36 @@ pub fn handle_ui(
 }
 
 /// One frame of a drag: the target follows the pointer on the drag's plane and the chain is
-/// solved for it; on release the pole is kept for the chain's next drag.
+/// solved for it; on release the pole is kept for the chain's next drag. Returns the grab that
+/// goes on (none once released).
 fn continue_drag(
-    app: &mut EditorApp,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
     mut drag: IkDrag,
     projection: &Projection,
     hover: Option<Pos2>,
     down: bool,
     painter: &Painter,
-) {
+) -> Option<IkGrab> {
     let on_plane = hover.and_then(|p| projection.on_plane(p, drag.plane_point, drag.plane_normal));
     if let Some(on_plane) = on_plane {
         match drag.drag_to(drag.target_for(on_plane)) {
             Ok(Some(rotations)) => {
-                let label = if app.session.record {
+                let label = if ctx.session.record {
                     format!(
                         "IK key {} at frame {}",
                         drag.chain.describe(),
-                        app.session.playback.whole_frame()
+                        ctx.session.playback.whole_frame()
                     )
                 } else {
                     format!("IK pose {}", drag.chain.describe())
                 };
-                app.apply_ik_pose(&rotations, &label);
+                actions.edit(Edit::IkPose { rotations, label });
             }
             Ok(None) => {}
             Err(e) => {
-                app.error(e.to_string());
-                if down {
-                    app.ik_grab = Some(IkGrab::Refused);
-                }
-                return;
+                actions.push(Action::Error(e.to_string()));
+                return down.then_some(IkGrab::Refused);
             }
         }
     }
@@ -150,18 +147,18 @@ fn continue_drag(
         }
     }
     if down {
-        app.ik_grab = Some(IkGrab::Dragging(Box::new(drag)));
-        return;
+        return Some(IkGrab::Dragging(Box::new(drag)));
     }
-    app.session.ik.remember_pole(&drag.chain, drag.pole);
     if drag.moved() {
         let turned = drag.chain.names[..drag.chain.bones()].join(", ");
-        if app.session.record {
-            app.info(format!("IK: keyed {turned} at frame {}", app.session.playback.whole_frame()));
+        actions.push(Action::Info(if ctx.session.record {
+            format!("IK: keyed {turned} at frame {}", ctx.session.playback.whole_frame())
         } else {
-            app.info(format!("IK: posed {turned} (press I to key)"));
-        }
+            format!("IK: posed {turned} (press I to key)")
+        }));
     }
+    actions.session(SessionChange::RememberPole { chain: Box::new(drag.chain), pole: drag.pole });
+    None
 }
 
 /// The chain's bones in the IK colour and the handle (a ring, filled while hovered or dragged) on

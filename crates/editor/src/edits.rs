@@ -1,0 +1,170 @@
+//! The document edits the panels push ([`Edit`]), applied by [`EditorApp::apply_edit`]: pose
+//! changes (keys in record mode, overrides, static values), turns with their spins, IK poses,
+//! and the key moves the dope sheet and the curve editor share. Each is one undo step, or part
+//! of its gesture's continuous step.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::Quat;
+
+use crate::actions::Edit;
+use crate::app::{EditorApp, IK_DRAG_GROUP};
+use crate::channels::{self, ChannelId, ChannelValue};
+use crate::eval::{euler_degrees, quat_from_euler_degrees};
+use crate::session::KeyRef;
+
+impl EditorApp {
+    /// Applies one edit the panels pushed.
+    pub(crate) fn apply_edit(&mut self, edit: Edit) {
+        match edit {
+            Edit::Pose { id, value, group } => self.apply_pose(id, value, &group),
+            Edit::Turn { id, turn, group } => self.apply_turn(id, turn, &group),
+            Edit::IkPose { rotations, label } => self.apply_ik_pose(&rotations, &label),
+            Edit::MoveSelectedKeys { seconds, ticket } => {
+                let moved = self.move_selected_keys(seconds);
+                self.results.record(ticket, moved);
+            }
+            Edit::ShiftSelectedValues { component, delta, twist } => {
+                self.shift_selected_values(component, delta, twist);
+            }
+            Edit::Scene { label, group: Some(group), change } => {
+                self.doc.edit_continuous(&group, &label, change);
+            }
+            Edit::Scene { label, group: None, change } => {
+                self.doc.edit(&label, change);
+            }
+        }
+    }
+
+    /// Applies a pose change made with a gizmo or the inspector. In record mode it writes a key
+    /// at the current frame; otherwise an animated channel gets a transient override (key it
+    /// with I) and a static one changes its value. `group` merges a drag into one undo step.
+    pub fn apply_pose(&mut self, id: ChannelId, value: ChannelValue, group: &str) {
+        let animated = channels::key_count(self.doc.scene(), id) > 0;
+        if self.session.record {
+            let time = self.session.key_time(self.doc.scene().fps);
+            let label = format!("key {}", id.label(self.doc.scene()));
+            self.doc.edit_continuous(group, &label, |scene| {
+                channels::set_key(scene, id, time, value);
+            });
+            self.session.overrides.remove(&id);
+        } else if animated {
+            self.session.overrides.insert(id, value);
+        } else {
+            let label = format!("pose {}", id.label(self.doc.scene()));
+            self.doc.edit_continuous(group, &label, |scene| {
+                channels::set_static_value(scene, id, value);
+            });
+        }
+    }
+
+    /// Applies the rotations an IK drag solved for the joints of a chain, as
+    /// [`EditorApp::apply_pose`] applies a gizmo rotation, all joints in one edit: in record mode
+    /// each joint gets an ordinary rotation key at the current frame; otherwise keyed joints get
+    /// pose overrides and unkeyed ones change their value. Every call of one drag joins one undo
+    /// step ([`IK_DRAG_GROUP`], closed when the pointer is released), labelled `label`.
+    pub fn apply_ik_pose(&mut self, rotations: &[(ChannelId, Quat)], label: &str) {
+        let values: Vec<(ChannelId, ChannelValue)> =
+            rotations.iter().map(|&(id, q)| (id, ChannelValue::Rotation(q.normalize()))).collect();
+        if self.session.record {
+            let time = self.session.key_time(self.doc.scene().fps);
+            self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
+                for &(id, value) in &values {
+                    channels::set_key(scene, id, time, value);
+                }
+            });
+            for (id, _) in &values {
+                self.session.overrides.remove(id);
+            }
+            return;
+        }
+        let (animated, fixed): (Vec<_>, Vec<_>) =
+            values.into_iter().partition(|(id, _)| channels::key_count(self.doc.scene(), *id) > 0);
+        if !fixed.is_empty() {
+            self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
+                for &(id, value) in &fixed {
+                    channels::set_static_value(scene, id, value);
+                }
+            });
+        }
+        for (id, value) in animated {
+            self.session.overrides.insert(id, value);
+        }
+    }
+
+    /// Applies a rotation turned with a gizmo ring or the inspector's twist field: the value
+    /// `turn.value()` as [`EditorApp::apply_pose`] would, but in record mode the key also gets
+    /// the spin that makes its segment from the previous key turn the way the hand went, turns
+    /// included ([`channels::set_rotation_key`]).
+    pub fn apply_turn(&mut self, id: ChannelId, turn: channels::Turn, group: &str) {
+        let value = turn.value();
+        if !self.session.record {
+            self.apply_pose(id, ChannelValue::Rotation(value), group);
+            return;
+        }
+        let time = self.session.key_time(self.doc.scene().fps);
+        let label = format!("key {}", id.label(self.doc.scene()));
+        self.doc.edit_continuous(group, &label, |scene| {
+            channels::set_rotation_key(scene, id, time, value, Some(turn));
+        });
+        self.session.overrides.remove(&id);
+    }
+
+    /// Moves every selected key by `delta` seconds as one continuous edit. Refused (returns
+    /// false) when a key would land on another key.
+    pub fn move_selected_keys(&mut self, delta: f64) -> bool {
+        let mut by_channel: BTreeMap<ChannelId, Vec<usize>> = BTreeMap::new();
+        for k in &self.session.selection.keys {
+            by_channel.entry(k.channel).or_default().push(k.index);
+        }
+        let mut trial = self.doc.scene().clone();
+        let mut new_keys = BTreeSet::new();
+        for (id, indices) in &by_channel {
+            match channels::move_keys(&mut trial, *id, indices, delta) {
+                Some(new_indices) => {
+                    new_keys.extend(new_indices.into_iter().map(|index| KeyRef { channel: *id, index }));
+                }
+                None => return false,
+            }
+        }
+        self.doc.edit_continuous("move keys", "move keys", |scene| *scene = trial);
+        self.session.selection.keys = new_keys;
+        true
+    }
+
+    /// Adds `delta` to component `component` of every selected key (an Euler angle for
+    /// rotations, degrees; with `twist`, the twist about the bone axis) as one continuous edit.
+    pub fn shift_selected_values(&mut self, component: usize, delta: f32, twist: bool) {
+        let keys: Vec<KeyRef> = self.session.selection.keys.iter().copied().collect();
+        let label = if keys.len() == 1 {
+            "move key value".to_owned()
+        } else {
+            format!("move {} key values", keys.len())
+        };
+        self.doc.edit_continuous("curve value", &label, |scene| {
+            for k in &keys {
+                let Some((time, _, _)) = channels::key_params(scene, k.channel, k.index) else { continue };
+                let Some(value) = channels::key_value(scene, k.channel, k.index) else { continue };
+                let moved = match value {
+                    ChannelValue::Vec3(mut v) if component < 3 => {
+                        v[component] += delta;
+                        ChannelValue::Vec3(v)
+                    }
+                    ChannelValue::Scalar(s) if component == 0 => ChannelValue::Scalar(s + delta),
+                    ChannelValue::Rotation(q) if twist && component == 0 => {
+                        // A twist about the bone axis, in the key's own frame.
+                        let turn = Quat::from_axis_angle(crate::twist::BONE_AXIS, delta.to_radians());
+                        ChannelValue::Rotation((q * turn).normalize())
+                    }
+                    ChannelValue::Rotation(q) if component < 3 && !twist => {
+                        let mut e = euler_degrees(q);
+                        e[component] += delta;
+                        ChannelValue::Rotation(quat_from_euler_degrees(e))
+                    }
+                    _ => continue,
+                };
+                channels::set_key(scene, k.channel, time, moved);
+            }
+        });
+    }
+}
