@@ -3,6 +3,9 @@
 //! 1,000 to 100,000 (the degenerate case: N = 3, the smallest skeleton the generator makes).
 //! Linear import keeps time / N flat across the sizes.
 //!
+//! `import_to_scene` adds the mapping onto a scene (what `keyrig import` and the editor do with
+//! a model) for 100,000 skinned mesh nodes and for 100,000 meshes that reuse one accessor.
+//!
 //! `cargo bench -p keyrig-io --bench import_scale -- --warm-up-time 1 --measurement-time 3`
 
 #[path = "../tests/support/big_gltf.rs"]
@@ -28,6 +31,20 @@ fn import_scale(c: &mut Criterion) {
                 b.iter(|| black_box(import_gltf_slice(bytes).expect("import")));
             });
         }
+    }
+    group.finish();
+    let mut group = c.benchmark_group("import_to_scene");
+    group.sample_size(10);
+    for (name, bytes) in [
+        ("skinned_nodes_100000", big_gltf::many_skinned_nodes(100_000)),
+        ("reused_accessor_meshes_100000", big_gltf::reused_accessor_meshes(100_000)),
+    ] {
+        group.bench_with_input(BenchmarkId::from_parameter(name), &bytes, |b, bytes| {
+            b.iter(|| {
+                let model = import_gltf_slice(bytes).expect("import");
+                black_box(model.to_scene("big.glb", None).expect("scene"))
+            });
+        });
     }
     group.finish();
 }

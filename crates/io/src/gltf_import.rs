@@ -607,17 +607,24 @@ fn read_image_data(
             None
         }
     };
-    doc.images()
+    // Read from the JSON, as `read_images` does: `gltf::Image::source` unwraps a view's
+    // `mimeType` and an image's `uri`, which validation does not require (found by fuzzing:
+    // an image with a buffer view and no MIME type panicked).
+    doc.as_json()
+        .images
+        .iter()
         .map(|image| {
-            let bytes: Vec<u8> = match image.source() {
-                gltf::image::Source::View { view, .. } => {
+            let bytes: Vec<u8> = match (&image.uri, image.buffer_view) {
+                (_, Some(view)) => {
+                    let view = doc.views().nth(view.value())?;
                     let data = buffers.get(view.buffer().index())?;
                     data.get(view.offset()..view.offset().checked_add(view.length())?)?.to_vec()
                 }
-                gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                (Some(uri), None) if uri.starts_with("data:") => {
                     gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None).ok()?.0
                 }
-                gltf::image::Source::Uri { uri, .. } => read_relative(base, uri).ok()?,
+                (Some(uri), None) => read_relative(base, uri).ok()?,
+                (None, None) => return None,
             };
             let mime_type = sniff(&bytes)?.to_owned();
             Some(ImageData { bytes: bytes.into(), mime_type })

@@ -281,3 +281,29 @@ fn a_skin_joint_past_the_last_node_does_not_panic() {
     let mapped = std::panic::catch_unwind(|| model.to_scene("x.glb", None).map(|s| s.objects.len()));
     assert!(mapped.is_ok(), "mapping panicked");
 }
+
+/// Found by the `gltf` fuzz target (a mutated InterpolationTest.glb): an image in a buffer
+/// view without its `mimeType`, and an image with neither a URI nor a buffer view, made the
+/// gltf crate's `Image::source` unwrap and panic. Both import; the image's bytes are read from
+/// the view when there is one (its type sniffed from the bytes), and are absent otherwise.
+#[test]
+fn images_without_a_mime_type_or_a_source_do_not_panic() {
+    let data = std::fs::read(corpus("InterpolationTest/InterpolationTest.glb")).expect("corpus file");
+    let json_len = u32::from_le_bytes(data[12..16].try_into().expect("4 bytes")) as usize;
+    let root: serde_json::Value = serde_json::from_slice(&data[20..20 + json_len]).expect("JSON");
+    let bin_len =
+        u32::from_le_bytes(data[20 + json_len..24 + json_len].try_into().expect("4 bytes")) as usize;
+    let bin = data[28 + json_len..28 + json_len + bin_len].to_vec();
+    assert!(root["images"][0]["bufferView"].is_u64(), "the corpus file embeds its image in a view");
+    let mut no_mime = root.clone();
+    no_mime["images"][0].as_object_mut().expect("an image").remove("mimeType");
+    let model = import_gltf_slice(&glb(no_mime, bin.clone())).expect("imports without the MIME type");
+    let image = model.image_data[0].as_ref().expect("the view's bytes are read");
+    assert_eq!(image.mime_type, "image/jpeg");
+    let mut no_source = root;
+    let image = no_source["images"][0].as_object_mut().expect("an image");
+    image.remove("mimeType");
+    image.remove("bufferView");
+    let model = import_gltf_slice(&glb(no_source, bin)).expect("imports without an image source");
+    assert!(model.image_data[0].is_none());
+}
