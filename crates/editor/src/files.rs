@@ -34,6 +34,10 @@ pub enum FileError {
     SkinnedMesh { path: PathBuf, source: Arc<keyrig_io::model::MappingError> },
     #[error("{}: {source}", path.display())]
     Morph { path: PathBuf, source: keyrig_render::MorphError },
+    #[error(transparent)]
+    Vrml(Arc<keyrig_io::vrml::VrmlError>),
+    #[error("{}: {source}", path.display())]
+    VrmlMesh { path: PathBuf, source: Arc<keyrig_io::vrml::map::VrmlMeshError> },
     #[error("{}: {source}", path.display())]
     Export { path: PathBuf, source: Arc<keyrig_io::gltf_export::ExportError> },
     #[error("{}: cannot read: {source}", path.display())]
@@ -42,11 +46,11 @@ pub enum FileError {
     Write { path: PathBuf, source: Arc<std::io::Error> },
     #[error("{}: cannot create folder: {source}", path.display())]
     Folder { path: PathBuf, source: Arc<std::io::Error> },
-    #[error("{}: unknown file type .{extension} (expected .ron, .glb, .gltf or .md2)", path.display())]
+    #[error("{}: unknown file type .{extension} (expected .ron, .glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv or .iv)", path.display())]
     UnknownType { path: PathBuf, extension: String },
-    #[error("{}: no file extension (expected .ron, .glb, .gltf or .md2)", path.display())]
+    #[error("{}: no file extension (expected .ron, .glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv or .iv)", path.display())]
     NoExtension { path: PathBuf },
-    #[error("{}: the editor shows meshes of glTF and MD2 files only", path.display())]
+    #[error("{}: the editor shows meshes of glTF, MD2, VRML, X3D and Open Inventor files only", path.display())]
     NotAMeshFile { path: PathBuf },
     #[error("{}: no node shows mesh {index}", path.display())]
     NoSuchMesh { path: PathBuf, index: usize },
@@ -64,6 +68,12 @@ pub enum FileError {
 impl From<keyrig_io::scene_file::SceneFileError> for FileError {
     fn from(e: keyrig_io::scene_file::SceneFileError) -> Self {
         FileError::Scene(Arc::new(e))
+    }
+}
+
+impl From<keyrig_io::vrml::VrmlError> for FileError {
+    fn from(e: keyrig_io::vrml::VrmlError) -> Self {
+        FileError::Vrml(Arc::new(e))
     }
 }
 
@@ -129,13 +139,25 @@ pub enum DialogPurpose {
 #[must_use]
 pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'static str])> {
     const SCENES: (&str, &[&str]) = ("keyrig scenes (.ron)", &["ron"]);
-    const MODELS: (&str, &[&str]) = ("Models (.glb, .gltf, .md2)", &["glb", "gltf", "md2"]);
+    const MODELS: (&str, &[&str]) = (
+        "Models (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv)",
+        &["glb", "gltf", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+    );
+    const VRML: (&str, &[&str]) = (
+        "VRML, X3D, Open Inventor (.wrl, .wrz, .x3d, .x3dv, .iv)",
+        &["wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+    );
     match purpose {
-        DialogPurpose::Open => {
-            vec![SCENES, MODELS, ("Scenes and models", &["ron", "glb", "gltf", "md2"])]
-        }
+        DialogPurpose::Open => vec![
+            SCENES,
+            MODELS,
+            (
+                "Scenes and models",
+                &["ron", "glb", "gltf", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+            ),
+        ],
         DialogPurpose::Import => {
-            vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"])]
+            vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"]), VRML]
         }
         DialogPurpose::SaveAs => vec![SCENES],
         DialogPurpose::Export => vec![("glTF binary (.glb)", &["glb"]), ("glTF (.gltf)", &["gltf"])],
@@ -203,9 +225,9 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
     if is_scene_file(path) {
         Ok(load_scene(path)?)
     } else {
-        let (mut scene, read) = read_model(path, &mut |_, _| {})?;
+        let (mut scene, read, own_camera) = read_model(path, &mut |_, _| {})?;
         let meshes = load_meshes_of(&scene, read, &mut |_| {});
-        frame_new_scene(&mut scene, &meshes);
+        frame_new_scene(&mut scene, &meshes, own_camera);
         Ok(scene)
     }
 }
@@ -219,7 +241,7 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, FileError> {
-    read_model(path, &mut |_, _| {}).map(|(scene, _)| scene)
+    read_model(path, &mut |_, _| {}).map(|(scene, _, _)| scene)
 }
 
 /// Progress of a model read: the stage and, where known, the done fraction.
@@ -228,9 +250,19 @@ type ProgressFn<'a> = &'a mut dyn FnMut(&str, Option<f32>);
 /// [`import_model`], with the meshes it read on the way (an MD2 file's morph mesh), so that
 /// they need not be read again, reporting its stages to `progress`: glTF is read and parsed
 /// by keyrig-io in one step (no fraction); an MD2 file is read in chunks (fraction of its
-/// bytes), then parsed (no fraction).
-fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<LoadedMesh>), FileError> {
+/// bytes), then parsed (no fraction); a VRML, X3D or Open Inventor file is read, parsed and
+/// mapped by keyrig-io in one step, and its meshes built at once. The flag says whether the
+/// model brings its own view (a VRML `Viewpoint`), which framing then keeps.
+fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<LoadedMesh>, bool), FileError> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    if keyrig_io::vrml::is_vrml_path(path) {
+        progress("reading and parsing", None);
+        let model = keyrig_io::vrml::import_vrml_file(path)?;
+        let file = absolute();
+        let scene = model.to_scene(&file.to_string_lossy());
+        progress("building meshes", None);
+        return Ok((scene, vrml_meshes(&file, &model), !model.views.is_empty()));
+    }
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
             progress("reading and parsing", None);
@@ -239,7 +271,7 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
             let scene = model
                 .to_scene(&absolute().to_string_lossy(), animation)
                 .map_err(|e| FileError::Mapping { path: path.to_path_buf(), source: Arc::new(e) })?;
-            Ok((scene, Vec::new()))
+            Ok((scene, Vec::new(), false))
         }
         Some("md2") => {
             let data = read_with_progress(path, &mut |f| progress("reading", Some(f)))?;
@@ -272,6 +304,7 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
             Ok((
                 scene,
                 vec![((PathBuf::from(file), None), Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)))],
+                false,
             ))
         }
         Some(other) => Err(FileError::UnknownType { path: path.to_path_buf(), extension: other.to_owned() }),
@@ -346,9 +379,56 @@ pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh
         .and_then(|m| m.with_look(model.texcoords.clone(), material))
 }
 
-/// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame) and adds a
-/// sun when it has no light, as `keyrig render` does for models.
-fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
+/// Every mesh of a VRML/X3D/Inventor model, keyed as [`MeshStore`] keys them (`path`, mesh
+/// index): rigid skinned meshes, or morph meshes playing their `CoordinateInterpolator`'s keys
+/// at their own times; each with its material.
+#[must_use]
+pub fn vrml_meshes(path: &Path, model: &keyrig_io::vrml::VrmlModel) -> Vec<LoadedMesh> {
+    (0..model.meshes.len())
+        .map(|i| {
+            let mesh = &model.meshes[i];
+            let material = mesh.material.clone();
+            let loaded = match &mesh.morph {
+                Some(morph) => {
+                    let frames: Vec<Vec<SkinnedVertex>> = morph
+                        .frames
+                        .iter()
+                        .map(|f| {
+                            f.positions
+                                .iter()
+                                .zip(&f.normals)
+                                .map(|(&p, &n)| SkinnedVertex::new(p, n))
+                                .collect()
+                        })
+                        .collect();
+                    let uvs = mesh.uvs.clone();
+                    MorphMesh::new(frames, mesh.indices.clone(), Vec::new())
+                        .and_then(|m| m.with_key_times(morph.times.clone(), morph.period))
+                        .and_then(|m| match uvs {
+                            Some(uvs) => m.with_look(uvs, Some(std::sync::Arc::new(material.clone()))),
+                            None => Ok(m),
+                        })
+                        .map(|m| (FileMesh::Morph(std::sync::Arc::new(m)), Some(material)))
+                        .map_err(|source| FileError::Morph { path: path.to_path_buf(), source })
+                }
+                None => model
+                    .skinned_mesh(i)
+                    .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), Some(material)))
+                    .map_err(|e| FileError::VrmlMesh { path: path.to_path_buf(), source: Arc::new(e) }),
+            };
+            ((path.to_path_buf(), Some(i)), loaded)
+        })
+        .collect()
+}
+
+/// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame), unless the
+/// model brought its own view (`own_camera`), and adds a sun when it has no light, as
+/// `keyrig render` does for models.
+fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh], own_camera: bool) {
+    if own_camera {
+        frame_model_scene(scene, std::iter::empty());
+        return;
+    }
     let mut points = Vec::new();
     for object in &scene.objects {
         let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
@@ -423,8 +503,26 @@ fn load_meshes_of(
         progress((0, total));
     }
     let mut meshes = read;
+    let mut vrml_files: HashMap<PathBuf, Vec<LoadedMesh>> = HashMap::new();
     for (i, (path, mesh)) in wanted.into_iter().enumerate() {
-        let loaded = load_file_mesh(&path, mesh);
+        let loaded = if keyrig_io::vrml::is_vrml_path(&path) {
+            // A VRML file is read once for all of its meshes.
+            let all =
+                vrml_files.entry(path.clone()).or_insert_with(|| {
+                    match keyrig_io::vrml::import_vrml_file(&path) {
+                        Ok(model) => vrml_meshes(&path, &model),
+                        Err(e) => vec![((path.clone(), mesh), Err(FileError::Vrml(Arc::new(e))))],
+                    }
+                });
+            all.iter().find(|((_, m), _)| *m == mesh).map(|(_, l)| l.clone()).unwrap_or_else(|| {
+                all.first().map_or(
+                    Err(FileError::NoSuchMesh { path: path.clone(), index: mesh.unwrap_or(0) }),
+                    |(_, l)| l.clone(),
+                )
+            })
+        } else {
+            load_file_mesh(&path, mesh)
+        };
         progress((i + 1, total));
         meshes.push(((path, mesh), loaded));
     }
@@ -485,12 +583,13 @@ impl BackgroundImport {
                     *p = ImportProgress { stage: stage.to_owned(), fraction };
                 }
             };
-            let (mut scene, read) = read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
+            let (mut scene, read, own_camera) =
+                read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
             let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
             });
             if purpose == ImportPurpose::Open {
-                frame_new_scene(&mut scene, &meshes);
+                frame_new_scene(&mut scene, &meshes, own_camera);
             }
             Ok(LoadedModel { scene, meshes })
         });
@@ -584,6 +683,27 @@ impl MeshStore {
         mesh: Option<usize>,
     ) -> Result<&FileMesh, FileError> {
         let key = (full_path(base_dir, path), mesh);
+        if !self.meshes.contains_key(&key) && keyrig_io::vrml::is_vrml_path(&key.0) {
+            // One read of the file gives every mesh of it.
+            match keyrig_io::vrml::import_vrml_file(&key.0) {
+                Ok(model) => {
+                    for ((p, m), loaded) in vrml_meshes(&key.0, &model) {
+                        self.insert(p, m, loaded);
+                    }
+                    if !self.meshes.contains_key(&key) {
+                        self.generation += 1;
+                        self.meshes.insert(
+                            key.clone(),
+                            Err(FileError::NoSuchMesh { path: key.0.clone(), index: mesh.unwrap_or(0) }),
+                        );
+                    }
+                }
+                Err(e) => {
+                    self.generation += 1;
+                    self.meshes.insert(key.clone(), Err(FileError::Vrml(Arc::new(e))));
+                }
+            }
+        }
         if !self.meshes.contains_key(&key) {
             self.generation += 1;
             let loaded = load_file_mesh(&key.0, mesh).map(|(loaded, material)| {

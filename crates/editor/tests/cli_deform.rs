@@ -161,8 +161,8 @@ fn demo_scene_and_gltf_model_deform() {
     let json = deform_json(&demo, &["--frame", "45"], "bones-blending", dir.path());
     assert_eq!(json["object"], "Arm");
     assert_eq!(json["vertex_count"], 1250);
-    let model = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+    let model =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     for kind in DeformerKind::ALL {
         let json = deform_json(&model, &["--time", "0.5"], kind.cli_name(), dir.path());
         let p = positions(&json, "positions");
@@ -231,8 +231,8 @@ fn bad_arguments_and_files_are_clear_errors() {
 
 /// RiggedSimple.glb with the first vertex's four weights replaced by `weights`.
 fn glb_with_weights(dir: &Path, name: &str, weights: [f32; 4]) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+    let source =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     let mut data = std::fs::read(source).unwrap();
     let u32_at = |d: &[u8], at: usize| u32::from_le_bytes(d[at..at + 4].try_into().unwrap()) as usize;
     let json_len = u32_at(&data, 12);

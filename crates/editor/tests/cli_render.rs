@@ -120,8 +120,7 @@ fn renders_an_md2_model_through_gpu_morphing() {
 
 #[test]
 fn renders_an_animated_gltf_model_with_its_skin() {
-    let model =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/CesiumMan/CesiumMan.glb");
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/CesiumMan/CesiumMan.glb");
     assert!(model.exists(), "{} is missing (the shared corpus must be beside the checkout)", model.display());
     let dir = tempfile::tempdir().expect("tempdir");
     let mut images = Vec::new();

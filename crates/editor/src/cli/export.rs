@@ -16,7 +16,7 @@ use keyrig_io::gltf_export::{export_scene, BakeOptions, ExportOptions};
 
 #[derive(clap::Args, Debug)]
 pub struct ExportArgs {
-    /// Scene file (.ron) or model (.glb, .gltf, .md2).
+    /// Scene file (.ron) or model (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv).
     pub scene: PathBuf,
     /// Output file: .glb (binary) or .gltf (JSON with the buffer embedded).
     #[arg(short, long)]
@@ -72,12 +72,12 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
 }
 
 /// A scene file with the folder its model paths resolve against, or a model (.glb, .gltf,
-/// .md2) mapped onto a scene as the editor opens it (its first animation; an MD2 plays every
+/// .md2, .wrl, .wrz, .x3d, .x3dv, .iv) mapped onto a scene as the editor opens it (its first animation; an MD2 plays every
 /// frame), with absolute model paths.
 pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, Option<PathBuf>)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("glb" | "gltf" | "md2") => {
+        Some("glb" | "gltf" | "md2" | "wrl" | "wrz" | "x3d" | "x3dv" | "x3dz" | "x3dvz" | "iv") => {
             let scene = keyrig_editor::files::import_model(path).map_err(anyhow::Error::msg)?;
             Ok((scene, None))
         }

@@ -328,8 +328,10 @@ impl<'a, 'd> Parser<'a, 'd> {
             let t = self.lex.next()?;
             match t.tok {
                 Tok::Punct(b'}') => break,
-                Tok::Eof => return err(t.at, format!("the file ends inside the `{}` node begun here", clip(kind)))
-                    .map_err(|e| ParseError { at, ..e }),
+                Tok::Eof => {
+                    return err(t.at, format!("the file ends inside the `{}` node begun here", clip(kind)))
+                        .map_err(|e| ParseError { at, ..e })
+                }
                 Tok::Ident("ROUTE") => self.route(t.at)?,
                 Tok::Ident("PROTO") => self.proto(t.at, false)?,
                 Tok::Ident("EXTERNPROTO") => self.proto(t.at, true)?,
@@ -345,7 +347,12 @@ impl<'a, 'd> Parser<'a, 'd> {
                         let t = self.lex.next()?;
                         match t.tok {
                             Tok::Ident(n) => (n, t.at),
-                            other => return err(t.at, format!("expected a field name, found {}", describe(&other))),
+                            other => {
+                                return err(
+                                    t.at,
+                                    format!("expected a field name, found {}", describe(&other)),
+                                )
+                            }
                         }
                     };
                     let value = if takes_value(name) {
@@ -375,7 +382,11 @@ impl<'a, 'd> Parser<'a, 'd> {
                 other => {
                     return err(
                         t.at,
-                        format!("expected a field name or `}}` in the `{}` node, found {}", clip(kind), describe(&other)),
+                        format!(
+                            "expected a field name or `}}` in the `{}` node, found {}",
+                            clip(kind),
+                            describe(&other)
+                        ),
                     )
                 }
             }
@@ -456,14 +467,21 @@ impl<'a, 'd> Parser<'a, 'd> {
                         Tok::Punct(b')') => break,
                         Tok::Punct(b'|') => {}
                         Tok::Ident(n) => names.push(n.to_owned()),
-                        other => return err(t.at, format!("expected a name or `)` in a bit mask, found {}", describe(&other))),
+                        other => {
+                            return err(
+                                t.at,
+                                format!("expected a name or `)` in a bit mask, found {}", describe(&other)),
+                            )
+                        }
                     }
                 }
                 Ok(Value::Names(names))
             }
             Tok::Punct(b'~') => Ok(Value::Empty),
             Tok::Eof => err(at, format!("the file ends where field `{}` needs a value", clip(name))),
-            other => err(t.at, format!("expected a value for field `{}`, found {}", clip(name), describe(&other))),
+            other => {
+                err(t.at, format!("expected a value for field `{}`, found {}", clip(name), describe(&other)))
+            }
         }
     }
 
@@ -486,7 +504,14 @@ impl<'a, 'd> Parser<'a, 'd> {
                         Tok::Punct(b']') => break,
                         Tok::Eof => return self.unclosed(name, open),
                         other => {
-                            return err(t.at, format!("expected a number or `]` in field `{}`, found {}", clip(name), describe(&other)))
+                            return err(
+                                t.at,
+                                format!(
+                                    "expected a number or `]` in field `{}`, found {}",
+                                    clip(name),
+                                    describe(&other)
+                                ),
+                            )
                         }
                     }
                 }
@@ -501,7 +526,14 @@ impl<'a, 'd> Parser<'a, 'd> {
                         Tok::Punct(b']') => break,
                         Tok::Eof => return self.unclosed(name, open),
                         other => {
-                            return err(t.at, format!("expected a string or `]` in field `{}`, found {}", clip(name), describe(&other)))
+                            return err(
+                                t.at,
+                                format!(
+                                    "expected a string or `]` in field `{}`, found {}",
+                                    clip(name),
+                                    describe(&other)
+                                ),
+                            )
                         }
                     }
                 }
@@ -517,7 +549,14 @@ impl<'a, 'd> Parser<'a, 'd> {
                         Tok::Punct(b']') => break,
                         Tok::Eof => return self.unclosed(name, open),
                         other => {
-                            return err(t.at, format!("expected TRUE, FALSE or `]` in field `{}`, found {}", clip(name), describe(&other)))
+                            return err(
+                                t.at,
+                                format!(
+                                    "expected TRUE, FALSE or `]` in field `{}`, found {}",
+                                    clip(name),
+                                    describe(&other)
+                                ),
+                            )
                         }
                     }
                 }
@@ -553,7 +592,10 @@ impl<'a, 'd> Parser<'a, 'd> {
                 }
                 Tok::Number(_) | Tok::Str(_) => mixed = true,
                 other => {
-                    return err(t.at, format!("unexpected {} in the list of field `{}`", describe(&other), clip(name)))
+                    return err(
+                        t.at,
+                        format!("unexpected {} in the list of field `{}`", describe(&other), clip(name)),
+                    )
                 }
             }
         }
@@ -565,7 +607,13 @@ impl<'a, 'd> Parser<'a, 'd> {
     }
 
     fn unclosed<T>(&self, name: &str, open: usize) -> Result<T> {
-        err(open, format!("the list of field `{}` opened here is not closed before the end of the file", clip(name)))
+        err(
+            open,
+            format!(
+                "the list of field `{}` opened here is not closed before the end of the file",
+                clip(name)
+            ),
+        )
     }
 
     /// `ROUTE a.f TO b.g` (the keyword is read).
@@ -623,12 +671,20 @@ impl<'a, 'd> Parser<'a, 'd> {
                     let fat = self.lex.offset();
                     let default =
                         if takes_value(access) && !external { Some(self.value(fname, fat)?) } else { None };
-                    fields.push(ProtoField { access: access.to_owned(), kind, name: fname.to_owned(), default });
+                    fields.push(ProtoField {
+                        access: access.to_owned(),
+                        kind,
+                        name: fname.to_owned(),
+                        default,
+                    });
                 }
                 other => {
                     return err(
                         t.at,
-                        format!("expected an interface declaration (field, eventIn, …) or `]`, found {}", describe(&other)),
+                        format!(
+                            "expected an interface declaration (field, eventIn, …) or `]`, found {}",
+                            describe(&other)
+                        ),
                     )
                 }
             }
@@ -643,7 +699,9 @@ impl<'a, 'd> Parser<'a, 'd> {
                     Value::Empty => Vec::new(),
                     _ => return err(t.at, "an EXTERNPROTO's URL list must hold strings"),
                 },
-                other => return err(t.at, format!("expected the EXTERNPROTO's URL, found {}", describe(&other))),
+                other => {
+                    return err(t.at, format!("expected the EXTERNPROTO's URL, found {}", describe(&other)))
+                }
             };
             self.doc.protos.push(Proto {
                 name: name.clone(),
@@ -669,7 +727,14 @@ impl<'a, 'd> Parser<'a, 'd> {
             self.template_depth -= 1;
             let scope = self.scopes.pop().unwrap_or_default();
             let routes = self.resolve_routes(&scope)?;
-            self.doc.protos.push(Proto { name: name.clone(), fields, body, routes, extern_urls: None, place: self.place(at) });
+            self.doc.protos.push(Proto {
+                name: name.clone(),
+                fields,
+                body,
+                routes,
+                extern_urls: None,
+                place: self.place(at),
+            });
         }
         if let Some(scope) = self.scopes.last_mut() {
             scope.protos.insert(name, index);

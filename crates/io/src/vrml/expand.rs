@@ -99,7 +99,12 @@ fn ends(interface: &Interface, node: NodeId, field: &str) -> Vec<(NodeId, String
     out
 }
 
-fn instantiate(doc: &mut Document, instance: NodeId, proto: usize, interface: &mut Interface) -> Result<(), ExpandError> {
+fn instantiate(
+    doc: &mut Document,
+    instance: NodeId,
+    proto: usize,
+    interface: &mut Interface,
+) -> Result<(), ExpandError> {
     let inst = doc.nodes[instance.0 as usize].clone();
     let def = &doc.protos[proto];
     let name = def.name.clone();

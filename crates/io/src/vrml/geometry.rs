@@ -94,14 +94,19 @@ impl Tessellation {
     /// `points` must have every index the faces use (checked when the mesh was built).
     #[must_use]
     pub fn frame(&self, points: &[Vec3]) -> Frame {
-        let positions: Vec<Vec3> = self.vertex_point.iter().map(|&p| points.get(p as usize).copied().unwrap_or(Vec3::ZERO)).collect();
+        let positions: Vec<Vec3> = self
+            .vertex_point
+            .iter()
+            .map(|&p| points.get(p as usize).copied().unwrap_or(Vec3::ZERO))
+            .collect();
         let normals = match &self.explicit_normals {
             Some(n) => n.clone(),
             None => {
                 let faces = self.face_normals(points);
                 (0..self.vertex_point.len())
                     .map(|v| {
-                        let group = &self.group_faces[self.group_start[v] as usize..self.group_start[v + 1] as usize];
+                        let group =
+                            &self.group_faces[self.group_start[v] as usize..self.group_start[v + 1] as usize];
                         let sum: Vec3 = group.iter().map(|&f| faces[f as usize]).sum();
                         sum.normalize_or(Vec3::Y)
                     })
@@ -180,7 +185,8 @@ impl PolyMesh {
                 let point = self.corners[corner];
                 // The faces this corner's normal sums.
                 let group: Vec<u32> = if smooth {
-                    let mut g: Vec<u32> = around[around_start[point as usize] as usize..around_start[point as usize + 1] as usize]
+                    let mut g: Vec<u32> = around
+                        [around_start[point as usize] as usize..around_start[point as usize + 1] as usize]
                         .iter()
                         .copied()
                         .filter(|&g| face_normals[g as usize].dot(face_normals[f]) >= cos_crease - 1e-6)
@@ -256,7 +262,9 @@ fn ear_clip(pts: &[Vec3], normal: Vec3, out: &mut Vec<[usize; 3]>) {
             let inside = idx.iter().any(|&k| {
                 k != a && k != b && k != c && {
                     let p = p2[k];
-                    cross(p2[a], p2[b], p) >= 0.0 && cross(p2[b], p2[c], p) >= 0.0 && cross(p2[c], p2[a], p) >= 0.0
+                    cross(p2[a], p2[b], p) >= 0.0
+                        && cross(p2[b], p2[c], p) >= 0.0
+                        && cross(p2[c], p2[a], p) >= 0.0
                 }
             });
             if !inside {
@@ -309,11 +317,20 @@ pub fn box_solid(size: Vec3) -> Solid {
     let (x, y, z) = (h.x, h.y, h.z);
     // Front, back, right, left, top, bottom; each seen from outside, texture upright.
     s.quad([Vec3::new(-x, -y, z), Vec3::new(x, -y, z), Vec3::new(x, y, z), Vec3::new(-x, y, z)], Vec3::Z);
-    s.quad([Vec3::new(x, -y, -z), Vec3::new(-x, -y, -z), Vec3::new(-x, y, -z), Vec3::new(x, y, -z)], -Vec3::Z);
+    s.quad(
+        [Vec3::new(x, -y, -z), Vec3::new(-x, -y, -z), Vec3::new(-x, y, -z), Vec3::new(x, y, -z)],
+        -Vec3::Z,
+    );
     s.quad([Vec3::new(x, -y, z), Vec3::new(x, -y, -z), Vec3::new(x, y, -z), Vec3::new(x, y, z)], Vec3::X);
-    s.quad([Vec3::new(-x, -y, -z), Vec3::new(-x, -y, z), Vec3::new(-x, y, z), Vec3::new(-x, y, -z)], -Vec3::X);
+    s.quad(
+        [Vec3::new(-x, -y, -z), Vec3::new(-x, -y, z), Vec3::new(-x, y, z), Vec3::new(-x, y, -z)],
+        -Vec3::X,
+    );
     s.quad([Vec3::new(-x, y, z), Vec3::new(x, y, z), Vec3::new(x, y, -z), Vec3::new(-x, y, -z)], Vec3::Y);
-    s.quad([Vec3::new(-x, -y, -z), Vec3::new(x, -y, -z), Vec3::new(x, -y, z), Vec3::new(-x, -y, z)], -Vec3::Y);
+    s.quad(
+        [Vec3::new(-x, -y, -z), Vec3::new(x, -y, -z), Vec3::new(x, -y, z), Vec3::new(-x, -y, z)],
+        -Vec3::Y,
+    );
     s
 }
 
@@ -346,7 +363,14 @@ pub fn sphere_solid(radius: f32) -> Solid {
 /// A cylinder (`top_radius` = `bottom_radius`) or cone (`top_radius` 0) along Y, centred on
 /// the origin, with the parts asked for.
 #[must_use]
-pub fn round_solid(bottom_radius: f32, top_radius: f32, height: f32, side: bool, bottom: bool, top: bool) -> Solid {
+pub fn round_solid(
+    bottom_radius: f32,
+    top_radius: f32,
+    height: f32,
+    side: bool,
+    bottom: bool,
+    top: bool,
+) -> Solid {
     let mut s = Solid::default();
     let n = ROUND_SEGMENTS;
     let h = height * 0.5;
@@ -377,7 +401,11 @@ pub fn round_solid(bottom_radius: f32, top_radius: f32, height: f32, side: bool,
         let ring: Vec<u32> = (0..n)
             .map(|k| {
                 let d = dir(angle(k));
-                s.vertex(d * radius + Vec3::Y * y, normal, Vec2::new(0.5 + 0.5 * d.x, 0.5 - 0.5 * d.z * if up { 1.0 } else { -1.0 }))
+                s.vertex(
+                    d * radius + Vec3::Y * y,
+                    normal,
+                    Vec2::new(0.5 + 0.5 * d.x, 0.5 - 0.5 * d.z * if up { 1.0 } else { -1.0 }),
+                )
             })
             .collect();
         for k in 0..n {

@@ -184,10 +184,13 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
         "BaseColor" => state.diffuse = v3(t, id, "rgb", Vec3::splat(0.8)),
         "Coordinate3" => state.coords = Arc::new(vec3s(nums(t, id, "point"))),
         "Normal" => state.normals = Some(Arc::new(vec3s(nums(t, id, "vector")))),
-        "NormalBinding" => state.normal_binding = name_value(t, id, "value").unwrap_or_else(|| "DEFAULT".into()),
+        "NormalBinding" => {
+            state.normal_binding = name_value(t, id, "value").unwrap_or_else(|| "DEFAULT".into())
+        }
         "TextureCoordinate2" => {
-            state.texcoords =
-                Some(Arc::new(nums(t, id, "point").chunks_exact(2).map(|c| Vec2::new(c[0] as f32, c[1] as f32)).collect()));
+            state.texcoords = Some(Arc::new(
+                nums(t, id, "point").chunks_exact(2).map(|c| Vec2::new(c[0] as f32, c[1] as f32)).collect(),
+            ));
         }
         "Texture2" => state.texture = t.texture_of(id),
         "ShapeHints" => {
@@ -200,10 +203,16 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
             }
         }
         "Cube" => {
-            let size = Vec3::new(num(t, id, "width", 2.0), num(t, id, "height", 2.0), num(t, id, "depth", 2.0));
+            let size =
+                Vec3::new(num(t, id, "width", 2.0), num(t, id, "height", 2.0), num(t, id, "depth", 2.0));
             push_shape(t, id, state, GeometryRef::Solid(Arc::new(geometry::box_solid(size))));
         }
-        "Sphere" => push_shape(t, id, state, GeometryRef::Solid(Arc::new(geometry::sphere_solid(num(t, id, "radius", 1.0))))),
+        "Sphere" => push_shape(
+            t,
+            id,
+            state,
+            GeometryRef::Solid(Arc::new(geometry::sphere_solid(num(t, id, "radius", 1.0)))),
+        ),
         "Cone" => {
             let s = geometry::round_solid(
                 num(t, id, "bottomRadius", 1.0),
@@ -244,7 +253,11 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
                 }
             };
             let m = state.matrix;
-            let location = if kind == "DirectionalLight" { Vec3::ZERO } else { v3(t, id, "location", Vec3::new(0.0, 0.0, 1.0)) };
+            let location = if kind == "DirectionalLight" {
+                Vec3::ZERO
+            } else {
+                v3(t, id, "location", Vec3::new(0.0, 0.0, 1.0))
+            };
             let direction = v3(t, id, "direction", -Vec3::Z);
             t.lights.push(LightInstance {
                 node: None,
@@ -271,12 +284,22 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
             t.views.push((view, Vec::new()));
         }
         "Info" => t.skips_add(kind, "not imported (its text is a comment)", id),
-        "Complexity" | "DrawStyle" | "LightModel" | "Font" | "PickStyle" | "Environment" | "MaterialBinding"
-        | "TextureCoordinateBinding" | "Units" | "TextureCoordinateDefault" => {
+        "Complexity"
+        | "DrawStyle"
+        | "LightModel"
+        | "Font"
+        | "PickStyle"
+        | "Environment"
+        | "MaterialBinding"
+        | "TextureCoordinateBinding"
+        | "Units"
+        | "TextureCoordinateDefault" => {
             t.skips_add(kind, "a drawing setting keyrig does not take", id);
         }
         "Text2" | "Text3" | "AsciiText" => t.skips_add(kind, "text is not imported", id),
-        "IndexedLineSet" | "LineSet" | "PointSet" => t.skips_add(kind, "lines and points are not imported (keyrig draws triangles)", id),
+        "IndexedLineSet" | "LineSet" | "PointSet" => {
+            t.skips_add(kind, "lines and points are not imported (keyrig draws triangles)", id)
+        }
         _ => t.skips_add(kind, "this node type is not imported", id),
     }
     Ok(())
@@ -312,8 +335,12 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
     let node = doc.node(id);
     let kind = node.kind.as_str();
     let vp = node.value("vertexProperty").and_then(|v| v.nodes().first().copied());
-    let (mut coords, mut normals, mut binding, mut texcoords) =
-        (Arc::clone(&state.coords), state.normals.clone(), state.normal_binding.clone(), state.texcoords.clone());
+    let (mut coords, mut normals, mut binding, mut texcoords) = (
+        Arc::clone(&state.coords),
+        state.normals.clone(),
+        state.normal_binding.clone(),
+        state.texcoords.clone(),
+    );
     if let Some(vp) = vp {
         let v = vec3s(nums(t, vp, "vertex"));
         if !v.is_empty() {
@@ -324,16 +351,22 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
             normals = Some(Arc::new(n));
             binding = name_value(t, vp, "normalBinding").unwrap_or_else(|| "PER_VERTEX_INDEXED".into());
         }
-        let uv: Vec<Vec2> = nums(t, vp, "texCoord").chunks_exact(2).map(|c| Vec2::new(c[0] as f32, c[1] as f32)).collect();
+        let uv: Vec<Vec2> =
+            nums(t, vp, "texCoord").chunks_exact(2).map(|c| Vec2::new(c[0] as f32, c[1] as f32)).collect();
         if !uv.is_empty() {
             texcoords = Some(Arc::new(uv));
         }
         if nums(t, vp, "orderedRGBA").len() > 1 {
-            t.skips_add("VertexProperty.orderedRGBA", "per-vertex and per-face colours are not imported (the material's colour is used)", vp);
+            t.skips_add(
+                "VertexProperty.orderedRGBA",
+                "per-vertex and per-face colours are not imported (the material's colour is used)",
+                vp,
+            );
         }
     }
     let ints = |name: &str| -> Vec<i64> { nums(t, id, name).iter().map(|&v| v as i64).collect() };
-    let mut mesh = PolyMesh { ccw: state.ccw, convex: true, crease_angle: state.crease, ..PolyMesh::default() };
+    let mut mesh =
+        PolyMesh { ccw: state.ccw, convex: true, crease_angle: state.crease, ..PolyMesh::default() };
     mesh.face_start.push(0);
     let start = num(t, id, "startIndex", 0.0).max(0.0) as u32;
     match kind {
@@ -356,7 +389,11 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
         "FaceSet" | "TriangleStripSet" => {
             let mut next = start;
             let counts = ints("numVertices");
-            let counts = if counts.is_empty() || counts == [-1] { vec![i64::from(coords.len() as u32 - next.min(coords.len() as u32))] } else { counts };
+            let counts = if counts.is_empty() || counts == [-1] {
+                vec![i64::from(coords.len() as u32 - next.min(coords.len() as u32))]
+            } else {
+                counts
+            };
             for c in counts {
                 let c = u32::try_from(c).map_err(|_| format!("numVertices {c}"))?;
                 let run: Vec<u32> = (next..next.saturating_add(c)).collect();
@@ -381,7 +418,8 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
             }
         }
         "QuadMesh" => {
-            let (rows, cols) = (num(t, id, "verticesPerColumn", 1.0) as u32, num(t, id, "verticesPerRow", 1.0) as u32);
+            let (rows, cols) =
+                (num(t, id, "verticesPerColumn", 1.0) as u32, num(t, id, "verticesPerRow", 1.0) as u32);
             for r in 0..rows.saturating_sub(1) {
                 for c in 0..cols.saturating_sub(1) {
                     let a = start + r * cols + c;
@@ -399,7 +437,9 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
     if let Some(n) = &normals {
         let index: Vec<i64> = ints("normalIndex").into_iter().filter(|&i| i >= 0).collect();
         let get = |i: usize| -> Result<Vec3, String> {
-            n.get(i).copied().ok_or_else(|| format!("normal index {i} is out of range (there are {})", n.len()))
+            n.get(i)
+                .copied()
+                .ok_or_else(|| format!("normal index {i} is out of range (there are {})", n.len()))
         };
         let mut per_corner = Vec::with_capacity(mesh.corners.len());
         for f in 0..faces {
@@ -421,7 +461,9 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
         let mut per_corner = Vec::with_capacity(mesh.corners.len());
         for (k, &c) in mesh.corners.iter().enumerate() {
             let i = index.get(k).map_or(c as usize, |&i| i as usize);
-            per_corner.push(uv.get(i).copied().ok_or_else(|| format!("texture coordinate index {i} is out of range"))?);
+            per_corner.push(
+                uv.get(i).copied().ok_or_else(|| format!("texture coordinate index {i} is out of range"))?,
+            );
         }
         mesh.corner_uvs = Some(per_corner);
     }
@@ -434,7 +476,8 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
 
 fn strip(mesh: &mut PolyMesh, run: &[u32]) {
     for i in 2..run.len() {
-        let tri = if i % 2 == 0 { [run[i - 2], run[i - 1], run[i]] } else { [run[i - 1], run[i - 2], run[i]] };
+        let tri =
+            if i % 2 == 0 { [run[i - 2], run[i - 1], run[i]] } else { [run[i - 1], run[i - 2], run[i]] };
         mesh.corners.extend_from_slice(&tri);
         mesh.face_start.push(mesh.corners.len() as u32);
     }

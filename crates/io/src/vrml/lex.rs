@@ -155,7 +155,10 @@ impl<'a> Lexer<'a> {
         let mut run = i;
         loop {
             let Some(&b) = bytes.get(i) else {
-                return Err(LexError { at, message: "a string is not closed before the end of the file".into() });
+                return Err(LexError {
+                    at,
+                    message: "a string is not closed before the end of the file".into(),
+                });
             };
             match b {
                 b'"' => {
@@ -242,10 +245,7 @@ impl<'a> Lexer<'a> {
                 let stop = self.text[end..]
                     .find(|c: char| c.is_whitespace() || "[]{},".contains(c))
                     .map_or(self.text.len(), |n| end + n);
-                Err(LexError {
-                    at,
-                    message: format!("`{}` is not a number", clip(&self.text[at..stop])),
-                })
+                Err(LexError { at, message: format!("`{}` is not a number", clip(&self.text[at..stop])) })
             }
             _ => Ok(()),
         }
@@ -295,7 +295,10 @@ mod tests {
     #[test]
     fn vrml_tokens() {
         assert_eq!(
-            tokens("DEF A Transform { translation 1,-2.5e1 .5 # c\n url \"a\\\"b\" } ROUTE A.x TO B.y_z", false),
+            tokens(
+                "DEF A Transform { translation 1,-2.5e1 .5 # c\n url \"a\\\"b\" } ROUTE A.x TO B.y_z",
+                false
+            ),
             vec![
                 Tok::Ident("DEF"),
                 Tok::Ident("A"),

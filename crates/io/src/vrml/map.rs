@@ -184,7 +184,11 @@ impl VrmlModel {
         for o in &self.objects {
             let Some(keyrig_core::MeshSource::File { mesh: Some(m), .. }) = &o.mesh else { continue };
             let Some(mesh) = self.meshes.get(*m) else { continue };
-            let world = Mat4::from_scale_rotation_translation(o.scale.value, o.rotation.value.normalize(), o.translation.value);
+            let world = Mat4::from_scale_rotation_translation(
+                o.scale.value,
+                o.rotation.value.normalize(),
+                o.translation.value,
+            );
             for p in &mesh.positions {
                 let p = world.transform_point3(*p);
                 b = (b.0.min(p), b.1.max(p));
@@ -205,7 +209,9 @@ impl VrmlModel {
             .joints
             .iter()
             .enumerate()
-            .map(|(j, name)| keyrig_skin::RestJoint::new(name.clone(), j.checked_sub(1), Vec3::ZERO, Quat::IDENTITY))
+            .map(|(j, name)| {
+                keyrig_skin::RestJoint::new(name.clone(), j.checked_sub(1), Vec3::ZERO, Quat::IDENTITY)
+            })
             .collect();
         let skeleton = keyrig_skin::RestSkeleton::new(&rest)?;
         let last = (mesh.joints.len().max(1) - 1) as u16;
@@ -544,7 +550,11 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
         let field = base_field(&r.to_field).to_owned();
         let key = (r.to, field.clone());
         if channels.contains_key(&key) {
-            skipped.add(format!("{}.{}", target.kind, field), "a second interpolator drives the same field", r.place);
+            skipped.add(
+                format!("{}.{}", target.kind, field),
+                "a second interpolator drives the same field",
+                r.place,
+            );
             continue;
         }
         let fractions = numbers(doc, interp, "key").unwrap_or(&[]);
@@ -561,8 +571,11 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
         let arity = |a: usize| -> Option<usize> { (values.len() >= n * a).then_some(a) };
         let channel = match from.kind.as_str() {
             "PositionInterpolator" | "SplinePositionInterpolator" => arity(3).map(|a| {
-                let v: Vec<Vec3> =
-                    values.chunks_exact(a).take(n).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+                let v: Vec<Vec3> = values
+                    .chunks_exact(a)
+                    .take(n)
+                    .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+                    .collect();
                 let keys = if from.kind == "SplinePositionInterpolator" {
                     spline_keys(doc, interp, fractions, &v, timing.cycle)
                 } else {
@@ -571,18 +584,27 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
                 Channel::Vec3(RawTrack::new(keys), timing)
             }),
             "ColorInterpolator" => arity(3).map(|a| {
-                let v: Vec<Vec3> =
-                    values.chunks_exact(a).take(n).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+                let v: Vec<Vec3> = values
+                    .chunks_exact(a)
+                    .take(n)
+                    .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+                    .collect();
                 let keys = keyed(fractions, &v, timing.cycle, hsv_lerp);
                 Channel::Vec3(RawTrack::new(resample_colour(&keys)), timing)
             }),
             "OrientationInterpolator" => arity(4).map(|a| {
                 let v: Vec<Quat> = values.chunks_exact(a).take(n).map(axis_angle).collect();
-                Channel::Quat(RawTrack::new(keyed(fractions, &v, timing.cycle, crate::model::slerp_short)), timing)
+                Channel::Quat(
+                    RawTrack::new(keyed(fractions, &v, timing.cycle, crate::model::slerp_short)),
+                    timing,
+                )
             }),
             "ScalarInterpolator" => arity(1).map(|_| {
                 let v: Vec<f32> = values.iter().take(n).map(|&x| x as f32).collect();
-                Channel::Scalar(RawTrack::new(keyed(fractions, &v, timing.cycle, |a, b, u| a + (b - a) * u)), timing)
+                Channel::Scalar(
+                    RawTrack::new(keyed(fractions, &v, timing.cycle, |a, b, u| a + (b - a) * u)),
+                    timing,
+                )
             }),
             "CoordinateInterpolator" => {
                 let points = values.len() / 3 / n;
@@ -604,7 +626,11 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
             }
         };
         let Some(channel) = channel else {
-            skipped.add(from.kind.clone(), format!("keyValue has fewer values than its {n} keys need"), from.place);
+            skipped.add(
+                from.kind.clone(),
+                format!("keyValue has fewer values than its {n} keys need"),
+                from.place,
+            );
             continue;
         };
         duration = duration.max(timing.cycle);
@@ -724,7 +750,11 @@ pub(crate) struct ShapeInstance {
 #[derive(Clone, Debug)]
 pub(crate) enum GeometryRef {
     /// A polygon mesh over the points of `coord` (a Coordinate node, for morphing) or given.
-    Poly { tess: Arc<Tessellation>, points: Arc<Vec<Vec3>>, coord: Option<NodeId> },
+    Poly {
+        tess: Arc<Tessellation>,
+        points: Arc<Vec<Vec3>>,
+        coord: Option<NodeId>,
+    },
     Solid(Arc<Solid>),
 }
 
@@ -748,10 +778,14 @@ impl Skips {
     }
 
     fn into_list(self, doc: &Document) -> Vec<Skipped> {
-        self
-            .items
+        self.items
             .into_iter()
-            .map(|((what, why), (count, place))| Skipped { what, why, place: Some(place_text(doc, place)), count })
+            .map(|((what, why), (count, place))| Skipped {
+                what,
+                why,
+                place: Some(place_text(doc, place)),
+                count,
+            })
             .collect()
     }
 }
@@ -760,7 +794,10 @@ pub(crate) fn place_text(doc: &Document, place: Place) -> String {
     match doc.files.get(place.file.0 as usize) {
         Some(f) => {
             let (line, column) = super::lex::line_column(&f.text, place.at);
-            let name = f.path.file_name().map_or_else(|| f.path.display().to_string(), |n| n.to_string_lossy().into_owned());
+            let name = f
+                .path
+                .file_name()
+                .map_or_else(|| f.path.display().to_string(), |n| n.to_string_lossy().into_owned());
             format!("{name}:{line}:{column}")
         }
         None => format!("byte {}", place.at),
@@ -819,14 +856,24 @@ impl<'d> Traversal<'d> {
         Ok(())
     }
 
-    fn visit_all(&mut self, ids: &[NodeId], frames: &mut Vec<Frame>, names: &mut Vec<String>) -> Result<(), VrmlError> {
+    fn visit_all(
+        &mut self,
+        ids: &[NodeId],
+        frames: &mut Vec<Frame>,
+        names: &mut Vec<String>,
+    ) -> Result<(), VrmlError> {
         for &id in ids {
             self.visit(id, frames, names)?;
         }
         Ok(())
     }
 
-    fn visit(&mut self, id: NodeId, frames: &mut Vec<Frame>, names: &mut Vec<String>) -> Result<(), VrmlError> {
+    fn visit(
+        &mut self,
+        id: NodeId,
+        frames: &mut Vec<Frame>,
+        names: &mut Vec<String>,
+    ) -> Result<(), VrmlError> {
         let doc = self.doc;
         let id = doc.resolved(id);
         self.count_visit(id)?;
@@ -853,20 +900,26 @@ impl<'d> Traversal<'d> {
             }
             "Group" | "StaticGroup" | "Anchor" | "Collision" | "CADAssembly" | "CADLayer" | "Billboard" => {
                 if kind == "Billboard" {
-                    self.skips.add("Billboard", "its turning towards the viewer is not imported (drawn as a Group)", node.place);
+                    self.skips.add(
+                        "Billboard",
+                        "its turning towards the viewer is not imported (drawn as a Group)",
+                        node.place,
+                    );
                 }
                 self.visit_all(&children("children"), frames, names)?;
             }
             "CADFace" => self.visit_all(&children("shape"), frames, names)?,
             "Switch" => {
                 let choice = float(doc, id, "whichChoice", -1.0) as i64;
-                let list = if node.value("choice").is_some() { children("choice") } else { children("children") };
+                let list =
+                    if node.value("choice").is_some() { children("choice") } else { children("children") };
                 if let Some(&c) = usize::try_from(choice).ok().and_then(|c| list.get(c)) {
                     self.visit(c, frames, names)?;
                 }
             }
             "LOD" => {
-                let list = if node.value("level").is_some() { children("level") } else { children("children") };
+                let list =
+                    if node.value("level").is_some() { children("level") } else { children("children") };
                 if list.len() > 1 {
                     self.skips.add("LOD", "only the first (most detailed) level is imported", node.place);
                 }
@@ -890,18 +943,20 @@ impl<'d> Traversal<'d> {
                 };
                 self.views.push((view, frames.clone()));
             }
-            "WorldInfo" | "NavigationInfo" | "Background" | "TextureBackground" | "Fog" | "Sound" | "Script"
-            | "TouchSensor" | "ProximitySensor" | "VisibilitySensor" | "PlaneSensor" | "SphereSensor"
-            | "CylinderSensor" | "KeySensor" | "StringSensor" | "BooleanFilter" | "BooleanSequencer"
-            | "IntegerSequencer" | "BooleanToggle" | "BooleanTrigger" | "TimeTrigger" | "IntegerTrigger"
-            | "MetadataSet" | "MetadataString" | "MetadataFloat" | "MetadataDouble" | "MetadataInteger"
-            | "MetadataBoolean" | "EaseInEaseOut" => {
+            "WorldInfo" | "NavigationInfo" | "Background" | "TextureBackground" | "Fog" | "Sound"
+            | "Script" | "TouchSensor" | "ProximitySensor" | "VisibilitySensor" | "PlaneSensor"
+            | "SphereSensor" | "CylinderSensor" | "KeySensor" | "StringSensor" | "BooleanFilter"
+            | "BooleanSequencer" | "IntegerSequencer" | "BooleanToggle" | "BooleanTrigger"
+            | "TimeTrigger" | "IntegerTrigger" | "MetadataSet" | "MetadataString" | "MetadataFloat"
+            | "MetadataDouble" | "MetadataInteger" | "MetadataBoolean" | "EaseInEaseOut" => {
                 self.skips.add(kind.to_owned(), "not imported (keyrig has no counterpart)", node.place);
             }
             _ if HANDLED_ELSEWHERE.contains(&kind) || is_interpolator(kind) => {}
             _ => {
                 let why = match node.proto {
-                    Some(p) if doc.protos[p].body.is_empty() => "a PROTO whose definition could not be loaded",
+                    Some(p) if doc.protos[p].body.is_empty() => {
+                        "a PROTO whose definition could not be loaded"
+                    }
                     _ => "this node type is not imported",
                 };
                 self.skips.add(kind.to_owned(), why, node.place);
@@ -924,7 +979,13 @@ impl<'d> Traversal<'d> {
             hints.push(def.clone());
         }
         hints.push(doc.node(geometry).kind.clone());
-        self.shapes.push(ShapeInstance { names: hints, frames: frames.to_vec(), geometry: g, material, place: node.place });
+        self.shapes.push(ShapeInstance {
+            names: hints,
+            frames: frames.to_vec(),
+            geometry: g,
+            material,
+            place: node.place,
+        });
         Ok(())
     }
 
@@ -940,10 +1001,18 @@ impl<'d> Traversal<'d> {
                 base = [d.x, d.y, d.z, alpha];
                 let emissive = vec3(doc, m, "emissiveColor", Vec3::ZERO);
                 if emissive != Vec3::ZERO {
-                    self.skips.add("Material.emissiveColor", "not imported (keyrig materials have a base colour only)", doc.node(m).place);
+                    self.skips.add(
+                        "Material.emissiveColor",
+                        "not imported (keyrig materials have a base colour only)",
+                        doc.node(m).place,
+                    );
                 }
                 if doc.node(m).value("specularColor").is_some() || doc.node(m).value("shininess").is_some() {
-                    self.skips.add("Material.specularColor/shininess", "not imported (keyrig materials have a base colour only)", doc.node(m).place);
+                    self.skips.add(
+                        "Material.specularColor/shininess",
+                        "not imported (keyrig materials have a base colour only)",
+                        doc.node(m).place,
+                    );
                 }
             }
             if let Some(t) = node_field(doc, app, "texture") {
@@ -963,15 +1032,24 @@ impl<'d> Traversal<'d> {
         let doc = self.doc;
         let node = doc.node(id);
         let sampler = keyrig_core::Sampler {
-            wrap_u: if boolean(doc, id, "repeatS", true) { keyrig_core::WrapMode::Repeat } else { keyrig_core::WrapMode::ClampToEdge },
-            wrap_v: if boolean(doc, id, "repeatT", true) { keyrig_core::WrapMode::Repeat } else { keyrig_core::WrapMode::ClampToEdge },
+            wrap_u: if boolean(doc, id, "repeatS", true) {
+                keyrig_core::WrapMode::Repeat
+            } else {
+                keyrig_core::WrapMode::ClampToEdge
+            },
+            wrap_v: if boolean(doc, id, "repeatT", true) {
+                keyrig_core::WrapMode::Repeat
+            } else {
+                keyrig_core::WrapMode::ClampToEdge
+            },
             ..keyrig_core::Sampler::default()
         };
         let image = match node.kind.as_str() {
             "ImageTexture" | "Texture2" => match numbers(doc, id, "image") {
                 Some(image) if node.kind == "Texture2" && image.len() > 3 => sf_image(image),
                 _ => {
-                    let urls: Vec<String> = strings(doc, id, if node.kind == "Texture2" { "filename" } else { "url" }).to_vec();
+                    let urls: Vec<String> =
+                        strings(doc, id, if node.kind == "Texture2" { "filename" } else { "url" }).to_vec();
                     self.load_image(&urls, node.place)
                 }
             },
@@ -981,9 +1059,8 @@ impl<'d> Traversal<'d> {
                 None
             }
         };
-        let texture = image.and_then(|(w, h, rgba)| {
-            keyrig_core::TextureImage::new(w, h, rgba, sampler).ok().map(Arc::new)
-        });
+        let texture = image
+            .and_then(|(w, h, rgba)| keyrig_core::TextureImage::new(w, h, rgba, sampler).ok().map(Arc::new));
         self.texture_cache.insert(id, texture.clone());
         texture
     }
@@ -1052,8 +1129,15 @@ impl<'d> Traversal<'d> {
                     boolean(doc, id, "top", true),
                 ))
             }
-            "IndexedFaceSet" | "IndexedTriangleSet" | "TriangleSet" | "IndexedTriangleFanSet"
-            | "IndexedTriangleStripSet" | "TriangleFanSet" | "TriangleStripSet" | "IndexedQuadSet" | "QuadSet"
+            "IndexedFaceSet"
+            | "IndexedTriangleSet"
+            | "TriangleSet"
+            | "IndexedTriangleFanSet"
+            | "IndexedTriangleStripSet"
+            | "TriangleFanSet"
+            | "TriangleStripSet"
+            | "IndexedQuadSet"
+            | "QuadSet"
             | "ElevationGrid" => match self.poly(id) {
                 Ok(g) => g,
                 Err(message) => {
@@ -1062,7 +1146,11 @@ impl<'d> Traversal<'d> {
                 }
             },
             other => {
-                self.skips.add(other.to_owned(), "this geometry is not imported (keyrig draws triangles)", place);
+                self.skips.add(
+                    other.to_owned(),
+                    "this geometry is not imported (keyrig draws triangles)",
+                    place,
+                );
                 None
             }
         }
@@ -1074,15 +1162,19 @@ impl<'d> Traversal<'d> {
         let kind = node.kind.as_str();
         let coord = node_field(doc, id, "coord");
         let points: Vec<Vec3> = if kind == "ElevationGrid" {
-            let (nx, nz) = (float(doc, id, "xDimension", 0.0).max(0.0) as usize, float(doc, id, "zDimension", 0.0).max(0.0) as usize);
+            let (nx, nz) = (
+                float(doc, id, "xDimension", 0.0).max(0.0) as usize,
+                float(doc, id, "zDimension", 0.0).max(0.0) as usize,
+            );
             let (dx, dz) = (float(doc, id, "xSpacing", 1.0), float(doc, id, "zSpacing", 1.0));
             let heights = numbers(doc, id, "height").unwrap_or(&[]);
             if heights.len() < nx.saturating_mul(nz) {
                 return Err(format!("{} heights for a {nx}×{nz} grid", heights.len()));
             }
-            (0..nz).flat_map(|z| (0..nx).map(move |x| (x, z))).map(|(x, z)| {
-                Vec3::new(x as f32 * dx, heights[z * nx + x] as f32, z as f32 * dz)
-            }).collect()
+            (0..nz)
+                .flat_map(|z| (0..nx).map(move |x| (x, z)))
+                .map(|(x, z)| Vec3::new(x as f32 * dx, heights[z * nx + x] as f32, z as f32 * dz))
+                .collect()
         } else {
             let Some(c) = coord else { return Ok(None) };
             numbers(doc, c, "point")
@@ -1094,7 +1186,9 @@ impl<'d> Traversal<'d> {
         if points.iter().any(|p| !p.is_finite()) {
             return Err("a point is not finite".into());
         }
-        let ints = |name: &str| -> Vec<i64> { numbers(doc, id, name).unwrap_or(&[]).iter().map(|&v| v as i64).collect() };
+        let ints = |name: &str| -> Vec<i64> {
+            numbers(doc, id, name).unwrap_or(&[]).iter().map(|&v| v as i64).collect()
+        };
         let mut mesh = PolyMesh {
             ccw: boolean(doc, id, "ccw", true),
             convex: boolean(doc, id, "convex", true),
@@ -1202,7 +1296,8 @@ impl<'d> Traversal<'d> {
                 .collect();
             let per_vertex = boolean(doc, id, "normalPerVertex", true);
             let index = ints("normalIndex");
-            mesh.corner_normals = Some(per_corner(&mesh, &vectors, &index, per_vertex, faces, kind == "IndexedFaceSet")?);
+            mesh.corner_normals =
+                Some(per_corner(&mesh, &vectors, &index, per_vertex, faces, kind == "IndexedFaceSet")?);
         }
         if let Some(t) = node_field(doc, id, "texCoord") {
             let uvs: Vec<Vec2> = numbers(doc, t, "point")
@@ -1217,13 +1312,22 @@ impl<'d> Traversal<'d> {
             let nz = float(doc, id, "zDimension", 0.0).max(2.0) - 1.0;
             let dx = float(doc, id, "xSpacing", 1.0);
             let dz = float(doc, id, "zSpacing", 1.0);
-            mesh.corner_uvs = Some(mesh.corners.iter().map(|&c| {
-                let p = points[c as usize];
-                Vec2::new(p.x / dx / nx, p.z / dz / nz)
-            }).collect());
+            mesh.corner_uvs = Some(
+                mesh.corners
+                    .iter()
+                    .map(|&c| {
+                        let p = points[c as usize];
+                        Vec2::new(p.x / dx / nx, p.z / dz / nz)
+                    })
+                    .collect(),
+            );
         }
         if node.value("color").is_some() {
-            self.skips.add(format!("{kind}.color"), "per-vertex and per-face colours are not imported (the material's colour is used)", node.place);
+            self.skips.add(
+                format!("{kind}.color"),
+                "per-vertex and per-face colours are not imported (the material's colour is used)",
+                node.place,
+            );
         }
         let tess = mesh.tessellate(&points)?;
         if tess.indices.is_empty() {
@@ -1266,9 +1370,10 @@ fn per_corner<T: Copy>(
     indexed_faces: bool,
 ) -> Result<Vec<T>, String> {
     let get = |i: i64| -> Result<T, String> {
-        usize::try_from(i).ok().and_then(|i| values.get(i).copied()).ok_or_else(|| {
-            format!("index {i} is out of range (there are {} values)", values.len())
-        })
+        usize::try_from(i)
+            .ok()
+            .and_then(|i| values.get(i).copied())
+            .ok_or_else(|| format!("index {i} is out of range (there are {} values)", values.len()))
     };
     let mut out = Vec::with_capacity(mesh.corners.len());
     if per_vertex {
@@ -1341,14 +1446,23 @@ impl Traversal<'_> {
             _ => {
                 let cutoff = float(doc, id, "cutOffAngle", std::f32::consts::FRAC_PI_4).to_degrees();
                 let beam = float(doc, id, "beamWidth", std::f32::consts::FRAC_PI_2).to_degrees();
-                keyrig_core::LightKind::Spot { cutoff_deg: cutoff, inner_angle_deg: beam.min(cutoff), dropoff: 1.0 }
+                keyrig_core::LightKind::Spot {
+                    cutoff_deg: cutoff,
+                    inner_angle_deg: beam.min(cutoff),
+                    dropoff: 1.0,
+                }
             }
         };
         if float(doc, id, "ambientIntensity", 0.0) != 0.0 {
-            self.skips.add(format!("{}.ambientIntensity", node.kind), "not imported (keyrig's ambient light is the scene's)", node.place);
+            self.skips.add(
+                format!("{}.ambientIntensity", node.kind),
+                "not imported (keyrig's ambient light is the scene's)",
+                node.place,
+            );
         }
         let name = node.def.clone().unwrap_or_else(|| node.kind.clone());
-        let position = if node.kind == "DirectionalLight" { Vec3::ZERO } else { vec3(doc, id, "location", Vec3::ZERO) };
+        let position =
+            if node.kind == "DirectionalLight" { Vec3::ZERO } else { vec3(doc, id, "location", Vec3::ZERO) };
         self.lights.push(LightInstance {
             node: Some(id),
             frames: frames.to_vec(),
@@ -1434,9 +1548,11 @@ impl Mapper<'_> {
 
     fn frame_animated(&self, frame: &Frame) -> bool {
         match frame {
-            Frame::Transform { node, .. } => ["translation", "rotation", "scale", "center", "scaleOrientation"]
-                .iter()
-                .any(|f| self.anim.channels.contains_key(&(*node, (*f).to_owned()))),
+            Frame::Transform { node, .. } => {
+                ["translation", "rotation", "scale", "center", "scaleOrientation"]
+                    .iter()
+                    .any(|f| self.anim.channels.contains_key(&(*node, (*f).to_owned())))
+            }
             Frame::Matrix(_) => false,
         }
     }
@@ -1448,7 +1564,8 @@ impl Mapper<'_> {
         let so = rotation(doc, node, "scaleOrientation");
         let s = vec3(doc, node, "scale", Vec3::ONE);
         let scale_animated = self.vec3_channel(node, "scale").is_some();
-        c == Vec3::ZERO && (so.angle_between(Quat::IDENTITY) < 1e-6 || (s.x == s.y && s.y == s.z && !scale_animated))
+        c == Vec3::ZERO
+            && (so.angle_between(Quat::IDENTITY) < 1e-6 || (s.x == s.y && s.y == s.z && !scale_animated))
     }
 
     /// The animated translation, rotation and scale of a plain Transform.
@@ -1473,7 +1590,12 @@ impl Mapper<'_> {
     }
 
     /// The joints of one frame (1 to 3, see the module documentation).
-    fn joints_of(&mut self, frame: &Frame, out: &mut Vec<keyrig_core::Joint>, used: &mut HashMap<String, usize>) {
+    fn joints_of(
+        &mut self,
+        frame: &Frame,
+        out: &mut Vec<keyrig_core::Joint>,
+        used: &mut HashMap<String, usize>,
+    ) {
         let mut unique = |base: String| {
             let base = base.replace('/', "_");
             let n = used.entry(base.clone()).or_insert(0);
@@ -1488,7 +1610,12 @@ impl Mapper<'_> {
         match frame {
             Frame::Matrix(m) => {
                 let (t, r, s) = exact_trs(*m).unwrap_or((m.w_axis.truncate(), Quat::IDENTITY, Vec3::ONE));
-                let mut j = keyrig_core::Joint::new(unique("Transform".into()), parent(out), Vec3::ZERO, Quat::IDENTITY);
+                let mut j = keyrig_core::Joint::new(
+                    unique("Transform".into()),
+                    parent(out),
+                    Vec3::ZERO,
+                    Quat::IDENTITY,
+                );
                 j.translation = Animated::constant(t);
                 j.rotation = Animated::constant(r);
                 j.scale = Animated::constant(s);
@@ -1499,12 +1626,21 @@ impl Mapper<'_> {
                 let doc = self.doc;
                 for f in ["center", "scaleOrientation"] {
                     if self.anim.channels.contains_key(&(node, f.to_owned())) {
-                        self.skips.add(format!("Transform.{f} animation"), "not imported (its value at rest is used)", doc.node(node).place);
+                        self.skips.add(
+                            format!("Transform.{f} animation"),
+                            "not imported (its value at rest is used)",
+                            doc.node(node).place,
+                        );
                     }
                 }
                 let (t, r, s) = self.trs(node);
                 if self.plain(node) {
-                    let mut j = keyrig_core::Joint::new(unique(name.clone()), parent(out), Vec3::ZERO, Quat::IDENTITY);
+                    let mut j = keyrig_core::Joint::new(
+                        unique(name.clone()),
+                        parent(out),
+                        Vec3::ZERO,
+                        Quat::IDENTITY,
+                    );
                     j.translation = t;
                     j.rotation = r;
                     j.scale = s;
@@ -1518,7 +1654,8 @@ impl Mapper<'_> {
                 for k in shifted.track.keys.iter_mut() {
                     k.value += c;
                 }
-                let mut j1 = keyrig_core::Joint::new(unique(name.clone()), parent(out), Vec3::ZERO, Quat::IDENTITY);
+                let mut j1 =
+                    keyrig_core::Joint::new(unique(name.clone()), parent(out), Vec3::ZERO, Quat::IDENTITY);
                 j1.translation = shifted;
                 j1.rotation = r;
                 let with_so = so.angle_between(Quat::IDENTITY) >= 1e-6;
@@ -1527,12 +1664,22 @@ impl Mapper<'_> {
                     out.push(j1);
                 } else {
                     out.push(j1);
-                    let mut j2 = keyrig_core::Joint::new(unique(format!("{name} scaleOrientation")), parent(out), Vec3::ZERO, Quat::IDENTITY);
+                    let mut j2 = keyrig_core::Joint::new(
+                        unique(format!("{name} scaleOrientation")),
+                        parent(out),
+                        Vec3::ZERO,
+                        Quat::IDENTITY,
+                    );
                     j2.rotation = Animated::constant(so);
                     j2.scale = s;
                     out.push(j2);
                 }
-                let mut j3 = keyrig_core::Joint::new(unique(format!("{name} center")), parent(out), Vec3::ZERO, Quat::IDENTITY);
+                let mut j3 = keyrig_core::Joint::new(
+                    unique(format!("{name} center")),
+                    parent(out),
+                    Vec3::ZERO,
+                    Quat::IDENTITY,
+                );
                 j3.translation = Animated::constant(-(so.inverse() * c));
                 j3.rotation = Animated::constant(so.inverse());
                 out.push(j3);
@@ -1562,7 +1709,11 @@ fn bake(m: Mat4, positions: &mut [Vec3], normals: &mut [Vec3], indices: &mut [u3
 }
 
 /// Maps the expanded document to a [`VrmlModel`]; `skipped` holds what loading left out.
-pub(crate) fn map_document(doc: &Document, skipped: Vec<(String, String, Place)>, path: &Path) -> Result<VrmlModel, VrmlError> {
+pub(crate) fn map_document(
+    doc: &Document,
+    skipped: Vec<(String, String, Place)>,
+    path: &Path,
+) -> Result<VrmlModel, VrmlError> {
     let encoding = doc.files.first().map_or(Encoding::Vrml97, |f| f.encoding);
     let mut traversal = Traversal::new(doc);
     if encoding == Encoding::Inventor {
@@ -1587,7 +1738,8 @@ pub(crate) fn map_document(doc: &Document, skipped: Vec<(String, String, Place)>
         meshes.push(mesh);
     }
     for (o, object) in objects.iter_mut().enumerate() {
-        object.mesh = Some(keyrig_core::MeshSource::File { path: String::new(), mesh: Some(o), clip: None, fps: None });
+        object.mesh =
+            Some(keyrig_core::MeshSource::File { path: String::new(), mesh: Some(o), clip: None, fps: None });
     }
     let mut lights = Vec::new();
     let mut light_names = HashMap::new();
@@ -1600,7 +1752,11 @@ pub(crate) fn map_document(doc: &Document, skipped: Vec<(String, String, Place)>
         .map(|(v, frames)| {
             let m = frames.iter().fold(Mat4::IDENTITY, |acc, f| acc * frame_matrix(doc, f));
             let (_, r, _) = m.to_scale_rotation_translation();
-            View { position: m.transform_point3(v.position), orientation: (r * v.orientation).normalize(), ..v.clone() }
+            View {
+                position: m.transform_point3(v.position),
+                orientation: (r * v.orientation).normalize(),
+                ..v.clone()
+            }
         })
         .collect();
     for (v, _) in &traversal.views {
@@ -1608,7 +1764,13 @@ pub(crate) fn map_document(doc: &Document, skipped: Vec<(String, String, Place)>
         let forward = v.orientation * -Vec3::Z;
         let level_up = (Vec3::Y - forward * forward.dot(Vec3::Y)).normalize_or(up);
         if up.angle_between(level_up) > 1e-3 {
-            mapper.skips.add("Viewpoint roll", format!("`{}` is rolled; keyrig's view keeps the horizon level", v.name), doc.roots.first().map_or(Place { file: super::tree::FileId(0), at: 0 }, |r| doc.node(*r).place));
+            mapper.skips.add(
+                "Viewpoint roll",
+                format!("`{}` is rolled; keyrig's view keeps the horizon level", v.name),
+                doc.roots
+                    .first()
+                    .map_or(Place { file: super::tree::FileId(0), at: 0 }, |r| doc.node(*r).place),
+            );
         }
     }
     for ((node, field), _) in mapper.anim.channels.iter() {
@@ -1617,11 +1779,16 @@ pub(crate) fn map_document(doc: &Document, skipped: Vec<(String, String, Place)>
             (kind, field.as_str()),
             ("Transform" | "CADPart", "translation" | "rotation" | "scale" | "center" | "scaleOrientation")
                 | ("Coordinate", "point")
-                | ("DirectionalLight" | "PointLight" | "SpotLight", "location" | "direction" | "color" | "intensity")
+                | (
+                    "DirectionalLight" | "PointLight" | "SpotLight",
+                    "location" | "direction" | "color" | "intensity"
+                )
         );
         if !taken {
             let why = match kind {
-                "Viewpoint" | "OrthoViewpoint" => "camera animation: keyrig scenes have no cameras yet (the view is kept at rest)",
+                "Viewpoint" | "OrthoViewpoint" => {
+                    "camera animation: keyrig scenes have no cameras yet (the view is kept at rest)"
+                }
                 "Material" => "keyrig does not animate material colours yet",
                 _ => "keyrig has no channel for this field",
             };
@@ -1641,7 +1808,9 @@ impl Mapper<'_> {
         let mut object = keyrig_core::Object::new(name.clone());
         object.deformer.kind = keyrig_core::DeformerKind::Rigid;
         let (mut positions, mut normals, uvs, mut indices, coord) = match &shape.geometry {
-            GeometryRef::Solid(s) => (s.positions.clone(), s.normals.clone(), Some(s.uvs.clone()), s.indices.clone(), None),
+            GeometryRef::Solid(s) => {
+                (s.positions.clone(), s.normals.clone(), Some(s.uvs.clone()), s.indices.clone(), None)
+            }
             GeometryRef::Poly { tess, points, coord } => {
                 let f = tess.frame(points);
                 (f.positions, f.normals, tess.uvs.clone(), tess.indices.clone(), *coord)
@@ -1654,10 +1823,11 @@ impl Mapper<'_> {
         let animated: Vec<usize> =
             shape.frames.iter().enumerate().filter(|(_, f)| self.frame_animated(f)).map(|(i, _)| i).collect();
         let matrices: Vec<Mat4> = shape.frames.iter().map(|f| frame_matrix(doc, f)).collect();
-        let product = |range: std::ops::Range<usize>| matrices[range].iter().fold(Mat4::IDENTITY, |a, m| a * *m);
+        let product =
+            |range: std::ops::Range<usize>| matrices[range].iter().fold(Mat4::IDENTITY, |a, m| a * *m);
         let mut joints: Vec<keyrig_core::Joint> = Vec::new();
-        let mut bake_matrix = Mat4::IDENTITY;
-        let mut place_static = |object: &mut keyrig_core::Object, m: Mat4| -> Mat4 {
+        let bake_matrix;
+        let place_static = |object: &mut keyrig_core::Object, m: Mat4| -> Mat4 {
             match exact_trs(m) {
                 Some((t, r, s)) => {
                     object.translation = Animated::constant(t);
@@ -1712,7 +1882,11 @@ impl Mapper<'_> {
         let morph = morph_channel.and_then(|(keys, frames, timing)| {
             let GeometryRef::Poly { tess, points, .. } = &shape.geometry else { return None };
             if frames.iter().any(|f| f.len() < points.len()) {
-                self.skips.add("CoordinateInterpolator", format!("its key values have fewer points than the Coordinate's {}", points.len()), shape.place);
+                self.skips.add(
+                    "CoordinateInterpolator",
+                    format!("its key values have fewer points than the Coordinate's {}", points.len()),
+                    shape.place,
+                );
                 return None;
             }
             let morph_frames: Vec<geometry::Frame> = frames
@@ -1727,7 +1901,11 @@ impl Mapper<'_> {
             let times: Vec<f64> = keys.iter().map(|k| k.clamp(0.0, 1.0) * timing.cycle).collect();
             Some(MorphKeys { times, period: timing.looping.then_some(timing.cycle), frames: morph_frames })
         });
-        let joint_names: Vec<String> = if joints.is_empty() { vec!["root".into()] } else { joints.iter().map(|j| j.name.clone()).collect() };
+        let joint_names: Vec<String> = if joints.is_empty() {
+            vec!["root".into()]
+        } else {
+            joints.iter().map(|j| j.name.clone()).collect()
+        };
         if !joints.is_empty() {
             object.skeleton = Some(keyrig_core::Skeleton::new(joints));
         }
@@ -1754,7 +1932,11 @@ impl Mapper<'_> {
         }
         light.name = light.name.replace('/', "_");
         if l.frames.iter().any(|f| self.frame_animated(f)) {
-            self.skips.add("light under an animated Transform", "the light stays where the transforms put it at rest", l.node.map_or(Place { file: super::tree::FileId(0), at: 0 }, |n| doc.node(n).place));
+            self.skips.add(
+                "light under an animated Transform",
+                "the light stays where the transforms put it at rest",
+                l.node.map_or(Place { file: super::tree::FileId(0), at: 0 }, |n| doc.node(n).place),
+            );
         }
         let m = l.frames.iter().fold(Mat4::IDENTITY, |acc, f| acc * frame_matrix(doc, f));
         let Some(node) = l.node else { return light };

@@ -81,7 +81,9 @@ impl fmt::Display for VrmlError {
         }
         match self.place {
             ErrorPlace::File => {}
-            ErrorPlace::Text { line, column, byte: Some(b) } => write!(f, "line {line}, column {column} (byte {b}): ")?,
+            ErrorPlace::Text { line, column, byte: Some(b) } => {
+                write!(f, "line {line}, column {column} (byte {b}): ")?
+            }
             ErrorPlace::Text { line, column, byte: None } => write!(f, "line {line}, column {column}: ")?,
         }
         write!(f, "{}", self.kind)
@@ -115,9 +117,9 @@ impl VrmlError {
 /// `.wrl`, `.wrz`, `.x3d`, `.x3dv`, `.x3dz`, `.x3dvz`, `.iv`.
 #[must_use]
 pub fn is_vrml_path(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| ["wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv", "vrml"].iter().any(|x| e.eq_ignore_ascii_case(x)))
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        ["wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv", "vrml"].iter().any(|x| e.eq_ignore_ascii_case(x))
+    })
 }
 
 /// The encoding a text's first line announces.
@@ -128,9 +130,15 @@ fn detect(text: &str) -> Result<Encoding, String> {
         Ok(Encoding::Vrml97)
     } else if first.starts_with("#X3D V") {
         Ok(Encoding::X3dClassic)
-    } else if first.starts_with("#Inventor V2.") || first.starts_with("#Inventor V1.0") || first.starts_with("#VRML V1.0") {
+    } else if first.starts_with("#Inventor V2.")
+        || first.starts_with("#Inventor V1.0")
+        || first.starts_with("#VRML V1.0")
+    {
         if first.contains("binary") {
-            Err(format!("`{}`: binary Open Inventor files are not supported; keyrig reads the ASCII encoding", lex::clip(first)))
+            Err(format!(
+                "`{}`: binary Open Inventor files are not supported; keyrig reads the ASCII encoding",
+                lex::clip(first)
+            ))
         } else {
             Ok(Encoding::Inventor)
         }
@@ -170,7 +178,10 @@ fn decode(bytes: Vec<u8>, file: Option<&Path>) -> Result<String, VrmlError> {
         VrmlError {
             file: file.map(Path::to_path_buf),
             place: ErrorPlace::Text { line, column, byte: Some(at) },
-            kind: VrmlErrorKind::NotUtf8(format!("byte 0x{:02x} does not begin a UTF-8 character", e.as_bytes()[at])),
+            kind: VrmlErrorKind::NotUtf8(format!(
+                "byte 0x{:02x} does not begin a UTF-8 character",
+                e.as_bytes()[at]
+            )),
         }
     })
 }
@@ -231,7 +242,10 @@ fn parse_into(
         _ => {
             // The header line is a comment to the tokenizer.
             let parser = classic::Parser::new(&text, encoding, doc, file);
-            parser.parse_file().map(|(roots, routes, protos)| (file, roots, routes, protos)).map_err(parse_error)
+            parser
+                .parse_file()
+                .map(|(roots, routes, protos)| (file, roots, routes, protos))
+                .map_err(parse_error)
         }
     }
 }
@@ -243,7 +257,11 @@ fn local_file(folder: &Path, url: &str) -> Result<PathBuf, String> {
     if url.is_empty() {
         return Err("an empty URL".into());
     }
-    if url.contains("://") || url.starts_with("urn:") || url.starts_with("data:") || url.starts_with("javascript:") {
+    if url.contains("://")
+        || url.starts_with("urn:")
+        || url.starts_with("data:")
+        || url.starts_with("javascript:")
+    {
         return Err(format!("`{}` is not a file in the model's folder", lex::clip(url)));
     }
     let rel = Path::new(url);
@@ -267,9 +285,20 @@ struct Loader {
 
 impl Loader {
     /// Reads the first readable local file among `urls` (relative to the file `from`).
-    fn read(&mut self, doc: &Document, from: FileId, urls: &[String], what: &str, place: Place) -> Option<(PathBuf, String)> {
+    fn read(
+        &mut self,
+        doc: &Document,
+        from: FileId,
+        urls: &[String],
+        what: &str,
+        place: Place,
+    ) -> Option<(PathBuf, String)> {
         let Some(root) = &self.root else {
-            self.skipped.push((what.to_owned(), format!("{} (read from memory: no folder to look in)", urls.join(" ")), place));
+            self.skipped.push((
+                what.to_owned(),
+                format!("{} (read from memory: no folder to look in)", urls.join(" ")),
+                place,
+            ));
             return None;
         };
         let folder = doc.files[from.0 as usize].path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -349,7 +378,9 @@ fn import_text(text: String, path: PathBuf, folder: Option<PathBuf>) -> Result<V
                     VrmlErrorKind::Limit(format!("Inlines are nested more than {MAX_INLINE_DEPTH} deep")),
                 ));
             }
-            let Some((file_path, text)) = loader.read(&doc, place.file, &urls, "Inline", place) else { continue };
+            let Some((file_path, text)) = loader.read(&doc, place.file, &urls, "Inline", place) else {
+                continue;
+            };
             if paths.contains(&file_path) {
                 return Err(VrmlError::at_place(
                     &doc,
@@ -380,7 +411,11 @@ fn import_text(text: String, path: PathBuf, folder: Option<PathBuf>) -> Result<V
 /// A `Group` holding `children` (what an Inline stands for).
 fn push_group(doc: &mut Document, place: Place, children: Vec<NodeId>) -> Result<NodeId, VrmlError> {
     if doc.nodes.len() >= classic::MAX_NODES {
-        return Err(VrmlError::at_place(doc, place, VrmlErrorKind::Limit(format!("more than {} nodes", classic::MAX_NODES))));
+        return Err(VrmlError::at_place(
+            doc,
+            place,
+            VrmlErrorKind::Limit(format!("more than {} nodes", classic::MAX_NODES)),
+        ));
     }
     let id = NodeId(doc.nodes.len() as u32);
     doc.nodes.push(tree::Node {
@@ -410,10 +445,18 @@ fn resolve_extern(
     let urls = p.extern_urls.clone().unwrap_or_default();
     let fail = |message: String| expand::ExpandError { place: p.place, message };
     if chain.get(&p.place.file).is_some_and(|(d, _)| *d + 1 > MAX_INLINE_DEPTH) {
-        return Err(fail(format!("EXTERNPROTO {}: files are nested more than {MAX_INLINE_DEPTH} deep", p.name)));
+        return Err(fail(format!(
+            "EXTERNPROTO {}: files are nested more than {MAX_INLINE_DEPTH} deep",
+            p.name
+        )));
     }
-    let wanted = urls.iter().find_map(|u| u.split_once('#').map(|(_, f)| f.to_owned())).unwrap_or_else(|| p.name.clone());
-    let Some((path, text)) = loader.read(doc, p.place.file, &urls, &format!("EXTERNPROTO {}", p.name), p.place) else {
+    let wanted = urls
+        .iter()
+        .find_map(|u| u.split_once('#').map(|(_, f)| f.to_owned()))
+        .unwrap_or_else(|| p.name.clone());
+    let Some((path, text)) =
+        loader.read(doc, p.place.file, &urls, &format!("EXTERNPROTO {}", p.name), p.place)
+    else {
         // Not loaded: its instances stand for nothing (the loader lists why).
         doc.protos[proto].extern_urls = None;
         return Ok(());
@@ -421,8 +464,8 @@ fn resolve_extern(
     let (_, protos) = match files.get(&path) {
         Some(entry) => entry.clone(),
         None => {
-            let (file, _roots, _routes, protos) =
-                parse_into(doc, text, path.clone()).map_err(|e| fail(format!("EXTERNPROTO {}: {e}", p.name)))?;
+            let (file, _roots, _routes, protos) = parse_into(doc, text, path.clone())
+                .map_err(|e| fail(format!("EXTERNPROTO {}: {e}", p.name)))?;
             files.insert(path.clone(), (file, protos.clone()));
             (file, protos)
         }

@@ -32,11 +32,36 @@ fn err<T>(at: usize, message: impl Into<String>) -> Result<T> {
 #[must_use]
 pub fn default_container(kind: &str) -> &'static str {
     match kind {
-        "Box" | "Sphere" | "Cone" | "Cylinder" | "IndexedFaceSet" | "IndexedTriangleSet" | "TriangleSet"
-        | "IndexedTriangleFanSet" | "IndexedTriangleStripSet" | "TriangleFanSet" | "TriangleStripSet"
-        | "IndexedQuadSet" | "QuadSet" | "ElevationGrid" | "Extrusion" | "IndexedLineSet" | "LineSet"
-        | "PointSet" | "Text" | "Arc2D" | "ArcClose2D" | "Circle2D" | "Disk2D" | "Polyline2D" | "Polypoint2D"
-        | "Rectangle2D" | "TriangleSet2D" | "GeoElevationGrid" | "NurbsPatchSurface" | "NurbsCurve" => "geometry",
+        "Box"
+        | "Sphere"
+        | "Cone"
+        | "Cylinder"
+        | "IndexedFaceSet"
+        | "IndexedTriangleSet"
+        | "TriangleSet"
+        | "IndexedTriangleFanSet"
+        | "IndexedTriangleStripSet"
+        | "TriangleFanSet"
+        | "TriangleStripSet"
+        | "IndexedQuadSet"
+        | "QuadSet"
+        | "ElevationGrid"
+        | "Extrusion"
+        | "IndexedLineSet"
+        | "LineSet"
+        | "PointSet"
+        | "Text"
+        | "Arc2D"
+        | "ArcClose2D"
+        | "Circle2D"
+        | "Disk2D"
+        | "Polyline2D"
+        | "Polypoint2D"
+        | "Rectangle2D"
+        | "TriangleSet2D"
+        | "GeoElevationGrid"
+        | "NurbsPatchSurface"
+        | "NurbsCurve" => "geometry",
         "Appearance" => "appearance",
         "Material" | "TwoSidedMaterial" | "PhysicalMaterial" | "UnlitMaterial" => "material",
         "ImageTexture" | "PixelTexture" | "MovieTexture" | "MultiTexture" => "texture",
@@ -196,11 +221,13 @@ impl Reader<'_> {
         }
         match e.tag_name().name() {
             "ROUTE" => {
-                let get = |a: &str| e.attribute(a).map(str::to_owned).ok_or_else(|| ParseError {
-                    at,
-                    message: format!("<ROUTE> has no {a} attribute"),
-                    limit: false,
-                });
+                let get = |a: &str| {
+                    e.attribute(a).map(str::to_owned).ok_or_else(|| ParseError {
+                        at,
+                        message: format!("<ROUTE> has no {a} attribute"),
+                        limit: false,
+                    })
+                };
                 let route = (get("fromNode")?, get("fromField")?, get("toNode")?, get("toField")?, at);
                 if let Some(r) = self.routes.last_mut() {
                     r.push(route);
@@ -211,8 +238,8 @@ impl Reader<'_> {
                 self.proto(e, depth)?;
                 Ok(None)
             }
-            "IS" | "field" | "fieldValue" | "ProtoInterface" | "ProtoBody" | "connect" | "IMPORT" | "EXPORT"
-            | "meta" | "component" | "unit" => Ok(None),
+            "IS" | "field" | "fieldValue" | "ProtoInterface" | "ProtoBody" | "connect" | "IMPORT"
+            | "EXPORT" | "meta" | "component" | "unit" => Ok(None),
             _ => self.node(e, depth).map(Some),
         }
     }
@@ -221,8 +248,11 @@ impl Reader<'_> {
         let at = e.range().start;
         let tag = e.tag_name().name();
         let kind = if tag == "ProtoInstance" {
-            e.attribute("name")
-                .ok_or_else(|| ParseError { at, message: "<ProtoInstance> has no name".into(), limit: false })?
+            e.attribute("name").ok_or_else(|| ParseError {
+                at,
+                message: "<ProtoInstance> has no name".into(),
+                limit: false,
+            })?
         } else {
             tag
         };
@@ -232,7 +262,10 @@ impl Reader<'_> {
                 Some(&id) => Ok((container, id)),
                 None => err(
                     at,
-                    format!("USE {}: no node named so is defined before this point (a node cannot USE itself)", clip(name)),
+                    format!(
+                        "USE {}: no node named so is defined before this point (a node cannot USE itself)",
+                        clip(name)
+                    ),
                 ),
             };
         }
@@ -323,7 +356,11 @@ impl Reader<'_> {
         let at = e.range().start;
         let name = e
             .attribute("name")
-            .ok_or_else(|| ParseError { at, message: format!("<{}> has no name", e.tag_name().name()), limit: false })?
+            .ok_or_else(|| ParseError {
+                at,
+                message: format!("<{}> has no name", e.tag_name().name()),
+                limit: false,
+            })?
             .to_owned();
         let external = e.tag_name().name() == "ExternProtoDeclare";
         let interface: Vec<roxmltree::Node<'_, '_>> = if external {
@@ -387,7 +424,14 @@ impl Reader<'_> {
             let routes = self.resolve_routes()?;
             self.defs.pop();
             self.protos.pop();
-            self.doc.protos.push(Proto { name: name.clone(), fields, body, routes, extern_urls: None, place: self.place(at) });
+            self.doc.protos.push(Proto {
+                name: name.clone(),
+                fields,
+                body,
+                routes,
+                extern_urls: None,
+                place: self.place(at),
+            });
         }
         if let Some(p) = self.protos.last_mut() {
             p.insert(name, index);
