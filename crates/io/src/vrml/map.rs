@@ -99,6 +99,12 @@ pub struct VrmlMesh {
     /// for an object without a skeleton.
     pub joints: Vec<String>,
     pub morph: Option<MorphKeys>,
+    /// The point of the file's Coordinate each vertex shows (polygon meshes; `None` for
+    /// primitives).
+    pub vertex_points: Option<Vec<u32>>,
+    /// The static transform applied to the file's points (the Transforms below the object's
+    /// own place, or all of them when they cannot be the object's transform).
+    pub baked: Mat4,
 }
 
 /// A `Viewpoint` (or Inventor camera), kept as a named view until keyrig scenes have cameras.
@@ -1816,6 +1822,10 @@ impl Mapper<'_> {
                 (f.positions, f.normals, tess.uvs.clone(), tess.indices.clone(), *coord)
             }
         };
+        let vertex_points = match &shape.geometry {
+            GeometryRef::Poly { tess, .. } => Some(tess.vertex_point.clone()),
+            GeometryRef::Solid(_) => None,
+        };
         let morph_channel = coord.and_then(|c| match self.anim.channels.get(&(c, "point".to_owned())) {
             Some(Channel::Points(keys, frames, timing)) => Some((keys.clone(), frames.clone(), *timing)),
             _ => None,
@@ -1918,6 +1928,8 @@ impl Mapper<'_> {
             material: shape.material.clone(),
             joints: joint_names,
             morph,
+            vertex_points,
+            baked: bake_matrix,
         };
         (object, mesh)
     }
