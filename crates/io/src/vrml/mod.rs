@@ -336,7 +336,30 @@ impl Loader {
     }
 }
 
+/// Stack of the thread that parses and maps a file: the readers recurse once per level of
+/// nesting (bounded by [`classic::MAX_DEPTH`] and the Inline and PROTO depths), which a
+/// default 2 MiB thread stack cannot hold in every build. Only what is touched is used.
+const IMPORT_STACK_BYTES: usize = 512 << 20;
+
 fn import_text(text: String, path: PathBuf, folder: Option<PathBuf>) -> Result<VrmlModel, VrmlError> {
+    let name = path.clone();
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("keyrig-vrml-import".into())
+            .stack_size(IMPORT_STACK_BYTES)
+            .spawn_scoped(scope, move || import_text_here(text, path, folder))
+            .map_err(|e| VrmlError::whole(Some(&name), VrmlErrorKind::Io(e)))?
+            .join()
+            .unwrap_or_else(|_| {
+                Err(VrmlError::whole(
+                    Some(&name),
+                    VrmlErrorKind::Invalid("the import stopped unexpectedly".into()),
+                ))
+            })
+    })
+}
+
+fn import_text_here(text: String, path: PathBuf, folder: Option<PathBuf>) -> Result<VrmlModel, VrmlError> {
     let mut doc = Document::default();
     let (_, roots, routes, _) = parse_into(&mut doc, text, path.clone())?;
     doc.roots = roots;
