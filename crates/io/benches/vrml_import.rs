@@ -21,9 +21,13 @@ fn vrml_import(c: &mut Criterion) {
         let text = big_vrml::wrl(blocks);
         group.throughput(Throughput::Bytes(text.len() as u64));
         let mb = text.len() as f64 / 1e6;
-        group.bench_with_input(BenchmarkId::new("wrl_mb", format!("{mb:.1}")), text.as_bytes(), |b, bytes| {
-            b.iter(|| black_box(keyrig_io::vrml::import_vrml_slice(bytes, "big.wrl").expect("import")));
-        });
+        group.bench_with_input(
+            BenchmarkId::new("wrl_mb", format!("{mb:.1}")),
+            text.as_bytes(),
+            |b, bytes| {
+                b.iter(|| black_box(keyrig_io::vrml::import_vrml_slice(bytes, "big.wrl").expect("import")));
+            },
+        );
     }
     group.finish();
 }

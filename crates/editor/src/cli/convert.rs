@@ -27,6 +27,12 @@ pub struct ConvertArgs {
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     crate::cli::export::check_output_extension(&args.output)?;
+    if keyrig_io::vrml::export::ExportFormat::of_path(&args.output).is_some() {
+        bail!(
+            "{}: `keyrig convert` writes glTF; write VRML, X3D or Inventor with `keyrig export`",
+            args.output.display()
+        );
+    }
     let ext = args.input.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("md2") => {}

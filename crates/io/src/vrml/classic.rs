@@ -284,6 +284,12 @@ impl<'a, 'd> Parser<'a, 'd> {
             });
         }
         let id = NodeId(self.doc.nodes.len() as u32);
+        // Coin writes VRML97 nodes in Inventor files with a `VRML` prefix
+        // (`VRMLPositionInterpolator`): they are the VRML97 nodes.
+        let kind = match kind.strip_prefix("VRML") {
+            Some(rest) if self.inventor && rest.starts_with(|c: char| c.is_ascii_uppercase()) => rest,
+            _ => kind,
+        };
         let proto = self.lookup_proto(kind);
         self.doc.nodes.push(Node {
             kind: kind.to_owned(),

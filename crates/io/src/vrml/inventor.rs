@@ -20,6 +20,8 @@ struct State {
     diffuse: Vec3,
     alpha: f32,
     coords: Arc<Vec<Vec3>>,
+    /// The Coordinate3 node the coordinates come from (a CoordinateInterpolator may drive it).
+    coord_node: Option<NodeId>,
     normals: Option<Arc<Vec<Vec3>>>,
     normal_binding: String,
     texcoords: Option<Arc<Vec<Vec2>>>,
@@ -37,6 +39,7 @@ impl Default for State {
             diffuse: Vec3::splat(0.8),
             alpha: 1.0,
             coords: Arc::new(Vec::new()),
+            coord_node: None,
             normals: None,
             normal_binding: "DEFAULT".into(),
             texcoords: None,
@@ -182,7 +185,10 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
             }
         }
         "BaseColor" => state.diffuse = v3(t, id, "rgb", Vec3::splat(0.8)),
-        "Coordinate3" => state.coords = Arc::new(vec3s(nums(t, id, "point"))),
+        "Coordinate3" => {
+            state.coords = Arc::new(vec3s(nums(t, id, "point")));
+            state.coord_node = Some(id);
+        }
         "Normal" => state.normals = Some(Arc::new(vec3s(nums(t, id, "vector")))),
         "NormalBinding" => {
             state.normal_binding = name_value(t, id, "value").unwrap_or_else(|| "DEFAULT".into())
@@ -283,7 +289,14 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
             };
             t.views.push((view, Vec::new()));
         }
-        "Info" => t.skips_add(kind, "not imported (its text is a comment)", id),
+        "Info" => {
+            let metadata = matches!(node.value("string"), Some(Value::Strings(s)) if s.iter().any(|s| s.starts_with(super::export::METADATA_TAG)));
+            if !metadata {
+                t.skips_add(kind, "not imported (its text is a comment)", id);
+            }
+        }
+        "TimeSensor" => {}
+        k if k.ends_with("Interpolator") => {}
         "Complexity"
         | "DrawStyle"
         | "LightModel"
@@ -341,10 +354,12 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
         state.normal_binding.clone(),
         state.texcoords.clone(),
     );
+    let mut coord_node = state.coord_node;
     if let Some(vp) = vp {
         let v = vec3s(nums(t, vp, "vertex"));
         if !v.is_empty() {
             coords = Arc::new(v);
+            coord_node = None;
         }
         let n = vec3s(nums(t, vp, "normal"));
         if !n.is_empty() {
@@ -471,7 +486,7 @@ fn face_set(t: &mut Traversal<'_>, id: NodeId, state: &State) -> Result<Option<G
     if tess.indices.is_empty() {
         return Ok(None);
     }
-    Ok(Some(GeometryRef::Poly { tess: Arc::new(tess), points: coords, coord: None }))
+    Ok(Some(GeometryRef::Poly { tess: Arc::new(tess), points: coords, coord: coord_node }))
 }
 
 fn strip(mesh: &mut PolyMesh, run: &[u32]) {

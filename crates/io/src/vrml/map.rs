@@ -130,6 +130,10 @@ pub struct VrmlModel {
     /// Seconds of animation (the longest cycle); 0 without animation.
     pub duration: f64,
     pub skipped: Vec<Skipped>,
+    /// keyrig's own scene, when the file is a keyrig export carrying it as metadata
+    /// ([`super::export::METADATA_TAG`]); its rate, range, ambient light and camera are the
+    /// mapped scene's.
+    pub metadata_scene: Option<keyrig_core::Scene>,
 }
 
 /// Why a mesh could not become a keyrig-skin mesh.
@@ -160,6 +164,12 @@ impl VrmlModel {
         scene.lights = self.lights.clone();
         if let Some(view) = self.views.first() {
             scene.camera = self.camera_of(view);
+        }
+        if let Some(original) = &self.metadata_scene {
+            scene.fps = original.fps;
+            scene.frame_range = original.frame_range;
+            scene.ambient = original.ambient;
+            scene.camera = original.camera;
         }
         scene
     }
@@ -949,6 +959,7 @@ impl<'d> Traversal<'d> {
                 };
                 self.views.push((view, frames.clone()));
             }
+            "WorldInfo" if node.value("info").is_some_and(|v| matches!(v, Value::Strings(s) if s.iter().any(|s| s.starts_with(super::export::METADATA_TAG)))) => {}
             "WorldInfo" | "NavigationInfo" | "Background" | "TextureBackground" | "Fog" | "Sound"
             | "Script" | "TouchSensor" | "ProximitySensor" | "VisibilitySensor" | "PlaneSensor"
             | "SphereSensor" | "CylinderSensor" | "KeySensor" | "StringSensor" | "BooleanFilter"
@@ -1784,7 +1795,7 @@ pub(crate) fn map_document(
         let taken = matches!(
             (kind, field.as_str()),
             ("Transform" | "CADPart", "translation" | "rotation" | "scale" | "center" | "scaleOrientation")
-                | ("Coordinate", "point")
+                | ("Coordinate" | "Coordinate3", "point")
                 | (
                     "DirectionalLight" | "PointLight" | "SpotLight",
                     "location" | "direction" | "color" | "intensity"
@@ -1803,7 +1814,18 @@ pub(crate) fn map_document(
     }
     let skipped = mapper.skips.into_list(doc);
     let _ = path;
-    Ok(VrmlModel { encoding, objects, meshes, lights, views, duration: mapper.anim.duration, skipped })
+    let mut model = VrmlModel {
+        encoding,
+        objects,
+        meshes,
+        lights,
+        views,
+        duration: mapper.anim.duration,
+        skipped,
+        metadata_scene: None,
+    };
+    super::export::restore_metadata(doc, &mut model);
+    Ok(model)
 }
 
 impl Mapper<'_> {

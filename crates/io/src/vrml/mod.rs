@@ -15,6 +15,7 @@
 
 pub mod classic;
 pub mod expand;
+pub mod export;
 pub mod geometry;
 mod inventor;
 mod lex;

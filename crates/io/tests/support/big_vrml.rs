@@ -19,7 +19,9 @@ pub fn wrl(blocks: usize) -> String {
             (b % 7) as f32 / 7.0,
             (b % 11) as f32 / 11.0
         );
-        s.push_str("    geometry IndexedFaceSet {\n      creaseAngle 0.5\n      coord Coordinate { point [\n");
+        s.push_str(
+            "    geometry IndexedFaceSet {\n      creaseAngle 0.5\n      coord Coordinate { point [\n",
+        );
         for i in 0..12 {
             for j in 0..12 {
                 let y = ((i as f32 * 0.7 + b as f32).sin() * (j as f32 * 0.5).cos()) * 0.3;
