@@ -1,5 +1,5 @@
 //! VRML97 import time against file size: generated .wrl files (`tests/support/big_vrml.rs`)
-//! of about 5, 25 and 50 MB — thousands of shapes with crease-angle meshes and animated
+//! of about 7, 37 and 74 MB — thousands of shapes with crease-angle meshes and animated
 //! Transforms — read, expanded, tessellated and mapped onto keyrig objects and tracks
 //! (`keyrig_io::vrml::import_vrml_slice`), and the degenerate case of one block. Linear
 //! import keeps the throughput (bytes per second) flat across the sizes; the target is a

@@ -3,7 +3,7 @@
 
 Usage: coin_reference.py FILE FPS LAST_FRAME
 
-Reads FILE with Coin3D (through pivy, Debian's python3-pivy): a .wrl as it is; an .x3dv with
+Reads FILE with Coin3D (through pivy, Debian's python3-pivy): a .wrl or .iv as it is; an .x3dv with
 its X3D header and PROFILE/COMPONENT/META lines replaced by a VRML97 header (its nodes are
 VRML97's); an .x3d (XML) by writing its TimeSensors, interpolators and ROUTEs as a VRML97 file
 (X3D XML files with PROTOs are refused: test their classic twin). Then for every TimeSensor,
@@ -110,7 +110,7 @@ def read(path):
     inp.setBuffer(text)
     folder = path.rsplit("/", 1)[0] if "/" in path else "."
     coin.SoInput.addDirectoryFirst(folder)
-    root = coin.SoDB.readAllVRML(inp)
+    root = coin.SoDB.readAll(inp) if path.lower().endswith(".iv") else coin.SoDB.readAllVRML(inp)
     if root is None:
         raise SystemExit(f"Coin could not read {path}")
     root.ref()

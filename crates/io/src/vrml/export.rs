@@ -960,7 +960,7 @@ fn inventor(roots: &[WNode], routes: &[(String, &'static str, String, &'static s
                 let s = num_field(n, "scale").unwrap_or(vec![1.0; 3]);
                 let _ = writeln!(
                     out,
-                    "    Transform {{\n      translation {}{}\n      rotation {}{}\n      scaleFactor {}{}\n    }}",
+                    "    DEF {def}_xf Transform {{\n      translation {}{}\n      rotation {}{}\n      scaleFactor {}{}\n    }}",
                     nums(&t),
                     connection(&def, "translation").unwrap_or_default(),
                     nums(&r),

@@ -1,14 +1,14 @@
 //! Large generated VRML97 files for the import benchmark: `blocks` animated Transforms, each
 //! with a shape whose IndexedFaceSet is a wavy grid of 12 × 12 points (121 quads, crease angle
 //! 0.5), a material, and every tenth Transform driven by a 13-key PositionInterpolator and a
-//! 5-key OrientationInterpolator from one TimeSensor. About 5.3 kB per block.
+//! 5-key OrientationInterpolator from one TimeSensor. About 7.8 kB per block.
 
 use std::fmt::Write;
 
 /// A .wrl of `blocks` blocks.
 #[must_use]
 pub fn wrl(blocks: usize) -> String {
-    let mut s = String::with_capacity(blocks * 5400 + 200);
+    let mut s = String::with_capacity(blocks * 7800 + 200);
     s.push_str("#VRML V2.0 utf8\nDEF Clock TimeSensor { cycleInterval 4 loop TRUE }\n");
     for b in 0..blocks {
         let (x, z) = ((b % 100) as f32 * 3.0, (b / 100) as f32 * 3.0);
