@@ -37,6 +37,8 @@ pub enum FileError {
     #[error(transparent)]
     Vrml(Arc<keyrig_io::vrml::VrmlError>),
     #[error("{}: {source}", path.display())]
+    VrmlExport { path: PathBuf, source: Arc<keyrig_io::vrml::export::VrmlExportError> },
+    #[error("{}: {source}", path.display())]
     VrmlMesh { path: PathBuf, source: Arc<keyrig_io::vrml::map::VrmlMeshError> },
     #[error("{}: {source}", path.display())]
     Export { path: PathBuf, source: Arc<keyrig_io::gltf_export::ExportError> },
@@ -160,7 +162,14 @@ pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'
             vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"]), VRML]
         }
         DialogPurpose::SaveAs => vec![SCENES],
-        DialogPurpose::Export => vec![("glTF binary (.glb)", &["glb"]), ("glTF (.gltf)", &["gltf"])],
+        DialogPurpose::Export => vec![
+            ("glTF binary (.glb)", &["glb"]),
+            ("glTF (.gltf)", &["gltf"]),
+            ("VRML97 (.wrl)", &["wrl"]),
+            ("X3D (.x3d)", &["x3d"]),
+            ("X3D classic (.x3dv)", &["x3dv"]),
+            ("Open Inventor (.iv)", &["iv"]),
+        ],
     }
 }
 
@@ -181,7 +190,7 @@ pub fn file_dialog(
         DialogPurpose::Open => "Open scene or model",
         DialogPurpose::SaveAs => "Save scene as",
         DialogPurpose::Import => "Import model",
-        DialogPurpose::Export => "Export glTF",
+        DialogPurpose::Export => "Export glTF, VRML, X3D or Open Inventor",
     };
     let mut dialog = egui_file_dialog::FileDialog::new()
         .id(egui::Id::new(("keyrig_file_dialog", title)))
@@ -627,9 +636,20 @@ impl BackgroundImport {
     }
 }
 
-/// Writes the scene as glTF (.glb, or .gltf with the buffer embedded), resolving mesh files
-/// against `base_dir` (the scene's folder).
+/// Writes the scene as glTF (.glb, or .gltf with the buffer embedded) — or, by the path's
+/// extension, as VRML97 (.wrl), X3D (.x3d, .x3dv) or Open Inventor (.iv) through
+/// `keyrig_io::vrml::export` — resolving mesh files against `base_dir` (the scene's folder).
 pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Result<(), FileError> {
+    if let Some(format) = keyrig_io::vrml::export::ExportFormat::of_path(path) {
+        let options = keyrig_io::vrml::export::VrmlExportOptions {
+            base_dir: base_dir.map(Path::to_path_buf),
+            ..keyrig_io::vrml::export::VrmlExportOptions::default()
+        };
+        let text = keyrig_io::vrml::export::export_scene(scene, format, &options)
+            .map_err(|e| FileError::VrmlExport { path: path.to_path_buf(), source: Arc::new(e) })?;
+        return keyrig_io::file_io::write_atomic(path, text.as_bytes())
+            .map_err(|e| FileError::Write { path: path.to_path_buf(), source: Arc::new(e) });
+    }
     let options = keyrig_io::gltf_export::ExportOptions {
         base_dir: base_dir.map(Path::to_path_buf),
         ..keyrig_io::gltf_export::ExportOptions::default()

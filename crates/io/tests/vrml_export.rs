@@ -99,7 +99,7 @@ fn coin3d_plays_the_export_as_keyrig_samples_the_scene() {
     let python = python();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/coin_reference.py");
     let dir = tempfile::tempdir().unwrap();
-    for asset in ["demo.ron", "twist.ron"] {
+    for asset in ["demo.ron", "twist.ron", "cycle.ron", "ik.ron"] {
         let scene = keyrig_io::project::load_scene(&assets().join(asset)).unwrap();
         let eval = SceneEvaluator::new(&scene, &HashMap::new());
         let none = Overrides::default();

@@ -20,7 +20,9 @@
 use std::collections::HashMap;
 
 use super::lex::{clip, LexError, Lexer, Tok, Token};
-use super::tree::{Document, Encoding, Field, FileId, Node, NodeId, Place, Proto, ProtoField, Route, Value};
+use super::tree::{
+    Document, Encoding, Field, FileId, Node, NodeId, Parsed, Place, Proto, ProtoField, Route, Value,
+};
 
 /// Deepest nesting of nodes and lists a file may have.
 pub const MAX_DEPTH: usize = 200;
@@ -111,7 +113,7 @@ impl<'a, 'd> Parser<'a, 'd> {
 
     /// Parses the whole file; returns its top-level nodes and routes (resolved) and the
     /// indices of its PROTOs by name.
-    pub fn parse_file(mut self) -> Result<(Vec<NodeId>, Vec<Route>, HashMap<String, usize>)> {
+    pub fn parse_file(mut self) -> Result<Parsed> {
         let mut roots = Vec::new();
         loop {
             let t = self.lex.next()?;

@@ -211,11 +211,7 @@ pub fn import_vrml_slice(bytes: &[u8], name: &str) -> Result<VrmlModel, VrmlErro
 }
 
 /// Parses `text` as file `path` into the next file slot of `doc`.
-fn parse_into(
-    doc: &mut Document,
-    text: String,
-    path: PathBuf,
-) -> Result<(FileId, Vec<NodeId>, Vec<tree::Route>, HashMap<String, usize>), VrmlError> {
+fn parse_into(doc: &mut Document, text: String, path: PathBuf) -> Result<(FileId, tree::Parsed), VrmlError> {
     let encoding = detect(&text).map_err(|m| VrmlError {
         file: Some(path.clone()),
         place: ErrorPlace::Text { line: 1, column: 1, byte: Some(0) },
@@ -230,23 +226,20 @@ fn parse_into(
         VrmlError::at(&source, e.at, kind)
     };
     match encoding {
-        Encoding::X3dXml => xml::parse_x3d_xml(&text, doc, file)
-            .map(|(roots, routes, protos)| (file, roots, routes, protos))
-            .map_err(|e| match e {
+        Encoding::X3dXml => {
+            xml::parse_x3d_xml(&text, doc, file).map(|parsed| (file, parsed)).map_err(|e| match e {
                 xml::XmlError::Syntax { line, column, message } => VrmlError {
                     file: Some(path.clone()),
                     place: ErrorPlace::Text { line: line as usize, column: column as usize, byte: None },
                     kind: VrmlErrorKind::Syntax(format!("XML: {message}")),
                 },
                 xml::XmlError::X3d(e) => parse_error(e),
-            }),
+            })
+        }
         _ => {
             // The header line is a comment to the tokenizer.
             let parser = classic::Parser::new(&text, encoding, doc, file);
-            parser
-                .parse_file()
-                .map(|(roots, routes, protos)| (file, roots, routes, protos))
-                .map_err(parse_error)
+            parser.parse_file().map(|parsed| (file, parsed)).map_err(parse_error)
         }
     }
 }
@@ -362,7 +355,7 @@ fn import_text(text: String, path: PathBuf, folder: Option<PathBuf>) -> Result<V
 
 fn import_text_here(text: String, path: PathBuf, folder: Option<PathBuf>) -> Result<VrmlModel, VrmlError> {
     let mut doc = Document::default();
-    let (_, roots, routes, _) = parse_into(&mut doc, text, path.clone())?;
+    let (_, (roots, routes, _)) = parse_into(&mut doc, text, path.clone())?;
     doc.roots = roots;
     doc.routes.extend(routes);
     let root = folder.map(|f| std::fs::canonicalize(&f).unwrap_or(f));
@@ -413,7 +406,7 @@ fn import_text_here(text: String, path: PathBuf, folder: Option<PathBuf>) -> Res
                 ));
             }
             paths.push(file_path.clone());
-            let (file, roots, routes, _) = parse_into(&mut doc, text, file_path)?;
+            let (file, (roots, routes, _)) = parse_into(&mut doc, text, file_path)?;
             chain.insert(file, (depth + 1, paths));
             doc.routes.extend(routes);
             if let tree::Value::Nodes(children) = &mut doc.nodes[group.0 as usize].fields[0].value {
@@ -488,7 +481,7 @@ fn resolve_extern(
     let (_, protos) = match files.get(&path) {
         Some(entry) => entry.clone(),
         None => {
-            let (file, _roots, _routes, protos) = parse_into(doc, text, path.clone())
+            let (file, (_roots, _routes, protos)) = parse_into(doc, text, path.clone())
                 .map_err(|e| fail(format!("EXTERNPROTO {}: {e}", p.name)))?;
             files.insert(path.clone(), (file, protos.clone()));
             (file, protos)

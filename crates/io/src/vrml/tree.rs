@@ -203,3 +203,7 @@ impl Document {
         id
     }
 }
+
+/// What parsing one file gives: its top-level nodes, its routes (resolved) and its PROTOs by
+/// name (indices into [`Document::protos`]).
+pub type Parsed = (Vec<NodeId>, Vec<Route>, std::collections::HashMap<String, usize>);

@@ -11,7 +11,7 @@ use std::collections::HashMap;
 
 use super::classic::{ParseError, MAX_DEPTH, MAX_NODES};
 use super::lex::{clip, Lexer, Tok};
-use super::tree::{Document, Field, FileId, Node, NodeId, Place, Proto, ProtoField, Route, Value};
+use super::tree::{Document, Field, FileId, Node, NodeId, Parsed, Place, Proto, ProtoField, Route, Value};
 
 /// A parse error of the XML encoding: where (line and column, or a byte offset) and what.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -120,6 +120,9 @@ pub fn attribute_value(text: &str) -> Value {
     }
 }
 
+/// A ROUTE by DEF names: from node, from field, to node, to field, byte offset.
+type NamedRoute = (String, String, String, String, usize);
+
 const NOT_FIELDS: [&str; 6] = ["DEF", "USE", "containerField", "class", "id", "style"];
 
 struct Reader<'d> {
@@ -128,7 +131,9 @@ struct Reader<'d> {
     /// DEF names per scope (the file, each ProtoBody).
     defs: Vec<HashMap<String, NodeId>>,
     protos: Vec<HashMap<String, usize>>,
-    routes: Vec<Vec<(String, String, String, String, usize)>>,
+    /// Per scope: (from node, from field, to node, to field, byte) by name, resolved at the
+    /// scope's end.
+    routes: Vec<Vec<NamedRoute>>,
     template: usize,
 }
 
@@ -137,11 +142,7 @@ struct Reader<'d> {
 ///
 /// # Errors
 /// Malformed XML or X3D.
-pub fn parse_x3d_xml(
-    text: &str,
-    doc: &mut Document,
-    file: FileId,
-) -> std::result::Result<(Vec<NodeId>, Vec<Route>, HashMap<String, usize>), XmlError> {
+pub fn parse_x3d_xml(text: &str, doc: &mut Document, file: FileId) -> std::result::Result<Parsed, XmlError> {
     let options = roxmltree::ParsingOptions { allow_dtd: true, ..roxmltree::ParsingOptions::default() };
     let xml = roxmltree::Document::parse_with_options(text, options).map_err(|e| {
         let pos = e.pos();

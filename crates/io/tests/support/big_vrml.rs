@@ -25,14 +25,14 @@ pub fn wrl(blocks: usize) -> String {
         for i in 0..12 {
             for j in 0..12 {
                 let y = ((i as f32 * 0.7 + b as f32).sin() * (j as f32 * 0.5).cos()) * 0.3;
-                let _ = write!(s, "        {:.4} {:.4} {:.4},\n", i as f32 * 0.2, y, j as f32 * 0.2);
+                let _ = writeln!(s, "        {:.4} {:.4} {:.4},", i as f32 * 0.2, y, j as f32 * 0.2);
             }
         }
         s.push_str("      ] }\n      coordIndex [\n");
         for i in 0..11 {
             for j in 0..11 {
                 let a = i * 12 + j;
-                let _ = write!(s, "        {} {} {} {} -1,\n", a, a + 1, a + 13, a + 12);
+                let _ = writeln!(s, "        {} {} {} {} -1,", a, a + 1, a + 13, a + 12);
             }
         }
         s.push_str("      ]\n    }\n  }\n}\n");
