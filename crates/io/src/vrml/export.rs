@@ -509,16 +509,14 @@ pub fn export_scene(
             };
             let rest: Vec<Vec3> =
                 deformed(t0).or_else(|| m.mesh.as_ref().map(|s| s.positions.clone())).unwrap_or_default();
-            let moves = animated
-                && (m.morph.is_some()
-                    || eval.skin(o).is_some()
-                        && (object.skeleton.as_ref().is_some_and(|s| {
-                            s.joints.iter().any(|j| {
-                                j.rotation.is_animated()
-                                    || j.translation.is_animated()
-                                    || j.scale.is_animated()
-                            })
-                        })));
+            let skeleton_moves = object.skeleton.as_ref().is_some_and(|s| {
+                s.root_translation.is_animated()
+                    || s.joints.iter().any(|j| {
+                        j.rotation.is_animated() || j.translation.is_animated() || j.scale.is_animated()
+                    })
+                    || s.ik_constraints.iter().any(|c| c.target.is_animated() || c.blend.is_animated())
+            });
+            let moves = animated && (m.morph.is_some() || eval.skin(o).is_some() && skeleton_moves);
             if moves {
                 let fits = |a: &Vec<Vec3>, b: &Vec<Vec3>, mid: &Vec<Vec3>, u: f32| {
                     a.iter()

@@ -388,7 +388,7 @@ pub fn round_solid(
             let b1 = s.vertex(d1 * bottom_radius - Vec3::Y * h, n1, Vec2::new(u1, 0.0));
             let t1 = s.vertex(d1 * top_radius + Vec3::Y * h, n1, Vec2::new(u1, 1.0));
             let t0 = s.vertex(d0 * top_radius + Vec3::Y * h, n0, Vec2::new(u0, 1.0));
-            s.indices.extend_from_slice(&[b0, t1, b1, b0, t0, t1]);
+            s.indices.extend_from_slice(&[b0, b1, t1, b0, t1, t0]);
             if top_radius == 0.0 {
                 // The apex triangles keep one triangle each (the second is degenerate).
                 s.indices.truncate(s.indices.len() - 3);
@@ -411,9 +411,9 @@ pub fn round_solid(
         for k in 0..n {
             let (a, b) = (ring[k], ring[(k + 1) % n]);
             if up {
-                s.indices.extend_from_slice(&[centre, b, a]);
-            } else {
                 s.indices.extend_from_slice(&[centre, a, b]);
+            } else {
+                s.indices.extend_from_slice(&[centre, b, a]);
             }
         }
     };
