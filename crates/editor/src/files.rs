@@ -234,7 +234,7 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
     if is_scene_file(path) {
         Ok(load_scene(path)?)
     } else {
-        let (mut scene, read, own_camera) = read_model(path, &mut |_, _| {})?;
+        let (mut scene, read, own_camera, _) = read_model(path, &mut |_, _| {})?;
         let meshes = load_meshes_of(&scene, read, &mut |_| {});
         frame_new_scene(&mut scene, &meshes, own_camera);
         Ok(scene)
@@ -250,7 +250,7 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, FileError> {
-    read_model(path, &mut |_, _| {}).map(|(scene, _, _)| scene)
+    read_model(path, &mut |_, _| {}).map(|(scene, _, _, _)| scene)
 }
 
 /// Progress of a model read: the stage and, where known, the done fraction.
@@ -261,8 +261,12 @@ type ProgressFn<'a> = &'a mut dyn FnMut(&str, Option<f32>);
 /// by keyrig-io in one step (no fraction); an MD2 file is read in chunks (fraction of its
 /// bytes), then parsed (no fraction); a VRML, X3D or Open Inventor file is read, parsed and
 /// mapped by keyrig-io in one step, and its meshes built at once. The flag says whether the
-/// model brings its own view (a VRML `Viewpoint`), which framing then keeps.
-fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<LoadedMesh>, bool), FileError> {
+/// model brings its own view (a VRML `Viewpoint`), which framing then keeps; the lines say
+/// what the file holds that was not imported (VRML, X3D, Inventor).
+fn read_model(
+    path: &Path,
+    progress: ProgressFn<'_>,
+) -> Result<(Scene, Vec<LoadedMesh>, bool, Vec<String>), FileError> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     if keyrig_io::vrml::is_vrml_path(path) {
         progress("reading and parsing", None);
@@ -270,7 +274,7 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
         let file = absolute();
         let scene = model.to_scene(&file.to_string_lossy());
         progress("building meshes", None);
-        return Ok((scene, vrml_meshes(&file, &model), !model.views.is_empty()));
+        return Ok((scene, vrml_meshes(&file, &model), !model.views.is_empty(), model.skipped_lines()));
     }
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
@@ -280,7 +284,7 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
             let scene = model
                 .to_scene(&absolute().to_string_lossy(), animation)
                 .map_err(|e| FileError::Mapping { path: path.to_path_buf(), source: Arc::new(e) })?;
-            Ok((scene, Vec::new(), false))
+            Ok((scene, Vec::new(), false, Vec::new()))
         }
         Some("md2") => {
             let data = read_with_progress(path, &mut |f| progress("reading", Some(f)))?;
@@ -314,6 +318,7 @@ fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<(Scene, Vec<Loade
                 scene,
                 vec![((PathBuf::from(file), None), Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)))],
                 false,
+                Vec::new(),
             ))
         }
         Some(other) => Err(FileError::UnknownType { path: path.to_path_buf(), extension: other.to_owned() }),
@@ -568,6 +573,8 @@ pub struct ImportProgress {
 pub struct LoadedModel {
     pub scene: Scene,
     pub meshes: Vec<LoadedMesh>,
+    /// What the file holds that was not imported, one line per kind (VRML, X3D, Inventor).
+    pub not_imported: Vec<String>,
 }
 
 /// A model import running on its own thread.
@@ -592,7 +599,7 @@ impl BackgroundImport {
                     *p = ImportProgress { stage: stage.to_owned(), fraction };
                 }
             };
-            let (mut scene, read, own_camera) =
+            let (mut scene, read, own_camera, not_imported) =
                 read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
             let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
@@ -600,7 +607,7 @@ impl BackgroundImport {
             if purpose == ImportPurpose::Open {
                 frame_new_scene(&mut scene, &meshes, own_camera);
             }
-            Ok(LoadedModel { scene, meshes })
+            Ok(LoadedModel { scene, meshes, not_imported })
         });
         BackgroundImport { path, purpose, started: Instant::now(), progress, handle }
     }
