@@ -524,3 +524,30 @@ fn x3d_spline_position_interpolator_follows_the_specification() {
     }
     assert!(compared == 91 && worst < 1e-5, "{compared} frames, worst {worst}");
 }
+
+/// Equal keys make a jump (VRML97 §4.6.8): the segment before ends on the first of their
+/// values and the last shows from the key on; Coin agrees at every frame, including the frame
+/// on the key (the samekeys case of the NIST suite, on a Transform keyrig imports, and on an
+/// orientation), for a looping and a one-shot sensor.
+#[test]
+fn equal_keys_jump_as_coin_does() {
+    let python = python();
+    let dir = tempfile::tempdir().unwrap();
+    for looping in ["TRUE", "FALSE"] {
+        let path = dir.path().join(format!("jump_{looping}.wrl"));
+        std::fs::write(
+            &path,
+            format!(
+                "#VRML V2.0 utf8\nDEF T TimeSensor {{ cycleInterval 2 loop {looping} }}\n\
+                 DEF P PositionInterpolator {{ key [ 0.1 0.5 0.5 0.5 0.9 ] keyValue [ 0 0 0, 1 0 0, 5 5 5, 0 2 0, 0 0 3 ] }}\n\
+                 DEF O OrientationInterpolator {{ key [ 0 0.5 0.5 1 ] keyValue [ 0 0 1 0, 0 0 1 1, 1 0 0 2, 1 0 0 0.5 ] }}\n\
+                 DEF X Transform {{ children Shape {{ geometry Box {{ }} }} }}\n\
+                 ROUTE T.fraction_changed TO P.set_fraction\nROUTE T.fraction_changed TO O.set_fraction\n\
+                 ROUTE P.value_changed TO X.set_translation\nROUTE O.value_changed TO X.set_rotation\n"
+            ),
+        )
+        .unwrap();
+        let (channels, frames) = check(&python, &path);
+        assert_eq!((channels, frames), (2, 61), "{looping}");
+    }
+}
