@@ -45,7 +45,7 @@ fn write(dir: &Path, scene: &keyrig_core::Scene, name: &str) -> PathBuf {
 #[test]
 fn keyrig_reads_its_own_export_back_to_the_same_keys() {
     let dir = tempfile::tempdir().unwrap();
-    for asset in ["demo.ron", "twist.ron", "cycle.ron", "ik.ron"] {
+    for asset in ["demo.ron", "twist.ron", "cycle.ron", "ik.ron", "characters.ron"] {
         let scene = keyrig_io::project::load_scene(&assets().join(asset)).unwrap();
         for ext in ["x3d", "iv", "wrl", "x3dv"] {
             let path = write(dir.path(), &scene, &format!("{}.{ext}", asset.trim_end_matches(".ron")));

@@ -325,10 +325,42 @@ fn load_meshes(scene: &Scene, options: &VrmlExportOptions) -> Result<Vec<Option<
                         .map_err(|e| fail(e.to_string()))?;
                         Some(MeshOut { mesh: Some(Arc::new(rigid)), morph: None, indices, colour })
                     }
+                } else if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("md2")) {
+                    // An MD2 model plays its clip's frames at `fps`, looping, the last morphing
+                    // back into the first: morph keys at k / fps, the first frame again at the
+                    // end, repeating every n / fps.
+                    let model = crate::md2::load_md2_file(&file).map_err(|e| fail(e.to_string()))?;
+                    let MeshSource::File { clip, fps, .. } = object.mesh.as_ref().expect("file mesh") else {
+                        unreachable!("a file mesh")
+                    };
+                    let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+                    let range = match clip {
+                        Some(name) => model
+                            .clips
+                            .iter()
+                            .find(|c| &c.name == name)
+                            .map(|c| c.frames.clone())
+                            .ok_or_else(|| fail(format!("`{path}` has no clip `{name}`")))?,
+                        None => 0..model.frames.len(),
+                    };
+                    let mut frames: Vec<super::geometry::Frame> = range
+                        .filter_map(|f| model.frame_pose(f))
+                        .map(|p| super::geometry::Frame { positions: p.positions, normals: p.normals })
+                        .collect();
+                    if frames.is_empty() || !(fps.is_finite() && fps > 0.0) {
+                        return Err(fail(format!("`{path}`: no frames to play at {fps} fps")));
+                    }
+                    let n = frames.len();
+                    frames.push(frames[0].clone());
+                    let times = (0..=n).map(|k| k as f64 / fps).collect();
+                    Some(MeshOut {
+                        mesh: None,
+                        morph: Some(super::map::MorphKeys { times, period: Some(n as f64 / fps), frames }),
+                        indices: model.indices.clone(),
+                        colour: [1.0, 1.0, 1.0, 1.0],
+                    })
                 } else {
-                    return Err(fail(format!(
-                        "`{path}`: MD2 objects are not written to VRML/X3D/Inventor yet"
-                    )));
+                    return Err(fail(format!("`{path}` is not a model file keyrig reads")));
                 }
             }
         };
