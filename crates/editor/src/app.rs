@@ -1109,6 +1109,16 @@ impl EditorApp {
             self.meshes.insert(file, mesh, loaded);
         }
         let seconds = elapsed.as_secs_f64();
+        // What the file holds that keyrig did not take is said, never dropped silently.
+        let skipped = match imported.not_imported.as_slice() {
+            [] => String::new(),
+            lines => format!(
+                "; not imported ({} kind{}, `keyrig info` lists them): {}",
+                lines.len(),
+                if lines.len() == 1 { "" } else { "s" },
+                lines.iter().take(3).cloned().collect::<Vec<_>>().join("; ")
+            ),
+        };
         match purpose {
             ImportPurpose::Open => {
                 let n = imported.scene.objects.len();
@@ -1116,7 +1126,7 @@ impl EditorApp {
                 // Frame what the viewport draws (deformed, in its own units) once it has.
                 self.actions.push(Action::FrameObjects((0..n).collect()));
                 self.recent.add(&path);
-                self.info(format!("Opened {} ({seconds:.2} s)", path.display()));
+                self.info(format!("Opened {} ({seconds:.2} s){skipped}", path.display()));
             }
             ImportPurpose::Import => {
                 let scene = imported.scene;
@@ -1148,7 +1158,7 @@ impl EditorApp {
                     String::new()
                 };
                 self.info(format!(
-                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}",
+                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}{skipped}",
                     path.display()
                 ));
             }

@@ -27,6 +27,71 @@ pub enum MorphError {
     BadFps(f64),
     #[error("time must be finite, got {0}")]
     BadTime(f64),
+    #[error("{times} key times for {frames} frames, or times that are not finite and increasing, or a period that is not finite and > 0")]
+    KeyTimes { times: usize, frames: usize },
+}
+
+/// Frames shown at their own times instead of at a rate (a VRML/X3D `CoordinateInterpolator`:
+/// frame i at `times[i]` seconds, linear between neighbours, holding before the first and
+/// after the last; with a `period` the whole repeats every `period` seconds, a time at a
+/// positive multiple of it showing the end of a cycle only at the first, as keyrig's repeating
+/// tracks do).
+///
+/// # Invariants
+/// One time per frame, finite and not decreasing (equal times are a jump: the later frame
+/// shows from that time on); `period` finite and > 0 ([`MorphClips::with_key_times`]).
+#[derive(Clone, Debug)]
+pub struct KeyTimes {
+    times: Vec<f64>,
+    period: Option<f64>,
+}
+
+impl PartialEq for KeyTimes {
+    fn eq(&self, other: &Self) -> bool {
+        self.times.len() == other.times.len()
+            && self.times.iter().zip(&other.times).all(|(a, b)| a.to_bits() == b.to_bits())
+            && self.period.map(f64::to_bits) == other.period.map(f64::to_bits)
+    }
+}
+
+impl Eq for KeyTimes {}
+
+impl KeyTimes {
+    /// The key times, one per frame.
+    #[must_use]
+    pub fn times(&self) -> &[f64] {
+        &self.times
+    }
+
+    /// The repeat period, when the frames loop.
+    #[must_use]
+    pub fn period(&self) -> Option<f64> {
+        self.period
+    }
+
+    fn blend(&self, time: f64) -> Result<MorphBlend, MorphError> {
+        if !time.is_finite() {
+            return Err(MorphError::BadTime(time));
+        }
+        let local = match self.period {
+            Some(p) if time > p => time - (time / p).floor() * p,
+            _ => time,
+        };
+        let times = &self.times;
+        let last = times.len() - 1;
+        let hold = |i: usize| MorphBlend { frame_a: i as u32, frame_b: i as u32, t: 0.0 };
+        if local < times[0] {
+            return Ok(hold(0));
+        }
+        if local >= times[last] {
+            return Ok(hold(last));
+        }
+        // The last key at or before `local` (after a jump: the later of equal keys).
+        let next = times.partition_point(|&k| k <= local);
+        let a = next - 1;
+        let t = ((local - times[a]) / (times[next] - times[a])) as f32;
+        Ok(MorphBlend { frame_a: a as u32, frame_b: next as u32, t: t.clamp(0.0, 1.0) })
+    }
 }
 
 /// A named run of consecutive frames (an MD2 clip: `stand`, `run`, …).
@@ -53,6 +118,7 @@ pub struct MorphBlend {
 pub struct MorphClips {
     frame_count: usize,
     clips: Vec<MorphClip>,
+    key_times: Option<KeyTimes>,
 }
 
 impl MorphClips {
@@ -72,7 +138,31 @@ impl MorphClips {
                 frames: frame_count,
             });
         }
-        Ok(MorphClips { frame_count, clips })
+        Ok(MorphClips { frame_count, clips, key_times: None })
+    }
+
+    /// The same frames shown at their own times ([`KeyTimes`]) rather than at a rate: then
+    /// [`MorphClips::blend_at`] ignores the clip and the rate.
+    ///
+    /// # Errors
+    /// [`MorphError::KeyTimes`]: not one time per frame, times not finite or decreasing, or a
+    /// period that is not finite and > 0.
+    pub fn with_key_times(mut self, times: Vec<f64>, period: Option<f64>) -> Result<Self, MorphError> {
+        let ok = times.len() == self.frame_count
+            && times.iter().all(|t| t.is_finite())
+            && times.windows(2).all(|w| w[0] <= w[1])
+            && period.is_none_or(|p| p.is_finite() && p > 0.0);
+        if !ok {
+            return Err(MorphError::KeyTimes { times: times.len(), frames: self.frame_count });
+        }
+        self.key_times = Some(KeyTimes { times, period });
+        Ok(self)
+    }
+
+    /// The frames' own times, when they have them.
+    #[must_use]
+    pub fn key_times(&self) -> Option<&KeyTimes> {
+        self.key_times.as_ref()
     }
 
     /// Number of stored frames.
@@ -118,13 +208,17 @@ impl MorphClips {
         Ok(frames.len() as f64 / fps)
     }
 
-    /// The frames to blend at `time` seconds when `clip` plays at `fps`, looping:
+    /// The frames to blend at `time` seconds: at their own times when the frames have them
+    /// ([`MorphClips::with_key_times`]); else when `clip` plays at `fps`, looping:
     /// f = (time · fps) mod n over the clip's n frames; frames ⌊f⌋ and ⌊f⌋ + 1 (the clip's
     /// first after its last) with weight t = f − ⌊f⌋. A pure function of its inputs.
     ///
     /// # Errors
     /// An unknown clip, a rate that is not finite and > 0, a time that is not finite.
     pub fn blend_at(&self, clip: Option<&str>, fps: f64, time: f64) -> Result<MorphBlend, MorphError> {
+        if let Some(keys) = &self.key_times {
+            return keys.blend(time);
+        }
         let frames = self.clip_frames(clip)?;
         if !(fps.is_finite() && fps > 0.0) {
             return Err(MorphError::BadFps(fps));
@@ -164,5 +258,45 @@ mod tests {
             MorphClips::new(3, vec![MorphClip { name: "x".into(), frames: 2..5 }]),
             Err(MorphError::ClipRange { .. })
         ));
+    }
+
+    /// Key times: linear between keys, held outside them, equal keys a jump, repeating with
+    /// the period (a time at a positive multiple of it shows the cycle's end only at the
+    /// first multiple, as repeating tracks do).
+    ///
+    /// ```text
+    /// frames   0     1       2 3
+    /// times    0.5   1.0     2.0 (2.0)      period 4
+    /// ```
+    #[test]
+    fn key_times_blend_like_a_coordinate_interpolator() {
+        let clips =
+            MorphClips::new(4, vec![]).unwrap().with_key_times(vec![0.5, 1.0, 2.0, 2.0], Some(4.0)).unwrap();
+        let at = |t: f64| {
+            let b = clips.blend_at(Some("ignored"), 10.0, t).unwrap();
+            (b.frame_a, b.frame_b, b.t)
+        };
+        assert_eq!(at(0.0), (0, 0, 0.0));
+        assert_eq!(at(0.5), (0, 1, 0.0));
+        assert_eq!(at(0.75), (0, 1, 0.5));
+        assert_eq!(at(1.5), (1, 2, 0.5));
+        assert_eq!(at(1.999_999), (1, 2, 0.999_999));
+        assert_eq!(at(2.0), (3, 3, 0.0), "the later of equal keys from its time on");
+        assert_eq!(at(4.0), (3, 3, 0.0), "the first cycle's end");
+        assert_eq!(at(4.75), (0, 1, 0.5), "the second cycle");
+        assert_eq!(at(8.0), (0, 0, 0.0), "a later multiple starts the next cycle");
+        assert!(matches!(
+            MorphClips::new(2, vec![]).unwrap().with_key_times(vec![1.0, 0.0], None),
+            Err(MorphError::KeyTimes { .. })
+        ));
+        assert!(matches!(
+            MorphClips::new(2, vec![]).unwrap().with_key_times(vec![0.0], None),
+            Err(MorphError::KeyTimes { .. })
+        ));
+        assert!(matches!(
+            MorphClips::new(2, vec![]).unwrap().with_key_times(vec![0.0, 1.0], Some(0.0)),
+            Err(MorphError::KeyTimes { .. })
+        ));
+        assert!(matches!(clips.blend_at(None, 10.0, f64::NAN), Err(MorphError::BadTime(_))));
     }
 }

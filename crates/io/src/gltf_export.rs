@@ -120,6 +120,12 @@ pub enum MeshFileError {
     Gltf(#[from] crate::gltf_import::GltfError),
     #[error(transparent)]
     Md2(#[from] crate::md2::Md2LoadError),
+    #[error(transparent)]
+    Vrml(#[from] crate::vrml::VrmlError),
+    #[error(transparent)]
+    VrmlMesh(#[from] crate::vrml::map::VrmlMeshError),
+    #[error("mesh {0} morphs by a CoordinateInterpolator, which glTF export does not write yet")]
+    VrmlMorph(usize),
     #[error("has no mesh {0}")]
     NoMesh(usize),
     #[error("no node shows mesh {0}")]
@@ -367,6 +373,7 @@ type Influences = (Vec<[u16; 4]>, Vec<[f32; 4]>);
 enum LoadedFile {
     Gltf(Box<ImportedModel>),
     Md2(Box<crate::md2::Md2Model>),
+    Vrml(Box<crate::vrml::VrmlModel>),
 }
 
 /// Loads the model file at `path` (glTF by default, MD2 by its extension), through the same
@@ -374,6 +381,9 @@ enum LoadedFile {
 /// [`crate::md2::load_md2_file`] (which also finds the skin image).
 fn load_file(path: &Path) -> Result<LoadedFile, MeshFileError> {
     let is_md2 = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
+    if crate::vrml::is_vrml_path(path) {
+        return Ok(LoadedFile::Vrml(Box::new(crate::vrml::import_vrml_file(path)?)));
+    }
     Ok(if is_md2 {
         LoadedFile::Md2(Box::new(crate::md2::load_md2_file(path)?))
     } else {
@@ -637,6 +647,33 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
                         let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
                         md2_object(&mut doc, scene, model, &file, clip.as_deref(), fps, node, &object.name)
                             .map_err(err)?;
+                    }
+                    LoadedFile::Vrml(model) => {
+                        let index = mesh.unwrap_or(0);
+                        if model.meshes.get(index).is_some_and(|m| m.morph.is_some()) {
+                            return Err(err(MeshFileError::VrmlMorph(index)));
+                        }
+                        let mesh = model.skinned_mesh(index).map_err(|e| err(e.into()))?;
+                        let colour = model.meshes[index].material.base_colour;
+                        let skinned = !joint_nodes.is_empty() && joint_nodes.len() == mesh.skeleton.len();
+                        let prim = PrimitiveData {
+                            positions: mesh.positions.clone(),
+                            normals: Some(mesh.normals.clone()),
+                            texcoords: mesh.uvs.clone(),
+                            indices: mesh.indices.clone(),
+                            skin: skinned.then(|| {
+                                (mesh.influences.joints().to_vec(), mesh.influences.weights().to_vec())
+                            }),
+                            targets: Vec::new(),
+                            material: Some(MaterialData { base_colour: colour, texture: None }),
+                        };
+                        if skinned {
+                            let ibms = ibms_of(&mesh.skeleton);
+                            skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
+                        } else {
+                            let m = doc.mesh(&object.name, &[prim], None);
+                            doc.nodes[node]["mesh"] = json!(m);
+                        }
                     }
                     LoadedFile::Gltf(model) => {
                         let index = mesh.unwrap_or(0);

@@ -1,5 +1,6 @@
 //! keyrig-io: everything that touches a file. RON scene files (versioned, checked, saved
-//! atomically), the built-in demo scene, glTF import/export and MD2 import.
+//! atomically), the built-in demo scene, glTF import/export, MD2 import, and VRML97 / X3D /
+//! Open Inventor import ([`vrml`]).
 
 pub mod demo;
 pub mod file_io;
@@ -13,5 +14,6 @@ pub mod scene_file;
 mod scene_locate;
 mod scene_text;
 mod scene_v1;
+pub mod vrml;
 
 pub use scene_file::{load, save, LocatedProblem, SceneFileError};

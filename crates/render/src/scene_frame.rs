@@ -126,6 +126,16 @@ impl MorphMesh {
         Ok(self)
     }
 
+    /// The mesh with its frames shown at their own times (a VRML/X3D
+    /// `CoordinateInterpolator`; [`keyrig_eval::morph::MorphClips::with_key_times`]).
+    ///
+    /// # Errors
+    /// [`MorphError::KeyTimes`] when the times do not fit the frames.
+    pub fn with_key_times(mut self, times: Vec<f64>, period: Option<f64>) -> Result<Self, MorphError> {
+        self.clips = Arc::new((*self.clips).clone().with_key_times(times, period)?);
+        Ok(self)
+    }
+
     /// Texture coordinates, one per vertex, when the mesh has them.
     #[must_use]
     pub fn uvs(&self) -> Option<&[Vec2]> {

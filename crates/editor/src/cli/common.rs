@@ -60,9 +60,18 @@ pub fn time_in_range(scene: &Scene, frame: Option<f64>, time: Option<f64>) -> an
 /// Loads the scene at `path` for a headless command. `.ron` scenes are read leniently (problems
 /// are returned beside the scene, located in the file); `.glb`/`.gltf` models are imported and
 /// mapped to a scene with keyrig-io's mapping (first animation), whose problems have no file
-/// position. MD2 models hold vertex animation, not channels, and are refused.
+/// position; VRML97, X3D and Open Inventor files likewise through `keyrig_io::vrml`. MD2 models
+/// hold vertex animation, not channels, and are refused.
 pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, Vec<LocatedProblem>)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if keyrig_io::vrml::is_vrml_path(path) {
+        let model = keyrig_io::vrml::import_vrml_file(path)?;
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let scene = model.to_scene(&name);
+        let problems =
+            scene.problems().into_iter().map(|problem| LocatedProblem { problem, position: None }).collect();
+        return Ok((scene, problems));
+    }
     match ext.as_deref() {
         Some("ron") => Ok(scene_file::load_lenient(path)?),
         Some("glb" | "gltf") => {
@@ -85,7 +94,7 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
             path.display()
         ),
         _ => bail!(
-            "{}: unknown file type; `keyrig {command}` reads .ron scenes and .glb/.gltf models",
+            "{}: unknown file type; `keyrig {command}` reads .ron scenes, .glb/.gltf models and .wrl/.wrz/.x3d/.x3dv/.iv files",
             path.display()
         ),
     }

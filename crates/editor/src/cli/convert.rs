@@ -27,10 +27,16 @@ pub struct ConvertArgs {
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     crate::cli::export::check_output_extension(&args.output)?;
+    if keyrig_io::vrml::export::ExportFormat::of_path(&args.output).is_some() {
+        bail!(
+            "{}: `keyrig convert` writes glTF; write VRML, X3D or Inventor with `keyrig export`",
+            args.output.display()
+        );
+    }
     let ext = args.input.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("md2") => {}
-        Some("glb" | "gltf") => {
+        Some("glb" | "gltf" | "wrl" | "wrz" | "x3d" | "x3dv" | "x3dz" | "x3dvz" | "iv") => {
             return crate::cli::export::run(crate::cli::export::ExportArgs {
                 scene: args.input,
                 output: args.output,
@@ -40,7 +46,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
             });
         }
         _ => bail!(
-            "{}: only .md2, .glb and .gltf models can be converted (export a scene with `keyrig export`)",
+            "{}: only .md2, .glb, .gltf, .wrl, .wrz, .x3d, .x3dv and .iv models can be converted (export a scene with `keyrig export`)",
             args.input.display()
         ),
     }

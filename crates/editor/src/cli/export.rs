@@ -16,9 +16,11 @@ use keyrig_io::gltf_export::{export_scene, BakeOptions, ExportOptions};
 
 #[derive(clap::Args, Debug)]
 pub struct ExportArgs {
-    /// Scene file (.ron) or model (.glb, .gltf, .md2).
+    /// Scene file (.ron) or model (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv).
     pub scene: PathBuf,
-    /// Output file: .glb (binary) or .gltf (JSON with the buffer embedded).
+    /// Output file: .glb (binary) or .gltf (JSON with the buffer embedded); or .wrl (VRML97),
+    /// .x3dv / .x3d (X3D classic / XML), .iv (Open Inventor) with the animation as
+    /// interpolators and keyrig's own keys as metadata.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Largest angle in degrees between an exported rotation and the scene's curve.
@@ -49,6 +51,9 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
     let mut inputs = vec![(args.scene.clone(), "the input file".to_owned())];
     inputs.extend(keyrig_io::project::scene_inputs(&scene, base_dir.as_deref()));
     keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
+    if let Some(format) = keyrig_io::vrml::export::ExportFormat::of_path(&args.output) {
+        return export_vrml(&args, &scene, base_dir, format);
+    }
     let options = ExportOptions {
         rotation_tolerance_deg: args.rotation_tolerance,
         base_dir,
@@ -71,13 +76,45 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `keyrig export … -o OUT.wrl|.x3dv|.x3d|.iv`: keyrig-io's VRML/X3D/Inventor writer, with
+/// the rotation tolerance of the command line and a position tolerance of 10⁻⁴ of the scene's
+/// size; written atomically and read back as a check.
+fn export_vrml(
+    args: &ExportArgs,
+    scene: &keyrig_core::Scene,
+    base_dir: Option<PathBuf>,
+    format: keyrig_io::vrml::export::ExportFormat,
+) -> anyhow::Result<()> {
+    if args.bake {
+        bail!("--bake is for glTF; VRML, X3D and Inventor files are always written as linear keys");
+    }
+    let options = keyrig_io::vrml::export::VrmlExportOptions {
+        base_dir,
+        rotation_tolerance_deg: args.rotation_tolerance,
+        ..keyrig_io::vrml::export::VrmlExportOptions::default()
+    };
+    let text = keyrig_io::vrml::export::export_scene(scene, format, &options)
+        .with_context(|| format!("{}: cannot export", args.scene.display()))?;
+    keyrig_io::file_io::write_atomic(&args.output, text.as_bytes())
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    keyrig_io::vrml::import_vrml_file(&args.output)
+        .with_context(|| format!("{}: the written file does not import again", args.output.display()))?;
+    eprintln!(
+        "keyrig: wrote {} ({} objects, {} lights)",
+        args.output.display(),
+        scene.objects.len(),
+        scene.lights.len()
+    );
+    Ok(())
+}
+
 /// A scene file with the folder its model paths resolve against, or a model (.glb, .gltf,
-/// .md2) mapped onto a scene as the editor opens it (its first animation; an MD2 plays every
+/// .md2, .wrl, .wrz, .x3d, .x3dv, .iv) mapped onto a scene as the editor opens it (its first animation; an MD2 plays every
 /// frame), with absolute model paths.
 pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, Option<PathBuf>)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("glb" | "gltf" | "md2") => {
+        Some("glb" | "gltf" | "md2" | "wrl" | "wrz" | "x3d" | "x3dv" | "x3dz" | "x3dvz" | "iv") => {
             let scene = keyrig_editor::files::import_model(path).map_err(anyhow::Error::msg)?;
             Ok((scene, None))
         }
@@ -88,11 +125,13 @@ pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, O
     }
 }
 
-/// `.glb` or `.gltf`, case-insensitive.
+/// `.glb`, `.gltf`, `.wrl`, `.x3dv`, `.x3d` or `.iv`, case-insensitive.
 pub fn check_output_extension(path: &std::path::Path) -> anyhow::Result<()> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("glb" | "gltf")) {
-        bail!("{}: the output must end in .glb or .gltf", path.display());
+    if !matches!(ext.as_deref(), Some("glb" | "gltf"))
+        && keyrig_io::vrml::export::ExportFormat::of_path(path).is_none()
+    {
+        bail!("{}: the output must end in .glb, .gltf, .wrl, .x3dv, .x3d or .iv", path.display());
     }
     Ok(())
 }

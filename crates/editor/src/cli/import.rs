@@ -13,7 +13,7 @@ use anyhow::{bail, Context};
 
 #[derive(clap::Args, Debug)]
 pub struct ImportArgs {
-    /// Model file (.glb, .gltf, .md2).
+    /// Model file (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv).
     pub model: PathBuf,
     /// Output scene file (.ron).
     #[arg(short, long)]
@@ -25,8 +25,12 @@ pub struct ImportArgs {
 
 pub fn run(args: ImportArgs) -> anyhow::Result<()> {
     let ext = args.model.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "md2")) {
-        bail!("{}: the model must be a .glb, .gltf or .md2 file", args.model.display());
+    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "md2")) && !keyrig_io::vrml::is_vrml_path(&args.model)
+    {
+        bail!(
+            "{}: the model must be a .glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv or .iv file",
+            args.model.display()
+        );
     }
     if !keyrig_editor::files::is_scene_file(&args.output) {
         bail!("{}: the output must end in .ron", args.output.display());
@@ -41,6 +45,9 @@ pub fn run(args: ImportArgs) -> anyhow::Result<()> {
     if let Some(animation) = args.animation {
         if ext.as_deref() == Some("md2") {
             bail!("--animation is for glTF models; an MD2 model plays all its frames");
+        }
+        if keyrig_io::vrml::is_vrml_path(&args.model) {
+            bail!("--animation is for glTF models; a VRML/X3D/Inventor file plays all its TimeSensors");
         }
         let model = keyrig_io::gltf_import::import_gltf_file(&args.model)?;
         if animation >= model.animations.len() {

@@ -25,7 +25,8 @@ pub enum InfoFormat {
 
 #[derive(clap::Args, Debug)]
 pub struct InfoArgs {
-    /// Scene file (.ron) or glTF model (.glb, .gltf).
+    /// Scene file (.ron), glTF model (.glb, .gltf), MD2 model, or VRML97 / X3D / Open Inventor
+    /// file (.wrl, .wrz, .x3d, .x3dv, .iv).
     pub file: PathBuf,
     /// Output format.
     #[arg(long, value_enum, default_value_t = InfoFormat::Text)]
@@ -92,6 +93,9 @@ fn mesh_problems(scene: &Scene, base_dir: &Path) -> Vec<keyrig_core::Problem> {
 }
 
 fn format_line(path: &Path) -> String {
+    if keyrig_io::vrml::is_vrml_path(path) {
+        return "VRML97 / X3D / Open Inventor file, mapped to a scene".to_string();
+    }
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("glb" | "gltf") => "glTF model, mapped to a scene (first animation)".to_string(),
         _ => format!("keyrig scene, version {}", scene_file::CURRENT_VERSION),
@@ -103,6 +107,9 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         args.file.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
     if is_md2 {
         return md2_info(&args);
+    }
+    if keyrig_io::vrml::is_vrml_path(&args.file) {
+        return vrml_info(&args);
     }
     let (scene, mut problems) = super::common::load_scene_lenient(&args.file, "info")?;
     if is_scene(&args.file) {
@@ -128,6 +135,81 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
             problems.len(),
             if problems.len() == 1 { "" } else { "s" }
         );
+    }
+    Ok(())
+}
+
+/// `keyrig info` of a VRML97, X3D or Open Inventor file: the scene it maps to, as for a scene,
+/// then its encoding, its views (Viewpoints, kept as named views until scenes have cameras),
+/// the meshes that morph, and every kind of thing the mapping did not import, with where.
+fn vrml_info(args: &InfoArgs) -> anyhow::Result<()> {
+    let model = keyrig_io::vrml::import_vrml_file(&args.file)?;
+    let name = args.file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let scene = model.to_scene(&name);
+    let problems: Vec<LocatedProblem> =
+        scene.problems().into_iter().map(|problem| LocatedProblem { problem, position: None }).collect();
+    let morphs: Vec<(String, usize)> = model
+        .objects
+        .iter()
+        .zip(&model.meshes)
+        .filter_map(|(o, m)| m.morph.as_ref().map(|k| (o.name.clone(), k.frames.len())))
+        .collect();
+    let text = match args.format {
+        InfoFormat::Text => {
+            use std::fmt::Write as _;
+            let mut w = summary_text(&args.file, &scene, &problems);
+            let _ = writeln!(w, "encoding: {}", model.encoding.name());
+            let _ = writeln!(w, "views:    {}", model.views.len());
+            for v in &model.views {
+                let _ = writeln!(
+                    w,
+                    "  {:?} at {:?}, field of view {:.1}°",
+                    v.name,
+                    v.position.to_array(),
+                    v.field_of_view.to_degrees()
+                );
+            }
+            for (object, frames) in &morphs {
+                let _ = writeln!(
+                    w,
+                    "morph:    {object:?}: {frames} CoordinateInterpolator keys (vertex animation)"
+                );
+            }
+            if model.skipped.is_empty() {
+                let _ = writeln!(w, "not imported: nothing");
+            } else {
+                let _ = writeln!(w, "not imported: {}", model.skipped.len());
+                for line in model.skipped_lines() {
+                    let _ = writeln!(w, "  {line}");
+                }
+            }
+            w
+        }
+        InfoFormat::Json => {
+            let mut doc = summary_json(&args.file, &scene, &problems);
+            doc["encoding"] = serde_json::json!(model.encoding.name());
+            doc["views"] = serde_json::json!(model
+                .views
+                .iter()
+                .map(|v| serde_json::json!({"name": v.name, "position": v.position.to_array(), "orientation": v.orientation.to_array(), "field_of_view": v.field_of_view}))
+                .collect::<Vec<_>>());
+            doc["morphs"] = serde_json::json!(morphs
+                .iter()
+                .map(|(o, f)| serde_json::json!({"object": o, "keys": f}))
+                .collect::<Vec<_>>());
+            doc["not_imported"] = serde_json::json!(model
+                .skipped
+                .iter()
+                .map(
+                    |s| serde_json::json!({"what": s.what, "why": s.why, "where": s.place, "count": s.count})
+                )
+                .collect::<Vec<_>>());
+            serde_json::to_string_pretty(&doc).context("writing JSON")? + "\n"
+        }
+    };
+    super::common::write_stdout(text.as_bytes())?;
+    if !problems.is_empty() {
+        bail!("{}: {} validation problem(s), listed above", args.file.display(), problems.len());
     }
     Ok(())
 }

@@ -24,7 +24,7 @@ const MD2_FRAMES_PER_TIMELINE_FRAME: f64 = 10.0 / 30.0;
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// Scene (.ron) or model (.glb, .gltf, .md2) to render.
+    /// Scene (.ron) or model (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv) to render.
     pub file: PathBuf,
     /// Frame to render (may be fractional); the first frame of the scene's range by default.
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
@@ -363,6 +363,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         let (scene, loaded, morphs, materials) = if has_extension(&args.file, &["glb", "gltf"]) {
             let (scene, loaded, materials) = gltf_scene(&args.file)?;
             (scene, loaded, HashMap::new(), materials)
+        } else if keyrig_io::vrml::is_vrml_path(&args.file) {
+            // The editor's opening of the model (its first view as the camera, or framed), and
+            // its meshes through the editor's mesh store.
+            let scene = keyrig_editor::files::open_any(&args.file).map_err(anyhow::Error::msg)?;
+            let meshes = keyrig_editor::files::render_meshes(&scene, None)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
+            (scene, meshes.skinned, meshes.morphs, meshes.materials)
         } else {
             // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
             let scene = keyrig_io::scene_file::load(&args.file)?;

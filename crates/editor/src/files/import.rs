@@ -12,7 +12,7 @@ use glam::{Mat4, Vec3};
 use keyrig_core::Scene;
 
 use super::meshes::{
-    is_gltf, load_file_mesh, load_gltf_meshes, md2_morph_mesh, FileMesh, LoadedMesh, MeshLoad,
+    is_gltf, load_file_mesh, load_gltf_meshes, md2_morph_mesh, vrml_meshes, FileMesh, LoadedMesh, MeshLoad,
 };
 use super::{extension, md2_rotation, FileError, MD2_SCALE};
 
@@ -25,7 +25,7 @@ use super::{extension, md2_rotation, FileError, MD2_SCALE};
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, FileError> {
-    read_model(path, &mut |_, _| {}).map(|(scene, _)| scene)
+    read_model(path, &mut |_, _| {}).map(|(scene, _, _, _)| scene)
 }
 
 /// Progress of a model read: the stage and, where known, the done fraction.
@@ -34,12 +34,23 @@ type ProgressFn<'a> = &'a mut dyn FnMut(&str, Option<f32>);
 /// [`import_model`], with the meshes it read on the way (an MD2 file's morph mesh), so that
 /// they need not be read again, reporting its stages to `progress`: glTF is read and parsed
 /// by keyrig-io in one step (no fraction); an MD2 file is read in chunks (fraction of its
-/// bytes), then parsed (no fraction).
+/// bytes), then parsed (no fraction); a VRML, X3D or Open Inventor file is read, parsed and
+/// mapped by keyrig-io in one step, and its meshes built at once. The flag says whether the
+/// model brings its own view (a VRML `Viewpoint`), which framing then keeps; the lines say
+/// what the file holds that was not imported (VRML, X3D, Inventor).
 pub(super) fn read_model(
     path: &Path,
     progress: ProgressFn<'_>,
-) -> Result<(Scene, Vec<LoadedMesh>), FileError> {
+) -> Result<(Scene, Vec<LoadedMesh>, bool, Vec<String>), FileError> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    if keyrig_io::vrml::is_vrml_path(path) {
+        progress("reading and parsing", None);
+        let model = keyrig_io::vrml::import_vrml_file(path)?;
+        let file = absolute();
+        let scene = model.to_scene(&file.to_string_lossy());
+        progress("building meshes", None);
+        return Ok((scene, vrml_meshes(&file, &model), !model.views.is_empty(), model.skipped_lines()));
+    }
     match extension(path).as_deref() {
         Some("glb" | "gltf") => {
             progress("reading and parsing", None);
@@ -48,7 +59,7 @@ pub(super) fn read_model(
             let scene = model
                 .to_scene(&absolute().to_string_lossy(), animation)
                 .map_err(|e| FileError::Mapping { path: path.to_path_buf(), source: Arc::new(e) })?;
-            Ok((scene, Vec::new()))
+            Ok((scene, Vec::new(), false, Vec::new()))
         }
         Some("md2") => {
             let data = read_with_progress(path, &mut |f| progress("reading", Some(f)))?;
@@ -81,6 +92,8 @@ pub(super) fn read_model(
             Ok((
                 scene,
                 vec![((PathBuf::from(file), None), Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)))],
+                false,
+                Vec::new(),
             ))
         }
         Some(other) => Err(FileError::UnknownType { path: path.to_path_buf(), extension: other.to_owned() }),
@@ -125,9 +138,14 @@ pub fn frame_range_end(seconds: f64, fps: f64) -> i32 {
     keyrig_io::md2::frame_range_end(seconds, fps)
 }
 
-/// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame) and adds a
-/// sun when it has no light, as `keyrig render` does for models.
-pub(super) fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh]) {
+/// Points a model's new scene's camera at its meshes (rest pose, first MD2 frame), unless the
+/// model brought its own view (`own_camera`), and adds a sun when it has no light, as
+/// `keyrig render` does for models.
+pub(super) fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh], own_camera: bool) {
+    if own_camera {
+        frame_model_scene(scene, std::iter::empty());
+        return;
+    }
     let mut points = Vec::new();
     // Found by key, not by a search per object (quadratic for 100,000 objects).
     let by_key: HashMap<(&Path, Option<usize>), &FileMesh> = meshes
@@ -211,8 +229,27 @@ pub(super) fn load_meshes_of(
     // A glTF file is imported once for all the meshes wanted of it (once per mesh made a file
     // of 100,000 meshes take hours).
     let mut files: HashMap<PathBuf, Result<Vec<MeshLoad>, FileError>> = HashMap::new();
+    let mut vrml_files: HashMap<PathBuf, Result<HashMap<Option<usize>, MeshLoad>, FileError>> =
+        HashMap::new();
     for (i, (path, mesh)) in wanted.into_iter().enumerate() {
-        let loaded = if is_gltf(&path) {
+        let loaded = if keyrig_io::vrml::is_vrml_path(&path) {
+            // A VRML file is read once for all of its meshes, found by key.
+            let all =
+                vrml_files.entry(path.clone()).or_insert_with(|| {
+                    match keyrig_io::vrml::import_vrml_file(&path) {
+                        Ok(model) => {
+                            Ok(vrml_meshes(&path, &model).into_iter().map(|((_, m), l)| (m, l)).collect())
+                        }
+                        Err(e) => Err(FileError::Vrml(Arc::new(e))),
+                    }
+                });
+            match all {
+                Ok(all) => all.get(&mesh).cloned().unwrap_or_else(|| {
+                    Err(FileError::NoSuchMesh { path: path.clone(), index: mesh.unwrap_or(0) })
+                }),
+                Err(e) => Err(e.clone()),
+            }
+        } else if is_gltf(&path) {
             let all = files.entry(path.clone()).or_insert_with(|| load_gltf_meshes(&path));
             match all {
                 Ok(all) => all.get(mesh.unwrap_or(0)).cloned().unwrap_or_else(|| {
@@ -254,6 +291,8 @@ pub struct ImportProgress {
 pub struct LoadedModel {
     pub scene: Scene,
     pub meshes: Vec<LoadedMesh>,
+    /// What the file holds that was not imported, one line per kind (VRML, X3D, Inventor).
+    pub not_imported: Vec<String>,
 }
 
 /// A model import running on its own thread.
@@ -278,14 +317,15 @@ impl BackgroundImport {
                     *p = ImportProgress { stage: stage.to_owned(), fraction };
                 }
             };
-            let (mut scene, read) = read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
+            let (mut scene, read, own_camera, not_imported) =
+                read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
             let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
             });
             if purpose == ImportPurpose::Open {
-                frame_new_scene(&mut scene, &meshes);
+                frame_new_scene(&mut scene, &meshes, own_camera);
             }
-            Ok(LoadedModel { scene, meshes })
+            Ok(LoadedModel { scene, meshes, not_imported })
         });
         BackgroundImport { path, purpose, started: Instant::now(), progress, handle }
     }

@@ -55,6 +55,48 @@ pub(super) fn is_gltf(path: &Path) -> bool {
     matches!(extension(path).as_deref(), Some("glb" | "gltf"))
 }
 
+/// Every mesh of a VRML/X3D/Inventor model, keyed as [`MeshStore`] keys them (`path`, mesh
+/// index): rigid skinned meshes, or morph meshes playing their `CoordinateInterpolator`'s keys
+/// at their own times; each with its material.
+#[must_use]
+pub fn vrml_meshes(path: &Path, model: &keyrig_io::vrml::VrmlModel) -> Vec<LoadedMesh> {
+    (0..model.meshes.len())
+        .map(|i| {
+            let mesh = &model.meshes[i];
+            let material = mesh.material.clone();
+            let loaded = match &mesh.morph {
+                Some(morph) => {
+                    let frames: Vec<Vec<SkinnedVertex>> = morph
+                        .frames
+                        .iter()
+                        .map(|f| {
+                            f.positions
+                                .iter()
+                                .zip(&f.normals)
+                                .map(|(&p, &n)| SkinnedVertex::new(p, n))
+                                .collect()
+                        })
+                        .collect();
+                    let uvs = mesh.uvs.clone();
+                    MorphMesh::new(frames, mesh.indices.clone(), Vec::new())
+                        .and_then(|m| m.with_key_times(morph.times.clone(), morph.period))
+                        .and_then(|m| match uvs {
+                            Some(uvs) => m.with_look(uvs, Some(std::sync::Arc::new(material.clone()))),
+                            None => Ok(m),
+                        })
+                        .map(|m| (FileMesh::Morph(std::sync::Arc::new(m)), Some(material)))
+                        .map_err(|source| FileError::Morph { path: path.to_path_buf(), source })
+                }
+                None => model
+                    .skinned_mesh(i)
+                    .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), Some(material)))
+                    .map_err(|e| FileError::VrmlMesh { path: path.to_path_buf(), source: Arc::new(e) }),
+            };
+            ((path.to_path_buf(), Some(i)), loaded)
+        })
+        .collect()
+}
+
 /// A mesh read from a model file.
 #[derive(Clone, Debug)]
 pub enum FileMesh {
@@ -97,6 +139,22 @@ impl MeshStore {
         mesh: Option<usize>,
     ) -> Result<&FileMesh, FileError> {
         let key = (full_path(base_dir, path), mesh);
+        if !self.meshes.contains_key(&key) && keyrig_io::vrml::is_vrml_path(&key.0) {
+            // One read of the file gives every mesh of it.
+            self.generation += 1;
+            match keyrig_io::vrml::import_vrml_file(&key.0) {
+                Ok(model) => {
+                    for (k, loaded) in vrml_meshes(&key.0, &model) {
+                        self.keep(k, loaded);
+                    }
+                    if !self.meshes.contains_key(&key) {
+                        let index = mesh.unwrap_or(0);
+                        self.keep(key.clone(), Err(FileError::NoSuchMesh { path: key.0.clone(), index }));
+                    }
+                }
+                Err(e) => self.keep(key.clone(), Err(FileError::Vrml(Arc::new(e)))),
+            }
+        }
         if !self.meshes.contains_key(&key) {
             self.generation += 1;
             if is_gltf(&key.0) {

@@ -42,6 +42,12 @@ pub enum FileError {
     SkinnedMesh { path: PathBuf, source: Arc<keyrig_io::model::MappingError> },
     #[error("{}: {source}", path.display())]
     Morph { path: PathBuf, source: keyrig_render::MorphError },
+    #[error(transparent)]
+    Vrml(Arc<keyrig_io::vrml::VrmlError>),
+    #[error("{}: {source}", path.display())]
+    VrmlExport { path: PathBuf, source: Arc<keyrig_io::vrml::export::VrmlExportError> },
+    #[error("{}: {source}", path.display())]
+    VrmlMesh { path: PathBuf, source: Arc<keyrig_io::vrml::map::VrmlMeshError> },
     #[error("{}: {source}", path.display())]
     Export { path: PathBuf, source: Arc<keyrig_io::gltf_export::ExportError> },
     #[error("{}: cannot read: {source}", path.display())]
@@ -50,11 +56,11 @@ pub enum FileError {
     Write { path: PathBuf, source: Arc<std::io::Error> },
     #[error("{}: cannot create folder: {source}", path.display())]
     Folder { path: PathBuf, source: Arc<std::io::Error> },
-    #[error("{}: unknown file type .{extension} (expected .ron, .glb, .gltf or .md2)", path.display())]
+    #[error("{}: unknown file type .{extension} (expected .ron, .glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv or .iv)", path.display())]
     UnknownType { path: PathBuf, extension: String },
-    #[error("{}: no file extension (expected .ron, .glb, .gltf or .md2)", path.display())]
+    #[error("{}: no file extension (expected .ron, .glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv or .iv)", path.display())]
     NoExtension { path: PathBuf },
-    #[error("{}: the editor shows meshes of glTF and MD2 files only", path.display())]
+    #[error("{}: the editor shows meshes of glTF, MD2, VRML, X3D and Open Inventor files only", path.display())]
     NotAMeshFile { path: PathBuf },
     #[error("{}: no node shows mesh {index}", path.display())]
     NoSuchMesh { path: PathBuf, index: usize },
@@ -70,6 +76,12 @@ pub enum FileError {
 impl From<keyrig_io::scene_file::SceneFileError> for FileError {
     fn from(e: keyrig_io::scene_file::SceneFileError) -> Self {
         FileError::Scene(Arc::new(e))
+    }
+}
+
+impl From<keyrig_io::vrml::VrmlError> for FileError {
+    fn from(e: keyrig_io::vrml::VrmlError) -> Self {
+        FileError::Vrml(Arc::new(e))
     }
 }
 
@@ -132,16 +144,35 @@ pub enum DialogPurpose {
 #[must_use]
 pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'static str])> {
     const SCENES: (&str, &[&str]) = ("keyrig scenes (.ron)", &["ron"]);
-    const MODELS: (&str, &[&str]) = ("Models (.glb, .gltf, .md2)", &["glb", "gltf", "md2"]);
+    const MODELS: (&str, &[&str]) = (
+        "Models (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv)",
+        &["glb", "gltf", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+    );
+    const VRML: (&str, &[&str]) = (
+        "VRML, X3D, Open Inventor (.wrl, .wrz, .x3d, .x3dv, .iv)",
+        &["wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+    );
     match purpose {
-        DialogPurpose::Open => {
-            vec![SCENES, MODELS, ("Scenes and models", &["ron", "glb", "gltf", "md2"])]
-        }
+        DialogPurpose::Open => vec![
+            SCENES,
+            MODELS,
+            (
+                "Scenes and models",
+                &["ron", "glb", "gltf", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+            ),
+        ],
         DialogPurpose::Import => {
-            vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"])]
+            vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"]), VRML]
         }
         DialogPurpose::SaveAs => vec![SCENES],
-        DialogPurpose::Export => vec![("glTF binary (.glb)", &["glb"]), ("glTF (.gltf)", &["gltf"])],
+        DialogPurpose::Export => vec![
+            ("glTF binary (.glb)", &["glb"]),
+            ("glTF (.gltf)", &["gltf"]),
+            ("VRML97 (.wrl)", &["wrl"]),
+            ("X3D (.x3d)", &["x3d"]),
+            ("X3D classic (.x3dv)", &["x3dv"]),
+            ("Open Inventor (.iv)", &["iv"]),
+        ],
     }
 }
 
@@ -162,7 +193,7 @@ pub fn file_dialog(
         DialogPurpose::Open => "Open scene or model",
         DialogPurpose::SaveAs => "Save scene as",
         DialogPurpose::Import => "Import model",
-        DialogPurpose::Export => "Export glTF",
+        DialogPurpose::Export => "Export glTF, VRML, X3D or Open Inventor",
     };
     let mut dialog = egui_file_dialog::FileDialog::new()
         .id(egui::Id::new(("keyrig_file_dialog", title)))
@@ -206,16 +237,27 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
     if is_scene_file(path) {
         Ok(load_scene(path)?)
     } else {
-        let (mut scene, read) = import::read_model(path, &mut |_, _| {})?;
+        let (mut scene, read, own_camera, _) = import::read_model(path, &mut |_, _| {})?;
         let meshes = import::load_meshes_of(&scene, read, &mut |_| {});
-        import::frame_new_scene(&mut scene, &meshes);
+        import::frame_new_scene(&mut scene, &meshes, own_camera);
         Ok(scene)
     }
 }
 
-/// Writes the scene as glTF (.glb, or .gltf with the buffer embedded), resolving mesh files
-/// against `base_dir` (the scene's folder).
+/// Writes the scene as glTF (.glb, or .gltf with the buffer embedded) — or, by the path's
+/// extension, as VRML97 (.wrl), X3D (.x3d, .x3dv) or Open Inventor (.iv) through
+/// `keyrig_io::vrml::export` — resolving mesh files against `base_dir` (the scene's folder).
 pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Result<(), FileError> {
+    if let Some(format) = keyrig_io::vrml::export::ExportFormat::of_path(path) {
+        let options = keyrig_io::vrml::export::VrmlExportOptions {
+            base_dir: base_dir.map(Path::to_path_buf),
+            ..keyrig_io::vrml::export::VrmlExportOptions::default()
+        };
+        let text = keyrig_io::vrml::export::export_scene(scene, format, &options)
+            .map_err(|e| FileError::VrmlExport { path: path.to_path_buf(), source: Arc::new(e) })?;
+        return keyrig_io::file_io::write_atomic(path, text.as_bytes())
+            .map_err(|e| FileError::Write { path: path.to_path_buf(), source: Arc::new(e) });
+    }
     let options = keyrig_io::gltf_export::ExportOptions {
         base_dir: base_dir.map(Path::to_path_buf),
         ..keyrig_io::gltf_export::ExportOptions::default()
