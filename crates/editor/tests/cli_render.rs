@@ -283,6 +283,9 @@ fn a_scene_made_from_any_model_renders_as_the_model_does() {
             "{}: {differ} of {} pixels differ between the model and its scene",
             model.display(),
             from_model.len() / 4
+        );
+    }
+}
 
 /// Pixels of `image` that differ from its top-left corner (the background without a grid).
 fn covered(image: &keyrig_render::image::RgbaImage) -> usize {
