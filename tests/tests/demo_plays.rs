@@ -1,7 +1,7 @@
 //! End to end across keyrig-io, keyrig-core and keyrig-skin: the committed demo scene loads
 //! from disk, has no problems, and plays through every frame with all four deformers; at the
 //! 180° forearm twist linear blend collapses the forearm while bones blending and dual
-//! quaternion keep it round (DESIGN.md §6, the product's headline).
+//! quaternion keep it round (docs/design.md §6, the product's headline).
 
 use std::path::PathBuf;
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent reference values for keyrig's track interpolation (DESIGN.md section 3).
+"""Independent reference values for keyrig's track interpolation (docs/design.md section 3).
 
 Writes JSON fixtures to crates/core/tests/fixtures/, which crates/core/tests/reference.rs
 compares against keyrig-core's Track to 1e-6.
@@ -38,7 +38,7 @@ def f32(x):
 
 
 # ----------------------------------------------------------------------------------------------
-# Kochanek-Bartels tangents (DESIGN.md section 3), written independently of the Rust code.
+# Kochanek-Bartels tangents (docs/design.md section 3), written independently of the Rust code.
 
 
 def kb_tangents(times, chords, tcbs):
@@ -236,7 +236,7 @@ def squad_tcb_fixture(name):
         samples.append({"time": float(t), "value": quat_json(q)})
     write(
         name,
-        "Squad with TCB (controls from DESIGN.md section 3 incl. spacing factors), uneven times",
+        "Squad with TCB (controls from docs/design.md section 3 incl. spacing factors), uneven times",
         "numpy-quaternion squad_evaluate " + quaternion.__version__ + " with controls computed in Python",
         quat_key_json(times, stored, tcbs),
         samples,

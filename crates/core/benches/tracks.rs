@@ -1,4 +1,4 @@
-//! Sampling throughput of keyrig tracks (DESIGN.md §10; figures in docs/benchmarks.md).
+//! Sampling throughput of keyrig tracks (docs/design.md §10; figures in docs/benchmarks.md).
 //!
 //! For 4, 100, 10 000 and 100 000 keys (uneven spacing, random T/C/B):
 //! * `vec3_tcb`: Vec3 Kochanek–Bartels track;

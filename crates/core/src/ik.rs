@@ -5,7 +5,7 @@
 //! # The chain
 //! An [`IkChain`] is `n + 1` joints, root first and end joint (the hand) last, each the child of
 //! the one before; `n ≥ 2` bones join them. Per joint it borrows what `F(j) = F(p(j))·R(j)·T(j)`
-//! needs (DESIGN.md §4): the joint's origin in its parent's frame, R(j)'s rotation and T(j)'s
+//! needs (docs/design.md §4): the joint's origin in its parent's frame, R(j)'s rotation and T(j)'s
 //! rotation (the keyed one). With `W_{−1} = I`, the positions and frames in the chain parent's
 //! space are
 //!

@@ -44,7 +44,7 @@ pub enum ConstraintError {
     Solve(#[from] IkError),
 }
 
-/// The local pose of a skeleton (the T(j) parts of DESIGN.md §4, one entry per joint) that a
+/// The local pose of a skeleton (the T(j) parts of docs/design.md §4, one entry per joint) that a
 /// constraint is solved on; its rotations are written.
 #[derive(Debug)]
 pub struct LocalPose<'a> {

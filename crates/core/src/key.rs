@@ -72,7 +72,7 @@ pub const MAX_SPIN_TURNS: i32 = 1000;
 ///
 /// The segment from key i to key i+1 then turns by the *unwrapped* angle-axis `L` below
 /// (half the angle times the unit axis, of any size) instead of the short-way logarithm
-/// `log(q_i⁻¹·q_{i+1})`; DESIGN.md §3 and docs/interpolation.md give the formulas.
+/// `log(q_i⁻¹·q_{i+1})`; docs/design.md §3 and docs/interpolation.md give the formulas.
 ///
 /// ```text
 /// (time: 1.0, value: (0.0, 0.0, 0.0, 1.0), spin: Some(Angle(axis: (1.0, 0.0, 0.0), degrees: 360.0)))
@@ -290,7 +290,7 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Keys<T> {
 }
 
 /// What a track does before its first key (`before`) or after its last (`after`): a cycle
-/// (DESIGN.md §9 "Cycles"; docs/interpolation.md gives the formulas). `P = t_n − t_0` is the
+/// (docs/design.md §9 "Cycles"; docs/interpolation.md gives the formulas). `P = t_n − t_0` is the
 /// period, the time from the first key to the last.
 ///
 /// Every behaviour but [`Cycle::Hold`] needs at least two keys (a positive period).

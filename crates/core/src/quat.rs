@@ -196,7 +196,7 @@ pub fn exp_fast(v: DVec3) -> DQuat {
 }
 
 /// `log(a⁻¹ · b)`: the half-angle vector that turns `a` into `b` in `a`'s frame
-/// (DESIGN.md §3 writes it `L(a, b)`).
+/// (docs/design.md §3 writes it `L(a, b)`).
 #[must_use]
 pub fn log_between(a: DQuat, b: DQuat) -> DVec3 {
     log(a.conjugate() * b)

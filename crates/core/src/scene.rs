@@ -120,7 +120,7 @@ impl MeshSource {
     }
 }
 
-/// Meshes keyrig can generate (DESIGN.md §6).
+/// Meshes keyrig can generate (docs/design.md §6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ProceduralMesh {
     /// 78 vertices, 152 triangles, 4 bones along X, 160.158 cm.
@@ -235,7 +235,7 @@ fn zero_translation() -> Animated<Vec3> {
 
 /// One joint: rest transform R(j) relative to its parent and its animated local transform
 /// T(j) = translate(translation) · rotate(rotation) · scale(scale), applied after R(j):
-/// `F(j) = F(p(j)) · R(j) · T(j)` (DESIGN.md §4).
+/// `F(j) = F(p(j)) · R(j) · T(j)` (docs/design.md §4).
 ///
 /// keyrig's own rigs key `rotation` only; imported characters key all three, exactly as their
 /// file does. `translation` and `scale` are left out of a scene file while they are the
@@ -323,7 +323,7 @@ impl Default for DeformerSettings {
     }
 }
 
-/// The four skin deformers (DESIGN.md §5).
+/// The four skin deformers (docs/design.md §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum DeformerKind {
     /// One weight per vertex: v' = M(j)·v.

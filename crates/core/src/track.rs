@@ -1,4 +1,4 @@
-//! Validated, evaluable keyframe tracks (DESIGN.md §3).
+//! Validated, evaluable keyframe tracks (docs/design.md §3).
 //!
 //! A [`RawTrack`] is checked once by [`Track::new`] into a [`Track`], which precomputes
 //! everything that depends only on the keys (Kochanek–Bartels tangents with the non-uniform
@@ -25,7 +25,7 @@
 //!
 //! # Spin keys
 //! A rotation key with a [`Spin`] is reached from the previous key by an *unwrapped* chord
-//! `L` (half the angle times the axis, any size) instead of the short-way logarithm (DESIGN.md
+//! `L` (half the angle times the axis, any size) instead of the short-way logarithm (docs/design.md
 //! §3; docs/interpolation.md). `L` enters the Kochanek–Bartels tangents like any chord, and
 //! * Linear: `q(u) = q_i·exp(u·L)·exp(u·e)`,
 //! * Tcb: `q(u) = q_i·exp(u·L)·exp(s·((1−u)·A + u·B) + u·e)`, `s = 2u(1−u)`,
@@ -40,7 +40,7 @@
 //! so C = 0 keys stay C¹. Tracks without spins are interpolated exactly as before.
 //!
 //! # Cycles
-//! Outside its keys a track does what its [`Cycles`] say (DESIGN.md §9; period `P = t_n − t_0`):
+//! Outside its keys a track does what its [`Cycles`] say (docs/design.md §9; period `P = t_n − t_0`):
 //! * Hold: the end key's value.
 //! * Linear: `P_n + (t − t_n)·v_n` with `v_n` the velocity arriving at the last key (leaving
 //!   the first, backwards, before it); rotations `q_n·exp((t − t_n)·ω_n)` with `ω_n = q⁻¹·dq/dt`.
@@ -770,7 +770,7 @@ fn clamp_tangent(m: f64, d: f64, d_prev: f64, d_next: f64) -> f64 {
 /// per segment (not per second), with the non-uniform spacing factors.
 ///
 /// `chords[j]` is the difference from key j to key j+1 (`P_{j+1} − P_j`, or `L(q_j, q_{j+1})`).
-/// DESIGN.md §3:
+/// docs/design.md §3:
 /// `S_i = 2Δ_i/(Δ_{i−1}+Δ_i) · [(1−T)(1+B)(1+C)/2 · d_{i−1} + (1−T)(1−B)(1−C)/2 · d_i]`,
 /// `D_i = 2Δ_{i−1}/(Δ_{i−1}+Δ_i) · [(1−T)(1+B)(1−C)/2 · d_{i−1} + (1−T)(1−B)(1+C)/2 · d_i]`,
 /// with `d_{−1}`, `d_n`, `Δ_{−1}`, `Δ_n` at the ends from [`end_chords`] (without cycles

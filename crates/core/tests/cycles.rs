@@ -1,4 +1,4 @@
-//! Cycles (DESIGN.md §9): what a track does before its first key and after its last.
+//! Cycles (docs/design.md §9): what a track does before its first key and after its last.
 //! Table tests with a timeline, the validation errors, and property tests for periodicity,
 //! the offset per cycle, ping-pong's mirror symmetry and continuity through the seam.
 

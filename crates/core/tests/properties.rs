@@ -1,4 +1,4 @@
-//! Property tests for every interpolation invariant of DESIGN.md §3.
+//! Property tests for every interpolation invariant of docs/design.md §3.
 
 mod support;
 

@@ -1,4 +1,4 @@
-//! Spin keys (issue 14; DESIGN.md §3): rotation segments beyond half a turn.
+//! Spin keys (issue 14; docs/design.md §3): rotation segments beyond half a turn.
 //!
 //! ```text
 //!  key 0            key 1                          key 2

@@ -1,5 +1,5 @@
 //! The `keyrig` binary: with no arguments it opens the editor on the demo scene; subcommands
-//! serve scripts and batch work (DESIGN.md §7).
+//! serve scripts and batch work (docs/design.md §7).
 
 use std::process::ExitCode;
 

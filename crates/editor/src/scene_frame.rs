@@ -260,7 +260,6 @@ impl SceneFrame {
             return self.skinned_now(o);
         };
         match meshes.peek(base_dir, path, *mesh)? {
-            FileMesh::Static { positions, indices } => Some((positions, indices)),
             FileMesh::Morph(morph) => {
                 let positions = self.skin.deformed_positions(o).filter(|_| self.is_skinned_now(o))?;
                 Some((positions, morph.indices()))
@@ -427,7 +426,6 @@ impl SceneFrame {
         let file = meshes.peek(base_dir, path, *mesh)?;
         let identity = match file {
             FileMesh::Morph(m) => Arc::as_ptr(m) as usize,
-            FileMesh::Static { positions, .. } => positions.as_ptr() as usize,
             FileMesh::Skinned(m) => Arc::as_ptr(m) as usize,
         };
         if let Some((id, b)) = self.mesh_boxes.get(&o) {
@@ -439,7 +437,6 @@ impl SceneFrame {
             FileMesh::Morph(m) => {
                 Bounds::of(m.frames().iter().flatten().map(keyrig_render::SkinnedVertex::position))
             }
-            FileMesh::Static { positions, .. } => Bounds::of(positions.iter().copied()),
             FileMesh::Skinned(m) => Bounds::of(m.positions.iter().copied()),
         };
         self.mesh_boxes.insert(o, (identity, b));

@@ -1,7 +1,7 @@
 //! CPU skinning of the scene's skinned meshes for the viewport, through keyrig-skin: the mesh,
 //! its bindings and the joint palette come from the scene evaluator (keyrig-eval), built when
 //! the document changes; here only the deformer runs, into buffers kept from frame to frame.
-//! Also the cross-section measure of DESIGN.md §6 for the selected joint.
+//! Also the cross-section measure of docs/design.md §6 for the selected joint.
 //!
 //! Vertex-animated (MD2) meshes are morphed here too, on the CPU, for the painter fallback
 //! and for tests ([`SkinCache::morph`]); the GPU viewport morphs them in keyrig-render.

@@ -161,8 +161,8 @@ fn demo_scene_and_gltf_model_deform() {
     let json = deform_json(&demo, &["--frame", "45"], "bones-blending", dir.path());
     assert_eq!(json["object"], "Arm");
     assert_eq!(json["vertex_count"], 1250);
-    let model = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+    let model =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     for kind in DeformerKind::ALL {
         let json = deform_json(&model, &["--time", "0.5"], kind.cli_name(), dir.path());
         let p = positions(&json, "positions");
@@ -231,8 +231,8 @@ fn bad_arguments_and_files_are_clear_errors() {
 
 /// RiggedSimple.glb with the first vertex's four weights replaced by `weights`.
 fn glb_with_weights(dir: &Path, name: &str, weights: [f32; 4]) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
+    let source =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb");
     let mut data = std::fs::read(source).unwrap();
     let u32_at = |d: &[u8], at: usize| u32::from_le_bytes(d[at..at + 4].try_into().unwrap()) as usize;
     let json_len = u32_at(&data, 12);
@@ -354,4 +354,72 @@ fn gltf_morph_target_models_deform_as_base_plus_weighted_targets() {
             .any(|(g, p)| (*g - *p).length() > 1e-3);
     }
     assert!(moved, "the targets move the cube at some time");
+}
+
+/// Issue 29: a scene made from a model (`keyrig import`) deforms like the model file itself
+/// where the scene has not changed it: every skinned model of the corpus, every deformer, at a
+/// time inside its animation. The scene reads the mesh from the model file (the path it holds
+/// is relative to the scene's folder) and poses it with its own keys through the evaluator.
+#[test]
+fn a_scene_made_from_a_skinned_model_deforms_as_the_model_file_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let models = [
+        ("gltf/RiggedSimple/RiggedSimple.glb", 0.5),
+        ("gltf/RiggedSimple/glTF/RiggedSimple.gltf", 0.8),
+        ("gltf/RiggedFigure/RiggedFigure.glb", 0.4),
+        ("gltf/CesiumMan/CesiumMan.glb", 0.7),
+        ("gltf/Fox/Fox.glb", 1.3),
+        ("gltf/SimpleSkin/glTF/SimpleSkin.gltf", 2.5),
+        ("gltf/SimpleSkin/glTF-Embedded/SimpleSkin.gltf", 1.0),
+    ];
+    for (n, (model, time)) in models.into_iter().enumerate() {
+        let model = corpus(model);
+        let scene = dir.path().join(format!("scene{n}.ron"));
+        let o = keyrig(&["import", model.to_str().unwrap(), "-o", scene.to_str().unwrap()]);
+        assert!(o.status.success(), "{}: {}", model.display(), stderr(&o));
+        for deformer in ["linear", "dual-quaternion"] {
+            let time = time.to_string();
+            let from_model = deform_json(&model, &["--time", &time], deformer, dir.path());
+            let from_scene = deform_json(&scene, &["--time", &time], deformer, dir.path());
+            assert_eq!(from_scene["object"], from_model["object"], "{}", model.display());
+            assert_eq!(from_scene["animation"], "skin");
+            let (a, b) = (positions(&from_model, "positions"), positions(&from_scene, "positions"));
+            assert_eq!(a.len(), b.len(), "{}: vertex count", model.display());
+            let (min, max) = a.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let size = (max - min).length();
+            let worst = a.iter().zip(&b).map(|(p, q)| p.distance(*q)).fold(0.0f32, f32::max);
+            assert!(
+                worst <= 1e-5 * size,
+                "{} {deformer}: the scene's vertices are off by {worst} (model size {size})",
+                model.display()
+            );
+        }
+    }
+}
+
+/// A scene deforms its imported character with the scene's own keys: a key added in the scene
+/// moves the vertices away from the model file's pose.
+#[test]
+fn a_scene_s_own_keys_pose_its_imported_character() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = corpus("gltf/RiggedSimple/RiggedSimple.glb");
+    let path = dir.path().join("rigged.ron");
+    let o = keyrig(&["import", model.to_str().unwrap(), "-o", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = positions(&deform_json(&path, &["--time", "0.5"], "linear", dir.path()), "positions");
+    let mut scene = keyrig_io::scene_file::load(&path).unwrap();
+    let object = scene.objects.iter_mut().find(|o| o.skeleton.is_some()).expect("a skinned object");
+    let skeleton = object.skeleton.as_mut().unwrap();
+    let joint = skeleton.joints.len() - 1;
+    skeleton.joints[joint].rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(vec![
+            Key::new(0.0, Quat::from_rotation_x(1.2)),
+            Key::new(1.0, Quat::from_rotation_x(1.2)),
+        ]),
+    );
+    keyrig_io::scene_file::save(&path, &scene).unwrap();
+    let after = positions(&deform_json(&path, &["--time", "0.5"], "linear", dir.path()), "positions");
+    let moved = before.iter().zip(&after).filter(|(a, b)| a.distance(**b) > 1e-3).count();
+    assert!(moved > before.len() / 10, "the scene's key moved {moved} of {} vertices", before.len());
 }

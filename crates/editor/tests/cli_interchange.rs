@@ -195,8 +195,7 @@ fn outputs_never_replace_an_input_or_a_model_the_scene_uses() {
     // A scene whose cube is a glTF model beside it.
     let model = dir.path().join("rigged.glb");
     std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/RiggedSimple/RiggedSimple.glb"),
         &model,
     )
     .expect("copy model");

@@ -120,8 +120,7 @@ fn renders_an_md2_model_through_gpu_morphing() {
 
 #[test]
 fn renders_an_animated_gltf_model_with_its_skin() {
-    let model =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/CesiumMan/CesiumMan.glb");
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/CesiumMan/CesiumMan.glb");
     assert!(model.exists(), "{} is missing (the shared corpus must be beside the checkout)", model.display());
     let dir = tempfile::tempdir().expect("tempdir");
     let mut images = Vec::new();
@@ -230,4 +229,60 @@ fn bad_arguments_and_files_are_explained() {
     let result = keyrig(&["render", broken.to_str().expect("utf-8 path"), "-o", out]);
     assert!(!result.status.success());
     assert!(stderr(&result).contains("broken.ron"), "{}", stderr(&result));
+}
+
+/// Issue 29: a scene made from a model (`keyrig import`) renders, whatever the model holds —
+/// a skinned character, meshes without a skin (bound rigidly to one joint) or an MD2 model —
+/// and shows what rendering the model file itself shows (an MD2 model on its own is drawn
+/// about its centre, its scene stands it on the ground: only glTF pictures are compared).
+#[test]
+fn a_scene_made_from_any_model_renders_as_the_model_does() {
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus");
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (n, model) in [
+        "gltf/CesiumMan/CesiumMan.glb",
+        "gltf/InterpolationTest/InterpolationTest.glb",
+        "gltf/AnimatedMorphCube/AnimatedMorphCube.glb",
+        "md2/sydney/sydney.md2",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let model = corpus.join(model);
+        let scene = dir.path().join(format!("scene{n}.ron"));
+        let imported =
+            keyrig(&["import", model.to_str().expect("utf-8"), "-o", scene.to_str().expect("utf-8")]);
+        assert!(imported.status.success(), "import {}: {}", model.display(), stderr(&imported));
+        let render = |file: &Path, name: &str| {
+            let out = dir.path().join(format!("{name}{n}.png"));
+            let result = keyrig(&[
+                "render",
+                file.to_str().expect("utf-8"),
+                "--frame",
+                "10",
+                "--size",
+                "160x120",
+                "-o",
+                out.to_str().expect("utf-8"),
+            ]);
+            assert!(result.status.success(), "render {}: {}", file.display(), stderr(&result));
+            keyrig_render::image::open(&out).expect("a PNG").to_rgba8()
+        };
+        let (from_model, from_scene) = (render(&model, "model"), render(&scene, "scene"));
+        assert!(distinct_colours(&from_scene) > 20, "{}: the scene's image looks empty", model.display());
+        if model.extension().is_some_and(|e| e == "md2") {
+            continue;
+        }
+        let differ = from_model
+            .pixels()
+            .zip(from_scene.pixels())
+            .filter(|(a, b)| a.0.iter().zip(b.0).any(|(x, y)| x.abs_diff(y) > 8))
+            .count();
+        assert!(
+            differ * 100 < from_model.len() / 4,
+            "{}: {differ} of {} pixels differ between the model and its scene",
+            model.display(),
+            from_model.len() / 4
+        );
+    }
 }

@@ -12,7 +12,7 @@
 //! diamond wherever the layout puts them.
 //!
 //! With `KEYRIG_UPDATE_SCREENSHOTS=1` the screenshots are copied into `docs/screenshots/`
-//! for docs/guide.md (also an imported glTF character and an MD2 model opened in the editor).
+//! for docs/guide.md (`cargo xtask screenshots` takes the guide's pictures of imported models).
 //!
 //! Needs `Xvfb`, `xdotool` and ImageMagick's `import` (`.ci/run` installs them); it fails,
 //! saying what to install, without them.
@@ -388,26 +388,6 @@ fn keyrig_in_a_real_x_window_keys_copies_pastes_and_saves() {
         assert!(a.angle_between(b).to_degrees() < 5.0, "the real drag turned the wrist as the model's did");
     }
     let _ = window;
-}
-
-/// Screenshots for docs/guide.md: an imported glTF character and an MD2 model, each opened
-/// in the real window (skipped quickly unless `KEYRIG_UPDATE_SCREENSHOTS` is set, as they
-/// only feed the guide).
-#[test]
-fn guide_screenshots_of_imported_models() {
-    if std::env::var_os("KEYRIG_UPDATE_SCREENSHOTS").is_none() {
-        return;
-    }
-    let session = Session::new();
-    for (name, model) in [
-        ("guide-cesium-man", "gltf/CesiumMan/CesiumMan.glb"),
-        ("guide-md2-ratamahatta", "md2/ratamahatta/ratamahatta.md2"),
-    ] {
-        let path = common::corpus(model);
-        let (_keyrig, _window) = session.start_keyrig(&["edit", path.to_str().expect("utf-8 path")]);
-        std::thread::sleep(Duration::from_secs(3));
-        session.screenshot(name);
-    }
 }
 
 /// How many pixels of `rect` differ between two screenshots.

@@ -1,5 +1,5 @@
 //! keyrig-eval: the scene evaluator — the one path from a scene's keys to what is drawn,
-//! deformed, sampled and exported at a time (DESIGN.md §2).
+//! deformed, sampled and exported at a time (docs/design.md §2).
 //!
 //! [`SceneEvaluator::new`] validates a [`keyrig_core::Scene`] once: every channel's track
 //! (keyrig-core), each skeleton's rest data and each skinned mesh with its deformer bindings

@@ -1,4 +1,4 @@
-//! The built-in demo scene (DESIGN.md §7): the paper's 4-bone arm bending at the elbow and
+//! The built-in demo scene (docs/design.md §7): the paper's 4-bone arm bending at the elbow and
 //! twisting 180° at the forearm joint, a spinning cube, a moving spot light and a sun.
 //!
 //! [`demo_scene`] builds it in code; `assets/demo.ron` is that scene saved with
@@ -19,7 +19,7 @@
 //! and whose IK/FK blend is keyed from 0 to 1 (issue 19, IK constraints and cycles).
 //!
 //! Units are metres and seconds; the arm runs along +X from its root joint, 1.60158 m long in
-//! four bones of 0.400395 m (DESIGN.md §6 gives 160.158 cm). keyrig-skin builds the procedural
+//! four bones of 0.400395 m (docs/design.md §6 gives 160.158 cm). keyrig-skin builds the procedural
 //! arms in centimetres; the renderer and the editor scale a procedural mesh to the object's
 //! skeleton, and a test checks that this skeleton is keyrig-skin's arm × 0.01.
 

@@ -1,5 +1,5 @@
 //! Reading untrusted input files and writing every output file: the one place where keyrig
-//! opens files (DESIGN.md §8).
+//! opens files (docs/design.md §8).
 //!
 //! **Reading** ([`open_regular_file`], [`read_regular_file`]): the file must be a regular
 //! file (not a FIFO, a device such as `/dev/zero`, a socket or a folder) and no larger than

@@ -2,7 +2,7 @@
 //! light animation, KHR_lights_punctual lights; as .glb or as .gltf with the buffer
 //! embedded as a `data:` URI.
 //!
-//! Mapping (DESIGN.md §3, §8):
+//! Mapping (docs/design.md §3, §8):
 //! - an object becomes a node with its rest TRS; its skeleton's joints become child nodes
 //!   (rest transform R(j)); its mesh becomes a separate root node holding the mesh and the
 //!   skin, as glTF ignores a skinned mesh node's own transform. Inverse bind matrices are

@@ -1,4 +1,4 @@
-//! Quake 2 MD2 import (seed text 001; DESIGN.md §8).
+//! Quake 2 MD2 import (seed text 001; docs/design.md §8).
 //!
 //! An MD2 file is a 68-byte header of seventeen little-endian `i32`s followed by arrays the
 //! header points at: skin names (64 bytes each), texture coordinates (`i16` s, t in skin

@@ -551,11 +551,13 @@ pub enum MappingError {
     Node { node: usize, message: String },
     #[error("skin {skin}: {source}")]
     Skin { skin: usize, source: keyrig_skin::SkinError },
+    #[error("mesh {mesh}: {message}")]
+    Mesh { mesh: usize, message: String },
 }
 
 /// How a skin maps onto a keyrig skeleton: the skin's joints and every ancestor node of them
 /// up to the scene root, parents first, so that the keyrig skeleton's F(j) is exactly the
-/// file's global transform of joint j's node (DESIGN.md §4; glTF 2.0 §3.7.3). When the nodes
+/// file's global transform of joint j's node (docs/design.md §4; glTF 2.0 §3.7.3). When the nodes
 /// have several scene roots, a synthetic identity root joint holds them together.
 struct SkeletonMap {
     /// glTF node of keyrig joint k (`None` for the synthetic root).
@@ -714,6 +716,60 @@ impl ImportedModel {
             joints.push(joint);
         }
         keyrig_core::Skeleton::new(joints)
+    }
+
+    /// Mesh `mesh` without a skin as a keyrig-skin [`keyrig_skin::SkinnedMesh`] bound rigidly to
+    /// one root joint at the origin: its triangle primitives merged, in the mesh's own space,
+    /// with the file's normals (computed from the triangles where a primitive has none) and
+    /// TEXCOORD_0. The renderer, the editor and `keyrig deform` draw and pose it like any skinned
+    /// mesh; the object's transform places it.
+    ///
+    /// # Errors
+    /// No such mesh, or keyrig-skin rejects it (no triangles, a non-finite position).
+    pub fn rigid_mesh(&self, mesh: usize) -> Result<keyrig_skin::SkinnedMesh, MappingError> {
+        let bad = |message: String| MappingError::Mesh { mesh, message };
+        let model_mesh = self.meshes.get(mesh).ok_or_else(|| bad("no such mesh".into()))?;
+        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut uvs, mut has_uvs) = (Vec::new(), false);
+        for prim in model_mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
+            let base = positions.len() as u32;
+            positions.extend_from_slice(&prim.positions);
+            match &prim.texcoords {
+                Some(t) if t.len() == prim.positions.len() => {
+                    has_uvs = true;
+                    uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { Vec2::ZERO }));
+                }
+                _ => uvs.resize(positions.len(), Vec2::ZERO),
+            }
+            match &prim.normals {
+                Some(n) => normals.extend_from_slice(n),
+                None => normals.extend(keyrig_skin::mesh::vertex_normals(&prim.positions, &prim.indices)),
+            }
+            indices.extend(prim.indices.iter().map(|&i| base + i));
+        }
+        let n = positions.len();
+        let skeleton = keyrig_skin::RestSkeleton::new(&[keyrig_skin::RestJoint::new(
+            "root",
+            None,
+            Vec3::ZERO,
+            Quat::IDENTITY,
+        )])
+        .map_err(|e| bad(e.to_string()))?;
+        let rigid = keyrig_skin::SkinnedMesh::new(
+            positions,
+            normals,
+            indices,
+            vec![[0; 4]; n],
+            vec![[1.0, 0.0, 0.0, 0.0]; n],
+            Some(vec![0; n]),
+            skeleton,
+        )
+        .map_err(|e| bad(e.to_string()))?;
+        if has_uvs {
+            rigid.with_uvs(uvs).map_err(|e| bad(e.to_string()))
+        } else {
+            Ok(rigid)
+        }
     }
 
     /// The mesh on `node` as a keyrig-skin [`keyrig_skin::SkinnedMesh`] bound to the skeleton

@@ -1,4 +1,4 @@
-//! RON scene files: versioned, strictly checked, saved atomically (DESIGN.md §8).
+//! RON scene files: versioned, strictly checked, saved atomically (docs/design.md §8).
 //!
 //! A scene file is one RON struct with the format version first and the scene second:
 //!

@@ -107,3 +107,25 @@ fn a_chain_half_a_million_nodes_deep_imports() {
     let world = timed("500k chain world matrices", || model.world_matrices(&model.pose_at(None, 0.0)));
     assert_eq!(world.len(), 500_000);
 }
+
+/// Issue 29: a file that reuses one accessor in many meshes (100,000 meshes and nodes,
+/// 13.2 MB, almost all JSON) imports with every mesh sharing the decoded accessor, within
+/// 20 times the file's size at the peak (17.0 × measured). The issue's 10 × is not reached:
+/// the gltf crate's parsed document alone takes 8.4 × this file (about 830 bytes of structures
+/// per 130 bytes of JSON for one mesh, its primitive's attribute map and its node), and the
+/// importer's own meshes and nodes are built while that document is held (docs/benchmarks.md,
+/// "Import memory").
+#[test]
+fn one_accessor_reused_by_many_meshes_imports_within_twenty_times_the_file() {
+    let bytes = big_gltf::reused_accessor_meshes(100_000);
+    let (model, peak) = measure_peak(|| import_gltf_slice(&bytes).expect("import"));
+    assert_eq!(model.meshes.len(), 100_000);
+    let first = &model.meshes[0].primitives[0].positions;
+    assert!(model.meshes.iter().all(|m| std::sync::Arc::ptr_eq(&m.primitives[0].positions, first)));
+    eprintln!(
+        "file {} bytes, import peak {peak} bytes ({:.1} × the file)",
+        bytes.len(),
+        peak as f64 / bytes.len() as f64
+    );
+    assert!(peak <= 20 * bytes.len(), "import peak {peak} bytes for a {} byte file", bytes.len());
+}

@@ -89,7 +89,7 @@ impl SkinnedVertex {
 }
 
 /// Bones-blending binding of one vertex: the child joint k and the blend parameter t
-/// (DESIGN.md §5.3; the parent bone j is k's parent).
+/// (docs/design.md §5.3; the parent bone j is k's parent).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlendBinding {
     pub joint: u32,
@@ -216,7 +216,7 @@ fn check_dispatch(vertex_count: usize) -> Result<(), RenderError> {
     Ok(())
 }
 
-/// One joint's pose for a frame, in the terms of DESIGN.md §4.
+/// One joint's pose for a frame, in the terms of docs/design.md §4.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointPose {
     /// M(j) = F(j)·A(j)⁻¹, the skinning matrix.

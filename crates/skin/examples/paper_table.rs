@@ -23,7 +23,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     writeln!(md)?;
     writeln!(
         md,
-        "Seed text 000, chapter V (DESIGN.md §6): two arms along +X, {ARM_LENGTH_CM} cm long, 4 bones of {:.4} cm; \
+        "Seed text 000, chapter V (docs/design.md §6): two arms along +X, {ARM_LENGTH_CM} cm long, 4 bones of {:.4} cm; \
          one inner joint (`{}`, index {PAPER_JOINT}, x = {:.3} cm) is rotated, every other joint stays at rest. \
          Weights: each vertex is bound to one bone (single weights); linear blend and dual quaternion use the \
          smooth weights derived across each joint with the default blend zone (a quarter of the parent bone and \

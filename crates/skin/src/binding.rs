@@ -24,7 +24,7 @@ use crate::influences::{validate_influences, BonesBlendVertex};
 use crate::skeleton::RestSkeleton;
 
 /// The bones-blending zone around each joint, as fractions of the parent bone's and the child
-/// bone's length (DESIGN.md §5; `DeformerSettings::blend_parent_fraction` / `…child_fraction`).
+/// bone's length (docs/design.md §5; `DeformerSettings::blend_parent_fraction` / `…child_fraction`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlendZone {
     pub parent_fraction: f32,

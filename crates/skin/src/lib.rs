@@ -1,6 +1,6 @@
 //! keyrig-skin: the rest skeleton, pose evaluation (joint palettes) and the four skin
 //! deformers — rigid, linear blend, bones blending and dual quaternion — with the paper's test
-//! meshes and measures. Pure: no file I/O, no GPU, no UI. DESIGN.md §4–§6 are the reference;
+//! meshes and measures. Pure: no file I/O, no GPU, no UI. docs/design.md §4–§6 are the reference;
 //! `docs/skinning.md` is the guide.
 //!
 //! One frame: [`RestSkeleton`] + [`Pose`] → [`JointPalette`] (F(j), M(j) = F(j)·A(j)⁻¹) →

@@ -1,4 +1,4 @@
-//! Skinned meshes and the meshes keyrig generates in code (DESIGN.md §6).
+//! Skinned meshes and the meshes keyrig generates in code (docs/design.md §6).
 //!
 //! Units: **centimetres**, as in the paper (seed text 000, chapter V). The arms lie along +X
 //! from the origin; their 4 bones are joints `shoulder`, `elbow`, `forearm` and `wrist`

@@ -1,4 +1,4 @@
-//! The paper's test as a measured table (DESIGN.md §6; seed text 000, chapter V): both arms ×
+//! The paper's test as a measured table (docs/design.md §6; seed text 000, chapter V): both arms ×
 //! four deformers × four poses of one inner joint, with the cross-section radius at that joint
 //! and the enclosed volume, each relative to rest.
 

@@ -1,4 +1,4 @@
-//! Pose evaluation: from local joint transforms T(j) to the joint palette (DESIGN.md §4).
+//! Pose evaluation: from local joint transforms T(j) to the joint palette (docs/design.md §4).
 //!
 //! T(j) = translate(t_j) · rotate(q_j) · scale(s_j) (identity at rest);
 //! F(j) = F(p(j))·R(j)·T(j) with F(root) = Tr·R(root)·T(root), where Tr is the pose's root
@@ -70,7 +70,7 @@ impl Pose {
     }
 }
 
-/// Per-joint data of the bones-blending deformer for joint k (DESIGN.md §5):
+/// Per-joint data of the bones-blending deformer for joint k (docs/design.md §5):
 /// v' = F(j)·R(k)·slerp(I, T(k), t)·A(k)⁻¹·v with j = p(k).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BonesBlendJoint {

@@ -1,4 +1,4 @@
-//! The rest skeleton in Kavan's notation (DESIGN.md §4, seed text 000):
+//! The rest skeleton in Kavan's notation (docs/design.md §4, seed text 000):
 //!
 //! - R(j) = `parent_from_joint[j]`: rest transform of joint j relative to its parent;
 //! - A(j) = R(0)…R(p(j))·R(j) = `bind_model_from_joint[j]`: the rest (bind) transform in

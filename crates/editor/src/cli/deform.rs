@@ -96,7 +96,9 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         (time, morph_object(file, &scene, None, args.object.as_deref(), time)?)
     } else {
         let (scene, loaded, gltf) = if has_extension(file, &["ron"]) {
-            (keyrig_io::scene_file::load(file)?, Vec::new(), None)
+            let scene = keyrig_io::scene_file::load(file)?;
+            let loaded = scene_meshes(file, &scene)?;
+            (scene, loaded, None)
         } else if has_extension(file, &["glb", "gltf"]) {
             let (scene, loaded, gltf) = gltf_scene(file)?;
             (scene, loaded, Some(gltf))
@@ -169,7 +171,7 @@ fn skinned_output(
     match &object.mesh {
         None => bail!("{}: object `{}` has no mesh", file.display(), object.name),
         Some(MeshSource::File { path, .. }) if loaded.get(index).is_none_or(Option::is_none) => bail!(
-            "{}: objects[{index}] (`{}`).mesh: the mesh comes from `{path}`; deform the model file itself (keyrig deform {path} …)",
+            "{}: objects[{index}] (`{}`).mesh: `{path}` has no skinned mesh to deform",
             file.display(),
             object.name
         ),
@@ -207,6 +209,31 @@ fn skinned_output(
         normals: out.normals,
         indices: skin.mesh.indices.clone(),
     })
+}
+
+/// The skinned meshes of a scene's glTF objects (characters; meshes without a skin bound
+/// rigidly to one joint), by object index, read through the editor's mesh store from paths
+/// relative to the scene's folder: the scene poses them with its own keys, IK and deformer
+/// choice, as the editor and `render` do.
+fn scene_meshes(file: &Path, scene: &Scene) -> anyhow::Result<Vec<Option<SkinnedMesh>>> {
+    let base_dir = keyrig_io::file_io::parent_or_dot(file);
+    let mut store = keyrig_editor::files::MeshStore::default();
+    let mut loaded = Vec::with_capacity(scene.objects.len());
+    for (o, object) in scene.objects.iter().enumerate() {
+        let mesh = match &object.mesh {
+            Some(MeshSource::File { path, mesh, .. }) if !has_extension(Path::new(path), &["md2"]) => {
+                match store.get(Some(&base_dir), path, *mesh).map_err(|e| {
+                    anyhow::anyhow!("{}: objects[{o}] (`{}`).mesh: {e}", file.display(), object.name)
+                })? {
+                    keyrig_editor::files::FileMesh::Skinned(m) => Some((**m).clone()),
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
+        loaded.push(mesh);
+    }
+    Ok(loaded)
 }
 
 /// An MD2 object (of a scene, or the object a model opened on its own becomes) morphed to

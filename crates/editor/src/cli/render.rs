@@ -267,57 +267,13 @@ fn gltf_scene(path: &Path) -> anyhow::Result<GltfScene> {
         let mesh = if model.nodes[node].skin.is_some() {
             model.skinned_mesh(node).with_context(|| format!("{}: node {node}", path.display()))?
         } else {
-            let Some(mesh) = model.nodes[node].mesh.and_then(|m| model.meshes.get(m)) else { continue };
-            rigid_mesh(mesh).with_context(|| format!("{}: mesh of node {node}", path.display()))?
+            let Some(mesh) = model.nodes[node].mesh else { continue };
+            model.rigid_mesh(mesh).with_context(|| format!("{}: mesh of node {node}", path.display()))?
         };
         loaded.insert(object, mesh);
     }
     frame_scene(&mut scene, &loaded);
     Ok((scene, loaded, materials))
-}
-
-/// The triangle primitives of a glTF mesh merged into one mesh bound rigidly to a root joint.
-fn rigid_mesh(mesh: &keyrig_io::model::ModelMesh) -> anyhow::Result<SkinnedMesh> {
-    let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut uvs, mut has_uvs) = (Vec::new(), false);
-    for primitive in &mesh.primitives {
-        if primitive.mode != keyrig_io::model::PrimitiveMode::Triangles {
-            continue;
-        }
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&primitive.positions);
-        match &primitive.texcoords {
-            Some(t) if t.len() == primitive.positions.len() => {
-                has_uvs = true;
-                uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { glam::Vec2::ZERO }));
-            }
-            _ => uvs.resize(positions.len(), glam::Vec2::ZERO),
-        }
-        match &primitive.normals {
-            Some(n) => normals.extend_from_slice(n),
-            None => {
-                normals.extend(keyrig_skin::mesh::vertex_normals(&primitive.positions, &primitive.indices))
-            }
-        }
-        indices.extend(primitive.indices.iter().map(|&i| base + i));
-    }
-    let n = positions.len();
-    let skeleton = keyrig_skin::RestSkeleton::new(&[keyrig_skin::RestJoint::new(
-        "root",
-        None,
-        Vec3::ZERO,
-        Quat::IDENTITY,
-    )])?;
-    let mesh = SkinnedMesh::new(
-        positions,
-        normals,
-        indices,
-        vec![[0; 4]; n],
-        vec![[1.0, 0.0, 0.0, 0.0]; n],
-        Some(vec![0; n]),
-        skeleton,
-    )?;
-    Ok(if has_uvs { mesh.with_uvs(uvs)? } else { mesh })
 }
 
 /// Points the scene's camera at the models' rest bounds (glTF files carry no keyrig camera).

@@ -48,13 +48,19 @@ pub fn morph_mesh_from_md2(model: &keyrig_io::md2::Md2Model) -> Result<MorphMesh
 pub type LoadedMesh =
     ((PathBuf, Option<usize>), Result<(FileMesh, Option<keyrig_core::Material>), FileError>);
 
+/// How loading one mesh of a model file went: the mesh and, for glTF, its material.
+pub(super) type MeshLoad = Result<(FileMesh, Option<keyrig_core::Material>), FileError>;
+
+pub(super) fn is_gltf(path: &Path) -> bool {
+    matches!(extension(path).as_deref(), Some("glb" | "gltf"))
+}
+
 /// A mesh read from a model file.
 #[derive(Clone, Debug)]
 pub enum FileMesh {
-    /// A skinned mesh, bound to its skin's skeleton.
+    /// A skinned mesh, bound to its skin's skeleton (a glTF mesh without a skin: bound rigidly
+    /// to one root joint, [`keyrig_io::model::ImportedModel::rigid_mesh`]).
     Skinned(std::sync::Arc<keyrig_skin::SkinnedMesh>),
-    /// A mesh without a skin: positions and triangles in its node's space.
-    Static { positions: Vec<glam::Vec3>, indices: Vec<u32> },
     /// A vertex-animated mesh (MD2): every frame, its triangles and clips.
     Morph(std::sync::Arc<MorphMesh>),
 }
@@ -65,7 +71,6 @@ impl FileMesh {
     pub fn rest_positions(&self) -> Vec<Vec3> {
         match self {
             FileMesh::Skinned(m) => m.positions.clone(),
-            FileMesh::Static { positions, .. } => positions.clone(),
             FileMesh::Morph(m) => m.frames()[0].iter().map(SkinnedVertex::position).collect(),
         }
     }
@@ -94,15 +99,41 @@ impl MeshStore {
         let key = (full_path(base_dir, path), mesh);
         if !self.meshes.contains_key(&key) {
             self.generation += 1;
-            let loaded = load_file_mesh(&key.0, mesh).map(|(loaded, material)| {
-                if let Some(material) = material {
-                    self.materials.insert(key.clone(), std::sync::Arc::new(material));
+            if is_gltf(&key.0) {
+                // Every mesh of the file from one import: a scene that shows many meshes of one
+                // file reads it once.
+                match load_gltf_meshes(&key.0) {
+                    Ok(all) => {
+                        for (index, loaded) in all.into_iter().enumerate() {
+                            if index == 0 {
+                                self.keep((key.0.clone(), None), loaded.clone());
+                            }
+                            self.keep((key.0.clone(), Some(index)), loaded);
+                        }
+                        if !self.meshes.contains_key(&key) {
+                            let index = mesh.unwrap_or(0);
+                            self.keep(key.clone(), Err(FileError::NoSuchMesh { path: key.0.clone(), index }));
+                        }
+                    }
+                    Err(e) => self.keep(key.clone(), Err(e)),
                 }
-                loaded
-            });
-            self.meshes.insert(key.clone(), loaded);
+            } else {
+                let loaded = load_file_mesh(&key.0, mesh);
+                self.keep(key.clone(), loaded);
+            }
         }
         self.meshes[&key].as_ref().map_err(Clone::clone)
+    }
+
+    /// Stores how loading one mesh went, its material apart.
+    fn keep(&mut self, key: (PathBuf, Option<usize>), loaded: MeshLoad) {
+        let loaded = loaded.map(|(loaded, material)| {
+            if let Some(material) = material {
+                self.materials.insert(key.clone(), std::sync::Arc::new(material));
+            }
+            loaded
+        });
+        self.meshes.insert(key, loaded);
     }
 
     /// The material of a loaded mesh (a glTF mesh's base colour and texture, an MD2 skin).
@@ -189,7 +220,6 @@ impl MeshStore {
                     Some(FileMesh::Morph(m)) => {
                         keyrig_eval::LoadedMesh::Morph(std::sync::Arc::clone(m.playback()))
                     }
-                    Some(FileMesh::Static { .. }) => keyrig_eval::LoadedMesh::Static,
                     None => continue,
                 };
                 out.insert(o, loaded);
@@ -224,27 +254,80 @@ pub(super) fn load_file_mesh(
     }
     let model = keyrig_io::gltf_import::import_gltf_file(path)?;
     let index = mesh.unwrap_or(0);
-    let Some(node) = model.nodes.iter().position(|n| n.mesh == Some(index)) else {
+    let node = model.nodes.iter().position(|n| n.mesh == Some(index));
+    gltf_mesh(&model, path, index, node)
+}
+
+/// Every mesh of the glTF file at `path` by mesh index, from one import: a file of many meshes
+/// is read once, not once per mesh.
+pub(super) fn load_gltf_meshes(path: &Path) -> Result<Vec<MeshLoad>, FileError> {
+    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let mut node_of_mesh = vec![None; model.meshes.len()];
+    for (n, node) in model.nodes.iter().enumerate() {
+        if let Some(slot) = node.mesh.and_then(|m| node_of_mesh.get_mut(m)) {
+            slot.get_or_insert(n);
+        }
+    }
+    // Meshes without a skin that show the same accessors (a file that reuses one mesh's data in
+    // many meshes) share one rigid mesh: memory follows the file's data, not its mesh count.
+    let mut rigid: HashMap<Vec<[usize; 5]>, std::sync::Arc<keyrig_skin::SkinnedMesh>> = HashMap::new();
+    let mut out = Vec::with_capacity(node_of_mesh.len());
+    for (index, node) in node_of_mesh.into_iter().enumerate() {
+        let unskinned = node.is_some_and(|n| model.nodes[n].skin.is_none());
+        let key = unskinned.then(|| accessors_of(&model.meshes[index]));
+        if let Some(shared) = key.as_ref().and_then(|k| rigid.get(k)) {
+            let material = model.material(index).unwrap_or_else(|e| Some(e.without_texture()));
+            out.push(Ok((FileMesh::Skinned(std::sync::Arc::clone(shared)), material)));
+            continue;
+        }
+        let loaded = gltf_mesh(&model, path, index, node);
+        if let (Some(key), Ok((FileMesh::Skinned(mesh), _))) = (key, &loaded) {
+            rigid.insert(key, std::sync::Arc::clone(mesh));
+        }
+        out.push(loaded);
+    }
+    Ok(out)
+}
+
+/// The decoded data a mesh's triangle primitives show (by address: keyrig-io decodes each
+/// accessor once, so equal addresses are the same accessor).
+fn accessors_of(mesh: &keyrig_io::model::ModelMesh) -> Vec<[usize; 5]> {
+    fn address<T>(data: Option<&std::sync::Arc<[T]>>) -> usize {
+        data.map_or(0, |d| d.as_ptr() as usize)
+    }
+    mesh.primitives
+        .iter()
+        .filter(|p| p.mode == keyrig_io::model::PrimitiveMode::Triangles)
+        .map(|p| {
+            [
+                address(Some(&p.positions)),
+                address(p.normals.as_ref()),
+                address(p.texcoords.as_ref()),
+                address(Some(&p.indices)),
+                p.positions.len(),
+            ]
+        })
+        .collect()
+}
+
+/// Mesh `index` of a glTF model as the first node that shows it (`node`) uses it: skinned by
+/// that node's skin, or bound rigidly to one root joint when the node has none (drawn and
+/// posed like any skinned mesh, placed by its object); with the mesh's material.
+fn gltf_mesh(
+    model: &keyrig_io::model::ImportedModel,
+    path: &Path,
+    index: usize,
+    node: Option<usize>,
+) -> MeshLoad {
+    let Some(node) = node else {
         return Err(FileError::NoSuchMesh { path: path.to_path_buf(), index });
     };
     let material = model.material(index).unwrap_or_else(|e| Some(e.without_texture()));
-    if model.nodes[node].skin.is_some() {
-        return model
-            .skinned_mesh(node)
-            .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), material))
-            .map_err(|e| FileError::SkinnedMesh { path: path.to_path_buf(), source: Arc::new(e) });
-    }
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for prim in model.meshes.get(index).map(|m| m.primitives.as_slice()).unwrap_or_default() {
-        if prim.mode != keyrig_io::model::PrimitiveMode::Triangles {
-            continue;
-        }
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&prim.positions);
-        indices.extend(prim.indices.iter().map(|i| i + base));
-    }
-    Ok((FileMesh::Static { positions, indices }, material))
+    let skinned =
+        if model.nodes[node].skin.is_some() { model.skinned_mesh(node) } else { model.rigid_mesh(index) };
+    skinned
+        .map(|m| (FileMesh::Skinned(std::sync::Arc::new(m)), material))
+        .map_err(|e| FileError::SkinnedMesh { path: path.to_path_buf(), source: Arc::new(e) })
 }
 
 /// Skinned and vertex-animated (MD2) meshes of every object of `scene` whose mesh is a model
@@ -271,7 +354,6 @@ pub fn render_meshes(scene: &Scene, base_dir: Option<&Path>) -> Result<RenderMes
             FileMesh::Morph(m) => {
                 morphs.insert(o, (**m).clone());
             }
-            FileMesh::Static { .. } => return Err(FileError::NotSkinned { at: at(), path: path.clone() }),
         }
     }
     let materials = store.materials_for(base_dir, scene);

@@ -65,8 +65,6 @@ pub enum FileError {
     /// A file of an object of the scene (`at` names the object).
     #[error("{at}: {source}")]
     OfObject { at: String, source: Box<FileError> },
-    #[error("{at}: `{path}` has no skin; only skinned glTF meshes are drawn")]
-    NotSkinned { at: String, path: String },
 }
 
 impl From<keyrig_io::scene_file::SceneFileError> for FileError {

@@ -547,7 +547,7 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     cycles_ui(ui, ctx, actions, first.channel);
 }
 
-/// The channel's behaviour before its first key and after its last (cycles, DESIGN.md §9): two
+/// The channel's behaviour before its first key and after its last (cycles, docs/design.md §9): two
 /// combo boxes, "Before keys" and "After keys", each an undoable edit of the channel of the
 /// first selected key.
 fn cycles_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: ChannelId) {

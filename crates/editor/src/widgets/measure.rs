@@ -27,7 +27,7 @@ pub fn measure_ui(ui: &mut Ui, ctx: &FrameCtx<'_>) {
     match measure_text(ctx) {
         Some(text) => {
             ui.label(text).on_hover_text(
-                "Mean distance of the limb's surface from the joint, posed / rest (DESIGN.md §6). \
+                "Mean distance of the limb's surface from the joint, posed / rest (docs/design.md §6). \
                  Near 0 is the candy-wrapper collapse of linear blending under twist.",
             );
         }

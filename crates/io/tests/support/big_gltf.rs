@@ -281,3 +281,35 @@ pub fn two_primitive_skin() -> Vec<u8> {
     });
     glb(root, bin.bytes)
 }
+
+/// `meshes` meshes, each of one primitive using the same POSITION, NORMAL and index accessors
+/// (one triangle), each shown by a node of its own: a file that reuses one accessor in many
+/// meshes, whose size is almost all JSON.
+pub fn reused_accessor_meshes(meshes: usize) -> Vec<u8> {
+    let mut bin = Bin::default();
+    let pos = bin.add(
+        &f32_bytes([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        5126,
+        3,
+        "VEC3",
+        Some((json!([0.0, 0.0, 0.0]), json!([1.0, 1.0, 0.0]))),
+    );
+    let normal = bin.add(&f32_bytes([0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0]), 5126, 3, "VEC3", None);
+    let indices: Vec<u8> = [0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes()).collect();
+    let idx = bin.add(&indices[..6], 5123, 3, "SCALAR", None);
+    let mesh_list: Vec<Value> = (0..meshes)
+        .map(|_| json!({"primitives": [{"attributes": {"POSITION": pos, "NORMAL": normal}, "indices": idx}]}))
+        .collect();
+    let nodes: Vec<Value> =
+        (0..meshes).map(|i| json!({"mesh": i, "translation": [i as f32 * 0.01, 0.0, 0.0]})).collect();
+    let root = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": (0..meshes).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": mesh_list,
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    glb(root, bin.bytes)
+}

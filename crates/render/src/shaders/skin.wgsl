@@ -1,4 +1,4 @@
-// keyrig GPU skinning: the four deformers of DESIGN.md §5 as compute entry points.
+// keyrig GPU skinning: the four deformers of docs/design.md §5 as compute entry points.
 //
 // Every entry point reads the rest vertices (uploaded once), the per-joint frame data
 // (uploaded every frame) and the static per-joint inverse bind matrices (uploaded once), and
