@@ -64,6 +64,10 @@ pub type Curve = Vec<(f64, f32)>;
 /// rotations were read as twists.
 type SampleKey = (ChannelId, u64, u64, usize, bool);
 
+/// What the key points were placed for: the evaluator, the plot (rect and view, as bits), the
+/// channels, and whether rotations were read as twists.
+type PointsKey = (EvalKey, [u32; 4], [u64; 4], Vec<ChannelId>, bool);
+
 /// The curve editor and its own state: the view, the gesture under way, how rotations read,
 /// where it was laid out, and its samples (kept while the document, the view and the channel
 /// stay the same).
@@ -84,6 +88,8 @@ pub struct CurveEditor {
     /// Samples by channel, frames and count, for the evaluator they were taken from; each
     /// frame keeps only those it used.
     samples: HashMap<SampleKey, (EvalKey, Rc<Vec<Curve>>, bool)>,
+    /// The key points of the last plot, kept while it and the document stay the same.
+    points: Option<(PointsKey, Rc<Vec<KeyPoint>>)>,
 }
 
 /// The axis whose unwrapped turn the curve view draws for a rotation channel: the first spin
@@ -443,6 +449,32 @@ impl CurveEditor {
             .collect()
     }
 
+    /// The key points of `all` on `plot`, placed once per document revision, plot and channels.
+    fn key_points(
+        &mut self,
+        ctx: &FrameCtx<'_>,
+        ids: &[ChannelId],
+        plot: &Plot,
+        all: &[(ChannelId, Rc<Vec<Curve>>)],
+    ) -> Rc<Vec<KeyPoint>> {
+        let (r, v) = (plot.rect, plot.view);
+        let key: PointsKey = (
+            crate::scene_frame::evaluator_key(ctx.doc, ctx.meshes),
+            [r.min.x.to_bits(), r.min.y.to_bits(), r.max.x.to_bits(), r.max.y.to_bits()],
+            [v.start.to_bits(), v.end.to_bits(), u64::from(v.low.to_bits()), u64::from(v.high.to_bits())],
+            ids.to_vec(),
+            self.rotation_as_twist,
+        );
+        if let Some((k, points)) = &self.points {
+            if *k == key {
+                return Rc::clone(points);
+            }
+        }
+        let points = Rc::new(key_points(&ctx.evaluator(), ctx.scene(), self.rotation_as_twist, plot, all));
+        self.points = Some((key, Rc::clone(&points)));
+        points
+    }
+
     /// The view that shows the frame range and every value of `ids` (with a margin).
     fn fit_view(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> CurveView {
         let range = ctx.scene().frame_range;
@@ -552,7 +584,7 @@ impl CurveEditor {
         let plot = Plot { rect: plot_rect(rect), view };
         let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
         let all = self.curves_over(ctx, ids, (view.start, view.end), samples);
-        let points = key_points(&ctx.evaluator(), scene, self.rotation_as_twist, &plot, &all);
+        let points = self.key_points(ctx, ids, &plot, &all);
         let pick = |pos: Pos2| {
             points
                 .iter()
@@ -1000,8 +1032,8 @@ impl CurveEditor {
                 plot_painter.add(Shape::line(points, Stroke::new(1.5, colour)));
             }
         }
-        let points = key_points(&ctx.evaluator(), scene, self.rotation_as_twist, &plot, &all);
-        for p in &points {
+        let points = self.key_points(ctx, ids, &plot, &all);
+        for p in points.iter() {
             let n = ids.iter().position(|&id| id == p.key.channel).unwrap_or(0);
             let components = all.get(n).map_or(3, |(_, c)| c.len());
             let colour = curve_colour(n, p.component, components);
@@ -1075,7 +1107,7 @@ impl CurveEditor {
             );
         }
         // Accessibility tools (and UI tests) see each drawn key: "curve key elbow rotation X frame 30".
-        for p in &points {
+        for p in points.iter() {
             let r = egui::Rect::from_center_size(p.pos, Vec2::splat(2.0 * PICK_RADIUS));
             let id = egui::Id::new(("curve key", p.key.channel, p.key.index, p.component));
             let label = || {
