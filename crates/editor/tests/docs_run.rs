@@ -42,7 +42,7 @@ const BY_HAND: &[(&str, &str, &str)] = &[
         "the ui_guide test itself, writing screenshots",
     ),
     ("docs/benchmarks.md", "cargo ", "release builds and benchmarks of minutes each"),
-    ("docs/fuzzing.md", "cargo install cargo-fuzz", "installs a tool and fuzzes for minutes"),
+    ("docs/fuzzing.md", "cargo xtask fuzz", "installs a tool and fuzzes for half an hour"),
     ("docs/interpolation.md", "python3 -m venv", "installs Python packages to regenerate reference fixtures"),
     ("docs/scene-format.md", "(", "an outline of the file: `( … )` stands for the scene described below it"),
     (

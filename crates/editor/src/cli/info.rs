@@ -313,8 +313,11 @@ struct ByName<'a> {
     objects: HashMap<&'a str, usize>,
     lights: HashMap<&'a str, usize>,
     /// Per object index: its skeleton's joints and IK constraints by name.
-    joints: HashMap<usize, (HashMap<&'a str, usize>, HashMap<&'a str, usize>)>,
+    joints: HashMap<usize, (Names<'a>, Names<'a>)>,
 }
+
+/// Indices by name.
+type Names<'a> = HashMap<&'a str, usize>;
 
 impl<'a> ByName<'a> {
     fn new(scene: &'a Scene) -> Self {
