@@ -36,8 +36,7 @@ use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator};
 
 use super::map::hsv_lerp;
 
-/// The first line of the metadata string that carries keyrig's own scene.
-pub const METADATA_TAG: &str = "keyrig-scene-ron";
+pub use super::tree::METADATA_TAG;
 
 /// The file format, from the output's extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -1076,7 +1075,7 @@ fn inventor(roots: &[WNode], routes: &[(String, &'static str, String, &'static s
 /// and lights take back the keys of keyrig's own scene (matched by name), with the scene's
 /// rate and range: tension, continuity, bias, cycles and spins as they were. Returns whether
 /// metadata was found.
-pub(crate) fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlModel) -> bool {
+pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlModel) -> bool {
     let Some(text) = doc.nodes.iter().find_map(|n| {
         let field = match n.kind.as_str() {
             "WorldInfo" => "info",

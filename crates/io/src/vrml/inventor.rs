@@ -290,7 +290,7 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
             t.views.push((view, Vec::new()));
         }
         "Info" => {
-            let metadata = matches!(node.value("string"), Some(Value::Strings(s)) if s.iter().any(|s| s.starts_with(super::export::METADATA_TAG)));
+            let metadata = matches!(node.value("string"), Some(Value::Strings(s)) if s.iter().any(|s| s.starts_with(super::tree::METADATA_TAG)));
             if !metadata {
                 t.skips_add(kind, "not imported (its text is a comment)", id);
             }

@@ -131,7 +131,7 @@ pub struct VrmlModel {
     pub duration: f64,
     pub skipped: Vec<Skipped>,
     /// keyrig's own scene, when the file is a keyrig export carrying it as metadata
-    /// ([`super::export::METADATA_TAG`]); its rate, range, ambient light and camera are the
+    /// ([`super::tree::METADATA_TAG`]); its rate, range, ambient light and camera are the
     /// mapped scene's.
     pub metadata_scene: Option<keyrig_core::Scene>,
 }
@@ -858,6 +858,16 @@ impl<'d> Traversal<'d> {
         }
     }
 
+    /// Visits the VRML/X3D scene graph from the document's roots.
+    ///
+    /// # Errors
+    /// Too many instances, or a graph nested too deep.
+    pub fn visit_roots(&mut self) -> Result<(), VrmlError> {
+        let (mut frames, mut names) = (Vec::new(), Vec::new());
+        let roots = self.doc.roots.clone();
+        self.visit_all(&roots, &mut frames, &mut names)
+    }
+
     pub fn count_visit(&mut self, id: NodeId) -> Result<(), VrmlError> {
         self.visits += 1;
         if self.visits > MAX_INSTANCES {
@@ -959,7 +969,7 @@ impl<'d> Traversal<'d> {
                 };
                 self.views.push((view, frames.clone()));
             }
-            "WorldInfo" if node.value("info").is_some_and(|v| matches!(v, Value::Strings(s) if s.iter().any(|s| s.starts_with(super::export::METADATA_TAG)))) => {}
+            "WorldInfo" if node.value("info").is_some_and(|v| matches!(v, Value::Strings(s) if s.iter().any(|s| s.starts_with(super::tree::METADATA_TAG)))) => {}
             "WorldInfo" | "NavigationInfo" | "Background" | "TextureBackground" | "Fog" | "Sound"
             | "Script" | "TouchSensor" | "ProximitySensor" | "VisibilitySensor" | "PlaneSensor"
             | "SphereSensor" | "CylinderSensor" | "KeySensor" | "StringSensor" | "BooleanFilter"
@@ -1726,21 +1736,15 @@ fn bake(m: Mat4, positions: &mut [Vec3], normals: &mut [Vec3], indices: &mut [u3
 }
 
 /// Maps the expanded document to a [`VrmlModel`]; `skipped` holds what loading left out.
+/// `traversal` has visited the scene graph (VRML/X3D: [`Traversal::visit_roots`]; Inventor:
+/// `inventor::traverse`).
 pub(crate) fn map_document(
     doc: &Document,
+    mut traversal: Traversal<'_>,
     skipped: Vec<(String, String, Place)>,
     path: &Path,
 ) -> Result<VrmlModel, VrmlError> {
     let encoding = doc.files.first().map_or(Encoding::Vrml97, |f| f.encoding);
-    let mut traversal = Traversal::new(doc);
-    if encoding == Encoding::Inventor {
-        super::inventor::traverse(&mut traversal)?;
-    } else {
-        let mut frames = Vec::new();
-        let mut names = Vec::new();
-        let roots = doc.roots.clone();
-        traversal.visit_all(&roots, &mut frames, &mut names)?;
-    }
     let mut skips = std::mem::take(&mut traversal.skips);
     for (what, why, place) in skipped {
         skips.add(what, why, place);
@@ -1814,7 +1818,7 @@ pub(crate) fn map_document(
     }
     let skipped = mapper.skips.into_list(doc);
     let _ = path;
-    let mut model = VrmlModel {
+    let model = VrmlModel {
         encoding,
         objects,
         meshes,
@@ -1824,7 +1828,6 @@ pub(crate) fn map_document(
         skipped,
         metadata_scene: None,
     };
-    super::export::restore_metadata(doc, &mut model);
     Ok(model)
 }
 

@@ -422,7 +422,16 @@ fn import_text_here(text: String, path: PathBuf, folder: Option<PathBuf>) -> Res
         }
     }
     let _ = interface;
-    map::map_document(&doc, loader.skipped, &path)
+    let mut traversal = map::Traversal::new(&doc);
+    if doc.files.first().is_some_and(|f| f.encoding == Encoding::Inventor) {
+        inventor::traverse(&mut traversal)?;
+    } else {
+        traversal.visit_roots()?;
+    }
+    let mut model = map::map_document(&doc, traversal, loader.skipped, &path)?;
+    // A file keyrig wrote carries keyrig's own scene: its keys come back exactly.
+    export::restore_metadata(&doc, &mut model);
+    Ok(model)
 }
 
 /// A `Group` holding `children` (what an Inline stands for).

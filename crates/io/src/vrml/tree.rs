@@ -207,3 +207,8 @@ impl Document {
 /// What parsing one file gives: its top-level nodes, its routes (resolved) and its PROTOs by
 /// name (indices into [`Document::protos`]).
 pub type Parsed = (Vec<NodeId>, Vec<Route>, std::collections::HashMap<String, usize>);
+
+/// The first line of the metadata string that carries keyrig's own scene in a file keyrig
+/// wrote (a `WorldInfo` `info` string, an Inventor `Info` node's `string`; see
+/// [`super::export`]).
+pub const METADATA_TAG: &str = "keyrig-scene-ron";
