@@ -8,7 +8,8 @@
 //!   which a fresh machine may already have, does not serve: wgpu's GL backend lacks the
 //!   second view format the renderer gives its colour target (`DownlevelFlags::VIEW_FORMATS`;
 //!   docs/testing.md, "Which GPU the tests use");
-//! - the glTF export tests: Node.js, npm and the Khronos glTF-Validator from its lockfile.
+//! - the glTF export tests: Node.js, npm and the Khronos glTF-Validator from its lockfile;
+//! - the VRML/X3D/Inventor reference tests: Coin3D through Python (`python3-pivy`).
 //!
 //! On Debian as root (or with password-less sudo) the missing packages are installed with
 //! `apt-get`; elsewhere the task stops and prints the one command to run.
@@ -40,6 +41,12 @@ const WINDOW: &[Need] = &[
     Need { package: "libxi6", command: None, why: "the editor window's input" },
 ];
 
+const COIN: &[Need] = &[Need {
+    package: "python3-pivy",
+    command: None,
+    why: "Coin3D for Python, the VRML/Inventor reference the VRML tests compare with",
+}];
+
 const NODE: &[Need] = &[
     Need { package: "nodejs", command: Some("node"), why: "the Khronos glTF-Validator" },
     Need { package: "npm", command: Some("npm"), why: "installing the glTF-Validator" },
@@ -55,7 +62,7 @@ const LAVAPIPE: &[Need] = &[
 /// # Errors
 /// What is missing and cannot be installed here, with the command that installs it.
 pub fn run(validator: bool) -> Result<(), String> {
-    let mut needs: Vec<&Need> = WINDOW.iter().collect();
+    let mut needs: Vec<&Need> = WINDOW.iter().chain(COIN).collect();
     if validator && (!on_path("node") || !on_path("npm")) {
         needs.extend(NODE);
     }
