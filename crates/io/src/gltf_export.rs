@@ -531,263 +531,341 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
     // Tracks with cycles are written as keys over the scene's frame range.
     let range =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
-    let mut lights: Vec<Value> = Vec::new();
     let mut files: HashMap<PathBuf, LoadedFile> = HashMap::new();
-
     for (oi, object) in scene.objects.iter().enumerate() {
-        let here = format!("objects[{oi}]");
-        let node = doc.nodes.len();
-        doc.nodes.push(json!({"name": object.name}));
-        doc.roots.push(node);
-        let identity = (Quat::IDENTITY, Vec3::ZERO);
-        set_vec3(
-            &mut doc.nodes[node],
-            "translation",
-            &object.translation,
-            identity,
-            Vec3::ZERO,
-            &format!("{here}.translation"),
-        )?;
-        set_vec3(
-            &mut doc.nodes[node],
-            "scale",
-            &object.scale,
-            identity,
-            Vec3::ONE,
-            &format!("{here}.scale"),
-        )?;
-        set_quat(&mut doc.nodes[node], &object.rotation, Quat::IDENTITY, &format!("{here}.rotation"))?;
-        doc.channels.extend(vec3_channel(
-            node,
-            "translation",
-            &object.translation,
-            identity,
-            options,
-            range,
-            &format!("{here}.translation"),
-        )?);
-        doc.channels.extend(vec3_channel(
-            node,
-            "scale",
-            &object.scale,
-            identity,
-            options,
-            range,
-            &format!("{here}.scale"),
-        )?);
-        doc.channels.extend(quat_channel(
-            node,
-            &object.rotation,
-            Quat::IDENTITY,
-            options,
-            range,
-            &format!("{here}.rotation"),
-        )?);
-
-        let joint_nodes = match &object.skeleton {
-            Some(skeleton) => export_joints(&mut doc, node, skeleton, options, range, &here)?,
-            None => Vec::new(),
-        };
-
-        let Some(source) = &object.mesh else { continue };
-        let mesh_here = format!("{here}.mesh");
-        match source {
-            MeshSource::Procedural(kind) => {
-                let mut mesh = keyrig_skin::mesh_for(*kind);
-                // Procedural meshes are built in centimetres on their own skeleton; fit them to
-                // the object's skeleton as the editor and renderer do. A skeleton that does not
-                // build is reported by the skeleton's own export; the mesh then keeps its
-                // native size.
-                let rest =
-                    object.skeleton.as_ref().and_then(|s| keyrig_skin::RestSkeleton::from_scene(s).ok());
-                if let Some(rest) = rest {
-                    if let Ok(fitted) = mesh.clone().fit_to_skeleton(rest) {
-                        mesh = fitted;
-                    }
-                }
-                let skinned = !joint_nodes.is_empty();
-                let prim = PrimitiveData {
-                    positions: mesh.positions.clone(),
-                    normals: Some(mesh.normals.clone()),
-                    texcoords: None,
-                    indices: mesh.indices.clone(),
-                    skin: skinned
-                        .then(|| (mesh.influences.joints().to_vec(), mesh.influences.weights().to_vec())),
-                    targets: Vec::new(),
-                    material: None,
-                };
-                if skinned {
-                    check_joints(&prim, joint_nodes.len(), &format!("{here}.skeleton"))?;
-                    if mesh.skeleton.len() != joint_nodes.len() {
-                        // The fit failed (a skeleton that does not build): bind to the scene's rest.
-                        let ibms = inverse_bind_matrices(object.skeleton.as_ref().expect("skeleton"));
-                        skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
-                    } else {
-                        let ibms = ibms_of(&mesh.skeleton);
-                        skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
-                    }
-                } else {
-                    let m = doc.mesh(&object.name, &[prim], None);
-                    doc.nodes[node]["mesh"] = json!(m);
-                }
-            }
-            MeshSource::File { path, mesh, clip, fps } => {
-                let file = options.base_dir.as_deref().unwrap_or(Path::new(".")).join(path);
-                let err = |source: MeshFileError| ExportError::MeshFile {
-                    path: mesh_here.clone(),
-                    file: file.clone(),
-                    source: Box::new(source),
-                };
-                if !files.contains_key(&file) {
-                    let loaded = load_file(&file).map_err(err)?;
-                    files.insert(file.clone(), loaded);
-                }
-                match &files[&file] {
-                    LoadedFile::Md2(model) => {
-                        let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
-                        md2_object(&mut doc, scene, model, &file, clip.as_deref(), fps, node, &object.name)
-                            .map_err(err)?;
-                    }
-                    LoadedFile::Vrml(model) => {
-                        let index = mesh.unwrap_or(0);
-                        if model.meshes.get(index).is_some_and(|m| m.morph.is_some()) {
-                            return Err(err(MeshFileError::VrmlMorph(index)));
-                        }
-                        let mesh = model.skinned_mesh(index).map_err(|e| err(e.into()))?;
-                        let colour = model.meshes[index].material.base_colour;
-                        let skinned = !joint_nodes.is_empty() && joint_nodes.len() == mesh.skeleton.len();
-                        let prim = PrimitiveData {
-                            positions: mesh.positions.clone(),
-                            normals: Some(mesh.normals.clone()),
-                            texcoords: mesh.uvs.clone(),
-                            indices: mesh.indices.clone(),
-                            skin: skinned.then(|| {
-                                (mesh.influences.joints().to_vec(), mesh.influences.weights().to_vec())
-                            }),
-                            targets: Vec::new(),
-                            material: Some(MaterialData { base_colour: colour, texture: None }),
-                        };
-                        if skinned {
-                            let ibms = ibms_of(&mesh.skeleton);
-                            skinned_mesh_node(&mut doc, &object.name, &[prim], &ibms, &joint_nodes, node);
-                        } else {
-                            let m = doc.mesh(&object.name, &[prim], None);
-                            doc.nodes[node]["mesh"] = json!(m);
-                        }
-                    }
-                    LoadedFile::Gltf(model) => {
-                        let index = mesh.unwrap_or(0);
-                        gltf_object(
-                            &mut doc,
-                            model,
-                            &file,
-                            index,
-                            node,
-                            object,
-                            &joint_nodes,
-                            options,
-                            &here,
-                        )?;
-                    }
-                }
-            }
-        }
+        export_object(&mut doc, &mut files, scene, object, options, range, &format!("objects[{oi}]"))?;
     }
-
-    let tol = options.rotation_tolerance_deg.to_radians();
+    let t0 = f64::from(scene.frame_range.start) / scene.fps;
+    let mut lights: Vec<Value> = Vec::new();
     for (li, light) in scene.lights.iter().enumerate() {
         let here = format!("lights[{li}]");
-        let t0 = f64::from(scene.frame_range.start) / scene.fps;
-        let colour = sample_at(&light.colour, t0, &format!("{here}.colour"))?;
-        let intensity = sample_at(&light.intensity, t0, &format!("{here}.intensity"))?;
-        let mut l = json!({"name": light.name, "color": colour.max(Vec3::ZERO).to_array(), "intensity": intensity.max(0.0)});
-        match light.kind {
-            LightKind::Directional => l["type"] = json!("directional"),
-            LightKind::Point => l["type"] = json!("point"),
-            LightKind::Spot { cutoff_deg, inner_angle_deg, .. } => {
-                if !(cutoff_deg.is_finite() && inner_angle_deg.is_finite()) {
-                    return Err(scene_err(format!("{here}.kind"), "spot angles must be finite"));
+        let light_index = lights.len();
+        lights.push(punctual_light(light, t0, &here)?);
+        light_node(&mut doc, light, light_index, t0, options, range, &here)?;
+    }
+    Ok(doc.into_gltf(lights))
+}
+
+/// Writes `object` (at the scene path `here`): its node with its transform and channels
+/// ([`object_node`]), its skeleton's joints ([`export_joints`]) and its mesh, procedural
+/// ([`procedural_mesh`]) or from a model file, which is loaded once per export into `files`.
+fn export_object(
+    doc: &mut Document,
+    files: &mut HashMap<PathBuf, LoadedFile>,
+    scene: &Scene,
+    object: &keyrig_core::Object,
+    options: &ExportOptions,
+    range: (f64, f64),
+    here: &str,
+) -> Result<(), ExportError> {
+    let node = object_node(doc, object, options, range, here)?;
+    let joint_nodes = match &object.skeleton {
+        Some(skeleton) => export_joints(doc, node, skeleton, options, range, here)?,
+        None => Vec::new(),
+    };
+
+    let Some(source) = &object.mesh else { return Ok(()) };
+    let mesh_here = format!("{here}.mesh");
+    match source {
+        MeshSource::Procedural(kind) => procedural_mesh(doc, object, *kind, node, &joint_nodes, here)?,
+        MeshSource::File { path, mesh, clip, fps } => {
+            let file = options.base_dir.as_deref().unwrap_or(Path::new(".")).join(path);
+            let err = |source: MeshFileError| ExportError::MeshFile {
+                path: mesh_here.clone(),
+                file: file.clone(),
+                source: Box::new(source),
+            };
+            if !files.contains_key(&file) {
+                let loaded = load_file(&file).map_err(err)?;
+                files.insert(file.clone(), loaded);
+            }
+            match &files[&file] {
+                LoadedFile::Md2(model) => {
+                    let fps = fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
+                    md2_object(doc, scene, model, &file, clip.as_deref(), fps, node, &object.name)
+                        .map_err(err)?;
                 }
-                let outer = cutoff_deg.to_radians().clamp(1e-4, std::f32::consts::FRAC_PI_2);
-                let inner = inner_angle_deg.to_radians().clamp(0.0, outer - 1e-4);
-                l["type"] = json!("spot");
-                l["spot"] = json!({"innerConeAngle": inner, "outerConeAngle": outer});
+                LoadedFile::Vrml(model) => {
+                    let index = mesh.unwrap_or(0);
+                    if model.meshes.get(index).is_some_and(|m| m.morph.is_some()) {
+                        return Err(err(MeshFileError::VrmlMorph(index)));
+                    }
+                    let mesh = model.skinned_mesh(index).map_err(|e| err(e.into()))?;
+                    let colour = model.meshes[index].material.base_colour;
+                    let skinned = !joint_nodes.is_empty() && joint_nodes.len() == mesh.skeleton.len();
+                    let prim = PrimitiveData {
+                        positions: mesh.positions.clone(),
+                        normals: Some(mesh.normals.clone()),
+                        texcoords: mesh.uvs.clone(),
+                        indices: mesh.indices.clone(),
+                        skin: skinned
+                            .then(|| (mesh.influences.joints().to_vec(), mesh.influences.weights().to_vec())),
+                        targets: Vec::new(),
+                        material: Some(MaterialData { base_colour: colour, texture: None }),
+                    };
+                    if skinned {
+                        let ibms = ibms_of(&mesh.skeleton);
+                        skinned_mesh_node(doc, &object.name, &[prim], &ibms, &joint_nodes, node);
+                    } else {
+                        let m = doc.mesh(&object.name, &[prim], None);
+                        doc.nodes[node]["mesh"] = json!(m);
+                    }
+                }
+                LoadedFile::Gltf(model) => {
+                    let index = mesh.unwrap_or(0);
+                    gltf_object(doc, model, &file, index, node, object, &joint_nodes, options, here)?;
+                }
             }
         }
-        let light_index = lights.len();
-        lights.push(l);
-        let node = doc.nodes.len();
-        doc.nodes
-            .push(json!({"name": light.name, "extensions": {"KHR_lights_punctual": {"light": light_index}}}));
-        doc.roots.push(node);
-        let identity = (Quat::IDENTITY, Vec3::ZERO);
-        set_vec3(
-            &mut doc.nodes[node],
-            "translation",
-            &light.position,
-            identity,
-            Vec3::ZERO,
-            &format!("{here}.position"),
-        )?;
-        doc.channels.extend(vec3_channel(
-            node,
-            "translation",
-            &light.position,
-            identity,
-            options,
-            range,
-            &format!("{here}.position"),
-        )?);
-        // Direction → rotation taking the light's −Z to the direction.
-        let dir_here = format!("{here}.direction");
-        let dir = AnimatedTrack::new(&light.direction).map_err(|e| scene_err(&dir_here, e.to_string()))?;
-        let rest = look_rotation(dir.sample(t0));
-        doc.nodes[node]["rotation"] = json!(rest.to_array());
-        if let Some(track) = dir.track() {
-            // Key times are breaks, and a Step segment is a hold and one jump, as for the
-            // other rotations.
-            let (breaks, jumps) = if track.cycles().is_hold() {
-                step_breaks(track.key_times(), |i| track.segment_interpolation(i))
-            } else {
-                (cycle_breaks(track, range), Vec::new())
-            };
-            let sampler = |t: f64| look_rotation(track.sample(t));
-            let (times, values) = match &options.bake {
-                Some(bake) => {
-                    resample_rotation(&sampler, &breaks, &jumps, bake.rotation_tolerance(options), nlerp)
-                }
-                None => resample_rotation(&sampler, &breaks, &jumps, tol, crate::model::slerp_short),
-            };
-            doc.channels.push(linear_quat_channel(node, times, values));
+    }
+    Ok(())
+}
+
+/// Writes the root node of `object` with its rest translation, scale and rotation and their
+/// channels; returns the node.
+fn object_node(
+    doc: &mut Document,
+    object: &keyrig_core::Object,
+    options: &ExportOptions,
+    range: (f64, f64),
+    here: &str,
+) -> Result<usize, ExportError> {
+    let node = doc.nodes.len();
+    doc.nodes.push(json!({"name": object.name}));
+    doc.roots.push(node);
+    let identity = (Quat::IDENTITY, Vec3::ZERO);
+    set_vec3(
+        &mut doc.nodes[node],
+        "translation",
+        &object.translation,
+        identity,
+        Vec3::ZERO,
+        &format!("{here}.translation"),
+    )?;
+    set_vec3(&mut doc.nodes[node], "scale", &object.scale, identity, Vec3::ONE, &format!("{here}.scale"))?;
+    set_quat(&mut doc.nodes[node], &object.rotation, Quat::IDENTITY, &format!("{here}.rotation"))?;
+    doc.channels.extend(vec3_channel(
+        node,
+        "translation",
+        &object.translation,
+        identity,
+        options,
+        range,
+        &format!("{here}.translation"),
+    )?);
+    doc.channels.extend(vec3_channel(
+        node,
+        "scale",
+        &object.scale,
+        identity,
+        options,
+        range,
+        &format!("{here}.scale"),
+    )?);
+    doc.channels.extend(quat_channel(
+        node,
+        &object.rotation,
+        Quat::IDENTITY,
+        options,
+        range,
+        &format!("{here}.rotation"),
+    )?);
+    Ok(node)
+}
+
+/// Writes the procedural mesh `kind` of `object` (node `node`), fitted to the object's
+/// skeleton and skinned to its joints `joint_nodes` when it has any.
+fn procedural_mesh(
+    doc: &mut Document,
+    object: &keyrig_core::Object,
+    kind: keyrig_core::ProceduralMesh,
+    node: usize,
+    joint_nodes: &[usize],
+    here: &str,
+) -> Result<(), ExportError> {
+    let mut mesh = keyrig_skin::mesh_for(kind);
+    // Procedural meshes are built in centimetres on their own skeleton; fit them to
+    // the object's skeleton as the editor and renderer do. A skeleton that does not
+    // build is reported by the skeleton's own export; the mesh then keeps its
+    // native size.
+    let rest = object.skeleton.as_ref().and_then(|s| keyrig_skin::RestSkeleton::from_scene(s).ok());
+    if let Some(rest) = rest {
+        if let Ok(fitted) = mesh.clone().fit_to_skeleton(rest) {
+            mesh = fitted;
         }
     }
+    let skinned = !joint_nodes.is_empty();
+    let prim = PrimitiveData {
+        positions: mesh.positions.clone(),
+        normals: Some(mesh.normals.clone()),
+        texcoords: None,
+        indices: mesh.indices.clone(),
+        skin: skinned.then(|| (mesh.influences.joints().to_vec(), mesh.influences.weights().to_vec())),
+        targets: Vec::new(),
+        material: None,
+    };
+    if skinned {
+        check_joints(&prim, joint_nodes.len(), &format!("{here}.skeleton"))?;
+        if mesh.skeleton.len() != joint_nodes.len() {
+            // The fit failed (a skeleton that does not build): bind to the scene's rest.
+            let ibms = inverse_bind_matrices(object.skeleton.as_ref().expect("skeleton"));
+            skinned_mesh_node(doc, &object.name, &[prim], &ibms, joint_nodes, node);
+        } else {
+            let ibms = ibms_of(&mesh.skeleton);
+            skinned_mesh_node(doc, &object.name, &[prim], &ibms, joint_nodes, node);
+        }
+    } else {
+        let m = doc.mesh(&object.name, &[prim], None);
+        doc.nodes[node]["mesh"] = json!(m);
+    }
+    Ok(())
+}
 
-    let Document { mut b, nodes, roots, meshes, skins, channels, images, textures, materials, .. } = doc;
-    let mut root = json!({
-        "asset": {"version": "2.0", "generator": concat!("keyrig ", env!("CARGO_PKG_VERSION"))},
-        "scene": 0,
-        "scenes": [{"name": "keyrig scene", "nodes": roots}],
-        "nodes": nodes,
-    });
-    if !meshes.is_empty() {
-        root["meshes"] = json!(meshes);
+/// The KHR_lights_punctual entry of `light` (at the scene path `here`): its kind, and its
+/// colour and intensity at `t0`, the start of the frame range (core glTF cannot animate them).
+fn punctual_light(light: &keyrig_core::Light, t0: f64, here: &str) -> Result<Value, ExportError> {
+    let colour = sample_at(&light.colour, t0, &format!("{here}.colour"))?;
+    let intensity = sample_at(&light.intensity, t0, &format!("{here}.intensity"))?;
+    let mut l = json!({"name": light.name, "color": colour.max(Vec3::ZERO).to_array(), "intensity": intensity.max(0.0)});
+    match light.kind {
+        LightKind::Directional => l["type"] = json!("directional"),
+        LightKind::Point => l["type"] = json!("point"),
+        LightKind::Spot { cutoff_deg, inner_angle_deg, .. } => {
+            if !(cutoff_deg.is_finite() && inner_angle_deg.is_finite()) {
+                return Err(scene_err(format!("{here}.kind"), "spot angles must be finite"));
+            }
+            let outer = cutoff_deg.to_radians().clamp(1e-4, std::f32::consts::FRAC_PI_2);
+            let inner = inner_angle_deg.to_radians().clamp(0.0, outer - 1e-4);
+            l["type"] = json!("spot");
+            l["spot"] = json!({"innerConeAngle": inner, "outerConeAngle": outer});
+        }
     }
-    if !skins.is_empty() {
-        root["skins"] = json!(skins);
+    Ok(l)
+}
+
+/// Writes the root node of `light` (entry `light_index` of KHR_lights_punctual) with its
+/// position and its direction as a rotation ([`light_direction`]), and their channels.
+fn light_node(
+    doc: &mut Document,
+    light: &keyrig_core::Light,
+    light_index: usize,
+    t0: f64,
+    options: &ExportOptions,
+    range: (f64, f64),
+    here: &str,
+) -> Result<(), ExportError> {
+    let node = doc.nodes.len();
+    doc.nodes
+        .push(json!({"name": light.name, "extensions": {"KHR_lights_punctual": {"light": light_index}}}));
+    doc.roots.push(node);
+    let identity = (Quat::IDENTITY, Vec3::ZERO);
+    set_vec3(
+        &mut doc.nodes[node],
+        "translation",
+        &light.position,
+        identity,
+        Vec3::ZERO,
+        &format!("{here}.position"),
+    )?;
+    doc.channels.extend(vec3_channel(
+        node,
+        "translation",
+        &light.position,
+        identity,
+        options,
+        range,
+        &format!("{here}.position"),
+    )?);
+    light_direction(doc, node, light, t0, options, range, here)
+}
+
+/// The rotation of the light node `node`: the one taking the light's −Z to its direction, at
+/// `t0` as the node's rest rotation and, when the direction is animated, as a LINEAR channel
+/// resampled like the other rotations.
+fn light_direction(
+    doc: &mut Document,
+    node: usize,
+    light: &keyrig_core::Light,
+    t0: f64,
+    options: &ExportOptions,
+    range: (f64, f64),
+    here: &str,
+) -> Result<(), ExportError> {
+    // Direction → rotation taking the light's −Z to the direction.
+    let dir_here = format!("{here}.direction");
+    let dir = AnimatedTrack::new(&light.direction).map_err(|e| scene_err(&dir_here, e.to_string()))?;
+    let rest = look_rotation(dir.sample(t0));
+    doc.nodes[node]["rotation"] = json!(rest.to_array());
+    if let Some(track) = dir.track() {
+        // Key times are breaks, and a Step segment is a hold and one jump, as for the
+        // other rotations.
+        let (breaks, jumps) = if track.cycles().is_hold() {
+            step_breaks(track.key_times(), |i| track.segment_interpolation(i))
+        } else {
+            (cycle_breaks(track, range), Vec::new())
+        };
+        let sampler = |t: f64| look_rotation(track.sample(t));
+        let tol = options.rotation_tolerance_deg.to_radians();
+        let (times, values) = match &options.bake {
+            Some(bake) => {
+                resample_rotation(&sampler, &breaks, &jumps, bake.rotation_tolerance(options), nlerp)
+            }
+            None => resample_rotation(&sampler, &breaks, &jumps, tol, crate::model::slerp_short),
+        };
+        doc.channels.push(linear_quat_channel(node, times, values));
     }
-    if !materials.is_empty() {
-        root["materials"] = json!(materials);
+    Ok(())
+}
+
+impl Document {
+    /// The glTF JSON and binary buffer of everything written, with the KHR_lights_punctual
+    /// `lights`: the node tree, meshes, skins, materials and textures, one animation of every
+    /// channel ([`Document::animation`], its accessors after the meshes'), and the buffer
+    /// padded to a multiple of 4 bytes.
+    fn into_gltf(self, lights: Vec<Value>) -> ExportedGltf {
+        let Document { mut b, nodes, roots, meshes, skins, channels, images, textures, materials, .. } = self;
+        let mut root = json!({
+            "asset": {"version": "2.0", "generator": concat!("keyrig ", env!("CARGO_PKG_VERSION"))},
+            "scene": 0,
+            "scenes": [{"name": "keyrig scene", "nodes": roots}],
+            "nodes": nodes,
+        });
+        if !meshes.is_empty() {
+            root["meshes"] = json!(meshes);
+        }
+        if !skins.is_empty() {
+            root["skins"] = json!(skins);
+        }
+        if !materials.is_empty() {
+            root["materials"] = json!(materials);
+        }
+        if !images.is_empty() {
+            root["images"] = json!(images);
+            root["textures"] = json!(textures);
+            root["samplers"] =
+                json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+        }
+        if !lights.is_empty() {
+            root["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+            root["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
+        }
+        if !channels.is_empty() {
+            root["animations"] = json!([Self::animation(&mut b, &channels)]);
+        }
+        while !b.bin.len().is_multiple_of(4) {
+            b.bin.push(0);
+        }
+        if !b.bin.is_empty() {
+            root["buffers"] = json!([{"byteLength": b.bin.len()}]);
+            root["bufferViews"] = json!(b.views);
+            root["accessors"] = json!(b.accessors);
+        }
+        ExportedGltf { json: root, bin: b.bin }
     }
-    if !images.is_empty() {
-        root["images"] = json!(images);
-        root["textures"] = json!(textures);
-        root["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
-    }
-    if !lights.is_empty() {
-        root["extensionsUsed"] = json!(["KHR_lights_punctual"]);
-        root["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
-    }
-    if !channels.is_empty() {
+
+    /// The animation "keyrig" of `channels`: a sampler of each channel, its times and values
+    /// written to `b`, and the channel targeting its node and path.
+    fn animation(b: &mut Builder, channels: &[Channel]) -> Value {
         let mut samplers = Vec::new();
         let mut chans = Vec::new();
         for (i, c) in channels.iter().enumerate() {
@@ -802,17 +880,8 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             samplers.push(json!({"input": input, "output": output, "interpolation": c.interpolation}));
             chans.push(json!({"sampler": i, "target": {"node": c.node, "path": c.path}}));
         }
-        root["animations"] = json!([{"name": "keyrig", "channels": chans, "samplers": samplers}]);
+        json!({"name": "keyrig", "channels": chans, "samplers": samplers})
     }
-    while !b.bin.len().is_multiple_of(4) {
-        b.bin.push(0);
-    }
-    if !b.bin.is_empty() {
-        root["buffers"] = json!([{"byteLength": b.bin.len()}]);
-        root["bufferViews"] = json!(b.views);
-        root["accessors"] = json!(b.accessors);
-    }
-    Ok(ExportedGltf { json: root, bin: b.bin })
 }
 
 /// Writes the joints of `skeleton` as nodes below the object node `object_node` and their

@@ -735,6 +735,16 @@ impl DrawPipelines {
     }
 }
 
+/// The overlay lines written for a frame ([`Renderer::write_overlay_lines`]): the grid's
+/// vertices first, then the skeletons', motion paths' and light gizmos'.
+#[derive(Clone, Copy, Debug)]
+struct OverlayLines {
+    /// The first `grid_vertices` vertices are the grid (drawn depth-tested).
+    grid_vertices: u32,
+    /// All vertices; those after the grid are drawn on top.
+    line_vertices: u64,
+}
+
 impl Renderer {
     /// Builds the pipelines for viewports of `color_format` (headless uses
     /// `Rgba8UnormSrgb`; the shaders write linear colour, so use an sRGB format) with
@@ -1107,6 +1117,30 @@ impl Renderer {
         frame: &FrameInput,
         viewport: &Viewport,
     ) -> Result<(wgpu::CommandBuffer, FrameStats), RenderError> {
+        self.check_frame(frame, viewport)?;
+        let mut stats = FrameStats::default();
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig frame") });
+
+        // 1. Per-frame uploads and compute passes.
+        self.encode_deformations(&mut encoder, frame, &mut stats)?;
+
+        // 2. Uniforms.
+        self.write_globals(frame, viewport, &mut stats);
+        self.write_objects(frame, &mut stats);
+
+        // 3. Overlay lines: grid (depth-tested) first, then skeletons and paths (on top).
+        let lines = self.write_overlay_lines(frame, &mut stats)?;
+
+        // 4. The render pass.
+        self.encode_render_pass(&mut encoder, frame, viewport, lines, &mut stats);
+        Ok((encoder.finish(), stats))
+    }
+
+    /// Refuses a viewport of another colour format or sample count than the renderer's, and
+    /// a camera that cannot be projected.
+    fn check_frame(&self, frame: &FrameInput, viewport: &Viewport) -> Result<(), RenderError> {
         if viewport.format != self.color_format {
             return Err(RenderError::Gpu(format!(
                 "viewport format {:?} differs from the renderer's {:?}",
@@ -1122,12 +1156,18 @@ impl Renderer {
         if !camera::is_usable(&frame.camera) {
             return Err(RenderError::NonFinite { what: "camera (or distance ≤ 0)", index: 0 });
         }
-        let mut stats = FrameStats::default();
-        let mut encoder = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig frame") });
+        Ok(())
+    }
 
-        // 1. Per-frame uploads and compute passes.
+    /// Checks every draw item (a known mesh, a finite transform and colour, a deformation its
+    /// mesh has) and, for a skinned or morphing item, writes its joints or morph frames and
+    /// records its compute pass.
+    fn encode_deformations(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInput,
+        stats: &mut FrameStats,
+    ) -> Result<(), RenderError> {
         for item in &frame.items {
             let mesh = self.meshes.get(&item.mesh).ok_or(RenderError::UnknownMesh(item.mesh))?;
             if !item.world_from_model.is_finite() || !item.colour.is_finite() {
@@ -1139,13 +1179,13 @@ impl Renderer {
             match (&item.deform, &mesh.deformation) {
                 (Deform::Skin { deformer, joints }, Deformation::Skinned(skin)) => {
                     stats.joint_bytes += self.skinner.write_joints(&self.queue, skin, item.mesh, joints)?;
-                    self.skinner.encode(&mut encoder, skin, *deformer);
+                    self.skinner.encode(encoder, skin, *deformer);
                     stats.deformed_vertices += u64::from(skin.vertex_count);
                 }
                 (Deform::Morph { frame_a, frame_b, t }, Deformation::Morph(morph)) => {
                     stats.morph_bytes +=
                         self.skinner.write_morph(&self.queue, morph, item.mesh, *frame_a, *frame_b, *t)?;
-                    self.skinner.encode_morph(&mut encoder, morph);
+                    self.skinner.encode_morph(encoder, morph);
                     stats.deformed_vertices += u64::from(morph.vertex_count);
                 }
                 (Deform::None, _) => {}
@@ -1157,8 +1197,13 @@ impl Renderer {
                 }
             }
         }
+        Ok(())
+    }
 
-        // 2. Uniforms.
+    /// Writes the frame's globals: the camera's projection for the viewport's aspect ratio,
+    /// its position, the ambient light and the first [`MAX_LIGHTS`] lights (the others are
+    /// counted in [`FrameStats::lights_dropped`]).
+    fn write_globals(&self, frame: &FrameInput, viewport: &Viewport, stats: &mut FrameStats) {
         let (width, height) = viewport.size();
         let aspect = width as f32 / height as f32;
         let mut lights = [GpuLight::zeroed(); MAX_LIGHTS];
@@ -1181,7 +1226,12 @@ impl Renderer {
         };
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
         stats.uniform_bytes += std::mem::size_of::<GpuGlobals>() as u64;
+    }
 
+    /// Writes each draw item's object uniforms (transform, normal matrix, colour, selection,
+    /// ghost tint) at its [`OBJECT_STRIDE`] slot, growing the buffer to a power of two when
+    /// the items do not fit.
+    fn write_objects(&mut self, frame: &FrameInput, stats: &mut FrameStats) {
         let needed = frame.items.len().max(1) as u64;
         if needed > self.object_capacity {
             self.object_capacity = needed.next_power_of_two();
@@ -1209,8 +1259,18 @@ impl Renderer {
             self.queue.write_buffer(&self.objects, 0, &object_bytes);
             stats.uniform_bytes += object_bytes.len() as u64;
         }
+    }
 
-        // 3. Overlay lines: grid (depth-tested) first, then skeletons and paths (on top).
+    /// Builds and writes the overlay lines: the grid first, then skeletons, motion paths and
+    /// light gizmos, growing the line buffer to a power of two when they do not fit.
+    ///
+    /// # Errors
+    /// [`RenderError::NonFinite`] for a line vertex that is not finite.
+    fn write_overlay_lines(
+        &mut self,
+        frame: &FrameInput,
+        stats: &mut FrameStats,
+    ) -> Result<OverlayLines, RenderError> {
         let mut lines = Lines::default();
         if let Some(spacing) = frame.grid_spacing.filter(|s| s.is_finite() && *s > 0.0) {
             overlay::grid(&mut lines, spacing, 50);
@@ -1242,116 +1302,146 @@ impl Renderer {
             self.queue.write_buffer(&self.line_buffer, 0, bytes);
             stats.overlay_bytes += bytes.len() as u64;
         }
+        Ok(OverlayLines { grid_vertices, line_vertices })
+    }
 
-        // 4. The render pass.
-        {
-            let bg = frame.background;
-            // With MSAA the multisampled image is resolved and then discarded; without, the
-            // pass draws straight into the colour texture, which must be stored.
-            let (view, resolve_target, store) = match &viewport.msaa_view {
-                Some(msaa) => (msaa, Some(&viewport.resolved_view), wgpu::StoreOp::Discard),
-                None => (&viewport.resolved_view, None, wgpu::StoreOp::Store),
-            };
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("keyrig viewport"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: f64::from(bg.x),
-                            g: f64::from(bg.y),
-                            b: f64::from(bg.z),
-                            a: 1.0,
-                        }),
-                        store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &viewport.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
+    /// Records the render pass: cleared to the background, the draw items
+    /// ([`Renderer::draw_items`]), then the overlay lines ([`Renderer::draw_lines`]).
+    fn encode_render_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInput,
+        viewport: &Viewport,
+        lines: OverlayLines,
+        stats: &mut FrameStats,
+    ) {
+        let mut pass = Self::begin_render_pass(encoder, viewport, frame.background);
+        pass.set_bind_group(0, &self.globals_bind_group, &[]);
+        self.draw_items(&mut pass, frame, stats);
+        self.draw_lines(&mut pass, lines, stats);
+    }
+
+    /// Begins the viewport's render pass, clearing colour to `background` and depth to 1.
+    fn begin_render_pass<'e>(
+        encoder: &'e mut wgpu::CommandEncoder,
+        viewport: &Viewport,
+        background: Vec3,
+    ) -> wgpu::RenderPass<'e> {
+        let bg = background;
+        // With MSAA the multisampled image is resolved and then discarded; without, the
+        // pass draws straight into the colour texture, which must be stored.
+        let (view, resolve_target, store) = match &viewport.msaa_view {
+            Some(msaa) => (msaa, Some(&viewport.resolved_view), wgpu::StoreOp::Discard),
+            None => (&viewport.resolved_view, None, wgpu::StoreOp::Store),
+        };
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("keyrig viewport"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: f64::from(bg.x),
+                        g: f64::from(bg.y),
+                        b: f64::from(bg.z),
+                        a: 1.0,
                     }),
-                    stencil_ops: None,
+                    store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &viewport.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
                 }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, &self.globals_bind_group, &[]);
-            let pipelines = &self.pipelines;
-            let pipeline = match frame.style {
-                RenderStyle::Solid => &pipelines.solid,
-                RenderStyle::Wireframe => &pipelines.wireframe,
-                RenderStyle::Points => &pipelines.points,
-            };
-            // Opaque items first, then ghosts blended over them (in the order given).
-            let order = frame
-                .items
-                .iter()
-                .enumerate()
-                .filter(|(_, item)| item.ghost.is_none())
-                .chain(frame.items.iter().enumerate().filter(|(_, item)| item.ghost.is_some()));
-            for (i, item) in order {
-                // Checked above.
-                let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
-                if item.ghost.is_some() {
-                    if mesh.triangle_index_count == 0 {
-                        continue;
-                    }
-                    pass.set_pipeline(&pipelines.ghost);
-                    pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
-                    pass.set_bind_group(2, &self.white_texture, &[]);
-                    pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
-                    pass.set_vertex_buffer(1, mesh.uvs.slice(..));
-                    pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
-                    stats.draw_calls += 1;
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
+
+    /// Draws the items in the frame's style, opaque items first, then ghosts blended over
+    /// them; a mesh without the primitives the style needs (triangles for Solid, edges for
+    /// Wireframe) is drawn as points.
+    fn draw_items(&self, pass: &mut wgpu::RenderPass<'_>, frame: &FrameInput, stats: &mut FrameStats) {
+        let pipelines = &self.pipelines;
+        let pipeline = match frame.style {
+            RenderStyle::Solid => &pipelines.solid,
+            RenderStyle::Wireframe => &pipelines.wireframe,
+            RenderStyle::Points => &pipelines.points,
+        };
+        // Opaque items first, then ghosts blended over them (in the order given).
+        let order = frame
+            .items
+            .iter()
+            .enumerate()
+            .filter(|(_, item)| item.ghost.is_none())
+            .chain(frame.items.iter().enumerate().filter(|(_, item)| item.ghost.is_some()));
+        for (i, item) in order {
+            // Checked in encode_deformations.
+            let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
+            if item.ghost.is_some() {
+                if mesh.triangle_index_count == 0 {
                     continue;
                 }
-                pass.set_pipeline(pipeline);
+                pass.set_pipeline(&pipelines.ghost);
                 pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
-                let texture = match &mesh.texture {
-                    Some(texture) if frame.textures => texture,
-                    _ => &self.white_texture,
-                };
-                pass.set_bind_group(2, texture, &[]);
+                pass.set_bind_group(2, &self.white_texture, &[]);
                 pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
                 pass.set_vertex_buffer(1, mesh.uvs.slice(..));
-                match frame.style {
-                    RenderStyle::Solid if mesh.triangle_index_count > 0 => {
-                        pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
-                        pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
-                    }
-                    RenderStyle::Wireframe if mesh.edge_index_count > 0 => {
-                        pass.set_index_buffer(mesh.edges.slice(..), wgpu::IndexFormat::Uint32);
-                        pass.draw_indexed(0..mesh.edge_index_count, 0, 0..1);
-                    }
-                    RenderStyle::Solid | RenderStyle::Wireframe => {
-                        pass.set_pipeline(&pipelines.points);
-                        pass.draw(0..mesh.vertex_count, 0..1);
-                    }
-                    RenderStyle::Points => pass.draw(0..mesh.vertex_count, 0..1),
+                pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
+                stats.draw_calls += 1;
+                continue;
+            }
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
+            let texture = match &mesh.texture {
+                Some(texture) if frame.textures => texture,
+                _ => &self.white_texture,
+            };
+            pass.set_bind_group(2, texture, &[]);
+            pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
+            pass.set_vertex_buffer(1, mesh.uvs.slice(..));
+            match frame.style {
+                RenderStyle::Solid if mesh.triangle_index_count > 0 => {
+                    pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
                 }
+                RenderStyle::Wireframe if mesh.edge_index_count > 0 => {
+                    pass.set_index_buffer(mesh.edges.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..mesh.edge_index_count, 0, 0..1);
+                }
+                RenderStyle::Solid | RenderStyle::Wireframe => {
+                    pass.set_pipeline(&pipelines.points);
+                    pass.draw(0..mesh.vertex_count, 0..1);
+                }
+                RenderStyle::Points => pass.draw(0..mesh.vertex_count, 0..1),
+            }
+            stats.draw_calls += 1;
+        }
+    }
+
+    /// Draws the overlay lines: the grid depth-tested, the rest on top of everything.
+    fn draw_lines(&self, pass: &mut wgpu::RenderPass<'_>, lines: OverlayLines, stats: &mut FrameStats) {
+        let OverlayLines { grid_vertices, line_vertices } = lines;
+        if line_vertices > 0 {
+            pass.set_vertex_buffer(0, self.line_buffer.slice(..));
+            if grid_vertices > 0 {
+                pass.set_pipeline(&self.pipelines.lines_depth);
+                pass.draw(0..grid_vertices, 0..1);
                 stats.draw_calls += 1;
             }
-            if line_vertices > 0 {
-                pass.set_vertex_buffer(0, self.line_buffer.slice(..));
-                if grid_vertices > 0 {
-                    pass.set_pipeline(&pipelines.lines_depth);
-                    pass.draw(0..grid_vertices, 0..1);
-                    stats.draw_calls += 1;
-                }
-                if line_vertices as u32 > grid_vertices {
-                    pass.set_pipeline(&pipelines.lines_on_top);
-                    pass.draw(grid_vertices..line_vertices as u32, 0..1);
-                    stats.draw_calls += 1;
-                }
+            if line_vertices as u32 > grid_vertices {
+                pass.set_pipeline(&self.pipelines.lines_on_top);
+                pass.draw(grid_vertices..line_vertices as u32, 0..1);
+                stats.draw_calls += 1;
             }
         }
-        Ok((encoder.finish(), stats))
     }
 
     /// Reads back the current deformed vertices of a mesh (the last frame's compute output,
