@@ -555,6 +555,37 @@ pub enum MappingError {
     Mesh { mesh: usize, message: String },
 }
 
+/// Triangle primitives merged into one vertex list, as a keyrig-skin mesh takes them: positions,
+/// normals (computed from the triangles where a primitive has none), TEXCOORD_0 ((0, 0) for the
+/// vertices of primitives without one, non-finite ones zeroed) and indices renumbered.
+#[derive(Default)]
+struct MergedTriangles {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    indices: Vec<u32>,
+    uvs: Vec<Vec2>,
+    has_uvs: bool,
+}
+
+impl MergedTriangles {
+    fn push(&mut self, prim: &ModelPrimitive) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&prim.positions);
+        match &prim.texcoords {
+            Some(t) if t.len() == prim.positions.len() => {
+                self.has_uvs = true;
+                self.uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { Vec2::ZERO }));
+            }
+            _ => self.uvs.resize(self.positions.len(), Vec2::ZERO),
+        }
+        match &prim.normals {
+            Some(n) => self.normals.extend_from_slice(n),
+            None => self.normals.extend(keyrig_skin::mesh::vertex_normals(&prim.positions, &prim.indices)),
+        }
+        self.indices.extend(prim.indices.iter().map(|&i| base + i));
+    }
+}
+
 /// How a skin maps onto a keyrig skeleton: the skin's joints and every ancestor node of them
 /// up to the scene root, parents first, so that the keyrig skeleton's F(j) is exactly the
 /// file's global transform of joint j's node (docs/design.md §4; glTF 2.0 §3.7.3). When the nodes
@@ -729,24 +760,11 @@ impl ImportedModel {
     pub fn rigid_mesh(&self, mesh: usize) -> Result<keyrig_skin::SkinnedMesh, MappingError> {
         let bad = |message: String| MappingError::Mesh { mesh, message };
         let model_mesh = self.meshes.get(mesh).ok_or_else(|| bad("no such mesh".into()))?;
-        let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
-        let (mut uvs, mut has_uvs) = (Vec::new(), false);
+        let mut merged = MergedTriangles::default();
         for prim in model_mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
-            let base = positions.len() as u32;
-            positions.extend_from_slice(&prim.positions);
-            match &prim.texcoords {
-                Some(t) if t.len() == prim.positions.len() => {
-                    has_uvs = true;
-                    uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { Vec2::ZERO }));
-                }
-                _ => uvs.resize(positions.len(), Vec2::ZERO),
-            }
-            match &prim.normals {
-                Some(n) => normals.extend_from_slice(n),
-                None => normals.extend(keyrig_skin::mesh::vertex_normals(&prim.positions, &prim.indices)),
-            }
-            indices.extend(prim.indices.iter().map(|&i| base + i));
+            merged.push(prim);
         }
+        let MergedTriangles { positions, normals, indices, uvs, has_uvs } = merged;
         let n = positions.len();
         let skeleton = keyrig_skin::RestSkeleton::new(&[keyrig_skin::RestJoint::new(
             "root",
@@ -804,28 +822,13 @@ impl ImportedModel {
         }
         let renumber: Vec<u16> =
             s.joints.iter().map(|&n| keyrig_of_node.get(n).copied().unwrap_or(0)).collect();
-        let (mut positions, mut normals, mut indices, mut joints, mut weights) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        // TEXCOORD_0; (0, 0) for the vertices of primitives without one.
-        let (mut uvs, mut has_uvs) = (Vec::new(), false);
+        let (mut joints, mut weights) = (Vec::new(), Vec::new());
+        let mut merged = MergedTriangles::default();
         for prim in self.meshes[mesh].primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
             if prim.joint_sets.is_empty() {
                 return Err(bad("a primitive has no JOINTS_0/WEIGHTS_0"));
             }
-            let base = positions.len() as u32;
-            positions.extend_from_slice(&prim.positions);
-            match &prim.texcoords {
-                Some(t) if t.len() == prim.positions.len() => {
-                    has_uvs = true;
-                    uvs.extend(t.iter().map(|uv| if uv.is_finite() { *uv } else { Vec2::ZERO }));
-                }
-                _ => uvs.resize(positions.len(), Vec2::ZERO),
-            }
-            match &prim.normals {
-                Some(nm) => normals.extend_from_slice(nm),
-                None => normals.extend(keyrig_skin::mesh::vertex_normals(&prim.positions, &prim.indices)),
-            }
-            indices.extend(prim.indices.iter().map(|i| i + base));
+            merged.push(prim);
             for v in 0..prim.positions.len() {
                 let mut influences: Vec<(u16, f32)> = prim
                     .joint_sets
@@ -850,6 +853,7 @@ impl ImportedModel {
                 weights.push(wv);
             }
         }
+        let MergedTriangles { positions, normals, indices, uvs, has_uvs } = merged;
         let world = self.rest_world();
         let mut rest_joints = Vec::with_capacity(map.nodes.len());
         let mut ibms = Vec::with_capacity(map.nodes.len());
