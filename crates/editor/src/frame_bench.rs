@@ -7,7 +7,10 @@
 //! (scene evaluation, CPU skinning, the panels' layout) minus the viewport's GPU render call;
 //! *drawing* is the rest: keyrig-render's viewport, egui's tessellation and rendering, and
 //! presenting the window. The first frames (warm-up: building the evaluator and uploading
-//! meshes) are not counted.
+//! meshes) are not counted. *CPU per frame* is the process's CPU time (every thread: the
+//! editor's and the CPU rasterizer's) over the measured frames divided by their number: unlike
+//! the frame rate it hardly depends on what else the machine runs, so it compares changes made
+//! on a loaded machine.
 
 use std::time::{Duration, Instant};
 
@@ -23,6 +26,20 @@ pub struct FrameBenchmark {
     /// The previous frame's preparation time, paired with its interval when the next starts.
     pending_prepare: Option<Duration>,
     samples: Vec<(Duration, Duration)>,
+    /// The process's CPU time when the first measured frame started and when the last ended.
+    cpu: (Option<Duration>, Option<Duration>),
+}
+
+/// The CPU time of this process so far, all threads together (Linux: `/proc/self/stat`'s
+/// `utime` + `stime`, in the kernel's fixed 100 Hz user ticks); `None` elsewhere.
+fn process_cpu_time() -> Option<Duration> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which may hold spaces) start at field 3 (`state`).
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let mut fields = rest.split(' ');
+    let utime: u64 = fields.nth(11)?.parse().ok()?;
+    let stime: u64 = fields.next()?.parse().ok()?;
+    Some(Duration::from_millis((utime + stime) * 10))
 }
 
 /// Median, 90th percentile and worst of some durations, in milliseconds.
@@ -45,6 +62,7 @@ impl FrameBenchmark {
             last_start: None,
             pending_prepare: None,
             samples: Vec::new(),
+            cpu: (None, None),
         }
     }
 
@@ -56,7 +74,13 @@ impl FrameBenchmark {
                 self.warm_up -= 1;
             } else {
                 self.samples.push((prepare, now - last));
+                if self.is_done() {
+                    self.cpu.1 = process_cpu_time();
+                }
             }
+        }
+        if self.warm_up == 0 && self.cpu.0.is_none() {
+            self.cpu.0 = process_cpu_time();
         }
         self.last_start = Some(now);
         now
@@ -83,11 +107,18 @@ impl FrameBenchmark {
         let prepare = stats(self.samples.iter().map(|s| ms(s.0)).collect());
         let draw = stats(self.samples.iter().map(|s| ms(s.1.saturating_sub(s.0))).collect());
         let total: f64 = self.samples.iter().map(|s| s.1.as_secs_f64()).sum();
+        let cpu = match self.cpu {
+            (Some(start), Some(end)) if !self.samples.is_empty() => format!(
+                "\ncpu      {:.1} ms per frame (the process's CPU time, every thread)",
+                ms(end.saturating_sub(start)) / self.samples.len() as f64
+            ),
+            _ => String::new(),
+        };
         format!(
             "keyrig frame benchmark: {} frames, {viewport}\n\
              frame    median {:.2} ms, 90% {:.2} ms, worst {:.2} ms ({:.1} frames per second)\n\
              prepare  median {:.2} ms, 90% {:.2} ms, worst {:.2} ms (evaluation, CPU skinning, UI)\n\
-             draw     median {:.2} ms, 90% {:.2} ms, worst {:.2} ms (viewport, egui, present)",
+             draw     median {:.2} ms, 90% {:.2} ms, worst {:.2} ms (viewport, egui, present){cpu}",
             self.samples.len(),
             frame.0,
             frame.1,
@@ -121,5 +152,29 @@ mod tests {
         let report = bench.report("test");
         assert!(report.starts_with("keyrig frame benchmark: 3 frames, test"), "{report}");
         assert!(report.contains("prepare  median") && report.contains("frames per second"), "{report}");
+        if cfg!(target_os = "linux") {
+            assert!(report.contains("ms per frame (the process's CPU time"), "{report}");
+        }
+    }
+
+    #[test]
+    fn the_process_cpu_time_grows_with_work() {
+        if !cfg!(target_os = "linux") {
+            assert_eq!(process_cpu_time(), None);
+            return;
+        }
+        let before = process_cpu_time().expect("/proc/self/stat");
+        // Busy work until the kernel's tick counter moves (bounded, so a broken reader fails
+        // instead of hanging).
+        let started = Instant::now();
+        let mut x = 0u64;
+        let mut after = before;
+        while after == before && started.elapsed() < Duration::from_secs(20) {
+            for _ in 0..1_000_000 {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            }
+            after = process_cpu_time().expect("/proc/self/stat");
+        }
+assert!(after > before, "{before:?} → {after:?}");
     }
 }
