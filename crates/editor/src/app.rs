@@ -45,6 +45,9 @@ pub struct EditorApp {
     /// Whether [`crate::fonts::install`] ran on the context (at start-up, else on the first
     /// frame).
     pub(crate) fonts_installed: bool,
+    /// Whether the window is cleared with the panels' background colour (eframe, through
+    /// [`eframe::App::clear_color`]); otherwise each frame paints it ([`crate::theme`]).
+    pub(crate) window_clears_background: bool,
     /// The scene and its undo history.
     pub doc: Document,
     /// Selection, clock, record mode, overrides, clipboard.
@@ -95,6 +98,7 @@ impl EditorApp {
         let session = Session::at_start(scene.frame_range);
         EditorApp {
             fonts_installed: false,
+            window_clears_background: false,
             doc: Document::new(scene, path),
             session,
             view,

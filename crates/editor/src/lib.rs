@@ -34,6 +34,7 @@ pub mod panels;
 pub mod scene_frame;
 pub mod session;
 pub mod skinning;
+pub mod theme;
 pub mod twist;
 pub mod view;
 pub mod widgets;
@@ -104,7 +105,9 @@ pub fn run_editor(
         options,
         Box::new(|cc| {
             fonts::install(&cc.egui_ctx);
+            theme::install(&cc.egui_ctx);
             app.fonts_installed = true;
+            app.window_clears_background = true;
             // The GPU viewport needs eframe's wgpu device; without it the painter draws.
             if let Some(render_state) = &cc.wgpu_render_state {
                 app.attach_gpu(render_state);

@@ -44,7 +44,12 @@ impl EditorApp {
         let ctx = ctx.clone();
         if !self.fonts_installed {
             crate::fonts::install(&ctx);
+            crate::theme::install(&ctx);
             self.fonts_installed = true;
+        }
+        if !self.window_clears_background {
+            let background = crate::theme::panel_background(&ctx.global_style().visuals);
+            ui.painter().rect_filled(ctx.content_rect(), 0.0, background);
         }
         // Playback clock.
         let dt = ctx.input(|i| f64::from(i.stable_dt));
@@ -171,6 +176,11 @@ impl EditorApp {
 impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         EditorApp::ui(self, ui);
+    }
+
+    /// The panels' background: clearing to it is how the window gets it ([`crate::theme`]).
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        crate::theme::panel_background(visuals).to_normalized_gamma_f32()
     }
 
     fn on_exit(&mut self) {
