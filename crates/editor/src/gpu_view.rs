@@ -1,7 +1,8 @@
 //! The viewport drawn by keyrig-render on eframe's wgpu device: GPU skinning with the object's
 //! deformer, lights, grid, skeletons and the selection's motion path, rendered into an
-//! offscreen texture that the viewport panel shows as an egui image (docs/rendering.md,
-//! "Embedding in the editor"). The editor's scene evaluator (with pose overrides) provides the
+//! offscreen texture that the viewport panel copies into egui's render pass with a paint
+//! callback of its own ([`ViewportImage`]: one unblended triangle, far cheaper on a CPU
+//! rasterizer than egui's textured-mesh shader; docs/rendering.md, "Embedding in the editor"). The editor's scene evaluator (with pose overrides) provides the
 //! state of the frame; the [`SceneRig`] shares that evaluator and is rebuilt, with its vertex
 //! buffers uploaded, only when the evaluator is (the document or its loaded meshes changed).
 //! A frame uploads joint palettes, morph frames and uniforms only.
@@ -9,7 +10,6 @@
 //! Without a wgpu render state (the UI tests, or a failure here) the viewport panel falls back
 //! to drawing the CPU-skinned mesh with egui's painter.
 
-use egui::TextureId;
 use egui_wgpu::{wgpu, RenderState};
 use keyrig_render::{FrameStats, Renderer, SceneRig, ViewOptions, Viewport};
 
@@ -24,6 +24,133 @@ pub enum GpuViewError {
     NoScene,
     #[error("no viewport texture")]
     NoTarget,
+}
+
+/// The pipeline that copies the viewport's image into egui's render pass
+/// (`shaders/viewport_blit.wgsl`), for the window's format.
+struct Blit {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    /// Pixel for pixel (the image has the rect's size in pixels) and scaled up.
+    samplers: [wgpu::Sampler; 2],
+    /// The window's format decodes sRGB on write: sample the image's sRGB view (linear
+    /// values), otherwise its encoded view (the stored values), so the copy is exact either way.
+    srgb_target: bool,
+}
+
+impl Blit {
+    fn new(device: &wgpu::Device, target: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::include_wgsl!("shaders/viewport_blit.wgsl"));
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("viewport blit"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport blit"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("viewport blit"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_blit"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_blit"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        let sampler = |filter: wgpu::FilterMode| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("viewport blit"),
+                mag_filter: filter,
+                min_filter: filter,
+                ..wgpu::SamplerDescriptor::default()
+            })
+        };
+        Blit {
+            pipeline,
+            layout,
+            samplers: [sampler(wgpu::FilterMode::Nearest), sampler(wgpu::FilterMode::Linear)],
+            srgb_target: target.is_srgb(),
+        }
+    }
+
+    /// The bind groups that read `viewport`'s image: pixel for pixel, scaled.
+    fn bind_groups(&self, device: &wgpu::Device, viewport: &Viewport) -> [wgpu::BindGroup; 2] {
+        let view = if self.srgb_target { viewport.color_view() } else { viewport.encoded_color_view() };
+        self.samplers.clone().map(|sampler| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("viewport blit"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view) },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
+                ],
+            })
+        })
+    }
+}
+
+/// A rendered viewport image, drawn into egui's render pass by a paint callback over the
+/// viewport's rect ([`ViewportImage::paint_callback`]).
+#[derive(Clone)]
+pub struct ViewportImage {
+    pipeline: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+}
+
+impl ViewportImage {
+    /// The egui shape that copies the image into `rect`.
+    #[must_use]
+    pub fn paint_callback(self, rect: egui::Rect) -> egui::PaintCallback {
+        egui_wgpu::Callback::new_paint_callback(rect, self)
+    }
+}
+
+impl egui_wgpu::CallbackTrait for ViewportImage {
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        _resources: &egui_wgpu::CallbackResources,
+    ) {
+        render_pass.set_pipeline(&self.pipeline);
+        render_pass.set_bind_group(0, &self.bind_group, &[]);
+        render_pass.draw(0..3, 0..1);
+    }
 }
 
 /// The colour format of the offscreen viewport (sRGB: the shaders write linear colour).
@@ -55,7 +182,9 @@ pub struct GpuFrame<'a> {
 pub struct GpuView {
     render_state: RenderState,
     renderer: Renderer,
-    target: Option<(Viewport, TextureId)>,
+    /// The offscreen image and the blit's bind groups reading it.
+    target: Option<(Viewport, [wgpu::BindGroup; 2])>,
+    blit: Blit,
     rig: Option<((u64, u64, u64), SceneRig)>,
     /// The ghost meshes on the GPU: (object, count) for the current rig.
     ghost_meshes: Option<(usize, usize)>,
@@ -111,6 +240,7 @@ impl GpuView {
             .unwrap_or_else(|_| Renderer::new(device, queue, FORMAT));
         GpuView {
             render_state: render_state.clone(),
+            blit: Blit::new(device, render_state.target_format),
             renderer,
             target: None,
             rig: None,
@@ -150,35 +280,18 @@ impl GpuView {
         format!("{} ({:?})", info.name, info.backend)
     }
 
-    fn ensure_target(&mut self, width: u32, height: u32) -> Result<TextureId, GpuViewError> {
+    fn ensure_target(&mut self, width: u32, height: u32) -> Result<(), GpuViewError> {
         let samples = self.renderer.sample_count();
-        if let Some((viewport, id)) = &self.target {
+        if let Some((viewport, _)) = &self.target {
             if viewport.size() == (width, height) && viewport.sample_count() == samples {
-                return Ok(*id);
+                return Ok(());
             }
         }
         let device = &self.render_state.device;
         let viewport = Viewport::with_sample_count(device, width, height, FORMAT, samples)?;
-        let mut egui_renderer = self.render_state.renderer.write();
-        let id = match &self.target {
-            Some((_, id)) => {
-                egui_renderer.update_egui_texture_from_wgpu_texture(
-                    device,
-                    viewport.encoded_color_view(),
-                    wgpu::FilterMode::Linear,
-                    *id,
-                );
-                *id
-            }
-            None => egui_renderer.register_native_texture(
-                device,
-                viewport.encoded_color_view(),
-                wgpu::FilterMode::Linear,
-            ),
-        };
-        drop(egui_renderer);
-        self.target = Some((viewport, id));
-        Ok(id)
+        let bind_groups = self.blit.bind_groups(device, &viewport);
+        self.target = Some((viewport, bind_groups));
+        Ok(())
     }
 
     /// Whether the next [`GpuView::render`] for `rig_key` rebuilds the scene rig (and so reads
@@ -188,16 +301,29 @@ impl GpuView {
         self.rig.as_ref().is_none_or(|(key, _)| *key != rig_key)
     }
 
-    /// Renders the frame into a texture of `size_px` pixels and returns its egui texture id.
-    pub fn render(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, GpuViewError> {
+    /// Renders the frame into a texture of `size_px` pixels and returns the image to paint;
+    /// `one_to_one` when it is shown pixel for pixel (sampled without filtering), otherwise it
+    /// is scaled up with bilinear filtering.
+    pub fn render(
+        &mut self,
+        frame: GpuFrame<'_>,
+        size_px: [u32; 2],
+        one_to_one: bool,
+    ) -> Result<ViewportImage, GpuViewError> {
         let started = std::time::Instant::now();
-        let result = self.render_inner(frame, size_px);
+        let result = self.render_inner(frame, size_px).and_then(|()| {
+            let Some((_, bind_groups)) = &self.target else { return Err(GpuViewError::NoTarget) };
+            Ok(ViewportImage {
+                pipeline: self.blit.pipeline.clone(),
+                bind_group: bind_groups[usize::from(!one_to_one)].clone(),
+            })
+        });
         self.last_render_time = started.elapsed();
         result
     }
 
-    fn render_inner(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<TextureId, GpuViewError> {
-        let texture = self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
+    fn render_inner(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<(), GpuViewError> {
+        self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
         if self.needs_rig(frame.rig_key) {
             let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes)
                 .with_materials(&frame.materials);
@@ -230,7 +356,7 @@ impl GpuView {
         if let Some(log) = &mut self.frame_log {
             log.tick(size_px, self.renderer.sample_count());
         }
-        Ok(texture)
+        Ok(())
     }
 }
 

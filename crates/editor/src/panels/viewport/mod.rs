@@ -341,10 +341,10 @@ impl Viewport {
         if let Err(e) = gpu.set_antialiasing(ctx.view.antialiasing) {
             errors.push(format!("GPU viewport: {e}"));
         }
-        let drawn = match gpu.render(frame, size) {
-            Ok(texture) => {
-                let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
-                ui.painter().with_clip_rect(rect).image(texture, rect, uv, Color32::WHITE);
+        let one_to_one = ctx.view.resolution_scale >= 1.0;
+        let drawn = match gpu.render(frame, size, one_to_one) {
+            Ok(image) => {
+                ui.painter().with_clip_rect(rect).add(image.paint_callback(rect));
                 true
             }
             Err(e) => {
