@@ -68,6 +68,9 @@ pub struct FrameCtx<'a> {
     pub pending: Option<&'a PendingAction>,
     /// The recovery file, while its autosaved scene is offered.
     pub recovery: Option<&'a Recovery>,
+    /// Whether opaque backgrounds can be filled by the GPU viewport's paint callback
+    /// ([`crate::widgets::flat_fill`]): the window is drawn with wgpu.
+    pub gpu_fills: bool,
 }
 
 impl FrameCtx<'_> {

@@ -175,6 +175,6 @@ mod tests {
             }
             after = process_cpu_time().expect("/proc/self/stat");
         }
-assert!(after > before, "{before:?} → {after:?}");
+        assert!(after > before, "{before:?} → {after:?}");
     }
 }

@@ -124,6 +124,79 @@ impl Blit {
     }
 }
 
+/// The pipeline of [`FlatFill`]: a triangle over the callback's rect whose fragments (all
+/// ones) are multiplied by the render pass's blend constant (source factor: the constant,
+/// destination: zero), so the fragment shader reads nothing. Kept in egui-wgpu's callback resources.
+pub struct FlatFillPipeline {
+    pipeline: wgpu::RenderPipeline,
+    srgb_target: bool,
+}
+
+impl FlatFillPipeline {
+    fn new(device: &wgpu::Device, target: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::include_wgsl!("shaders/viewport_blit.wgsl"));
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("flat fill"),
+            bind_group_layouts: &[],
+            immediate_size: 0,
+        });
+        let constant = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Constant,
+            dst_factor: wgpu::BlendFactor::Zero,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("flat fill"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_blit"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_flat_fill"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target,
+                    blend: Some(wgpu::BlendState { color: constant, alpha: constant }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        FlatFillPipeline { pipeline, srgb_target: target.is_srgb() }
+    }
+}
+
+/// An opaque colour filled over a paint callback's rect ([`crate::widgets::flat_fill`]).
+pub struct FlatFill(pub egui::Color32);
+
+impl egui_wgpu::CallbackTrait for FlatFill {
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        resources: &egui_wgpu::CallbackResources,
+    ) {
+        let Some(fill) = resources.get::<FlatFillPipeline>() else { return };
+        // The constant is written as is to a plain target, encoded to sRGB by an sRGB one.
+        let [r, g, b, a] = if fill.srgb_target {
+            egui::Rgba::from(self.0).to_array()
+        } else {
+            self.0.to_normalized_gamma_f32()
+        };
+        render_pass.set_pipeline(&fill.pipeline);
+        render_pass.set_blend_constant(wgpu::Color { r: r.into(), g: g.into(), b: b.into(), a: a.into() });
+        render_pass.draw(0..3, 0..1);
+    }
+}
+
 /// A rendered viewport image, drawn into egui's render pass by a paint callback over the
 /// viewport's rect ([`ViewportImage::paint_callback`]).
 #[derive(Clone)]
@@ -234,6 +307,8 @@ impl GpuView {
     /// the whole rest of the viewport (docs/benchmarks.md, "Editor").
     #[must_use]
     pub fn new(render_state: &RenderState) -> Self {
+        let fills = FlatFillPipeline::new(&render_state.device, render_state.target_format);
+        render_state.renderer.write().callback_resources.insert(fills);
         let samples = if is_cpu(render_state) { 1 } else { keyrig_render::SAMPLE_COUNT };
         let (device, queue) = (&render_state.device, &render_state.queue);
         let renderer = Renderer::with_sample_count(device, queue, FORMAT, samples)

@@ -144,6 +144,7 @@ impl EditorApp {
             recent: &self.recent.paths,
             pending: self.pending.as_ref(),
             recovery: self.recovery_offer.as_ref().map(|_| &self.recovery),
+            gpu_fills: self.panels.viewport.gpu().is_some(),
         };
         let actions = &mut self.actions;
         let panels = &mut self.panels;

@@ -914,7 +914,7 @@ impl CurveEditor {
     fn paint(&mut self, ui: &Ui, ctx: &FrameCtx<'_>, ids: &[ChannelId], rect: egui::Rect, clip: egui::Rect) {
         let painter = ui.painter().with_clip_rect(clip);
         let visuals = ui.visuals().clone();
-        painter.rect_filled(clip, 2.0, visuals.extreme_bg_color);
+        crate::widgets::flat_fill::fill(&painter, clip, visuals.extreme_bg_color, ctx.gpu_fills);
         if ids.is_empty() {
             return;
         }

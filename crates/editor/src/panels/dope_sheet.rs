@@ -529,7 +529,7 @@ impl DopeSheet {
 
         let painter = ui.painter_at(visible);
         let visuals = ui.visuals().clone();
-        painter.rect_filled(visible, 0.0, visuals.extreme_bg_color);
+        crate::widgets::flat_fill::fill(&painter, visible, visuals.extreme_bg_color, ctx.gpu_fills);
         let keys_rect = Rect::from_min_max(
             Pos2::new(geo.keys.0 - PAD, visible.top()),
             Pos2::new(geo.keys.1 + PAD, visible.bottom()),

@@ -1,4 +1,6 @@
-// Copies the 3D viewport's finished image into egui's render pass, inside the viewport's rect
+// Flat fills and the viewport's image, drawn into egui's render pass by paint callbacks.
+//
+// fs_blit copies the 3D viewport's finished image into egui's render pass, inside the viewport's rect
 // (egui sets the viewport transform to that rect before a paint callback). One triangle covers
 // the rect; no blending, no colour conversion beyond the texture view's own: a CPU rasterizer
 // shades this for a fraction of what egui's own textured-mesh shader costs (docs/rendering.md).
@@ -25,4 +27,11 @@ fn vs_blit(@builtin(vertex_index) i: u32) -> VsOut {
 @fragment
 fn fs_blit(in: VsOut) -> @location(0) vec4<f32> {
     return vec4<f32>(textureSample(image, image_sampler, in.uv).rgb, 1.0);
+}
+
+// An opaque fill: the pipeline's blend state multiplies this output by the blend constant
+// (source factor: the constant, destination factor: zero), so the pixel becomes the constant.
+@fragment
+fn fs_flat_fill() -> @location(0) vec4<f32> {
+    return vec4<f32>(1.0);
 }

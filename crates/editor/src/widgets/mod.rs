@@ -4,6 +4,7 @@
 
 pub mod command_button;
 pub mod field;
+pub mod flat_fill;
 pub mod key_diamond;
 pub mod measure;
 pub mod tcb_slider;
