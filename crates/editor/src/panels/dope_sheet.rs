@@ -25,6 +25,7 @@ use crate::actions::{Action, Actions, Edit, SessionChange, Ticket};
 use crate::channels::{self, ChannelId};
 use crate::context::FrameCtx;
 use crate::session::{KeyRef, Selected, Selection};
+use crate::widgets::flat_fill;
 use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
 use crate::widgets::publish_painted;
 use crate::widgets::time_axis::TimeAxis;
@@ -542,12 +543,22 @@ impl DopeSheet {
         ));
         let mut truncated: Option<usize> = None;
         let hover = body.hover_pos();
+        // Row shades, composited over the background here so they are opaque fills (cheap on a
+        // CPU rasterizer, widgets::flat_fill); the out-of-range shade goes back over them.
+        let selected_row =
+            flat_fill::over(visuals.extreme_bg_color, visuals.selection.bg_fill.gamma_multiply(0.35));
+        let odd_row = flat_fill::over(visuals.extreme_bg_color, visuals.faint_bg_color.gamma_multiply(0.5));
+        let outside = visuals.faint_bg_color.gamma_multiply(0.5);
         for (r, row) in rows.iter().enumerate().take(last).skip(first) {
             let rect = row_rect(r);
-            if ctx.session.selection.contains(row.item) {
-                painter.rect_filled(rect, 0.0, visuals.selection.bg_fill.gamma_multiply(0.35));
-            } else if r % 2 == 1 {
-                painter.rect_filled(rect, 0.0, visuals.faint_bg_color.gamma_multiply(0.5));
+            let shade = if ctx.session.selection.contains(row.item) {
+                Some(selected_row)
+            } else {
+                (r % 2 == 1).then_some(odd_row)
+            };
+            if let Some(colour) = shade {
+                flat_fill::fill(&painter, rect, colour, ctx.gpu_fills);
+                shade_outside_range(&painter, scene, geo, rect.intersect(keys_rect), outside);
             }
             // Name, with the expander of a group.
             let indent = geo.names.0 + 4.0 + INDENT * row.depth as f32;

@@ -21,6 +21,15 @@ pub fn fill(painter: &Painter, rect: Rect, colour: Color32, gpu: bool) {
     }
 }
 
+/// `src` painted over the opaque `dst` as egui blends (premultiplied alpha, on the stored
+/// gamma-encoded values): the opaque colour a translucent shade gives over a known background.
+#[must_use]
+pub fn over(dst: Color32, src: Color32) -> Color32 {
+    let keep = 255 - u16::from(src.a());
+    let channel = |s: u8, d: u8| (u16::from(s) + (u16::from(d) * keep + 127) / 255).min(255) as u8;
+    Color32::from_rgb(channel(src.r(), dst.r()), channel(src.g(), dst.g()), channel(src.b(), dst.b()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -33,6 +42,19 @@ mod tests {
             fill(ui.painter(), rect, colour, gpu);
         });
         output.shapes.into_iter().map(|clipped| clipped.shape).collect()
+    }
+
+    #[test]
+    fn over_composites_premultiplied_colours() {
+        let bg = Color32::from_gray(10);
+        assert_eq!(over(bg, Color32::TRANSPARENT), bg);
+        assert_eq!(over(bg, Color32::from_rgb(200, 100, 50)), Color32::from_rgb(200, 100, 50));
+        // Half-transparent white (premultiplied 128, alpha 128) over grey 10: 128 + 10 · 127/255.
+        let half_white = Color32::from_white_alpha(128);
+        assert_eq!(over(bg, half_white), Color32::from_gray(133));
+        // egui's own gamma_multiply keeps colours premultiplied.
+        let shade = Color32::from_gray(60).gamma_multiply(0.5);
+        assert_eq!(over(bg, shade), Color32::from_gray(30 + 5));
     }
 
     #[test]
