@@ -7,7 +7,7 @@ mod common;
 use common::{drag, harness, press};
 
 use egui::{Event, Key, Modifiers, MouseWheelUnit, Pos2};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use keyrig_editor::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::eval::euler_degrees;
@@ -261,4 +261,80 @@ fn a_and_alt_a_over_the_curves_select_all_and_none() {
     h.event(Event::PointerMoved(plot.center()));
     press(&mut h, Modifiers::ALT, Key::A);
     assert!(h.state().session.selection.keys.is_empty());
+}
+
+/// What an inspector field shows, read through AccessKit as a screen reader would.
+fn field(h: &Harness<'_, EditorApp>, label: &str) -> f64 {
+    h.get_by_role_and_label(egui::accesskit::Role::SpinButton, label)
+        .accesskit_node()
+        .numeric_value()
+        .unwrap_or_else(|| panic!("{label} has a value"))
+}
+
+/// The demo's Cube spins once about Y (keys at 0°, 120°, 240°, 360°): the inspector and the
+/// curves read Y climbing 0 → 360 with X and Z at 0, not X and Z flipping to 180 while Y bounces
+/// between ±90 (issue 30). The stored keys and their interpolation stay as they were.
+#[test]
+fn a_spin_about_y_reads_y_0_to_360_in_the_inspector_and_the_curves() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let keys_before = h.state().doc.scene().objects[1].rotation.clone();
+    h.get_by_label("Cube").click();
+    h.run();
+    for (frame, y) in [(0, 0.0), (20, 80.0), (45, 180.0), (60, 240.0), (75, 300.0), (89, 356.0)] {
+        common::go_to_frame(&mut h, frame);
+        let (x, got, z) = (field(&h, "Rotation (°) X"), field(&h, "Rotation (°) Y"), field(&h, "Rotation (°) Z"));
+        assert!((got - y).abs() < 0.05, "frame {frame}: Y reads {got}, not {y}");
+        assert!(x.abs() < 0.05 && z.abs() < 0.05, "frame {frame}: X {x}, Z {z} stay 0");
+    }
+    let curves = h.state().sample_curves(ChannelId::ObjectRotation(1), 0.0, 90.0, 181);
+    assert_eq!(curves.len(), 3, "X, Y, Z");
+    for (i, &(frame, y)) in curves[1].iter().enumerate() {
+        assert!((y - frame as f32 * 4.0).abs() < 0.05, "Y at frame {frame} reads {y}");
+        assert!(curves[0][i].1.abs() < 0.05 && curves[2][i].1.abs() < 0.05, "X and Z at frame {frame}");
+    }
+    assert_eq!(h.state().doc.scene().objects[1].rotation, keys_before, "reading changes no key");
+}
+
+/// The rotation mode chosen in the inspector (one undo step) changes what the fields and the
+/// curves read: a ZYX order reads the same spin the same way, a quaternion shows W X Y Z.
+#[test]
+fn the_rotation_mode_changes_what_the_inspector_and_the_curves_read() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    common::go_to_frame(&mut h, 60);
+    let undo = h.state().doc.undo_len();
+    h.get_by_label("Rotation mode").click();
+    h.run();
+    h.get_by_label("Quaternion (WXYZ)").click();
+    h.run();
+    assert_eq!(h.state().doc.scene().objects[1].rotation_mode, keyrig_core::RotationMode::Quaternion);
+    assert_eq!(h.state().doc.undo_len(), undo + 1);
+    // 240° about Y: w = cos 120°, y = sin 120°.
+    let (w, y) = (field(&h, "Rotation (°) W"), field(&h, "Rotation (°) Y"));
+    let half = 120f64.to_radians();
+    assert!((w.abs() - half.cos().abs()).abs() < 1e-3 && (y.abs() - half.sin()).abs() < 1e-3, "w {w} y {y}");
+    let curves = h.state().sample_curves(ChannelId::ObjectRotation(1), 0.0, 90.0, 91);
+    assert_eq!(curves.len(), 4, "W, X, Y, Z");
+    // Continuous: the quaternion stays on one hemisphere, so w runs 1 → −1 smoothly.
+    for pair in curves[0].windows(2) {
+        assert!((pair[1].1 - pair[0].1).abs() < 0.1, "w jumps between frames {} and {}", pair[0].0, pair[1].0);
+    }
+    h.get_by_label("Rotation mode").click();
+    h.run();
+    h.get_by_label("ZYX Euler").click();
+    h.run();
+    let y = field(&h, "Rotation (°) Y");
+    assert!((y - 240.0).abs() < 0.05, "ZYX reads the spin as Y 240, got {y}");
+    // Typing X = 30 in ZYX order: R = Rx(30)·Ry(240) (X turns last), checked on the matrices.
+    common::set_value(&mut h, egui::accesskit::Role::SpinButton, "Rotation (°) X", 30.0);
+    let Some(ChannelValue::Rotation(q)) = h.state().value_now(ChannelId::ObjectRotation(1)) else {
+        panic!("a rotation")
+    };
+    let expected = glam::Mat3::from_rotation_x(30f32.to_radians()) * glam::Mat3::from_rotation_y(240f32.to_radians());
+    let got = glam::Mat3::from_quat(q);
+    let diff = (expected - got).to_cols_array().iter().fold(0.0f32, |m, d| m.max(d.abs()));
+    assert!(diff < 1e-4, "{expected:?} vs {got:?}");
 }
