@@ -1039,6 +1039,8 @@ impl CurveEditor {
                 let mute = ui
                     .selectable_label(muted, egui::RichText::new("M").small())
                     .on_hover_text(format!("Mute {label}: it plays its static value, its keys are kept"));
+                let name = format!("mute {label}");
+                ui.ctx().accesskit_node_builder(mute.id, |node| node.set_label(name));
                 if mute.clicked() {
                     let what = if muted { "unmute" } else { "mute" };
                     actions.push(Action::CloseGroup);
@@ -1049,6 +1051,8 @@ impl CurveEditor {
                 let lock = ui
                     .selectable_label(locked, egui::RichText::new("🔒").small())
                     .on_hover_text(format!("Lock {label}: its keys and value cannot be changed"));
+                let name = format!("lock {label}");
+                ui.ctx().accesskit_node_builder(lock.id, |node| node.set_label(name));
                 if lock.clicked() {
                     let what = if locked { "unlock" } else { "lock" };
                     actions.push(Action::CloseGroup);
