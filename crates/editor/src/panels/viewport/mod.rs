@@ -206,7 +206,8 @@ impl Viewport {
     /// The pivot setting in the viewport's top-right corner, as Blender's header: where the
     /// gizmo turns several selected items about ([`Pivot`]).
     fn pivot_ui(&mut self, ui: &mut Ui, rect: Rect) {
-        let area = Rect::from_min_size(egui::pos2(rect.right() - 178.0, rect.top() + 6.0), egui::vec2(172.0, 22.0));
+        // Below the record marker, which takes the corner itself.
+        let area = Rect::from_min_size(egui::pos2(rect.right() - 186.0, rect.top() + 30.0), egui::vec2(180.0, 22.0));
         let pivot = &mut self.gizmo.pivot;
         ui.put(area, |ui: &mut Ui| {
             egui::ComboBox::from_label("Pivot")
