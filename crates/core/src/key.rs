@@ -403,7 +403,6 @@ pub struct Animated<T> {
     pub locked: bool,
 }
 
-
 impl<T> Animated<T> {
     /// A constant, not animated.
     #[must_use]

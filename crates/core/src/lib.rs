@@ -14,8 +14,8 @@ pub mod track;
 pub mod validate;
 
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
-pub use rotation_mode::{EulerOrder, RotationMode};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
+pub use rotation_mode::{EulerOrder, RotationMode};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, IkConstraint, Joint, Light, LightKind, MeshSource,
     Object, Problem, ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,

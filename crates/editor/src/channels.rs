@@ -151,7 +151,6 @@ pub fn set_locked(scene: &mut Scene, id: ChannelId, locked: bool) -> bool {
     true
 }
 
-
 /// Key times (seconds) of a channel, in storage order.
 #[must_use]
 pub fn key_times(scene: &Scene, id: ChannelId) -> Vec<f64> {

@@ -246,9 +246,8 @@ impl SkeletonMirror {
         let extent = if n > 0 { (max - min).length() } else { 0.0 };
         let tolerance = (PAIR_TOLERANCE * extent).max(1e-6);
         let first = initial_plane(&positions, &sides);
-        let pairing = |plane: &SymmetryPlane| {
-            pair_joints(plane, &positions, &sides, &mirror.names, &depth, tolerance)
-        };
+        let pairing =
+            |plane: &SymmetryPlane| pair_joints(plane, &positions, &sides, &mirror.names, &depth, tolerance);
         let counterpart = pairing(&first);
         let plane = fit_plane(&positions, &sides, &counterpart, first);
         mirror.counterpart = pairing(&plane);
@@ -325,7 +324,8 @@ impl SkeletonMirror {
         };
         let source_frames = self.frames(&local(source), source.root_translation);
         // For each target joint, the source joint whose rotation / translation / scale it takes.
-        let (mut rotation_from, mut translation_from, mut scale_from) = (vec![None; n], vec![None; n], vec![None; n]);
+        let (mut rotation_from, mut translation_from, mut scale_from) =
+            (vec![None; n], vec![None; n], vec![None; n]);
         let mut root = current.root_translation;
         for &id in channels {
             match id {
@@ -375,7 +375,10 @@ impl SkeletonMirror {
         }
         for k in 0..n {
             if rotation_from[k].is_some() {
-                out.push((ChannelId::JointRotation { object, joint: k }, ChannelValue::Rotation(new[k].rotation)));
+                out.push((
+                    ChannelId::JointRotation { object, joint: k },
+                    ChannelValue::Rotation(new[k].rotation),
+                ));
             }
             if translation_from[k].is_some() {
                 out.push((
@@ -384,7 +387,10 @@ impl SkeletonMirror {
                 ));
             }
             if let Some(j) = scale_from[k] {
-                out.push((ChannelId::JointScale { object, joint: k }, ChannelValue::Vec3(source.local_scales[j])));
+                out.push((
+                    ChannelId::JointScale { object, joint: k },
+                    ChannelValue::Vec3(source.local_scales[j]),
+                ));
             }
         }
         out
@@ -394,7 +400,8 @@ impl SkeletonMirror {
     #[must_use]
     pub fn describe(&self) -> String {
         let name = |j: usize| self.names[j].as_str();
-        let pairs: Vec<String> = self.pairs().into_iter().map(|(a, b)| format!("{} ↔ {}", name(a), name(b))).collect();
+        let pairs: Vec<String> =
+            self.pairs().into_iter().map(|(a, b)| format!("{} ↔ {}", name(a), name(b))).collect();
         let mut text = format!(
             "{} pair(s): {}; {} on the plane",
             pairs.len(),
@@ -547,7 +554,9 @@ pub fn mirror_clipboard(
     }
     for object in objects {
         let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else { continue };
-        let Some(current) = current_pose(object).filter(|p| p.len() == skeleton.joints.len()) else { continue };
+        let Some(current) = current_pose(object).filter(|p| p.len() == skeleton.joints.len()) else {
+            continue;
+        };
         let mut source = current.clone();
         let mut channels = Vec::new();
         for &(id, value) in clipboard {
@@ -621,14 +630,17 @@ mod tests {
         let q = Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1);
         for normal in [Vec3::X, Vec3::new(0.3, -0.5, 0.8).normalize()] {
             let plane = SymmetryPlane { normal, offset: 0.4 };
-            let m = Mat3::IDENTITY - 2.0 * Mat3::from_cols(normal * normal.x, normal * normal.y, normal * normal.z);
+            let m = Mat3::IDENTITY
+                - 2.0 * Mat3::from_cols(normal * normal.x, normal * normal.y, normal * normal.z);
             let expected = m * Mat3::from_quat(q) * m;
             let got = Mat3::from_quat(plane.reflect_rotation(q));
             let diff = (expected - got).to_cols_array().iter().fold(0.0f32, |a, d| a.max(d.abs()));
             assert!(diff < 1e-5, "{normal}: {expected:?} vs {got:?}");
             let p = Vec3::new(1.0, 2.0, -3.0);
             let r = plane.reflect_point(p);
-            assert!((plane.distance(r) + plane.distance(p)).abs() < 1e-5 && (r - p).cross(normal).length() < 1e-5);
+            assert!(
+                (plane.distance(r) + plane.distance(p)).abs() < 1e-5 && (r - p).cross(normal).length() < 1e-5
+            );
         }
     }
 
@@ -645,9 +657,19 @@ mod tests {
         let joint = |name: &str, parent, at, q| keyrig_core::Joint::new(name, parent, at, q);
         keyrig_core::Skeleton::new(vec![
             joint("spine", None, Vec3::new(0.0, 1.0, 0.0), Quat::from_rotation_y(0.3)),
-            joint("arm.L", Some(0), Quat::from_rotation_y(-0.3) * Vec3::new(0.2, 0.5, 0.0), Quat::from_rotation_y(-0.3) * left_rotation),
+            joint(
+                "arm.L",
+                Some(0),
+                Quat::from_rotation_y(-0.3) * Vec3::new(0.2, 0.5, 0.0),
+                Quat::from_rotation_y(-0.3) * left_rotation,
+            ),
             joint("hand.L", Some(1), hand_left, Quat::from_rotation_x(0.7)),
-            joint("arm.R", Some(0), Quat::from_rotation_y(-0.3) * Vec3::new(-0.2, 0.5, 0.0), Quat::from_rotation_y(-0.3) * right_rotation),
+            joint(
+                "arm.R",
+                Some(0),
+                Quat::from_rotation_y(-0.3) * Vec3::new(-0.2, 0.5, 0.0),
+                Quat::from_rotation_y(-0.3) * right_rotation,
+            ),
             joint("hand.R", Some(3), hand_right, Quat::from_rotation_z(-1.3)),
         ])
     }
@@ -657,9 +679,11 @@ mod tests {
     fn positions(skeleton: &keyrig_core::Skeleton, pose: &keyrig_skin::Pose) -> Vec<Vec3> {
         let mut frames: Vec<Affine3A> = Vec::new();
         for (j, joint) in skeleton.joints.iter().enumerate() {
-            let parent = joint.parent.map_or(Affine3A::from_translation(pose.root_translation), |p| frames[p]);
+            let parent =
+                joint.parent.map_or(Affine3A::from_translation(pose.root_translation), |p| frames[p]);
             let rest = Affine3A::from_rotation_translation(joint.rest_rotation, joint.rest_translation);
-            let local = Affine3A::from_rotation_translation(pose.local_rotations[j], pose.local_translations[j]);
+            let local =
+                Affine3A::from_rotation_translation(pose.local_rotations[j], pose.local_translations[j]);
             frames.push(parent * rest * local);
         }
         frames.iter().map(|f| f.translation.into()).collect()
@@ -685,7 +709,9 @@ mod tests {
         let mut mirrored = current.clone();
         for (id, value) in mirror.mirror_channels(0, &source, &current, &channels) {
             match (id, value) {
-                (ChannelId::JointRotation { joint, .. }, ChannelValue::Rotation(q)) => mirrored.local_rotations[joint] = q,
+                (ChannelId::JointRotation { joint, .. }, ChannelValue::Rotation(q)) => {
+                    mirrored.local_rotations[joint] = q
+                }
                 (ChannelId::RootTranslation(_), ChannelValue::Vec3(v)) => mirrored.root_translation = v,
                 other => panic!("unexpected {other:?}"),
             }
@@ -715,7 +741,12 @@ mod tests {
     #[test]
     fn an_unnamed_joint_off_the_plane_without_a_partner_is_reported() {
         let mut skeleton = lopsided_rig();
-        skeleton.joints.push(keyrig_core::Joint::new("prop", Some(0), Vec3::new(0.6, 0.0, 0.0), Quat::IDENTITY));
+        skeleton.joints.push(keyrig_core::Joint::new(
+            "prop",
+            Some(0),
+            Vec3::new(0.6, 0.0, 0.0),
+            Quat::IDENTITY,
+        ));
         let mirror = SkeletonMirror::new(&skeleton);
         assert_eq!(mirror.unpaired(), vec![5]);
         assert_eq!(mirror.pairs(), vec![(1, 3), (2, 4)]);

@@ -575,7 +575,10 @@ fn several_joints_turn_together_and_the_curve_legend_hides_in_a_real_x_window() 
     let viewport = h.state().viewport_rect().expect("laid out");
     assert!(changed_pixels(&plain, &turned, viewport) > 1000, "the arm turned in the real window");
     let after = [joint_on_screen(h.state(), 2), joint_on_screen(h.state(), 3)];
-    assert!((after[0] - before[0]).length() > 20.0 && (after[1] - before[1]).length() > 20.0, "the model's forearm and wrist swung");
+    assert!(
+        (after[0] - before[0]).length() > 20.0 && (after[1] - before[1]).length() > 20.0,
+        "the model's forearm and wrist swung"
+    );
 
     // The curve editor: the elbow alone (outliner click) shows its rotation's curves.
     let elbow_label = h.get_by_label("elbow").rect().center();
@@ -612,7 +615,10 @@ fn several_joints_turn_together_and_the_curve_legend_hides_in_a_real_x_window() 
     ) else {
         panic!("rotation keys")
     };
-    assert!(saved.angle_between(model).to_degrees() < 5.0, "the real drag turned the elbow as the model's did");
+    assert!(
+        saved.angle_between(model).to_degrees() < 5.0,
+        "the real drag turned the elbow as the model's did"
+    );
 }
 
 /// Issue 30 in the real window: CesiumMan's walk pose copied at frame 15 (outliner click,
@@ -650,7 +656,10 @@ fn a_mirrored_pose_paste_on_cesium_man_in_a_real_x_window() {
     session.wait_idle();
     let mirrored = session.screenshot("guide_mirrored_paste");
     let viewport = h.state().viewport_rect().expect("laid out");
-    assert!(changed_pixels(&plain, &mirrored, viewport) > 500, "the character changed pose in the real window");
+    assert!(
+        changed_pixels(&plain, &mirrored, viewport) > 500,
+        "the character changed pose in the real window"
+    );
 
     let scene = save_as(&session, "e2e-mirror");
     // The saved keys at frame 45, evaluated, against the reflection (x → −x about the plane
@@ -666,7 +675,9 @@ fn a_mirrored_pose_paste_on_cesium_man_in_a_real_x_window() {
     let normal = (l - r).normalize();
     let offset = normal.dot((l + r) * 0.5);
     let reflect = |p: glam::Vec3| p - 2.0 * (normal.dot(p) - offset) * normal;
-    for (a, b) in [("leg_joint_L_5", "leg_joint_R_5"), ("Skeleton_arm_joint_L__2_", "Skeleton_arm_joint_R__3_")] {
+    for (a, b) in
+        [("leg_joint_L_5", "leg_joint_R_5"), ("Skeleton_arm_joint_L__2_", "Skeleton_arm_joint_R__3_")]
+    {
         for (from, to) in [(a, b), (b, a)] {
             let expected = reflect(copied.object_from_joint[find(from)].translation.into());
             let got: glam::Vec3 = palette.model_from_joint[find(to)].translation.into();

@@ -283,7 +283,8 @@ fn a_spin_about_y_reads_y_0_to_360_in_the_inspector_and_the_curves() {
     h.run();
     for (frame, y) in [(0, 0.0), (20, 80.0), (45, 180.0), (60, 240.0), (75, 300.0), (89, 356.0)] {
         common::go_to_frame(&mut h, frame);
-        let (x, got, z) = (field(&h, "Rotation (°) X"), field(&h, "Rotation (°) Y"), field(&h, "Rotation (°) Z"));
+        let (x, got, z) =
+            (field(&h, "Rotation (°) X"), field(&h, "Rotation (°) Y"), field(&h, "Rotation (°) Z"));
         assert!((got - y).abs() < 0.05, "frame {frame}: Y reads {got}, not {y}");
         assert!(x.abs() < 0.05 && z.abs() < 0.05, "frame {frame}: X {x}, Z {z} stay 0");
     }
@@ -320,7 +321,12 @@ fn the_rotation_mode_changes_what_the_inspector_and_the_curves_read() {
     assert_eq!(curves.len(), 4, "W, X, Y, Z");
     // Continuous: the quaternion stays on one hemisphere, so w runs 1 → −1 smoothly.
     for pair in curves[0].windows(2) {
-        assert!((pair[1].1 - pair[0].1).abs() < 0.1, "w jumps between frames {} and {}", pair[0].0, pair[1].0);
+        assert!(
+            (pair[1].1 - pair[0].1).abs() < 0.1,
+            "w jumps between frames {} and {}",
+            pair[0].0,
+            pair[1].0
+        );
     }
     h.get_by_label("Rotation mode").click();
     h.run();
@@ -333,7 +339,8 @@ fn the_rotation_mode_changes_what_the_inspector_and_the_curves_read() {
     let Some(ChannelValue::Rotation(q)) = h.state().value_now(ChannelId::ObjectRotation(1)) else {
         panic!("a rotation")
     };
-    let expected = glam::Mat3::from_rotation_x(30f32.to_radians()) * glam::Mat3::from_rotation_y(240f32.to_radians());
+    let expected =
+        glam::Mat3::from_rotation_x(30f32.to_radians()) * glam::Mat3::from_rotation_y(240f32.to_radians());
     let got = glam::Mat3::from_quat(q);
     let diff = (expected - got).to_cols_array().iter().fold(0.0f32, |m, d| m.max(d.abs()));
     assert!(diff < 1e-4, "{expected:?} vs {got:?}");
@@ -341,8 +348,10 @@ fn the_rotation_mode_changes_what_the_inspector_and_the_curves_read() {
 
 /// Vertical span (points) of the drawn keys of one curve.
 fn key_span(h: &Harness<'_, EditorApp>, curve: &str, frames: &[i32]) -> f32 {
-    let ys: Vec<f32> =
-        frames.iter().map(|f| h.get_by_label(&format!("curve key {curve} frame {f}")).rect().center().y).collect();
+    let ys: Vec<f32> = frames
+        .iter()
+        .map(|f| h.get_by_label(&format!("curve key {curve} frame {f}")).rect().center().y)
+        .collect();
     ys.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)) - ys.iter().fold(f32::INFINITY, |a, &b| a.min(b))
 }
 
@@ -465,7 +474,10 @@ fn mute_and_lock_per_channel() {
     assert_eq!(h.state().doc.scene().objects[1].rotation.track, keys, "the keys are kept");
     click_with(&mut h, "mute Cube rotation", Modifiers::NONE);
     let Some(ChannelValue::Rotation(q)) = h.state().value_now(rotation) else { panic!("a rotation") };
-    assert!((q.angle_between(glam::Quat::IDENTITY).to_degrees() - 120.0).abs() < 0.1, "unmuted: 240° about Y");
+    assert!(
+        (q.angle_between(glam::Quat::IDENTITY).to_degrees() - 120.0).abs() < 0.1,
+        "unmuted: 240° about Y"
+    );
 
     click_with(&mut h, "lock Cube translation", Modifiers::NONE);
     let scene = h.state().doc.scene().clone();

@@ -538,7 +538,10 @@ fn with_individual_origins_a_selected_chain_curls() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), None);
     let ([elbow, forearm], forward) = turn_elbow_and_forearm(&mut h, Some("Individual origins"));
-    assert_eq!(h.state().panels().viewport.pivot(), keyrig_editor::panels::viewport::Pivot::IndividualOrigins);
+    assert_eq!(
+        h.state().panels().viewport.pivot(),
+        keyrig_editor::panels::viewport::Pivot::IndividualOrigins
+    );
     assert_quarter_turn_about_view_axis(elbow.0, elbow.1, forward);
     // The forearm turns by its own quarter turn on top of the elbow's: half a turn in all.
     let (angle, axis) = world_turn(forearm.0, forearm.1);
@@ -569,7 +572,10 @@ fn the_gizmo_moves_every_selected_object_and_a_root_joint() {
     drag_centre(&mut h, centre, egui::vec2(50.0, 0.0));
     let (arm_moved, cube_moved) = (position(h.state(), 0) - arm_before, position(h.state(), 1) - cube_before);
     assert!(arm_moved.length() > 1e-3, "the arm moved: {arm_moved:?}");
-    assert!((arm_moved - cube_moved).length() < 1e-4, "both by the same offset: {arm_moved:?} {cube_moved:?}");
+    assert!(
+        (arm_moved - cube_moved).length() < 1e-4,
+        "both by the same offset: {arm_moved:?} {cube_moved:?}"
+    );
     assert_eq!(h.state().doc.undo_len(), undo + 1, "one undo step");
 
     h.get_by_label("shoulder").click();

@@ -178,14 +178,21 @@ fn joint_positions(h: &Harness<'_, EditorApp>) -> (glam::Affine3A, Vec<Vec3>) {
 /// the reflection of the copied ones across the character's plane of symmetry, which the test
 /// finds on its own: through the midpoints of the rest positions of the left/right pairs
 /// listed here by hand, normal to their mean difference.
-fn mirrored_paste_is_a_mirror_image(model: &str, pairs: &[(&str, &str)], centre: &[&str], copy: i32, paste: i32) {
+fn mirrored_paste_is_a_mirror_image(
+    model: &str,
+    pairs: &[(&str, &str)],
+    centre: &[&str],
+    copy: i32,
+    paste: i32,
+) {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut h = harness(dir.path(), Some(common::corpus(model)));
     h.state_mut().wait_for_background_work();
     h.run();
     let scene = h.state().doc.scene().clone();
     let skeleton = scene.objects[0].skeleton.as_ref().expect("a skeleton");
-    let find = |name: &str| skeleton.joints.iter().position(|j| j.name == name).unwrap_or_else(|| panic!("{name}"));
+    let find =
+        |name: &str| skeleton.joints.iter().position(|j| j.name == name).unwrap_or_else(|| panic!("{name}"));
     let rest = keyrig_skin::RestSkeleton::from_scene(skeleton).expect("rest skeleton");
     let (mut sum, mut mids) = (Vec3::ZERO, Vec::new());
     for (left, right) in pairs {
@@ -214,7 +221,10 @@ fn mirrored_paste_is_a_mirror_image(model: &str, pairs: &[(&str, &str)], centre:
     let status = h.state().status().expect("a message").text.clone();
     assert!(status.contains("mirrored"), "{status}");
     for (left, right) in pairs {
-        assert!(status.contains(&format!("{left} ↔ {right}")), "the status names the pair {left} ↔ {right}: {status}");
+        assert!(
+            status.contains(&format!("{left} ↔ {right}")),
+            "the status names the pair {left} ↔ {right}: {status}"
+        );
     }
     let (world, pasted) = joint_positions(&h);
     let object_space = |w: glam::Affine3A, p: Vec3| -> Vec3 { w.inverse().transform_point3(p) };

@@ -24,12 +24,12 @@ use crate::channels::{self, ChannelId, ChannelValue};
 use crate::commands::Command;
 use crate::context::FrameCtx;
 use crate::eval::{continuous_euler, PoseOverrides};
-use keyrig_core::rotation_mode;
 use crate::scene_frame::EvalKey;
 use crate::session::{KeyRef, Selection};
 use crate::widgets::publish_painted;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
+use keyrig_core::rotation_mode;
 
 /// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
 const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
@@ -393,7 +393,8 @@ fn handles(scene: &Scene, selection: &Selection, plot: &Plot, ids: &[ChannelId],
                     key,
                     component: c,
                     outgoing,
-                    pos: plot.pos((t + sign * seconds) * fps, map.apply(v + sign as f32 * m * seconds as f32)),
+                    pos: plot
+                        .pos((t + sign * seconds) * fps, map.apply(v + sign as f32 * m * seconds as f32)),
                     key_pos: plot.pos(t * fps, map.apply(v)),
                     seconds,
                     convert,
@@ -630,12 +631,14 @@ impl CurveEditor {
                         if self.hidden.contains(&(id, c)) {
                             return None;
                         }
-                        let curve = whole.as_ref().and_then(|w| w.get(n)).and_then(|(_, curves)| curves.get(c));
+                        let curve =
+                            whole.as_ref().and_then(|w| w.get(n)).and_then(|(_, curves)| curves.get(c));
                         Some(match curve {
                             Some(curve) => {
-                                let (lo, hi) = curve.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
-                                    (lo.min(p.1), hi.max(p.1))
-                                });
+                                let (lo, hi) =
+                                    curve.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                                        (lo.min(p.1), hi.max(p.1))
+                                    });
                                 if lo.is_finite() && hi.is_finite() {
                                     ValueMap::normalizing(lo, hi)
                                 } else {
@@ -949,10 +952,12 @@ impl CurveEditor {
                         view.low
                             + (plot.rect.bottom() - y) / plot.rect.height().max(1.0) * (view.high - view.low)
                     };
-                    let rise = grip.map.invert(value_at(pointer.y)) - grip.map.invert(value_at(grip.key_pos.y));
+                    let rise =
+                        grip.map.invert(value_at(pointer.y)) - grip.map.invert(value_at(grip.key_pos.y));
                     let tangent = rise / grip.seconds.max(1e-9) as f32 * if outgoing { 1.0 } else { -1.0 };
                     let side = if outgoing { "out" } else { "in" };
-                    let label = format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index);
+                    let label =
+                        format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index);
                     actions.edit(Edit::continuous("curve handle", label, move |scene| {
                         if convert && key.index > 0 {
                             channels::convert_to_hermite(scene, key.channel, &[key.index - 1]);
@@ -1027,10 +1032,8 @@ impl CurveEditor {
     fn legend_ui(&mut self, ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, ids: &[ChannelId]) {
         let scene = ctx.scene();
         let twist = self.rotation_as_twist;
-        let every: Vec<(ChannelId, usize)> = ids
-            .iter()
-            .flat_map(|&id| (0..curve_count(scene, id, twist)).map(move |c| (id, c)))
-            .collect();
+        let every: Vec<(ChannelId, usize)> =
+            ids.iter().flat_map(|&id| (0..curve_count(scene, id, twist)).map(move |c| (id, c))).collect();
         ui.horizontal_wrapped(|ui| {
             for (n, &id) in ids.iter().enumerate() {
                 let label = id.label(scene);

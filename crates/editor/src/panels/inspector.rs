@@ -11,11 +11,11 @@ use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::context::FrameCtx;
 use crate::eval::continuous_euler;
-use keyrig_core::rotation_mode::{self, RotationMode};
 use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::measure::measure_ui;
 use crate::widgets::tcb_slider::tcb_slider_ui;
+use keyrig_core::rotation_mode::{self, RotationMode};
 
 /// Starts applying a field's change: a committed (typed) value is its own undo step, so any
 /// open continuous group is closed first; a drag continues its group until release.
@@ -96,7 +96,13 @@ fn quat_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut glam::Vec4) -> Fi
 /// The rotation mode of a rotation channel (its object's or joint's): quaternion, or Euler
 /// angles in one of the six orders. Changing it changes what is shown and typed, not the keys;
 /// one undo step.
-fn rotation_mode_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: ChannelId, mode: RotationMode) {
+fn rotation_mode_ui(
+    ui: &mut Ui,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    id: ChannelId,
+    mode: RotationMode,
+) {
     let help = match mode.euler() {
         Some(order) => order.formula(),
         None => "The unit quaternion w, x, y, z; typed values are normalised".to_owned(),

@@ -207,7 +207,8 @@ impl Viewport {
     /// gizmo turns several selected items about ([`Pivot`]).
     fn pivot_ui(&mut self, ui: &mut Ui, rect: Rect) {
         // Below the record marker, which takes the corner itself.
-        let area = Rect::from_min_size(egui::pos2(rect.right() - 186.0, rect.top() + 30.0), egui::vec2(180.0, 22.0));
+        let area =
+            Rect::from_min_size(egui::pos2(rect.right() - 186.0, rect.top() + 30.0), egui::vec2(180.0, 22.0));
         let pivot = &mut self.gizmo.pivot;
         ui.put(area, |ui: &mut Ui| {
             egui::ComboBox::from_label("Pivot")

@@ -86,7 +86,11 @@ pub(super) fn targets(ctx: &FrameCtx<'_>) -> Vec<Target> {
     items.iter().filter_map(|&item| target(ctx, item, &selected_joint)).collect()
 }
 
-fn target(ctx: &FrameCtx<'_>, item: Selected, selected_joint: &dyn Fn(usize, usize) -> bool) -> Option<Target> {
+fn target(
+    ctx: &FrameCtx<'_>,
+    item: Selected,
+    selected_joint: &dyn Fn(usize, usize) -> bool,
+) -> Option<Target> {
     let scene = ctx.scene();
     match item {
         Selected::Joint { object, joint } => {
@@ -130,7 +134,10 @@ fn target(ctx: &FrameCtx<'_>, item: Selected, selected_joint: &dyn Fn(usize, usi
             };
             Some(Target {
                 world,
-                rotation: Some((ChannelId::JointRotation { object, joint }, parent_rotation * j.rest_rotation)),
+                rotation: Some((
+                    ChannelId::JointRotation { object, joint },
+                    parent_rotation * j.rest_rotation,
+                )),
                 direction: None,
                 translation,
                 carried,
@@ -242,7 +249,13 @@ pub(super) fn turn(
 
 /// Pushes the edits that move every target that can move (and is not carried by a selected
 /// joint) by the world offset `offset` from its value now.
-pub(super) fn shift(ctx: &FrameCtx<'_>, actions: &mut Actions, targets: &[Target], offset: Vec3, group: &str) {
+pub(super) fn shift(
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    targets: &[Target],
+    offset: Vec3,
+    group: &str,
+) {
     for t in targets.iter().filter(|t| !t.carried) {
         if let Some((id, _, world_to_value)) = t.translation {
             if let Some(now) = vec3(ctx.value_now(id)) {
@@ -254,11 +267,21 @@ pub(super) fn shift(ctx: &FrameCtx<'_>, actions: &mut Actions, targets: &[Target
 }
 
 /// Pushes the edits that turn the lights among `targets` (directions only) by `rotation`.
-pub(super) fn aim_lights(ctx: &FrameCtx<'_>, actions: &mut Actions, targets: &[Target], rotation: Quat, group: &str) {
+pub(super) fn aim_lights(
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    targets: &[Target],
+    rotation: Quat,
+    group: &str,
+) {
     for t in targets {
         if let Some((id, _)) = t.direction {
             if let Some(now) = vec3(ctx.value_now(id)) {
-                actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(rotation * now), group: group.to_owned() });
+                actions.edit(Edit::Pose {
+                    id,
+                    value: ChannelValue::Vec3(rotation * now),
+                    group: group.to_owned(),
+                });
             }
         }
     }
