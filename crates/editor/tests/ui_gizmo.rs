@@ -587,3 +587,62 @@ fn the_gizmo_moves_every_selected_object_and_a_root_joint() {
     };
     assert!(root.length() > 1e-3, "the root translation holds the move: {root:?}");
 }
+
+/// The axis ring seen most at a slant in the default view (the thinnest ellipse on screen)
+/// takes a press 12 points off its drawn arc, and the drag turns the wrist about that ring's
+/// axis (issue 30: two of four such presses missed the ring).
+#[test]
+fn a_press_12_points_off_a_slanted_ring_still_turns_the_joint() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_wrist(&mut h);
+    go_to_frame(&mut h, 15);
+    let app = h.state();
+    let rect = app.viewport_rect().expect("laid out");
+    let projection = Projection::new(&app.view.camera, rect);
+    let world = wrist_world(app);
+    let (_, rotation, centre) = world.to_scale_rotation_translation();
+    let eye = app.view.camera.eye();
+    let to_eye = (eye - centre).normalize();
+    // Screen points per world unit at the wrist's depth, so that a ring of radius r projects to
+    // transform-gizmo's 75-point axis rings.
+    let side = to_eye.any_orthonormal_vector() * 0.01;
+    let centre_screen = projection.project(centre).expect("in view");
+    let per_unit = (projection.project(centre + side).expect("in view") - centre_screen).length() / 0.01;
+    let radius = 75.0 / per_unit;
+    // For each axis ring: the drawn (front) arc's points on screen.
+    let arcs: Vec<(Vec3, Vec<Pos2>)> = [Vec3::X, Vec3::Y, Vec3::Z]
+        .map(|a| rotation * a)
+        .into_iter()
+        .map(|axis| {
+            let (u, v) = axis.any_orthonormal_pair();
+            let points = (0..=180)
+                .map(|i| (i as f32 * 2.0).to_radians())
+                .map(|a| (u * a.cos() + v * a.sin()) * radius)
+                .filter(|o| o.dot(to_eye) >= 0.0)
+                .filter_map(|o| projection.project(centre + o))
+                .collect();
+            (axis, points)
+        })
+        .collect();
+    // The thinnest ellipse: the smallest nearest distance of its arc from the centre.
+    let minor =
+        |points: &[Pos2]| points.iter().map(|p| p.distance(centre_screen)).fold(f32::INFINITY, f32::min);
+    let (axis, arc) = arcs
+        .iter()
+        .filter(|(_, p)| p.len() > 10)
+        .min_by(|a, b| minor(&a.1).total_cmp(&minor(&b.1)))
+        .expect("a ring");
+    // The point of the arc halfway along it, and 12 points off it, away from the centre.
+    let on_arc = arc[arc.len() / 2];
+    let outward = (on_arc - centre_screen).normalized();
+    let press = on_arc + outward * 12.0;
+    let along = (arc[arc.len() / 2 + 3] - arc[arc.len() / 2 - 3]).normalized();
+    let path: Vec<Pos2> = (0..=12).map(|i| press + along * (5.0 * i as f32)).collect();
+    let before = rotation_of(wrist_world(h.state()));
+    drag_along(&mut h, &path);
+    let after = rotation_of(wrist_world(h.state()));
+    let (angle, turned_about) = world_turn(before, after);
+    assert!(angle > 5.0, "the press 12 points off the ring turned the wrist: {angle}°");
+    assert!(turned_about.dot(*axis).abs() > 0.99, "about the ring's axis {axis:?}: {turned_about:?}");
+}

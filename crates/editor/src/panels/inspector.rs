@@ -610,7 +610,7 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         });
     });
     if (mode, tcb) != before {
-        let label = if keys.len() == 1 { "edit key".to_owned() } else { format!("edit {} keys", keys.len()) };
+        let label = key_edit_label(ctx, &keys, (mode, tcb), before);
         let keys = keys.clone();
         actions.edit(Edit::continuous("key inspector", label, move |scene| {
             for k in &keys {
@@ -634,6 +634,39 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         }));
     }
     cycles_ui(ui, ctx, actions, first.channel);
+}
+
+/// The undo step's name for a change in the key inspector: what changed, on which key(s) —
+/// "tension 0.50 on elbow rotation key at frame 30", "interpolation Linear on 3 keys".
+fn key_edit_label(
+    ctx: &FrameCtx<'_>,
+    keys: &[crate::session::KeyRef],
+    (mode, tcb): (Interpolation, Tcb),
+    (old_mode, old): (Interpolation, Tcb),
+) -> String {
+    let what = if mode != old_mode {
+        format!("interpolation {mode:?}")
+    } else if tcb.tension != old.tension {
+        format!("tension {:.2}", tcb.tension)
+    } else if tcb.continuity != old.continuity {
+        format!("continuity {:.2}", tcb.continuity)
+    } else if tcb.bias != old.bias {
+        format!("bias {:.2}", tcb.bias)
+    } else if tcb.clamped != old.clamped {
+        (if tcb.clamped { "clamped" } else { "unclamped" }).to_owned()
+    } else {
+        "key".to_owned()
+    };
+    let scene = ctx.scene();
+    let on = match keys {
+        [k] => {
+            let frame = channels::key_params(scene, k.channel, k.index)
+                .map_or(0, |p| (p.0 * scene.fps).round() as i64);
+            format!("{} key at frame {frame}", k.channel.label(scene))
+        }
+        many => format!("{} keys", many.len()),
+    };
+    format!("{what} on {on}")
 }
 
 /// The channel's behaviour before its first key and after its last (cycles, docs/design.md §9): two

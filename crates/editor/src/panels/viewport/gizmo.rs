@@ -171,13 +171,25 @@ impl GizmoState {
         // A press on a rotation ring of a joint or object starts a drag of our own (RingDrag):
         // transform-gizmo only tells which ring was picked.
         let first_rotation = items.iter().find_map(|t| t.rotation);
-        if let (true, Some((GizmoResult::Rotation { axis, is_view_axis, .. }, _))) = (pressed, &result) {
-            if let Some((channel, frame)) = first_rotation {
-                let (_, world_rotation, centre_world) = world.to_scale_rotation_translation();
+        let (_, world_rotation, _) = world.to_scale_rotation_translation();
+        let picked = match (pressed, &result) {
+            (true, Some((GizmoResult::Rotation { axis, is_view_axis, .. }, _))) => {
                 let axis = DVec3::from(*axis).as_vec3();
-                let axis = if *is_view_axis { axis } else { world_rotation * axis };
+                Some((if *is_view_axis { axis } else { world_rotation * axis }, *is_view_axis))
+            }
+            // transform-gizmo picks a ring within a few world units of it in the ring's plane,
+            // which on a ring seen at a slant is a sliver of screen: a press up to
+            // RING_HIT_POINTS from an axis ring's drawn arc takes that ring too.
+            (true, None) if !on_handle && free && response.contains_pointer() && turns => hover
+                .and_then(|p| near_axis_ring(projection, &world, ctx.view.camera.eye(), p))
+                .map(|axis| (axis, false)),
+            _ => None,
+        };
+        if let Some((axis, is_view_axis)) = picked {
+            if let Some((channel, frame)) = first_rotation {
+                let centre_world: Vec3 = world.translation.into();
+                let is_view_axis = &is_view_axis;
                 let eye = ctx.view.camera.eye();
-                let centre_world: Vec3 = centre_world;
                 let step = 0.01 * (centre_world - eye).length().max(1e-3);
                 let screen_dir = |v: Vec3| match (
                     projection.project(centre_world),
@@ -236,6 +248,52 @@ pub(super) fn light_aim(d: Vec3) -> Quat {
 fn to_transform(a: Affine3A) -> Transform {
     let (s, r, t) = a.to_scale_rotation_translation();
     Transform::from_scale_rotation_translation(s.as_dvec3(), r.as_dquat(), t.as_dvec3())
+}
+
+/// How far (points) from an axis ring's drawn arc a press still takes the ring.
+const RING_HIT_POINTS: f32 = 14.0;
+
+/// The world axis of the axis ring (X, Y or Z of the gizmo's frame `world`) whose drawn arc —
+/// the half facing the camera, [`AXIS_RING_RADIUS`] points across at the gizmo's centre — is
+/// nearest `pointer`, within [`RING_HIT_POINTS`].
+fn near_axis_ring(projection: &Projection, world: &Affine3A, eye: Vec3, pointer: Pos2) -> Option<Vec3> {
+    let (_, rotation, centre) = world.to_scale_rotation_translation();
+    let centre_screen = projection.project(centre)?;
+    let to_eye = (eye - centre).normalize_or_zero();
+    // The world radius that projects to the ring's screen radius at the centre's depth.
+    let across = to_eye.any_orthonormal_vector();
+    let unit = projection.project(centre + across * 0.01 * (eye - centre).length().max(1e-3))?;
+    let points_per_world = (unit - centre_screen).length() / (0.01 * (eye - centre).length().max(1e-3));
+    if points_per_world <= 0.0 {
+        return None;
+    }
+    let radius = AXIS_RING_RADIUS / points_per_world;
+    let mut best: Option<(f32, Vec3)> = None;
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z].map(|a| rotation * a) {
+        let (u, v) = axis.any_orthonormal_pair();
+        let mut previous: Option<Pos2> = None;
+        for step in 0..=96 {
+            let a = step as f32 / 96.0 * std::f32::consts::TAU;
+            let offset = (u * a.cos() + v * a.sin()) * radius;
+            // The far half is not drawn.
+            let on_arc = offset.dot(to_eye) >= -0.02 * radius;
+            let here = projection.project(centre + offset).filter(|_| on_arc);
+            if let (Some(a), Some(b)) = (previous, here) {
+                let d = distance_to_segment(pointer, a, b);
+                if d <= RING_HIT_POINTS && best.is_none_or(|(e, _)| d < e) {
+                    best = Some((d, axis));
+                }
+            }
+            previous = here;
+        }
+    }
+    best.map(|(_, axis)| axis)
+}
+
+fn distance_to_segment(p: Pos2, a: Pos2, b: Pos2) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_sq().max(1e-9)).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
 }
 
 /// Screen radius of transform-gizmo's axis rings with its default visuals (gizmo_size).
