@@ -393,6 +393,14 @@ pub struct Animated<T> {
     /// After the last key.
     #[serde(default, skip_serializing_if = "Cycle::is_hold")]
     pub after: Cycle,
+    /// Muted (Blender's mute): the channel plays its static `value` and ignores its keys,
+    /// which are kept. Left out of a scene file when false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub muted: bool,
+    /// Locked: the editor refuses to change the channel's keys and value. Left out of a scene
+    /// file when false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub locked: bool,
 }
 
 impl<T> Animated<T> {
@@ -405,7 +413,7 @@ impl<T> Animated<T> {
     /// The static `value` and a `track`, holding outside its keys.
     #[must_use]
     pub fn new(value: T, track: RawTrack<T>) -> Self {
-        Animated { value, track, before: Cycle::Hold, after: Cycle::Hold }
+        Animated { value, track, before: Cycle::Hold, after: Cycle::Hold, muted: false, locked: false }
     }
 
     /// The same with the given behaviour before the first key and after the last.

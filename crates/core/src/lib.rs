@@ -8,12 +8,14 @@ pub mod ik_constraint;
 pub mod key;
 pub mod material;
 pub mod quat;
+pub mod rotation_mode;
 pub mod scene;
 pub mod track;
 pub mod validate;
 
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
+pub use rotation_mode::{EulerOrder, RotationMode};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, IkConstraint, Joint, Light, LightKind, MeshSource,
     Object, Problem, ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,

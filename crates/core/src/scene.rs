@@ -8,6 +8,7 @@ use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::key::{Animated, RawTrack};
+use crate::rotation_mode::RotationMode;
 
 /// A whole scene: timing, animated objects, lights and a camera.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -60,6 +61,10 @@ pub struct Object {
     pub name: String,
     pub translation: Animated<Vec3>,
     pub rotation: Animated<Quat>,
+    /// How the rotation reads and is typed (Euler order or quaternion); the keys stay
+    /// quaternions. Left out of a scene file at its default, XYZ Euler.
+    #[serde(default, skip_serializing_if = "RotationMode::is_default")]
+    pub rotation_mode: RotationMode,
     pub scale: Animated<Vec3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mesh: Option<MeshSource>,
@@ -77,6 +82,7 @@ impl Object {
             name: name.into(),
             translation: Animated::constant(Vec3::ZERO),
             rotation: Animated::constant(Quat::IDENTITY),
+            rotation_mode: RotationMode::default(),
             scale: Animated::constant(Vec3::ONE),
             mesh: None,
             skeleton: None,
@@ -256,6 +262,10 @@ pub struct Joint {
     pub translation: Animated<Vec3>,
     /// Animated local rotation of T(j), applied after the rest transform; identity at rest.
     pub rotation: Animated<Quat>,
+    /// How the rotation reads and is typed (Euler order or quaternion); the keys stay
+    /// quaternions. Left out of a scene file at its default, XYZ Euler.
+    #[serde(default, skip_serializing_if = "RotationMode::is_default")]
+    pub rotation_mode: RotationMode,
     /// Animated local scale of T(j) (applied first); one at rest.
     #[serde(default = "unit_scale", skip_serializing_if = "is_unit_scale")]
     pub scale: Animated<Vec3>,
@@ -277,6 +287,7 @@ impl Joint {
             rest_rotation,
             translation: zero_translation(),
             rotation: Animated::constant(Quat::IDENTITY),
+            rotation_mode: RotationMode::default(),
             scale: unit_scale(),
         }
     }

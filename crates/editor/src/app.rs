@@ -562,27 +562,25 @@ impl EditorApp {
 
     /// Applies the copied pose at the current frame: in record mode as keys, otherwise as
     /// the pose shown (overrides on animated channels, values of static ones); one undo step.
-    /// Mirrored, each value goes to the joint of the other side (`.L`/`.R`, `Left`/`Right`;
-    /// a joint without one keeps it) flipped across the X axis, as Blender's Paste Flipped.
+    /// Mirrored, the pose is reflected across each character's symmetry plane onto the joints
+    /// of the other side, whatever their local axes ([`crate::mirror::mirror_clipboard`]), as
+    /// Blender's Paste Flipped; the status bar says which joints paired.
     pub fn paste_pose(&mut self, mirrored: bool) {
         if self.session.pose_clipboard.is_empty() {
             self.info("Paste pose: copy a pose first (Alt+C)");
             return;
         }
         let scene = self.doc.scene();
-        let pose: Vec<(ChannelId, ChannelValue)> = self
-            .session
-            .pose_clipboard
-            .iter()
-            .filter_map(|&(id, value)| {
-                let (id, value) = if mirrored {
-                    (crate::mirror::mirror_channel(scene, id), crate::mirror::mirror_value(id, value))
-                } else {
-                    (id, value)
-                };
-                channels::channel(scene, id).map(|_| (id, value))
-            })
-            .collect();
+        let (pose, report) = if mirrored {
+            let paste = crate::mirror::mirror_clipboard(scene, &self.session.pose_clipboard, |o| {
+                self.object_pose_now(o).map(|p| p.pose)
+            });
+            (paste.values, Some(paste.report))
+        } else {
+            (self.session.pose_clipboard.clone(), None)
+        };
+        let pose: Vec<(ChannelId, ChannelValue)> =
+            pose.into_iter().filter(|&(id, _)| channels::channel(scene, id).is_some()).collect();
         let time = self.session.key_time(scene.fps);
         let frame = self.session.playback.whole_frame();
         let what = if mirrored { "paste pose mirrored" } else { "paste pose" };
@@ -608,10 +606,10 @@ impl EditorApp {
                 self.session.overrides.insert(id, value);
             }
         }
-        self.info(format!(
-            "Pasted the pose on {count} channel(s){}",
-            if mirrored { ", mirrored" } else { "" }
-        ));
+        match report {
+            Some(report) => self.info(format!("Pasted the pose on {count} channel(s), mirrored. {report}")),
+            None => self.info(format!("Pasted the pose on {count} channel(s)")),
+        }
     }
 
     /// Deletes the selected keys.

@@ -22,7 +22,7 @@ use keyrig_core::{Cycles, Interpolation, Key, RawTrack, Scene, Spin, Tcb, Track}
 use crate::twist::{nearest_turn, spin_toward, twist_degrees};
 
 pub use keyrig_core::channel_id::{
-    channel, channel_mut, ChannelId, ChannelKind, ChannelMut, ChannelRef, ChannelValue,
+    channel, channel_mut as any_channel_mut, ChannelId, ChannelKind, ChannelMut, ChannelRef, ChannelValue,
 };
 
 /// A copy of one key with its value type erased (clipboard).
@@ -105,6 +105,50 @@ macro_rules! with_track_mut {
             }
         }
     };
+}
+
+/// The channel to change, `None` when it does not exist or is locked (a locked channel's keys
+/// and value stay as they are: every edit of this module goes through here).
+fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
+    any_channel_mut(scene, id).filter(|c| !match c {
+        ChannelMut::Vec3(a) => a.locked,
+        ChannelMut::Rotation(a) => a.locked,
+        ChannelMut::Scalar(a) => a.locked,
+    })
+}
+
+/// Whether channel `id` is muted (plays its static value) and locked (refuses edits).
+#[must_use]
+pub fn mute_and_lock(scene: &Scene, id: ChannelId) -> (bool, bool) {
+    match channel(scene, id) {
+        Some(ChannelRef::Vec3(a)) => (a.muted, a.locked),
+        Some(ChannelRef::Rotation(a)) => (a.muted, a.locked),
+        Some(ChannelRef::Scalar(a)) => (a.muted, a.locked),
+        None => (false, false),
+    }
+}
+
+/// Mutes or unmutes channel `id` (a locked channel too: muting changes no key); false when it
+/// does not exist.
+pub fn set_muted(scene: &mut Scene, id: ChannelId, muted: bool) -> bool {
+    match any_channel_mut(scene, id) {
+        Some(ChannelMut::Vec3(a)) => a.muted = muted,
+        Some(ChannelMut::Rotation(a)) => a.muted = muted,
+        Some(ChannelMut::Scalar(a)) => a.muted = muted,
+        None => return false,
+    }
+    true
+}
+
+/// Locks or unlocks channel `id`; false when it does not exist.
+pub fn set_locked(scene: &mut Scene, id: ChannelId, locked: bool) -> bool {
+    match any_channel_mut(scene, id) {
+        Some(ChannelMut::Vec3(a)) => a.locked = locked,
+        Some(ChannelMut::Rotation(a)) => a.locked = locked,
+        Some(ChannelMut::Scalar(a)) => a.locked = locked,
+        None => return false,
+    }
+    true
 }
 
 /// Key times (seconds) of a channel, in storage order.
@@ -308,7 +352,7 @@ pub fn scale_key_times(scene: &mut Scene, factor: f64) {
         return;
     }
     for id in ChannelId::all(scene) {
-        let Some(c) = channel_mut(scene, id) else { continue };
+        let Some(c) = any_channel_mut(scene, id) else { continue };
         with_track_mut!(c, t => {
             if !t.keys.is_empty() {
                 for k in t.keys.iter_mut() {

@@ -10,7 +10,7 @@ use glam::Quat;
 use crate::actions::Edit;
 use crate::app::{EditorApp, IK_DRAG_GROUP};
 use crate::channels::{self, ChannelId, ChannelValue};
-use crate::eval::{euler_degrees, quat_from_euler_degrees};
+use crate::eval::continuous_euler;
 use crate::session::KeyRef;
 
 impl EditorApp {
@@ -141,8 +141,28 @@ impl EditorApp {
         } else {
             format!("move {} key values", keys.len())
         };
+        // Each rotation key as the curves read it: its rotation mode and its Euler angles,
+        // continuous from the channel's first key (so a component moves the way it is drawn).
+        let readings: Vec<(keyrig_core::RotationMode, Option<glam::Vec3>)> = {
+            let scene = self.doc.scene();
+            let eval = self.evaluator();
+            let none = crate::eval::PoseOverrides::new();
+            keys.iter()
+                .map(|k| {
+                    let mode = keyrig_core::rotation_mode::of_channel(scene, k.channel);
+                    let time = channels::key_params(scene, k.channel, k.index).map(|p| p.0);
+                    let euler = match (mode.euler(), time) {
+                        (Some(order), Some(time)) if k.channel.kind() == channels::ChannelKind::Rotation => {
+                            continuous_euler(&eval, scene, k.channel, order, time, &none)
+                        }
+                        _ => None,
+                    };
+                    (mode, euler)
+                })
+                .collect()
+        };
         self.doc.edit_continuous("curve value", &label, |scene| {
-            for k in &keys {
+            for (k, (mode, euler)) in keys.iter().zip(readings) {
                 let Some((time, _, _)) = channels::key_params(scene, k.channel, k.index) else { continue };
                 let Some(value) = channels::key_value(scene, k.channel, k.index) else { continue };
                 let moved = match value {
@@ -156,11 +176,24 @@ impl EditorApp {
                         let turn = Quat::from_axis_angle(crate::twist::BONE_AXIS, delta.to_radians());
                         ChannelValue::Rotation((q * turn).normalize())
                     }
-                    ChannelValue::Rotation(q) if component < 3 && !twist => {
-                        let mut e = euler_degrees(q);
-                        e[component] += delta;
-                        ChannelValue::Rotation(quat_from_euler_degrees(e))
-                    }
+                    ChannelValue::Rotation(q) if !twist => match mode.euler() {
+                        Some(order) if component < 3 => {
+                            let mut e = euler.map_or_else(|| order.angles(q), |e| order.angles_near(q, e));
+                            e[component] += delta;
+                            ChannelValue::Rotation(order.to_quat(e))
+                        }
+                        None if component < 4 => {
+                            // w, x, y, z as the curves draw them.
+                            let mut v = [q.w, q.x, q.y, q.z];
+                            v[component] += delta;
+                            let moved = Quat::from_xyzw(v[1], v[2], v[3], v[0]);
+                            if moved.length() < 1e-6 {
+                                continue;
+                            }
+                            ChannelValue::Rotation(moved.normalize())
+                        }
+                        _ => continue,
+                    },
                     _ => continue,
                 };
                 channels::set_key(scene, k.channel, time, moved);

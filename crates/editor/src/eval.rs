@@ -53,31 +53,114 @@ impl ObjectPose {
     }
 }
 
-/// The rotation order of the Euler angles the inspector and the curve view show
-/// ([`euler_degrees`]).
+/// The rotation order of the Euler angles shown for a channel without a rotation mode of its
+/// own ([`euler_degrees`]); each object and joint can choose its own
+/// ([`keyrig_core::RotationMode`]).
 pub const EULER_ORDER: &str = "XYZ";
 
 /// What [`EULER_ORDER`] means, for tooltips.
 pub const EULER_ORDER_HELP: &str =
-    "Euler angles in the order XYZ, intrinsic: R = Rx·Ry·Rz (turn about X, then about \
-     the turned Y, then about the turned Z; glam's EulerRot::XYZ). Blender calls the same \
-     rotation order ZYX, Maya zyx.";
+    "Euler angles in the order XYZ, as Blender and Maya name it: R = Rz·Ry·Rx (turn about X \
+     first, then Y, then Z, about the parent's axes; glam's EulerRot::XYZEx, scipy's \"xyz\").";
 
-/// A rotation as XYZ Euler angles in degrees (what the curve view and inspector show), in the
-/// order [`EULER_ORDER`].
+/// A rotation as XYZ Euler angles in degrees, each in (−180, 180] ([`EULER_ORDER`]).
 #[must_use]
 pub fn euler_degrees(q: Quat) -> Vec3 {
-    let (x, y, z) = q.to_euler(glam::EulerRot::XYZ);
-    // Angles in (−180, 180]: a half turn reads 180 as the curve view shows it, not −180
-    // (within the f32 noise of the conversion).
-    let half_turn = |d: f32| if d <= -179.9995 { d + 360.0 } else { d };
-    Vec3::new(half_turn(x.to_degrees()), half_turn(y.to_degrees()), half_turn(z.to_degrees()))
+    keyrig_core::EulerOrder::XYZ.angles(q)
 }
 
 /// The inverse of [`euler_degrees`].
 #[must_use]
 pub fn quat_from_euler_degrees(e: Vec3) -> Quat {
-    Quat::from_euler(glam::EulerRot::XYZ, e.x.to_radians(), e.y.to_radians(), e.z.to_radians())
+    keyrig_core::EulerOrder::XYZ.to_quat(e)
+}
+
+/// Most halvings of one step of [`continuous_euler`]'s walk.
+const MAX_HALVINGS: u32 = 12;
+
+/// Largest turn between two readings of [`continuous_euler`]'s walk, degrees: small enough
+/// that the nearest Euler triple is the continuation.
+const WALK_STEP_DEGREES: f32 = 30.0;
+
+/// Euler angles (degrees, `order`) of rotation channel `id` at `time`, continuous from the
+/// channel's first key: the walk reads the keyed rotation from the first key to `time` in
+/// steps of at most [`WALK_STEP_DEGREES`] (through every turn of a spin segment), each reading
+/// the triple nearest the last ([`keyrig_core::EulerOrder::angles_near`]). A spin about Y reads
+/// Y 0 → 360 → 720 with X and Z at 0. The value at `time` itself has the overrides; `None`
+/// when the channel does not exist.
+#[must_use]
+pub fn continuous_euler(
+    eval: &keyrig_eval::SceneEvaluator,
+    scene: &Scene,
+    id: ChannelId,
+    order: keyrig_core::EulerOrder,
+    time: f64,
+    overrides: &PoseOverrides,
+) -> Option<Vec3> {
+    let Some(ChannelValue::Rotation(now)) = eval.value(id, time, overrides) else { return None };
+    let keys = match crate::channels::channel(scene, id) {
+        Some(crate::channels::ChannelRef::Rotation(a)) => &a.track.keys,
+        _ => return Some(order.angles(now)),
+    };
+    let none = PoseOverrides::new();
+    let rotation = |t: f64| match eval.value(id, t, &none) {
+        Some(ChannelValue::Rotation(q)) => q,
+        _ => now,
+    };
+    let Some(first) = keys.first().filter(|k| k.time < time) else { return Some(order.angles(now)) };
+    let mut e = order.angles(rotation(first.time));
+    let mut q = rotation(first.time);
+    // Checkpoints: every key up to `time`, each segment cut into at least 8 pieces per turn
+    // its spin makes.
+    for (i, key) in keys.iter().enumerate().skip(1) {
+        let (t0, t1) = (keys[i - 1].time, key.time.min(time));
+        if t1 <= t0 {
+            break;
+        }
+        let turns = match key.spin {
+            Some(keyrig_core::Spin::Turns(n)) => f64::from(n.unsigned_abs()) + 1.0,
+            Some(keyrig_core::Spin::Angle { degrees, .. }) => degrees.abs() / 360.0 + 1.0,
+            None => 1.0,
+        };
+        let pieces = (8.0 * turns).min(8.0 * f64::from(keyrig_core::MAX_SPIN_TURNS) + 8.0) as usize;
+        for p in 1..=pieces {
+            let t = t0 + (t1 - t0) * p as f64 / pieces as f64;
+            walk(&rotation, order, &mut e, &mut q, t - (t1 - t0) / pieces as f64, t, 0);
+        }
+        if key.time >= time {
+            break;
+        }
+    }
+    if keys.last().is_some_and(|k| k.time < time) {
+        let from = keys.last().map_or(time, |k| k.time);
+        for p in 1..=8 {
+            let t = from + (time - from) * f64::from(p) / 8.0;
+            walk(&rotation, order, &mut e, &mut q, t - (time - from) / 8.0, t, 0);
+        }
+    }
+    Some(order.angles_near(now, e))
+}
+
+/// One step of [`continuous_euler`]'s walk from `t0` (read as `e`, rotation `q`) to `t1`,
+/// halved while it turns more than [`WALK_STEP_DEGREES`].
+fn walk(
+    rotation: &impl Fn(f64) -> Quat,
+    order: keyrig_core::EulerOrder,
+    e: &mut Vec3,
+    q: &mut Quat,
+    t0: f64,
+    t1: f64,
+    depth: u32,
+) {
+    let next = rotation(t1);
+    if depth < MAX_HALVINGS && q.angle_between(next).to_degrees() > WALK_STEP_DEGREES {
+        let mid = 0.5 * (t0 + t1);
+        walk(rotation, order, e, q, t0, mid, depth + 1);
+        walk(rotation, order, e, q, mid, t1, depth + 1);
+        return;
+    }
+    *e = order.angles_near(next, *e);
+    *q = next;
 }
 
 /// The twist about the bone axis ([`crate::twist::BONE_AXIS`]) of rotation `q` shown for

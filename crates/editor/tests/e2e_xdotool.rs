@@ -492,3 +492,196 @@ fn a_cycle_in_the_curve_editor_of_a_real_x_window() {
     let cycles = channels::cycles(h.state().doc.scene(), elbow).expect("the elbow's channel");
     assert!(!cycles.is_hold(), "the elbow's keys repeat: {cycles:?}");
 }
+
+/// Where object 0's joint `joint` is on screen in the model.
+fn joint_on_screen(app: &EditorApp, joint: usize) -> Pos2 {
+    let rect = app.viewport_rect().expect("laid out");
+    let pose = app.object_pose_now(0).expect("the arm");
+    let at: glam::Vec3 = (pose.world_from_object * pose.object_from_joint[joint]).translation.into();
+    Projection::new(&app.view.camera, rect).project(at).expect("the joint is in view")
+}
+
+/// Saves with Ctrl+S into the save dialog (typed path, Enter) and loads what was saved.
+fn save_as(session: &Session, name: &str) -> keyrig_core::Scene {
+    let saved = session.home.path().join(format!("{name}.ron"));
+    session.key("ctrl+s");
+    std::thread::sleep(Duration::from_millis(500));
+    let typed = session.home.path().join(name);
+    session.xdo(&["key", "--clearmodifiers", "ctrl+a"]);
+    session.xdo(&["type", "--delay", "15", typed.to_str().expect("utf-8 path")]);
+    session.key("Return");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !saved.exists() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = session.screenshot(&format!("probe-{name}"));
+    assert!(saved.exists(), "Ctrl+S did not save {} (screenshot {})", saved.display(), shot.display());
+    keyrig_io::scene_file::load(&saved).expect("the saved scene loads")
+}
+
+/// Issue 30 in the real window: the elbow and the forearm selected (outliner click, Shift+click)
+/// turn together with one drag of the gizmo's view ring in record mode; then in the curve
+/// editor a click on a legend entry hides that curve and Normalize rescales the rest; the saved
+/// file holds the elbow's key as the model's drag made it.
+#[test]
+fn several_joints_turn_together_and_the_curve_legend_hides_in_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+
+    let elbow = h.get_by_label("elbow").rect().center();
+    session.click(elbow);
+    h.get_by_label("elbow").click();
+    h.run();
+    let forearm = h.get_by_label("forearm").rect().center();
+    session.xdo(&["keydown", "shift"]);
+    session.click(forearm);
+    session.xdo(&["keyup", "shift"]);
+    h.input_mut().modifiers = Modifiers::SHIFT;
+    h.get_by_label("forearm").click();
+    h.run();
+    h.input_mut().modifiers = Modifiers::NONE;
+    h.run();
+    assert_eq!(h.state().session.selection.items().count(), 2);
+
+    session.key("r");
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "12", "Right"]);
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    common::go_to_frame(&mut h, 12);
+    let before = [joint_on_screen(h.state(), 2), joint_on_screen(h.state(), 3)];
+    // The gizmo stands at the median point of the elbow and the forearm.
+    let centre = Pos2::new(
+        (joint_on_screen(h.state(), 1).x + joint_on_screen(h.state(), 2).x) * 0.5,
+        (joint_on_screen(h.state(), 1).y + joint_on_screen(h.state(), 2).y) * 0.5,
+    );
+    session.wait_idle();
+    let plain = session.screenshot("probe-two-joints-before");
+    let ring: Vec<Pos2> = (0..=18)
+        .map(|step| {
+            let a = (step as f32 * 5.0).to_radians();
+            centre + egui::vec2(a.cos(), -a.sin()) * VIEW_RING_RADIUS
+        })
+        .collect();
+    session.drag(&ring);
+    model_drag(&mut h, &ring);
+    let away = ring[ring.len() - 1] + egui::vec2(0.0, -200.0);
+    h.event(Event::PointerMoved(away));
+    h.run();
+    session.mouse_to(away);
+    session.wait_idle();
+    let turned = session.screenshot("guide_two_joints_turned");
+    let viewport = h.state().viewport_rect().expect("laid out");
+    assert!(changed_pixels(&plain, &turned, viewport) > 1000, "the arm turned in the real window");
+    let after = [joint_on_screen(h.state(), 2), joint_on_screen(h.state(), 3)];
+    assert!(
+        (after[0] - before[0]).length() > 20.0 && (after[1] - before[1]).length() > 20.0,
+        "the model's forearm and wrist swung"
+    );
+
+    // The curve editor: the elbow alone (outliner click) shows its rotation's curves.
+    let elbow_label = h.get_by_label("elbow").rect().center();
+    session.click(elbow_label);
+    h.get_by_label("elbow").click();
+    h.run();
+    session.wait_idle();
+    let curves = session.screenshot("probe-curves");
+    let entry = h.get_by_label("elbow rotation Z").rect().center();
+    session.click(entry);
+    h.get_by_label("elbow rotation Z").click();
+    h.run();
+    session.wait_idle();
+    let hidden = session.screenshot("guide_curve_legend_hidden");
+    let curves_rect = h.state().curves_rect().expect("laid out");
+    let gone = changed_pixels(&curves, &hidden, curves_rect);
+    assert!(gone > 200, "a legend click hides the Z curve in the real window: {gone} pixels changed");
+    assert!(h.query_by_label("curve key elbow rotation Z frame 12").is_none());
+    let normalize = h.get_by_label("Normalize").rect().center();
+    session.click(normalize);
+    h.get_by_label("Normalize").click();
+    h.run();
+    session.wait_idle();
+    let normalized = session.screenshot("guide_curve_normalized");
+    assert!(changed_pixels(&hidden, &normalized, curves_rect) > 200, "Normalize redraws the curves");
+
+    let scene = save_as(&session, "e2e-two-joints");
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let key = channels::key_at(&scene, elbow, 12.0 / 30.0).expect("the elbow keyed at frame 12");
+    let (Some(channels::ChannelValue::Rotation(saved)), Some(channels::ChannelValue::Rotation(model))) = (
+        channels::key_value(&scene, elbow, key),
+        channels::key_at(h.state().doc.scene(), elbow, 12.0 / 30.0)
+            .and_then(|i| channels::key_value(h.state().doc.scene(), elbow, i)),
+    ) else {
+        panic!("rotation keys")
+    };
+    assert!(
+        saved.angle_between(model).to_degrees() < 5.0,
+        "the real drag turned the elbow as the model's did"
+    );
+}
+
+/// Issue 30 in the real window: CesiumMan's walk pose copied at frame 15 (outliner click,
+/// Alt+C) and pasted mirrored at frame 45 in record mode (Alt+Shift+V); the saved file's keys
+/// put every paired joint at the mirror image of its partner's copied place.
+#[test]
+fn a_mirrored_pose_paste_on_cesium_man_in_a_real_x_window() {
+    let session = Session::new();
+    let model = common::corpus("gltf/CesiumMan/CesiumMan.glb");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", model.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(model.clone()));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    session.wait_idle();
+    let name = h.state().doc.scene().objects[0].name.clone();
+    let label = h.get_by_label(&name).rect().center();
+    session.click(label);
+    h.get_by_label(&name).click();
+    h.run();
+    session.key("r");
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "15", "Right"]);
+    common::go_to_frame(&mut h, 15);
+    let copied = h.state().object_pose_now(0).expect("the character");
+    session.wait_idle();
+    session.key("alt+c");
+    common::press(&mut h, Modifiers::ALT, egui::Key::C);
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "30", "Right"]);
+    common::go_to_frame(&mut h, 45);
+    session.wait_idle();
+    let plain = session.screenshot("probe-before-mirror");
+    session.key("alt+shift+v");
+    common::press(&mut h, Modifiers::ALT.plus(Modifiers::SHIFT), egui::Key::V);
+    session.wait_idle();
+    let mirrored = session.screenshot("guide_mirrored_paste");
+    let viewport = h.state().viewport_rect().expect("laid out");
+    assert!(
+        changed_pixels(&plain, &mirrored, viewport) > 500,
+        "the character changed pose in the real window"
+    );
+
+    let scene = save_as(&session, "e2e-mirror");
+    // The saved keys at frame 45, evaluated, against the reflection (x → −x about the plane
+    // x = 0.005 of CesiumMan's rest pose, found from its arm and leg pairs in ui_poses.rs) of the
+    // copied pose.
+    let eval = keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new());
+    let state = eval.object_at(0, 45.0 / scene.fps, &Default::default()).expect("the character");
+    let palette = state.palette.expect("a skeleton");
+    let skeleton = scene.objects[0].skeleton.as_ref().expect("a skeleton");
+    let find = |n: &str| skeleton.joints.iter().position(|j| j.name == n).expect(n);
+    let rest = keyrig_skin::RestSkeleton::from_scene(skeleton).expect("rest");
+    let (l, r) = (rest.rest_position(find("leg_joint_L_1")), rest.rest_position(find("leg_joint_R_1")));
+    let normal = (l - r).normalize();
+    let offset = normal.dot((l + r) * 0.5);
+    let reflect = |p: glam::Vec3| p - 2.0 * (normal.dot(p) - offset) * normal;
+    for (a, b) in
+        [("leg_joint_L_5", "leg_joint_R_5"), ("Skeleton_arm_joint_L__2_", "Skeleton_arm_joint_R__3_")]
+    {
+        for (from, to) in [(a, b), (b, a)] {
+            let expected = reflect(copied.object_from_joint[find(from)].translation.into());
+            let got: glam::Vec3 = palette.model_from_joint[find(to)].translation.into();
+            assert!(got.distance(expected) < 0.01, "{to} at {got} is the mirror image of {from}: {expected}");
+        }
+    }
+}

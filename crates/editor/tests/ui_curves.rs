@@ -7,7 +7,7 @@ mod common;
 use common::{drag, harness, press};
 
 use egui::{Event, Key, Modifiers, MouseWheelUnit, Pos2};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use keyrig_editor::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::eval::euler_degrees;
@@ -261,4 +261,231 @@ fn a_and_alt_a_over_the_curves_select_all_and_none() {
     h.event(Event::PointerMoved(plot.center()));
     press(&mut h, Modifiers::ALT, Key::A);
     assert!(h.state().session.selection.keys.is_empty());
+}
+
+/// What an inspector field shows, read through AccessKit as a screen reader would.
+fn field(h: &Harness<'_, EditorApp>, label: &str) -> f64 {
+    h.get_by_role_and_label(egui::accesskit::Role::SpinButton, label)
+        .accesskit_node()
+        .numeric_value()
+        .unwrap_or_else(|| panic!("{label} has a value"))
+}
+
+/// The demo's Cube spins once about Y (keys at 0°, 120°, 240°, 360°): the inspector and the
+/// curves read Y climbing 0 → 360 with X and Z at 0, not X and Z flipping to 180 while Y bounces
+/// between ±90 (issue 30). The stored keys and their interpolation stay as they were.
+#[test]
+fn a_spin_about_y_reads_y_0_to_360_in_the_inspector_and_the_curves() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let keys_before = h.state().doc.scene().objects[1].rotation.clone();
+    h.get_by_label("Cube").click();
+    h.run();
+    for (frame, y) in [(0, 0.0), (20, 80.0), (45, 180.0), (60, 240.0), (75, 300.0), (89, 356.0)] {
+        common::go_to_frame(&mut h, frame);
+        let (x, got, z) =
+            (field(&h, "Rotation (°) X"), field(&h, "Rotation (°) Y"), field(&h, "Rotation (°) Z"));
+        assert!((got - y).abs() < 0.05, "frame {frame}: Y reads {got}, not {y}");
+        assert!(x.abs() < 0.05 && z.abs() < 0.05, "frame {frame}: X {x}, Z {z} stay 0");
+    }
+    let curves = h.state().sample_curves(ChannelId::ObjectRotation(1), 0.0, 90.0, 181);
+    assert_eq!(curves.len(), 3, "X, Y, Z");
+    for (i, &(frame, y)) in curves[1].iter().enumerate() {
+        assert!((y - frame as f32 * 4.0).abs() < 0.05, "Y at frame {frame} reads {y}");
+        assert!(curves[0][i].1.abs() < 0.05 && curves[2][i].1.abs() < 0.05, "X and Z at frame {frame}");
+    }
+    assert_eq!(h.state().doc.scene().objects[1].rotation, keys_before, "reading changes no key");
+}
+
+/// The rotation mode chosen in the inspector (one undo step) changes what the fields and the
+/// curves read: a ZYX order reads the same spin the same way, a quaternion shows W X Y Z.
+#[test]
+fn the_rotation_mode_changes_what_the_inspector_and_the_curves_read() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    common::go_to_frame(&mut h, 60);
+    let undo = h.state().doc.undo_len();
+    h.get_by_label("Rotation mode").click();
+    h.run();
+    h.get_by_label("Quaternion (WXYZ)").click();
+    h.run();
+    assert_eq!(h.state().doc.scene().objects[1].rotation_mode, keyrig_core::RotationMode::Quaternion);
+    assert_eq!(h.state().doc.undo_len(), undo + 1);
+    // 240° about Y: w = cos 120°, y = sin 120°.
+    let (w, y) = (field(&h, "Rotation (°) W"), field(&h, "Rotation (°) Y"));
+    let half = 120f64.to_radians();
+    assert!((w.abs() - half.cos().abs()).abs() < 1e-3 && (y.abs() - half.sin()).abs() < 1e-3, "w {w} y {y}");
+    let curves = h.state().sample_curves(ChannelId::ObjectRotation(1), 0.0, 90.0, 91);
+    assert_eq!(curves.len(), 4, "W, X, Y, Z");
+    // Continuous: the quaternion stays on one hemisphere, so w runs 1 → −1 smoothly.
+    for pair in curves[0].windows(2) {
+        assert!(
+            (pair[1].1 - pair[0].1).abs() < 0.1,
+            "w jumps between frames {} and {}",
+            pair[0].0,
+            pair[1].0
+        );
+    }
+    h.get_by_label("Rotation mode").click();
+    h.run();
+    h.get_by_label("ZYX Euler").click();
+    h.run();
+    let y = field(&h, "Rotation (°) Y");
+    assert!((y - 240.0).abs() < 0.05, "ZYX reads the spin as Y 240, got {y}");
+    // Typing X = 30 in ZYX order: R = Rx(30)·Ry(240) (X turns last), checked on the matrices.
+    common::set_value(&mut h, egui::accesskit::Role::SpinButton, "Rotation (°) X", 30.0);
+    let Some(ChannelValue::Rotation(q)) = h.state().value_now(ChannelId::ObjectRotation(1)) else {
+        panic!("a rotation")
+    };
+    let expected =
+        glam::Mat3::from_rotation_x(30f32.to_radians()) * glam::Mat3::from_rotation_y(240f32.to_radians());
+    let got = glam::Mat3::from_quat(q);
+    let diff = (expected - got).to_cols_array().iter().fold(0.0f32, |m, d| m.max(d.abs()));
+    assert!(diff < 1e-4, "{expected:?} vs {got:?}");
+}
+
+/// Vertical span (points) of the drawn keys of one curve.
+fn key_span(h: &Harness<'_, EditorApp>, curve: &str, frames: &[i32]) -> f32 {
+    let ys: Vec<f32> = frames
+        .iter()
+        .map(|f| h.get_by_label(&format!("curve key {curve} frame {f}")).rect().center().y)
+        .collect();
+    ys.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)) - ys.iter().fold(f32::INFINITY, |a, &b| a.min(b))
+}
+
+/// Clicks a widget found by label with `modifiers` held, as the mouse does.
+fn click_with(h: &mut Harness<'_, EditorApp>, label: &str, modifiers: Modifiers) {
+    let at = h.get_by_label(label).rect().center();
+    h.input_mut().modifiers = modifiers;
+    h.event(Event::PointerMoved(at));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton { pos: at, button: egui::PointerButton::Primary, pressed, modifiers });
+    }
+    h.run();
+    h.input_mut().modifiers = Modifiers::NONE;
+    h.run();
+}
+
+/// The Cube's translation (±1) and rotation (0 … 360) in one view: a legend click hides a
+/// curve, Ctrl+click shows one alone and again shows all, Normalize scales each curve to its
+/// own −1 … 1 so the small one is no longer a flat line.
+#[test]
+fn legend_clicks_hide_and_solo_curves_and_normalize_scales_each_curve() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    let frames = [0, 30, 60, 75, 90];
+    assert!(h.query_by_label("curve key Cube translation X frame 30").is_some());
+    click_with(&mut h, "Cube translation X", Modifiers::NONE);
+    assert!(h.query_by_label("curve key Cube translation X frame 30").is_none(), "X hidden");
+    assert!(h.query_by_label("curve key Cube translation Y frame 30").is_some(), "Y still shown");
+    click_with(&mut h, "Cube rotation Y", Modifiers::COMMAND);
+    assert!(h.query_by_label("curve key Cube translation Y frame 30").is_none(), "solo hides the others");
+    assert!(h.query_by_label("curve key Cube rotation Y frame 30").is_some(), "the soloed curve shows");
+    click_with(&mut h, "Cube rotation Y", Modifiers::COMMAND);
+    assert!(h.query_by_label("curve key Cube translation X frame 30").is_some(), "Ctrl+click again: all");
+
+    let plot = h.state().curves_rect().expect("laid out").height();
+    let flat = key_span(&h, "Cube translation Y", &frames);
+    assert!(flat < 0.05 * plot, "next to 0 … 360 the translation is nearly flat: {flat} of {plot}");
+    click_with(&mut h, "Normalize", Modifiers::NONE);
+    assert!(h.state().panels().curves.normalized);
+    let scaled = key_span(&h, "Cube translation Y", &frames);
+    assert!(scaled > 0.5 * plot, "normalised, it spans the view: {scaled} of {plot}");
+    let spin = key_span(&h, "Cube rotation Y", &[0, 30, 60, 90]);
+    assert!(scaled > 0.5 * plot && spin > 0.5 * plot, "both read at full height: {scaled}, {spin}");
+}
+
+/// F over the curves frames the selected keys' curves as drawn: the Cube's 0° → 360° spin is
+/// framed 0 … 360 (not ±0.001 around the equal quaternions), and one key gets a readable span.
+#[test]
+fn f_frames_a_spin_by_its_unwrapped_values_and_one_key_with_room() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("key Cube rotation frame 0").click();
+    h.run();
+    click_with(&mut h, "key Cube rotation frame 90", Modifiers::SHIFT);
+    let keys = h.state().session.selection.keys.len();
+    assert_eq!(keys, 2, "frames 0 and 90 selected");
+    let centre = h.state().curves_rect().expect("laid out").center();
+    h.event(Event::PointerMoved(centre));
+    press(&mut h, Modifiers::NONE, Key::F);
+    let view = h.state().panels().curves.view.expect("framed");
+    assert!(view.low <= 0.0 && view.high >= 360.0 && view.high < 450.0, "{view:?}");
+    assert!(view.start <= 0.0 && view.end >= 90.0, "{view:?}");
+
+    h.get_by_label("key Cube rotation frame 30").click();
+    h.run();
+    h.event(Event::PointerMoved(centre));
+    press(&mut h, Modifiers::NONE, Key::F);
+    let view = h.state().panels().curves.view.expect("framed");
+    assert!(view.end - view.start >= 20.0, "one key: at least 20 frames, {view:?}");
+    assert!(view.high - view.low >= 30.0, "one key: a tenth of the values at least, {view:?}");
+    assert!(view.start < 30.0 && view.end > 30.0);
+}
+
+/// A Hermite key shows both its handles; dragging the in-handle of a key after a TCB key makes
+/// that key Hermite too (keeping its shape) and bends the curve before the key.
+#[test]
+fn a_hermite_key_shows_and_drags_both_handles() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let cube = ChannelId::ObjectTranslation(1);
+    h.get_by_label("key Cube translation frame 30").click();
+    h.run();
+    open_context_menu(&mut h);
+    h.get_by_label("Hermite handles (keeps the shape)").click();
+    h.run();
+    assert!(h.query_by_label("out handle Cube translation Y key 1").is_some());
+    let handle = h.get_by_label("in handle Cube translation Y key 1").rect().center();
+    let y_at = |h: &Harness<'_, EditorApp>, f: i32| match h.state().evaluator().value(
+        cube,
+        f64::from(f) / 30.0,
+        &Default::default(),
+    ) {
+        Some(ChannelValue::Vec3(v)) => v.y,
+        other => panic!("{other:?}"),
+    };
+    let before: Vec<f32> = (0..30).map(|f| y_at(&h, f)).collect();
+    drag(&mut h, handle, handle + egui::vec2(0.0, 30.0));
+    let (_, mode, _) = channels::key_params(h.state().doc.scene(), cube, 0).expect("key 0");
+    assert_eq!(mode, keyrig_core::Interpolation::Hermite, "the previous key became Hermite");
+    let after: Vec<f32> = (0..30).map(|f| y_at(&h, f)).collect();
+    assert!(before.iter().zip(&after).any(|(a, b)| (a - b).abs() > 1e-3), "the curve before the key bends");
+}
+
+/// Mute plays the static value (keys kept); lock refuses a key drag.
+#[test]
+fn mute_and_lock_per_channel() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    common::go_to_frame(&mut h, 60);
+    let rotation = ChannelId::ObjectRotation(1);
+    let keys = h.state().doc.scene().objects[1].rotation.track.clone();
+    click_with(&mut h, "mute Cube rotation", Modifiers::NONE);
+    assert!(h.state().doc.scene().objects[1].rotation.muted);
+    let Some(ChannelValue::Rotation(q)) = h.state().value_now(rotation) else { panic!("a rotation") };
+    assert!(q.angle_between(glam::Quat::IDENTITY) < 1e-5, "muted: the static value, not 240°");
+    assert_eq!(h.state().doc.scene().objects[1].rotation.track, keys, "the keys are kept");
+    click_with(&mut h, "mute Cube rotation", Modifiers::NONE);
+    let Some(ChannelValue::Rotation(q)) = h.state().value_now(rotation) else { panic!("a rotation") };
+    assert!(
+        (q.angle_between(glam::Quat::IDENTITY).to_degrees() - 120.0).abs() < 0.1,
+        "unmuted: 240° about Y"
+    );
+
+    click_with(&mut h, "lock Cube translation", Modifiers::NONE);
+    let scene = h.state().doc.scene().clone();
+    let key = h.get_by_label("curve key Cube translation Y frame 30").rect().center();
+    drag(&mut h, key, key + egui::vec2(0.0, -40.0));
+    assert_eq!(
+        h.state().doc.scene().objects[1].translation.track,
+        scene.objects[1].translation.track,
+        "a locked channel's keys stay"
+    );
 }

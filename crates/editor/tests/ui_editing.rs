@@ -328,6 +328,11 @@ fn double_click_resets_a_tcb_slider_and_its_number_box_commits_once() {
     h.run();
     set_value(&mut h, Role::Slider, "Tension", 0.6);
     assert_eq!(channels::key_params(h.state().doc.scene(), elbow, 2).expect("key").2.tension, 0.6);
+    assert_eq!(
+        h.state().doc.undo_label(),
+        Some("tension 0.60 on elbow rotation key at frame 30"),
+        "the undo step says what changed"
+    );
 
     let rail = h.get_by_role_and_label(Role::Slider, "Tension").rect();
     let at = egui::pos2(rail.left() + rail.width() * 0.3, rail.center().y);

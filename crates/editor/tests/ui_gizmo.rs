@@ -461,3 +461,188 @@ fn a_ring_seen_nearly_edge_on_turns_one_degree_per_point() {
         projection.project(moved).expect("in view") - projection.project(near_point).expect("in view");
     assert!(on_screen_move.dot(tangent) > 0.0, "the near side moves with the pointer: {on_screen_move:?}");
 }
+
+/// World rotation and position of joint `joint` of the demo arm now.
+fn joint_frame(app: &EditorApp, joint: usize) -> (Quat, Vec3) {
+    let pose = app.object_pose_now(0).expect("the demo arm");
+    let (_, r, t) = (pose.world_from_object * pose.object_from_joint[joint]).to_scale_rotation_translation();
+    (r, t)
+}
+
+/// Selects the elbow, Shift-clicks the forearm (the active joint), turns record mode on and
+/// drags a quarter turn around the gizmo's view ring, centred at `centre` (world); returns the
+/// elbow's and forearm's world rotations before and after, and the view axis.
+fn turn_elbow_and_forearm(h: &mut Harness<'_, EditorApp>, pivot: Option<&str>) -> ([(Quat, Quat); 2], Vec3) {
+    h.get_by_label("elbow").click();
+    h.run();
+    h.input_mut().modifiers = Modifiers::SHIFT;
+    h.get_by_label("forearm").click();
+    h.run();
+    h.input_mut().modifiers = Modifiers::NONE;
+    h.run();
+    let selected: Vec<Selected> = h.state().session.selection.items().collect();
+    assert_eq!(selected.len(), 2, "{selected:?}");
+    if let Some(pivot) = pivot {
+        h.get_by_label("Pivot").click();
+        h.run();
+        h.get_by_label(pivot).click();
+        h.run();
+    }
+    h.get_by_label("⏺ Record").click();
+    h.run();
+    go_to_frame(h, 12);
+    let before = [joint_frame(h.state(), 1).0, joint_frame(h.state(), 2).0];
+    // The gizmo stands at the pivot: the mean of the two origins, or the active (forearm).
+    let centre = match pivot {
+        None => (joint_frame(h.state(), 1).1 + joint_frame(h.state(), 2).1) * 0.5,
+        Some(_) => joint_frame(h.state(), 2).1,
+    };
+    let centre = on_screen(h.state(), centre);
+    let forward = (h.state().view.camera.target - h.state().view.camera.eye()).normalize();
+    let steps = 18;
+    let path: Vec<Pos2> = (0..=steps)
+        .map(|step| {
+            let a = (90.0 * step as f32 / steps as f32).to_radians();
+            centre + egui::vec2(a.cos(), -a.sin()) * VIEW_RING_RADIUS
+        })
+        .collect();
+    let undo = h.state().doc.undo_len();
+    drag_along(h, &path);
+    assert_eq!(h.state().doc.undo_len(), undo + 1, "one undo step for the drag");
+    let after = [joint_frame(h.state(), 1).0, joint_frame(h.state(), 2).0];
+    ([(before[0], after[0]), (before[1], after[1])], forward)
+}
+
+#[test]
+fn the_gizmo_turns_every_selected_joint_about_the_median_point() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let ([elbow, forearm], forward) = turn_elbow_and_forearm(&mut h, None);
+    // The two turn as one body: each by a quarter turn about the view axis.
+    assert_quarter_turn_about_view_axis(elbow.0, elbow.1, forward);
+    assert_quarter_turn_about_view_axis(forearm.0, forearm.1, forward);
+    // The elbow is keyed; the forearm, carried by it, keeps its own rotation.
+    let keyed = |joint| {
+        let id = ChannelId::JointRotation { object: 0, joint };
+        channels::key_times(h.state().doc.scene(), id).iter().any(|t| (t * 30.0 - 12.0).abs() < 1e-6)
+    };
+    assert!(keyed(1), "the elbow is keyed at frame 12");
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    let (a, _) = world_turn(elbow.0, joint_frame(h.state(), 1).0);
+    let (b, _) = world_turn(forearm.0, joint_frame(h.state(), 2).0);
+    assert!(a < 0.05 && b < 0.05, "one undo takes both turns back ({a}°, {b}°)");
+}
+
+#[test]
+fn with_individual_origins_a_selected_chain_curls() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let ([elbow, forearm], forward) = turn_elbow_and_forearm(&mut h, Some("Individual origins"));
+    assert_eq!(
+        h.state().panels().viewport.pivot(),
+        keyrig_editor::panels::viewport::Pivot::IndividualOrigins
+    );
+    assert_quarter_turn_about_view_axis(elbow.0, elbow.1, forward);
+    // The forearm turns by its own quarter turn on top of the elbow's: half a turn in all.
+    let (angle, axis) = world_turn(forearm.0, forearm.1);
+    assert!((angle - 180.0).abs() < 6.0, "the forearm curls by {angle}°, not 180°");
+    assert!(axis.dot(forward).abs() > 0.99, "about the view axis: {axis:?}");
+}
+
+/// Two objects selected move together by the same offset (one undo step), and a skeleton's
+/// root joint moves with the gizmo (its root translation).
+#[test]
+fn the_gizmo_moves_every_selected_object_and_a_root_joint() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let position = |app: &EditorApp, o: usize| -> Vec3 {
+        app.object_pose_now(o).expect("a pose").world_from_object.translation.into()
+    };
+    h.get_by_label("Arm").click();
+    h.run();
+    h.input_mut().modifiers = Modifiers::SHIFT;
+    h.get_by_label("Cube").click();
+    h.run();
+    h.input_mut().modifiers = Modifiers::NONE;
+    h.run();
+    let (arm_before, cube_before) = (position(h.state(), 0), position(h.state(), 1));
+    let undo = h.state().doc.undo_len();
+    // The gizmo stands at the median point of the two origins.
+    let centre = on_screen(h.state(), (arm_before + cube_before) * 0.5);
+    drag_centre(&mut h, centre, egui::vec2(50.0, 0.0));
+    let (arm_moved, cube_moved) = (position(h.state(), 0) - arm_before, position(h.state(), 1) - cube_before);
+    assert!(arm_moved.length() > 1e-3, "the arm moved: {arm_moved:?}");
+    assert!(
+        (arm_moved - cube_moved).length() < 1e-4,
+        "both by the same offset: {arm_moved:?} {cube_moved:?}"
+    );
+    assert_eq!(h.state().doc.undo_len(), undo + 1, "one undo step");
+
+    h.get_by_label("shoulder").click();
+    h.run();
+    let shoulder = |app: &EditorApp| common::joint_world(app, 0, 0);
+    drag_selection_right(&mut h, shoulder);
+    let Some(channels::ChannelValue::Vec3(root)) = h.state().value_now(ChannelId::RootTranslation(0)) else {
+        panic!("a root translation")
+    };
+    assert!(root.length() > 1e-3, "the root translation holds the move: {root:?}");
+}
+
+/// The axis ring seen most at a slant in the default view (the thinnest ellipse on screen)
+/// takes a press 12 points off its drawn arc, and the drag turns the wrist about that ring's
+/// axis (issue 30: two of four such presses missed the ring).
+#[test]
+fn a_press_12_points_off_a_slanted_ring_still_turns_the_joint() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    select_wrist(&mut h);
+    go_to_frame(&mut h, 15);
+    let app = h.state();
+    let rect = app.viewport_rect().expect("laid out");
+    let projection = Projection::new(&app.view.camera, rect);
+    let world = wrist_world(app);
+    let (_, rotation, centre) = world.to_scale_rotation_translation();
+    let eye = app.view.camera.eye();
+    let to_eye = (eye - centre).normalize();
+    // Screen points per world unit at the wrist's depth, so that a ring of radius r projects to
+    // transform-gizmo's 75-point axis rings.
+    let side = to_eye.any_orthonormal_vector() * 0.01;
+    let centre_screen = projection.project(centre).expect("in view");
+    let per_unit = (projection.project(centre + side).expect("in view") - centre_screen).length() / 0.01;
+    let radius = 75.0 / per_unit;
+    // For each axis ring: the drawn (front) arc's points on screen.
+    let arcs: Vec<(Vec3, Vec<Pos2>)> = [Vec3::X, Vec3::Y, Vec3::Z]
+        .map(|a| rotation * a)
+        .into_iter()
+        .map(|axis| {
+            let (u, v) = axis.any_orthonormal_pair();
+            let points = (0..=180)
+                .map(|i| (i as f32 * 2.0).to_radians())
+                .map(|a| (u * a.cos() + v * a.sin()) * radius)
+                .filter(|o| o.dot(to_eye) >= 0.0)
+                .filter_map(|o| projection.project(centre + o))
+                .collect();
+            (axis, points)
+        })
+        .collect();
+    // The thinnest ellipse: the smallest nearest distance of its arc from the centre.
+    let minor =
+        |points: &[Pos2]| points.iter().map(|p| p.distance(centre_screen)).fold(f32::INFINITY, f32::min);
+    let (axis, arc) = arcs
+        .iter()
+        .filter(|(_, p)| p.len() > 10)
+        .min_by(|a, b| minor(&a.1).total_cmp(&minor(&b.1)))
+        .expect("a ring");
+    // The point of the arc halfway along it, and 12 points off it, away from the centre.
+    let on_arc = arc[arc.len() / 2];
+    let outward = (on_arc - centre_screen).normalized();
+    let press = on_arc + outward * 12.0;
+    let along = (arc[arc.len() / 2 + 3] - arc[arc.len() / 2 - 3]).normalized();
+    let path: Vec<Pos2> = (0..=12).map(|i| press + along * (5.0 * i as f32)).collect();
+    let before = rotation_of(wrist_world(h.state()));
+    drag_along(&mut h, &path);
+    let after = rotation_of(wrist_world(h.state()));
+    let (angle, turned_about) = world_turn(before, after);
+    assert!(angle > 5.0, "the press 12 points off the ring turned the wrist: {angle}°");
+    assert!(turned_about.dot(*axis).abs() > 0.99, "about the ring's axis {axis:?}: {turned_about:?}");
+}

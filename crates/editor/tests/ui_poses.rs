@@ -165,3 +165,129 @@ fn ctrl_drag_in_the_viewport_box_selects_joints() {
     assert!(selected.contains(&Selected::Joint { object: 0, joint: 2 }));
     assert_eq!(h.state().view.camera, camera, "a box drag does not orbit");
 }
+
+/// World positions of every joint of object 0 now.
+fn joint_positions(h: &Harness<'_, EditorApp>) -> (glam::Affine3A, Vec<Vec3>) {
+    let pose = h.state().object_pose_now(0).expect("the character");
+    let world = pose.world_from_object;
+    (world, pose.object_from_joint.iter().map(|f| (world * *f).translation.into()).collect())
+}
+
+/// Copies the whole character's pose at frame `copy` (outliner click, Alt+C), pastes it
+/// mirrored at frame `paste` (Alt+Shift+V), and compares the world positions of the joints with
+/// the reflection of the copied ones across the character's plane of symmetry, which the test
+/// finds on its own: through the midpoints of the rest positions of the left/right pairs
+/// listed here by hand, normal to their mean difference.
+fn mirrored_paste_is_a_mirror_image(
+    model: &str,
+    pairs: &[(&str, &str)],
+    centre: &[&str],
+    copy: i32,
+    paste: i32,
+) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), Some(common::corpus(model)));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    let scene = h.state().doc.scene().clone();
+    let skeleton = scene.objects[0].skeleton.as_ref().expect("a skeleton");
+    let find =
+        |name: &str| skeleton.joints.iter().position(|j| j.name == name).unwrap_or_else(|| panic!("{name}"));
+    let rest = keyrig_skin::RestSkeleton::from_scene(skeleton).expect("rest skeleton");
+    let (mut sum, mut mids) = (Vec3::ZERO, Vec::new());
+    for (left, right) in pairs {
+        let (l, r) = (rest.rest_position(find(left)), rest.rest_position(find(right)));
+        sum += l - r;
+        mids.push((l + r) * 0.5);
+    }
+    let normal = sum.normalize();
+    let offset = mids.iter().map(|m| normal.dot(*m)).sum::<f32>() / mids.len() as f32;
+    let reflect = |p: Vec3| p - 2.0 * (normal.dot(p) - offset) * normal;
+    let size = {
+        let ps: Vec<Vec3> = (0..rest.len()).map(|j| rest.rest_position(j)).collect();
+        let lo = ps.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
+        let hi = ps.iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+        (hi - lo).length()
+    };
+
+    h.get_by_label(scene.objects[0].name.as_str()).click();
+    h.run();
+    go_to_frame(&mut h, copy);
+    let (world_copied, copied) = joint_positions(&h);
+    press(&mut h, Modifiers::ALT, Key::C);
+    go_to_frame(&mut h, paste);
+    let (_, before) = joint_positions(&h);
+    press(&mut h, Modifiers::ALT.plus(Modifiers::SHIFT), Key::V);
+    let status = h.state().status().expect("a message").text.clone();
+    assert!(status.contains("mirrored"), "{status}");
+    for (left, right) in pairs {
+        assert!(
+            status.contains(&format!("{left} ↔ {right}")),
+            "the status names the pair {left} ↔ {right}: {status}"
+        );
+    }
+    let (world, pasted) = joint_positions(&h);
+    let object_space = |w: glam::Affine3A, p: Vec3| -> Vec3 { w.inverse().transform_point3(p) };
+    let mut worst: f32 = 0.0;
+    let mut check = |from: usize, to: usize| {
+        let expected = world.transform_point3(reflect(object_space(world_copied, copied[from])));
+        let error = pasted[to].distance(expected);
+        worst = worst.max(error / size);
+        assert!(
+            error < 0.002 * size,
+            "{model}: joint {} at {} should be the mirror image of {} at {} (error {error}, size {size})",
+            skeleton.joints[to].name,
+            pasted[to],
+            skeleton.joints[from].name,
+            expected
+        );
+    };
+    for (left, right) in pairs {
+        check(find(left), find(right));
+        check(find(right), find(left));
+    }
+    for name in centre {
+        check(find(name), find(name));
+    }
+    let moved = before.iter().zip(&pasted).map(|(a, b)| a.distance(*b)).fold(0.0f32, f32::max);
+    assert!(moved > 0.05 * size, "{model}: the paste changed the pose (moved {moved} of {size})");
+    eprintln!("{model}: worst error {worst:.5} of the size; {status}");
+}
+
+#[test]
+fn cesium_man_pasted_mirrored_is_the_mirror_image_of_the_copied_walk() {
+    mirrored_paste_is_a_mirror_image(
+        "gltf/CesiumMan/CesiumMan.glb",
+        &[
+            ("Skeleton_arm_joint_L__4_", "Skeleton_arm_joint_R"),
+            ("Skeleton_arm_joint_L__3_", "Skeleton_arm_joint_R__2_"),
+            ("Skeleton_arm_joint_L__2_", "Skeleton_arm_joint_R__3_"),
+            ("leg_joint_L_1", "leg_joint_R_1"),
+            ("leg_joint_L_2", "leg_joint_R_2"),
+            ("leg_joint_L_3", "leg_joint_R_3"),
+            ("leg_joint_L_5", "leg_joint_R_5"),
+        ],
+        &["Skeleton_torso_joint_1", "Skeleton_torso_joint_2", "torso_joint_3", "Skeleton_neck_joint_2"],
+        15,
+        45,
+    );
+}
+
+#[test]
+fn the_fox_pasted_mirrored_is_the_mirror_image_of_the_copied_pose() {
+    mirrored_paste_is_a_mirror_image(
+        "gltf/Fox/Fox.glb",
+        &[
+            ("b_LeftUpperArm_09", "b_RightUpperArm_06"),
+            ("b_LeftForeArm_010", "b_RightForeArm_07"),
+            ("b_LeftHand_011", "b_RightHand_08"),
+            ("b_LeftLeg01_015", "b_RightLeg01_019"),
+            ("b_LeftLeg02_016", "b_RightLeg02_020"),
+            ("b_LeftFoot01_017", "b_RightFoot01_021"),
+            ("b_LeftFoot02_018", "b_RightFoot02_022"),
+        ],
+        &["b_Hip_01", "b_Spine01_02", "b_Spine02_03", "b_Neck_04", "b_Head_05", "b_Tail02_013"],
+        10,
+        40,
+    );
+}

@@ -63,6 +63,7 @@ struct Slot<T: TrackValue> {
     keys: Keys<T>,
     value: T,
     cycles: keyrig_core::Cycles,
+    muted: bool,
     eval: Arc<SlotEval<T>>,
     problem: Option<EvalProblem>,
 }
@@ -83,6 +84,7 @@ impl<T: TrackValue> Slot<T> {
             keys: animated.track.keys.clone(),
             value: animated.value,
             cycles: animated.cycles(),
+            muted: animated.muted,
             eval: Arc::new(eval),
             problem,
         }
@@ -94,6 +96,7 @@ impl<T: TrackValue> Slot<T> {
         if self.keys.shares_with(&animated.track.keys)
             && self.value == animated.value
             && self.cycles == animated.cycles()
+            && self.muted == animated.muted
         {
             return false;
         }

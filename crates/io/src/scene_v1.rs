@@ -73,6 +73,7 @@ impl ObjectV1 {
             name: self.name,
             translation: self.translation,
             rotation: self.rotation,
+            rotation_mode: keyrig_core::RotationMode::default(),
             scale: self.scale,
             mesh: self.mesh,
             skeleton: self.skeleton.map(|s| keyrig_core::Skeleton {

@@ -477,7 +477,8 @@ impl<T: TrackValue> AnimatedTrack<T> {
     /// static value of an unanimated property, else the errors of [`Track::with_cycles`]
     /// (cycles on an unanimated value are ignored: it has nothing to repeat).
     pub fn new(animated: &Animated<T>) -> Result<Self, TrackError> {
-        if animated.track.is_empty() {
+        // A muted channel plays its static value.
+        if animated.track.is_empty() || animated.muted {
             let wide = animated.value.check().map_err(|problem| match problem {
                 ValueProblem::NonFinite => TrackError::NonFiniteStaticValue,
                 ValueProblem::ZeroQuaternion => TrackError::ZeroStaticQuaternion,

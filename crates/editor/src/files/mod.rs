@@ -200,6 +200,8 @@ pub fn file_dialog(
         .title(title)
         .storage(storage)
         .default_size([760.0, 460.0])
+        // Centred over the window, as the other dialogs are (not docked over the timeline).
+        .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
         .show_path_edit_button(true);
     if let Some(folder) = folder {
         dialog = dialog.initial_directory(folder);

@@ -23,12 +23,13 @@ use crate::actions::{Action, Actions, Edit, SessionChange, Ticket};
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::commands::Command;
 use crate::context::FrameCtx;
-use crate::eval::{euler_degrees, PoseOverrides, EULER_ORDER};
+use crate::eval::{continuous_euler, PoseOverrides};
 use crate::scene_frame::EvalKey;
 use crate::session::{KeyRef, Selection};
 use crate::widgets::publish_painted;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
+use keyrig_core::rotation_mode;
 
 /// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
 const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
@@ -45,16 +46,18 @@ pub struct CurveView {
 /// What the current pointer gesture in the curve view is doing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum CurveGesture {
-    /// Moving the selected keys: whole frames and value (of `component`) already applied.
-    MoveKeys { frames: i32, value: f32, component: usize },
+    /// Moving the selected keys: whole frames and value (of `component`, in curve units)
+    /// already applied; `scale` is how the grabbed curve is drawn (normalised view).
+    MoveKeys { frames: i32, value: f32, component: usize, scale: f32 },
     /// A box selection from this point.
     Box { start: Pos2 },
     /// Panning with the middle button from this view.
     Pan { from: CurveView },
     /// Scrubbing the current frame on the frame ruler.
     Scrub,
-    /// Dragging a Hermite handle: the key, the component and which tangent.
-    Handle { key: KeyRef, component: usize, outgoing: bool },
+    /// Dragging a Hermite handle: the key, the component and which tangent; `convert`: the
+    /// previous key is not Hermite yet (its segment takes the handle once it is dragged).
+    Handle { key: KeyRef, component: usize, outgoing: bool, convert: bool },
 }
 
 /// One component over time: (frame, value) samples.
@@ -66,7 +69,7 @@ type SampleKey = (ChannelId, u64, u64, usize, bool);
 
 /// What the key points were placed for: the evaluator, the plot (rect and view, as bits), the
 /// channels, and whether rotations were read as twists.
-type PointsKey = (EvalKey, [u32; 4], [u64; 4], Vec<ChannelId>, bool);
+type PointsKey = (EvalKey, [u32; 4], [u64; 4], Vec<ChannelId>, bool, Maps);
 
 /// The curve editor and its own state: the view, the gesture under way, how rotations read,
 /// where it was laid out, and its samples (kept while the document, the view and the channel
@@ -80,6 +83,10 @@ pub struct CurveEditor {
     frame_keys: bool,
     /// Rotations drawn as their unwrapped twist about the bone axis instead of Euler angles.
     pub rotation_as_twist: bool,
+    /// Curves hidden from view (a click on their legend entry), by channel and curve.
+    pub hidden: BTreeSet<(ChannelId, usize)>,
+    /// Each shown curve scaled to −1 … 1 over the frame range (Blender's Normalize).
+    pub normalized: bool,
     /// Where the curve view was laid out in the last frame (F over it frames its keys).
     rect: Option<egui::Rect>,
     /// The key move pushed in the last frame and the whole frames the gesture has applied once
@@ -135,24 +142,37 @@ pub fn sample_curves(
     let fps = scene.fps.max(1e-9);
     let none = PoseOverrides::new();
     let n = samples.max(2);
+    let mode = rotation_mode::of_channel(scene, id);
     let mut curves: Vec<Curve> = Vec::new();
+    // Rotations read continuously: Euler angles from the channel's first key on
+    // ([`continuous_euler`]), each sample the triple nearest the last; quaternions on the
+    // hemisphere of the last sample.
+    let mut near: Option<Vec<f32>> = match (id.kind(), mode.euler()) {
+        (channels::ChannelKind::Rotation, Some(order)) if !twist => {
+            continuous_euler(eval, scene, id, order, start / fps, &none).map(|e| e.to_array().to_vec())
+        }
+        _ => None,
+    };
     for i in 0..n {
         let frame = start + (end - start) * i as f64 / (n - 1) as f64;
-        let values = shown_components(twist, eval.value(id, frame / fps, &none));
+        let values = shown_components(mode, twist, eval.value(id, frame / fps, &none), near.as_deref());
         if curves.is_empty() {
             curves = vec![Vec::with_capacity(n); values.len()];
         }
-        for (c, v) in values.into_iter().enumerate() {
-            let v = if id.kind() == channels::ChannelKind::Rotation {
-                // Unwrap Euler angles so a turn past ±180° stays continuous.
+        for (c, v) in values.iter().enumerate() {
+            let v = if twist && id.kind() == channels::ChannelKind::Rotation {
+                // Unwrap the twist so a turn past ±180° stays continuous.
                 match curves[c].last() {
                     Some(&(_, prev)) => prev + (v - prev + 180.0).rem_euclid(360.0) - 180.0,
-                    None => v,
+                    None => *v,
                 }
             } else {
-                v
+                *v
             };
             curves[c].push((frame, v));
+        }
+        if id.kind() == channels::ChannelKind::Rotation && !twist {
+            near = Some(values);
         }
     }
     if let Some((track, axis)) = turn_axis(scene, id).filter(|_| !twist) {
@@ -169,19 +189,56 @@ pub fn sample_curves(
 }
 
 /// The numbers the curve view draws for a value: a vector's components, a scalar, and a
-/// rotation's XYZ Euler angles in degrees — or, with `twist`, its twist about the bone axis (X)
-/// in degrees (wrapped here; the curves unwrap it along time).
-fn shown_components(twist: bool, value: Option<ChannelValue>) -> Vec<f32> {
+/// rotation as its channel's mode reads it — Euler angles in degrees in its order (the triple
+/// nearest `near` when given), or the quaternion's w, x, y, z (on `near`'s hemisphere) — or,
+/// with `twist`, its twist about the bone axis (X) in degrees (wrapped here; the curves unwrap
+/// it along time).
+fn shown_components(
+    mode: keyrig_core::RotationMode,
+    twist: bool,
+    value: Option<ChannelValue>,
+    near: Option<&[f32]>,
+) -> Vec<f32> {
     match value {
         Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
         Some(ChannelValue::Rotation(q)) if twist => {
             vec![crate::twist::twist_degrees(q.as_dquat(), crate::twist::BONE_AXIS.as_dvec3()) as f32]
         }
-        Some(ChannelValue::Rotation(q)) => euler_degrees(q).to_array().to_vec(),
+        Some(ChannelValue::Rotation(q)) => match mode.euler() {
+            Some(order) => match near {
+                Some(&[x, y, z, ..]) => order.angles_near(q, glam::Vec3::new(x, y, z)),
+                _ => order.angles(q),
+            }
+            .to_array()
+            .to_vec(),
+            None => {
+                let flip = match near {
+                    Some(&[w, x, y, z, ..]) => q.dot(glam::Quat::from_xyzw(x, y, z, w)) < 0.0,
+                    _ => q.w < 0.0,
+                };
+                let q = if flip { -q } else { q };
+                vec![q.w, q.x, q.y, q.z]
+            }
+        },
         Some(ChannelValue::Scalar(s)) => vec![s],
         None => Vec::new(),
     }
 }
+
+/// How many value curves a channel has (1 for scalars and twists, 4 for quaternions, else 3);
+/// a rotation with spin keys has its unwrapped turn after them.
+fn value_count(scene: &Scene, id: ChannelId, twist: bool) -> usize {
+    match id.kind() {
+        channels::ChannelKind::Scalar => 1,
+        channels::ChannelKind::Rotation if twist => 1,
+        channels::ChannelKind::Rotation if rotation_mode::of_channel(scene, id).euler().is_none() => 4,
+        _ => 3,
+    }
+}
+
+/// The fewest frames F over the curves shows around the selected keys (one key is not zoomed
+/// to a frame's width).
+const MIN_FRAMED_FRAMES: f64 = 20.0;
 
 /// Width of the value ruler and height of the frame ruler, points.
 const VALUE_RULER: f32 = 44.0;
@@ -205,24 +262,34 @@ const PALETTE: [Color32; 12] = [
     Color32::from_rgb(130, 200, 170),
 ];
 
-/// The colour of component `c` of the `n`-th shown channel: a channel's X, Y, Z take three
-/// neighbouring colours, so two channels never share one (up to four channels).
-fn curve_colour(n: usize, c: usize, components: usize) -> Color32 {
-    if components == 4 && c == 3 {
+/// The colour of curve `c` of the `n`-th shown channel: a channel's components take
+/// neighbouring colours, so two channels never share one (up to four channels); the unwrapped
+/// turn is white.
+fn curve_colour(n: usize, c: usize, is_turn: bool) -> Color32 {
+    if is_turn {
         return TURN_COLOUR;
     }
     PALETTE[(n * 3 + c) % PALETTE.len()]
 }
 
-/// "X", "Y", "Z" for a vector or Euler angle component, "turn" for the unwrapped twist.
-fn component_name(id: ChannelId, c: usize) -> &'static str {
+/// "X", "Y", "Z" for a vector or Euler angle component, "W" … "Z" for a quaternion's, "turn"
+/// for the unwrapped turn.
+fn component_name(scene: &Scene, id: ChannelId, c: usize) -> &'static str {
+    let quaternion = id.kind() == channels::ChannelKind::Rotation
+        && rotation_mode::of_channel(scene, id).euler().is_none();
     match (id.kind(), c) {
         (channels::ChannelKind::Scalar, _) => "",
+        _ if quaternion => ["W", "X", "Y", "Z", "turn"].get(c).copied().unwrap_or("turn"),
         (_, 0) => "X",
         (_, 1) => "Y",
         (_, 2) => "Z",
         _ => "turn",
     }
+}
+
+/// How many curves a channel draws: its values and, for a rotation with spin keys, its turn.
+fn curve_count(scene: &Scene, id: ChannelId, twist: bool) -> usize {
+    value_count(scene, id, twist) + usize::from(!twist && turn_axis(scene, id).is_some())
 }
 
 /// Screen mapping of the plot: frames across (the time axis the dope sheet shares), values up.
@@ -283,16 +350,23 @@ struct Handle {
     /// The key's own point, and the seconds the handle spans (a third of the segment).
     key_pos: Pos2,
     seconds: f64,
+    /// An in-handle of a Hermite key after a key that is not Hermite: dragging it makes the
+    /// previous key Hermite too (keeping its shape), so that the segment takes the tangent.
+    convert: bool,
+    /// How the curve is drawn.
+    map: ValueMap,
 }
 
-/// The handles of the selected Hermite keys of position and scalar channels.
-fn handles(scene: &Scene, selection: &Selection, plot: &Plot) -> Vec<Handle> {
+/// The handles of the selected Hermite keys of position and scalar channels among `ids`: the
+/// out-handle and the in-handle of each (both tangents are stored), on the curves as drawn.
+fn handles(scene: &Scene, selection: &Selection, plot: &Plot, ids: &[ChannelId], maps: &Maps) -> Vec<Handle> {
     let fps = scene.fps.max(1e-9);
     let mut out = Vec::new();
     for &key in &selection.keys {
         if key.channel.kind() == channels::ChannelKind::Rotation {
             continue;
         }
+        let Some(n) = ids.iter().position(|&id| id == key.channel) else { continue };
         // Per key, not the whole track's times: A can select every key of a long track.
         let time_of = |i: usize| channels::key_params(scene, key.channel, i).map(|p| p.0);
         let (Some(t), Some(value)) = (time_of(key.index), channels::key_value(scene, key.channel, key.index))
@@ -309,26 +383,30 @@ fn handles(scene: &Scene, selection: &Selection, plot: &Plot) -> Vec<Handle> {
             channels::key_params(scene, key.channel, i)
                 .is_some_and(|p| p.1 == keyrig_core::Interpolation::Hermite)
         };
-        let mut add = |tangent: Option<Vec<f32>>, neighbour: Option<f64>, outgoing: bool| {
-            let (Some(tangent), Some(n)) = (tangent, neighbour) else { return };
-            let seconds = (n - t).abs() / 3.0;
+        let mut add = |tangent: Option<Vec<f32>>, neighbour: Option<f64>, outgoing: bool, convert: bool| {
+            let (Some(tangent), Some(other)) = (tangent, neighbour) else { return };
+            let seconds = (other - t).abs() / 3.0;
             let sign = if outgoing { 1.0 } else { -1.0 };
             for (c, (&v, &m)) in values.iter().zip(&tangent).enumerate() {
+                let Some(map) = maps.get(n).and_then(|m| m.get(c)).copied().flatten() else { continue };
                 out.push(Handle {
                     key,
                     component: c,
                     outgoing,
-                    pos: plot.pos((t + sign * seconds) * fps, v + sign as f32 * m * seconds as f32),
-                    key_pos: plot.pos(t * fps, v),
+                    pos: plot
+                        .pos((t + sign * seconds) * fps, map.apply(v + sign as f32 * m * seconds as f32)),
+                    key_pos: plot.pos(t * fps, map.apply(v)),
                     seconds,
+                    convert,
+                    map,
                 });
             }
         };
         if hermite(key.index) {
-            add(outt, time_of(key.index + 1), true);
+            add(outt, time_of(key.index + 1), true, false);
         }
-        if key.index > 0 && hermite(key.index - 1) {
-            add(inn, time_of(key.index - 1), false);
+        if key.index > 0 && (hermite(key.index - 1) || hermite(key.index)) {
+            add(inn, time_of(key.index - 1), false, !hermite(key.index - 1));
         }
     }
     out
@@ -348,41 +426,100 @@ fn value_extent(all: &[(ChannelId, Rc<Vec<Curve>>)]) -> Option<(f32, f32)> {
     (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
 
-/// The key points of the shown curves in view: each key of each channel on each of its
-/// components, at the curve's (unwrapped) value.
+/// How one curve is drawn: its values scaled about `mid` (normalised view), or hidden.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ValueMap {
+    pub mid: f32,
+    pub scale: f32,
+}
+
+impl ValueMap {
+    pub const IDENTITY: ValueMap = ValueMap { mid: 0.0, scale: 1.0 };
+
+    /// The plotted value of a curve value.
+    #[must_use]
+    pub fn apply(self, v: f32) -> f32 {
+        (v - self.mid) * self.scale
+    }
+
+    /// The curve value of a plotted value.
+    #[must_use]
+    pub fn invert(self, y: f32) -> f32 {
+        y / self.scale + self.mid
+    }
+
+    /// The map that puts `lo … hi` on −1 … 1 (a flat curve is centred, not stretched).
+    #[must_use]
+    pub fn normalizing(lo: f32, hi: f32) -> Self {
+        let mid = 0.5 * (lo + hi);
+        let half = 0.5 * (hi - lo);
+        ValueMap { mid, scale: if half > 1e-6 { 1.0 / half } else { 1.0 } }
+    }
+}
+
+/// Per channel, per curve: how it is drawn (`None`: hidden).
+type Maps = Vec<Vec<Option<ValueMap>>>;
+
+/// The curves as drawn: mapped by `maps`, hidden ones empty (their index kept).
+fn displayed(all: &[(ChannelId, Rc<Vec<Curve>>)], maps: &Maps) -> Vec<(ChannelId, Rc<Vec<Curve>>)> {
+    all.iter()
+        .enumerate()
+        .map(|(n, (id, curves))| {
+            let shown = curves
+                .iter()
+                .enumerate()
+                .map(|(c, curve)| match maps.get(n).and_then(|m| m.get(c)).copied().flatten() {
+                    Some(map) if map == ValueMap::IDENTITY => curve.clone(),
+                    Some(map) => curve.iter().map(|&(f, v)| (f, map.apply(v))).collect(),
+                    None => Vec::new(),
+                })
+                .collect();
+            (*id, Rc::new(shown))
+        })
+        .collect()
+}
+
+/// The key points of the shown curves in view: each key of each channel on each of its shown
+/// components, at the value its curve reads there (Euler angles continuous with the curve,
+/// twists unwrapped onto it), mapped as the curve is drawn.
 fn key_points(
     eval: &SceneEvaluator,
     scene: &Scene,
     twist: bool,
     plot: &Plot,
     all: &[(ChannelId, Rc<Vec<Curve>>)],
+    maps: &Maps,
 ) -> Vec<KeyPoint> {
     let fps = scene.fps.max(1e-9);
     let none = PoseOverrides::new();
     let mut out = Vec::new();
     let mut last_column = std::collections::HashMap::new();
-    for (id, curves) in all {
+    for (n, (id, curves)) in all.iter().enumerate() {
+        let mode = rotation_mode::of_channel(scene, *id);
         let window =
             channels::keys_between(scene, *id, plot.view.start / fps - 1e-9, plot.view.end / fps + 1e-9);
         for (i, time) in window.times.iter().enumerate() {
             let frame = time * fps;
-            let raw = shown_components(twist, eval.value(*id, *time, &none));
-            if raw.is_empty() {
-                continue;
-            }
+            // Each curve's sample nearest the key: the reading the key continues.
+            let near: Vec<f32> = curves
+                .iter()
+                .filter_map(|curve| {
+                    curve
+                        .iter()
+                        .min_by(|a, b| (a.0 - frame).abs().total_cmp(&(b.0 - frame).abs()))
+                        .map(|&(_, v)| v)
+                })
+                .collect();
+            let raw = shown_components(mode, twist, eval.value(*id, *time, &none), Some(&near));
             for (c, raw) in raw.into_iter().enumerate() {
-                let Some(curve) = curves.get(c) else { continue };
-                // The sample nearest the key, to unwrap an Euler angle onto the curve.
-                let near = curve
-                    .iter()
-                    .min_by(|a, b| (a.0 - frame).abs().total_cmp(&(b.0 - frame).abs()))
-                    .map_or(raw, |&(_, v)| v);
-                let value = if id.kind() == channels::ChannelKind::Rotation {
-                    raw + 360.0 * ((near - raw) / 360.0).round()
-                } else {
-                    raw
+                let Some(map) = maps.get(n).and_then(|m| m.get(c)).copied().flatten() else { continue };
+                let value = match near.get(c) {
+                    Some(&near) if twist && id.kind() == channels::ChannelKind::Rotation => {
+                        raw + 360.0 * ((near - raw) / 360.0).round()
+                    }
+                    _ => raw,
                 };
-                let pos = plot.pos(frame, value);
+                let pos = plot.pos(frame, map.apply(value));
                 // One point per pixel column and component (motion-capture density).
                 let column = (pos.x.round() as i32, *id, c);
                 if last_column.insert(column, ()).is_some() {
@@ -456,6 +593,7 @@ impl CurveEditor {
         ids: &[ChannelId],
         plot: &Plot,
         all: &[(ChannelId, Rc<Vec<Curve>>)],
+        maps: &Maps,
     ) -> Rc<Vec<KeyPoint>> {
         let (r, v) = (plot.rect, plot.view);
         let key: PointsKey = (
@@ -464,23 +602,64 @@ impl CurveEditor {
             [v.start.to_bits(), v.end.to_bits(), u64::from(v.low.to_bits()), u64::from(v.high.to_bits())],
             ids.to_vec(),
             self.rotation_as_twist,
+            maps.clone(),
         );
         if let Some((k, points)) = &self.points {
             if *k == key {
                 return Rc::clone(points);
             }
         }
-        let points = Rc::new(key_points(&ctx.evaluator(), ctx.scene(), self.rotation_as_twist, plot, all));
+        let points =
+            Rc::new(key_points(&ctx.evaluator(), ctx.scene(), self.rotation_as_twist, plot, all, maps));
         self.points = Some((key, Rc::clone(&points)));
         points
     }
 
-    /// The view that shows the frame range and every value of `ids` (with a margin).
+    /// How each curve of `ids` is drawn: hidden, scaled to −1 … 1 over the frame range
+    /// (normalised view), or as it is.
+    fn maps(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> Maps {
+        let scene = ctx.scene();
+        let range = scene.frame_range;
+        let (start, end) = (f64::from(range.start), f64::from(range.end.max(range.start + 1)));
+        let whole = if self.normalized { Some(self.curves_over(ctx, ids, (start, end), 200)) } else { None };
+        ids.iter()
+            .enumerate()
+            .map(|(n, &id)| {
+                let count = curve_count(scene, id, self.rotation_as_twist);
+                (0..count)
+                    .map(|c| {
+                        if self.hidden.contains(&(id, c)) {
+                            return None;
+                        }
+                        let curve =
+                            whole.as_ref().and_then(|w| w.get(n)).and_then(|(_, curves)| curves.get(c));
+                        Some(match curve {
+                            Some(curve) => {
+                                let (lo, hi) =
+                                    curve.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                                        (lo.min(p.1), hi.max(p.1))
+                                    });
+                                if lo.is_finite() && hi.is_finite() {
+                                    ValueMap::normalizing(lo, hi)
+                                } else {
+                                    ValueMap::IDENTITY
+                                }
+                            }
+                            None => ValueMap::IDENTITY,
+                        })
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The view that shows the frame range and every shown value of `ids` (with a margin).
     fn fit_view(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> CurveView {
         let range = ctx.scene().frame_range;
         let (start, end) = (f64::from(range.start), f64::from(range.end.max(range.start + 1)));
         let all = self.curves_over(ctx, ids, (start, end), 200);
-        let (mut lo, mut hi) = value_extent(&all).unwrap_or((-1.0, 1.0));
+        let maps = self.maps(ctx, ids);
+        let (mut lo, mut hi) = value_extent(&displayed(&all, &maps)).unwrap_or((-1.0, 1.0));
         if hi - lo < 1e-3 {
             lo -= 0.5;
             hi += 0.5;
@@ -490,6 +669,10 @@ impl CurveEditor {
     }
 
     /// Frames the selected keys (all shown keys when none is selected): F over the curve view.
+    /// The frames from the first selected key to the last (at least [`MIN_FRAMED_FRAMES`]), and
+    /// every value the shown curves of their channels take there as drawn — spins and
+    /// unwrapped angles included, so a 0° → 360° turn frames 0 … 360 — at least a tenth of the
+    /// whole view's value span.
     fn frame_selected_keys(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) {
         if ids.is_empty() {
             return;
@@ -497,24 +680,44 @@ impl CurveEditor {
         let fit = self.fit_view(ctx, ids);
         let scene = ctx.scene();
         let fps = scene.fps.max(1e-9);
-        let eval = ctx.evaluator();
-        let none = PoseOverrides::new();
-        let (mut f0, mut f1, mut v0, mut v1) =
-            (f64::INFINITY, f64::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY);
-        for k in &ctx.session.selection.keys {
+        let (mut f0, mut f1) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut channels_of_keys: Vec<ChannelId> = Vec::new();
+        for k in ctx.session.selection.keys.iter().filter(|k| ids.contains(&k.channel)) {
             let Some((time, _, _)) = channels::key_params(scene, k.channel, k.index) else { continue };
             f0 = f0.min(time * fps);
             f1 = f1.max(time * fps);
-            for v in shown_components(self.rotation_as_twist, eval.value(k.channel, time, &none)) {
-                v0 = v0.min(v);
-                v1 = v1.max(v);
+            if !channels_of_keys.contains(&k.channel) {
+                channels_of_keys.push(k.channel);
             }
         }
         if !f0.is_finite() {
             self.view = Some(fit);
             return;
         }
-        let (df, dv) = ((f1 - f0).max(4.0) * 0.1, (v1 - v0).max(1e-2) * 0.1);
+        let grow = (MIN_FRAMED_FRAMES - (f1 - f0)).max(0.0) * 0.5;
+        let (f0, f1) = (f0 - grow, f1 + grow);
+        let all = self.curves_over(ctx, ids, (f0, f1), 400);
+        let maps = self.maps(ctx, ids);
+        let shown = displayed(&all, &maps);
+        let (mut v0, mut v1) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (id, curves) in &shown {
+            if !channels_of_keys.contains(id) {
+                continue;
+            }
+            for &(_, v) in curves.iter().flatten() {
+                if v.is_finite() {
+                    v0 = v0.min(v);
+                    v1 = v1.max(v);
+                }
+            }
+        }
+        if !v0.is_finite() {
+            (v0, v1) = (fit.low, fit.high);
+        }
+        let min_span = (fit.high - fit.low) * 0.1;
+        let grow_v = (min_span - (v1 - v0)).max(0.0) * 0.5;
+        let (v0, v1) = (v0 - grow_v, v1 + grow_v);
+        let (df, dv) = ((f1 - f0) * 0.08, (v1 - v0).max(1e-3) * 0.08);
         self.view = Some(CurveView { start: f0 - df, end: f1 + df, low: v0 - dv, high: v1 + dv });
     }
 
@@ -547,9 +750,21 @@ impl CurveEditor {
             if !ids.is_empty() && ui.small_button("Fit").on_hover_text(fit).clicked() {
                 self.view = None;
             }
+            if !ids.is_empty() {
+                let normalize = ui
+                    .selectable_label(self.normalized, "Normalize")
+                    .on_hover_text("Each curve scaled to −1 … 1 over the frame range, so small and large curves read together");
+                if normalize.clicked() {
+                    self.normalized = !self.normalized;
+                    self.view = None;
+                }
+                if !self.hidden.is_empty() && ui.small_button("Show all").clicked() {
+                    self.hidden.clear();
+                }
+            }
         });
         if !ids.is_empty() {
-            self.legend_ui(ui, scene, &ids);
+            self.legend_ui(ui, ctx, actions, &ids);
         }
         let size = ui.available_size().max(Vec2::new(100.0, 60.0));
         let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
@@ -584,7 +799,14 @@ impl CurveEditor {
         let plot = Plot { rect: plot_rect(rect), view };
         let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
         let all = self.curves_over(ctx, ids, (view.start, view.end), samples);
-        let points = self.key_points(ctx, ids, &plot, &all);
+        let maps = self.maps(ctx, ids);
+        let points = self.key_points(ctx, ids, &plot, &all, &maps);
+        let scale_of = |key: KeyRef, component: usize| {
+            ids.iter()
+                .position(|&id| id == key.channel)
+                .and_then(|n| maps.get(n).and_then(|m| m.get(component)).copied().flatten())
+                .map_or(1.0, |m| m.scale)
+        };
         let pick = |pos: Pos2| {
             points
                 .iter()
@@ -626,7 +848,7 @@ impl CurveEditor {
             }
         }
         let press = ui.input(|i| i.pointer.press_origin());
-        let grips = handles(scene, selection, &plot);
+        let grips = handles(scene, selection, &plot, ids, &maps);
         let grip_at = |pos: Pos2| {
             grips
                 .iter()
@@ -643,12 +865,18 @@ impl CurveEditor {
                     key: grip.key,
                     component: grip.component,
                     outgoing: grip.outgoing,
+                    convert: grip.convert,
                 })
             } else if let Some(point) = pick(origin) {
                 if !selection.keys.contains(&point.key) {
                     select_key(selection, actions, point.key, additive);
                 }
-                Some(CurveGesture::MoveKeys { frames: 0, value: 0.0, component: point.component })
+                Some(CurveGesture::MoveKeys {
+                    frames: 0,
+                    value: 0.0,
+                    component: point.component,
+                    scale: scale_of(point.key, point.component),
+                })
             } else {
                 Some(CurveGesture::Box { start: origin })
             };
@@ -664,13 +892,14 @@ impl CurveEditor {
                     ctx.set_frame(actions, plot.frame(pos.x).round() as i32);
                 }
             }
-            Some(CurveGesture::MoveKeys { frames, value, component }) if delta.is_some() => {
+            Some(CurveGesture::MoveKeys { frames, value, component, scale }) if delta.is_some() => {
                 let delta = delta.unwrap_or_default();
                 // The keys keep the view they were grabbed in, so a drag moves them by what the
                 // pointer moved.
                 self.view.get_or_insert(view);
                 let wanted_frames = (f64::from(delta.x) * plot.frames_per_point()).round() as i32;
-                let wanted_value = -delta.y * plot.values_per_point();
+                // In curve units: the pointer moves the drawn curve (scaled when normalised).
+                let wanted_value = -delta.y * plot.values_per_point() / scale;
                 let mut applied = (frames, value);
                 if wanted_frames != frames && self.pending_move.is_none() {
                     let ticket = actions.ticket();
@@ -684,7 +913,7 @@ impl CurveEditor {
                     applied.1 = wanted_value;
                 }
                 self.gesture =
-                    Some(CurveGesture::MoveKeys { frames: applied.0, value: applied.1, component });
+                    Some(CurveGesture::MoveKeys { frames: applied.0, value: applied.1, component, scale });
             }
             Some(CurveGesture::Box { start }) => {
                 if response.drag_stopped() {
@@ -714,7 +943,7 @@ impl CurveEditor {
                     high: from.high + values,
                 });
             }
-            Some(CurveGesture::Handle { key, component, outgoing }) if delta.is_some() => {
+            Some(CurveGesture::Handle { key, component, outgoing, convert }) if delta.is_some() => {
                 // The handle follows the pointer's value; its time stays a third of the segment.
                 let grip =
                     grips.iter().find(|h| h.key == key && h.component == component && h.outgoing == outgoing);
@@ -723,9 +952,16 @@ impl CurveEditor {
                         view.low
                             + (plot.rect.bottom() - y) / plot.rect.height().max(1.0) * (view.high - view.low)
                     };
-                    let rise = value_at(pointer.y) - value_at(grip.key_pos.y);
+                    let rise =
+                        grip.map.invert(value_at(pointer.y)) - grip.map.invert(value_at(grip.key_pos.y));
                     let tangent = rise / grip.seconds.max(1e-9) as f32 * if outgoing { 1.0 } else { -1.0 };
-                    actions.edit(Edit::continuous("curve handle", "drag tangent handle", move |scene| {
+                    let side = if outgoing { "out" } else { "in" };
+                    let label =
+                        format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index);
+                    actions.edit(Edit::continuous("curve handle", label, move |scene| {
+                        if convert && key.index > 0 {
+                            channels::convert_to_hermite(scene, key.channel, &[key.index - 1]);
+                        }
                         channels::set_tangent_component(
                             scene,
                             key.channel,
@@ -790,41 +1026,86 @@ impl CurveEditor {
         }
     }
 
-    /// The legend: a swatch and name per shown curve, and how rotations read.
-    fn legend_ui(&mut self, ui: &mut Ui, scene: &Scene, ids: &[ChannelId]) {
-        let entries: Vec<(ChannelId, String, usize)> = ids
-            .iter()
-            .map(|&id| {
-                let components = match id.kind() {
-                    channels::ChannelKind::Scalar => 1,
-                    channels::ChannelKind::Rotation if self.rotation_as_twist => 1,
-                    _ if turn_axis(scene, id).is_some() => 4,
-                    _ => 3,
-                };
-                (id, id.label(scene), components)
-            })
-            .collect();
+    /// The legend: per channel its mute and lock toggles, then a swatch and name per curve —
+    /// a click hides or shows the curve, Ctrl+click shows it alone (again: every curve) — and
+    /// how rotations read.
+    fn legend_ui(&mut self, ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, ids: &[ChannelId]) {
+        let scene = ctx.scene();
+        let twist = self.rotation_as_twist;
+        let every: Vec<(ChannelId, usize)> =
+            ids.iter().flat_map(|&id| (0..curve_count(scene, id, twist)).map(move |c| (id, c))).collect();
         ui.horizontal_wrapped(|ui| {
-            for (n, (id, label, components)) in entries.iter().enumerate() {
-                let (id, components) = (*id, *components);
-                for c in 0..components {
-                    let colour = curve_colour(n, c, components);
+            for (n, &id) in ids.iter().enumerate() {
+                let label = id.label(scene);
+                let values = value_count(scene, id, twist);
+                let (muted, locked) = channels::mute_and_lock(scene, id);
+                let mute = ui
+                    .selectable_label(muted, egui::RichText::new("M").small())
+                    .on_hover_text(format!("Mute {label}: it plays its static value, its keys are kept"));
+                let name = format!("mute {label}");
+                ui.ctx().accesskit_node_builder(mute.id, |node| node.set_label(name));
+                if mute.clicked() {
+                    let what = if muted { "unmute" } else { "mute" };
+                    actions.push(Action::CloseGroup);
+                    actions.edit(Edit::scene(format!("{what} {label}"), move |scene| {
+                        channels::set_muted(scene, id, !muted);
+                    }));
+                }
+                let lock = ui
+                    .selectable_label(locked, egui::RichText::new("🔒").small())
+                    .on_hover_text(format!("Lock {label}: its keys and value cannot be changed"));
+                let name = format!("lock {label}");
+                ui.ctx().accesskit_node_builder(lock.id, |node| node.set_label(name));
+                if lock.clicked() {
+                    let what = if locked { "unlock" } else { "lock" };
+                    actions.push(Action::CloseGroup);
+                    actions.edit(Edit::scene(format!("{what} {label}"), move |scene| {
+                        channels::set_locked(scene, id, !locked);
+                    }));
+                }
+                for c in 0..curve_count(scene, id, twist) {
+                    let colour = curve_colour(n, c, c >= values);
+                    let visible = !self.hidden.contains(&(id, c));
                     let (swatch, _) = ui.allocate_exact_size(Vec2::new(10.0, 10.0), Sense::hover());
-                    ui.painter().rect_filled(swatch, 2.0, colour);
-                    let name = if components == 1 && id.kind() == channels::ChannelKind::Rotation {
+                    if visible {
+                        ui.painter().rect_filled(swatch, 2.0, colour);
+                    } else {
+                        ui.painter().rect_stroke(swatch, 2.0, Stroke::new(1.0, colour), egui::StrokeKind::Inside);
+                    }
+                    let name = if values == 1 && c == 0 && id.kind() == channels::ChannelKind::Rotation {
                         format!("{label} twist")
                     } else {
-                        format!("{label} {}", component_name(id, c)).trim_end().to_owned()
+                        format!("{label} {}", component_name(scene, id, c)).trim_end().to_owned()
                     };
-                    ui.label(egui::RichText::new(name).small());
+                    let mut text = egui::RichText::new(name).small();
+                    if !visible {
+                        text = text.weak().strikethrough();
+                    }
+                    let entry = ui
+                        .selectable_label(visible, text)
+                        .on_hover_text("Click: hide or show this curve. Ctrl+click: show it alone (again: all)");
+                    if entry.clicked() {
+                        if ui.input(|i| i.modifiers.command) {
+                            let alone = every.iter().all(|&k| (k == (id, c)) != self.hidden.contains(&k));
+                            self.hidden = if alone {
+                                BTreeSet::new()
+                            } else {
+                                every.iter().copied().filter(|&k| k != (id, c)).collect()
+                            };
+                        } else if !self.hidden.remove(&(id, c)) {
+                            self.hidden.insert((id, c));
+                        }
+                    }
                 }
             }
             if ids.iter().any(|id| id.kind() == channels::ChannelKind::Rotation) {
                 let twist = &mut self.rotation_as_twist;
-                let euler = format!("Euler angles ({EULER_ORDER})");
                 ui.label(egui::RichText::new("rotations:").small().weak());
-                ui.selectable_value(twist, false, egui::RichText::new(euler).small())
-                    .on_hover_text("Rotations as Euler angles in this order, degrees, unwrapped along the curve");
+                ui.selectable_value(twist, false, egui::RichText::new("As each channel's mode").small())
+                    .on_hover_text(
+                        "Rotations as their channel's rotation mode reads them (inspector): Euler angles \
+                         in its order, continuous from key to key, or the quaternion's w, x, y, z",
+                    );
                 ui.selectable_value(twist, true, egui::RichText::new("Twist about X").small()).on_hover_text(
                     "Rotations as their twist about the bone axis (X), degrees, unwrapped: a 720° twist climbs to 720",
                 );
@@ -927,6 +1208,8 @@ impl CurveEditor {
         let fps = scene.fps.max(1e-9);
         let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
         let all = self.curves_over(ctx, ids, (view.start, view.end), samples);
+        let maps = self.maps(ctx, ids);
+        let shown = displayed(&all, &maps);
         let weak = visuals.weak_text_color();
         let grid = Stroke::new(1.0, visuals.faint_bg_color);
         let plot_painter = painter.with_clip_rect(plot.rect.intersect(clip));
@@ -1025,18 +1308,19 @@ impl CurveEditor {
         }
 
         // Curves and their keys.
-        for (n, (_, curves)) in all.iter().enumerate() {
+        for (n, (id, curves)) in shown.iter().enumerate() {
+            let values = value_count(scene, *id, self.rotation_as_twist);
             for (c, curve) in curves.iter().enumerate() {
-                let colour = curve_colour(n, c, curves.len());
+                let colour = curve_colour(n, c, c >= values);
                 let points: Vec<Pos2> = curve.iter().map(|&(f, v)| plot.pos(f, v)).collect();
                 plot_painter.add(Shape::line(points, Stroke::new(1.5, colour)));
             }
         }
-        let points = self.key_points(ctx, ids, &plot, &all);
+        let points = self.key_points(ctx, ids, &plot, &all, &maps);
         for p in points.iter() {
             let n = ids.iter().position(|&id| id == p.key.channel).unwrap_or(0);
-            let components = all.get(n).map_or(3, |(_, c)| c.len());
-            let colour = curve_colour(n, p.component, components);
+            let values = value_count(scene, p.key.channel, self.rotation_as_twist);
+            let colour = curve_colour(n, p.component, p.component >= values);
             if ctx.session.selection.keys.contains(&p.key) {
                 plot_painter.circle(
                     p.pos,
@@ -1048,8 +1332,10 @@ impl CurveEditor {
                 plot_painter.circle_filled(p.pos, 3.0, colour);
             }
         }
-        for grip in handles(scene, &ctx.session.selection, &plot) {
-            plot_painter.line_segment([grip.key_pos, grip.pos], Stroke::new(1.0, Color32::from_gray(200)));
+        for grip in handles(scene, &ctx.session.selection, &plot, ids, &maps) {
+            // An in-handle whose segment is not Hermite yet is drawn dashed-grey until dragged.
+            let line = if grip.convert { Color32::from_gray(120) } else { Color32::from_gray(200) };
+            plot_painter.line_segment([grip.key_pos, grip.pos], Stroke::new(1.0, line));
             plot_painter.circle(
                 grip.pos,
                 3.5,
@@ -1070,7 +1356,7 @@ impl CurveEditor {
                 format!(
                     "{side} handle {} {} key {}",
                     channel.label(scene),
-                    component_name(channel, component),
+                    component_name(scene, channel, component),
                     grip.key.index
                 )
             };
@@ -1117,7 +1403,7 @@ impl CurveEditor {
                 format!(
                     "curve key {} {} frame {frame}",
                     channel.label(scene),
-                    component_name(channel, component)
+                    component_name(scene, channel, component)
                 )
                 .replace("  ", " ")
             };

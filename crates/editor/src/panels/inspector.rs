@@ -10,11 +10,12 @@ use keyrig_core::{Cycle, DeformerKind, Interpolation, Tcb};
 use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::channels::{self, ChannelId, ChannelValue};
 use crate::context::FrameCtx;
-use crate::eval::{euler_degrees, quat_from_euler_degrees, EULER_ORDER, EULER_ORDER_HELP};
+use crate::eval::continuous_euler;
 use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::measure::measure_ui;
 use crate::widgets::tcb_slider::tcb_slider_ui;
+use keyrig_core::rotation_mode::{self, RotationMode};
 
 /// Starts applying a field's change: a committed (typed) value is its own undo step, so any
 /// open continuous group is closed first; a drag continues its group until release.
@@ -68,6 +69,70 @@ fn vec3_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut Vec3, speed: f64)
     .inner
 }
 
+/// A row of four drag values for a quaternion, labelled "<label> W" (X, Y, Z).
+fn quat_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut glam::Vec4) -> FieldChange {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        if !marker.is_empty() {
+            ui.weak(marker);
+        }
+    });
+    ui.horizontal(|ui| {
+        let mut changed = FieldChange::None;
+        let mut components = v.to_array();
+        for (axis, c) in ["W", "X", "Y", "Z"].iter().zip(components.iter_mut()) {
+            let name = format!("{label} {axis}");
+            let (_, change) = number_field(ui, c, &name, |d| d.speed(0.005).max_decimals(4));
+            if change.any() {
+                changed = change;
+            }
+        }
+        *v = glam::Vec4::from_array(components);
+        changed
+    })
+    .inner
+}
+
+/// The rotation mode of a rotation channel (its object's or joint's): quaternion, or Euler
+/// angles in one of the six orders. Changing it changes what is shown and typed, not the keys;
+/// one undo step.
+fn rotation_mode_ui(
+    ui: &mut Ui,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    id: ChannelId,
+    mode: RotationMode,
+) {
+    let help = match mode.euler() {
+        Some(order) => order.formula(),
+        None => "The unit quaternion w, x, y, z; typed values are normalised".to_owned(),
+    };
+    let mut chosen = mode;
+    let response = egui::ComboBox::from_label("Rotation mode")
+        .selected_text(mode.label())
+        .show_ui(ui, |ui| {
+            for choice in RotationMode::ALL {
+                let tip = match choice.euler() {
+                    Some(order) => order.formula(),
+                    None => "Quaternion components w, x, y, z".to_owned(),
+                };
+                ui.selectable_value(&mut chosen, choice, choice.label()).on_hover_text(tip);
+            }
+        })
+        .response;
+    response.on_hover_text(format!(
+        "{help}. The keys stay quaternions, interpolated as before; the mode changes what the \
+         inspector and the curves show and type."
+    ));
+    if chosen != mode {
+        let name = id.label(ctx.scene());
+        actions.push(Action::CloseGroup);
+        actions.edit(Edit::scene(format!("rotation mode {} of {name}", chosen.label()), move |scene| {
+            rotation_mode::set_for_channel(scene, id, chosen);
+        }));
+    }
+}
+
 /// A colour button that opens egui's colour picker, for a linear-RGB colour as the scene stores
 /// it (components above 1 are clamped by the picker only when it is used). The button carries
 /// the accessible label `label`; its tooltip shows the stored numbers.
@@ -116,14 +181,38 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             }
         }
         ChannelValue::Rotation(q) => {
-            let mut e = euler_degrees(q);
-            let change = vec3_editor(ui, label, marker, &mut e, 0.5);
-            if change.any() && e.is_finite() {
-                begin(actions, change);
-                let value = ChannelValue::Rotation(quat_from_euler_degrees(e));
-                actions.edit(Edit::Pose { id, value, group: group.clone() });
+            let mode = rotation_mode::of_channel(ctx.scene(), id);
+            match mode.euler() {
+                Some(order) => {
+                    // Continuous from the channel's first key: a spin reads 0 → 360, not a flip.
+                    let mut e = continuous_euler(
+                        &ctx.evaluator(),
+                        ctx.scene(),
+                        id,
+                        order,
+                        ctx.time(),
+                        &ctx.session.overrides,
+                    )
+                    .unwrap_or_else(|| order.angles(q));
+                    let change = vec3_editor(ui, label, marker, &mut e, 0.5);
+                    if change.any() && e.is_finite() {
+                        begin(actions, change);
+                        let value = ChannelValue::Rotation(order.to_quat(e));
+                        actions.edit(Edit::Pose { id, value, group: group.clone() });
+                    }
+                }
+                None => {
+                    let mut v = glam::Vec4::new(q.w, q.x, q.y, q.z);
+                    let change = quat_editor(ui, label, marker, &mut v);
+                    let q = glam::Quat::from_xyzw(v.y, v.z, v.w, v.x);
+                    if change.any() && q.is_finite() && q.length() > 1e-6 {
+                        begin(actions, change);
+                        let value = ChannelValue::Rotation(q.normalize());
+                        actions.edit(Edit::Pose { id, value, group: group.clone() });
+                    }
+                }
             }
-            ui.weak(format!("Euler {EULER_ORDER}")).on_hover_text(EULER_ORDER_HELP);
+            rotation_mode_ui(ui, ctx, actions, id, mode);
             if matches!(id, ChannelId::JointRotation { .. }) {
                 twist_ui(ui, ctx, actions, id, q, &group);
             }
@@ -521,7 +610,7 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         });
     });
     if (mode, tcb) != before {
-        let label = if keys.len() == 1 { "edit key".to_owned() } else { format!("edit {} keys", keys.len()) };
+        let label = key_edit_label(ctx, &keys, (mode, tcb), before);
         let keys = keys.clone();
         actions.edit(Edit::continuous("key inspector", label, move |scene| {
             for k in &keys {
@@ -545,6 +634,39 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         }));
     }
     cycles_ui(ui, ctx, actions, first.channel);
+}
+
+/// The undo step's name for a change in the key inspector: what changed, on which key(s) —
+/// "tension 0.50 on elbow rotation key at frame 30", "interpolation Linear on 3 keys".
+fn key_edit_label(
+    ctx: &FrameCtx<'_>,
+    keys: &[crate::session::KeyRef],
+    (mode, tcb): (Interpolation, Tcb),
+    (old_mode, old): (Interpolation, Tcb),
+) -> String {
+    let what = if mode != old_mode {
+        format!("interpolation {mode:?}")
+    } else if tcb.tension != old.tension {
+        format!("tension {:.2}", tcb.tension)
+    } else if tcb.continuity != old.continuity {
+        format!("continuity {:.2}", tcb.continuity)
+    } else if tcb.bias != old.bias {
+        format!("bias {:.2}", tcb.bias)
+    } else if tcb.clamped != old.clamped {
+        (if tcb.clamped { "clamped" } else { "unclamped" }).to_owned()
+    } else {
+        "key".to_owned()
+    };
+    let scene = ctx.scene();
+    let on = match keys {
+        [k] => {
+            let frame = channels::key_params(scene, k.channel, k.index)
+                .map_or(0, |p| (p.0 * scene.fps).round() as i64);
+            format!("{} key at frame {frame}", k.channel.label(scene))
+        }
+        many => format!("{} keys", many.len()),
+    };
+    format!("{what} on {on}")
 }
 
 /// The channel's behaviour before its first key and after its last (cycles, docs/design.md §9): two

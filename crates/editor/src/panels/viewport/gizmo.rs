@@ -5,24 +5,18 @@
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Stroke, Ui};
 use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
-use keyrig_core::LightKind;
 use transform_gizmo_egui::math::Transform;
 use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrientation, GizmoResult};
 
-use crate::actions::{Actions, Edit};
+use crate::actions::Actions;
 use crate::camera::{OrbitCamera, Projection};
-use crate::channels::{ChannelId, ChannelValue, Turn};
 use crate::context::FrameCtx;
-use crate::session::Selected;
 use crate::twist::{RingDrag, RingDragState};
+
+use super::targets::{self, Pivot, Target};
 
 /// The undo group of a gizmo drag: its edits are one undo step.
 const GROUP: &str = "gizmo";
-
-/// A pose change from the gizmo, part of the drag's undo step.
-fn pose_edit(actions: &mut Actions, id: ChannelId, value: ChannelValue) {
-    actions.edit(Edit::Pose { id, value, group: GROUP.to_owned() });
-}
 
 /// The gizmo's state across frames.
 #[derive(Default)]
@@ -33,6 +27,12 @@ pub(super) struct GizmoState {
     /// A drag on a rotation ring of a joint or object, turned by the editor itself
     /// ([`RingDrag`]) rather than by transform-gizmo.
     pub(super) ring: Option<RingDragState>,
+    /// What the ring drag turns (every selected item, as it stood at the press) and the point
+    /// it turns about.
+    ring_targets: Vec<Target>,
+    ring_centre: Vec3,
+    /// Where the selection turns about (the viewport's pivot setting).
+    pub(super) pivot: Pivot,
 }
 
 impl GizmoState {
@@ -60,22 +60,32 @@ impl GizmoState {
         rect: Rect,
         response: &egui::Response,
     ) -> bool {
-        let Some((world, kind)) = gizmo_target(ctx) else {
+        let items = targets::targets(ctx);
+        let Some(active) = items.first() else {
             self.drag = false;
             self.ring = None;
             return false;
         };
-        let modes = match kind {
-            GizmoKind::Joint { .. } => GizmoMode::all_rotate(),
-            GizmoKind::Object(_) => GizmoMode::all_rotate() | GizmoMode::all_translate(),
-            // Point lights have only a place, directional lights only a direction (their icon's
-            // place is not used for lighting), spot lights both.
-            GizmoKind::Light(_, LightKind::Point) => GizmoMode::all_translate(),
-            GizmoKind::Light(_, LightKind::Directional) => GizmoMode::all_rotate(),
-            GizmoKind::Light(_, LightKind::Spot { .. }) => {
-                GizmoMode::all_rotate() | GizmoMode::all_translate()
-            }
-        };
+        // The gizmo stands at the pivot with the active item's axes.
+        let mut world = active.world;
+        world.translation = targets::pivot_point(&items, self.pivot).into();
+        // Point lights have only a place, directional lights only a direction (their icon's
+        // place is not used for lighting), spot lights both; joints move where the rig allows
+        // (a root, or a joint with translation keys).
+        let turns = items.iter().any(|t| t.rotation.is_some() || t.direction.is_some());
+        let moves = items.iter().any(|t| t.translation.is_some() && !t.carried);
+        let mut modes = GizmoMode::all_rotate() & GizmoMode::all_translate();
+        if turns {
+            modes |= GizmoMode::all_rotate();
+        }
+        if moves {
+            modes |= GizmoMode::all_translate();
+        }
+        if modes.is_empty() {
+            self.drag = false;
+            self.ring = None;
+            return false;
+        }
         let to_rows = |m: glam::Mat4| m.as_dmat4().into();
         self.gizmo.update_config(GizmoConfig {
             view_matrix: to_rows(projection.camera_from_world),
@@ -108,19 +118,26 @@ impl GizmoState {
         };
         if let Some(mut ring) = self.ring.take() {
             // A rotation ring drag of our own: the angle follows the pointer (RingDrag), the
-            // gizmo only draws its handles where the target now is.
+            // gizmo only draws its handles where the target now is. Every selected item turns
+            // about the pivot ([`targets::turn`]).
             if let Some(p) = hover {
                 ring.drag.drag_to(p);
             }
             let degrees = ring.drag.degrees(snap);
             let delta = degrees - ring.applied;
             if delta != 0.0 {
-                if let Some(ChannelValue::Rotation(from)) = ctx.value_now(ring.channel) {
-                    let axis = ring.frame.inverse() * ring.drag.axis;
-                    let turn = Turn { from, axis, degrees: delta };
-                    actions.edit(Edit::Turn { id: ring.channel, turn, group: GROUP.to_owned() });
-                    ring.applied = degrees;
-                }
+                targets::turn(
+                    ctx,
+                    actions,
+                    &self.ring_targets,
+                    self.pivot,
+                    self.ring_centre,
+                    ring.drag.axis,
+                    delta,
+                    degrees,
+                    GROUP,
+                );
+                ring.applied = degrees;
             }
             let _ = self.gizmo.update(interaction(false, false, false), &targets);
             paint_gizmo(ui, &self.gizmo, rect);
@@ -129,6 +146,7 @@ impl GizmoState {
                 self.ring = Some(ring);
             } else {
                 self.drag = false;
+                self.ring_targets.clear();
             }
             return true;
         }
@@ -152,13 +170,26 @@ impl GizmoState {
         }
         // A press on a rotation ring of a joint or object starts a drag of our own (RingDrag):
         // transform-gizmo only tells which ring was picked.
-        if let (true, Some((GizmoResult::Rotation { axis, is_view_axis, .. }, _))) = (pressed, &result) {
-            if let Some((channel, frame)) = rotation_channel(ctx, kind) {
-                let (_, world_rotation, centre_world) = world.to_scale_rotation_translation();
+        let first_rotation = items.iter().find_map(|t| t.rotation);
+        let (_, world_rotation, _) = world.to_scale_rotation_translation();
+        let picked = match (pressed, &result) {
+            (true, Some((GizmoResult::Rotation { axis, is_view_axis, .. }, _))) => {
                 let axis = DVec3::from(*axis).as_vec3();
-                let axis = if *is_view_axis { axis } else { world_rotation * axis };
+                Some((if *is_view_axis { axis } else { world_rotation * axis }, *is_view_axis))
+            }
+            // transform-gizmo picks a ring within a few world units of it in the ring's plane,
+            // which on a ring seen at a slant is a sliver of screen: a press up to
+            // RING_HIT_POINTS from an axis ring's drawn arc takes that ring too.
+            (true, None) if !on_handle && free && response.contains_pointer() && turns => hover
+                .and_then(|p| near_axis_ring(projection, &world, ctx.view.camera.eye(), p))
+                .map(|axis| (axis, false)),
+            _ => None,
+        };
+        if let Some((axis, is_view_axis)) = picked {
+            if let Some((channel, frame)) = first_rotation {
+                let centre_world: Vec3 = world.translation.into();
+                let is_view_axis = &is_view_axis;
                 let eye = ctx.view.camera.eye();
-                let centre_world: Vec3 = centre_world;
                 let step = 0.01 * (centre_world - eye).length().max(1e-3);
                 let screen_dir = |v: Vec3| match (
                     projection.project(centre_world),
@@ -171,6 +202,8 @@ impl GizmoState {
                     let radius = if *is_view_axis { VIEW_RING_RADIUS } else { AXIS_RING_RADIUS };
                     let drag = RingDrag::new(axis, centre_world - eye, centre, press, radius, screen_dir);
                     self.ring = Some(RingDragState { drag, channel, frame, applied: 0.0 });
+                    self.ring_centre = centre_world;
+                    self.ring_targets = items;
                     // End transform-gizmo's own drag; it draws idle handles from now on.
                     let _ = self.gizmo.update(interaction(false, false, false), &targets);
                     paint_gizmo(ui, &self.gizmo, rect);
@@ -189,75 +222,14 @@ impl GizmoState {
         let Some(new) = transforms.first() else { return owns };
         let new_rotation: Quat = DQuat::from(new.rotation).as_quat().normalize();
         let new_translation: Vec3 = DVec3::from(new.translation).as_vec3();
-        match kind {
-            GizmoKind::Joint { object, joint } => {
-                // F(j) = F(p)·R(j)·T(j): T = (world_from_parent·R(j))⁻¹ · new world rotation.
-                let scene = ctx.scene();
-                let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else {
-                    return owns;
-                };
-                let Some(pose) = ctx.pose(object) else { return owns };
-                let j = &skeleton.joints[joint];
-                let parent_world = match j.parent.filter(|&p| p < joint) {
-                    Some(p) => pose.world_from_object * pose.object_from_joint[p],
-                    None => pose.world_from_object,
-                };
-                let (_, parent_rotation, _) = parent_world.to_scale_rotation_translation();
-                let local = joint_rotation_from_world(parent_rotation, j.rest_rotation, new_rotation);
-                pose_edit(
-                    actions,
-                    ChannelId::JointRotation { object, joint },
-                    ChannelValue::Rotation(local.normalize()),
-                );
-            }
-            GizmoKind::Object(o) => {
-                if matches!(result, GizmoResult::Translation { .. }) {
-                    pose_edit(actions, ChannelId::ObjectTranslation(o), ChannelValue::Vec3(new_translation));
-                } else {
-                    pose_edit(actions, ChannelId::ObjectRotation(o), ChannelValue::Rotation(new_rotation));
-                }
-            }
-            GizmoKind::Light(l, _) => {
-                if matches!(result, GizmoResult::Translation { .. }) {
-                    pose_edit(actions, ChannelId::LightPosition(l), ChannelValue::Vec3(new_translation));
-                } else if let Some(ChannelValue::Vec3(old)) = ctx.value_now(ChannelId::LightDirection(l)) {
-                    // Keep the direction's length (it need not be unit), turn it with the gizmo.
-                    let length = old.length();
-                    let length = if length > 0.0 { length } else { 1.0 };
-                    let direction = (new_rotation * LIGHT_AXIS) * length;
-                    pose_edit(actions, ChannelId::LightDirection(l), ChannelValue::Vec3(direction));
-                }
-            }
+        let (_, old_rotation, old_translation) = world.to_scale_rotation_translation();
+        if matches!(result, GizmoResult::Translation { .. }) {
+            targets::shift(ctx, actions, &items, new_translation - old_translation, GROUP);
+        } else {
+            // Only lights turn through transform-gizmo (joints and objects turn on our rings).
+            targets::aim_lights(ctx, actions, &items, new_rotation * old_rotation.inverse(), GROUP);
         }
         owns
-    }
-}
-
-/// The world transform the gizmo edits for the selection, and which channels it drives.
-fn gizmo_target(ctx: &FrameCtx<'_>) -> Option<(Affine3A, GizmoKind)> {
-    match ctx.session.selection.item? {
-        Selected::Joint { object, joint } => {
-            let pose = ctx.pose(object)?;
-            Some((
-                pose.world_from_object * *pose.object_from_joint.get(joint)?,
-                GizmoKind::Joint { object, joint },
-            ))
-        }
-        Selected::Object(o) => Some((ctx.pose(o)?.world_from_object, GizmoKind::Object(o))),
-        Selected::Light(l) => {
-            let kind = ctx.scene().lights.get(l)?.kind;
-            let Some(ChannelValue::Vec3(p)) = ctx.value_now(ChannelId::LightPosition(l)) else { return None };
-            let aim = match kind {
-                LightKind::Point => Quat::IDENTITY,
-                LightKind::Directional | LightKind::Spot { .. } => {
-                    let Some(ChannelValue::Vec3(d)) = ctx.value_now(ChannelId::LightDirection(l)) else {
-                        return None;
-                    };
-                    light_aim(d)
-                }
-            };
-            Some((Affine3A::from_rotation_translation(aim, p), GizmoKind::Light(l, kind)))
-        }
     }
 }
 
@@ -266,18 +238,11 @@ const LIGHT_AXIS: Vec3 = Vec3::NEG_Z;
 
 /// A rotation that takes [`LIGHT_AXIS`] onto the direction `d` (any twist about `d`; only the
 /// direction is a channel).
-fn light_aim(d: Vec3) -> Quat {
+pub(super) fn light_aim(d: Vec3) -> Quat {
     match d.try_normalize() {
         Some(d) => Quat::from_rotation_arc(LIGHT_AXIS, d),
         None => Quat::IDENTITY,
     }
-}
-
-#[derive(Clone, Copy)]
-enum GizmoKind {
-    Joint { object: usize, joint: usize },
-    Object(usize),
-    Light(usize, LightKind),
 }
 
 fn to_transform(a: Affine3A) -> Transform {
@@ -285,30 +250,56 @@ fn to_transform(a: Affine3A) -> Transform {
     Transform::from_scale_rotation_translation(s.as_dvec3(), r.as_dquat(), t.as_dvec3())
 }
 
+/// How far (points) from an axis ring's drawn arc a press still takes the ring.
+const RING_HIT_POINTS: f32 = 14.0;
+
+/// The world axis of the axis ring (X, Y or Z of the gizmo's frame `world`) whose drawn arc —
+/// the half facing the camera, [`AXIS_RING_RADIUS`] points across at the gizmo's centre — is
+/// nearest `pointer`, within [`RING_HIT_POINTS`].
+fn near_axis_ring(projection: &Projection, world: &Affine3A, eye: Vec3, pointer: Pos2) -> Option<Vec3> {
+    let (_, rotation, centre) = world.to_scale_rotation_translation();
+    let centre_screen = projection.project(centre)?;
+    let to_eye = (eye - centre).normalize_or_zero();
+    // The world radius that projects to the ring's screen radius at the centre's depth.
+    let across = to_eye.any_orthonormal_vector();
+    let unit = projection.project(centre + across * 0.01 * (eye - centre).length().max(1e-3))?;
+    let points_per_world = (unit - centre_screen).length() / (0.01 * (eye - centre).length().max(1e-3));
+    if points_per_world <= 0.0 {
+        return None;
+    }
+    let radius = AXIS_RING_RADIUS / points_per_world;
+    let mut best: Option<(f32, Vec3)> = None;
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z].map(|a| rotation * a) {
+        let (u, v) = axis.any_orthonormal_pair();
+        let mut previous: Option<Pos2> = None;
+        for step in 0..=96 {
+            let a = step as f32 / 96.0 * std::f32::consts::TAU;
+            let offset = (u * a.cos() + v * a.sin()) * radius;
+            // The far half is not drawn.
+            let on_arc = offset.dot(to_eye) >= -0.02 * radius;
+            let here = projection.project(centre + offset).filter(|_| on_arc);
+            if let (Some(a), Some(b)) = (previous, here) {
+                let d = distance_to_segment(pointer, a, b);
+                if d <= RING_HIT_POINTS && best.is_none_or(|(e, _)| d < e) {
+                    best = Some((d, axis));
+                }
+            }
+            previous = here;
+        }
+    }
+    best.map(|(_, axis)| axis)
+}
+
+fn distance_to_segment(p: Pos2, a: Pos2, b: Pos2) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_sq().max(1e-9)).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
+}
+
 /// Screen radius of transform-gizmo's axis rings with its default visuals (gizmo_size).
 const AXIS_RING_RADIUS: f32 = 75.0;
 /// Screen radius of its view-axis ring (gizmo_size + stroke width + 5).
 const VIEW_RING_RADIUS: f32 = 84.0;
-
-/// The rotation channel the gizmo's rings turn for a joint or object, and the world rotation
-/// of the frame its value is expressed in.
-fn rotation_channel(ctx: &FrameCtx<'_>, kind: GizmoKind) -> Option<(ChannelId, Quat)> {
-    match kind {
-        GizmoKind::Joint { object, joint } => {
-            let skeleton = ctx.scene().objects.get(object)?.skeleton.as_ref()?;
-            let pose = ctx.pose(object)?;
-            let j = skeleton.joints.get(joint)?;
-            let parent_world = match j.parent.filter(|&p| p < joint) {
-                Some(p) => pose.world_from_object * *pose.object_from_joint.get(p)?,
-                None => pose.world_from_object,
-            };
-            let (_, parent_rotation, _) = parent_world.to_scale_rotation_translation();
-            Some((ChannelId::JointRotation { object, joint }, parent_rotation * j.rest_rotation))
-        }
-        GizmoKind::Object(o) => Some((ChannelId::ObjectRotation(o), Quat::IDENTITY)),
-        GizmoKind::Light(..) => None,
-    }
-}
 
 /// Shows a ring drag: the start and current directions (around the centre) or the line the
 /// drag follows (edge-on), and the angle turned, with "snap 15°" while Ctrl is held.

@@ -8,6 +8,7 @@
 mod gizmo;
 pub mod ik_handle;
 mod painter;
+mod targets;
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};
 use glam::Vec3;
@@ -22,6 +23,7 @@ use crate::session::Selected;
 use crate::widgets::measure::measure_text;
 
 pub use gizmo::joint_rotation_from_world;
+pub use targets::Pivot;
 
 /// Pick radius around joints and lights, points.
 const PICK_RADIUS: f32 = 9.0;
@@ -157,6 +159,7 @@ impl Viewport {
                     }
                 }
             }
+            self.pivot_ui(ui, rect);
             overlay_ui(&painter, rect, ctx, &errors, self.gpu.is_some());
             self.errors = errors;
         });
@@ -200,6 +203,33 @@ fn pick(targets: &[(Pos2, Selected)], pos: Pos2) -> Option<Selected> {
 }
 
 impl Viewport {
+    /// The pivot setting in the viewport's top-right corner, as Blender's header: where the
+    /// gizmo turns several selected items about ([`Pivot`]).
+    fn pivot_ui(&mut self, ui: &mut Ui, rect: Rect) {
+        // Below the record marker, which takes the corner itself.
+        let area =
+            Rect::from_min_size(egui::pos2(rect.right() - 186.0, rect.top() + 30.0), egui::vec2(180.0, 22.0));
+        let pivot = &mut self.gizmo.pivot;
+        ui.put(area, |ui: &mut Ui| {
+            egui::ComboBox::from_label("Pivot")
+                .selected_text(pivot.label())
+                .width(132.0)
+                .show_ui(ui, |ui| {
+                    for choice in Pivot::ALL {
+                        ui.selectable_value(pivot, choice, choice.label()).on_hover_text(choice.help());
+                    }
+                })
+                .response
+                .on_hover_text("Pivot point: where several selected items turn about")
+        });
+    }
+
+    /// The gizmo's pivot setting.
+    #[must_use]
+    pub fn pivot(&self) -> Pivot {
+        self.gizmo.pivot
+    }
+
     /// Ctrl+drag on empty space draws a box and selects the joints inside it when released
     /// (Ctrl+Shift+drag adds them to the selection). Returns whether a box drag is under way.
     fn box_select(
