@@ -6,6 +6,7 @@ pub mod demo;
 pub mod file_io;
 pub mod gltf_export;
 pub mod gltf_import;
+pub mod gltf_pointer;
 pub mod md2;
 pub mod message;
 pub mod model;
