@@ -1012,10 +1012,20 @@ impl ImportedModel {
                     }
                 }
             }
+            crate::gltf_attributes::object_attributes(self, anim, i, &channels_of[i], &mut object);
             scene.objects.push(object);
+        }
+        let mut uses = vec![0usize; self.lights.len()];
+        for l in self.nodes.iter().filter_map(|n| n.light) {
+            if let Some(u) = uses.get_mut(l) {
+                *u += 1;
+            }
         }
         for (i, node) in self.nodes.iter().enumerate() {
             let Some(light) = node.light.and_then(|l| self.lights.get(l)) else { continue };
+            let light_index = node.light.unwrap_or_default();
+            // A light several nodes place is named by its nodes, so each scene light has a name.
+            let name = if uses[light_index] > 1 { node.name.clone() } else { light.name.clone() };
             let (_, rotation, position) = world[i].to_scale_rotation_translation();
             let kind = match light.kind {
                 ModelLightKind::Directional => keyrig_core::LightKind::Directional,
@@ -1026,15 +1036,18 @@ impl ImportedModel {
                     dropoff: 1.0,
                 },
             };
-            scene.lights.push(keyrig_core::Light {
-                name: light.name.clone(),
+            let mut scene_light = keyrig_core::Light {
+                name,
                 kind,
                 enabled: true,
                 position: keyrig_core::Animated::constant(position),
                 direction: keyrig_core::Animated::constant(rotation * Vec3::NEG_Z),
                 colour: keyrig_core::Animated::constant(light.colour),
                 intensity: keyrig_core::Animated::constant(light.intensity),
-            });
+                attributes: Default::default(),
+            };
+            crate::gltf_attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
+            scene.lights.push(scene_light);
         }
         Ok(scene)
     }

@@ -181,3 +181,68 @@ fn a_bad_pointer_output_is_an_error_with_its_place() {
     let err = import_gltf_slice(&json).unwrap_err().to_string();
     assert!(err.starts_with("/accessors/1: accessor: type Vec4"), "{err}");
 }
+
+#[test]
+fn the_scene_holds_colour_opacity_and_visibility_as_channels() {
+    use keyrig_core::channel::ChannelPath;
+    let path = corpus("AnimatedColorsCube/AnimatedColorsCube.glb");
+    let model = import_gltf_file(&path).unwrap();
+    let scene = model.to_scene("AnimatedColorsCube.glb", Some(0)).unwrap();
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    let (json, bin) = glb(&path);
+    let sampler = &json["animations"][0]["samplers"][2];
+    let times = floats(&json, &bin, sampler["input"].as_u64().unwrap() as usize);
+    let values = floats(&json, &bin, sampler["output"].as_u64().unwrap() as usize);
+    let colour = ChannelPath::parse("object/TestCube/colour").unwrap().resolve(&scene).unwrap();
+    let opacity = ChannelPath::parse("object/TestCube/opacity").unwrap().resolve(&scene).unwrap();
+    for (k, &t) in times.iter().enumerate() {
+        let rgba = &values[4 * k..4 * k + 4];
+        assert_eq!(
+            colour.sample(f64::from(t)),
+            keyrig_core::channel_id::ChannelValue::Vec3(glam::Vec3::new(rgba[0], rgba[1], rgba[2]))
+        );
+        assert_eq!(opacity.sample(f64::from(t)), keyrig_core::channel_id::ChannelValue::Scalar(rgba[3]));
+    }
+    // The other cubes use other materials: no colour channel, always opaque.
+    assert!(scene.objects[1].attributes.colour.is_none());
+
+    let model = import_gltf_file(&corpus("LightVisibility/LightVisibility.glb")).unwrap();
+    let scene = model.to_scene("LightVisibility.glb", Some(0)).unwrap();
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    let names: Vec<&str> = scene.lights.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "InvisibleLight",
+            "ChildOfInvisibleShouldBeInvisible",
+            "DescendantOfInvisibleShouldBeInvisible",
+            "light1",
+            "light2"
+        ]
+    );
+    // The invisible node hides its light and every light below it.
+    for l in 0..3 {
+        assert_eq!(scene.lights[l].attributes.visible, keyrig_core::Animated::constant(0.0), "{}", names[l]);
+    }
+    assert_eq!(scene.lights[3].attributes.visible, keyrig_core::Animated::constant(1.0));
+    assert_eq!(scene.lights[4].attributes.visible.track.len(), 11);
+    // KHR_lights_punctual range 5 is kept; the cone stays the kind's (not animated).
+    assert_eq!(scene.lights[3].attributes.range, Some(keyrig_core::Animated::constant(5.0)));
+}
+
+#[test]
+fn morph_weights_become_one_channel_per_target() {
+    let model = import_gltf_file(&corpus("AnimatedMorphCube/AnimatedMorphCube.glb")).unwrap();
+    let scene = model.to_scene("AnimatedMorphCube.glb", Some(0)).unwrap();
+    let weights = &scene.objects[0].attributes.morph_weights;
+    assert_eq!(weights.len(), 2);
+    let keyrig_io::model::ChannelTarget::Weights(w) = &model.animations[0].channels[0].target else {
+        panic!()
+    };
+    for (k, key) in w.keys.iter().enumerate() {
+        for (t, channel) in weights.iter().enumerate() {
+            assert_eq!(channel.track.keys[k].time, key.time);
+            assert_eq!(channel.track.keys[k].value, key.value[t]);
+        }
+    }
+}

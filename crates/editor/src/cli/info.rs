@@ -423,6 +423,19 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
                 keyrig_core::channel::IkProperty::Target => span(&c.target.track.keys),
                 keyrig_core::channel::IkProperty::Blend => span(&c.blend.track.keys),
             }),
+        ChannelPath::Attribute { light, owner, property } => {
+            let id = if *light {
+                names.lights.get(owner.as_str()).and_then(|&l| property.light_id(l))
+            } else {
+                names.objects.get(owner.as_str()).and_then(|&o| property.object_id(o))
+            };
+            match id.and_then(|id| id.get(scene)) {
+                Some(keyrig_core::channel_id::ChannelRef::Scalar(a)) => span(&a.track.keys),
+                Some(keyrig_core::channel_id::ChannelRef::Vec3(a)) => span(&a.track.keys),
+                Some(keyrig_core::channel_id::ChannelRef::Rotation(a)) => span(&a.track.keys),
+                None => (0, None),
+            }
+        }
         ChannelPath::Light { light, property } => {
             let Some(l) = names.lights.get(light.as_str()).map(|&l| &scene.lights[l]) else {
                 return (0, None);
