@@ -33,6 +33,9 @@ pub(super) struct GizmoState {
     /// A drag on a rotation ring of a joint or object, turned by the editor itself
     /// ([`RingDrag`]) rather than by transform-gizmo.
     pub(super) ring: Option<RingDragState>,
+    /// Scale mode (S over the viewport toggles it): an object's gizmo shows scale handles
+    /// instead of its move arrows and rotation rings.
+    pub(super) scale: bool,
 }
 
 impl GizmoState {
@@ -67,6 +70,7 @@ impl GizmoState {
         };
         let modes = match kind {
             GizmoKind::Joint { .. } => GizmoMode::all_rotate(),
+            GizmoKind::Object(_) if self.scale => GizmoMode::all_scale(),
             GizmoKind::Object(_) => GizmoMode::all_rotate() | GizmoMode::all_translate(),
             // Point lights have only a place, directional lights only a direction (their icon's
             // place is not used for lighting), spot lights both.
@@ -211,7 +215,12 @@ impl GizmoState {
                 );
             }
             GizmoKind::Object(o) => {
-                if matches!(result, GizmoResult::Translation { .. }) {
+                if matches!(result, GizmoResult::Scale { .. }) {
+                    let scale = DVec3::from(new.scale).as_vec3();
+                    if scale.is_finite() {
+                        pose_edit(actions, ChannelId::ObjectScale(o), ChannelValue::Vec3(scale));
+                    }
+                } else if matches!(result, GizmoResult::Translation { .. }) {
                     pose_edit(actions, ChannelId::ObjectTranslation(o), ChannelValue::Vec3(new_translation));
                 } else {
                     pose_edit(actions, ChannelId::ObjectRotation(o), ChannelValue::Rotation(new_rotation));
