@@ -249,6 +249,9 @@ impl LightAttributeRig {
         kind: LightKind,
     ) -> (bool, Option<f32>, LightKind) {
         let Some(r) = rig else {
+            if overrides.is_empty() {
+                return (true, None, kind);
+            }
             let visible = match overrides.get(&id(AttributeId::LightVisible(l))) {
                 Some(ChannelValue::Scalar(v)) => *v >= 0.5,
                 _ => true,
