@@ -25,6 +25,7 @@ use std::fmt;
 
 use glam::{Quat, Vec3};
 
+use crate::attributes::{AttributeId, AttributeProperty};
 use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef};
 use crate::key::Animated;
 use crate::scene::{Object, Scene};
@@ -32,14 +33,26 @@ use crate::track::{AnimatedTrack, TrackError};
 use crate::validate::track_error_path;
 
 /// Properties of an object.
-pub const OBJECT_PROPERTIES: [&str; 6] =
-    ["translation", "rotation", "scale", "root_translation", "joint", "ik"];
+pub const OBJECT_PROPERTIES: [&str; 11] = [
+    "translation",
+    "rotation",
+    "scale",
+    "root_translation",
+    "joint",
+    "ik",
+    "visible",
+    "colour",
+    "opacity",
+    "morph",
+    "deformer",
+];
 /// Properties of a joint.
 pub const JOINT_PROPERTIES: [&str; 3] = ["translation", "rotation", "scale"];
 /// Properties of an IK constraint.
 pub const IK_PROPERTIES: [&str; 2] = ["target", "blend"];
 /// Properties of a light.
-pub const LIGHT_PROPERTIES: [&str; 4] = ["position", "direction", "colour", "intensity"];
+pub const LIGHT_PROPERTIES: [&str; 8] =
+    ["position", "direction", "colour", "intensity", "visible", "range", "cutoff_deg", "inner_angle_deg"];
 
 /// One animated value of an object.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -122,10 +135,31 @@ impl LightProperty {
 /// A parsed channel path (names, not yet looked up in a scene).
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum ChannelPath {
-    Object { object: String, property: ObjectProperty },
-    Joint { object: String, joint: String, property: JointProperty },
-    Ik { object: String, constraint: String, property: IkProperty },
-    Light { light: String, property: LightProperty },
+    Object {
+        object: String,
+        property: ObjectProperty,
+    },
+    Joint {
+        object: String,
+        joint: String,
+        property: JointProperty,
+    },
+    Ik {
+        object: String,
+        constraint: String,
+        property: IkProperty,
+    },
+    Light {
+        light: String,
+        property: LightProperty,
+    },
+    /// An attribute of an object or a light ([`crate::attributes`]): `object/<name>/visible`,
+    /// `object/<name>/morph/<target>`, `light/<name>/range`, …
+    Attribute {
+        light: bool,
+        owner: String,
+        property: AttributeProperty,
+    },
 }
 
 impl fmt::Display for ChannelPath {
@@ -139,6 +173,9 @@ impl fmt::Display for ChannelPath {
                 write!(f, "object/{object}/ik/{constraint}/{}", property.name())
             }
             ChannelPath::Light { light, property } => write!(f, "light/{light}/{}", property.name()),
+            ChannelPath::Attribute { light, owner, property } => {
+                write!(f, "{}/{owner}/{}", if *light { "light" } else { "object" }, property.path_name())
+            }
         }
     }
 }
@@ -177,6 +214,9 @@ pub enum ChannelError {
 
     #[error("channel path {path:?}: no light named {name:?}; {}", listing("lights", available))]
     UnknownLight { path: String, name: String, available: Vec<String> },
+
+    #[error("channel path {path:?}: {owner} has no {what} channel{hint}")]
+    NotSet { path: String, owner: String, what: String, hint: String },
 
     /// The channel exists but its keys are invalid.
     #[error("channel {path}: {field}: {source}")]
@@ -248,6 +288,17 @@ impl ChannelPath {
                     property,
                 })
             }
+            ["object", object, "morph", target] => match target.parse::<usize>() {
+                Ok(target) => Ok(ChannelPath::Attribute {
+                    light: false,
+                    owner: (*object).to_string(),
+                    property: AttributeProperty::Morph(target),
+                }),
+                Err(_) => Err(syntax("a morph-weight channel is object/<name>/morph/<target index>")),
+            },
+            ["object", _, "morph", ..] => {
+                Err(syntax("a morph-weight channel is object/<name>/morph/<target index>"))
+            }
             ["object", _, "ik", ..] => {
                 Err(syntax("an IK constraint channel is object/<name>/ik/<constraint>/<property>"))
             }
@@ -257,6 +308,13 @@ impl ChannelPath {
                     "rotation" => ObjectProperty::Rotation,
                     "scale" => ObjectProperty::Scale,
                     "root_translation" => ObjectProperty::RootTranslation,
+                    other if AttributeProperty::of_object(other).is_some() => {
+                        return Ok(ChannelPath::Attribute {
+                            light: false,
+                            owner: (*object).to_string(),
+                            property: AttributeProperty::of_object(other).expect("just matched"),
+                        })
+                    }
                     other => {
                         return Err(ChannelError::UnknownProperty {
                             path: path.to_string(),
@@ -274,6 +332,13 @@ impl ChannelPath {
                     "direction" => LightProperty::Direction,
                     "colour" | "color" => LightProperty::Colour,
                     "intensity" => LightProperty::Intensity,
+                    other if AttributeProperty::of_light(other).is_some() => {
+                        return Ok(ChannelPath::Attribute {
+                            light: true,
+                            owner: (*light).to_string(),
+                            property: AttributeProperty::of_light(other).expect("just matched"),
+                        })
+                    }
                     other => {
                         return Err(ChannelError::UnknownProperty {
                             path: path.to_string(),
@@ -356,6 +421,38 @@ impl ChannelPath {
                     IkProperty::Blend => ChannelId::IkBlend { object: i, constraint: c },
                 }
             }
+            ChannelPath::Attribute { light, owner, property } => {
+                let id = if *light {
+                    let l = scene.lights.iter().position(|l| l.name == *owner).ok_or_else(|| {
+                        ChannelError::UnknownLight {
+                            path: path.clone(),
+                            name: owner.clone(),
+                            available: scene.lights.iter().map(|l| l.name.clone()).collect(),
+                        }
+                    })?;
+                    property.light_id(l)
+                } else {
+                    property.object_id(find_object(owner)?.0)
+                };
+                let id = id.expect("parse pairs object and light properties with their owner");
+                if id.get(scene).is_none() {
+                    let hint = match id {
+                        AttributeId::MorphWeight { object, .. } => format!(
+                            " (it keys {} morph-target weights: morph/0 … morph/{})",
+                            scene.objects[object].attributes.morph_weights.len(),
+                            scene.objects[object].attributes.morph_weights.len().saturating_sub(1)
+                        ),
+                        _ => format!("; it is set in the scene file as {}", id.field_path()),
+                    };
+                    return Err(ChannelError::NotSet {
+                        path: path.clone(),
+                        owner: format!("{} {owner:?}", if *light { "light" } else { "object" }),
+                        what: property.path_name(),
+                        hint,
+                    });
+                }
+                ChannelId::Attribute(id)
+            }
             ChannelPath::Light { light, property } => {
                 let i = scene.lights.iter().position(|l| l.name == *light).ok_or_else(|| {
                     ChannelError::UnknownLight {
@@ -383,7 +480,9 @@ impl ChannelPath {
         let id = self.id(scene)?;
         let (path, field) = (self.to_string(), id.field_path());
         let kind = match id {
-            ChannelId::LightColour(_) => ValueKind::Colour,
+            ChannelId::LightColour(_) | ChannelId::Attribute(AttributeId::ObjectColour(_)) => {
+                ValueKind::Colour
+            }
             _ => match id.kind() {
                 ChannelKind::Vec3 => ValueKind::Position,
                 ChannelKind::Rotation => ValueKind::Rotation,
@@ -442,6 +541,29 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
             LightProperty::Intensity,
         ] {
             out.push(ChannelPath::Light { light: l.name.clone(), property });
+        }
+    }
+    // Attributes after the transforms, so that scenes without them list what they listed.
+    for (o, object) in scene.objects.iter().enumerate() {
+        for id in AttributeId::of_object(scene, o) {
+            if let ChannelId::Attribute(a) = id {
+                out.push(ChannelPath::Attribute {
+                    light: false,
+                    owner: object.name.clone(),
+                    property: a.property(),
+                });
+            }
+        }
+    }
+    for (l, light) in scene.lights.iter().enumerate() {
+        for id in AttributeId::of_light(scene, l) {
+            if let ChannelId::Attribute(a) = id {
+                out.push(ChannelPath::Attribute {
+                    light: true,
+                    owner: light.name.clone(),
+                    property: a.property(),
+                });
+            }
         }
     }
     out
@@ -607,6 +729,7 @@ mod tests {
             direction: Animated::constant(Vec3::NEG_Y),
             colour: Animated::constant(Vec3::ONE),
             intensity: Animated::constant(2.0),
+            attributes: Default::default(),
         });
         scene
     }

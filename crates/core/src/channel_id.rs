@@ -6,6 +6,7 @@
 
 use glam::{EulerRot, Quat, Vec3};
 
+use crate::attributes::AttributeId;
 use crate::key::Animated;
 use crate::scene::Scene;
 
@@ -55,6 +56,9 @@ pub enum ChannelId {
         object: usize,
         constraint: usize,
     },
+    /// Visibility, material, morph weights, deformer, light range and cone
+    /// ([`crate::attributes`]).
+    Attribute(AttributeId),
 }
 
 /// What kind of value a channel holds.
@@ -71,6 +75,7 @@ impl ChannelId {
         match self {
             ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } => ChannelKind::Rotation,
             ChannelId::LightIntensity(_) | ChannelId::IkBlend { .. } => ChannelKind::Scalar,
+            ChannelId::Attribute(a) => a.kind(),
             _ => ChannelKind::Vec3,
         }
     }
@@ -89,6 +94,7 @@ impl ChannelId {
             ChannelId::LightIntensity(_) => "intensity",
             ChannelId::IkTarget { .. } => "IK target",
             ChannelId::IkBlend { .. } => "IK blend",
+            ChannelId::Attribute(a) => a.channel_name(),
         }
     }
 
@@ -120,6 +126,7 @@ impl ChannelId {
             ChannelId::IkBlend { object, constraint } => {
                 format!("objects[{object}].skeleton.ik_constraints[{constraint}].blend")
             }
+            ChannelId::Attribute(a) => a.field_path(),
         }
     }
 
@@ -156,6 +163,7 @@ impl ChannelId {
                 out.push(ChannelId::IkBlend { object, constraint });
             }
         }
+        out.extend(AttributeId::of_object(scene, object));
         out
     }
 
@@ -179,6 +187,7 @@ impl ChannelId {
         }
         for l in 0..scene.lights.len() {
             out.extend(ChannelId::of_light(l));
+            out.extend(AttributeId::of_light(scene, l));
         }
         out
     }
@@ -202,6 +211,7 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
         ChannelId::IkTarget { object, constraint } | ChannelId::IkBlend { object, constraint } => {
             scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.name.clone()
         }
+        ChannelId::Attribute(a) => a.owner_name(scene)?,
     })
 }
 
@@ -275,6 +285,7 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::IkBlend { object, constraint } => ChannelRef::Scalar(
             &scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.blend,
         ),
+        ChannelId::Attribute(a) => a.get(scene)?,
     })
 }
 
@@ -307,5 +318,6 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::IkBlend { object, constraint } => ChannelMut::Scalar(
             &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.ik_constraints.get_mut(constraint)?.blend,
         ),
+        ChannelId::Attribute(a) => a.get_mut(scene)?,
     })
 }

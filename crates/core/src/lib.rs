@@ -1,6 +1,7 @@
 //! keyrig-core: keys, tracks, Kochanek–Bartels (TCB) and Squad interpolation, and the scene
 //! document. Pure: no file I/O, no GPU, no UI.
 
+pub mod attributes;
 pub mod channel;
 pub mod channel_id;
 pub mod ik;
@@ -13,6 +14,7 @@ pub mod scene;
 pub mod track;
 pub mod validate;
 
+pub use attributes::{AttributeId, AttributeProperty, LightAttributes, ObjectAttributes};
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use rotation_mode::{EulerOrder, RotationMode};

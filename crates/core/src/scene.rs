@@ -7,6 +7,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::attributes::{LightAttributes, ObjectAttributes};
 use crate::key::{Animated, RawTrack};
 use crate::rotation_mode::RotationMode;
 
@@ -72,6 +73,10 @@ pub struct Object {
     pub skeleton: Option<Skeleton>,
     #[serde(default)]
     pub deformer: DeformerSettings,
+    /// Visibility, material colour and opacity, morph weights, keyed deformer
+    /// (`crate::attributes`); left out of the file while nothing is set.
+    #[serde(default, skip_serializing_if = "ObjectAttributes::is_default")]
+    pub attributes: ObjectAttributes,
 }
 
 impl Object {
@@ -87,6 +92,7 @@ impl Object {
             mesh: None,
             skeleton: None,
             deformer: DeformerSettings::default(),
+            attributes: ObjectAttributes::default(),
         }
     }
 }
@@ -400,6 +406,10 @@ pub struct Light {
     /// Linear RGB colour.
     pub colour: Animated<Vec3>,
     pub intensity: Animated<f32>,
+    /// Visibility, range and keyed spot cone (`crate::attributes`); left out of the file while
+    /// nothing is set.
+    #[serde(default, skip_serializing_if = "LightAttributes::is_default")]
+    pub attributes: LightAttributes,
 }
 
 fn default_true() -> bool {
@@ -506,6 +516,6 @@ impl Scene {
                 + cost(&light.colour, theirs.map(|t| &t.colour))
                 + cost(&light.intensity, theirs.map(|t| &t.intensity));
         }
-        bytes
+        bytes + crate::attributes::key_bytes_not_shared(self, other)
     }
 }

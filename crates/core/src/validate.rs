@@ -557,6 +557,14 @@ impl Scene {
             "light",
             self.lights.iter().enumerate().map(|(i, l)| (format!("lights[{i}].name"), l.name.as_str())),
         );
+        for id in crate::attributes::every(self) {
+            match id.get(self) {
+                Some(crate::channel_id::ChannelRef::Scalar(a)) => c.animated(&id.field_path(), a),
+                Some(crate::channel_id::ChannelRef::Vec3(a)) => c.animated(&id.field_path(), a),
+                _ => {}
+            }
+            crate::attributes::attribute_problems(self, id, &mut |path, message| c.push(path, message));
+        }
         c.camera("camera", &self.camera);
         c.problems
     }
@@ -718,6 +726,7 @@ mod tests {
             direction: Animated::constant(Vec3::ZERO),
             colour: Animated::constant(Vec3::new(1.0, -0.5, 1.0)),
             intensity: Animated::constant(-2.0),
+            attributes: Default::default(),
         });
         assert_eq!(
             paths(&s),

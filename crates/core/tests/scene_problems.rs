@@ -30,6 +30,7 @@ fn base() -> Scene {
         direction: Animated::constant(Vec3::NEG_Y),
         colour: Animated::constant(Vec3::ONE),
         intensity: Animated::constant(1.0),
+        attributes: Default::default(),
     });
     scene
 }

@@ -5,7 +5,9 @@
 //! rebuilt around it (vertex buffers are not sent again: no mesh changed).
 //!
 //! Scenes: `assets/demo.ron` and `assets/characters.ron` (the demo with CesiumMan, the Fox
-//! and an MD2 model). docs/benchmarks.md records the figures.
+//! and an MD2 model), and `characters+attributes`: the characters scene with keyed attributes
+//! on every object and light (visibility, opacity, colour, a keyed deformer; light visibility,
+//! range and spot cone). docs/benchmarks.md records the figures.
 //!
 //! Run: `cargo bench -p keyrig-editor --bench frame_prep`
 
@@ -35,9 +37,13 @@ fn gpu_bytes(frame: &keyrig_render::FrameInput) -> usize {
 fn frame_prep(c: &mut Criterion) {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let mut group = c.benchmark_group("frame_prep");
-    for name in ["demo", "characters"] {
-        let path = assets.join(format!("{name}.ron"));
-        let scene = keyrig_io::scene_file::load(&path).expect("scene");
+    for name in ["demo", "characters", "characters+attributes"] {
+        let file = name.trim_end_matches("+attributes");
+        let path = assets.join(format!("{file}.ron"));
+        let mut scene = keyrig_io::scene_file::load(&path).expect("scene");
+        if name.ends_with("+attributes") {
+            with_attributes(&mut scene);
+        }
         let meshes = keyrig_editor::files::render_meshes(&scene, Some(&assets)).expect("meshes");
         let rig = SceneRig::with_loaded(&scene, &meshes.skinned, &meshes.morphs).expect("rig");
         let view = ViewOptions::default();
@@ -87,6 +93,44 @@ fn frame_prep(c: &mut Criterion) {
         });
     }
     group.finish();
+}
+
+/// Keys every attribute a frame evaluates on every object and light.
+fn with_attributes(scene: &mut keyrig_core::Scene) {
+    use keyrig_core::{Animated, Interpolation, Key, RawTrack};
+    let linear = |a: f32, b: f32| {
+        Animated::new(a, RawTrack::new(vec![Key::new(0.0, a), Key::new(1.5, b), Key::new(3.0, a)]))
+    };
+    let step = |values: &[f32]| {
+        let keys = values
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| Key::new(i as f64, v).with_interpolation(Interpolation::Step))
+            .collect();
+        Animated::new(values[0], RawTrack::new(keys))
+    };
+    for object in &mut scene.objects {
+        let a = &mut object.attributes;
+        a.visible = step(&[1.0, 1.0, 0.0, 1.0]);
+        a.opacity = linear(1.0, 0.3);
+        let colour = Animated::new(
+            glam::Vec3::ONE,
+            RawTrack::new(vec![Key::new(0.0, glam::Vec3::ONE), Key::new(3.0, glam::Vec3::new(1.0, 0.2, 0.1))]),
+        );
+        a.colour = Some(colour);
+        if object.skeleton.is_some() {
+            a.deformer = Some(step(&[1.0, 2.0, 3.0, 1.0]));
+        }
+    }
+    for light in &mut scene.lights {
+        light.attributes.visible = step(&[1.0, 0.0, 1.0]);
+        light.attributes.range = Some(linear(10.0, 4.0));
+        if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
+            light.attributes.cutoff_deg = Some(linear(cutoff_deg, cutoff_deg * 0.5));
+            light.attributes.inner_angle_deg = Some(linear(inner_angle_deg, inner_angle_deg * 0.5));
+        }
+    }
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
 }
 
 criterion_group!(benches, frame_prep);

@@ -433,7 +433,14 @@ pub fn set_key(scene: &mut Scene, id: ChannelId, time: f64, value: ChannelValue)
             Some(set_rotation_key_in(&mut a.track, time, q.normalize(), None))
         }
         (ChannelMut::Scalar(a), ChannelValue::Scalar(s)) => {
-            Some(insert_sorted(&mut a.track, Key::new(time, s)))
+            // Switches (visibility, the deformer) are whole numbers keyed with Step keys.
+            let key = match id {
+                ChannelId::Attribute(at) if at.is_switch() => {
+                    Key::new(time, s.round()).with_interpolation(keyrig_core::Interpolation::Step)
+                }
+                _ => Key::new(time, s),
+            };
+            Some(insert_sorted(&mut a.track, key))
         }
         _ => None,
     }

@@ -326,6 +326,10 @@ pub fn owner_of(channel: ChannelId) -> Selected {
         | ChannelId::LightColour(l)
         | ChannelId::LightIntensity(l) => Selected::Light(l),
         ChannelId::IkTarget { object, .. } | ChannelId::IkBlend { object, .. } => Selected::Object(object),
+        ChannelId::Attribute(a) => match a.owner() {
+            Ok(o) => Selected::Object(o),
+            Err(l) => Selected::Light(l),
+        },
     }
 }
 
@@ -362,6 +366,12 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         }
         (C::IkBlend { object, constraint }, Selected::Object(r)) => {
             C::IkBlend { object: shift(object, r)?, constraint }
+        }
+        (C::Attribute(a), Selected::Object(r)) if a.owner().is_ok() => {
+            C::Attribute(a.with_owner(shift(a.owner().ok()?, r)?))
+        }
+        (C::Attribute(a), Selected::Light(r)) if a.owner().is_err() => {
+            C::Attribute(a.with_owner(shift(a.owner().err()?, r)?))
         }
         (id, _) => id,
     })

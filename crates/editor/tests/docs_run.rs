@@ -415,6 +415,18 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
         }
         // The keys of a rotation track (the format's examples of spins).
         "track" => check_fragment("rotation", &format!("(value: (0.0, 0.0, 0.0, 1.0), track: {value})")),
+        "attributes" => {
+            // An object's attributes, validated as those of a cube in an otherwise empty scene.
+            let attributes: keyrig_core::ObjectAttributes = ron.from_str(value).map_err(|e| e.to_string())?;
+            let mut scene = keyrig_core::Scene::default();
+            let mut cube = keyrig_core::Object::new("Cube");
+            cube.attributes = attributes;
+            scene.objects.push(cube);
+            match scene.problems().first() {
+                Some(p) => Err(p.to_string()),
+                None => Ok(()),
+            }
+        }
         other => Err(format!("no rule for a fragment of field `{other}`: add one to docs_run.rs")),
     }
 }

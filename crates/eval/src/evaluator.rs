@@ -17,6 +17,10 @@ use keyrig_skin::{
 
 use crate::morph::{MorphBlend, MorphClips, MorphError};
 
+mod attributes;
+pub use attributes::ObjectLook;
+use attributes::{LightAttributeRig, ObjectAttributeRig};
+
 /// Values set on channels without keys being written (a gizmo drag, a slider), keyed by the
 /// channel they replace: the evaluator shows them instead of the channel's track.
 pub type Overrides = HashMap<ChannelId, ChannelValue>;
@@ -210,6 +214,8 @@ struct ObjectRig {
     rest_palette: Option<JointPalette>,
     morph: Option<MorphRig>,
     deformer: DeformerKind,
+    /// Visibility, colour, opacity, morph weights, keyed deformer; `None` while all default.
+    attributes: Option<Box<ObjectAttributeRig>>,
     /// What the skeleton's rest data, the mesh and its bindings were built from: when an edit
     /// leaves these as they were, they are kept.
     built_from: RestSource,
@@ -282,6 +288,7 @@ struct LightRig {
     direction: Slot<Vec3>,
     colour: Slot<Vec3>,
     intensity: Slot<f32>,
+    attributes: Option<Box<LightAttributeRig>>,
 }
 
 /// The state of one object at a time.
@@ -299,6 +306,8 @@ pub struct ObjectState {
     pub palette_error: Option<SkinError>,
     /// The frames a vertex-animated mesh shows.
     pub morph: Option<Result<MorphBlend, MorphError>>,
+    /// Visibility, opacity, colour, deformer and morph weights at this time.
+    pub look: ObjectLook,
 }
 
 impl ObjectState {
@@ -310,6 +319,7 @@ impl ObjectState {
             palette: None,
             palette_error: None,
             morph: None,
+            look: ObjectLook::new(DeformerKind::LinearBlend),
         }
     }
 }
@@ -324,6 +334,11 @@ pub struct LightState {
     pub direction: Vec3,
     pub colour: Vec3,
     pub intensity: f32,
+    /// False: the light does not light anything at this time.
+    pub visible: bool,
+    /// Distance beyond which the light has no effect (glTF's smooth range falloff); `None`:
+    /// unlimited. A spot's `kind` holds its cone at this time.
+    pub range: Option<f32>,
 }
 
 /// The scene at one time.
@@ -422,6 +437,9 @@ impl SceneEvaluator {
             {
                 self.problems.push(p.clone());
             }
+            if let Some(a) = &rig.attributes {
+                a.for_each_problem(&mut |p| self.problems.push(p.clone()));
+            }
         }
     }
 
@@ -496,6 +514,10 @@ impl SceneEvaluator {
             ChannelId::IkBlend { object, constraint } => Some(ChannelValue::Scalar(
                 self.objects.get(object)?.skeleton.as_ref()?.constraints.get(constraint)?.blend.sample(time),
             )),
+            ChannelId::Attribute(a) => match a.owner() {
+                Ok(o) => ObjectAttributeRig::value(self.objects.get(o)?.attributes.as_deref(), a, time),
+                Err(l) => LightAttributeRig::value(self.lights.get(l)?.attributes.as_deref(), a, time),
+            },
         }
     }
 
@@ -657,6 +679,14 @@ impl SceneEvaluator {
         if let Some(morph) = &rig.morph {
             state.morph = Some(morph.clips.blend_at(morph.clip.as_deref(), morph.fps, time));
         }
+        ObjectAttributeRig::fill(
+            rig.attributes.as_deref(),
+            o,
+            time,
+            overrides,
+            rig.deformer,
+            &mut state.look,
+        );
     }
 
     /// Light `l` at `time` seconds; `None` when there is no such light.
@@ -671,8 +701,12 @@ impl SceneEvaluator {
             Some(ChannelValue::Scalar(s)) => *s,
             _ => rig.intensity.sample(time),
         };
+        let (visible, range, kind) =
+            LightAttributeRig::apply(rig.attributes.as_deref(), l, time, overrides, rig.kind);
         Some(LightState {
-            kind: rig.kind,
+            kind,
+            visible,
+            range,
             enabled: rig.enabled,
             position: vec3(ChannelId::LightPosition(l), &rig.position),
             direction: vec3(ChannelId::LightDirection(l), &rig.direction),
@@ -691,6 +725,7 @@ impl LightRig {
             direction: Slot::new(&light.direction, ChannelId::LightDirection(l)),
             colour: Slot::new(&light.colour, ChannelId::LightColour(l)),
             intensity: Slot::new(&light.intensity, ChannelId::LightIntensity(l)),
+            attributes: LightAttributeRig::new(&light.attributes, l),
         }
     }
 
@@ -701,6 +736,7 @@ impl LightRig {
             + usize::from(self.direction.refresh(&light.direction, ChannelId::LightDirection(l)))
             + usize::from(self.colour.refresh(&light.colour, ChannelId::LightColour(l)))
             + usize::from(self.intensity.refresh(&light.intensity, ChannelId::LightIntensity(l)))
+            + LightAttributeRig::refresh(&mut self.attributes, &light.attributes, l)
     }
 }
 
@@ -809,6 +845,7 @@ impl ObjectRig {
             rest_palette,
             morph,
             deformer: object.deformer.kind,
+            attributes: ObjectAttributeRig::new(&object.attributes, o),
             built_from: RestSource::of(object, loaded),
             problems,
         }
@@ -820,7 +857,8 @@ impl ObjectRig {
         let mut n =
             usize::from(self.translation.refresh(&object.translation, ChannelId::ObjectTranslation(o)))
                 + usize::from(self.rotation.refresh(&object.rotation, ChannelId::ObjectRotation(o)))
-                + usize::from(self.scale.refresh(&object.scale, ChannelId::ObjectScale(o)));
+                + usize::from(self.scale.refresh(&object.scale, ChannelId::ObjectScale(o)))
+                + ObjectAttributeRig::refresh(&mut self.attributes, &object.attributes, o);
         if let (Some(rig), Some(skeleton)) = (&mut self.skeleton, &object.skeleton) {
             n += usize::from(
                 rig.root_translation.refresh(&skeleton.root_translation, ChannelId::RootTranslation(o)),
@@ -852,6 +890,7 @@ impl ObjectRig {
 
     fn channel_count(&self) -> usize {
         3 + self.skeleton.as_ref().map_or(0, |s| 1 + 3 * s.joints.len() + 2 * s.constraints.len())
+            + self.attributes.as_ref().map_or(0, |a| a.channel_count())
     }
 
     fn for_each_problem(&self, f: &mut dyn FnMut(&EvalProblem)) {
@@ -875,6 +914,9 @@ impl ObjectRig {
                 visit(&c.target.problem);
                 visit(&c.blend.problem);
             }
+        }
+        if let Some(a) = &self.attributes {
+            a.for_each_problem(f);
         }
     }
 }

@@ -21,6 +21,6 @@ pub mod morph;
 
 pub use bake::{bake_all_ik, bake_ik_constraint, BakeError, Baked};
 pub use evaluator::{
-    EvalProblem, LightState, LoadedMesh, MorphRig, ObjectState, Overrides, Rebuilt, SceneEvaluator,
-    SceneState, SkinRig,
+    EvalProblem, LightState, LoadedMesh, MorphRig, ObjectLook, ObjectState, Overrides, Rebuilt,
+    SceneEvaluator, SceneState, SkinRig,
 };

@@ -50,6 +50,7 @@ fn scene() -> Scene {
         direction: Animated::constant(Vec3::NEG_Y),
         colour: Animated::constant(Vec3::ONE),
         intensity: Animated::new(1.0, RawTrack::new(vec![Key::new(0.0, 1.0), Key::new(1.0, 3.0)])),
+        attributes: Default::default(),
     });
     scene
 }

@@ -340,6 +340,7 @@ fn spot_light() -> Light {
                 Key::new(at(90), 1.0),
             ]),
         ),
+        attributes: Default::default(),
     }
 }
 
@@ -352,6 +353,7 @@ fn sun() -> Light {
         direction: Animated::constant(Vec3::new(-0.4, -1.0, -0.5)),
         colour: Animated::constant(Vec3::new(0.9, 0.95, 1.0)),
         intensity: Animated::constant(0.6),
+        attributes: Default::default(),
     }
 }
 

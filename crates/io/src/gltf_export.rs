@@ -391,9 +391,17 @@ fn load_file(path: &Path) -> Result<LoadedFile, MeshFileError> {
     })
 }
 
+mod attributes;
+
 /// Everything a document accumulates besides the buffer.
 #[derive(Default)]
 struct Document {
+    /// `KHR_animation_pointer` channels (written after `channels`).
+    pointers: Vec<attributes::PointerChannel>,
+    /// A node has `KHR_node_visibility`.
+    node_visibility: bool,
+    /// A channel is a `KHR_animation_pointer` one.
+    animation_pointer: bool,
     b: Builder,
     nodes: Vec<Value>,
     roots: Vec<usize>,
@@ -540,8 +548,18 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
     for (li, light) in scene.lights.iter().enumerate() {
         let here = format!("lights[{li}]");
         let light_index = lights.len();
-        lights.push(punctual_light(light, t0, &here)?);
+        let mut entry = punctual_light(light, t0, &here)?;
+        attributes::light(&mut doc, light, light_index, &mut entry, t0, options, range, &here)?;
+        lights.push(entry);
+        let node = doc.nodes.len();
         light_node(&mut doc, light, light_index, t0, options, range, &here)?;
+        attributes::visibility(
+            &mut doc,
+            node,
+            &light.attributes.visible,
+            t0,
+            &format!("{here}.attributes.visible"),
+        )?;
     }
     Ok(doc.into_gltf(lights))
 }
@@ -559,6 +577,36 @@ fn export_object(
     here: &str,
 ) -> Result<(), ExportError> {
     let node = object_node(doc, object, options, range, here)?;
+    attributes::visibility(
+        doc,
+        node,
+        &object.attributes.visible,
+        range.0,
+        &format!("{here}.attributes.visible"),
+    )?;
+    export_mesh(doc, files, scene, object, node, options, range, here)?;
+    // The object's own material with its colour and opacity: on its node's mesh or a skinned
+    // mesh node below it.
+    let mut with_mesh = vec![node];
+    if let Some(children) = doc.nodes[node]["children"].as_array() {
+        with_mesh.extend(children.iter().filter_map(Value::as_u64).map(|c| c as usize));
+    }
+    with_mesh.retain(|&n| doc.nodes[n].get("mesh").is_some());
+    attributes::material(doc, &with_mesh, &object.attributes, range.0, options, range, here)
+}
+
+/// Writes the skeleton and mesh of `object` (whose node is `node`).
+#[allow(clippy::too_many_arguments)]
+fn export_mesh(
+    doc: &mut Document,
+    files: &mut HashMap<PathBuf, LoadedFile>,
+    scene: &Scene,
+    object: &keyrig_core::Object,
+    node: usize,
+    options: &ExportOptions,
+    range: (f64, f64),
+    here: &str,
+) -> Result<(), ExportError> {
     let joint_nodes = match &object.skeleton {
         Some(skeleton) => export_joints(doc, node, skeleton, options, range, here)?,
         None => Vec::new(),
@@ -613,7 +661,7 @@ fn export_object(
                 }
                 LoadedFile::Gltf(model) => {
                     let index = mesh.unwrap_or(0);
-                    gltf_object(doc, model, &file, index, node, object, &joint_nodes, options, here)?;
+                    gltf_object(doc, model, &file, index, node, object, &joint_nodes, options, range, here)?;
                 }
             }
         }
@@ -822,8 +870,33 @@ impl Document {
     /// `lights`: the node tree, meshes, skins, materials and textures, one animation of every
     /// channel ([`Document::animation`], its accessors after the meshes'), and the buffer
     /// padded to a multiple of 4 bytes.
-    fn into_gltf(self, lights: Vec<Value>) -> ExportedGltf {
-        let Document { mut b, nodes, roots, meshes, skins, channels, images, textures, materials, .. } = self;
+    fn into_gltf(mut self, lights: Vec<Value>) -> ExportedGltf {
+        let animation = (!self.channels.is_empty() || !self.pointers.is_empty()).then(|| {
+            let channels = std::mem::take(&mut self.channels);
+            let mut animation = Self::animation(&mut self.b, &channels);
+            let (mut samplers, mut chans) = (Vec::new(), Vec::new());
+            if let (Some(Value::Array(s)), Some(Value::Array(c))) = (
+                animation.get_mut("samplers").map(std::mem::take),
+                animation.get_mut("channels").map(std::mem::take),
+            ) {
+                (samplers, chans) = (s, c);
+            }
+            self.write_pointers(&mut samplers, &mut chans);
+            animation["samplers"] = json!(samplers);
+            animation["channels"] = json!(chans);
+            animation
+        });
+        let mut used: Vec<&str> = Vec::new();
+        if !lights.is_empty() {
+            used.push("KHR_lights_punctual");
+        }
+        if self.animation_pointer {
+            used.push("KHR_animation_pointer");
+        }
+        if self.node_visibility {
+            used.push("KHR_node_visibility");
+        }
+        let Document { mut b, nodes, roots, meshes, skins, images, textures, materials, .. } = self;
         let mut root = json!({
             "asset": {"version": "2.0", "generator": concat!("keyrig ", env!("CARGO_PKG_VERSION"))},
             "scene": 0,
@@ -845,12 +918,15 @@ impl Document {
             root["samplers"] =
                 json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
         }
+        if !used.is_empty() {
+            // Used, never required: a viewer without these extensions shows the rest values.
+            root["extensionsUsed"] = json!(used);
+        }
         if !lights.is_empty() {
-            root["extensionsUsed"] = json!(["KHR_lights_punctual"]);
             root["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
         }
-        if !channels.is_empty() {
-            root["animations"] = json!([Self::animation(&mut b, &channels)]);
+        if let Some(animation) = animation {
+            root["animations"] = json!([animation]);
         }
         while !b.bin.len().is_multiple_of(4) {
             b.bin.push(0);
@@ -1074,6 +1150,7 @@ fn gltf_object(
     object: &keyrig_core::Object,
     joint_nodes: &[usize],
     options: &ExportOptions,
+    range: (f64, f64),
     here: &str,
 ) -> Result<(), ExportError> {
     let file_err = |source: MeshFileError| ExportError::MeshFile {
@@ -1160,13 +1237,29 @@ fn gltf_object(
             material: Some(material),
         });
     }
+    let keyed = &object.attributes.morph_weights;
     let default_weights = (targets > 0).then(|| {
         let w = model.nodes[model_node].weights.clone().unwrap_or_else(|| source_mesh.weights.clone());
-        (0..targets).map(|i| w.get(i).copied().unwrap_or(0.0)).collect::<Vec<f32>>()
+        // The scene's weights (their values at the start of the range), else the file's.
+        (0..targets)
+            .map(|i| match keyed.get(i) {
+                Some(k) => AnimatedTrack::new(k).map_or(k.value, |t| t.sample(range.0)),
+                None => w.get(i).copied().unwrap_or(0.0),
+            })
+            .collect::<Vec<f32>>()
     });
     let m = doc.mesh(&object.name, &prims, default_weights.as_deref());
     doc.nodes[node]["mesh"] = json!(m);
-    if targets > 0 {
+    if targets > 0 && !keyed.is_empty() {
+        // The scene's morph-weight channels (targets it does not key keep their default).
+        let mut all: Vec<Animated<f32>> = keyed.iter().take(targets).cloned().collect();
+        let defaults = default_weights.clone().unwrap_or_default();
+        all.extend((all.len()..targets).map(|i| Animated::constant(defaults.get(i).copied().unwrap_or(0.0))));
+        if let Some(w) = attributes::weights_track(&all, range, &format!("{here}.attributes.morph_weights"))?
+        {
+            doc.channels.push(weights_channel(node, &w, options));
+        }
+    } else if targets > 0 {
         // The morph weights of the file's first animation, as `keyrig deform` plays them.
         let weights =
             model.animations.first().into_iter().flat_map(|a| &a.channels).find_map(|c| match &c.target {

@@ -109,11 +109,11 @@ impl fmt::Display for GltfError {
     }
 }
 
-fn at(location: Location, kind: GltfErrorKind) -> GltfError {
+pub(crate) fn at(location: Location, kind: GltfErrorKind) -> GltfError {
     GltfError { file: None, location, kind }
 }
 
-fn ptr(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
+pub(crate) fn ptr(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
     at(Location::Pointer(p.into()), kind)
 }
 
@@ -220,17 +220,23 @@ pub fn import_gltf_file(path: &Path) -> Result<ImportedModel, GltfError> {
 }
 
 /// Extensions this importer understands (others may be used, but not required).
-const SUPPORTED_REQUIRED: [&str; 1] = ["KHR_lights_punctual"];
+const SUPPORTED_REQUIRED: [&str; 3] = ["KHR_lights_punctual", "KHR_node_visibility", "KHR_animation_pointer"];
 
 fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> {
     let (json_bytes, chunk_offset, bin) =
         if data.starts_with(GLB_MAGIC) { parse_glb(data)? } else { (data, 0, None) };
-    let root: gltf::json::Root = gltf::json::deserialize::from_slice(json_bytes).map_err(|e| {
-        at(
-            Location::LineColumn { line: e.line(), column: e.column(), chunk_offset },
-            GltfErrorKind::Json(crate::message::clip_long_tokens(&e.to_string()).into_owned()),
-        )
-    })?;
+    let (mut root, raw) = crate::gltf_pointer::parse_root(json_bytes, chunk_offset)?;
+    for (i, ext) in root.extensions_required.iter().enumerate() {
+        if !SUPPORTED_REQUIRED.contains(&ext.as_str()) {
+            return Err(ptr(
+                format!("/extensionsRequired/{i}"),
+                GltfErrorKind::UnsupportedExtension(ext.clone()),
+            ));
+        }
+    }
+    // The gltf crate refuses required extensions it does not know; these are read here
+    // (crate::gltf_pointer).
+    root.extensions_required.retain(|e| !crate::gltf_pointer::READ_FROM_JSON.contains(&e.as_str()));
     check_position_indices(&root)?;
     let doc = match gltf::Document::from_json(root) {
         Ok(doc) => doc,
@@ -246,14 +252,6 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
         }
         Err(e) => return Err(ptr("", GltfErrorKind::Invalid(e.to_string()))),
     };
-    for (i, ext) in doc.extensions_required().enumerate() {
-        if !SUPPORTED_REQUIRED.contains(&ext) {
-            return Err(ptr(
-                format!("/extensionsRequired/{i}"),
-                GltfErrorKind::UnsupportedExtension(ext.to_owned()),
-            ));
-        }
-    }
     let buffers = load_buffers(&doc, base, bin)?;
     let budget = data.len() + buffers.iter().map(|b| b.len()).sum::<usize>();
     let cx = Reader { buffers: &buffers, budget, unbacked: RefCell::default(), cache: Decoded::default() };
@@ -270,8 +268,10 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
     check_skinned_meshes(&model)?;
-    check_animation_json(doc.as_json())?;
-    model.animations = doc.animations().map(|a| read_animation(&cx, &model, &a)).collect::<Result<_, _>>()?;
+    check_animation_json(doc.as_json(), &raw)?;
+    model.animations =
+        doc.animations().map(|a| read_animation(&cx, &model, &a, &raw)).collect::<Result<_, _>>()?;
+    crate::gltf_pointer::read_pointer_channels(&cx, &doc, &mut model, &raw)?;
     Ok(model)
 }
 
@@ -351,7 +351,7 @@ fn read_relative(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, GltfErrorKin
 
 /// Borrowed buffers, the byte budget that bounds accessors without a buffer view, and the
 /// accessors decoded so far.
-struct Reader<'a, 'b> {
+pub(crate) struct Reader<'a, 'b> {
     buffers: &'a [Cow<'b, [u8]>],
     budget: usize,
     /// Bytes of accessors without a buffer view (all-zero sparse bases) accepted so far:
@@ -386,7 +386,7 @@ fn shared<T>(
 }
 
 impl Reader<'_, '_> {
-    fn get<'s>(&'s self) -> impl Fn(gltf::Buffer<'_>) -> Option<&'s [u8]> + Clone + 's {
+    pub(crate) fn get<'s>(&'s self) -> impl Fn(gltf::Buffer<'_>) -> Option<&'s [u8]> + Clone + 's {
         let buffers = self.buffers;
         move |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d[..])
     }
@@ -401,7 +401,7 @@ fn component_size(t: DataType) -> usize {
 }
 
 /// Checks that accessor `acc` has one of `dims`/`types` and lies inside the file's bytes.
-fn check_accessor(
+pub(crate) fn check_accessor(
     cx: &Reader<'_, '_>,
     acc: &gltf::Accessor<'_>,
     use_: &str,
@@ -530,6 +530,7 @@ fn read_nodes(doc: &gltf::Document) -> Result<Vec<ModelNode>, GltfError> {
                 skin: n.skin().map(|s| s.index()),
                 light: n.light().map(|l| l.index()),
                 weights: n.weights().map(<[f32]>::to_vec),
+                visible: true,
             })
         })
         .collect::<Result<_, _>>()?;
@@ -687,7 +688,7 @@ fn finite_vec3s(values: Vec<[f32; 3]>, here: &str, what: &str) -> Result<Vec<Vec
         .collect()
 }
 
-fn count_matches(got: usize, expected: usize, here: &str) -> Result<(), GltfError> {
+pub(crate) fn count_matches(got: usize, expected: usize, here: &str) -> Result<(), GltfError> {
     if got == expected {
         Ok(())
     } else {
@@ -912,6 +913,7 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
             morph_targets: targets,
             base_colour_factor: pbr.base_color_factor(),
             base_colour_texture,
+            material: material.index(),
         });
     }
     let weights = mesh.weights().map(<[f32]>::to_vec).unwrap_or_default();
@@ -1084,11 +1086,11 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), GltfError> {
 
 /// The gltf crate's validation does not check animation channels and samplers fully, and its
 /// accessors unwrap them; so check every index and enum here first.
-fn check_animation_json(root: &gltf::json::Root) -> Result<(), GltfError> {
+fn check_animation_json(root: &gltf::json::Root, raw: &crate::gltf_pointer::Raw) -> Result<(), GltfError> {
     use gltf::json::validation::Checked;
     for (a, anim) in root.animations.iter().enumerate() {
         for (c, ch) in anim.channels.iter().enumerate() {
-            let here = format!("/animations/{a}/channels/{c}");
+            let here = format!("/animations/{a}/channels/{}", raw.file_channel(a, c));
             let checks = [
                 (format!("{here}/sampler"), "sampler", ch.sampler.value(), anim.samplers.len()),
                 (format!("{here}/target/node"), "node", ch.target.node.value(), root.nodes.len()),
@@ -1137,34 +1139,16 @@ fn read_animation(
     cx: &Reader<'_, '_>,
     model: &ImportedModel,
     anim: &gltf::Animation<'_>,
+    raw: &crate::gltf_pointer::Raw,
 ) -> Result<ModelAnimation, GltfError> {
     let mut channels = Vec::new();
     for channel in anim.channels() {
         let sampler = channel.sampler();
         let here = format!("/animations/{}/samplers/{}", anim.index(), sampler.index());
         let node = channel.target().node().index();
-        let input = sampler.input();
-        let key_count = check_accessor(cx, &input, "animation input", &[Dimensions::Scalar], F32)?;
+        let times = crate::gltf_pointer::key_times(cx, &sampler.input(), &here)?;
+        let key_count = times.len();
         let reader = channel.reader(cx.get());
-        let times: Vec<f32> = reader.read_inputs().map(Iterator::collect).unwrap_or_default();
-        count_matches(times.len(), key_count, &format!("{here}/input"))?;
-        for (k, w) in times.windows(2).enumerate() {
-            if w[0].partial_cmp(&w[1]) != Some(std::cmp::Ordering::Less) {
-                return Err(ptr(
-                    format!("/accessors/{}", input.index()),
-                    GltfErrorKind::Animation(format!(
-                        "key times must increase: key {k} at {} then {}",
-                        w[0], w[1]
-                    )),
-                ));
-            }
-        }
-        if times.iter().any(|t| !t.is_finite()) {
-            return Err(ptr(
-                format!("/accessors/{}", input.index()),
-                GltfErrorKind::NonFinite("key time".into()),
-            ));
-        }
         let interpolation = match sampler.interpolation() {
             gltf::animation::Interpolation::Step => Interpolation::Step,
             gltf::animation::Interpolation::Linear => Interpolation::Linear,
@@ -1191,7 +1175,11 @@ fn read_animation(
             let targets = mesh.and_then(|m| m.primitives.first()).map_or(0, |p| p.morph_targets.len());
             if targets == 0 {
                 return Err(ptr(
-                    format!("/animations/{}/channels/{}/target", anim.index(), channel.index()),
+                    format!(
+                        "/animations/{}/channels/{}/target",
+                        anim.index(),
+                        raw.file_channel(anim.index(), channel.index())
+                    ),
                     GltfErrorKind::Animation(format!(
                         "animates morph weights of node {node}, whose mesh has no targets"
                     )),
@@ -1260,12 +1248,13 @@ fn read_animation(
     Ok(ModelAnimation {
         name: anim.name().map_or_else(|| format!("animation{}", anim.index()), str::to_owned),
         channels,
+        pointers: Vec::new(),
     })
 }
 
 /// Builds keys from times and sampler outputs; CUBICSPLINE outputs come as
 /// (in-tangent a_k, value v_k, out-tangent b_k) per key and keep their per-second tangents.
-fn make_track<T: Clone>(times: &[f32], values: &[T], interpolation: Interpolation) -> RawTrack<T> {
+pub(crate) fn make_track<T: Clone>(times: &[f32], values: &[T], interpolation: Interpolation) -> RawTrack<T> {
     let keys = times
         .iter()
         .enumerate()

@@ -4,8 +4,10 @@
 
 pub mod demo;
 pub mod file_io;
+mod gltf_attributes;
 pub mod gltf_export;
 pub mod gltf_import;
+pub mod gltf_pointer;
 pub mod md2;
 pub mod message;
 pub mod model;

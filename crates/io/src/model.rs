@@ -29,6 +29,9 @@ pub struct ModelNode {
     pub light: Option<usize>,
     /// Morph-target weights of this node's mesh instance, when the node overrides them.
     pub weights: Option<Vec<f32>>,
+    /// `KHR_node_visibility`: false hides the node and everything below it (true when the
+    /// file does not say).
+    pub visible: bool,
 }
 
 /// How a primitive's indices are to be read.
@@ -95,6 +98,8 @@ pub struct ModelPrimitive {
     pub morph_targets: Vec<MorphTarget>,
     pub base_colour_factor: [f32; 4],
     pub base_colour_texture: Option<TextureRef>,
+    /// Index of the glTF material (`None`: the default material).
+    pub material: Option<usize>,
 }
 
 /// A mesh: primitives and default morph weights.
@@ -162,6 +167,9 @@ pub struct ModelChannel {
 pub struct ModelAnimation {
     pub name: String,
     pub channels: Vec<ModelChannel>,
+    /// `KHR_animation_pointer` channels on properties other than a node's transform and
+    /// weights (those are read into `channels`), and `KHR_node_visibility`.
+    pub pointers: Vec<crate::gltf_pointer::PointerChannel>,
 }
 
 impl ModelAnimation {
@@ -175,6 +183,7 @@ impl ModelAnimation {
                 ChannelTarget::Rotation(t) => t.keys.last().map(|k| k.time),
                 ChannelTarget::Weights(w) => w.keys.last().map(|k| k.time),
             })
+            .chain(self.pointers.iter().filter_map(|p| p.keys.last_time()))
             .fold(0.0, f64::max)
     }
 }
@@ -194,6 +203,9 @@ pub struct ImportedModel {
     /// buffer view, a `data:` URI or a file next to the model. `None` for an image that
     /// cannot be read or whose type is neither PNG nor JPEG (export then leaves it out).
     pub image_data: Vec<Option<ImageData>>,
+    /// Animation channels the import left out (unknown `KHR_animation_pointer` targets,
+    /// channels without a target), each with why.
+    pub skipped_channels: Vec<crate::gltf_pointer::SkippedChannel>,
 }
 
 /// Local transforms and morph weights of every node at one time.
@@ -1000,10 +1012,20 @@ impl ImportedModel {
                     }
                 }
             }
+            crate::gltf_attributes::object_attributes(self, anim, i, &channels_of[i], &mut object);
             scene.objects.push(object);
+        }
+        let mut uses = vec![0usize; self.lights.len()];
+        for l in self.nodes.iter().filter_map(|n| n.light) {
+            if let Some(u) = uses.get_mut(l) {
+                *u += 1;
+            }
         }
         for (i, node) in self.nodes.iter().enumerate() {
             let Some(light) = node.light.and_then(|l| self.lights.get(l)) else { continue };
+            let light_index = node.light.unwrap_or_default();
+            // A light several nodes place is named by its nodes, so each scene light has a name.
+            let name = if uses[light_index] > 1 { node.name.clone() } else { light.name.clone() };
             let (_, rotation, position) = world[i].to_scale_rotation_translation();
             let kind = match light.kind {
                 ModelLightKind::Directional => keyrig_core::LightKind::Directional,
@@ -1014,15 +1036,18 @@ impl ImportedModel {
                     dropoff: 1.0,
                 },
             };
-            scene.lights.push(keyrig_core::Light {
-                name: light.name.clone(),
+            let mut scene_light = keyrig_core::Light {
+                name,
                 kind,
                 enabled: true,
                 position: keyrig_core::Animated::constant(position),
                 direction: keyrig_core::Animated::constant(rotation * Vec3::NEG_Z),
                 colour: keyrig_core::Animated::constant(light.colour),
                 intensity: keyrig_core::Animated::constant(light.intensity),
-            });
+                attributes: Default::default(),
+            };
+            crate::gltf_attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
+            scene.lights.push(scene_light);
         }
         Ok(scene)
     }

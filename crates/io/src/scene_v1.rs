@@ -82,6 +82,7 @@ impl ObjectV1 {
                 ik_constraints: Vec::new(),
             }),
             deformer: self.deformer,
+            attributes: keyrig_core::ObjectAttributes::default(),
         }
     }
 }

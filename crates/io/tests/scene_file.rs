@@ -439,6 +439,7 @@ fn light() -> impl Strategy<Value = Light> {
             direction: Animated::constant(Vec3::NEG_Y),
             colour: Animated::constant(Vec3::ONE),
             intensity,
+            attributes: Default::default(),
         }
     })
 }

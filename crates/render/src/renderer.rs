@@ -110,6 +110,9 @@ pub struct DrawItem {
     pub deform: Deform,
     /// Linear RGB albedo.
     pub colour: Vec3,
+    /// 1 opaque; below 1 the item is blended over the opaque ones (alpha blending, drawn after
+    /// them without writing depth).
+    pub opacity: f32,
     pub selected: bool,
     /// Drawn as a translucent, tinted ghost (onion skinning) after the opaque items.
     pub ghost: Option<Ghost>,
@@ -133,6 +136,9 @@ pub struct LightInput {
     pub direction: Vec3,
     /// Linear RGB.
     pub colour: Vec3,
+    /// Distance beyond which the light has no effect, with glTF's smooth falloff
+    /// `clamp(1 − (d/range)⁴, 0, 1)` on top of 1/d² (`KHR_lights_punctual`); `None`: unlimited.
+    pub range: Option<f32>,
     pub intensity: f32,
 }
 
@@ -551,6 +557,13 @@ fn gpu_light(light: &LightInput) -> GpuLight {
             (2.0, [cutoff.to_radians().cos(), inner.to_radians().cos(), dropoff.max(0.0), 0.0])
         }
     };
+    let mut spot = spot;
+    // w: the range (0 for none); directional lights have none.
+    spot[3] = match (light.kind, light.range) {
+        (LightKind::Directional, _) | (_, None) => 0.0,
+        (_, Some(r)) if r.is_finite() && r > 0.0 => r,
+        _ => 0.0,
+    };
     GpuLight {
         position: light.position.extend(kind).to_array(),
         direction: direction.extend(0.0).to_array(),
@@ -594,6 +607,9 @@ struct DrawPipelines {
     lines_on_top: wgpu::RenderPipeline,
     /// Translucent ghosts: lit, blended over the scene, depth-tested without writing depth.
     ghost: wgpu::RenderPipeline,
+    /// Objects with opacity below 1: lit and textured as opaque ones, blended over the scene,
+    /// depth-tested without writing depth.
+    translucent: wgpu::RenderPipeline,
 }
 
 impl DrawPipelines {
@@ -726,6 +742,16 @@ impl DrawPipelines {
                 mesh_layout,
                 "vs_mesh",
                 "fs_ghost",
+                TriangleList,
+                LessEqual,
+                false,
+                Some(wgpu::BlendState::ALPHA_BLENDING),
+            ),
+            translucent: pipeline(
+                "keyrig translucent objects",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit",
                 TriangleList,
                 LessEqual,
                 false,
@@ -1247,7 +1273,7 @@ impl Renderer {
                 world_from_model: item.world_from_model.to_cols_array_2d(),
                 normal_from_model: if normal.is_finite() { normal } else { Mat4::IDENTITY }
                     .to_cols_array_2d(),
-                colour: item.colour.extend(1.0).to_array(),
+                colour: item.colour.extend(item.opacity.clamp(0.0, 1.0)).to_array(),
                 flags: [if item.selected { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
                 tint: item.ghost.map_or([0.0; 4], |g| g.tint.extend(g.opacity.clamp(0.0, 1.0)).to_array()),
             };
@@ -1374,12 +1400,15 @@ impl Renderer {
             RenderStyle::Wireframe => &pipelines.wireframe,
             RenderStyle::Points => &pipelines.points,
         };
-        // Opaque items first, then ghosts blended over them (in the order given).
+        // Opaque items first, then translucent items and ghosts blended over them (in the
+        // order given).
+        let translucent = |item: &DrawItem| item.ghost.is_none() && item.opacity < 1.0;
         let order = frame
             .items
             .iter()
             .enumerate()
-            .filter(|(_, item)| item.ghost.is_none())
+            .filter(|(_, item)| item.ghost.is_none() && !translucent(item))
+            .chain(frame.items.iter().enumerate().filter(|(_, item)| translucent(item)))
             .chain(frame.items.iter().enumerate().filter(|(_, item)| item.ghost.is_some()));
         for (i, item) in order {
             // Checked in encode_deformations.
@@ -1398,6 +1427,14 @@ impl Renderer {
                 stats.draw_calls += 1;
                 continue;
             }
+            if translucent(item) && item.opacity <= 0.0 {
+                continue;
+            }
+            let pipeline = if translucent(item) && frame.style == RenderStyle::Solid {
+                &pipelines.translucent
+            } else {
+                pipeline
+            };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
             let texture = match &mesh.texture {
@@ -1497,6 +1534,7 @@ mod tests {
             world_from_model: Mat4::IDENTITY,
             deform: Deform::None,
             colour: Vec3::new(0.9, 0.6, 0.3),
+            opacity: 1.0,
             selected: false,
             ghost: None,
         });

@@ -609,13 +609,15 @@ impl SceneRig {
     ) -> Result<Vec<DrawItem>, SceneFrameError> {
         let object = &self.objects[i];
         let mut items = Vec::new();
-        let colour = match (&object.material, view.textures) {
-            (Some(material), true) => {
+        let colour = match (state.look.colour, &object.material, view.textures) {
+            (Some(keyed), _, _) => keyed,
+            (None, Some(material), true) => {
                 let [r, g, b, _] = material.base_colour;
                 Vec3::new(r, g, b)
             }
             _ => object.colour,
         };
+        let opacity = state.look.opacity;
         let world_from_model = Mat4::from(state.world_from_object);
         let selected = matches!(view.selection, Some(Selected::Object(o)) if o == i);
         if let (Some(_), Some(blend)) = (&object.morph, &state.morph) {
@@ -627,6 +629,7 @@ impl SceneRig {
                 world_from_model,
                 deform: Deform::Morph { frame_a: blend.frame_a, frame_b: blend.frame_b, t: blend.t },
                 colour,
+                opacity,
                 selected,
                 ghost: None,
             });
@@ -642,10 +645,11 @@ impl SceneRig {
                 mesh,
                 world_from_model,
                 deform: Deform::Skin {
-                    deformer: view.deformer.unwrap_or(self.eval.deformer(i).unwrap_or_default()),
+                    deformer: view.deformer.unwrap_or(state.look.deformer),
                     joints: joint_poses(palette),
                 },
                 colour,
+                opacity,
                 selected,
                 ghost: None,
             });
@@ -680,19 +684,23 @@ impl SceneRig {
         frame.lights = state
             .lights
             .iter()
-            .filter(|l| l.enabled)
+            .filter(|l| l.enabled && l.visible)
             .map(|l| LightInput {
                 kind: l.kind,
                 position: l.position,
                 direction: l.direction,
                 colour: l.colour,
                 intensity: l.intensity,
+                range: l.range,
             })
             .collect();
         frame.grid_spacing = view.grid.then(|| grid_spacing_for(camera.distance));
         frame.textures = view.textures;
         for (i, state) in state.objects.iter().enumerate() {
-            frame.items.extend(self.object_items(i, state, view, i as MeshId)?);
+            // A hidden object is not drawn (its skeleton overlay still is, to pose it).
+            if state.look.visible {
+                frame.items.extend(self.object_items(i, state, view, i as MeshId)?);
+            }
             let world_from_model = Mat4::from(state.world_from_object);
             if view.skeletons {
                 if let (Some(_), Some(palette), Some(rest)) =

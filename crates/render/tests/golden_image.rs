@@ -58,6 +58,7 @@ pub fn test_scene() -> Scene {
         direction: Animated::constant(direction),
         colour: Animated::constant(Vec3::new(1.0, 0.95, 0.9)),
         intensity: Animated::constant(intensity),
+        attributes: Default::default(),
     };
     Scene {
         fps: 30.0,

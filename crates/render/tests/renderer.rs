@@ -42,6 +42,7 @@ fn floor_frame(lights: Vec<LightInput>) -> FrameInput {
         world_from_model: Mat4::IDENTITY,
         deform: Deform::None,
         colour: Vec3::ONE,
+        opacity: 1.0,
         selected: false,
         ghost: None,
     });
@@ -53,7 +54,7 @@ fn red(image: &keyrig_render::image::RgbaImage, x: u32, y: u32) -> u8 {
 }
 
 fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32) -> LightInput {
-    LightInput { kind, position, direction, colour: Vec3::ONE, intensity }
+    LightInput { kind, position, direction, colour: Vec3::ONE, intensity, range: None }
 }
 
 #[test]
@@ -413,4 +414,65 @@ fn selection_tints_without_hiding_the_shading() {
         plain[2] - selected[2] <= 15,
         "the shading shows through the tint where the surface faces the eye: {plain:?} → {selected:?}"
     );
+}
+
+/// sRGB encoding of a linear value in 0..=1, as the sRGB render target stores it.
+fn srgb(linear: f32) -> f32 {
+    if linear <= 0.003_130_8 {
+        12.92 * linear
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+#[test]
+fn opacity_blends_the_object_over_the_background() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let sun = light(LightKind::Directional, Vec3::ZERO, Vec3::NEG_Y, 0.5);
+    let centre_at = |r: &mut HeadlessRenderer, opacity: f32, background: Vec3| {
+        let mut frame = floor_frame(vec![sun]);
+        frame.background = background;
+        frame.items[0].opacity = opacity;
+        let (image, stats) = r.render_image(&frame, SIZE, SIZE).expect("render");
+        (red(&image, SIZE / 2, SIZE / 2), stats.draw_calls)
+    };
+    let (opaque, _) = centre_at(&mut r, 1.0, Vec3::ZERO);
+    let (half, calls) = centre_at(&mut r, 0.5, Vec3::ZERO);
+    assert_eq!(calls, 1);
+    // Blending happens on linear values (the target is sRGB): over black, half of the lit
+    // floor's linear value, then encoded. The lit value (diffuse 0.5 plus a little specular)
+    // is read back from the opaque image.
+    let lit_linear = {
+        let c = f32::from(opaque) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let expected = srgb(0.5 * lit_linear) * 255.0;
+    assert!((f32::from(half) - expected).abs() <= 3.0, "half {half}, expected {expected}, opaque {opaque}");
+    let (invisible, calls) = centre_at(&mut r, 0.0, Vec3::new(0.2, 0.0, 0.0));
+    assert_eq!(calls, 0, "an object at opacity 0 is not drawn");
+    assert!((f32::from(invisible) - srgb(0.2) * 255.0).abs() <= 2.0, "background shows: {invisible}");
+}
+
+#[test]
+fn a_light_range_ends_its_light_smoothly() {
+    let mut r = headless();
+    let (vertices, indices) = floor();
+    r.upload_mesh(1, &MeshData::Static { vertices: &vertices, indices: &indices }).expect("upload");
+    let point =
+        |range| LightInput { range, ..light(LightKind::Point, Vec3::new(0.0, 0.5, 0.0), Vec3::NEG_Y, 0.2) };
+    let (image, _) = r.render_image(&floor_frame(vec![point(None)]), SIZE, SIZE).expect("render");
+    let (centre, corner) = (red(&image, SIZE / 2, SIZE / 2), red(&image, 3, 3));
+    assert!(corner > 0);
+    // Range 0.6: the centre (d = 0.5) keeps 1 − (0.5/0.6)⁴ ≈ 0.52 of its light; the corners
+    // (d > 1) get none.
+    let (image, _) = r.render_image(&floor_frame(vec![point(Some(0.6))]), SIZE, SIZE).expect("render");
+    let (c2, k2) = (red(&image, SIZE / 2, SIZE / 2), red(&image, 3, 3));
+    assert_eq!(k2, 0, "beyond the range");
+    assert!(c2 > 0 && c2 < centre, "inside the range, dimmed: {c2} < {centre}");
 }

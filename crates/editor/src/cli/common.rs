@@ -74,20 +74,7 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
     }
     match ext.as_deref() {
         Some("ron") => Ok(scene_file::load_lenient(path)?),
-        Some("glb" | "gltf") => {
-            let model = keyrig_io::gltf_import::import_gltf_file(path)?;
-            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let animation = (!model.animations.is_empty()).then_some(0);
-            let scene = model
-                .to_scene(&name, animation)
-                .with_context(|| format!("{}: mapping the model to a scene", path.display()))?;
-            let problems = scene
-                .problems()
-                .into_iter()
-                .map(|problem| LocatedProblem { problem, position: None })
-                .collect();
-            Ok((scene, problems))
-        }
+        Some("glb" | "gltf") => load_gltf(path).map(|(_, scene, problems)| (scene, problems)),
         Some("md2") => bail!(
             "{}: MD2 models hold vertex animation (frames and clips), not channels; \
              `keyrig {command}` reads .ron scenes and .glb/.gltf models",
@@ -98,6 +85,22 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
             path.display()
         ),
     }
+}
+
+/// Imports the glTF model at `path` and maps it to a scene (first animation), as
+/// [`load_scene_lenient`] does; the model comes back too (`keyrig info` lists what it skipped).
+pub fn load_gltf(
+    path: &Path,
+) -> anyhow::Result<(keyrig_io::model::ImportedModel, Scene, Vec<LocatedProblem>)> {
+    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let animation = (!model.animations.is_empty()).then_some(0);
+    let scene = model
+        .to_scene(&name, animation)
+        .with_context(|| format!("{}: mapping the model to a scene", path.display()))?;
+    let problems =
+        scene.problems().into_iter().map(|problem| LocatedProblem { problem, position: None }).collect();
+    Ok((model, scene, problems))
 }
 
 /// Writes to stdout; a closed pipe (`keyrig sample … | head`) is not an error.

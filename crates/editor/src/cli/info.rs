@@ -111,7 +111,18 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
     if keyrig_io::vrml::is_vrml_path(&args.file) {
         return vrml_info(&args);
     }
-    let (scene, mut problems) = super::common::load_scene_lenient(&args.file, "info")?;
+    let is_gltf = args
+        .file
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"));
+    let (scene, mut problems, skipped) = if is_gltf {
+        let (model, scene, problems) = super::common::load_gltf(&args.file)?;
+        (scene, problems, Some(model.skipped_channels))
+    } else {
+        let (scene, problems) = super::common::load_scene_lenient(&args.file, "info")?;
+        (scene, problems, None)
+    };
     if is_scene(&args.file) {
         problems.extend(
             mesh_problems(&scene, &keyrig_io::file_io::parent_or_dot(&args.file))
@@ -120,11 +131,30 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         );
     }
     let text = match args.format {
-        InfoFormat::Text => summary_text(&args.file, &scene, &problems),
+        InfoFormat::Text => {
+            let mut w = summary_text(&args.file, &scene, &problems);
+            if let Some(skipped) = &skipped {
+                use std::fmt::Write as _;
+                if skipped.is_empty() {
+                    let _ = writeln!(w, "skipped channels: none");
+                } else {
+                    let _ = writeln!(w, "skipped channels: {}", skipped.len());
+                    for s in skipped {
+                        let _ = writeln!(w, "  {s}");
+                    }
+                }
+            }
+            w
+        }
         InfoFormat::Json => {
-            serde_json::to_string_pretty(&summary_json(&args.file, &scene, &problems))
-                .context("writing JSON")?
-                + "\n"
+            let mut doc = summary_json(&args.file, &scene, &problems);
+            if let Some(skipped) = &skipped {
+                doc["skipped_channels"] = serde_json::json!(skipped
+                    .iter()
+                    .map(|s| serde_json::json!({"channel": s.channel, "pointer": s.pointer, "why": s.reason}))
+                    .collect::<Vec<_>>());
+            }
+            serde_json::to_string_pretty(&doc).context("writing JSON")? + "\n"
         }
     };
     super::common::write_stdout(text.as_bytes())?;
@@ -393,6 +423,19 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
                 keyrig_core::channel::IkProperty::Target => span(&c.target.track.keys),
                 keyrig_core::channel::IkProperty::Blend => span(&c.blend.track.keys),
             }),
+        ChannelPath::Attribute { light, owner, property } => {
+            let id = if *light {
+                names.lights.get(owner.as_str()).and_then(|&l| property.light_id(l))
+            } else {
+                names.objects.get(owner.as_str()).and_then(|&o| property.object_id(o))
+            };
+            match id.and_then(|id| id.get(scene)) {
+                Some(keyrig_core::channel_id::ChannelRef::Scalar(a)) => span(&a.track.keys),
+                Some(keyrig_core::channel_id::ChannelRef::Vec3(a)) => span(&a.track.keys),
+                Some(keyrig_core::channel_id::ChannelRef::Rotation(a)) => span(&a.track.keys),
+                None => (0, None),
+            }
+        }
         ChannelPath::Light { light, property } => {
             let Some(l) = names.lights.get(light.as_str()).map(|&l| &scene.lights[l]) else {
                 return (0, None);

@@ -167,6 +167,7 @@ impl FrameSource for Md2Source {
             direction: Vec3::new(-0.4, -1.0, -0.6),
             colour: Vec3::ONE,
             intensity: 0.9,
+            range: None,
         }];
         input.ambient = Vec3::splat(0.15);
         input.items.push(DrawItem {
@@ -179,6 +180,7 @@ impl FrameSource for Md2Source {
                 t: (position - a) as f32,
             },
             // The skin as it is (white × texture), or the plain colour.
+            opacity: 1.0,
             colour: if self.textured { Vec3::ONE } else { Vec3::new(0.7, 0.65, 0.6) },
             selected: false,
             ghost: None,

@@ -197,6 +197,7 @@ pub fn frame_model_scene(scene: &mut Scene, points: impl IntoIterator<Item = Vec
             direction: keyrig_core::Animated::constant(Vec3::new(-0.4, -1.0, -0.6)),
             colour: keyrig_core::Animated::constant(Vec3::ONE),
             intensity: keyrig_core::Animated::constant(0.9),
+            attributes: Default::default(),
         });
         scene.ambient = Vec3::splat(0.15);
     }

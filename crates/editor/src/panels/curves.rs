@@ -116,6 +116,14 @@ pub fn turn_axis(scene: &Scene, id: ChannelId) -> Option<(keyrig_core::Track<gla
 #[must_use]
 pub fn shown_channels(scene: &Scene, selection: &Selection) -> Vec<ChannelId> {
     let mut ids: Vec<ChannelId> = selection.channels(scene);
+    // The item's attributes (visibility, opacity, cone, …) where keyed, after its transform.
+    match selection.item {
+        Some(crate::session::Selected::Object(o)) => {
+            ids.extend(keyrig_core::AttributeId::of_object(scene, o))
+        }
+        Some(crate::session::Selected::Light(l)) => ids.extend(keyrig_core::AttributeId::of_light(scene, l)),
+        _ => {}
+    }
     for k in &selection.keys {
         if !ids.contains(&k.channel) {
             ids.push(k.channel);

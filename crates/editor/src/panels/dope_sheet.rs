@@ -139,6 +139,12 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
                 out.push(channel_row(id, id.channel_name().to_owned(), 1, item));
             }
         }
+        // Visibility, colour, opacity, morph weights, deformer: where in use.
+        for id in keyrig_core::AttributeId::of_object(scene, o) {
+            if keyed(id) || selected {
+                out.push(channel_row(id, attribute_label(id), 1, item));
+            }
+        }
         let Some(skeleton) = &object.skeleton else { continue };
         let root = ChannelId::RootTranslation(o);
         if keyed(root) {
@@ -188,7 +194,8 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
     for (l, light) in scene.lights.iter().enumerate() {
         let item = Selected::Light(l);
         let folded = collapsed.contains(&item);
-        let all = ChannelId::of_light(l).to_vec();
+        let mut all = ChannelId::of_light(l).to_vec();
+        all.extend(keyrig_core::AttributeId::of_light(scene, l));
         out.push(Row {
             label: light.name.clone(),
             depth: 0,
@@ -202,11 +209,21 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
         let selected = selection.contains(item);
         for id in all {
             if keyed(id) || selected {
-                out.push(channel_row(id, id.channel_name().to_owned(), 1, item));
+                out.push(channel_row(id, attribute_label(id), 1, item));
             }
         }
     }
     out
+}
+
+/// A row's label: the channel's name, with the target of a morph weight.
+fn attribute_label(id: ChannelId) -> String {
+    match id {
+        ChannelId::Attribute(keyrig_core::AttributeId::MorphWeight { target, .. }) => {
+            format!("morph {target}")
+        }
+        _ => id.channel_name().to_owned(),
+    }
 }
 
 /// Where things are: the name column, the keys and the frames they show.

@@ -5,7 +5,7 @@
 
 use egui::Ui;
 use glam::Vec3;
-use keyrig_core::{Cycle, DeformerKind, Interpolation, Tcb};
+use keyrig_core::{AttributeId, Cycle, DeformerKind, Interpolation, Tcb};
 
 use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::channels::{self, ChannelId, ChannelValue};
@@ -168,7 +168,12 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
     };
     let group = format!("inspector {id:?}");
     match value {
-        ChannelValue::Vec3(mut v) if matches!(id, ChannelId::LightColour(_)) => {
+        ChannelValue::Vec3(mut v)
+            if matches!(
+                id,
+                ChannelId::LightColour(_) | ChannelId::Attribute(AttributeId::ObjectColour(_))
+            ) =>
+        {
             if colour_editor(ui, label, marker, &mut v) && v.is_finite() {
                 actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(v), group });
             }
@@ -215,6 +220,55 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             rotation_mode_ui(ui, ctx, actions, id, mode);
             if matches!(id, ChannelId::JointRotation { .. }) {
                 twist_ui(ui, ctx, actions, id, q, &group);
+            }
+        }
+        ChannelValue::Scalar(s) if matches!(id, ChannelId::Attribute(a) if a.is_switch() && a.value_range() == Some((0.0, 1.0))) =>
+        {
+            // Visibility: a check box, keyed (Step) in record mode like any channel.
+            let mut shown = s >= 0.5;
+            let changed = ui
+                .horizontal(|ui| {
+                    let r = ui.checkbox(&mut shown, label);
+                    ui.weak(marker);
+                    r.changed()
+                })
+                .inner;
+            if changed {
+                actions.push(Action::CloseGroup);
+                let value = ChannelValue::Scalar(if shown { 1.0 } else { 0.0 });
+                actions.edit(Edit::Pose { id, value, group });
+            }
+        }
+        ChannelValue::Scalar(s) if matches!(id, ChannelId::Attribute(AttributeId::Deformer(_))) => {
+            let current = keyrig_core::attributes::deformer_from_value(s).unwrap_or_default();
+            let mut chosen = current;
+            ui.horizontal(|ui| {
+                egui::ComboBox::from_label(label).selected_text(current.label()).show_ui(ui, |ui| {
+                    for k in DeformerKind::ALL {
+                        ui.selectable_value(&mut chosen, k, k.label());
+                    }
+                });
+                ui.weak(marker);
+            });
+            if chosen != current {
+                actions.push(Action::CloseGroup);
+                let value = ChannelValue::Scalar(keyrig_core::attributes::deformer_value(chosen));
+                actions.edit(Edit::Pose { id, value, group });
+            }
+        }
+        ChannelValue::Scalar(mut s) if matches!(id, ChannelId::Attribute(AttributeId::ObjectOpacity(_))) => {
+            let changed = ui
+                .horizontal(|ui| {
+                    let r = ui.add(egui::Slider::new(&mut s, 0.0..=1.0).text(label));
+                    ui.weak(marker);
+                    r
+                })
+                .inner;
+            if changed.changed() && s.is_finite() {
+                if changed.drag_stopped() || !changed.dragged() {
+                    actions.push(Action::CloseGroup);
+                }
+                actions.edit(Edit::Pose { id, value: ChannelValue::Scalar(s), group });
             }
         }
         ChannelValue::Scalar(mut s) => {
@@ -284,6 +338,7 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             channel_editor(ui, ctx, actions, ChannelId::ObjectTranslation(o), "Translation");
             channel_editor(ui, ctx, actions, ChannelId::ObjectRotation(o), "Rotation (°)");
             channel_editor(ui, ctx, actions, ChannelId::ObjectScale(o), "Scale");
+            object_attributes_ui(ui, ctx, actions, o);
             md2_ui(ui, ctx, actions, o);
         }
         Some(Selected::Joint { object, joint }) => {
@@ -332,6 +387,77 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             {
                 channel_editor(ui, ctx, actions, id, label);
             }
+            light_attributes_ui(ui, ctx, actions, l);
+        }
+    }
+}
+
+/// Sets an optional attribute (`None` → its current setting as a constant), one undo step.
+fn set_attribute(actions: &mut Actions, what: &str, f: impl Fn(&mut keyrig_core::Scene) + 'static) {
+    actions.push(Action::CloseGroup);
+    actions.edit(Edit::continuous("attribute", what.to_owned(), f));
+    actions.push(Action::CloseGroup);
+}
+
+/// An object's keyable attributes: visible, opacity, colour (once set), morph weights.
+fn object_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
+    let Some(object) = ctx.scene().objects.get(o) else { return };
+    let a = &object.attributes;
+    let id = |a: AttributeId| ChannelId::Attribute(a);
+    channel_editor(ui, ctx, actions, id(AttributeId::ObjectVisible(o)), "Visible");
+    channel_editor(ui, ctx, actions, id(AttributeId::ObjectOpacity(o)), "Opacity");
+    if a.colour.is_some() {
+        channel_editor(ui, ctx, actions, id(AttributeId::ObjectColour(o)), "Colour");
+    } else if object.mesh.is_some()
+        && ui
+            .button("Animate colour")
+            .on_hover_text("Give the object a colour channel that replaces its material's base colour")
+            .clicked()
+    {
+        set_attribute(actions, "animate colour", move |scene| {
+            if let Some(obj) = scene.objects.get_mut(o) {
+                obj.attributes.colour = Some(keyrig_core::Animated::constant(Vec3::splat(0.8)));
+            }
+        });
+    }
+    for target in 0..a.morph_weights.len() {
+        let label = format!("Morph {target}");
+        channel_editor(ui, ctx, actions, id(AttributeId::MorphWeight { object: o, target }), &label);
+    }
+}
+
+/// A light's keyable attributes: visible, range and (spot lights) the cone, once keyed.
+fn light_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, l: usize) {
+    let Some(light) = ctx.scene().lights.get(l) else { return };
+    let a = &light.attributes;
+    let id = |a: AttributeId| ChannelId::Attribute(a);
+    channel_editor(ui, ctx, actions, id(AttributeId::LightVisible(l)), "Visible");
+    if a.range.is_some() {
+        channel_editor(ui, ctx, actions, id(AttributeId::LightRange(l)), "Range");
+    } else if !matches!(light.kind, keyrig_core::LightKind::Directional)
+        && ui
+            .button("Limit range")
+            .on_hover_text("Give the light a range beyond which it has no effect")
+            .clicked()
+    {
+        set_attribute(actions, "light range", move |scene| {
+            if let Some(light) = scene.lights.get_mut(l) {
+                light.attributes.range = Some(keyrig_core::Animated::constant(10.0));
+            }
+        });
+    }
+    if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
+        if a.cutoff_deg.is_some() || a.inner_angle_deg.is_some() {
+            channel_editor(ui, ctx, actions, id(AttributeId::LightCutoff(l)), "Cutoff (°)");
+            channel_editor(ui, ctx, actions, id(AttributeId::LightInnerAngle(l)), "Inner angle (°)");
+        } else if ui.button("Animate cone").on_hover_text("Key the spot's cutoff and inner angles").clicked()
+        {
+            set_attribute(actions, "animate cone", move |scene| {
+                if let Some(light) = scene.lights.get_mut(l) {
+                    light.attributes.cutoff_deg = Some(keyrig_core::Animated::constant(cutoff_deg));
+                    light.attributes.inner_angle_deg = Some(keyrig_core::Animated::constant(inner_angle_deg));
+                }
+            });
         }
     }
 }
@@ -742,6 +868,22 @@ fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             .on_hover_text("How far the blend zone reaches into the parent bone (fraction of its length)");
         ui.add(egui::Slider::new(&mut settings.blend_child_fraction, 0.0..=1.0).text("Zone into child"))
             .on_hover_text("How far the blend zone reaches into the child bone (fraction of its length)");
+    }
+    // The deformer as a channel: keyed with Step keys, so one take can switch deformers.
+    let keyed = ChannelId::Attribute(AttributeId::Deformer(o));
+    if object.attributes.deformer.is_some() {
+        channel_editor(ui, ctx, actions, keyed, "Keyed deformer");
+    } else if ui
+        .button("Animate deformer")
+        .on_hover_text("Key the deformer (Step keys) to switch deformers during the animation")
+        .clicked()
+    {
+        let value = keyrig_core::attributes::deformer_value(settings.kind);
+        set_attribute(actions, "animate deformer", move |scene| {
+            if let Some(obj) = scene.objects.get_mut(o) {
+                obj.attributes.deformer = Some(keyrig_core::Animated::constant(value));
+            }
+        });
     }
     measure_ui(ui, ctx);
     if settings != object.deformer {

@@ -276,6 +276,7 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
                     direction: Animated::constant(m.transform_vector3(direction)),
                     colour: Animated::constant(v3(t, id, "color", Vec3::ONE)),
                     intensity: Animated::constant(num(t, id, "intensity", 1.0)),
+                    attributes: Default::default(),
                 },
             });
         }

@@ -1501,6 +1501,7 @@ impl Traversal<'_> {
                 direction: Animated::constant(vec3(doc, id, "direction", -Vec3::Z)),
                 colour: Animated::constant(colour(doc, id, "color", Vec3::ONE)),
                 intensity: Animated::constant(float(doc, id, "intensity", 1.0)),
+                attributes: Default::default(),
             },
         });
     }

@@ -8,6 +8,9 @@
 //   point:       radiance = colour·intensity / d²
 //   spot:        point radiance · cone(θ), cone = 1 inside the inner angle, 0 outside the
 //                cut-off, ((cos θ − cos cut) / (cos inner − cos cut))^dropoff in between.
+//   range r > 0 (point and spot): radiance · clamp(1 − (d/r)⁴, 0, 1), KHR_lights_punctual's
+//                recommended window, so the light ends smoothly at d = r.
+//   alpha = the object's opacity (colour.a): the translucent pipeline blends with it.
 
 const MAX_LIGHTS: u32 = 8u;
 const KIND_DIRECTIONAL: u32 = 0u;
@@ -21,7 +24,7 @@ struct Light {
     direction: vec4<f32>,
     // rgb colour × intensity
     radiance: vec4<f32>,
-    // cos(cut-off), cos(inner), dropoff, unused
+    // cos(cut-off), cos(inner), dropoff, range (0: none)
     spot: vec4<f32>,
 };
 
@@ -104,6 +107,11 @@ fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f3
             cone = select(cone, 0.0, cos_theta <= spot.x);
             falloff = falloff * cone;
         }
+        let range = globals.lights[i].spot.w;
+        if range > 0.0 {
+            let q = (1.0 / inv_d) / range;
+            falloff = falloff * clamp(1.0 - q * q * q * q, 0.0, 1.0);
+        }
         let radiance = globals.lights[i].radiance.rgb * falloff;
         let n_dot_l = max(dot(n, l), 0.0);
         diffuse = diffuse + radiance * n_dot_l;
@@ -126,7 +134,7 @@ fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f3
         let rim = (1.0 - facing) * (1.0 - facing);
         colour = mix(colour, vec3<f32>(1.0, 0.45, 0.05), 0.12 + 0.58 * rim);
     }
-    return vec4<f32>(colour, 1.0);
+    return vec4<f32>(colour, object.colour.a);
 }
 
 // Onion-skin ghosts: lit without the texture, mixed half-way towards the ghost's tint, and

@@ -8,9 +8,11 @@ use glam::{Affine3A, DQuat, DVec3, Quat, Vec3};
 use transform_gizmo_egui::math::Transform;
 use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrientation, GizmoResult};
 
-use crate::actions::Actions;
+use crate::actions::{Actions, Edit};
+use crate::channels::{ChannelId, ChannelValue};
 use crate::camera::{OrbitCamera, Projection};
 use crate::context::FrameCtx;
+use crate::session::Selected;
 use crate::twist::{RingDrag, RingDragState};
 
 use super::targets::{self, Pivot, Target};
@@ -33,6 +35,9 @@ pub(super) struct GizmoState {
     ring_centre: Vec3,
     /// Where the selection turns about (the viewport's pivot setting).
     pub(super) pivot: Pivot,
+    /// Scale mode (S over the viewport toggles it): with objects selected the gizmo shows
+    /// scale handles instead of its move arrows and rotation rings.
+    pub(super) scale: bool,
 }
 
 impl GizmoState {
@@ -69,17 +74,34 @@ impl GizmoState {
         // The gizmo stands at the pivot with the active item's axes.
         let mut world = active.world;
         world.translation = targets::pivot_point(&items, self.pivot).into();
+        // Scale mode scales the selected objects (each about its own origin).
+        let scaled: Vec<usize> = if self.scale {
+            ctx.session
+                .selection
+                .items()
+                .filter_map(|item| match item {
+                    Selected::Object(o) => Some(o),
+                    _ => None,
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         // Point lights have only a place, directional lights only a direction (their icon's
         // place is not used for lighting), spot lights both; joints move where the rig allows
         // (a root, or a joint with translation keys).
         let turns = items.iter().any(|t| t.rotation.is_some() || t.direction.is_some());
         let moves = items.iter().any(|t| t.translation.is_some() && !t.carried);
         let mut modes = GizmoMode::all_rotate() & GizmoMode::all_translate();
-        if turns {
-            modes |= GizmoMode::all_rotate();
-        }
-        if moves {
-            modes |= GizmoMode::all_translate();
+        if !scaled.is_empty() {
+            modes = GizmoMode::all_scale();
+        } else {
+            if turns {
+                modes |= GizmoMode::all_rotate();
+            }
+            if moves {
+                modes |= GizmoMode::all_translate();
+            }
         }
         if modes.is_empty() {
             self.drag = false;
@@ -222,8 +244,22 @@ impl GizmoState {
         let Some(new) = transforms.first() else { return owns };
         let new_rotation: Quat = DQuat::from(new.rotation).as_quat().normalize();
         let new_translation: Vec3 = DVec3::from(new.translation).as_vec3();
-        let (_, old_rotation, old_translation) = world.to_scale_rotation_translation();
-        if matches!(result, GizmoResult::Translation { .. }) {
+        let (old_scale, old_rotation, old_translation) = world.to_scale_rotation_translation();
+        if matches!(result, GizmoResult::Scale { .. }) {
+            // Every selected object's scale times the handle's factor along each axis.
+            let factor = DVec3::from(new.scale).as_vec3() / old_scale;
+            if factor.is_finite() {
+                for &o in &scaled {
+                    if let Some(ChannelValue::Vec3(now)) = ctx.value_now(ChannelId::ObjectScale(o)) {
+                        actions.edit(Edit::Pose {
+                            id: ChannelId::ObjectScale(o),
+                            value: ChannelValue::Vec3(now * factor),
+                            group: GROUP.to_owned(),
+                        });
+                    }
+                }
+            }
+        } else if matches!(result, GizmoResult::Translation { .. }) {
             targets::shift(ctx, actions, &items, new_translation - old_translation, GROUP);
         } else {
             // Only lights turn through transform-gizmo (joints and objects turn on our rings).

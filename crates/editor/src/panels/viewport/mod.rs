@@ -143,6 +143,26 @@ impl Viewport {
                 self.ik_grab = None;
                 None
             };
+            // S over the viewport: the object gizmo's scale mode on and off (Blender's S).
+            let typing = ui.ctx().egui_wants_keyboard_input();
+            if response.hovered()
+                && !typing
+                && ui.input(|i| i.modifiers.is_none() && i.key_pressed(egui::Key::S))
+            {
+                self.gizmo.scale = !self.gizmo.scale;
+            }
+            if matches!(ctx.session.selection.item, Some(crate::session::Selected::Object(_))) {
+                let at = egui::Rect::from_min_size(
+                    rect.left_bottom() + egui::vec2(8.0, -30.0),
+                    egui::vec2(96.0, 22.0),
+                );
+                let toggle = ui
+                    .put(at, egui::Button::selectable(self.gizmo.scale, "Scale gizmo"))
+                    .on_hover_text("Scale handles for the selected object instead of move and turn (S)");
+                if toggle.clicked() {
+                    self.gizmo.scale = !self.gizmo.scale;
+                }
+            }
             let gizmo_owns_primary = match handle {
                 Some(owns) => owns,
                 None => self.gizmo.ui(ui, ctx, actions, &projection, rect, &response),
