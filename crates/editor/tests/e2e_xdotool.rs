@@ -591,6 +591,8 @@ fn several_joints_turn_together_and_the_curve_legend_hides_in_a_real_x_window() 
     session.click(entry);
     h.get_by_label("elbow rotation Z").click();
     h.run();
+    // A loaded machine may not have started the redraw yet: wait before asking for idle.
+    std::thread::sleep(Duration::from_millis(500));
     session.wait_idle();
     let hidden = session.screenshot("guide_curve_legend_hidden");
     let curves_rect = h.state().curves_rect().expect("laid out");
@@ -601,6 +603,7 @@ fn several_joints_turn_together_and_the_curve_legend_hides_in_a_real_x_window() 
     session.click(normalize);
     h.get_by_label("Normalize").click();
     h.run();
+    std::thread::sleep(Duration::from_millis(500));
     session.wait_idle();
     let normalized = session.screenshot("guide_curve_normalized");
     assert!(changed_pixels(&hidden, &normalized, curves_rect) > 200, "Normalize redraws the curves");
