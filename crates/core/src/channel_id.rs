@@ -8,6 +8,7 @@ use glam::{EulerRot, Quat, Vec3};
 
 use crate::attributes::AttributeId;
 use crate::key::Animated;
+use crate::rotation_mode::RotationMode;
 use crate::scene::Scene;
 
 /// How rotations are printed.
@@ -320,4 +321,41 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ),
         ChannelId::Attribute(a) => a.get_mut(scene)?,
     })
+}
+
+/// The rotation mode of a rotation channel's object or joint (the default for other channels).
+#[must_use]
+pub fn rotation_mode(scene: &Scene, id: ChannelId) -> RotationMode {
+    match id {
+        ChannelId::ObjectRotation(o) => scene.objects.get(o).map(|o| o.rotation_mode),
+        ChannelId::JointRotation { object, joint } => scene
+            .objects
+            .get(object)
+            .and_then(|o| o.skeleton.as_ref())
+            .and_then(|s| s.joints.get(joint))
+            .map(|j| j.rotation_mode),
+        _ => None,
+    }
+    .unwrap_or_default()
+}
+
+/// Sets the rotation mode of a rotation channel's object or joint; false when `id` is not one.
+pub fn set_rotation_mode(scene: &mut Scene, id: ChannelId, mode: RotationMode) -> bool {
+    let slot = match id {
+        ChannelId::ObjectRotation(o) => scene.objects.get_mut(o).map(|o| &mut o.rotation_mode),
+        ChannelId::JointRotation { object, joint } => scene
+            .objects
+            .get_mut(object)
+            .and_then(|o| o.skeleton.as_mut())
+            .and_then(|s| s.joints.get_mut(joint))
+            .map(|j| &mut j.rotation_mode),
+        _ => None,
+    };
+    match slot {
+        Some(slot) => {
+            *slot = mode;
+            true
+        }
+        None => false,
+    }
 }

@@ -205,49 +205,6 @@ impl RotationMode {
     }
 }
 
-/// The rotation mode of a rotation channel's object or joint (the default for other channels).
-#[must_use]
-pub fn of_channel(scene: &crate::Scene, id: crate::channel_id::ChannelId) -> RotationMode {
-    use crate::channel_id::ChannelId;
-    match id {
-        ChannelId::ObjectRotation(o) => scene.objects.get(o).map(|o| o.rotation_mode),
-        ChannelId::JointRotation { object, joint } => scene
-            .objects
-            .get(object)
-            .and_then(|o| o.skeleton.as_ref())
-            .and_then(|s| s.joints.get(joint))
-            .map(|j| j.rotation_mode),
-        _ => None,
-    }
-    .unwrap_or_default()
-}
-
-/// Sets the rotation mode of a rotation channel's object or joint; false when `id` is not one.
-pub fn set_for_channel(
-    scene: &mut crate::Scene,
-    id: crate::channel_id::ChannelId,
-    mode: RotationMode,
-) -> bool {
-    use crate::channel_id::ChannelId;
-    let slot = match id {
-        ChannelId::ObjectRotation(o) => scene.objects.get_mut(o).map(|o| &mut o.rotation_mode),
-        ChannelId::JointRotation { object, joint } => scene
-            .objects
-            .get_mut(object)
-            .and_then(|o| o.skeleton.as_mut())
-            .and_then(|s| s.joints.get_mut(joint))
-            .map(|j| &mut j.rotation_mode),
-        _ => None,
-    };
-    match slot {
-        Some(slot) => {
-            *slot = mode;
-            true
-        }
-        None => false,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

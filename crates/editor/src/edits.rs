@@ -149,7 +149,7 @@ impl EditorApp {
             let none = crate::eval::PoseOverrides::new();
             keys.iter()
                 .map(|k| {
-                    let mode = keyrig_core::rotation_mode::of_channel(scene, k.channel);
+                    let mode = keyrig_core::channel_id::rotation_mode(scene, k.channel);
                     let time = channels::key_params(scene, k.channel, k.index).map(|p| p.0);
                     let euler = match (mode.euler(), time) {
                         (Some(order), Some(time)) if k.channel.kind() == channels::ChannelKind::Rotation => {

@@ -90,6 +90,8 @@ fn typing_720_in_record_mode_keys_two_turns() {
     assert_eq!(spins(h.state(), 3), vec![None, None]);
     assert!((twist_field(&h) + 90.0).abs() < 0.05);
 
-    // The Euler angles name their rotation order.
-    h.get_by_label("Euler XYZ");
+    // The Euler angles name their rotation order: the joint's rotation mode, XYZ by default.
+    h.get_by_label("Rotation mode");
+    let joint = &h.state().doc.scene().objects[0].skeleton.as_ref().expect("a skeleton").joints[3];
+    assert_eq!(joint.rotation_mode.euler(), Some(keyrig_core::EulerOrder::XYZ));
 }

@@ -29,7 +29,7 @@ use crate::session::{KeyRef, Selection};
 use crate::widgets::publish_painted;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
-use keyrig_core::rotation_mode;
+use keyrig_core::channel_id::rotation_mode;
 
 /// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
 const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
@@ -150,7 +150,7 @@ pub fn sample_curves(
     let fps = scene.fps.max(1e-9);
     let none = PoseOverrides::new();
     let n = samples.max(2);
-    let mode = rotation_mode::of_channel(scene, id);
+    let mode = rotation_mode(scene, id);
     let mut curves: Vec<Curve> = Vec::new();
     // Rotations read continuously: Euler angles from the channel's first key on
     // ([`continuous_euler`]), each sample the triple nearest the last; quaternions on the
@@ -239,7 +239,7 @@ fn value_count(scene: &Scene, id: ChannelId, twist: bool) -> usize {
     match id.kind() {
         channels::ChannelKind::Scalar => 1,
         channels::ChannelKind::Rotation if twist => 1,
-        channels::ChannelKind::Rotation if rotation_mode::of_channel(scene, id).euler().is_none() => 4,
+        channels::ChannelKind::Rotation if rotation_mode(scene, id).euler().is_none() => 4,
         _ => 3,
     }
 }
@@ -283,8 +283,8 @@ fn curve_colour(n: usize, c: usize, is_turn: bool) -> Color32 {
 /// "X", "Y", "Z" for a vector or Euler angle component, "W" … "Z" for a quaternion's, "turn"
 /// for the unwrapped turn.
 fn component_name(scene: &Scene, id: ChannelId, c: usize) -> &'static str {
-    let quaternion = id.kind() == channels::ChannelKind::Rotation
-        && rotation_mode::of_channel(scene, id).euler().is_none();
+    let quaternion =
+        id.kind() == channels::ChannelKind::Rotation && rotation_mode(scene, id).euler().is_none();
     match (id.kind(), c) {
         (channels::ChannelKind::Scalar, _) => "",
         _ if quaternion => ["W", "X", "Y", "Z", "turn"].get(c).copied().unwrap_or("turn"),
@@ -503,7 +503,7 @@ fn key_points(
     let mut out = Vec::new();
     let mut last_column = std::collections::HashMap::new();
     for (n, (id, curves)) in all.iter().enumerate() {
-        let mode = rotation_mode::of_channel(scene, *id);
+        let mode = rotation_mode(scene, *id);
         let window =
             channels::keys_between(scene, *id, plot.view.start / fps - 1e-9, plot.view.end / fps + 1e-9);
         for (i, time) in window.times.iter().enumerate() {

@@ -15,7 +15,8 @@ use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::measure::measure_ui;
 use crate::widgets::tcb_slider::tcb_slider_ui;
-use keyrig_core::rotation_mode::{self, RotationMode};
+use keyrig_core::channel_id::{rotation_mode, set_rotation_mode};
+use keyrig_core::RotationMode;
 
 /// Starts applying a field's change: a committed (typed) value is its own undo step, so any
 /// open continuous group is closed first; a drag continues its group until release.
@@ -128,7 +129,7 @@ fn rotation_mode_ui(
         let name = id.label(ctx.scene());
         actions.push(Action::CloseGroup);
         actions.edit(Edit::scene(format!("rotation mode {} of {name}", chosen.label()), move |scene| {
-            rotation_mode::set_for_channel(scene, id, chosen);
+            set_rotation_mode(scene, id, chosen);
         }));
     }
 }
@@ -186,7 +187,7 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             }
         }
         ChannelValue::Rotation(q) => {
-            let mode = rotation_mode::of_channel(ctx.scene(), id);
+            let mode = rotation_mode(ctx.scene(), id);
             match mode.euler() {
                 Some(order) => {
                     // Continuous from the channel's first key: a spin reads 0 → 360, not a flip.

@@ -269,18 +269,6 @@ impl GizmoState {
     }
 }
 
-/// The light's local axis that points along its direction (as glTF's lights shine along −Z).
-const LIGHT_AXIS: Vec3 = Vec3::NEG_Z;
-
-/// A rotation that takes [`LIGHT_AXIS`] onto the direction `d` (any twist about `d`; only the
-/// direction is a channel).
-pub(super) fn light_aim(d: Vec3) -> Quat {
-    match d.try_normalize() {
-        Some(d) => Quat::from_rotation_arc(LIGHT_AXIS, d),
-        None => Quat::IDENTITY,
-    }
-}
-
 fn to_transform(a: Affine3A) -> Transform {
     let (s, r, t) = a.to_scale_rotation_translation();
     Transform::from_scale_rotation_translation(s.as_dvec3(), r.as_dquat(), t.as_dvec3())

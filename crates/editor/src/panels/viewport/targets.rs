@@ -165,7 +165,7 @@ fn target(
                     Some((id, vec3(ctx.value_now(id))?))
                 }
             };
-            let aim = direction.map_or(Quat::IDENTITY, |(_, d)| super::gizmo::light_aim(d));
+            let aim = direction.map_or(Quat::IDENTITY, |(_, d)| light_aim(d));
             Some(Target {
                 world: Affine3A::from_rotation_translation(aim, position),
                 rotation: None,
@@ -179,6 +179,18 @@ fn target(
                 carried: false,
             })
         }
+    }
+}
+
+/// The light's local axis that points along its direction (as glTF's lights shine along −Z).
+const LIGHT_AXIS: Vec3 = Vec3::NEG_Z;
+
+/// A rotation that takes [`LIGHT_AXIS`] onto the direction `d` (any twist about `d`; only the
+/// direction is a channel).
+fn light_aim(d: Vec3) -> Quat {
+    match d.try_normalize() {
+        Some(d) => Quat::from_rotation_arc(LIGHT_AXIS, d),
+        None => Quat::IDENTITY,
     }
 }
 
