@@ -1,6 +1,7 @@
 //! keyrig-core: keys, tracks, Kochanek–Bartels (TCB) and Squad interpolation, and the scene
 //! document. Pure: no file I/O, no GPU, no UI.
 
+pub mod camera_object;
 pub mod channel;
 pub mod channel_id;
 pub mod ik;
@@ -12,6 +13,7 @@ pub mod scene;
 pub mod track;
 pub mod validate;
 
+pub use camera_object::{Aim, AimTarget, Lens, Marker, Projection, RenderSize, SceneCamera};
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use scene::{

@@ -7,6 +7,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::camera_object::{Marker, RenderSize, SceneCamera};
 use crate::key::{Animated, RawTrack};
 
 /// A whole scene: timing, animated objects, lights and a camera.
@@ -26,6 +27,19 @@ pub struct Scene {
     pub lights: Vec<Light>,
     #[serde(default)]
     pub camera: Camera,
+    /// Cameras placed in the scene (not the viewport's view, [`Scene::camera`]). Left out of
+    /// a scene file while empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cameras: Vec<SceneCamera>,
+    /// The camera active before the first marker bound to a camera; `None`: the first camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub active_camera: Option<String>,
+    /// Named timeline markers, optionally switching the active camera.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub markers: Vec<Marker>,
+    /// The size `keyrig render` renders at when not told (`None`: 1280×720).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub render_size: Option<RenderSize>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -41,6 +55,10 @@ impl Default for Scene {
             objects: Vec::new(),
             lights: Vec::new(),
             camera: Camera::default(),
+            cameras: Vec::new(),
+            active_camera: None,
+            markers: Vec::new(),
+            render_size: None,
         }
     }
 }
@@ -494,6 +512,15 @@ impl Scene {
                 + cost(&light.direction, theirs.map(|t| &t.direction))
                 + cost(&light.colour, theirs.map(|t| &t.colour))
                 + cost(&light.intensity, theirs.map(|t| &t.intensity));
+        }
+        for (c, camera) in self.cameras.iter().enumerate() {
+            let theirs = other.cameras.get(c);
+            bytes += cost(&camera.translation, theirs.map(|t| &t.translation))
+                + cost(&camera.rotation, theirs.map(|t| &t.rotation))
+                + cost(&camera.lens, theirs.map(|t| &t.lens));
+            if let Some(aim) = &camera.aim {
+                bytes += cost(&aim.roll, theirs.and_then(|t| t.aim.as_ref()).map(|a| &a.roll));
+            }
         }
         bytes
     }

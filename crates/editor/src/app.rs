@@ -403,6 +403,11 @@ impl EditorApp {
                     scene.lights.remove(l);
                 });
             }
+            Selected::Camera(c) => {
+                self.doc.edit(&format!("delete camera {name}"), |scene| {
+                    crate::cameras::remove_camera(scene, c);
+                });
+            }
             Selected::Joint { .. } => {
                 self.error(format!(
                     "Delete: {name} is a joint of a skeleton; select its object to delete the whole model"
@@ -435,6 +440,14 @@ impl EditorApp {
                 let index = scene.lights.len();
                 self.doc.edit(&format!("duplicate as {name}"), |scene| scene.lights.push(light));
                 Some((Selected::Light(index), name))
+            }
+            Some(Selected::Camera(c)) => {
+                let mut camera = scene.cameras[c].clone();
+                camera.name = unique_name(&camera.name, scene.cameras.iter().map(|x| x.name.as_str()));
+                let name = camera.name.clone();
+                let index = scene.cameras.len();
+                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.cameras.push(camera));
+                Some((Selected::Camera(index), name))
             }
             Some(Selected::Joint { .. }) => {
                 self.error("Duplicate: joints are duplicated with their model; select the object");
@@ -476,6 +489,7 @@ impl EditorApp {
         let taken = match item {
             Selected::Object(o) => scene.objects.iter().enumerate().any(|(i, x)| i != o && x.name == name),
             Selected::Light(l) => scene.lights.iter().enumerate().any(|(i, x)| i != l && x.name == name),
+            Selected::Camera(c) => scene.cameras.iter().enumerate().any(|(i, x)| i != c && x.name == name),
             Selected::Joint { object, joint } => scene.objects[object]
                 .skeleton
                 .as_ref()
@@ -497,6 +511,7 @@ impl EditorApp {
         self.doc.edit(&format!("rename {old} to {name}"), |scene| match item {
             Selected::Object(o) => scene.objects[o].name = new,
             Selected::Light(l) => scene.lights[l].name = new,
+            Selected::Camera(c) => crate::cameras::rename_camera(scene, c, new),
             Selected::Joint { object, joint } => {
                 if let Some(s) = scene.objects[object].skeleton.as_mut() {
                     s.joints[joint].name = new;
@@ -752,6 +767,11 @@ impl EditorApp {
                     self.view.camera.target = p;
                 }
             }
+            Some(Selected::Camera(c)) => {
+                if let Some(ChannelValue::Vec3(p)) = self.value_now(ChannelId::CameraTranslation(c)) {
+                    self.view.camera.target = p;
+                }
+            }
             None => match self.scene.bounds_of(None) {
                 Some(bounds) => self.view.camera.frame(bounds, aspect),
                 None => self.info("Nothing to frame: the scene is empty"),
@@ -888,6 +908,11 @@ impl EditorApp {
                 }
             }
             Command::ShowHelp => self.view.show_help = !self.view.show_help,
+            Command::LookThroughCamera => self.toggle_look_through(),
+            Command::CameraToView => self.camera_to_view(),
+            Command::AddCamera => self.add_camera(),
+            Command::ToggleMarker => self.toggle_marker(),
+            Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }
         ctx.request_repaint();
     }
@@ -1292,6 +1317,7 @@ impl EditorApp {
             ViewChange::Antialiasing(on) => view.antialiasing = on,
             ViewChange::Onion(onion) => view.onion = onion,
             ViewChange::ShowHelp(on) => view.show_help = on,
+            ViewChange::LookThrough(camera) => view.look_through = camera,
         }
     }
 }
@@ -1308,6 +1334,7 @@ pub fn item_name(scene: &Scene, item: Selected) -> Option<String> {
     Some(match item {
         Selected::Object(o) => scene.objects.get(o)?.name.clone(),
         Selected::Light(l) => scene.lights.get(l)?.name.clone(),
+        Selected::Camera(c) => scene.cameras.get(c)?.name.clone(),
         Selected::Joint { object, joint } => {
             scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone()
         }

@@ -15,6 +15,7 @@ use keyrig_skin::{
     mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
 };
 
+use crate::camera::{CameraRig, CameraState, Target};
 use crate::morph::{MorphBlend, MorphClips, MorphError};
 
 /// Values set on channels without keys being written (a gizmo drag, a slider), keyed by the
@@ -59,16 +60,16 @@ enum SlotEval<T: TrackValue> {
 /// One channel: what it was built from (the shared keys and the static value), its evaluable
 /// form and the problem that made it fall back. Cloning shares the evaluable form.
 #[derive(Clone, Debug)]
-struct Slot<T: TrackValue> {
+pub(crate) struct Slot<T: TrackValue> {
     keys: Keys<T>,
     value: T,
     cycles: keyrig_core::Cycles,
     eval: Arc<SlotEval<T>>,
-    problem: Option<EvalProblem>,
+    pub(crate) problem: Option<EvalProblem>,
 }
 
 impl<T: TrackValue> Slot<T> {
-    fn new(animated: &Animated<T>, id: ChannelId) -> Self {
+    pub(crate) fn new(animated: &Animated<T>, id: ChannelId) -> Self {
         let (eval, problem) = match AnimatedTrack::new(animated) {
             Ok(track) => (SlotEval::Track(track), None),
             Err(e) => (
@@ -90,7 +91,7 @@ impl<T: TrackValue> Slot<T> {
 
     /// Rebuilds the slot when its channel changed (its keys are no longer the list it was
     /// built from, or its static value or its cycles differ); true when it did.
-    fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
+    pub(crate) fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
         if self.keys.shares_with(&animated.track.keys)
             && self.value == animated.value
             && self.cycles == animated.cycles()
@@ -102,7 +103,7 @@ impl<T: TrackValue> Slot<T> {
     }
 
     #[inline]
-    fn sample(&self, t: f64) -> T {
+    pub(crate) fn sample(&self, t: f64) -> T {
         match &*self.eval {
             SlotEval::Track(track) => track.sample(t),
             SlotEval::Fallback(v) => *v,
@@ -329,6 +330,8 @@ pub struct SceneState {
     pub time: f64,
     pub objects: Vec<ObjectState>,
     pub lights: Vec<LightState>,
+    /// The scene cameras, by index.
+    pub cameras: Vec<CameraState>,
 }
 
 /// The validated runtime form of a [`Scene`]: every channel's track (tangents and Squad
@@ -345,6 +348,7 @@ pub struct SceneEvaluator {
     fps: f64,
     objects: Vec<ObjectRig>,
     lights: Vec<LightRig>,
+    cameras: Vec<CameraRig>,
     problems: Vec<EvalProblem>,
 }
 
@@ -358,6 +362,7 @@ impl SceneEvaluator {
             fps: scene.fps,
             objects: (0..scene.objects.len()).map(|o| ObjectRig::new(scene, o, meshes.get(&o))).collect(),
             lights: scene.lights.iter().enumerate().map(|(l, light)| LightRig::new(l, light)).collect(),
+            cameras: (0..scene.cameras.len()).map(|c| CameraRig::new(scene, c)).collect(),
             problems: Vec::new(),
         };
         eval.collect_problems();
@@ -401,6 +406,17 @@ impl SceneEvaluator {
                 }
             }
         }
+        self.cameras.truncate(scene.cameras.len());
+        for c in 0..scene.cameras.len() {
+            match self.cameras.get_mut(c) {
+                Some(rig) => rebuilt.channels += rig.refresh(scene, c),
+                None => {
+                    let rig = CameraRig::new(scene, c);
+                    rebuilt.channels += rig.channel_count();
+                    self.cameras.push(rig);
+                }
+            }
+        }
         self.collect_problems();
         rebuilt
     }
@@ -419,6 +435,9 @@ impl SceneEvaluator {
             {
                 self.problems.push(p.clone());
             }
+        }
+        for rig in &self.cameras {
+            rig.for_each_problem(&mut |p| self.problems.push(p.clone()));
         }
     }
 
@@ -493,6 +512,14 @@ impl SceneEvaluator {
             ChannelId::IkBlend { object, constraint } => Some(ChannelValue::Scalar(
                 self.objects.get(object)?.skeleton.as_ref()?.constraints.get(constraint)?.blend.sample(time),
             )),
+            ChannelId::CameraTranslation(c) => vec3(&self.cameras.get(c)?.translation),
+            ChannelId::CameraRotation(c) => {
+                Some(ChannelValue::Rotation(self.cameras.get(c)?.rotation.sample(time)))
+            }
+            ChannelId::CameraLens(c) => Some(ChannelValue::Scalar(self.cameras.get(c)?.lens.sample(time))),
+            ChannelId::CameraRoll(c) => {
+                Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.roll.sample(time)))
+            }
         }
     }
 
@@ -506,6 +533,7 @@ impl SceneEvaluator {
             ChannelId::JointRotation { object, joint } => {
                 &self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation
             }
+            ChannelId::CameraRotation(c) => &self.cameras.get(c)?.rotation,
             _ => return None,
         };
         match &*slot.eval {
@@ -517,7 +545,7 @@ impl SceneEvaluator {
     /// The whole scene at `time` seconds.
     #[must_use]
     pub fn evaluate(&self, time: f64, overrides: &Overrides) -> SceneState {
-        let mut state = SceneState { time, objects: Vec::new(), lights: Vec::new() };
+        let mut state = SceneState { time, objects: Vec::new(), lights: Vec::new(), cameras: Vec::new() };
         self.evaluate_into(time, overrides, &mut state);
         state
     }
@@ -540,6 +568,51 @@ impl SceneEvaluator {
         }
         state.lights.clear();
         state.lights.extend((0..self.lights.len()).filter_map(|l| self.light_at(l, time, overrides)));
+        state.cameras.clear();
+        let objects = &state.objects;
+        state.cameras.extend(
+            self.cameras
+                .iter()
+                .enumerate()
+                .map(|(c, rig)| rig.state(c, time, overrides, |target| Self::target_in(objects, target))),
+        );
+    }
+
+    /// Scene camera `c` at `time` seconds; `None` when there is no such camera. An aimed
+    /// camera evaluates the object it looks at.
+    #[must_use]
+    pub fn camera_at(&self, c: usize, time: f64, overrides: &Overrides) -> Option<CameraState> {
+        let rig = self.cameras.get(c)?;
+        Some(rig.state(c, time, overrides, |target| match *target {
+            Target::Object(o) | Target::Joint { object: o, .. } => {
+                let state = self.object_at(o, time, overrides)?;
+                let mut objects = vec![ObjectState::empty(); o];
+                objects.push(state);
+                Self::target_in(&objects, target)
+            }
+            Target::Point(p) => Some(p),
+            Target::Missing => None,
+        }))
+    }
+
+    /// The number of scene cameras.
+    #[must_use]
+    pub fn camera_count(&self) -> usize {
+        self.cameras.len()
+    }
+
+    /// The world position of an aim target in evaluated objects.
+    fn target_in(objects: &[ObjectState], target: &Target) -> Option<Vec3> {
+        match *target {
+            Target::Point(p) => Some(p),
+            Target::Object(o) => Some(objects.get(o)?.world_from_object.translation.into()),
+            Target::Joint { object, joint } => {
+                let state = objects.get(object)?;
+                let joint_in_model = state.palette.as_ref()?.model_from_joint.get(joint)?.translation;
+                Some(state.world_from_object.transform_point3a(joint_in_model).into())
+            }
+            Target::Missing => None,
+        }
     }
 
     /// Object `o` at `time` seconds; `None` when there is no such object. The skeleton's pose

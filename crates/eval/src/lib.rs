@@ -16,10 +16,12 @@
 //! [`LoadedMesh`]es.
 
 pub mod bake;
+pub mod camera;
 mod evaluator;
 pub mod morph;
 
 pub use bake::{bake_all_ik, bake_ik_constraint, BakeError, Baked};
+pub use camera::CameraState;
 pub use evaluator::{
     EvalProblem, LightState, LoadedMesh, MorphRig, ObjectState, Overrides, Rebuilt, SceneEvaluator,
     SceneState, SkinRig,

@@ -3,6 +3,8 @@
 //! channel before and after its keys), and the deformer with its
 //! parameters, plus the cross-section measure of the selected joint.
 
+mod camera;
+
 use egui::Ui;
 use glam::Vec3;
 use keyrig_core::{Cycle, DeformerKind, Interpolation, Tcb};
@@ -244,6 +246,7 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 channel_editor(ui, ctx, actions, id, label);
             }
         }
+        Some(Selected::Camera(c)) => camera::camera_ui(ui, ctx, actions, c, channel_editor),
     }
 }
 

@@ -75,6 +75,9 @@ impl GizmoState {
             GizmoKind::Light(_, LightKind::Spot { .. }) => {
                 GizmoMode::all_rotate() | GizmoMode::all_translate()
             }
+            // An aimed camera's rotation follows its target: only its place is dragged.
+            GizmoKind::Camera { aimed: true, .. } => GizmoMode::all_translate(),
+            GizmoKind::Camera { aimed: false, .. } => GizmoMode::all_rotate() | GizmoMode::all_translate(),
         };
         let to_rows = |m: glam::Mat4| m.as_dmat4().into();
         self.gizmo.update_config(GizmoConfig {
@@ -210,6 +213,13 @@ impl GizmoState {
                     ChannelValue::Rotation(local.normalize()),
                 );
             }
+            GizmoKind::Camera { camera: c, .. } => {
+                if matches!(result, GizmoResult::Translation { .. }) {
+                    pose_edit(actions, ChannelId::CameraTranslation(c), ChannelValue::Vec3(new_translation));
+                } else {
+                    pose_edit(actions, ChannelId::CameraRotation(c), ChannelValue::Rotation(new_rotation));
+                }
+            }
             GizmoKind::Object(o) => {
                 if matches!(result, GizmoResult::Translation { .. }) {
                     pose_edit(actions, ChannelId::ObjectTranslation(o), ChannelValue::Vec3(new_translation));
@@ -244,6 +254,11 @@ fn gizmo_target(ctx: &FrameCtx<'_>) -> Option<(Affine3A, GizmoKind)> {
             ))
         }
         Selected::Object(o) => Some((ctx.pose(o)?.world_from_object, GizmoKind::Object(o))),
+        Selected::Camera(c) => {
+            let state = ctx.scene.state()?.cameras.get(c)?;
+            let aimed = ctx.scene().cameras.get(c)?.aim.is_some();
+            Some((state.world_from_camera, GizmoKind::Camera { camera: c, aimed }))
+        }
         Selected::Light(l) => {
             let kind = ctx.scene().lights.get(l)?.kind;
             let Some(ChannelValue::Vec3(p)) = ctx.value_now(ChannelId::LightPosition(l)) else { return None };
@@ -278,6 +293,7 @@ enum GizmoKind {
     Joint { object: usize, joint: usize },
     Object(usize),
     Light(usize, LightKind),
+    Camera { camera: usize, aimed: bool },
 }
 
 fn to_transform(a: Affine3A) -> Transform {
@@ -306,7 +322,10 @@ fn rotation_channel(ctx: &FrameCtx<'_>, kind: GizmoKind) -> Option<(ChannelId, Q
             Some((ChannelId::JointRotation { object, joint }, parent_rotation * j.rest_rotation))
         }
         GizmoKind::Object(o) => Some((ChannelId::ObjectRotation(o), Quat::IDENTITY)),
-        GizmoKind::Light(..) => None,
+        GizmoKind::Camera { camera, aimed: false } => {
+            Some((ChannelId::CameraRotation(camera), Quat::IDENTITY))
+        }
+        GizmoKind::Light(..) | GizmoKind::Camera { aimed: true, .. } => None,
     }
 }
 
