@@ -1295,7 +1295,12 @@ impl Renderer {
             overlay::grid(&mut lines, spacing, 50);
         }
         let grid_vertices = lines.len() as u32;
-        let marker = frame.camera.distance * 0.008;
+        // Overlays keep their size on screen: in proportion to the distance looked from (through
+        // a scene camera: its distance to the orbit target, the middle of what is being worked on).
+        let marker = match &frame.through {
+            Some(through) => through.eye().distance(frame.camera.target).max(1e-3) * 0.008,
+            None => frame.camera.distance * 0.008,
+        };
         for skeleton in &frame.skeletons {
             overlay::skeleton(&mut lines, skeleton, marker);
         }

@@ -108,6 +108,11 @@ pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ct
     let aspect = scene.render_size.map_or(16.0 / 9.0, keyrig_core::RenderSize::aspect);
     let active = scene.active_camera_at(ctx.session.playback.frame);
     let mut lines = keyrig_render::overlay::Lines::default();
+    // The renderer's overlay size: in proportion to the distance looked from.
+    let marker = match super::look_through_state(ctx) {
+        Some(through) => through.eye().distance(ctx.view.camera.target).max(1e-3) * 0.008,
+        None => ctx.view.camera.distance * 0.008,
+    };
     for (c, camera) in state.cameras.iter().enumerate() {
         if ctx.view.look_through == Some(c) || !camera.is_usable() {
             continue;
@@ -118,7 +123,7 @@ pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ct
             selected: ctx.is_active(Selected::Camera(c)),
             active: active == Some(c),
         };
-        keyrig_render::overlay::camera_gizmo(&mut lines, &gizmo, ctx.view.camera.distance * 0.008);
+        keyrig_render::overlay::camera_gizmo(&mut lines, &gizmo, marker);
     }
     for pair in lines.vertices.chunks_exact(2) {
         let at =
@@ -149,8 +154,8 @@ pub(super) fn paint_render_frame(painter: &egui::Painter, rect: egui::Rect, ctx:
     }
     painter.rect_stroke(frame, 0.0, Stroke::new(1.0, Color32::from_gray(200)), egui::StrokeKind::Inside);
     painter.text(
-        frame.left_top() + egui::vec2(8.0, 6.0),
-        egui::Align2::LEFT_TOP,
+        frame.left_bottom() + egui::vec2(8.0, -6.0),
+        egui::Align2::LEFT_BOTTOM,
         format!("Camera: {}", camera.name),
         egui::FontId::proportional(14.0),
         Color32::from_gray(230),
