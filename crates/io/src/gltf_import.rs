@@ -117,6 +117,11 @@ fn ptr(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
     at(Location::Pointer(p.into()), kind)
 }
 
+/// An error at the JSON pointer `p` (for the importer's other modules).
+pub(crate) fn pointer_error(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
+    ptr(p, kind)
+}
+
 /// Converts a gltf-json path (`meshes[0].attributes["POSITION"]`) to a JSON pointer
 /// (`/meshes/0/attributes/POSITION`).
 #[must_use]
@@ -269,6 +274,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     model.meshes = doc.meshes().map(|m| read_mesh(&cx, &m)).collect::<Result<_, _>>()?;
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
+    model.cameras = crate::gltf_camera::read_cameras(&doc)?;
     check_skinned_meshes(&model)?;
     check_animation_json(doc.as_json())?;
     model.animations = doc.animations().map(|a| read_animation(&cx, &model, &a)).collect::<Result<_, _>>()?;
@@ -529,6 +535,7 @@ fn read_nodes(doc: &gltf::Document) -> Result<Vec<ModelNode>, GltfError> {
                 mesh: n.mesh().map(|m| m.index()),
                 skin: n.skin().map(|s| s.index()),
                 light: n.light().map(|l| l.index()),
+                camera: n.camera().map(|c| c.index()),
                 weights: n.weights().map(<[f32]>::to_vec),
             })
         })

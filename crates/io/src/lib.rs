@@ -4,6 +4,7 @@
 
 pub mod demo;
 pub mod file_io;
+pub mod gltf_camera;
 pub mod gltf_export;
 pub mod gltf_import;
 pub mod md2;

@@ -27,6 +27,8 @@ pub struct ModelNode {
     pub mesh: Option<usize>,
     pub skin: Option<usize>,
     pub light: Option<usize>,
+    /// The camera this node holds (an index of [`ImportedModel::cameras`]).
+    pub camera: Option<usize>,
     /// Morph-target weights of this node's mesh instance, when the node overrides them.
     pub weights: Option<Vec<f32>>,
 }
@@ -189,6 +191,8 @@ pub struct ImportedModel {
     pub skins: Vec<ModelSkin>,
     pub animations: Vec<ModelAnimation>,
     pub lights: Vec<ModelLight>,
+    /// The file's cameras ([`crate::gltf_camera`]).
+    pub cameras: Vec<crate::gltf_camera::ModelCamera>,
     pub images: Vec<ImageSource>,
     /// The bytes of each image (same order as `images`) where they could be read: from a
     /// buffer view, a `data:` URI or a file next to the model. `None` for an image that
@@ -942,7 +946,8 @@ impl ImportedModel {
     /// - each unskinned mesh node → an object at its rest world transform, with its own
     ///   translation/rotation/scale tracks when it is a root node;
     /// - each KHR_lights_punctual light → a light at its node's rest world position and
-    ///   direction (−Z), spot cone angles in degrees.
+    ///   direction (−Z), spot cone angles in degrees;
+    /// - each node holding a camera → a scene camera ([`crate::gltf_camera`]).
     ///
     /// What the scene does not take from the file: morph weights, animated lights, the
     /// animation of unskinned nodes below other nodes, and the other animations.
@@ -1024,6 +1029,7 @@ impl ImportedModel {
                 intensity: keyrig_core::Animated::constant(light.intensity),
             });
         }
+        crate::gltf_camera::add_scene_cameras(self, &world, &channels_of, &mut scene);
         Ok(scene)
     }
 }
