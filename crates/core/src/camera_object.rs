@@ -10,14 +10,13 @@
 //! or a point instead of its keyed rotation (3ds Max's target camera, Blender's Track To).
 //!
 //! [`Marker`]s name frames of the timeline; a marker bound to a camera makes it the active
-//! camera from its frame on ([`Scene::active_camera_at`]), as Blender's markers bound to
+//! camera from its frame on (`Scene::active_camera_at`), as Blender's markers bound to
 //! cameras.
 
 use glam::{Mat3, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::key::Animated;
-use crate::scene::Scene;
 
 /// A camera placed in the scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -245,34 +244,10 @@ impl RenderSize {
     }
 }
 
-impl Scene {
-    /// The index of the camera named `name`.
-    #[must_use]
-    pub fn camera_index(&self, name: &str) -> Option<usize> {
-        self.cameras.iter().position(|c| c.name == name)
-    }
-
-    /// The camera that is active at `frame`: the camera of the last marker at or before
-    /// `frame` that is bound to an existing camera; before any, the camera named by
-    /// `active_camera`, else the first camera. `None` for a scene without cameras.
-    #[must_use]
-    pub fn active_camera_at(&self, frame: f64) -> Option<usize> {
-        let from_marker = self
-            .markers
-            .iter()
-            .filter(|m| f64::from(m.frame) <= frame)
-            .filter_map(|m| Some((m.frame, self.camera_index(m.camera.as_deref()?)?)))
-            .max_by_key(|&(f, _)| f)
-            .map(|(_, c)| c);
-        from_marker
-            .or_else(|| self.active_camera.as_deref().and_then(|n| self.camera_index(n)))
-            .or_else(|| (!self.cameras.is_empty()).then_some(0))
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     fn close(a: Quat, b: Quat) -> bool {
         a.dot(b).abs() > 1.0 - 1e-6

@@ -565,19 +565,15 @@ impl Checker {
         if near_ok && camera.near <= 0.0 {
             self.push(join(path, "near"), format!("near plane {} must be > 0", camera.near));
         }
-        match camera.far {
-            Some(far) => {
-                if self.f32(&join(path, "far"), far) && near_ok && far <= camera.near {
-                    self.push(
-                        join(path, "far"),
-                        format!("far plane {far} must be beyond the near plane {}", camera.near),
-                    );
-                }
+        if let Some(far) = camera.far {
+            if self.f32(&join(path, "far"), far) && near_ok && far <= camera.near {
+                self.push(
+                    join(path, "far"),
+                    format!("far plane {far} must be beyond the near plane {}", camera.near),
+                );
             }
-            None if camera.projection == Projection::Orthographic => {
-                self.push(join(path, "far"), "an orthographic camera needs a far plane")
-            }
-            None => {}
+        } else if camera.projection == Projection::Orthographic {
+            self.push(join(path, "far"), "an orthographic camera needs a far plane");
         }
         if let Some(aim) = &camera.aim {
             let ap = join(path, "aim");

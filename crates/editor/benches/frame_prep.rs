@@ -4,8 +4,9 @@
 //! the document edit with its undo snapshot, the evaluator brought in step, the draw rig
 //! rebuilt around it (vertex buffers are not sent again: no mesh changed).
 //!
-//! Scenes: `assets/demo.ron` and `assets/characters.ron` (the demo with CesiumMan, the Fox
-//! and an MD2 model). docs/benchmarks.md records the figures.
+//! Scenes: `assets/demo.ron`, `assets/characters.ron` (the demo with CesiumMan, the Fox
+//! and an MD2 model) and `assets/cameras.ron` (the twisting arm seen by two aimed scene
+//! cameras). docs/benchmarks.md records the figures.
 //!
 //! Run: `cargo bench -p keyrig-editor --bench frame_prep`
 
@@ -35,7 +36,7 @@ fn gpu_bytes(frame: &keyrig_render::FrameInput) -> usize {
 fn frame_prep(c: &mut Criterion) {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let mut group = c.benchmark_group("frame_prep");
-    for name in ["demo", "characters"] {
+    for name in ["demo", "characters", "cameras"] {
         let path = assets.join(format!("{name}.ron"));
         let scene = keyrig_io::scene_file::load(&path).expect("scene");
         let meshes = keyrig_editor::files::render_meshes(&scene, Some(&assets)).expect("meshes");

@@ -395,7 +395,8 @@ impl EditorApp {
         match item {
             Selected::Object(o) => {
                 self.doc.edit(&format!("delete object {name}"), |scene| {
-                    scene.objects.remove(o);
+                    let gone = scene.objects.remove(o);
+                    crate::camera_edits::forget_aim_targets(scene, &gone.name);
                 });
             }
             Selected::Light(l) => {
@@ -405,7 +406,7 @@ impl EditorApp {
             }
             Selected::Camera(c) => {
                 self.doc.edit(&format!("delete camera {name}"), |scene| {
-                    crate::cameras::remove_camera(scene, c);
+                    crate::camera_edits::remove_camera(scene, c);
                 });
             }
             Selected::Joint { .. } => {
@@ -509,12 +510,20 @@ impl EditorApp {
         }
         let new = name.to_owned();
         self.doc.edit(&format!("rename {old} to {name}"), |scene| match item {
-            Selected::Object(o) => scene.objects[o].name = new,
+            Selected::Object(o) => {
+                let old = std::mem::replace(&mut scene.objects[o].name, new.clone());
+                crate::camera_edits::rename_aim_targets(scene, &old, None, &new);
+            }
             Selected::Light(l) => scene.lights[l].name = new,
-            Selected::Camera(c) => crate::cameras::rename_camera(scene, c, new),
+            Selected::Camera(c) => crate::camera_edits::rename_camera(scene, c, new),
             Selected::Joint { object, joint } => {
-                if let Some(s) = scene.objects[object].skeleton.as_mut() {
-                    s.joints[joint].name = new;
+                let old = scene.objects[object]
+                    .skeleton
+                    .as_mut()
+                    .map(|s| std::mem::replace(&mut s.joints[joint].name, new.clone()));
+                if let Some(old) = old {
+                    let owner = scene.objects[object].name.clone();
+                    crate::camera_edits::rename_aim_targets(scene, &owner, Some(&old), &new);
                 }
             }
         });

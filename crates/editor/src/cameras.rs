@@ -1,11 +1,11 @@
-//! Scene cameras in the editor: the edits that keep markers and the active camera pointing at
-//! the right camera when one is renamed or deleted, and the view ↔ camera conversions
-//! (look through a camera, set a camera to the current view).
+//! The editor's camera and marker commands: look through a camera, set a camera to the view,
+//! add a camera, add or remove a marker, bind a camera to a marker
+//! ([`crate::camera_edits`] holds the scene edits they share with renaming and deleting).
 
-use glam::{Quat, Vec3};
-use keyrig_core::{Camera, Marker, Scene, SceneCamera};
+use keyrig_core::{Marker, SceneCamera};
 
 use crate::app::{unique_name, EditorApp};
+use crate::camera_edits::{add_marker, view_as_camera};
 use crate::channels::{ChannelId, ChannelValue};
 use crate::session::Selected;
 
@@ -112,105 +112,5 @@ impl EditorApp {
             None => add_marker(scene, Marker { name: bound.clone(), frame, camera: Some(bound) }),
         });
         self.info(format!("{camera} is the active camera from frame {frame}"));
-    }
-}
-
-/// Adds `marker`, keeping the markers in frame order.
-fn add_marker(scene: &mut Scene, marker: Marker) {
-    let at = scene.markers.partition_point(|m| m.frame <= marker.frame);
-    scene.markers.insert(at, marker);
-}
-
-/// Removes camera `c`; markers bound to it are unbound and the active camera forgotten when it
-/// was this one (a marker or `active_camera` naming a missing camera is a scene problem).
-pub fn remove_camera(scene: &mut Scene, c: usize) {
-    if c >= scene.cameras.len() {
-        return;
-    }
-    let name = scene.cameras.remove(c).name;
-    for marker in &mut scene.markers {
-        if marker.camera.as_deref() == Some(name.as_str()) {
-            marker.camera = None;
-        }
-    }
-    if scene.active_camera.as_deref() == Some(name.as_str()) {
-        scene.active_camera = None;
-    }
-}
-
-/// Renames camera `c` to `name`, and the markers and active camera that named it.
-pub fn rename_camera(scene: &mut Scene, c: usize, name: String) {
-    let Some(camera) = scene.cameras.get_mut(c) else { return };
-    let old = std::mem::replace(&mut camera.name, name.clone());
-    for marker in &mut scene.markers {
-        if marker.camera.as_deref() == Some(old.as_str()) {
-            marker.camera = Some(name.clone());
-        }
-    }
-    if scene.active_camera.as_deref() == Some(old.as_str()) {
-        scene.active_camera = Some(name);
-    }
-}
-
-/// The world position and rotation of the orbit view `camera` as a scene camera (looking down
-/// its −Z, +Y up): what "set camera to current view" keys.
-#[must_use]
-pub fn view_as_camera(camera: &Camera) -> (Vec3, Quat) {
-    let eye = keyrig_render::camera::eye_position(camera);
-    let rotation = keyrig_core::camera_object::aim_rotation(eye, camera.target, Vec3::Y, 0.0)
-        .or_else(|| keyrig_core::camera_object::aim_rotation(eye, camera.target, Vec3::NEG_Z, 0.0))
-        .unwrap_or(Quat::IDENTITY);
-    (eye, rotation)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use keyrig_core::{Marker, SceneCamera};
-
-    fn scene() -> Scene {
-        let mut scene = Scene::default();
-        scene.cameras = vec![SceneCamera::new("A", Vec3::Z), SceneCamera::new("B", Vec3::X)];
-        scene.active_camera = Some("B".into());
-        scene.markers = vec![
-            Marker { name: "one".into(), frame: 5, camera: Some("B".into()) },
-            Marker { name: "two".into(), frame: 9, camera: Some("A".into()) },
-        ];
-        scene
-    }
-
-    #[test]
-    fn renaming_and_removing_keep_markers_valid() {
-        let mut s = scene();
-        rename_camera(&mut s, 1, "Close".into());
-        assert_eq!(s.active_camera.as_deref(), Some("Close"));
-        assert_eq!(s.markers[0].camera.as_deref(), Some("Close"));
-        assert_eq!(s.problems(), Vec::new());
-        remove_camera(&mut s, 1);
-        assert_eq!(s.active_camera, None);
-        assert_eq!(s.markers[0].camera, None);
-        assert_eq!(s.markers[1].camera.as_deref(), Some("A"));
-        assert_eq!(s.problems(), Vec::new());
-    }
-
-    #[test]
-    fn the_view_as_a_camera_sees_what_the_view_sees() {
-        let view = Camera {
-            target: Vec3::new(1.0, 0.5, 0.0),
-            yaw_deg: 30.0,
-            pitch_deg: 20.0,
-            distance: 6.0,
-            fov_y_deg: 45.0,
-        };
-        let (eye, rotation) = view_as_camera(&view);
-        let state = keyrig_eval::CameraState {
-            world_from_camera: glam::Affine3A::from_rotation_translation(rotation, eye),
-            lens: keyrig_core::Lens::Perspective { fov_y: 45f32.to_radians() },
-            near: 0.1,
-            far: Some(100.0),
-        };
-        // The same view matrix as the orbit camera's (keyrig-render's look-at).
-        let orbit = keyrig_render::camera::view_from_world(&view);
-        assert!(state.view_from_world().abs_diff_eq(orbit, 1e-4), "{} vs {orbit}", state.view_from_world());
     }
 }

@@ -232,17 +232,15 @@ impl Command {
             Command::CameraElbow => "Look down the arm at the second joint",
             Command::FrameSelection => "Centre the view on the selected joint, object or light",
             Command::LookThroughCamera => {
-                "Look through the selected scene camera (else the active one); again to leave it, as \
-                 does orbiting"
+                "View through the selected (else the active) camera; again, or orbit, to leave"
             }
             Command::CameraToView => {
-                "Place the selected camera (else the one looked through, else the active one) where \
-                 the view is; in record mode this keys its translation and rotation"
+                "Move the selected (else the active) camera to the view; keys in record mode"
             }
-            Command::AddCamera => "Add a scene camera where the view is, looking as the view looks",
+            Command::AddCamera => "Add a scene camera where the view is, looking as it looks",
             Command::ToggleMarker => "Add a timeline marker at the current frame, or remove the one there",
             Command::BindCameraToMarker => {
-                "Make the selected camera the active one from the current frame on (a marker bound to it)"
+                "Make the selected camera the active one from this frame on (a marker)"
             }
             Command::ShowHelp => "List every command and its shortcut",
         }

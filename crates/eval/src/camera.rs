@@ -10,7 +10,7 @@ use glam::{Affine3A, Mat4, Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
 use keyrig_core::{AimTarget, Lens, Projection, Scene, SceneCamera};
 
-use crate::evaluator::{EvalProblem, Overrides, Slot};
+use crate::slot::{EvalProblem, Overrides, Slot};
 
 /// A scene camera at one time.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,26 +1,20 @@
 //! [`SceneEvaluator`]: the validated runtime form of a scene, answering "the scene at time t".
 
 use std::collections::HashMap;
-use std::fmt;
 use std::sync::Arc;
 
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
 use keyrig_core::ik_constraint::{ConstraintChain, LocalPose};
-use keyrig_core::track::TrackValue;
-use keyrig_core::{
-    Animated, AnimatedTrack, DeformerKind, DeformerSettings, Keys, LightKind, MeshSource, Scene,
-};
+use keyrig_core::{DeformerKind, DeformerSettings, LightKind, MeshSource, Scene};
 use keyrig_skin::{
     mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
 };
 
 use crate::camera::{CameraRig, CameraState, Target};
 use crate::morph::{MorphBlend, MorphClips, MorphError};
-
-/// Values set on channels without keys being written (a gizmo drag, a slider), keyed by the
-/// channel they replace: the evaluator shows them instead of the channel's track.
-pub type Overrides = HashMap<ChannelId, ChannelValue>;
+pub use crate::slot::{EvalProblem, Overrides};
+use crate::slot::{Slot, SlotEval};
 
 /// What a model file gave for an object whose mesh is `MeshSource::File` (keyrig-io loads it;
 /// the evaluator reads no files).
@@ -32,83 +26,6 @@ pub enum LoadedMesh {
     Morph(Arc<MorphClips>),
     /// A mesh that neither skins nor morphs.
     Static,
-}
-
-/// Something the evaluator could not take from the scene, with the field path it concerns
-/// (`objects[0].skeleton.joints[2].rotation.track[1].time`). The scene still evaluates: a
-/// channel whose keys are invalid holds its static value, an object whose skeleton or mesh is
-/// invalid is drawn without skinning.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct EvalProblem {
-    pub path: String,
-    pub message: String,
-}
-
-impl fmt::Display for EvalProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.path, self.message)
-    }
-}
-
-/// A channel's validated track, or its static value when its keys are invalid.
-#[derive(Debug)]
-enum SlotEval<T: TrackValue> {
-    Track(AnimatedTrack<T>),
-    Fallback(T),
-}
-
-/// One channel: what it was built from (the shared keys and the static value), its evaluable
-/// form and the problem that made it fall back. Cloning shares the evaluable form.
-#[derive(Clone, Debug)]
-pub(crate) struct Slot<T: TrackValue> {
-    keys: Keys<T>,
-    value: T,
-    cycles: keyrig_core::Cycles,
-    eval: Arc<SlotEval<T>>,
-    pub(crate) problem: Option<EvalProblem>,
-}
-
-impl<T: TrackValue> Slot<T> {
-    pub(crate) fn new(animated: &Animated<T>, id: ChannelId) -> Self {
-        let (eval, problem) = match AnimatedTrack::new(animated) {
-            Ok(track) => (SlotEval::Track(track), None),
-            Err(e) => (
-                SlotEval::Fallback(animated.value),
-                Some(EvalProblem {
-                    path: keyrig_core::validate::track_error_path(&id.field_path(), &e),
-                    message: e.to_string(),
-                }),
-            ),
-        };
-        Slot {
-            keys: animated.track.keys.clone(),
-            value: animated.value,
-            cycles: animated.cycles(),
-            eval: Arc::new(eval),
-            problem,
-        }
-    }
-
-    /// Rebuilds the slot when its channel changed (its keys are no longer the list it was
-    /// built from, or its static value or its cycles differ); true when it did.
-    pub(crate) fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
-        if self.keys.shares_with(&animated.track.keys)
-            && self.value == animated.value
-            && self.cycles == animated.cycles()
-        {
-            return false;
-        }
-        *self = Slot::new(animated, id);
-        true
-    }
-
-    #[inline]
-    pub(crate) fn sample(&self, t: f64) -> T {
-        match &*self.eval {
-            SlotEval::Track(track) => track.sample(t),
-            SlotEval::Fallback(v) => *v,
-        }
-    }
 }
 
 /// A skinned mesh with its deformer bindings, shared by everything that draws or deforms it.

@@ -19,6 +19,7 @@ pub mod bake;
 pub mod camera;
 mod evaluator;
 pub mod morph;
+mod slot;
 
 pub use bake::{bake_all_ik, bake_ik_constraint, BakeError, Baked};
 pub use camera::CameraState;

@@ -11,55 +11,41 @@
 //! - Export ([`crate::gltf_export`]): each scene camera becomes a root node with a camera, its
 //!   translation and rotation channels as an object's; an aimed camera's rotation is baked.
 
-use glam::Mat4;
-use keyrig_core::{Animated, Projection, RenderSize, SceneCamera};
+use keyrig_core::SceneCamera;
 
-use crate::gltf_import::{GltfError, GltfErrorKind};
-use crate::model::{ChannelTarget, ImportedModel};
+use crate::model::{ModelCamera, ModelProjection};
 
-/// A glTF camera.
+/// Why a camera of the file is refused: where (a JSON pointer) and what.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ModelCamera {
-    pub name: String,
-    pub projection: ModelProjection,
-}
-
-/// A glTF camera's projection, as the file gives it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ModelProjection {
-    Perspective { yfov: f32, aspect_ratio: Option<f32>, znear: f32, zfar: Option<f32> },
-    Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
-}
-
-impl ModelProjection {
-    /// Width over height, when the file says.
-    #[must_use]
-    pub fn aspect_ratio(self) -> Option<f32> {
-        match self {
-            ModelProjection::Perspective { aspect_ratio, .. } => aspect_ratio,
-            ModelProjection::Orthographic { xmag, ymag, .. } => Some(xmag / ymag),
-        }
-    }
+pub(crate) struct CameraError {
+    pub pointer: String,
+    /// A number that is NaN or infinite (else a value out of range).
+    pub non_finite: bool,
+    pub message: String,
 }
 
 /// The file's cameras, checked: finite numbers, 0 < yfov < π, znear > 0 (≥ 0 orthographic),
 /// zfar > znear, a positive aspect ratio, magnifications not zero.
-pub(crate) fn read_cameras(doc: &gltf::Document) -> Result<Vec<ModelCamera>, GltfError> {
+pub(crate) fn read_cameras(doc: &gltf::Document) -> Result<Vec<ModelCamera>, CameraError> {
     doc.cameras()
         .map(|camera| {
             let here = format!("/cameras/{}", camera.index());
-            let invalid = |field: &str, message: String| {
-                crate::gltf_import::pointer_error(format!("{here}/{field}"), GltfErrorKind::Invalid(message))
+            let invalid = |field: &str, message: String| CameraError {
+                pointer: format!("{here}/{field}"),
+                non_finite: false,
+                message,
+            };
+            let non_finite = || CameraError {
+                pointer: here.clone(),
+                non_finite: true,
+                message: "camera parameter".into(),
             };
             let projection = match camera.projection() {
                 gltf::camera::Projection::Perspective(p) => {
                     let (yfov, znear, zfar, aspect) = (p.yfov(), p.znear(), p.zfar(), p.aspect_ratio());
                     let numbers = [yfov, znear].into_iter().chain(zfar).chain(aspect);
                     if numbers.into_iter().any(|x| !x.is_finite()) {
-                        return Err(crate::gltf_import::pointer_error(
-                            here,
-                            GltfErrorKind::NonFinite("camera parameter".into()),
-                        ));
+                        return Err(non_finite());
                     }
                     if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
                         return Err(invalid("perspective/yfov", format!("{yfov} is outside (0, π)")));
@@ -78,10 +64,7 @@ pub(crate) fn read_cameras(doc: &gltf::Document) -> Result<Vec<ModelCamera>, Glt
                 gltf::camera::Projection::Orthographic(o) => {
                     let (xmag, ymag, znear, zfar) = (o.xmag(), o.ymag(), o.znear(), o.zfar());
                     if [xmag, ymag, znear, zfar].iter().any(|x| !x.is_finite()) {
-                        return Err(crate::gltf_import::pointer_error(
-                            here,
-                            GltfErrorKind::NonFinite("camera parameter".into()),
-                        ));
+                        return Err(non_finite());
                     }
                     if xmag == 0.0 || ymag == 0.0 {
                         return Err(invalid(
@@ -102,58 +85,6 @@ pub(crate) fn read_cameras(doc: &gltf::Document) -> Result<Vec<ModelCamera>, Glt
             Ok(ModelCamera { name, projection })
         })
         .collect()
-}
-
-/// Adds a scene camera for each node of `model` that holds a camera (see the module
-/// documentation), named after the node (or its camera), unique among the scene's cameras.
-pub(crate) fn add_scene_cameras(
-    model: &ImportedModel,
-    world: &[Mat4],
-    channels_of: &[Vec<&ChannelTarget>],
-    scene: &mut keyrig_core::Scene,
-) {
-    for (i, node) in model.nodes.iter().enumerate() {
-        let Some(camera) = node.camera.and_then(|c| model.cameras.get(c)) else { continue };
-        let (_, rotation, translation) = world[i].to_scale_rotation_translation();
-        // The node's name, unless the file left it out (then the camera's).
-        let base = if node.name == format!("node{i}") { camera.name.clone() } else { node.name.clone() };
-        let name = if scene.camera_index(&base).is_some() {
-            (1..).map(|n| format!("{base}.{n:03}")).find(|n| scene.camera_index(n).is_none()).unwrap_or(base)
-        } else {
-            base
-        };
-        let mut out = SceneCamera::new(name, translation);
-        out.rotation = Animated::constant(rotation.normalize());
-        match camera.projection {
-            ModelProjection::Perspective { yfov, znear, zfar, .. } => {
-                out.projection = Projection::Perspective;
-                out.lens = Animated::constant(yfov.to_degrees());
-                (out.near, out.far) = (znear, zfar);
-            }
-            ModelProjection::Orthographic { ymag, znear, zfar, .. } => {
-                out.projection = Projection::Orthographic;
-                out.lens = Animated::constant(2.0 * ymag);
-                // keyrig's near plane is > 0; glTF allows an orthographic znear of 0.
-                (out.near, out.far) = (znear.max(1e-4).min(zfar * 0.5), Some(zfar));
-            }
-        }
-        if node.parent.is_none() {
-            for target in &channels_of[i] {
-                match target {
-                    ChannelTarget::Translation(t) => out.translation.track = t.clone(),
-                    ChannelTarget::Rotation(t) => out.rotation.track = t.clone(),
-                    ChannelTarget::Scale(_) | ChannelTarget::Weights(_) => {}
-                }
-            }
-        }
-        if scene.render_size.is_none() {
-            if let Some(aspect) = camera.projection.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0) {
-                let width = (720.0 * aspect).round().clamp(1.0, f32::from(u16::MAX)) as u32;
-                scene.render_size = Some(RenderSize { width: width.min(RenderSize::MAX_SIDE), height: 720 });
-            }
-        }
-        scene.cameras.push(out);
-    }
 }
 
 /// The glTF `cameras` entry of `camera` with its lens value `lens` (at the start of the

@@ -117,11 +117,6 @@ fn ptr(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
     at(Location::Pointer(p.into()), kind)
 }
 
-/// An error at the JSON pointer `p` (for the importer's other modules).
-pub(crate) fn pointer_error(p: impl Into<String>, kind: GltfErrorKind) -> GltfError {
-    ptr(p, kind)
-}
-
 /// Converts a gltf-json path (`meshes[0].attributes["POSITION"]`) to a JSON pointer
 /// (`/meshes/0/attributes/POSITION`).
 #[must_use]
@@ -274,7 +269,14 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     model.meshes = doc.meshes().map(|m| read_mesh(&cx, &m)).collect::<Result<_, _>>()?;
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
-    model.cameras = crate::gltf_camera::read_cameras(&doc)?;
+    model.cameras = crate::gltf_camera::read_cameras(&doc).map_err(|e| {
+        let kind = if e.non_finite {
+            GltfErrorKind::NonFinite(e.message)
+        } else {
+            GltfErrorKind::Invalid(e.message)
+        };
+        ptr(e.pointer, kind)
+    })?;
     check_skinned_meshes(&model)?;
     check_animation_json(doc.as_json())?;
     model.animations = doc.animations().map(|a| read_animation(&cx, &model, &a)).collect::<Result<_, _>>()?;

@@ -280,7 +280,7 @@ fn keyed_cameras_export_equal_at_every_key_and_frame() {
     for &t in &frames {
         let want = f64::from(height.sample(t)) / 2.0;
         assert!((ymag.at(t, false)[0] - want).abs() < 1e-5, "ymag at {t}");
-        assert!((xmag.at(t, false)[0] - want * f64::from(aspect)).abs() < 1e-4, "xmag at {t}");
+        assert!((xmag.at(t, false)[0] - want * aspect).abs() < 1e-4, "xmag at {t}");
     }
     assert!(glb.channel(Some(node), "rotation", None).is_none(), "an unkeyed rotation has no channel");
 
