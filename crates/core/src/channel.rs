@@ -15,6 +15,10 @@
 //! light/<light>/direction            Vec3
 //! light/<light>/colour               Vec3   linear RGB
 //! light/<light>/intensity            f32
+//! camera/<camera>/translation        Vec3   a scene camera's position (world space)
+//! camera/<camera>/rotation           Quat   its orientation (looks down −Z, +Y up)
+//! camera/<camera>/lens               f32    field of view °, focal length mm or ortho height
+//! camera/<camera>/roll               f32    an aimed camera's roll about its view axis, °
 //! ```
 //!
 //! [`ChannelPath::parse`] checks the syntax; [`ChannelPath::resolve`] finds the value in a
@@ -53,6 +57,30 @@ pub const IK_PROPERTIES: [&str; 2] = ["target", "blend"];
 /// Properties of a light.
 pub const LIGHT_PROPERTIES: [&str; 8] =
     ["position", "direction", "colour", "intensity", "visible", "range", "cutoff_deg", "inner_angle_deg"];
+
+/// Properties of a scene camera.
+pub const CAMERA_PROPERTIES: [&str; 4] = ["translation", "rotation", "lens", "roll"];
+
+/// One animated value of a scene camera.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CameraProperty {
+    Translation,
+    Rotation,
+    Lens,
+    Roll,
+}
+
+impl CameraProperty {
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraProperty::Translation => "translation",
+            CameraProperty::Rotation => "rotation",
+            CameraProperty::Lens => "lens",
+            CameraProperty::Roll => "roll",
+        }
+    }
+}
 
 /// One animated value of an object.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -160,6 +188,10 @@ pub enum ChannelPath {
         owner: String,
         property: AttributeProperty,
     },
+    Camera {
+        camera: String,
+        property: CameraProperty,
+    },
 }
 
 impl fmt::Display for ChannelPath {
@@ -176,6 +208,7 @@ impl fmt::Display for ChannelPath {
             ChannelPath::Attribute { light, owner, property } => {
                 write!(f, "{}/{owner}/{}", if *light { "light" } else { "object" }, property.path_name())
             }
+            ChannelPath::Camera { camera, property } => write!(f, "camera/{camera}/{}", property.name()),
         }
     }
 }
@@ -185,7 +218,7 @@ impl fmt::Display for ChannelPath {
 pub enum ChannelError {
     #[error(
         "channel path {path:?}: {problem}; expected object/<name>/<property>, \
-         object/<name>/joint/<joint>/<property> or light/<name>/<property>"
+         object/<name>/joint/<joint>/<property>, light/<name>/<property> or camera/<name>/<property>"
     )]
     Syntax { path: String, problem: String },
 
@@ -217,6 +250,11 @@ pub enum ChannelError {
 
     #[error("channel path {path:?}: {owner} has no {what} channel{hint}")]
     NotSet { path: String, owner: String, what: String, hint: String },
+    #[error("channel path {path:?}: no camera named {name:?}; {}", listing("cameras", available))]
+    UnknownCamera { path: String, name: String, available: Vec<String> },
+
+    #[error("channel path {path:?}: camera {camera:?} has no aim constraint, so it has no roll")]
+    NoAim { path: String, camera: String },
 
     /// The channel exists but its keys are invalid.
     #[error("channel {path}: {field}: {source}")]
@@ -350,10 +388,32 @@ impl ChannelPath {
                 };
                 Ok(ChannelPath::Light { light: (*light).to_string(), property })
             }
-            ["object" | "light", _] | ["object" | "light"] => Err(syntax("missing property")),
-            ["object" | "light", ..] => Err(syntax("too many parts")),
+            ["camera", camera, property] => {
+                let property = match *property {
+                    "translation" => CameraProperty::Translation,
+                    "rotation" => CameraProperty::Rotation,
+                    "lens" => CameraProperty::Lens,
+                    "roll" => CameraProperty::Roll,
+                    other => {
+                        return Err(ChannelError::UnknownProperty {
+                            path: path.to_string(),
+                            owner: "camera",
+                            property: other.to_string(),
+                            expected: CAMERA_PROPERTIES.to_vec(),
+                        })
+                    }
+                };
+                Ok(ChannelPath::Camera { camera: (*camera).to_string(), property })
+            }
+            ["object" | "light" | "camera", _] | ["object" | "light" | "camera"] => {
+                Err(syntax("missing property"))
+            }
+            ["object" | "light" | "camera", ..] => Err(syntax("too many parts")),
             // `split` yields at least one part, so `parts[0]` exists.
-            _ => Err(syntax(&format!("unknown kind {:?} (expected \"object\" or \"light\")", parts[0]))),
+            _ => Err(syntax(&format!(
+                "unknown kind {:?} (expected \"object\", \"light\" or \"camera\")",
+                parts[0]
+            ))),
         }
     }
 
@@ -468,6 +528,24 @@ impl ChannelPath {
                     LightProperty::Intensity => ChannelId::LightIntensity(i),
                 }
             }
+            ChannelPath::Camera { camera, property } => {
+                let i = scene.camera_index(camera).ok_or_else(|| ChannelError::UnknownCamera {
+                    path: path.clone(),
+                    name: camera.clone(),
+                    available: scene.cameras.iter().map(|c| c.name.clone()).collect(),
+                })?;
+                match property {
+                    CameraProperty::Translation => ChannelId::CameraTranslation(i),
+                    CameraProperty::Rotation => ChannelId::CameraRotation(i),
+                    CameraProperty::Lens => ChannelId::CameraLens(i),
+                    CameraProperty::Roll => {
+                        if scene.cameras[i].aim.is_none() {
+                            return Err(ChannelError::NoAim { path: path.clone(), camera: camera.clone() });
+                        }
+                        ChannelId::CameraRoll(i)
+                    }
+                }
+            }
         })
     }
 
@@ -498,7 +576,7 @@ impl ChannelPath {
 }
 
 /// Every channel of `scene`, objects first (translation, rotation, scale, root translation,
-/// joints in order), then lights.
+/// joints in order), then lights, then cameras.
 #[must_use]
 pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
     let mut out = Vec::new();
@@ -564,6 +642,14 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
                     property: a.property(),
                 });
             }
+        }
+    }
+    for c in &scene.cameras {
+        for property in [CameraProperty::Translation, CameraProperty::Rotation, CameraProperty::Lens] {
+            out.push(ChannelPath::Camera { camera: c.name.clone(), property });
+        }
+        if c.aim.is_some() {
+            out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Roll });
         }
     }
     out
@@ -763,7 +849,10 @@ mod tests {
         assert!(err("light/Key/rotation")
             .contains("light properties are: position, direction, colour, intensity"));
         assert!(err("object/Arm/joint/elbow/size").contains("unknown joint property \"size\""));
-        assert!(err("camera/x/y").contains("unknown kind \"camera\""));
+        assert!(err("camera/x/y").contains(
+            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll"
+        ));
+        assert!(err("lamp/x/y").contains("unknown kind \"lamp\""));
         assert!(err("object/Arm").contains("missing property"));
         assert!(err("object//rotation").contains("empty part"));
         assert!(err("object/Arm/joint/elbow").contains("object/<name>/joint/<joint>/<property>"));
@@ -815,6 +904,38 @@ mod tests {
         assert!(
             matches!(&err, ChannelError::InvalidTrack { field, .. } if field == "objects[0].translation.track[1].time")
         );
+    }
+
+    #[test]
+    fn camera_channels_resolve() {
+        use crate::camera_object::{Aim, AimTarget, SceneCamera};
+        let mut s = scene();
+        let mut cam = SceneCamera::new("Shot", Vec3::new(0.0, 1.0, 5.0));
+        cam.lens.track = RawTrack::new(vec![Key::new(0.0, 40.0), Key::new(2.0, 20.0)]);
+        s.cameras.push(cam);
+        let resolve = |s: &Scene, p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(s));
+        let lens = resolve(&s, "camera/Shot/lens").unwrap();
+        assert_eq!((lens.field.as_str(), lens.key_count), ("cameras[0].lens", 2));
+        assert_eq!(lens.sample(2.0), ChannelValue::Scalar(20.0));
+        assert_eq!(
+            resolve(&s, "camera/Shot/translation").unwrap().column_names(RotationFormat::Quat),
+            ["x", "y", "z"]
+        );
+        let err = resolve(&s, "camera/Shot/roll").unwrap_err().to_string();
+        assert!(err.contains("camera \"Shot\" has no aim constraint"), "{err}");
+        assert!(resolve(&s, "camera/Long/lens").unwrap_err().to_string().contains("cameras: \"Shot\""));
+        s.cameras[0].aim = Some(Aim::at(AimTarget::Point(Vec3::ZERO)));
+        assert_eq!(resolve(&s, "camera/Shot/roll").unwrap().field, "cameras[0].aim.roll");
+        let names: Vec<String> = list_channels(&s).iter().map(ToString::to_string).collect();
+        assert_eq!(
+            &names[names.len() - 4..],
+            ["camera/Shot/translation", "camera/Shot/rotation", "camera/Shot/lens", "camera/Shot/roll"]
+        );
+        for text in
+            ["camera/Shot/translation", "camera/Shot/rotation", "camera/Shot/lens", "camera/Shot/roll"]
+        {
+            assert_eq!(ChannelPath::parse(text).map(|p| p.to_string()), Ok(text.to_string()));
+        }
     }
 
     #[test]

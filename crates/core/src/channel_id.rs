@@ -60,6 +60,15 @@ pub enum ChannelId {
     /// Visibility, material, morph weights, deformer, light range and cone
     /// ([`crate::attributes`]).
     Attribute(AttributeId),
+    /// A scene camera's position (camera index).
+    CameraTranslation(usize),
+    /// A scene camera's orientation (unused while it is aimed).
+    CameraRotation(usize),
+    /// A scene camera's lens: field of view (degrees), focal length (mm) or orthographic
+    /// height, as its projection says.
+    CameraLens(usize),
+    /// The roll (degrees) of an aimed scene camera.
+    CameraRoll(usize),
 }
 
 /// What kind of value a channel holds.
@@ -74,9 +83,14 @@ impl ChannelId {
     #[must_use]
     pub fn kind(self) -> ChannelKind {
         match self {
-            ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } => ChannelKind::Rotation,
-            ChannelId::LightIntensity(_) | ChannelId::IkBlend { .. } => ChannelKind::Scalar,
             ChannelId::Attribute(a) => a.kind(),
+            ChannelId::ObjectRotation(_) | ChannelId::JointRotation { .. } | ChannelId::CameraRotation(_) => {
+                ChannelKind::Rotation
+            }
+            ChannelId::LightIntensity(_)
+            | ChannelId::IkBlend { .. }
+            | ChannelId::CameraLens(_)
+            | ChannelId::CameraRoll(_) => ChannelKind::Scalar,
             _ => ChannelKind::Vec3,
         }
     }
@@ -96,6 +110,10 @@ impl ChannelId {
             ChannelId::IkTarget { .. } => "IK target",
             ChannelId::IkBlend { .. } => "IK blend",
             ChannelId::Attribute(a) => a.channel_name(),
+            ChannelId::CameraTranslation(_) => "translation",
+            ChannelId::CameraRotation(_) => "rotation",
+            ChannelId::CameraLens(_) => "lens",
+            ChannelId::CameraRoll(_) => "roll",
         }
     }
 
@@ -128,6 +146,10 @@ impl ChannelId {
                 format!("objects[{object}].skeleton.ik_constraints[{constraint}].blend")
             }
             ChannelId::Attribute(a) => a.field_path(),
+            ChannelId::CameraTranslation(c) => format!("cameras[{c}].translation"),
+            ChannelId::CameraRotation(c) => format!("cameras[{c}].rotation"),
+            ChannelId::CameraLens(c) => format!("cameras[{c}].lens"),
+            ChannelId::CameraRoll(c) => format!("cameras[{c}].aim.roll"),
         }
     }
 
@@ -179,7 +201,22 @@ impl ChannelId {
         ]
     }
 
-    /// Every channel of the scene.
+    /// The channels of a scene camera: translation, rotation, lens, and its roll while it is
+    /// aimed.
+    #[must_use]
+    pub fn of_camera(scene: &Scene, camera: usize) -> Vec<ChannelId> {
+        let mut out = vec![
+            ChannelId::CameraTranslation(camera),
+            ChannelId::CameraRotation(camera),
+            ChannelId::CameraLens(camera),
+        ];
+        if scene.cameras.get(camera).is_some_and(|c| c.aim.is_some()) {
+            out.push(ChannelId::CameraRoll(camera));
+        }
+        out
+    }
+
+    /// Every channel of the scene: objects, lights, then cameras.
     #[must_use]
     pub fn all(scene: &Scene) -> Vec<ChannelId> {
         let mut out = Vec::new();
@@ -189,6 +226,9 @@ impl ChannelId {
         for l in 0..scene.lights.len() {
             out.extend(ChannelId::of_light(l));
             out.extend(AttributeId::of_light(scene, l));
+        }
+        for c in 0..scene.cameras.len() {
+            out.extend(ChannelId::of_camera(scene, c));
         }
         out
     }
@@ -213,6 +253,10 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
             scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.name.clone()
         }
         ChannelId::Attribute(a) => a.owner_name(scene)?,
+        ChannelId::CameraTranslation(c)
+        | ChannelId::CameraRotation(c)
+        | ChannelId::CameraLens(c)
+        | ChannelId::CameraRoll(c) => scene.cameras.get(c)?.name.clone(),
     })
 }
 
@@ -287,6 +331,10 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
             &scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.blend,
         ),
         ChannelId::Attribute(a) => a.get(scene)?,
+        ChannelId::CameraTranslation(c) => ChannelRef::Vec3(&scene.cameras.get(c)?.translation),
+        ChannelId::CameraRotation(c) => ChannelRef::Rotation(&scene.cameras.get(c)?.rotation),
+        ChannelId::CameraLens(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.lens),
+        ChannelId::CameraRoll(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.roll),
     })
 }
 
@@ -320,6 +368,10 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
             &mut scene.objects.get_mut(object)?.skeleton.as_mut()?.ik_constraints.get_mut(constraint)?.blend,
         ),
         ChannelId::Attribute(a) => a.get_mut(scene)?,
+        ChannelId::CameraTranslation(c) => ChannelMut::Vec3(&mut scene.cameras.get_mut(c)?.translation),
+        ChannelId::CameraRotation(c) => ChannelMut::Rotation(&mut scene.cameras.get_mut(c)?.rotation),
+        ChannelId::CameraLens(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.lens),
+        ChannelId::CameraRoll(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.roll),
     })
 }
 

@@ -2,6 +2,7 @@
 //! document. Pure: no file I/O, no GPU, no UI.
 
 pub mod attributes;
+pub mod camera_object;
 pub mod channel;
 pub mod channel_id;
 pub mod ik;
@@ -15,6 +16,7 @@ pub mod track;
 pub mod validate;
 
 pub use attributes::{AttributeId, AttributeProperty, LightAttributes, ObjectAttributes};
+pub use camera_object::{Aim, AimTarget, Lens, Marker, Projection, RenderSize, SceneCamera};
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use rotation_mode::{EulerOrder, RotationMode};

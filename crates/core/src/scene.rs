@@ -8,6 +8,7 @@ use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::attributes::{LightAttributes, ObjectAttributes};
+use crate::camera_object::{Marker, RenderSize, SceneCamera};
 use crate::key::{Animated, RawTrack};
 use crate::rotation_mode::RotationMode;
 
@@ -28,6 +29,19 @@ pub struct Scene {
     pub lights: Vec<Light>,
     #[serde(default)]
     pub camera: Camera,
+    /// Cameras placed in the scene (not the viewport's view, [`Scene::camera`]). Left out of
+    /// a scene file while empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cameras: Vec<SceneCamera>,
+    /// The camera active before the first marker bound to a camera; `None`: the first camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub active_camera: Option<String>,
+    /// Named timeline markers, optionally switching the active camera.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub markers: Vec<Marker>,
+    /// The size `keyrig render` renders at when not told (`None`: 1280×720).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub render_size: Option<RenderSize>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -43,6 +57,10 @@ impl Default for Scene {
             objects: Vec::new(),
             lights: Vec::new(),
             camera: Camera::default(),
+            cameras: Vec::new(),
+            active_camera: None,
+            markers: Vec::new(),
+            render_size: None,
         }
     }
 }
@@ -516,6 +534,40 @@ impl Scene {
                 + cost(&light.colour, theirs.map(|t| &t.colour))
                 + cost(&light.intensity, theirs.map(|t| &t.intensity));
         }
+        for (c, camera) in self.cameras.iter().enumerate() {
+            let theirs = other.cameras.get(c);
+            bytes += cost(&camera.translation, theirs.map(|t| &t.translation))
+                + cost(&camera.rotation, theirs.map(|t| &t.rotation))
+                + cost(&camera.lens, theirs.map(|t| &t.lens));
+            if let Some(aim) = &camera.aim {
+                bytes += cost(&aim.roll, theirs.and_then(|t| t.aim.as_ref()).map(|a| &a.roll));
+            }
+        }
         bytes + crate::attributes::key_bytes_not_shared(self, other)
+    }
+}
+
+impl Scene {
+    /// The index of the camera named `name`.
+    #[must_use]
+    pub fn camera_index(&self, name: &str) -> Option<usize> {
+        self.cameras.iter().position(|c| c.name == name)
+    }
+
+    /// The camera that is active at `frame`: the camera of the last marker at or before
+    /// `frame` that is bound to an existing camera; before any, the camera named by
+    /// `active_camera`, else the first camera. `None` for a scene without cameras.
+    #[must_use]
+    pub fn active_camera_at(&self, frame: f64) -> Option<usize> {
+        let from_marker = self
+            .markers
+            .iter()
+            .filter(|m| f64::from(m.frame) <= frame)
+            .filter_map(|m| Some((m.frame, self.camera_index(m.camera.as_deref()?)?)))
+            .max_by_key(|&(f, _)| f)
+            .map(|(_, c)| c);
+        from_marker
+            .or_else(|| self.active_camera.as_deref().and_then(|n| self.camera_index(n)))
+            .or_else(|| (!self.cameras.is_empty()).then_some(0))
     }
 }

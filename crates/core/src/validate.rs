@@ -28,11 +28,18 @@
 //!     with at least `bones` ≥ 2 joints above it and no zero-length bone at rest
 //!     ([`crate::ik_constraint::ConstraintChain::new`]); a finite target and pole; the blend's
 //!     value and keys in [0, 1].
+//! 11. Scene cameras ([`crate::SceneCamera`]): a unique, non-empty name; the lens value and
+//!     keys in range for the projection (field of view in (0°, 180°), focal length > 0 with a
+//!     sensor height > 0, orthographic height > 0); near > 0, far > near when given, an
+//!     orthographic camera has a far plane; an aim's up not zero, its object (and joint)
+//!     existing, its point finite. Markers name existing cameras; `active_camera` names an
+//!     existing camera; a render size has sides in 1..=16384.
 
 use std::collections::HashMap;
 
 use glam::{Quat, Vec3};
 
+use crate::camera_object::{AimTarget, Projection, RenderSize, SceneCamera};
 use crate::ik_constraint::{ConstraintChain, ConstraintError};
 use crate::key::{Animated, Interpolation, RawTrack, Spin};
 use crate::scene::{
@@ -524,6 +531,114 @@ impl Checker {
     }
 }
 
+impl Checker {
+    fn scene_camera(&mut self, path: &str, camera: &SceneCamera, scene: &Scene) {
+        self.animated(&join(path, "translation"), &camera.translation);
+        self.animated(&join(path, "rotation"), &camera.rotation);
+        self.animated(&join(path, "lens"), &camera.lens);
+        let (range, what): (fn(f32) -> bool, &str) = match camera.projection {
+            Projection::Perspective => (|v| v > 0.0 && v < 180.0, "a field of view must be in (0°, 180°)"),
+            Projection::FocalLength { sensor_height_mm } => {
+                let at = join(path, "projection.sensor_height_mm");
+                if self.f32(&at, sensor_height_mm) && sensor_height_mm <= 0.0 {
+                    self.push(at, format!("sensor height {sensor_height_mm} mm must be > 0"));
+                }
+                (|v| v > 0.0, "a focal length must be > 0 mm")
+            }
+            Projection::Orthographic => (|v| v > 0.0, "an orthographic view height must be > 0"),
+        };
+        let lenses = std::iter::once((join(path, "lens.value"), camera.lens.value)).chain(
+            camera
+                .lens
+                .track
+                .keys
+                .iter()
+                .enumerate()
+                .map(|(i, k)| (format!("{path}.lens.track[{i}].value"), k.value)),
+        );
+        for (p, v) in lenses {
+            if v.is_finite() && !range(v) {
+                self.push(p, format!("{v}: {what}"));
+            }
+        }
+        let near_ok = self.f32(&join(path, "near"), camera.near);
+        if near_ok && camera.near <= 0.0 {
+            self.push(join(path, "near"), format!("near plane {} must be > 0", camera.near));
+        }
+        if let Some(far) = camera.far {
+            if self.f32(&join(path, "far"), far) && near_ok && far <= camera.near {
+                self.push(
+                    join(path, "far"),
+                    format!("far plane {far} must be beyond the near plane {}", camera.near),
+                );
+            }
+        } else if camera.projection == Projection::Orthographic {
+            self.push(join(path, "far"), "an orthographic camera needs a far plane");
+        }
+        if let Some(aim) = &camera.aim {
+            let ap = join(path, "aim");
+            if self.value(&join(&ap, "up"), &aim.up) && aim.up.length() < 1e-6 {
+                self.push(join(&ap, "up"), "zero up direction");
+            }
+            self.animated(&join(&ap, "roll"), &aim.roll);
+            let tp = join(&ap, "target");
+            match &aim.target {
+                AimTarget::Point(p) => {
+                    self.value(&tp, p);
+                }
+                AimTarget::Object(name) => {
+                    if !scene.objects.iter().any(|o| &o.name == name) {
+                        self.push(tp, format!("no object named {name:?} to aim at"));
+                    }
+                }
+                AimTarget::Joint { object, joint } => {
+                    match scene.objects.iter().find(|o| &o.name == object) {
+                        None => self.push(tp, format!("no object named {object:?} to aim at")),
+                        Some(o) => {
+                            let joints = o.skeleton.as_ref().map(|s| s.joints.as_slice()).unwrap_or_default();
+                            if !joints.iter().any(|j| &j.name == joint) {
+                                self.push(
+                                    tp,
+                                    format!("object {object:?} has no joint named {joint:?} to aim at"),
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn cameras_and_markers(&mut self, scene: &Scene) {
+        for (i, camera) in scene.cameras.iter().enumerate() {
+            self.scene_camera(&format!("cameras[{i}]"), camera, scene);
+        }
+        self.unique_names(
+            "camera",
+            scene.cameras.iter().enumerate().map(|(i, c)| (format!("cameras[{i}].name"), c.name.as_str())),
+        );
+        let known = |name: &str| scene.cameras.iter().any(|c| c.name == name);
+        if let Some(name) = scene.active_camera.as_deref().filter(|n| !known(n)) {
+            self.push("active_camera", format!("no camera named {name:?}"));
+        }
+        for (i, marker) in scene.markers.iter().enumerate() {
+            if let Some(name) = marker.camera.as_deref().filter(|n| !known(n)) {
+                self.push(format!("markers[{i}].camera"), format!("no camera named {name:?}"));
+            }
+        }
+        if let Some(RenderSize { width, height }) = scene.render_size {
+            for (name, v) in [("width", width), ("height", height)] {
+                if !(1..=RenderSize::MAX_SIDE).contains(&v) {
+                    self.push(
+                        format!("render_size.{name}"),
+                        format!("{v} pixels is outside 1..={}", RenderSize::MAX_SIDE),
+                    );
+                }
+            }
+        }
+    }
+}
+
 impl Scene {
     /// Everything wrong with this scene, each with the path of the field it concerns; empty
     /// when the scene is valid. See the module documentation for the rules.
@@ -566,6 +681,7 @@ impl Scene {
             crate::attributes::attribute_problems(self, id, &mut |path, message| c.push(path, message));
         }
         c.camera("camera", &self.camera);
+        c.cameras_and_markers(self);
         c.problems
     }
 }
@@ -584,6 +700,55 @@ mod tests {
 
     fn paths(scene: &Scene) -> Vec<String> {
         scene.problems().into_iter().map(|p| p.path).collect()
+    }
+
+    #[test]
+    fn cameras_markers_and_render_size() {
+        use crate::camera_object::{Aim, AimTarget, Marker, Projection, RenderSize, SceneCamera};
+        let mut s = Scene::default();
+        s.objects.push(crate::scene::Object::new("Arm"));
+        let mut wide = SceneCamera::new("Wide", Vec3::Z);
+        wide.aim = Some(Aim::at(AimTarget::Object("Arm".into())));
+        s.cameras.push(wide);
+        s.markers.push(Marker { name: "cut".into(), frame: 10, camera: Some("Wide".into()) });
+        s.render_size = Some(RenderSize { width: 640, height: 360 });
+        assert_eq!(s.problems(), Vec::new());
+
+        let mut bad = SceneCamera::new("Wide", Vec3::Z);
+        bad.projection = Projection::Orthographic;
+        bad.lens.value = -1.0;
+        bad.near = 0.0;
+        bad.far = None;
+        bad.aim = Some(Aim {
+            up: Vec3::ZERO,
+            ..Aim::at(AimTarget::Joint { object: "Arm".into(), joint: "elbow".into() })
+        });
+        s.cameras.push(bad);
+        let mut focal = SceneCamera::new("Focal", Vec3::Z);
+        focal.projection = Projection::FocalLength { sensor_height_mm: 0.0 };
+        focal.lens.track = RawTrack::new(vec![Key::new(0.0, 50.0), Key::new(1.0, 0.0)]);
+        s.cameras.push(focal);
+        s.active_camera = Some("Tele".into());
+        s.markers.push(Marker { name: "x".into(), frame: 0, camera: Some("Nope".into()) });
+        s.render_size = Some(RenderSize { width: 0, height: 20000 });
+        assert_eq!(
+            paths(&s),
+            [
+                "cameras[1].lens.value",
+                "cameras[1].near",
+                "cameras[1].far",
+                "cameras[1].aim.up",
+                "cameras[1].aim.target",
+                "cameras[2].projection.sensor_height_mm",
+                "cameras[2].lens.track[1].value",
+                "cameras[1].name",
+                "active_camera",
+                "markers[1].camera",
+                "render_size.width",
+                "render_size.height",
+            ]
+        );
+        assert!(s.problems()[4].message.contains("has no joint named \"elbow\""));
     }
 
     #[test]

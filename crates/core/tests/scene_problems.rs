@@ -450,7 +450,9 @@ fn channel_path_syntax_errors_name_the_problem() {
         ("object/Arm/joint/elbow/rotation/x", "a joint channel is object/<name>/joint/<joint>/<property>"),
         ("/object/Arm/rotation", "empty part"),
         ("object/Arm/rotation/", "empty part"),
-        ("camera", "unknown kind \"camera\""),
+        ("camera", "missing property"),
+        ("camera/Shot/lens/x", "too many parts"),
+        ("lamp", "unknown kind \"lamp\""),
     ] {
         let err = ChannelPath::parse(path).expect_err(path).to_string();
         assert!(err.contains(problem), "{path}: {err}");

@@ -4,10 +4,11 @@
 //! the document edit with its undo snapshot, the evaluator brought in step, the draw rig
 //! rebuilt around it (vertex buffers are not sent again: no mesh changed).
 //!
-//! Scenes: `assets/demo.ron` and `assets/characters.ron` (the demo with CesiumMan, the Fox
-//! and an MD2 model), and `characters+attributes`: the characters scene with keyed attributes
-//! on every object and light (visibility, opacity, colour, a keyed deformer; light visibility,
-//! range and spot cone). docs/benchmarks.md records the figures.
+//! Scenes: `assets/demo.ron`, `assets/characters.ron` (the demo with CesiumMan, the Fox
+//! and an MD2 model), `characters+attributes`: the characters scene with keyed attributes on
+//! every object and light (visibility, opacity, colour, a keyed deformer; light visibility,
+//! range and spot cone), and `assets/cameras.ron` (the twisting arm seen by two aimed scene
+//! cameras). docs/benchmarks.md records the figures.
 //!
 //! Run: `cargo bench -p keyrig-editor --bench frame_prep`
 
@@ -37,7 +38,7 @@ fn gpu_bytes(frame: &keyrig_render::FrameInput) -> usize {
 fn frame_prep(c: &mut Criterion) {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let mut group = c.benchmark_group("frame_prep");
-    for name in ["demo", "characters", "characters+attributes"] {
+    for name in ["demo", "characters", "characters+attributes", "cameras"] {
         let file = name.trim_end_matches("+attributes");
         let path = assets.join(format!("{file}.ron"));
         let mut scene = keyrig_io::scene_file::load(&path).expect("scene");

@@ -161,6 +161,8 @@ pub enum ViewChange {
     Antialiasing(bool),
     Onion(crate::onion::OnionSkin),
     ShowHelp(bool),
+    /// Look through a scene camera, or (None) through the orbit camera again.
+    LookThrough(Option<usize>),
 }
 
 /// Names one pushed edit whose outcome the panel that pushed it reads in the next frame.

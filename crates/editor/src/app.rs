@@ -399,12 +399,18 @@ impl EditorApp {
         match item {
             Selected::Object(o) => {
                 self.doc.edit(&format!("delete object {name}"), |scene| {
-                    scene.objects.remove(o);
+                    let gone = scene.objects.remove(o);
+                    crate::camera_edits::forget_aim_targets(scene, &gone.name);
                 });
             }
             Selected::Light(l) => {
                 self.doc.edit(&format!("delete light {name}"), |scene| {
                     scene.lights.remove(l);
+                });
+            }
+            Selected::Camera(c) => {
+                self.doc.edit(&format!("delete camera {name}"), |scene| {
+                    crate::camera_edits::remove_camera(scene, c);
                 });
             }
             Selected::Joint { .. } => {
@@ -439,6 +445,14 @@ impl EditorApp {
                 let index = scene.lights.len();
                 self.doc.edit(&format!("duplicate as {name}"), |scene| scene.lights.push(light));
                 Some((Selected::Light(index), name))
+            }
+            Some(Selected::Camera(c)) => {
+                let mut camera = scene.cameras[c].clone();
+                camera.name = unique_name(&camera.name, scene.cameras.iter().map(|x| x.name.as_str()));
+                let name = camera.name.clone();
+                let index = scene.cameras.len();
+                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.cameras.push(camera));
+                Some((Selected::Camera(index), name))
             }
             Some(Selected::Joint { .. }) => {
                 self.error("Duplicate: joints are duplicated with their model; select the object");
@@ -480,6 +494,7 @@ impl EditorApp {
         let taken = match item {
             Selected::Object(o) => scene.objects.iter().enumerate().any(|(i, x)| i != o && x.name == name),
             Selected::Light(l) => scene.lights.iter().enumerate().any(|(i, x)| i != l && x.name == name),
+            Selected::Camera(c) => scene.cameras.iter().enumerate().any(|(i, x)| i != c && x.name == name),
             Selected::Joint { object, joint } => scene.objects[object]
                 .skeleton
                 .as_ref()
@@ -499,11 +514,20 @@ impl EditorApp {
         }
         let new = name.to_owned();
         self.doc.edit(&format!("rename {old} to {name}"), |scene| match item {
-            Selected::Object(o) => scene.objects[o].name = new,
+            Selected::Object(o) => {
+                let old = std::mem::replace(&mut scene.objects[o].name, new.clone());
+                crate::camera_edits::rename_aim_targets(scene, &old, None, &new);
+            }
             Selected::Light(l) => scene.lights[l].name = new,
+            Selected::Camera(c) => crate::camera_edits::rename_camera(scene, c, new),
             Selected::Joint { object, joint } => {
-                if let Some(s) = scene.objects[object].skeleton.as_mut() {
-                    s.joints[joint].name = new;
+                let old = scene.objects[object]
+                    .skeleton
+                    .as_mut()
+                    .map(|s| std::mem::replace(&mut s.joints[joint].name, new.clone()));
+                if let Some(old) = old {
+                    let owner = scene.objects[object].name.clone();
+                    crate::camera_edits::rename_aim_targets(scene, &owner, Some(&old), &new);
                 }
             }
         });
@@ -754,6 +778,11 @@ impl EditorApp {
                     self.view.camera.target = p;
                 }
             }
+            Some(Selected::Camera(c)) => {
+                if let Some(ChannelValue::Vec3(p)) = self.value_now(ChannelId::CameraTranslation(c)) {
+                    self.view.camera.target = p;
+                }
+            }
             None => match self.scene.bounds_of(None) {
                 Some(bounds) => self.view.camera.frame(bounds, aspect),
                 None => self.info("Nothing to frame: the scene is empty"),
@@ -890,6 +919,11 @@ impl EditorApp {
                 }
             }
             Command::ShowHelp => self.view.show_help = !self.view.show_help,
+            Command::LookThroughCamera => self.toggle_look_through(),
+            Command::CameraToView => self.camera_to_view(),
+            Command::AddCamera => self.add_camera(),
+            Command::ToggleMarker => self.toggle_marker(),
+            Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }
         ctx.request_repaint();
     }
@@ -1294,6 +1328,7 @@ impl EditorApp {
             ViewChange::Antialiasing(on) => view.antialiasing = on,
             ViewChange::Onion(onion) => view.onion = onion,
             ViewChange::ShowHelp(on) => view.show_help = on,
+            ViewChange::LookThrough(camera) => view.look_through = camera,
         }
     }
 }
@@ -1310,6 +1345,7 @@ pub fn item_name(scene: &Scene, item: Selected) -> Option<String> {
     Some(match item {
         Selected::Object(o) => scene.objects.get(o)?.name.clone(),
         Selected::Light(l) => scene.lights.get(l)?.name.clone(),
+        Selected::Camera(c) => scene.cameras.get(c)?.name.clone(),
         Selected::Joint { object, joint } => {
             scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone()
         }

@@ -213,6 +213,19 @@ impl Projection {
         }
     }
 
+    /// The projection of scene camera `camera` (looking through it) for `rect`.
+    #[must_use]
+    pub fn through(camera: &keyrig_eval::CameraState, rect: Rect) -> Self {
+        let camera_from_world = camera.view_from_world();
+        let clip_from_camera = camera.clip_from_view(rect.width() / rect.height().max(1.0));
+        Projection {
+            rect,
+            clip_from_world: clip_from_camera * camera_from_world,
+            camera_from_world,
+            clip_from_camera,
+        }
+    }
+
     /// Screen position of a world point, `None` behind the camera.
     #[must_use]
     pub fn project(&self, p: Vec3) -> Option<Pos2> {
@@ -257,9 +270,15 @@ impl Projection {
         let ndc_x = (screen.x - self.rect.left()) / self.rect.width() * 2.0 - 1.0;
         let ndc_y = 1.0 - (screen.y - self.rect.top()) / self.rect.height() * 2.0;
         let (sx, sy) = (self.clip_from_camera.x_axis.x, self.clip_from_camera.y_axis.y);
-        let in_camera = Vec3::new(ndc_x / sx, ndc_y / sy, -1.0);
         let world_from_camera = self.camera_from_world.inverse();
-        let eye = world_from_camera.transform_point3(Vec3::ZERO);
+        // An orthographic projection (w does not depend on depth): parallel rays from the
+        // point on the camera's plane.
+        let orthographic = self.clip_from_camera.z_axis.w == 0.0;
+        let (eye, in_camera) = if orthographic {
+            (world_from_camera.transform_point3(Vec3::new(ndc_x / sx, ndc_y / sy, 0.0)), Vec3::NEG_Z)
+        } else {
+            (world_from_camera.transform_point3(Vec3::ZERO), Vec3::new(ndc_x / sx, ndc_y / sy, -1.0))
+        };
         let dir = world_from_camera.transform_vector3(in_camera).try_normalize()?;
         (eye.is_finite() && dir.is_finite()).then_some((eye, dir))
     }

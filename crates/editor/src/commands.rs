@@ -45,6 +45,11 @@ pub enum Command {
     CameraShoulder,
     CameraElbow,
     FrameSelection,
+    LookThroughCamera,
+    CameraToView,
+    AddCamera,
+    ToggleMarker,
+    BindCameraToMarker,
     ShowHelp,
 }
 
@@ -60,7 +65,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 42] = [
+    pub const ALL: [Command; 47] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -102,6 +107,11 @@ impl Command {
         Command::CameraShoulder,
         Command::CameraElbow,
         Command::FrameSelection,
+        Command::CameraToView,
+        Command::LookThroughCamera,
+        Command::AddCamera,
+        Command::ToggleMarker,
+        Command::BindCameraToMarker,
         Command::ShowHelp,
     ];
 
@@ -147,6 +157,11 @@ impl Command {
             Command::CameraShoulder => "Shoulder view",
             Command::CameraElbow => "Elbow view",
             Command::FrameSelection => "Frame selection",
+            Command::LookThroughCamera => "Look through camera",
+            Command::CameraToView => "Set camera to view",
+            Command::AddCamera => "Add camera",
+            Command::ToggleMarker => "Add or remove marker",
+            Command::BindCameraToMarker => "Bind camera to marker",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -216,6 +231,17 @@ impl Command {
             Command::CameraShoulder => "Look down the arm at the first joint",
             Command::CameraElbow => "Look down the arm at the second joint",
             Command::FrameSelection => "Centre the view on the selected joint, object or light",
+            Command::LookThroughCamera => {
+                "View through the selected (else the active) camera; again, or orbit, to leave"
+            }
+            Command::CameraToView => {
+                "Move the selected (else the active) camera to the view; keys in record mode"
+            }
+            Command::AddCamera => "Add a scene camera where the view is, looking as it looks",
+            Command::ToggleMarker => "Add a timeline marker at the current frame, or remove the one there",
+            Command::BindCameraToMarker => {
+                "Make the selected camera the active one from this frame on (a marker)"
+            }
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -265,6 +291,11 @@ impl Command {
             Command::CameraShoulder => vec![sc(NONE, Key::F4)],
             Command::CameraElbow => vec![sc(NONE, Key::F5)],
             Command::FrameSelection => vec![sc(NONE, Key::F)],
+            Command::LookThroughCamera => vec![sc(NONE, Key::Num0)],
+            Command::CameraToView => vec![sc(CMD.plus(Modifiers::ALT), Key::Num0)],
+            Command::AddCamera => vec![sc(CMD_SHIFT, Key::C)],
+            Command::ToggleMarker => vec![sc(NONE, Key::M)],
+            Command::BindCameraToMarker => vec![sc(CMD, Key::B)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

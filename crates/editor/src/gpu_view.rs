@@ -426,6 +426,9 @@ impl GpuView {
                 input.motion_paths.push(path);
             }
         }
+        if frame.view.cameras {
+            input.camera_gizmos = rig.camera_gizmos(&frame.view, frame.state);
+        }
         let Some((viewport, _)) = &self.target else { return Err(GpuViewError::NoTarget) };
         self.last_stats = Some(self.renderer.render(&input, viewport)?);
         if let Some(log) = &mut self.frame_log {

@@ -16,6 +16,8 @@ pub mod actions;
 pub mod app;
 pub mod autosave;
 pub mod camera;
+pub mod camera_edits;
+pub mod cameras;
 pub mod channels;
 pub mod commands;
 pub mod context;

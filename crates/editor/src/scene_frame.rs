@@ -127,6 +127,7 @@ impl SceneFrame {
                 time,
                 objects: Vec::new(),
                 lights: Vec::new(),
+                cameras: Vec::new(),
             });
             eval.evaluate_into(time, overrides, state);
             self.state_for = state_for;

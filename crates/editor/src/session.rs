@@ -203,6 +203,7 @@ fn item_exists(item: Selected, scene: &Scene) -> bool {
             .and_then(|o| o.skeleton.as_ref())
             .is_some_and(|s| joint < s.joints.len()),
         Selected::Light(l) => l < scene.lights.len(),
+        Selected::Camera(c) => c < scene.cameras.len(),
     }
 }
 
@@ -225,6 +226,7 @@ fn item_channels(item: Selected, scene: &Scene) -> Vec<ChannelId> {
             })
             .collect(),
         Selected::Light(l) => ChannelId::of_light(l).to_vec(),
+        Selected::Camera(c) => ChannelId::of_camera(scene, c),
     }
 }
 
@@ -330,6 +332,10 @@ pub fn owner_of(channel: ChannelId) -> Selected {
             Ok(o) => Selected::Object(o),
             Err(l) => Selected::Light(l),
         },
+        ChannelId::CameraTranslation(c)
+        | ChannelId::CameraRotation(c)
+        | ChannelId::CameraLens(c)
+        | ChannelId::CameraRoll(c) => Selected::Camera(c),
     }
 }
 
@@ -373,6 +379,10 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         (C::Attribute(a), Selected::Light(r)) if a.owner().is_err() => {
             C::Attribute(a.with_owner(shift(a.owner().err()?, r)?))
         }
+        (C::CameraTranslation(c), Selected::Camera(r)) => C::CameraTranslation(shift(c, r)?),
+        (C::CameraRotation(c), Selected::Camera(r)) => C::CameraRotation(shift(c, r)?),
+        (C::CameraLens(c), Selected::Camera(r)) => C::CameraLens(shift(c, r)?),
+        (C::CameraRoll(c), Selected::Camera(r)) => C::CameraRoll(shift(c, r)?),
         (id, _) => id,
     })
 }

@@ -30,6 +30,9 @@ pub struct ViewState {
     pub show_help: bool,
     /// Ghosts of the selected object at other frames (View ▸ Onion skin).
     pub onion: crate::onion::OnionSkin,
+    /// The viewport looks through this scene camera (an index of `Scene::cameras`) instead of
+    /// the orbit camera (View ▸ Look through camera, 0).
+    pub look_through: Option<usize>,
 }
 
 impl ViewState {
@@ -47,6 +50,7 @@ impl ViewState {
             textures: true,
             show_help: false,
             onion: crate::onion::OnionSkin::default(),
+            look_through: None,
         }
     }
 }

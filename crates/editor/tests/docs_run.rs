@@ -413,6 +413,18 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
             }
             Ok(())
         }
+        // Scene cameras: they parse and validate as the cameras of an otherwise empty scene
+        // (an aim at an object or joint would need that object: the examples aim at points).
+        "cameras" => {
+            let cameras: Vec<keyrig_core::SceneCamera> = ron.from_str(value).map_err(|e| e.to_string())?;
+            let scene = keyrig_core::Scene { cameras, ..keyrig_core::Scene::default() };
+            let problems = scene.problems();
+            if problems.is_empty() {
+                Ok(())
+            } else {
+                Err(problems.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))
+            }
+        }
         // The keys of a rotation track (the format's examples of spins).
         "track" => check_fragment("rotation", &format!("(value: (0.0, 0.0, 0.0, 1.0), track: {value})")),
         "attributes" => {

@@ -1,29 +1,25 @@
 //! [`SceneEvaluator`]: the validated runtime form of a scene, answering "the scene at time t".
 
 use std::collections::HashMap;
-use std::fmt;
 use std::sync::Arc;
 
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
 use keyrig_core::ik_constraint::{ConstraintChain, LocalPose};
-use keyrig_core::track::TrackValue;
-use keyrig_core::{
-    Animated, AnimatedTrack, DeformerKind, DeformerSettings, Keys, LightKind, MeshSource, Scene,
-};
+use keyrig_core::{DeformerKind, DeformerSettings, LightKind, MeshSource, Scene};
 use keyrig_skin::{
     mesh_for, BlendZone, JointPalette, MeshBindings, Pose, RestSkeleton, SkinError, SkinnedMesh,
 };
 
+use crate::camera::{CameraRig, CameraState, Target};
 use crate::morph::{MorphBlend, MorphClips, MorphError};
 
 mod attributes;
 pub use attributes::ObjectLook;
 use attributes::{LightAttributeRig, ObjectAttributeRig};
 
-/// Values set on channels without keys being written (a gizmo drag, a slider), keyed by the
-/// channel they replace: the evaluator shows them instead of the channel's track.
-pub type Overrides = HashMap<ChannelId, ChannelValue>;
+pub use crate::slot::{EvalProblem, Overrides};
+use crate::slot::{Slot, SlotEval};
 
 /// What a model file gave for an object whose mesh is `MeshSource::File` (keyrig-io loads it;
 /// the evaluator reads no files).
@@ -35,86 +31,6 @@ pub enum LoadedMesh {
     Morph(Arc<MorphClips>),
     /// A mesh that neither skins nor morphs.
     Static,
-}
-
-/// Something the evaluator could not take from the scene, with the field path it concerns
-/// (`objects[0].skeleton.joints[2].rotation.track[1].time`). The scene still evaluates: a
-/// channel whose keys are invalid holds its static value, an object whose skeleton or mesh is
-/// invalid is drawn without skinning.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct EvalProblem {
-    pub path: String,
-    pub message: String,
-}
-
-impl fmt::Display for EvalProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.path, self.message)
-    }
-}
-
-/// A channel's validated track, or its static value when its keys are invalid.
-#[derive(Debug)]
-enum SlotEval<T: TrackValue> {
-    Track(AnimatedTrack<T>),
-    Fallback(T),
-}
-
-/// One channel: what it was built from (the shared keys and the static value), its evaluable
-/// form and the problem that made it fall back. Cloning shares the evaluable form.
-#[derive(Clone, Debug)]
-struct Slot<T: TrackValue> {
-    keys: Keys<T>,
-    value: T,
-    cycles: keyrig_core::Cycles,
-    muted: bool,
-    eval: Arc<SlotEval<T>>,
-    problem: Option<EvalProblem>,
-}
-
-impl<T: TrackValue> Slot<T> {
-    fn new(animated: &Animated<T>, id: ChannelId) -> Self {
-        let (eval, problem) = match AnimatedTrack::new(animated) {
-            Ok(track) => (SlotEval::Track(track), None),
-            Err(e) => (
-                SlotEval::Fallback(animated.value),
-                Some(EvalProblem {
-                    path: keyrig_core::validate::track_error_path(&id.field_path(), &e),
-                    message: e.to_string(),
-                }),
-            ),
-        };
-        Slot {
-            keys: animated.track.keys.clone(),
-            value: animated.value,
-            cycles: animated.cycles(),
-            muted: animated.muted,
-            eval: Arc::new(eval),
-            problem,
-        }
-    }
-
-    /// Rebuilds the slot when its channel changed (its keys are no longer the list it was
-    /// built from, or its static value or its cycles differ); true when it did.
-    fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
-        if self.keys.shares_with(&animated.track.keys)
-            && self.value == animated.value
-            && self.cycles == animated.cycles()
-            && self.muted == animated.muted
-        {
-            return false;
-        }
-        *self = Slot::new(animated, id);
-        true
-    }
-
-    #[inline]
-    fn sample(&self, t: f64) -> T {
-        match &*self.eval {
-            SlotEval::Track(track) => track.sample(t),
-            SlotEval::Fallback(v) => *v,
-        }
-    }
 }
 
 /// A skinned mesh with its deformer bindings, shared by everything that draws or deforms it.
@@ -347,6 +263,8 @@ pub struct SceneState {
     pub time: f64,
     pub objects: Vec<ObjectState>,
     pub lights: Vec<LightState>,
+    /// The scene cameras, by index.
+    pub cameras: Vec<CameraState>,
 }
 
 /// The validated runtime form of a [`Scene`]: every channel's track (tangents and Squad
@@ -363,6 +281,7 @@ pub struct SceneEvaluator {
     fps: f64,
     objects: Vec<ObjectRig>,
     lights: Vec<LightRig>,
+    cameras: Vec<CameraRig>,
     problems: Vec<EvalProblem>,
 }
 
@@ -376,6 +295,7 @@ impl SceneEvaluator {
             fps: scene.fps,
             objects: (0..scene.objects.len()).map(|o| ObjectRig::new(scene, o, meshes.get(&o))).collect(),
             lights: scene.lights.iter().enumerate().map(|(l, light)| LightRig::new(l, light)).collect(),
+            cameras: (0..scene.cameras.len()).map(|c| CameraRig::new(scene, c)).collect(),
             problems: Vec::new(),
         };
         eval.collect_problems();
@@ -419,6 +339,17 @@ impl SceneEvaluator {
                 }
             }
         }
+        self.cameras.truncate(scene.cameras.len());
+        for c in 0..scene.cameras.len() {
+            match self.cameras.get_mut(c) {
+                Some(rig) => rebuilt.channels += rig.refresh(scene, c),
+                None => {
+                    let rig = CameraRig::new(scene, c);
+                    rebuilt.channels += rig.channel_count();
+                    self.cameras.push(rig);
+                }
+            }
+        }
         self.collect_problems();
         rebuilt
     }
@@ -440,6 +371,9 @@ impl SceneEvaluator {
             if let Some(a) = &rig.attributes {
                 a.for_each_problem(&mut |p| self.problems.push(p.clone()));
             }
+        }
+        for rig in &self.cameras {
+            rig.for_each_problem(&mut |p| self.problems.push(p.clone()));
         }
     }
 
@@ -518,6 +452,14 @@ impl SceneEvaluator {
                 Ok(o) => ObjectAttributeRig::value(self.objects.get(o)?.attributes.as_deref(), a, time),
                 Err(l) => LightAttributeRig::value(self.lights.get(l)?.attributes.as_deref(), a, time),
             },
+            ChannelId::CameraTranslation(c) => vec3(&self.cameras.get(c)?.translation),
+            ChannelId::CameraRotation(c) => {
+                Some(ChannelValue::Rotation(self.cameras.get(c)?.rotation.sample(time)))
+            }
+            ChannelId::CameraLens(c) => Some(ChannelValue::Scalar(self.cameras.get(c)?.lens.sample(time))),
+            ChannelId::CameraRoll(c) => {
+                Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.roll.sample(time)))
+            }
         }
     }
 
@@ -531,6 +473,7 @@ impl SceneEvaluator {
             ChannelId::JointRotation { object, joint } => {
                 &self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation
             }
+            ChannelId::CameraRotation(c) => &self.cameras.get(c)?.rotation,
             _ => return None,
         };
         match &*slot.eval {
@@ -542,7 +485,7 @@ impl SceneEvaluator {
     /// The whole scene at `time` seconds.
     #[must_use]
     pub fn evaluate(&self, time: f64, overrides: &Overrides) -> SceneState {
-        let mut state = SceneState { time, objects: Vec::new(), lights: Vec::new() };
+        let mut state = SceneState { time, objects: Vec::new(), lights: Vec::new(), cameras: Vec::new() };
         self.evaluate_into(time, overrides, &mut state);
         state
     }
@@ -565,6 +508,51 @@ impl SceneEvaluator {
         }
         state.lights.clear();
         state.lights.extend((0..self.lights.len()).filter_map(|l| self.light_at(l, time, overrides)));
+        state.cameras.clear();
+        let objects = &state.objects;
+        state.cameras.extend(
+            self.cameras
+                .iter()
+                .enumerate()
+                .map(|(c, rig)| rig.state(c, time, overrides, |target| Self::target_in(objects, target))),
+        );
+    }
+
+    /// Scene camera `c` at `time` seconds; `None` when there is no such camera. An aimed
+    /// camera evaluates the object it looks at.
+    #[must_use]
+    pub fn camera_at(&self, c: usize, time: f64, overrides: &Overrides) -> Option<CameraState> {
+        let rig = self.cameras.get(c)?;
+        Some(rig.state(c, time, overrides, |target| match *target {
+            Target::Object(o) | Target::Joint { object: o, .. } => {
+                let state = self.object_at(o, time, overrides)?;
+                let mut objects = vec![ObjectState::empty(); o];
+                objects.push(state);
+                Self::target_in(&objects, target)
+            }
+            Target::Point(p) => Some(p),
+            Target::Missing => None,
+        }))
+    }
+
+    /// The number of scene cameras.
+    #[must_use]
+    pub fn camera_count(&self) -> usize {
+        self.cameras.len()
+    }
+
+    /// The world position of an aim target in evaluated objects.
+    fn target_in(objects: &[ObjectState], target: &Target) -> Option<Vec3> {
+        match *target {
+            Target::Point(p) => Some(p),
+            Target::Object(o) => Some(objects.get(o)?.world_from_object.translation.into()),
+            Target::Joint { object, joint } => {
+                let state = objects.get(object)?;
+                let joint_in_model = state.palette.as_ref()?.model_from_joint.get(joint)?.translation;
+                Some(state.world_from_object.transform_point3a(joint_in_model).into())
+            }
+            Target::Missing => None,
+        }
     }
 
     /// Object `o` at `time` seconds; `None` when there is no such object. The skeleton's pose

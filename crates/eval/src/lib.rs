@@ -16,10 +16,13 @@
 //! [`LoadedMesh`]es.
 
 pub mod bake;
+pub mod camera;
 mod evaluator;
 pub mod morph;
+mod slot;
 
 pub use bake::{bake_all_ik, bake_ik_constraint, BakeError, Baked};
+pub use camera::CameraState;
 pub use evaluator::{
     EvalProblem, LightState, LoadedMesh, MorphRig, ObjectLook, ObjectState, Overrides, Rebuilt,
     SceneEvaluator, SceneState, SkinRig,

@@ -28,6 +28,12 @@
 //!   holds the last written key after the range.
 //! - light colour and intensity are written at the start of the frame range (core glTF
 //!   cannot animate them).
+//! - **Scene cameras** ([`crate::gltf_camera`]) become root nodes holding a glTF camera
+//!   (`export_camera`): translation and rotation channels as an object's; an aimed camera's
+//!   rotation (glTF has no constraints) is sampled from the scene evaluator at every frame of
+//!   the range and resampled like a rotation track; an animated lens is written as a
+//!   `KHR_animation_pointer` channel on `/cameras/i/perspective/yfov` (orthographic: `ymag`
+//!   and `xmag`), LINEAR keys at every frame of the range.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -346,6 +352,15 @@ struct Channel {
     width: usize,
 }
 
+/// A KHR_animation_pointer channel: LINEAR keys of a property named by a JSON pointer.
+struct PointerChannel {
+    pointer: String,
+    times: Vec<f32>,
+    /// `width` numbers per key.
+    values: Vec<f32>,
+    width: usize,
+}
+
 /// The material of one exported primitive: base colour factor and texture.
 #[derive(Clone, Debug, PartialEq)]
 struct MaterialData {
@@ -408,6 +423,9 @@ struct Document {
     meshes: Vec<Value>,
     skins: Vec<Value>,
     channels: Vec<Channel>,
+    /// The `cameras` entries, and the KHR_animation_pointer channels that animate them.
+    cameras: Vec<Value>,
+    pointer_channels: Vec<PointerChannel>,
     images: Vec<Value>,
     textures: Vec<Value>,
     materials: Vec<Value>,
@@ -560,6 +578,12 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             t0,
             &format!("{here}.attributes.visible"),
         )?;
+    }
+    if !scene.cameras.is_empty() {
+        let eval = keyrig_eval::SceneEvaluator::new(scene, &HashMap::new());
+        for c in 0..scene.cameras.len() {
+            export_camera(&mut doc, scene, &eval, c, options, range)?;
+        }
     }
     Ok(doc.into_gltf(lights))
 }
@@ -871,7 +895,11 @@ impl Document {
     /// channel ([`Document::animation`], its accessors after the meshes'), and the buffer
     /// padded to a multiple of 4 bytes.
     fn into_gltf(mut self, lights: Vec<Value>) -> ExportedGltf {
-        let animation = (!self.channels.is_empty() || !self.pointers.is_empty()).then(|| {
+        // Camera lenses (keyrig_io::gltf_camera) and the attributes (gltf_attributes) both
+        // animate through KHR_animation_pointer; they share the one animation.
+        let camera_pointers = std::mem::take(&mut self.pointer_channels);
+        let animated = !self.channels.is_empty() || !self.pointers.is_empty() || !camera_pointers.is_empty();
+        let animation = animated.then(|| {
             let channels = std::mem::take(&mut self.channels);
             let mut animation = Self::animation(&mut self.b, &channels);
             let (mut samplers, mut chans) = (Vec::new(), Vec::new());
@@ -884,19 +912,20 @@ impl Document {
             self.write_pointers(&mut samplers, &mut chans);
             animation["samplers"] = json!(samplers);
             animation["channels"] = json!(chans);
+            Self::pointer_animation(&mut self.b, &camera_pointers, &mut animation);
             animation
         });
         let mut used: Vec<&str> = Vec::new();
         if !lights.is_empty() {
             used.push("KHR_lights_punctual");
         }
-        if self.animation_pointer {
+        if self.animation_pointer || !camera_pointers.is_empty() {
             used.push("KHR_animation_pointer");
         }
         if self.node_visibility {
             used.push("KHR_node_visibility");
         }
-        let Document { mut b, nodes, roots, meshes, skins, images, textures, materials, .. } = self;
+        let Document { mut b, nodes, roots, meshes, skins, cameras, images, textures, materials, .. } = self;
         let mut root = json!({
             "asset": {"version": "2.0", "generator": concat!("keyrig ", env!("CARGO_PKG_VERSION"))},
             "scene": 0,
@@ -924,6 +953,9 @@ impl Document {
         }
         if !lights.is_empty() {
             root["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
+        }
+        if !cameras.is_empty() {
+            root["cameras"] = json!(cameras);
         }
         if let Some(animation) = animation {
             root["animations"] = json!([animation]);
@@ -958,6 +990,143 @@ impl Document {
         }
         json!({"name": "keyrig", "channels": chans, "samplers": samplers})
     }
+
+    /// Adds the KHR_animation_pointer `channels` to `animation`: a LINEAR sampler each, and a
+    /// channel whose target names no node, only the pointer (path `pointer`).
+    fn pointer_animation(b: &mut Builder, channels: &[PointerChannel], animation: &mut Value) {
+        for c in channels {
+            let input = b.floats(&c.times, 1, "SCALAR", None, true);
+            let type_ = if c.width == 1 { "SCALAR" } else { "VEC3" };
+            let output = b.floats(&c.values, c.width, type_, None, false);
+            let samplers = animation["samplers"].as_array_mut().expect("samplers");
+            samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
+            let sampler = samplers.len() - 1;
+            animation["channels"].as_array_mut().expect("channels").push(json!({
+                "sampler": sampler,
+                "target": {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": c.pointer}}},
+            }));
+        }
+    }
+}
+
+/// Writes scene camera `c` ([`crate::gltf_camera`]): a root node holding the camera, its
+/// translation channel, its rotation channel (an aimed camera's sampled from `eval` at every
+/// frame), and its lens channel as KHR_animation_pointer keys at every frame.
+fn export_camera(
+    doc: &mut Document,
+    scene: &Scene,
+    eval: &keyrig_eval::SceneEvaluator,
+    c: usize,
+    options: &ExportOptions,
+    range: (f64, f64),
+) -> Result<(), ExportError> {
+    let camera = &scene.cameras[c];
+    let here = format!("cameras[{c}]");
+    let t0 = range.0;
+    let aspect = scene.render_size.map(keyrig_core::RenderSize::aspect);
+    let lens_track =
+        AnimatedTrack::new(&camera.lens).map_err(|e| scene_err(format!("{here}.lens"), e.to_string()))?;
+    let camera_index = doc.cameras.len();
+    doc.cameras.push(crate::gltf_camera::camera_json(camera, lens_track.sample(t0), aspect));
+    let node = doc.nodes.len();
+    doc.nodes.push(json!({"name": camera.name, "camera": camera_index}));
+    doc.roots.push(node);
+    let identity = (Quat::IDENTITY, Vec3::ZERO);
+    let translation_here = format!("{here}.translation");
+    set_vec3(
+        &mut doc.nodes[node],
+        "translation",
+        &camera.translation,
+        identity,
+        Vec3::ZERO,
+        &translation_here,
+    )?;
+    doc.channels.extend(vec3_channel(
+        node,
+        "translation",
+        &camera.translation,
+        identity,
+        options,
+        range,
+        &translation_here,
+    )?);
+    let frames: Vec<f64> =
+        (scene.frame_range.start..=scene.frame_range.end).map(|f| f64::from(f) / scene.fps).collect();
+    let no_overrides = keyrig_eval::Overrides::new();
+    if camera.aim.is_some() {
+        let rotation_at = |t: f64| {
+            eval.camera_at(c, t, &no_overrides)
+                .map_or(Quat::IDENTITY, |s| Quat::from_mat3a(&s.world_from_camera.matrix3).normalize())
+        };
+        doc.nodes[node]["rotation"] = json!(rotation_at(t0).to_array());
+        let tol = options.rotation_tolerance_deg.to_radians();
+        let (times, values) = match &options.bake {
+            Some(bake) => {
+                resample_rotation(&rotation_at, &frames, &[], bake.rotation_tolerance(options), nlerp)
+            }
+            None => resample_rotation(&rotation_at, &frames, &[], tol, crate::model::slerp_short),
+        };
+        if frames.len() > 1 {
+            doc.channels.push(linear_quat_channel(node, times, values));
+        }
+    } else {
+        let rotation_here = format!("{here}.rotation");
+        set_quat(&mut doc.nodes[node], &camera.rotation, Quat::IDENTITY, &rotation_here)?;
+        doc.channels.extend(quat_channel(
+            node,
+            &camera.rotation,
+            Quat::IDENTITY,
+            options,
+            range,
+            &rotation_here,
+        )?);
+    }
+    if camera.lens.is_animated() && frames.len() > 1 {
+        let times: Vec<f32> = frames.iter().map(|&t| t as f32).collect();
+        let lens: Vec<keyrig_core::Lens> =
+            frames.iter().map(|&t| keyrig_core::Lens::of(camera.projection, lens_track.sample(t))).collect();
+        let pointer = |field: &str| format!("/cameras/{camera_index}/{field}");
+        match camera.projection {
+            keyrig_core::Projection::Orthographic => {
+                let ymag: Vec<f32> = lens
+                    .iter()
+                    .map(|l| match l {
+                        keyrig_core::Lens::Orthographic { height } => height * 0.5,
+                        keyrig_core::Lens::Perspective { .. } => 0.0,
+                    })
+                    .collect();
+                let xmag = ymag.iter().map(|y| y * aspect.unwrap_or(16.0 / 9.0)).collect();
+                doc.pointer_channels.push(PointerChannel {
+                    pointer: pointer("orthographic/ymag"),
+                    times: times.clone(),
+                    values: ymag,
+                    width: 1,
+                });
+                doc.pointer_channels.push(PointerChannel {
+                    pointer: pointer("orthographic/xmag"),
+                    times,
+                    values: xmag,
+                    width: 1,
+                });
+            }
+            _ => {
+                let yfov = lens
+                    .iter()
+                    .map(|l| match l {
+                        keyrig_core::Lens::Perspective { fov_y } => *fov_y,
+                        keyrig_core::Lens::Orthographic { .. } => 0.0,
+                    })
+                    .collect();
+                doc.pointer_channels.push(PointerChannel {
+                    pointer: pointer("perspective/yfov"),
+                    times,
+                    values: yfov,
+                    width: 1,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Writes the joints of `skeleton` as nodes below the object node `object_node` and their

@@ -267,6 +267,14 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     model.meshes = doc.meshes().map(|m| read_mesh(&cx, &m)).collect::<Result<_, _>>()?;
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
+    model.cameras = crate::gltf_camera::read_cameras(&doc).map_err(|e| {
+        let kind = if e.non_finite {
+            GltfErrorKind::NonFinite(e.message)
+        } else {
+            GltfErrorKind::Invalid(e.message)
+        };
+        ptr(e.pointer, kind)
+    })?;
     check_skinned_meshes(&model)?;
     check_animation_json(doc.as_json(), &raw)?;
     model.animations =
@@ -529,6 +537,7 @@ fn read_nodes(doc: &gltf::Document) -> Result<Vec<ModelNode>, GltfError> {
                 mesh: n.mesh().map(|m| m.index()),
                 skin: n.skin().map(|s| s.index()),
                 light: n.light().map(|l| l.index()),
+                camera: n.camera().map(|c| c.index()),
                 weights: n.weights().map(<[f32]>::to_vec),
                 visible: true,
             })

@@ -27,6 +27,8 @@ pub struct ModelNode {
     pub mesh: Option<usize>,
     pub skin: Option<usize>,
     pub light: Option<usize>,
+    /// The camera this node holds (an index of [`ImportedModel::cameras`]).
+    pub camera: Option<usize>,
     /// Morph-target weights of this node's mesh instance, when the node overrides them.
     pub weights: Option<Vec<f32>>,
     /// `KHR_node_visibility`: false hides the node and everything below it (true when the
@@ -198,6 +200,8 @@ pub struct ImportedModel {
     pub skins: Vec<ModelSkin>,
     pub animations: Vec<ModelAnimation>,
     pub lights: Vec<ModelLight>,
+    /// The file's cameras.
+    pub cameras: Vec<ModelCamera>,
     pub images: Vec<ImageSource>,
     /// The bytes of each image (same order as `images`) where they could be read: from a
     /// buffer view, a `data:` URI or a file next to the model. `None` for an image that
@@ -954,7 +958,8 @@ impl ImportedModel {
     /// - each unskinned mesh node → an object at its rest world transform, with its own
     ///   translation/rotation/scale tracks when it is a root node;
     /// - each KHR_lights_punctual light → a light at its node's rest world position and
-    ///   direction (−Z), spot cone angles in degrees.
+    ///   direction (−Z), spot cone angles in degrees;
+    /// - each node holding a camera → a scene camera (`add_scene_cameras`).
     ///
     /// What the scene does not take from the file: morph weights, animated lights, the
     /// animation of unskinned nodes below other nodes, and the other animations.
@@ -1049,6 +1054,7 @@ impl ImportedModel {
             crate::gltf_attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
             scene.lights.push(scene_light);
         }
+        add_scene_cameras(self, &world, &channels_of, &mut scene);
         Ok(scene)
     }
 }
@@ -1078,5 +1084,91 @@ fn animated<T: Copy>(
     match keys.first() {
         Some(first) => keyrig_core::Animated::new(first.value, RawTrack::new(keys)),
         None => fallback,
+    }
+}
+
+/// A glTF camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelCamera {
+    pub name: String,
+    pub projection: ModelProjection,
+}
+
+/// A glTF camera's projection, as the file gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ModelProjection {
+    Perspective { yfov: f32, aspect_ratio: Option<f32>, znear: f32, zfar: Option<f32> },
+    Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
+}
+
+impl ModelProjection {
+    /// Width over height, when the file says.
+    #[must_use]
+    pub fn aspect_ratio(self) -> Option<f32> {
+        match self {
+            ModelProjection::Perspective { aspect_ratio, .. } => aspect_ratio,
+            ModelProjection::Orthographic { xmag, ymag, .. } => Some(xmag / ymag),
+        }
+    }
+}
+
+/// Adds a scene camera for each node of `model` that holds a camera, named after the node (or
+/// its camera), unique among the scene's cameras: at the node's rest world position and
+/// rotation (a camera looks down its node's −Z with +Y up in glTF as in keyrig; the node's
+/// scale does not apply), keyed by the node's own translation and rotation channels when it is
+/// a root node. A perspective camera's `yfov` (radians) becomes a field of view in degrees, an
+/// orthographic camera's `ymag` (half the view's height) a view height of `2·ymag`. The first
+/// camera with an aspect ratio (`aspectRatio`, or `xmag / ymag`) sets the scene's render size
+/// (720 pixels tall).
+fn add_scene_cameras(
+    model: &ImportedModel,
+    world: &[Mat4],
+    channels_of: &[Vec<&ChannelTarget>],
+    scene: &mut keyrig_core::Scene,
+) {
+    for (i, node) in model.nodes.iter().enumerate() {
+        let Some(camera) = node.camera.and_then(|c| model.cameras.get(c)) else { continue };
+        let (_, rotation, translation) = world[i].to_scale_rotation_translation();
+        // The node's name, unless the file left it out (then the camera's).
+        let base = if node.name == format!("node{i}") { camera.name.clone() } else { node.name.clone() };
+        let name = if scene.camera_index(&base).is_some() {
+            (1..).map(|n| format!("{base}.{n:03}")).find(|n| scene.camera_index(n).is_none()).unwrap_or(base)
+        } else {
+            base
+        };
+        let mut out = keyrig_core::SceneCamera::new(name, translation);
+        out.rotation = keyrig_core::Animated::constant(rotation.normalize());
+        match camera.projection {
+            ModelProjection::Perspective { yfov, znear, zfar, .. } => {
+                out.projection = keyrig_core::Projection::Perspective;
+                out.lens = keyrig_core::Animated::constant(yfov.to_degrees());
+                (out.near, out.far) = (znear, zfar);
+            }
+            ModelProjection::Orthographic { ymag, znear, zfar, .. } => {
+                out.projection = keyrig_core::Projection::Orthographic;
+                out.lens = keyrig_core::Animated::constant(2.0 * ymag);
+                // keyrig's near plane is > 0; glTF allows an orthographic znear of 0.
+                (out.near, out.far) = (znear.max(1e-4).min(zfar * 0.5), Some(zfar));
+            }
+        }
+        if node.parent.is_none() {
+            for target in &channels_of[i] {
+                match target {
+                    ChannelTarget::Translation(t) => out.translation.track = t.clone(),
+                    ChannelTarget::Rotation(t) => out.rotation.track = t.clone(),
+                    ChannelTarget::Scale(_) | ChannelTarget::Weights(_) => {}
+                }
+            }
+        }
+        if scene.render_size.is_none() {
+            if let Some(aspect) = camera.projection.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0) {
+                let width = (720.0 * aspect).round().clamp(1.0, f32::from(u16::MAX)) as u32;
+                scene.render_size = Some(keyrig_core::RenderSize {
+                    width: width.min(keyrig_core::RenderSize::MAX_SIDE),
+                    height: 720,
+                });
+            }
+        }
+        scene.cameras.push(out);
     }
 }

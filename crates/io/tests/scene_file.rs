@@ -460,6 +460,7 @@ fn scene() -> impl Strategy<Value = Scene> {
             objects,
             lights: light.into_iter().collect(),
             camera: keyrig_core::Camera::default(),
+            ..Scene::default()
         })
 }
 

@@ -39,7 +39,7 @@ pub use gpu::GpuContext;
 pub use headless::{HeadlessRenderer, HEADLESS_FORMAT};
 /// The `image` crate this crate renders into (re-exported so callers save PNGs with the same version).
 pub use image;
-pub use overlay::{LightGizmo, MotionPath, SkeletonOverlay};
+pub use overlay::{CameraGizmo, LightGizmo, MotionPath, SkeletonOverlay};
 pub use renderer::{
     Deform, DrawItem, FrameInput, FrameStats, Ghost, LightInput, MeshData, MeshId, RenderStyle, Renderer,
     Viewport, SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,

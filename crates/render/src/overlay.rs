@@ -24,6 +24,8 @@ pub mod colours {
     pub const PATH: [f32; 4] = [0.2, 0.9, 0.4, 1.0];
     pub const KEY: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
     pub const LIGHT: [f32; 4] = [1.0, 0.85, 0.3, 1.0];
+    pub const CAMERA: [f32; 4] = [0.55, 0.75, 1.0, 1.0];
+    pub const ACTIVE_CAMERA: [f32; 4] = [0.9, 0.9, 0.95, 1.0];
 }
 
 /// A batch of line segments (pairs of vertices).
@@ -207,6 +209,53 @@ pub fn light_gizmo(lines: &mut Lines, gizmo: &LightGizmo, marker: f32) {
     }
 }
 
+/// A scene camera drawn in the viewport: its frustum.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraGizmo {
+    pub camera: keyrig_eval::CameraState,
+    /// Width over height of the image it renders.
+    pub aspect: f32,
+    pub selected: bool,
+    /// The scene's active camera at this time.
+    pub active: bool,
+}
+
+/// A camera's frustum as Blender draws it: lines from the eye to the corners of its image
+/// rectangle `12·marker` in front of it (an orthographic camera: a box from the eye's plane),
+/// the rectangle, and a filled-in triangle on its top edge that shows which way is up.
+pub fn camera_gizmo(lines: &mut Lines, gizmo: &CameraGizmo, marker: f32) {
+    let colour = if gizmo.selected {
+        colours::SELECTED
+    } else if gizmo.active {
+        colours::ACTIVE_CAMERA
+    } else {
+        colours::CAMERA
+    };
+    let depth = marker * 12.0;
+    let camera = &gizmo.camera;
+    let far = camera.image_corners(gizmo.aspect, depth);
+    let near = match camera.lens {
+        keyrig_core::Lens::Perspective { .. } => [camera.eye(); 4],
+        keyrig_core::Lens::Orthographic { .. } => camera.image_corners(gizmo.aspect, 0.0),
+    };
+    for i in 0..4 {
+        lines.segment(near[i], far[i], colour);
+        lines.segment(far[i], far[(i + 1) % 4], colour);
+        if near[i] != near[(i + 1) % 4] {
+            lines.segment(near[i], near[(i + 1) % 4], colour);
+        }
+    }
+    // The up triangle over the top edge (corners 2 and 3 are top right and top left).
+    let (top_right, top_left) = (far[2], far[3]);
+    let width = top_right - top_left;
+    let up = camera.world_from_camera.transform_vector3(glam::Vec3::Y).normalize_or(glam::Vec3::Y);
+    let apex = (top_right + top_left) * 0.5 + up * width.length() * 0.3;
+    let (a, b) = (top_left + width * 0.2, top_right - width * 0.2);
+    lines.segment(a, apex, colour);
+    lines.segment(apex, b, colour);
+    lines.segment(b, a, colour);
+}
+
 /// Moves every vertex by a transform (e.g. model to world).
 pub fn transform(lines: &mut [LineVertex], world_from_model: &Mat4) {
     for v in lines {
@@ -232,6 +281,28 @@ pub fn edge_indices(triangles: &[u32]) -> Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn camera_frustum_reaches_its_image_corners() {
+        let camera = keyrig_eval::CameraState {
+            world_from_camera: glam::Affine3A::from_translation(Vec3::new(0.0, 1.0, 5.0)),
+            lens: keyrig_core::Lens::Perspective { fov_y: 90f32.to_radians() },
+            near: 0.1,
+            far: Some(100.0),
+        };
+        let gizmo = CameraGizmo { camera, aspect: 2.0, selected: false, active: true };
+        let mut lines = Lines::default();
+        camera_gizmo(&mut lines, &gizmo, 0.1);
+        // 4 eye-to-corner lines, 4 rectangle edges, 3 triangle edges.
+        assert_eq!(lines.len(), (4 + 4 + 3) * 2);
+        // 1.2 units in front (down −Z), a 90° field of view: 1.2 up and 2.4 to the side.
+        let top_right = Vec3::new(2.4, 2.2, 3.8);
+        assert!(lines
+            .vertices
+            .iter()
+            .any(|v| Vec3::from_slice(&v.position[..3]).abs_diff_eq(top_right, 1e-5)));
+        assert!(lines.vertices.iter().all(|v| v.colour == colours::ACTIVE_CAMERA));
+    }
 
     #[test]
     fn shared_edges_appear_once() {

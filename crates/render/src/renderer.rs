@@ -13,7 +13,7 @@ use keyrig_core::{Camera, DeformerKind, LightKind, TextureImage};
 
 use crate::camera;
 use crate::gpu::with_error_scope;
-use crate::overlay::{self, LightGizmo, LineVertex, Lines, MotionPath, SkeletonOverlay};
+use crate::overlay::{self, CameraGizmo, LightGizmo, LineVertex, Lines, MotionPath, SkeletonOverlay};
 use crate::skinning::{GpuSkinner, JointPose, MorphBuffers, SkinBuffers, SkinMeshInput, SkinnedVertex};
 use crate::RenderError;
 
@@ -159,6 +159,11 @@ pub struct FrameInput {
     pub motion_paths: Vec<MotionPath>,
     /// Lights drawn as gizmos (position, direction, cone).
     pub light_gizmos: Vec<LightGizmo>,
+    /// Scene cameras drawn as frustums.
+    pub camera_gizmos: Vec<CameraGizmo>,
+    /// Look through this scene camera instead of [`FrameInput::camera`] (whose orbit
+    /// distance still sizes the overlays).
+    pub through: Option<keyrig_eval::CameraState>,
     /// Linear RGB background.
     pub background: Vec3,
     /// Multiply each mesh's colour by its texture ([`Renderer::set_texture`]) in the solid
@@ -181,6 +186,8 @@ impl FrameInput {
             skeletons: Vec::new(),
             motion_paths: Vec::new(),
             light_gizmos: Vec::new(),
+            camera_gizmos: Vec::new(),
+            through: None,
             background: Vec3::new(0.018, 0.02, 0.025),
             textures: true,
         }
@@ -1182,6 +1189,12 @@ impl Renderer {
         if !camera::is_usable(&frame.camera) {
             return Err(RenderError::NonFinite { what: "camera (or distance ≤ 0)", index: 0 });
         }
+        if frame.through.is_some_and(|c| !c.is_usable()) {
+            return Err(RenderError::NonFinite {
+                what: "scene camera (position, rotation, lens or clip planes)",
+                index: 0,
+            });
+        }
         Ok(())
     }
 
@@ -1242,10 +1255,16 @@ impl Renderer {
             lights[light_count] = gpu_light(light);
             light_count += 1;
         }
+        let (clip_from_world, eye) = match &frame.through {
+            Some(through) => (through.clip_from_world(aspect), through.eye()),
+            None => (
+                camera::clip_from_world_in(&frame.camera, aspect, frame.depth_range),
+                camera::eye_position(&frame.camera),
+            ),
+        };
         let globals = GpuGlobals {
-            clip_from_world: camera::clip_from_world_in(&frame.camera, aspect, frame.depth_range)
-                .to_cols_array_2d(),
-            camera_position: camera::eye_position(&frame.camera).extend(1.0).to_array(),
+            clip_from_world: clip_from_world.to_cols_array_2d(),
+            camera_position: eye.extend(1.0).to_array(),
             ambient: frame.ambient.extend(0.0).to_array(),
             counts: [light_count as u32, 0, 0, 0],
             lights,
@@ -1302,7 +1321,12 @@ impl Renderer {
             overlay::grid(&mut lines, spacing, 50);
         }
         let grid_vertices = lines.len() as u32;
-        let marker = frame.camera.distance * 0.008;
+        // Overlays keep their size on screen: in proportion to the distance looked from (through
+        // a scene camera: its distance to the orbit target, the middle of what is being worked on).
+        let marker = match &frame.through {
+            Some(through) => through.eye().distance(frame.camera.target).max(1e-3) * 0.008,
+            None => frame.camera.distance * 0.008,
+        };
         for skeleton in &frame.skeletons {
             overlay::skeleton(&mut lines, skeleton, marker);
         }
@@ -1311,6 +1335,9 @@ impl Renderer {
         }
         for gizmo in &frame.light_gizmos {
             overlay::light_gizmo(&mut lines, gizmo, marker);
+        }
+        for gizmo in &frame.camera_gizmos {
+            overlay::camera_gizmo(&mut lines, gizmo, marker);
         }
         if lines.vertices.iter().any(|v| !v.position.iter().all(|x| x.is_finite())) {
             return Err(RenderError::NonFinite {

@@ -26,7 +26,7 @@ use keyrig_eval::{LoadedMesh, ObjectState, Overrides, SceneEvaluator, SceneState
 use keyrig_skin::{SkinError, SkinnedMesh};
 use thiserror::Error;
 
-use crate::overlay::{grid_spacing_for, LightGizmo, MotionPath, SkeletonOverlay};
+use crate::overlay::{grid_spacing_for, CameraGizmo, LightGizmo, MotionPath, SkeletonOverlay};
 use crate::renderer::{
     Deform, DrawItem, FrameInput, Ghost, LightInput, MeshData, MeshId, RenderStyle, Renderer,
 };
@@ -225,8 +225,13 @@ impl MorphMesh {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Selected {
     Object(usize),
-    Joint { object: usize, joint: usize },
+    Joint {
+        object: usize,
+        joint: usize,
+    },
     Light(usize),
+    /// A scene camera (`Scene::cameras`).
+    Camera(usize),
 }
 
 /// View settings that are not part of the scene.
@@ -250,6 +255,11 @@ pub struct ViewOptions {
     /// Draw materials (base colour and texture: glTF base colour, MD2 skins); `false` draws
     /// every object in its plain per-object colour.
     pub textures: bool,
+    /// Look through this scene camera (an index of `Scene::cameras`) instead of the orbit
+    /// camera.
+    pub look_through: Option<usize>,
+    /// Draw scene cameras as frustums (all but the one looked through).
+    pub cameras: bool,
 }
 
 impl Default for ViewOptions {
@@ -265,6 +275,8 @@ impl Default for ViewOptions {
             camera: None,
             depth_range: None,
             textures: true,
+            look_through: None,
+            cameras: true,
         }
     }
 }
@@ -579,7 +591,36 @@ impl SceneRig {
         if view.lights {
             frame.light_gizmos = self.light_gizmos(view.selection, &state);
         }
+        if view.cameras {
+            frame.camera_gizmos = self.camera_gizmos(view, &state);
+        }
         Ok(frame)
+    }
+
+    /// Frustums of the scene cameras of `state` but the one looked through (the selected one
+    /// highlighted, the active one at `state.time` brighter), in the scene's render aspect.
+    #[must_use]
+    pub fn camera_gizmos(&self, view: &ViewOptions, state: &SceneState) -> Vec<CameraGizmo> {
+        let aspect = self.render_aspect();
+        let active = self.scene.active_camera_at(state.time * self.scene.fps);
+        state
+            .cameras
+            .iter()
+            .enumerate()
+            .filter(|&(c, camera)| view.look_through != Some(c) && camera.is_usable())
+            .map(|(c, camera)| CameraGizmo {
+                camera: *camera,
+                aspect,
+                selected: view.selection == Some(Selected::Camera(c)),
+                active: active == Some(c),
+            })
+            .collect()
+    }
+
+    /// Width over height of the scene's render size (16:9 when it has none).
+    #[must_use]
+    pub fn render_aspect(&self) -> f32 {
+        self.scene.render_size.map_or(16.0 / 9.0, keyrig_core::RenderSize::aspect)
     }
 
     /// Gizmos of the enabled lights of `state` (the selected one highlighted).
@@ -678,6 +719,7 @@ impl SceneRig {
         }
         let camera = view.camera.unwrap_or(self.scene.camera);
         let mut frame = FrameInput::new(camera);
+        frame.through = view.look_through.and_then(|c| state.cameras.get(c).copied());
         frame.depth_range = view.depth_range;
         frame.style = view.style;
         frame.ambient = self.scene.ambient;
@@ -739,7 +781,7 @@ impl SceneRig {
         let (object, joint) = match selection {
             Some(Selected::Object(o)) => (o, None),
             Some(Selected::Joint { object, joint }) => (object, Some(joint)),
-            None | Some(Selected::Light(_)) => return Ok(None),
+            None | Some(Selected::Light(_) | Selected::Camera(_)) => return Ok(None),
         };
         let Some(scene_object) = self.scene.objects.get(object) else { return Ok(None) };
         let position_at = |t: f64| -> Result<Option<Vec3>, SceneFrameError> {

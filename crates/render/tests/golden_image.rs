@@ -82,6 +82,7 @@ pub fn test_scene() -> Scene {
             distance: 320.0,
             fov_y_deg: 45.0,
         },
+        ..Scene::default()
     }
 }
 

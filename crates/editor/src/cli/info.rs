@@ -447,7 +447,37 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
                 L::Intensity => span(&l.intensity.track.keys),
             }
         }
+        ChannelPath::Camera { camera, property } => {
+            use keyrig_core::channel::CameraProperty as C;
+            let Some(c) = scene.camera_index(camera).map(|c| &scene.cameras[c]) else { return (0, None) };
+            match property {
+                C::Translation => span(&c.translation.track.keys),
+                C::Rotation => span(&c.rotation.track.keys),
+                C::Lens => span(&c.lens.track.keys),
+                C::Roll => c.aim.as_ref().map_or((0, None), |a| span(&a.roll.track.keys)),
+            }
+        }
     }
+}
+
+/// A scene camera in one line: projection, lens, clip planes and aim.
+fn scene_camera_text(c: &keyrig_core::SceneCamera) -> String {
+    use keyrig_core::{AimTarget, Projection};
+    let lens = match c.projection {
+        Projection::Perspective => format!("perspective, field of view {}°", c.lens.value),
+        Projection::FocalLength { sensor_height_mm } => {
+            format!("perspective, focal length {} mm on a {sensor_height_mm} mm sensor", c.lens.value)
+        }
+        Projection::Orthographic => format!("orthographic, view height {}", c.lens.value),
+    };
+    let far = c.far.map_or_else(|| "infinity".to_owned(), |f| f.to_string());
+    let aim = match c.aim.as_ref().map(|a| &a.target) {
+        None => String::new(),
+        Some(AimTarget::Object(o)) => format!(", aimed at {o:?}"),
+        Some(AimTarget::Joint { object, joint }) => format!(", aimed at {object:?}/{joint:?}"),
+        Some(AimTarget::Point(p)) => format!(", aimed at {p}"),
+    };
+    format!("{lens}, clip {}..{far}{aim}", c.near)
 }
 
 /// An animated channel: its path, key count and key time range.
@@ -520,6 +550,27 @@ fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> Stri
         "camera:   target {}, yaw {}°, pitch {}°, distance {}, fov {}°",
         c.target, c.yaw_deg, c.pitch_deg, c.distance, c.fov_y_deg
     );
+    if !scene.cameras.is_empty() {
+        let _ = writeln!(w, "cameras:  {}", scene.cameras.len());
+        for c in &scene.cameras {
+            let active = if scene.active_camera_at(f64::from(range.start)) == scene.camera_index(&c.name) {
+                " (active at the first frame)"
+            } else {
+                ""
+            };
+            let _ = writeln!(w, "  {:?}: {}{active}", c.name, scene_camera_text(c));
+        }
+    }
+    if !scene.markers.is_empty() {
+        let _ = writeln!(w, "markers:  {}", scene.markers.len());
+        for m in &scene.markers {
+            let camera = m.camera.as_ref().map_or(String::new(), |c| format!(", switches to camera {c:?}"));
+            let _ = writeln!(w, "  frame {}: {:?}{camera}", m.frame, m.name);
+        }
+    }
+    if let Some(size) = scene.render_size {
+        let _ = writeln!(w, "render:   {}x{}", size.width, size.height);
+    }
     let channels = list_channels(scene);
     let names = ByName::new(scene);
     let animated: Vec<AnimatedChannel> = channels
@@ -599,7 +650,7 @@ fn summary_json(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> serd
             })
         })
         .collect();
-    json!({
+    let mut out = json!({
         "file": path.display().to_string(),
         "version": scene_file::CURRENT_VERSION,
         "fps": scene.fps,
@@ -610,5 +661,21 @@ fn summary_json(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> serd
         "tracks": tracks,
         "keys": tracks.iter().filter_map(|t| t["keys"].as_u64()).sum::<u64>(),
         "problems": problems,
-    })
+    });
+    // Scenes without cameras and markers print what they printed before these existed.
+    if !scene.cameras.is_empty() {
+        out["cameras"] = scene
+            .cameras
+            .iter()
+            .map(|c| json!({"name": c.name, "description": scene_camera_text(c)}))
+            .collect();
+    }
+    if !scene.markers.is_empty() {
+        out["markers"] = scene
+            .markers
+            .iter()
+            .map(|m| json!({"name": m.name, "frame": m.frame, "camera": m.camera}))
+            .collect();
+    }
+    out
 }

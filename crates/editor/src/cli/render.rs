@@ -36,9 +36,16 @@ pub struct RenderArgs {
     /// (default: each object's own).
     #[arg(long, value_name = "D")]
     pub deformer: Option<String>,
-    /// Image size.
-    #[arg(long, value_name = "WxH", default_value = "1280x720")]
-    pub size: String,
+    /// Image size (default: the scene's render size, else 1280x720).
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// Render through the scene camera named NAME at every frame (default: the scene's
+    /// active camera at each frame, switched by markers; the saved view without cameras).
+    #[arg(long, value_name = "NAME", conflicts_with = "view")]
+    pub camera: Option<String>,
+    /// Render through the scene's saved viewport view even when it has cameras.
+    #[arg(long)]
+    pub view: bool,
     /// Render style: solid, wireframe, points.
     #[arg(long, default_value = "solid")]
     pub style: String,
@@ -125,11 +132,50 @@ trait FrameSource {
 struct SceneSource {
     rig: SceneRig,
     view: ViewOptions,
+    /// Which scene camera each frame is seen through.
+    through: Through,
+}
+
+/// The camera a scene is rendered through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Through {
+    /// The scene's saved viewport view.
+    View,
+    /// The active camera at each frame ([`keyrig_core::Scene::active_camera_at`]).
+    Active,
+    /// One camera, by index.
+    Camera(usize),
+}
+
+impl Through {
+    fn of(scene: &keyrig_core::Scene, args: &RenderArgs) -> anyhow::Result<Self> {
+        match &args.camera {
+            Some(name) => scene.camera_index(name).map(Through::Camera).with_context(|| {
+                let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
+                if names.is_empty() {
+                    format!("--camera `{name}`: the scene has no cameras")
+                } else {
+                    format!("--camera `{name}`: no camera named `{name}` (cameras: {})", names.join(", "))
+                }
+            }),
+            None if args.view || scene.cameras.is_empty() => Ok(Through::View),
+            None => Ok(Through::Active),
+        }
+    }
+
+    fn camera_at(self, scene: &keyrig_core::Scene, frame: f64) -> Option<usize> {
+        match self {
+            Through::View => None,
+            Through::Active => scene.active_camera_at(frame),
+            Through::Camera(c) => Some(c),
+        }
+    }
 }
 
 impl FrameSource for SceneSource {
     fn frame(&self, frame: f64) -> anyhow::Result<FrameInput> {
-        Ok(self.rig.frame(self.rig.time_of_frame(frame), &self.view)?)
+        let view = ViewOptions { look_through: self.through.camera_at(self.rig.scene(), frame), ..self.view };
+        Ok(self.rig.frame(self.rig.time_of_frame(frame), &view)?)
     }
 
     fn default_frame(&self) -> f64 {
@@ -330,7 +376,7 @@ fn style_of(args: &RenderArgs) -> anyhow::Result<RenderStyle> {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let (width, height) = parse_size(&args.size)?;
+    let explicit_size = args.size.as_deref().map(parse_size).transpose()?;
     let style = style_of(&args)?;
     let deformer = match &args.deformer {
         None => None,
@@ -353,7 +399,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     let mut headless = HeadlessRenderer::new().context("opening a GPU device for offscreen rendering")?;
+    let mut scene_size = None;
     let source: Box<dyn FrameSource> = if has_extension(&args.file, &["md2"]) {
+        if args.camera.is_some() {
+            bail!("--camera: {} is an MD2 model; it has no scene cameras", args.file.display());
+        }
         if deformer.is_some() {
             bail!(
                 "--deformer: {} is a vertex-animated MD2 model; it has no skin to deform",
@@ -396,10 +446,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             skeletons: !args.no_skeleton,
             selection,
             textures: !args.no_textures,
+            cameras: false,
             ..ViewOptions::default()
         };
-        Box::new(SceneSource { rig, view })
+        let through = Through::of(&scene, &args)?;
+        scene_size = scene.render_size.map(|s| (s.width, s.height));
+        Box::new(SceneSource { rig, view, through })
     };
+    let (width, height) = explicit_size.or(scene_size).unwrap_or((1280, 720));
 
     let render_to = |headless: &mut HeadlessRenderer, frame: f64, out: &Path| -> anyhow::Result<()> {
         let input = source.frame(frame).with_context(|| format!("{}: frame {frame}", args.file.display()))?;

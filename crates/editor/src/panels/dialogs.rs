@@ -11,30 +11,41 @@ use crate::context::FrameCtx;
 pub fn help_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
     let shown = frame.view.show_help;
     let mut open = shown;
-    // Sized to the window (every row of the list fits on a 1280×800 window; a smaller one
-    // scrolls), with the explanations wrapping rather than running off the edge.
+    // Sized to the window, the list in two halves side by side (every row fits on a 1280×800
+    // window; a smaller one scrolls), with the explanations wrapping rather than running off
+    // the edge.
     let screen = ctx.content_rect().size();
     egui::Window::new("Keyboard shortcuts")
         .open(&mut open)
         .resizable(true)
         .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
-        .default_size(egui::vec2((screen.x * 0.8).min(900.0), screen.y * 0.97))
+        .default_size(egui::vec2((screen.x * 0.95).min(1250.0), screen.y * 0.97))
         .show(ctx, |ui| {
             egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-                egui::Grid::new("help_grid").striped(true).num_columns(3).spacing([12.0, 0.0]).show(
-                    ui,
-                    |ui| {
-                        for command in Command::ALL {
-                            ui.label(command.label());
-                            ui.monospace(command.shortcut_text(ctx));
-                            ui.add(
-                                egui::Label::new(egui::RichText::new(command.tooltip()).weak().small())
-                                    .wrap(),
-                            );
-                            ui.end_row();
-                        }
-                    },
-                );
+                let half = Command::ALL.len().div_ceil(2);
+                ui.columns(2, |columns| {
+                    for (c, ui) in columns.iter_mut().enumerate() {
+                        let commands = &Command::ALL
+                            [(c * half).min(Command::ALL.len())..((c + 1) * half).min(Command::ALL.len())];
+                        egui::Grid::new(("help_grid", c))
+                            .striped(true)
+                            .num_columns(3)
+                            .spacing([12.0, 0.0])
+                            .show(ui, |ui| {
+                                for command in commands {
+                                    ui.label(command.label());
+                                    ui.monospace(command.shortcut_text(ctx));
+                                    ui.add(
+                                        egui::Label::new(
+                                            egui::RichText::new(command.tooltip()).weak().small(),
+                                        )
+                                        .wrap(),
+                                    );
+                                    ui.end_row();
+                                }
+                            });
+                    }
+                });
             });
         });
     if shown && !open {

@@ -213,6 +213,27 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
             }
         }
     }
+    for (c, camera) in scene.cameras.iter().enumerate() {
+        let item = Selected::Camera(c);
+        let folded = collapsed.contains(&item);
+        let all = ChannelId::of_camera(scene, c);
+        out.push(Row {
+            label: camera.name.clone(),
+            depth: 0,
+            kind: RowKind::Group { collapsed: folded },
+            shows: all.clone(),
+            item,
+        });
+        if folded {
+            continue;
+        }
+        let selected = selection.contains(item);
+        for id in all {
+            if keyed(id) || selected {
+                out.push(channel_row(id, id.channel_name().to_owned(), 1, item));
+            }
+        }
+    }
     out
 }
 
@@ -493,7 +514,50 @@ impl DopeSheet {
             }
             f += step;
         }
+        marker_flags(&painter, ctx.scene(), geo, ruler);
         current_frame_line(&painter, ctx, geo, ruler);
+    }
+}
+
+/// The scene's timeline markers on the ruler: a flag at each marker's frame with its name (and
+/// the camera it switches to).
+fn marker_flags(painter: &egui::Painter, scene: &Scene, geo: &Geometry, ruler: Rect) {
+    let colour = Color32::from_rgb(230, 200, 90);
+    for marker in &scene.markers {
+        let x = geo.x(f64::from(marker.frame));
+        if x < geo.keys.0 - PAD || x > geo.keys.1 + PAD {
+            continue;
+        }
+        let bottom = ruler.bottom();
+        painter.add(egui::Shape::convex_polygon(
+            vec![Pos2::new(x - 4.0, bottom - 7.0), Pos2::new(x + 4.0, bottom - 7.0), Pos2::new(x, bottom)],
+            colour,
+            Stroke::NONE,
+        ));
+        let text = match &marker.camera {
+            Some(camera) => format!("{} ▸ {camera}", marker.name),
+            None => marker.name.clone(),
+        };
+        painter.text(
+            Pos2::new(x + 5.0, bottom - 8.0),
+            Align2::LEFT_BOTTOM,
+            text,
+            FontId::proportional(10.0),
+            colour,
+        );
+    }
+}
+
+/// A faint line down the rows at each marker's frame.
+fn marker_lines(painter: &egui::Painter, scene: &Scene, geo: &Geometry, rect: Rect) {
+    for marker in &scene.markers {
+        let x = geo.x(f64::from(marker.frame));
+        if x >= geo.keys.0 - PAD && x <= geo.keys.1 + PAD {
+            painter.line_segment(
+                [Pos2::new(x, rect.top()), Pos2::new(x, rect.bottom())],
+                Stroke::new(1.0, Color32::from_rgba_unmultiplied(230, 200, 90, 90)),
+            );
+        }
     }
 }
 
@@ -674,6 +738,7 @@ impl DopeSheet {
                 }
             }
         }
+        marker_lines(&painter, scene, geo, visible);
         current_frame_line(&painter, ctx, geo, visible);
 
         // Pointer.

@@ -3,6 +3,8 @@
 //! channel before and after its keys), and the deformer with its
 //! parameters, plus the cross-section measure of the selected joint.
 
+mod camera;
+
 use egui::Ui;
 use glam::Vec3;
 use keyrig_core::{AttributeId, Cycle, DeformerKind, Interpolation, Tcb};
@@ -333,6 +335,7 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         None => {
             ui.label("Nothing selected. Click an object, joint or light in the outliner or the viewport.");
         }
+        Some(Selected::Camera(c)) => camera::camera_ui(ui, ctx, actions, c, channel_editor),
         Some(Selected::Object(o)) => {
             let name = scene.objects.get(o).map(|x| x.name.clone()).unwrap_or_default();
             ui.strong(format!("Object: {name}"));

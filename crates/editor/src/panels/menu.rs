@@ -116,6 +116,12 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
+                let looking = ctx.view.look_through.is_some();
+                command_button(ui, ctx, actions, Command::LookThroughCamera, Some(looking));
+                for c in [Command::CameraToView, Command::AddCamera] {
+                    command_button(ui, ctx, actions, c, None);
+                }
+                ui.separator();
                 for style in RenderStyle::ALL {
                     if ui.radio(view.style == style, style.label()).clicked() {
                         actions.view(ViewChange::Style(style));
@@ -159,6 +165,10 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 command_button(ui, ctx, actions, Command::PlayPause, Some(playing));
                 command_button(ui, ctx, actions, Command::ToggleLoop, Some(looping));
                 for c in [Command::FirstFrame, Command::PrevFrame, Command::NextFrame, Command::LastFrame] {
+                    command_button(ui, ctx, actions, c, None);
+                }
+                ui.separator();
+                for c in [Command::ToggleMarker, Command::BindCameraToMarker] {
                     command_button(ui, ctx, actions, c, None);
                 }
             });

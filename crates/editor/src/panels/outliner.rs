@@ -1,5 +1,5 @@
 //! The outliner: objects (with their skeleton as an indented tree, [`keyrig_core::Skeleton::depth_first`])
-//! and lights. A click selects one item, Shift- or Ctrl-click adds or removes one; double-click
+//! lights and scene cameras. A click selects one item, Shift- or Ctrl-click adds or removes one; double-click
 //! renames; the context menu renames, duplicates and deletes.
 
 use egui::Ui;
@@ -72,6 +72,10 @@ impl Outliner {
             }
             entries.push(None);
             entries.extend((0..scene.lights.len()).map(|l| Some((Selected::Light(l), 0))));
+            if !scene.cameras.is_empty() {
+                entries.push(None);
+                entries.extend((0..scene.cameras.len()).map(|c| Some((Selected::Camera(c), 0))));
+            }
             let row_height = ui.spacing().interact_size.y;
             egui::ScrollArea::vertical().auto_shrink([false, false]).show_rows(
                 ui,
@@ -121,6 +125,7 @@ impl Outliner {
                                 .as_ref()
                                 .map_or("", |s| s.joints[joint].name.as_str()),
                             Selected::Light(l) => scene.lights[l].name.as_str(),
+                            Selected::Camera(c) => scene.cameras[c].name.as_str(),
                         };
                         if depth == 0 {
                             row(ui, item, name);

@@ -100,7 +100,32 @@ impl Timeline {
             if !ui.input(|i| i.pointer.any_down()) {
                 self.fps_drag_origin = None;
             }
+            markers_ui(ui, ctx, actions);
         });
+    }
+}
+
+/// The scene's timeline markers as buttons (its name, and the camera it switches to) that go to
+/// the marker's frame; the one at the current frame is highlighted. M adds or removes one.
+fn markers_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+    let scene = ctx.scene();
+    if scene.markers.is_empty() {
+        return;
+    }
+    ui.separator();
+    ui.label("Markers");
+    let now = ctx.session.playback.whole_frame();
+    for marker in &scene.markers {
+        let text = match &marker.camera {
+            Some(camera) => format!("▼ {} {} ▸ {camera}", marker.frame, marker.name),
+            None => format!("▼ {} {}", marker.frame, marker.name),
+        };
+        let response = ui
+            .selectable_label(marker.frame == now, text)
+            .on_hover_text("Go to this marker's frame (M at a marker's frame removes it)");
+        if response.clicked() {
+            ctx.set_frame(actions, marker.frame);
+        }
     }
 }
 

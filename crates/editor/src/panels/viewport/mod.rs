@@ -116,7 +116,11 @@ impl Viewport {
             // pixels a CPU rasterizer shades (docs/benchmarks.md, "Editor").
             let background = painter.add(egui::Shape::Noop);
             self.rect = Some(rect);
-            let projection = Projection::new(&ctx.view.camera, rect);
+            let through = look_through_state(ctx);
+            let projection = match &through {
+                Some(camera) => Projection::through(camera, rect),
+                None => Projection::new(&ctx.view.camera, rect),
+            };
             let mut errors = ctx.scene.errors().to_vec();
 
             let gpu_drawn = self.gpu_ui(ui, ctx, rect, &mut errors);
@@ -129,6 +133,12 @@ impl Viewport {
                 painter::paint_bones(&painter, &projection, ctx);
             }
             painter::paint_lights(&painter, &projection, ctx);
+            if !gpu_drawn {
+                painter::paint_cameras(&painter, &projection, ctx);
+            }
+            if through.is_some() {
+                painter::paint_render_frame(&painter, rect, ctx);
+            }
             let pick_targets = pick_targets(&projection, ctx);
 
             // Gizmo for the selection (drawn last, on top); in IK posing a selected joint shows
@@ -208,6 +218,15 @@ fn pick_targets(projection: &Projection, ctx: &FrameCtx<'_>) -> Vec<(Pos2, Selec
     for (l, light_state) in lights.iter().enumerate().take(scene.lights.len()) {
         if let Some(p) = projection.project(light_state.position) {
             targets.push((p, Selected::Light(l)));
+        }
+    }
+    let cameras = ctx.scene.state().map_or(&[][..], |s| s.cameras.as_slice());
+    for (c, camera) in cameras.iter().enumerate().take(scene.cameras.len()) {
+        if ctx.view.look_through == Some(c) {
+            continue;
+        }
+        if let Some(p) = projection.project(camera.eye()) {
+            targets.push((p, Selected::Camera(c)));
         }
     }
     targets
@@ -322,8 +341,19 @@ fn navigate(
         }
     }
     if camera != ctx.view.camera {
+        // Orbiting, panning or zooming leaves a scene camera's view for the orbit camera.
+        if ctx.view.look_through.is_some() {
+            actions.view(ViewChange::LookThrough(None));
+        }
         actions.view(ViewChange::Camera(camera));
     }
+}
+
+/// The scene camera the viewport looks through this frame, when it does and it can be
+/// projected.
+fn look_through_state(ctx: &FrameCtx<'_>) -> Option<keyrig_eval::CameraState> {
+    let c = ctx.view.look_through?;
+    ctx.scene.state()?.cameras.get(c).copied().filter(keyrig_eval::CameraState::is_usable)
 }
 
 impl Viewport {
@@ -345,6 +375,7 @@ impl Viewport {
             selection: ctx.session.selection.item,
             camera: Some(c),
             depth_range: Some(c.depth_range(ctx.scene.depth_bounds())),
+            look_through: look_through_state(ctx).and(ctx.view.look_through),
             ..keyrig_render::ViewOptions::default()
         };
         let ppp = ui.ctx().pixels_per_point() * ctx.view.resolution_scale.clamp(0.25, 1.0);

@@ -100,6 +100,68 @@ pub(super) fn paint_lights(painter: &egui::Painter, projection: &Projection, ctx
     }
 }
 
+/// Each scene camera but the one looked through as its frustum (keyrig-render's lines, drawn
+/// by the painter when the GPU does not draw).
+pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ctx: &FrameCtx<'_>) {
+    let Some(state) = ctx.scene.state() else { return };
+    let scene = ctx.scene();
+    let aspect = scene.render_size.map_or(16.0 / 9.0, keyrig_core::RenderSize::aspect);
+    let active = scene.active_camera_at(ctx.session.playback.frame);
+    let mut lines = keyrig_render::overlay::Lines::default();
+    // The renderer's overlay size: in proportion to the distance looked from.
+    let marker = match super::look_through_state(ctx) {
+        Some(through) => through.eye().distance(ctx.view.camera.target).max(1e-3) * 0.008,
+        None => ctx.view.camera.distance * 0.008,
+    };
+    for (c, camera) in state.cameras.iter().enumerate() {
+        if ctx.view.look_through == Some(c) || !camera.is_usable() {
+            continue;
+        }
+        let gizmo = keyrig_render::CameraGizmo {
+            camera: *camera,
+            aspect,
+            selected: ctx.is_active(Selected::Camera(c)),
+            active: active == Some(c),
+        };
+        keyrig_render::overlay::camera_gizmo(&mut lines, &gizmo, marker);
+    }
+    for pair in lines.vertices.chunks_exact(2) {
+        let at =
+            |v: &keyrig_render::overlay::LineVertex| Vec3::new(v.position[0], v.position[1], v.position[2]);
+        let [r, g, b, _] = pair[0].colour.map(|x| (x.clamp(0.0, 1.0) * 255.0) as u8);
+        if let Some(seg) = projection.project_segment(at(&pair[0]), at(&pair[1])) {
+            painter.line_segment(seg, Stroke::new(1.5, Color32::from_rgb(r, g, b)));
+        }
+    }
+}
+
+/// Looking through a scene camera: the part of the viewport its rendered image covers (the
+/// scene's render aspect about the vertical field of view), outlined, with the camera's name.
+pub(super) fn paint_render_frame(painter: &egui::Painter, rect: egui::Rect, ctx: &FrameCtx<'_>) {
+    let scene = ctx.scene();
+    let Some(camera) = ctx.view.look_through.and_then(|c| scene.cameras.get(c)) else { return };
+    let aspect = scene.render_size.map_or(16.0 / 9.0, keyrig_core::RenderSize::aspect);
+    let width = (rect.height() * aspect).min(rect.width());
+    let frame = egui::Rect::from_center_size(rect.center(), egui::vec2(width, rect.height()));
+    let shade = Color32::from_black_alpha(110);
+    for side in [
+        egui::Rect::from_min_max(rect.min, egui::pos2(frame.left(), rect.bottom())),
+        egui::Rect::from_min_max(egui::pos2(frame.right(), rect.top()), rect.max),
+    ] {
+        if side.width() > 0.5 {
+            painter.rect_filled(side, 0.0, shade);
+        }
+    }
+    painter.rect_stroke(frame, 0.0, Stroke::new(1.0, Color32::from_gray(200)), egui::StrokeKind::Inside);
+    painter.text(
+        frame.left_bottom() + egui::vec2(8.0, -6.0),
+        egui::Align2::LEFT_BOTTOM,
+        format!("Camera: {}", camera.name),
+        egui::FontId::proportional(14.0),
+        Color32::from_gray(230),
+    );
+}
+
 pub(super) fn draw_grid(painter: &egui::Painter, projection: &Projection) {
     let n = 10;
     for i in -n..=n {

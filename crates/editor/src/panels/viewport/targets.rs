@@ -154,6 +154,19 @@ fn target(
                 carried: false,
             })
         }
+        Selected::Camera(c) => {
+            let state = ctx.scene.state()?.cameras.get(c)?;
+            let aimed = scene.cameras.get(c)?.aim.is_some();
+            let id = ChannelId::CameraTranslation(c);
+            Some(Target {
+                world: state.world_from_camera,
+                // An aimed camera's rotation follows its target: only its place is dragged.
+                rotation: (!aimed).then_some((ChannelId::CameraRotation(c), Quat::IDENTITY)),
+                direction: None,
+                translation: vec3(ctx.value_now(id)).map(|v| (id, v, Mat3A::IDENTITY)),
+                carried: false,
+            })
+        }
         Selected::Light(l) => {
             let kind = scene.lights.get(l)?.kind;
             let position_id = ChannelId::LightPosition(l);

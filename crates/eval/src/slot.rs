@@ -1,0 +1,94 @@
+//! A channel's runtime form in the evaluator ([`Slot`]): its validated track, or its static
+//! value when the keys are invalid, with the problem; and the pose overrides that win over it.
+
+use std::collections::HashMap;
+use std::fmt;
+use std::sync::Arc;
+
+use keyrig_core::channel_id::{ChannelId, ChannelValue};
+use keyrig_core::track::TrackValue;
+use keyrig_core::{Animated, AnimatedTrack, Keys};
+
+/// Values set on channels without keys being written (a gizmo drag, a slider), keyed by the
+/// channel they replace: the evaluator shows them instead of the channel's track.
+pub type Overrides = HashMap<ChannelId, ChannelValue>;
+
+/// Something the evaluator could not take from the scene, with the field path it concerns
+/// (`objects[0].skeleton.joints[2].rotation.track[1].time`). The scene still evaluates: a
+/// channel whose keys are invalid holds its static value, an object whose skeleton or mesh is
+/// invalid is drawn without skinning.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EvalProblem {
+    pub path: String,
+    pub message: String,
+}
+
+impl fmt::Display for EvalProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path, self.message)
+    }
+}
+
+/// A channel's validated track, or its static value when its keys are invalid.
+#[derive(Debug)]
+pub(crate) enum SlotEval<T: TrackValue> {
+    Track(AnimatedTrack<T>),
+    Fallback(T),
+}
+
+/// One channel: what it was built from (the shared keys and the static value), its evaluable
+/// form and the problem that made it fall back. Cloning shares the evaluable form.
+#[derive(Clone, Debug)]
+pub(crate) struct Slot<T: TrackValue> {
+    keys: Keys<T>,
+    value: T,
+    cycles: keyrig_core::Cycles,
+    muted: bool,
+    pub(crate) eval: Arc<SlotEval<T>>,
+    pub(crate) problem: Option<EvalProblem>,
+}
+
+impl<T: TrackValue> Slot<T> {
+    pub(crate) fn new(animated: &Animated<T>, id: ChannelId) -> Self {
+        let (eval, problem) = match AnimatedTrack::new(animated) {
+            Ok(track) => (SlotEval::Track(track), None),
+            Err(e) => (
+                SlotEval::Fallback(animated.value),
+                Some(EvalProblem {
+                    path: keyrig_core::validate::track_error_path(&id.field_path(), &e),
+                    message: e.to_string(),
+                }),
+            ),
+        };
+        Slot {
+            keys: animated.track.keys.clone(),
+            value: animated.value,
+            cycles: animated.cycles(),
+            muted: animated.muted,
+            eval: Arc::new(eval),
+            problem,
+        }
+    }
+
+    /// Rebuilds the slot when its channel changed (its keys are no longer the list it was
+    /// built from, or its static value or its cycles differ); true when it did.
+    pub(crate) fn refresh(&mut self, animated: &Animated<T>, id: ChannelId) -> bool {
+        if self.keys.shares_with(&animated.track.keys)
+            && self.value == animated.value
+            && self.cycles == animated.cycles()
+            && self.muted == animated.muted
+        {
+            return false;
+        }
+        *self = Slot::new(animated, id);
+        true
+    }
+
+    #[inline]
+    pub(crate) fn sample(&self, t: f64) -> T {
+        match &*self.eval {
+            SlotEval::Track(track) => track.sample(t),
+            SlotEval::Fallback(v) => *v,
+        }
+    }
+}
