@@ -26,6 +26,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     #[serde(default)]
     pub camera: Camera,
+    /// Sound clips on the timeline (docs/scene-format.md); none in most scenes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sounds: Vec<crate::sound::SoundClip>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -41,6 +44,7 @@ impl Default for Scene {
             objects: Vec::new(),
             lights: Vec::new(),
             camera: Camera::default(),
+            sounds: Vec::new(),
         }
     }
 }

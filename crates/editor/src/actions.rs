@@ -86,6 +86,10 @@ pub enum Action {
     Dropped(PathBuf),
     /// A model import that finished on its thread.
     ImportFinished(BackgroundImport),
+    /// Starts rendering the scene as the Render animation dialog says.
+    StartRender(crate::playblast::Playblast),
+    /// Stops the running render (its movie is not written).
+    CancelRender,
 }
 
 /// A change of the document: one undo step, or one step per gesture.
@@ -161,6 +165,7 @@ pub enum ViewChange {
     Antialiasing(bool),
     Onion(crate::onion::OnionSkin),
     ShowHelp(bool),
+    ShowRender(bool),
 }
 
 /// Names one pushed edit whose outcome the panel that pushed it reads in the next frame.

@@ -68,6 +68,8 @@ pub struct FrameCtx<'a> {
     pub pending: Option<&'a PendingAction>,
     /// The recovery file, while its autosaved scene is offered.
     pub recovery: Option<&'a Recovery>,
+    /// File ▸ Render animation, while it runs.
+    pub render: Option<&'a crate::render_job::RenderJob>,
 }
 
 impl FrameCtx<'_> {

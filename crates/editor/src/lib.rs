@@ -34,6 +34,7 @@ pub mod mirror;
 pub mod onion;
 pub mod panels;
 pub mod playblast;
+pub mod render_job;
 pub mod scene_frame;
 pub mod session;
 pub mod skinning;

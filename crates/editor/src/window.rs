@@ -139,6 +139,7 @@ impl EditorApp {
             recent: &self.recent.paths,
             pending: self.pending.as_ref(),
             recovery: self.recovery_offer.as_ref().map(|_| &self.recovery),
+            render: self.render.as_ref(),
         };
         let actions = &mut self.actions;
         let panels = &mut self.panels;
@@ -165,6 +166,7 @@ impl EditorApp {
         panels::dialogs::help_ui(egui_ctx, &ctx, actions);
         panels::dialogs::confirm_ui(egui_ctx, &ctx, actions);
         panels::dialogs::recovery_ui(egui_ctx, &ctx, actions);
+        panels.render.ui(egui_ctx, &ctx, actions);
     }
 }
 

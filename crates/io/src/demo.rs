@@ -103,6 +103,7 @@ pub fn demo_scene() -> Scene {
             distance: 3.2,
             fov_y_deg: 45.0,
         },
+        sounds: Vec::new(),
     }
 }
 
@@ -193,6 +194,7 @@ fn arm_alone(skeleton: Skeleton, translation: Vec3, end: i32, camera: Camera) ->
         objects: vec![arm],
         lights: vec![sun()],
         camera,
+        sounds: Vec::new(),
     }
 }
 

@@ -88,5 +88,12 @@ pub fn scene_inputs(scene: &Scene, base_dir: Option<&Path>) -> Vec<(PathBuf, Str
         }
         out.push((file, format!("the model file that {here} uses")));
     }
+    for (i, clip) in scene.sounds.iter().enumerate() {
+        let file = match base_dir {
+            Some(dir) => dir.join(&clip.path),
+            None => PathBuf::from(&clip.path),
+        };
+        out.push((file, format!("the sound file of sounds[{i}]")));
+    }
     out
 }

@@ -29,6 +29,7 @@ impl SceneFileV1 {
             objects: s.objects.into_iter().map(ObjectV1::into_current).collect(),
             lights: s.lights,
             camera: s.camera,
+            sounds: Vec::new(),
         }
     }
 }

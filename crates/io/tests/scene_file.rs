@@ -459,6 +459,7 @@ fn scene() -> impl Strategy<Value = Scene> {
             objects,
             lights: light.into_iter().collect(),
             camera: keyrig_core::Camera::default(),
+            sounds: Vec::new(),
         })
 }
 

@@ -81,6 +81,7 @@ pub fn test_scene() -> Scene {
             distance: 320.0,
             fov_y_deg: 45.0,
         },
+        sounds: Vec::new(),
     }
 }
 
