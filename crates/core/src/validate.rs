@@ -561,10 +561,10 @@ impl Scene {
         for (i, clip) in self.sounds.iter().enumerate() {
             c.f64(&format!("sounds[{i}].start_frame"), clip.start_frame);
             if c.f64(&format!("sounds[{i}].gain"), f64::from(clip.gain)) && clip.gain < 0.0 {
-                c.push(&format!("sounds[{i}].gain"), format!("{} must be ≥ 0", clip.gain));
+                c.push(format!("sounds[{i}].gain"), format!("{} must be ≥ 0", clip.gain));
             }
             if clip.path.is_empty() {
-                c.push(&format!("sounds[{i}].path"), "the path is empty".to_owned());
+                c.push(format!("sounds[{i}].path"), "the path is empty".to_owned());
             }
         }
         c.problems

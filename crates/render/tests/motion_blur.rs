@@ -71,7 +71,7 @@ fn blur_spans_the_distance_travelled_while_the_shutter_is_open() {
     let subframes: Vec<_> = subframe_offsets(samples, shutter).iter().map(|o| frame_at(FRAME + o)).collect();
     let blurred = headless_image(&mut headless, &subframes);
 
-    let (open_first, open_last) = extent(&open, 8).expect("the cube at the shutter's opening");
+    let (open_first, _) = extent(&open, 8).expect("the cube at the shutter's opening");
     let (close_first, close_last) = extent(&close, 8).expect("the cube at its closing");
     let (still_first, still_last) = extent(&still, 8).expect("the cube at the frame");
     let cube_width = still_last - still_first;

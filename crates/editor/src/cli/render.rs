@@ -32,7 +32,8 @@ pub struct RenderArgs {
     /// Frame to render (may be fractional); the first frame of the scene's range by default.
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
     pub frame: Option<f64>,
-    /// Inclusive range of frames `A..B`, one numbered PNG each.
+    /// Inclusive range of frames `A..B`: a playblast written as OUT says (a movie or
+    /// numbered PNGs).
     #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Deformer for every skinned object: rigid, linear, bones-blending, dual-quaternion

@@ -12,9 +12,11 @@ use keyrig_render::image::RgbaImage;
 
 use super::{MovieFormat, PlayblastError};
 
-/// NeuQuant's sampling factor for GIF palettes (1 best, 30 fastest; 10 is the `gif` crate's
-/// own example and what `image` uses).
-const GIF_QUANTIZER_SPEED: i32 = 10;
+/// NeuQuant's sampling factor for GIF palettes (1 best, 30 fastest). At 10 (the `gif`
+/// crate's example) a 1280×720 frame took 0.54 s, more than twice its render
+/// (docs/benchmarks.md); 30 samples every 30th pixel, which still finds a rendered frame's
+/// few dozen hues.
+const GIF_QUANTIZER_SPEED: i32 = 30;
 
 /// One open movie (or folder of frames), fed frame by frame.
 pub enum MovieWriter {
