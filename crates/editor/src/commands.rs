@@ -164,9 +164,7 @@ impl Command {
             Command::SaveAs => "Save the scene to a new file",
             Command::Import => "Import a model (glTF, MD2) into the scene",
             Command::ExportGltf => "Export the scene's meshes, skins and animation as glTF",
-            Command::RenderAnimation => {
-                "Render a range of frames as a movie (MP4, GIF, animated PNG) or numbered PNGs, optionally motion-blurred"
-            }
+            Command::RenderAnimation => "Render frames as a movie (MP4, GIF, animated PNG) or PNG files",
             Command::Quit => "Close the editor (asks before losing changes)",
             Command::Undo => "Revert the last edit",
             Command::Redo => "Repeat the last undone edit",

@@ -68,3 +68,29 @@ fn hostile_files_are_refused_with_the_path_and_the_reason() {
         );
     }
 }
+
+/// Sound files are portable like models: `project::save_scene` names one below the scene's
+/// folder relative to it, `project::load_scene` makes it absolute in memory again, and the
+/// scene's inputs name it (so no output replaces it).
+#[test]
+fn sound_paths_are_relative_to_the_scene_on_disk() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::create_dir(dir.path().join("audio")).expect("folder");
+    let sound = dir.path().join("audio/line.wav");
+    std::fs::copy(fixture("tone.wav"), &sound).expect("copy");
+    let mut scene = keyrig_core::Scene::default();
+    scene.sounds.push(keyrig_core::SoundClip::new(sound.to_str().expect("utf-8"), 4.0));
+    let file = dir.path().join("shot.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+    let text = std::fs::read_to_string(&file).expect("read");
+    assert!(text.contains("path: \"audio/line.wav\""), "{text}");
+    let back = keyrig_io::project::load_scene(&file).expect("load");
+    let path = PathBuf::from(&back.sounds[0].path);
+    assert!(path.is_absolute());
+    assert_eq!(std::fs::canonicalize(&path).expect("found"), std::fs::canonicalize(&sound).expect("sound"));
+    let inputs =
+        keyrig_io::project::scene_inputs(&keyrig_io::scene_file::load(&file).expect("raw"), Some(dir.path()));
+    assert!(inputs
+        .iter()
+        .any(|(p, what)| p == &dir.path().join("audio/line.wav") && what.contains("sounds[0]")));
+}
