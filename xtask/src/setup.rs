@@ -47,6 +47,12 @@ const COIN: &[Need] = &[Need {
     why: "Coin3D for Python, the VRML/Inventor reference the VRML tests compare with",
 }];
 
+const FFMPEG: &[Need] = &[Need {
+    package: "ffmpeg",
+    command: Some("ffprobe"),
+    why: "FFmpeg's ffprobe and ffmpeg, the independent decoders of the playblast tests (MP4, GIF, APNG)",
+}];
+
 const NODE: &[Need] = &[
     Need { package: "nodejs", command: Some("node"), why: "the Khronos glTF-Validator" },
     Need { package: "npm", command: Some("npm"), why: "installing the glTF-Validator" },
@@ -62,7 +68,7 @@ const LAVAPIPE: &[Need] = &[
 /// # Errors
 /// What is missing and cannot be installed here, with the command that installs it.
 pub fn run(validator: bool) -> Result<(), String> {
-    let mut needs: Vec<&Need> = WINDOW.iter().chain(COIN).collect();
+    let mut needs: Vec<&Need> = WINDOW.iter().chain(COIN).chain(FFMPEG).collect();
     if validator && (!on_path("node") || !on_path("npm")) {
         needs.extend(NODE);
     }

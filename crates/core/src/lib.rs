@@ -12,6 +12,7 @@ pub mod material;
 pub mod quat;
 pub mod rotation_mode;
 pub mod scene;
+pub mod sound;
 pub mod track;
 pub mod validate;
 
@@ -24,6 +25,7 @@ pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, IkConstraint, Joint, Light, LightKind, MeshSource,
     Object, Problem, ProceduralMesh, Scene, Skeleton, MD2_DEFAULT_FPS,
 };
+pub use sound::{SoundClip, SummaryBuilder, WaveformSummary};
 pub use track::{
     check_cycles, AnimatedTrack, SpinProblem, TangentSide, Track, TrackEnd, TrackError, TrackValue,
 };

@@ -42,6 +42,9 @@ pub struct Scene {
     /// The size `keyrig render` renders at when not told (`None`: 1280×720).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub render_size: Option<RenderSize>,
+    /// Sound clips on the timeline (docs/scene-format.md); none in most scenes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sounds: Vec<crate::sound::SoundClip>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -61,6 +64,7 @@ impl Default for Scene {
             active_camera: None,
             markers: Vec::new(),
             render_size: None,
+            sounds: Vec::new(),
         }
     }
 }

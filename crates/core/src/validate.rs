@@ -682,6 +682,15 @@ impl Scene {
         }
         c.camera("camera", &self.camera);
         c.cameras_and_markers(self);
+        for (i, clip) in self.sounds.iter().enumerate() {
+            c.f64(&format!("sounds[{i}].start_frame"), clip.start_frame);
+            if c.f64(&format!("sounds[{i}].gain"), f64::from(clip.gain)) && clip.gain < 0.0 {
+                c.push(format!("sounds[{i}].gain"), format!("{} must be ≥ 0", clip.gain));
+            }
+            if clip.path.is_empty() {
+                c.push(format!("sounds[{i}].path"), "the path is empty".to_owned());
+            }
+        }
         c.problems
     }
 }

@@ -86,6 +86,10 @@ pub enum Action {
     Dropped(PathBuf),
     /// A model import that finished on its thread.
     ImportFinished(BackgroundImport),
+    /// Starts rendering the scene as the Render animation dialog says.
+    StartRender(crate::playblast::Playblast),
+    /// Stops the running render (its movie is not written).
+    CancelRender,
 }
 
 /// A change of the document: one undo step, or one step per gesture.
@@ -163,6 +167,7 @@ pub enum ViewChange {
     ShowHelp(bool),
     /// Look through a scene camera, or (None) through the orbit camera again.
     LookThrough(Option<usize>),
+    ShowRender(bool),
 }
 
 /// Names one pushed edit whose outcome the panel that pushed it reads in the next frame.

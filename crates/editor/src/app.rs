@@ -80,6 +80,8 @@ pub struct EditorApp {
     pub(crate) imports: Vec<files::BackgroundImport>,
     /// Smoothed time between frames while playing, seconds (shown in the status bar).
     pub(crate) frame_time: Option<f32>,
+    /// File ▸ Render animation running on its thread.
+    pub(crate) render: Option<crate::render_job::RenderJob>,
     /// `keyrig edit --benchmark-frames N`: plays, measures N frames, prints and quits.
     pub(crate) frame_benchmark: Option<crate::frame_bench::FrameBenchmark>,
     pub(crate) window_title: String,
@@ -123,6 +125,7 @@ impl EditorApp {
             selection_checked: (0, 0),
             imports: Vec::new(),
             frame_time: None,
+            render: None,
             frame_benchmark: None,
             window_title: String::new(),
             close_sent: false,
@@ -850,6 +853,7 @@ impl EditorApp {
             Command::SaveAs => self.open_dialog(DialogPurpose::SaveAs),
             Command::Import => self.open_dialog(DialogPurpose::Import),
             Command::ExportGltf => self.open_dialog(DialogPurpose::Export),
+            Command::RenderAnimation => self.view.show_render = true,
             Command::Quit => self.request(PendingAction::Quit),
             Command::Undo => {
                 if let Some(label) = self.doc.undo_label().map(str::to_owned) {
@@ -1121,6 +1125,50 @@ impl EditorApp {
         if !self.imports.is_empty() {
             ctx.request_repaint_after(Duration::from_millis(50));
         }
+        if self.render.as_ref().is_some_and(crate::render_job::RenderJob::is_finished) {
+            if let Some(job) = self.render.take() {
+                let output = job.blast.output.display().to_string();
+                match job.finish() {
+                    Ok(summary) => self.info(format!(
+                        "Rendered {} frames to {output} in {:.1} s",
+                        summary.frames,
+                        summary.wall_time.as_secs_f64()
+                    )),
+                    Err(e) => self.error(format!("Render animation: {e}")),
+                }
+            }
+        }
+        if self.render.is_some() {
+            ctx.request_repaint_after(Duration::from_millis(100));
+        }
+    }
+
+    /// Starts File ▸ Render animation on its own thread, from a copy of the scene seen by the
+    /// viewport's camera.
+    fn start_render(&mut self, blast: crate::playblast::Playblast) {
+        if self.render.is_some() {
+            self.error("A render is already running".to_owned());
+            return;
+        }
+        let scene = self.doc.scene().clone();
+        let file = self.doc.path().map(std::path::Path::to_path_buf);
+        match crate::render_job::RenderJob::start(scene, file, blast, self.view.camera) {
+            Ok(job) => self.render = Some(job),
+            Err(e) => self.error(format!("Render animation: {e}")),
+        }
+    }
+
+    /// Whether File ▸ Render animation is running.
+    #[must_use]
+    pub fn rendering(&self) -> bool {
+        self.render.is_some()
+    }
+
+    /// Waits for a running render to finish (tests).
+    pub fn wait_for_render(&mut self) {
+        while self.render.as_ref().is_some_and(|job| !job.is_finished()) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
     }
 
     /// Waits for every running import and applies it (tests, and before quitting).
@@ -1289,6 +1337,12 @@ impl EditorApp {
                 }
             }
             Action::ImportFinished(import) => self.apply_import(import),
+            Action::StartRender(blast) => self.start_render(blast),
+            Action::CancelRender => {
+                if let Some(job) = &self.render {
+                    job.cancel();
+                }
+            }
         }
     }
 
@@ -1329,6 +1383,7 @@ impl EditorApp {
             ViewChange::Onion(onion) => view.onion = onion,
             ViewChange::ShowHelp(on) => view.show_help = on,
             ViewChange::LookThrough(camera) => view.look_through = camera,
+            ViewChange::ShowRender(on) => view.show_render = on,
         }
     }
 }

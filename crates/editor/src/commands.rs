@@ -13,6 +13,7 @@ pub enum Command {
     SaveAs,
     Import,
     ExportGltf,
+    RenderAnimation,
     Quit,
     Undo,
     Redo,
@@ -65,13 +66,14 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 47] = [
+    pub const ALL: [Command; 48] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
         Command::Save,
         Command::Import,
         Command::ExportGltf,
+        Command::RenderAnimation,
         Command::Quit,
         Command::Redo,
         Command::Undo,
@@ -125,6 +127,7 @@ impl Command {
             Command::SaveAs => "Save as…",
             Command::Import => "Import model…",
             Command::ExportGltf => "Export glTF…",
+            Command::RenderAnimation => "Render animation…",
             Command::Quit => "Quit",
             Command::Undo => "Undo",
             Command::Redo => "Redo",
@@ -176,6 +179,7 @@ impl Command {
             Command::SaveAs => "Save the scene to a new file",
             Command::Import => "Import a model (glTF, MD2) into the scene",
             Command::ExportGltf => "Export the scene's meshes, skins and animation as glTF",
+            Command::RenderAnimation => "Render frames as a movie (MP4, GIF, animated PNG) or PNG files",
             Command::Quit => "Close the editor (asks before losing changes)",
             Command::Undo => "Revert the last edit",
             Command::Redo => "Repeat the last undone edit",
@@ -256,6 +260,7 @@ impl Command {
             Command::SaveAs => vec![sc(CMD_SHIFT, Key::S)],
             Command::Import => vec![sc(CMD, Key::I)],
             Command::ExportGltf => vec![sc(CMD, Key::E)],
+            Command::RenderAnimation => vec![sc(CMD_SHIFT, Key::R)],
             Command::Quit => vec![sc(CMD, Key::Q)],
             Command::Undo => vec![sc(CMD, Key::Z)],
             Command::Redo => vec![sc(CMD_SHIFT, Key::Z), sc(CMD, Key::Y)],

@@ -71,6 +71,8 @@ pub struct FrameCtx<'a> {
     /// Whether opaque backgrounds can be filled by the GPU viewport's paint callback
     /// ([`crate::widgets::flat_fill`]): the window is drawn with wgpu.
     pub gpu_fills: bool,
+    /// File ▸ Render animation, while it runs.
+    pub render: Option<&'a crate::render_job::RenderJob>,
 }
 
 impl FrameCtx<'_> {

@@ -8,6 +8,8 @@
 //! - [`widgets`]: key diamond, TCB slider.
 //! - [`twist`]: ring drags, the spins of turned keys, the unwrapped twist about a bone.
 //! - [`ik_posing`]: IK posing — the chain of a dragged end joint, its pole, one drag's solves.
+//! - [`playblast`]: frame ranges rendered offscreen into GIF, APNG, MP4 or numbered PNGs,
+//!   with motion blur (`keyrig render --frames`, File ▸ Render animation).
 //! - [`app`]: [`EditorApp`], which ties them together; [`run_editor`] opens the window.
 
 use std::path::PathBuf;
@@ -33,6 +35,8 @@ pub mod ik_posing;
 pub mod mirror;
 pub mod onion;
 pub mod panels;
+pub mod playblast;
+pub mod render_job;
 pub mod scene_frame;
 pub mod session;
 pub mod skinning;

@@ -25,7 +25,8 @@ enum Command {
     Convert(cli::convert::ConvertArgs),
     /// Make a scene file (.ron) from a model (.glb, .gltf, .md2), as the editor opens it.
     Import(cli::import::ImportArgs),
-    /// Render a frame or a frame range of a scene (.ron) or MD2 model to PNG, offscreen.
+    /// Render a frame of a scene or model to PNG, or a frame range as a playblast (MP4, GIF,
+    /// animated PNG or numbered PNGs), offscreen, optionally motion-blurred.
     Render(cli::render::RenderArgs),
     /// Summarize a scene: timing, objects, joints, lights, tracks, keys and validation problems.
     Info(cli::info::InfoArgs),

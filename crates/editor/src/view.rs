@@ -28,6 +28,8 @@ pub struct ViewState {
     pub textures: bool,
     /// The shortcut list (F12) is open.
     pub show_help: bool,
+    /// The Render animation dialog is open.
+    pub show_render: bool,
     /// Ghosts of the selected object at other frames (View ▸ Onion skin).
     pub onion: crate::onion::OnionSkin,
     /// The viewport looks through this scene camera (an index of `Scene::cameras`) instead of
@@ -49,6 +51,7 @@ impl ViewState {
             style: RenderStyle::Solid,
             textures: true,
             show_help: false,
+            show_render: false,
             onion: crate::onion::OnionSkin::default(),
             look_through: None,
         }

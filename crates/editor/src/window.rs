@@ -145,6 +145,7 @@ impl EditorApp {
             pending: self.pending.as_ref(),
             recovery: self.recovery_offer.as_ref().map(|_| &self.recovery),
             gpu_fills: self.panels.viewport.gpu().is_some(),
+            render: self.render.as_ref(),
         };
         let actions = &mut self.actions;
         let panels = &mut self.panels;
@@ -171,6 +172,7 @@ impl EditorApp {
         panels::dialogs::help_ui(egui_ctx, &ctx, actions);
         panels::dialogs::confirm_ui(egui_ctx, &ctx, actions);
         panels::dialogs::recovery_ui(egui_ctx, &ctx, actions);
+        panels.render.ui(egui_ctx, &ctx, actions);
     }
 }
 

@@ -425,6 +425,15 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
                 Err(problems.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))
             }
         }
+        // Sound clips: parsed and validated as a scene's.
+        "sounds" => {
+            let sounds: Vec<keyrig_core::SoundClip> = ron.from_str(value).map_err(|e| e.to_string())?;
+            let scene = keyrig_core::Scene { sounds, ..keyrig_core::Scene::default() };
+            match scene.problems().first() {
+                Some(problem) => Err(format!("{}: {}", problem.path, problem.message)),
+                None => Ok(()),
+            }
+        }
         // The keys of a rotation track (the format's examples of spins).
         "track" => check_fragment("rotation", &format!("(value: (0.0, 0.0, 0.0, 1.0), track: {value})")),
         "attributes" => {

@@ -221,6 +221,17 @@ impl Write for AtomicFile {
     }
 }
 
+/// Seeking (after flushing what is buffered) lets writers that patch a header once the body is
+/// written, such as an MP4 muxer, write atomically too.
+impl io::Seek for AtomicFile {
+    fn seek(&mut self, pos: io::SeekFrom) -> io::Result<u64> {
+        match &mut self.file {
+            Some(f) => io::Seek::seek(f, pos),
+            None => Err(io::Error::other("already committed")),
+        }
+    }
+}
+
 impl Drop for AtomicFile {
     fn drop(&mut self) {
         if self.file.take().is_some() {
@@ -368,6 +379,7 @@ pub fn refuse_overwriting(output: &Path, inputs: &[(PathBuf, String)]) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Seek as _;
 
     #[test]
     fn a_failed_write_leaves_the_previous_file_and_no_temporary_file() {
@@ -397,6 +409,19 @@ mod tests {
         f.commit().expect("commit");
         assert_eq!(fs::read(&path).expect("read"), b"two");
         assert_eq!(fs::read(backup_path(&path)).expect("backup"), b"one");
+    }
+
+    #[test]
+    fn a_seeking_writer_patches_what_it_wrote() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("movie.mp4");
+        let mut f = AtomicFile::create(&path).expect("create");
+        f.write_all(b"size????body").expect("write");
+        f.seek(io::SeekFrom::Start(4)).expect("seek");
+        f.write_all(b"0012").expect("patch");
+        assert_eq!(f.seek(io::SeekFrom::End(0)).expect("end"), 12);
+        f.commit().expect("commit");
+        assert_eq!(fs::read(&path).expect("read"), b"size0012body");
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! keyrig-io: everything that touches a file. RON scene files (versioned, checked, saved
 //! atomically), the built-in demo scene, glTF import/export, MD2 import, and VRML97 / X3D /
-//! Open Inventor import ([`vrml`]).
+//! Open Inventor import ([`vrml`]), and sound clips' files decoded into waveform summaries
+//! ([`sound`]).
 
 pub mod demo;
 pub mod file_io;
@@ -17,6 +18,7 @@ pub mod scene_file;
 mod scene_locate;
 mod scene_text;
 mod scene_v1;
+pub mod sound;
 pub mod vrml;
 
 pub use scene_file::{load, save, LocatedProblem, SceneFileError};

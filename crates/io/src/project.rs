@@ -1,5 +1,5 @@
-//! A scene and the files around it: scene files whose model paths are portable (relative to
-//! the scene's folder on disk, absolute in memory), and the files a scene reads.
+//! A scene and the files around it: scene files whose model and sound paths are portable
+//! (relative to the scene's folder on disk, absolute in memory), and the files a scene reads.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -57,13 +57,19 @@ pub fn portable_scene(scene_file: &Path, scene: &Scene) -> Scene {
     out
 }
 
-/// Replaces each model path `p` of the scene by `change(p)` where that is `Some`.
+/// Replaces each model and sound file path `p` of the scene by `change(p)` where that is
+/// `Some`.
 fn map_model_paths(scene: &mut Scene, mut change: impl FnMut(&str) -> Option<String>) {
     for object in &mut scene.objects {
         if let Some(MeshSource::File { path, .. }) = &mut object.mesh {
             if let Some(new) = change(path) {
                 *path = new;
             }
+        }
+    }
+    for clip in &mut scene.sounds {
+        if let Some(new) = change(&clip.path) {
+            clip.path = new;
         }
     }
 }
@@ -87,6 +93,13 @@ pub fn scene_inputs(scene: &Scene, base_dir: Option<&Path>) -> Vec<(PathBuf, Str
             }
         }
         out.push((file, format!("the model file that {here} uses")));
+    }
+    for (i, clip) in scene.sounds.iter().enumerate() {
+        let file = match base_dir {
+            Some(dir) => dir.join(&clip.path),
+            None => PathBuf::from(&clip.path),
+        };
+        out.push((file, format!("the sound file of sounds[{i}]")));
     }
     out
 }

@@ -3,7 +3,8 @@
 //! - [`skinning`]: the four skin deformers and MD2 vertex morphing as WGSL compute passes.
 //! - [`renderer`]: meshes, lights, render styles, grid, skeletons, motion paths, selection,
 //!   rendered into an offscreen [`Viewport`] — shared by the editor and headless rendering.
-//! - [`headless`]: its own device, frames to [`image::RgbaImage`].
+//! - [`headless`]: its own device, frames to [`image::RgbaImage`], motion-blurred frames
+//!   through [`accumulate`] (sub-frames averaged on the GPU).
 //! - [`gpu`]: opening a device without a window, reading buffers back.
 //!
 //! See docs/rendering.md for the architecture, the data layouts and how the editor embeds it.
@@ -25,6 +26,7 @@
 //! # }
 //! ```
 
+pub mod accumulate;
 pub mod camera;
 mod error;
 pub mod gpu;

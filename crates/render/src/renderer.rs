@@ -218,6 +218,18 @@ impl FrameStats {
     pub fn bytes_uploaded(&self) -> u64 {
         self.joint_bytes + self.morph_bytes + self.uniform_bytes + self.overlay_bytes
     }
+
+    /// Adds `other`'s counts to these (the frames of a motion-blurred image); dropped lights
+    /// keep the largest count.
+    pub fn add(&mut self, other: &FrameStats) {
+        self.joint_bytes += other.joint_bytes;
+        self.morph_bytes += other.morph_bytes;
+        self.uniform_bytes += other.uniform_bytes;
+        self.overlay_bytes += other.overlay_bytes;
+        self.deformed_vertices += other.deformed_vertices;
+        self.draw_calls += other.draw_calls;
+        self.lights_dropped = self.lights_dropped.max(other.lights_dropped);
+    }
 }
 
 /// An offscreen render target: colour + depth, with MSAA resolved into a single-sample colour

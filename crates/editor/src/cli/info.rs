@@ -43,6 +43,67 @@ fn is_scene(path: &Path) -> bool {
 /// (relative to `base_dir`, the scene's folder), whose skinned mesh is bound to as many
 /// joints as the object's skeleton has and which is skinned or vertex-animated (the
 /// renderer draws file meshes no other way).
+/// A scene's sound clips with their decoded files (or why a file does not decode).
+type ClipInfo = (keyrig_core::SoundClip, Result<keyrig_io::sound::DecodedSound, String>);
+
+fn sound_clips(scene: &Scene, base_dir: &Path) -> Vec<ClipInfo> {
+    scene
+        .sounds
+        .iter()
+        .map(|clip| {
+            let decoded =
+                keyrig_io::sound::decode_sound_file(&base_dir.join(&clip.path)).map_err(|e| e.to_string());
+            (clip.clone(), decoded)
+        })
+        .collect()
+}
+
+fn sounds_text(sounds: &[ClipInfo]) -> String {
+    use std::fmt::Write as _;
+    let mut out = format!("sounds:   {}\n", sounds.len());
+    for (clip, decoded) in sounds {
+        let file = match decoded {
+            Ok(d) => format!(
+                ", {} {} Hz {} channel{}, {:.3} s",
+                d.codec,
+                d.summary.sample_rate,
+                d.summary.channels,
+                if d.summary.channels == 1 { "" } else { "s" },
+                d.summary.duration()
+            ),
+            Err(_) => ", cannot be read (see problems)".to_owned(),
+        };
+        let _ = writeln!(
+            out,
+            "  {:?}: from frame {}, gain {}{}{file}",
+            clip.path,
+            clip.start_frame,
+            clip.gain,
+            if clip.mute { ", muted" } else { "" }
+        );
+    }
+    out
+}
+
+fn sounds_json(sounds: &[ClipInfo]) -> serde_json::Value {
+    sounds
+        .iter()
+        .map(|(clip, decoded)| {
+            let file = decoded.as_ref().ok();
+            serde_json::json!({
+                "path": clip.path,
+                "start_frame": clip.start_frame,
+                "gain": clip.gain,
+                "mute": clip.mute,
+                "codec": file.map(|d| d.codec.clone()),
+                "sample_rate": file.map(|d| d.summary.sample_rate),
+                "channels": file.map(|d| d.summary.channels),
+                "duration_s": file.map(|d| d.summary.duration()),
+            })
+        })
+        .collect()
+}
+
 fn mesh_problems(scene: &Scene, base_dir: &Path) -> Vec<keyrig_core::Problem> {
     use keyrig_editor::files::{FileMesh, MeshStore};
     let mut problems = Vec::new();
@@ -123,16 +184,30 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         let (scene, problems) = super::common::load_scene_lenient(&args.file, "info")?;
         (scene, problems, None)
     };
+    let mut sounds = Vec::new();
     if is_scene(&args.file) {
+        let base_dir = keyrig_io::file_io::parent_or_dot(&args.file);
         problems.extend(
-            mesh_problems(&scene, &keyrig_io::file_io::parent_or_dot(&args.file))
+            mesh_problems(&scene, &base_dir)
                 .into_iter()
                 .map(|problem| LocatedProblem { problem, position: None }),
         );
+        sounds = sound_clips(&scene, &base_dir);
+        problems.extend(sounds.iter().enumerate().filter_map(|(i, (_, decoded))| {
+            let message = decoded.as_ref().err()?.clone();
+            Some(LocatedProblem {
+                problem: keyrig_core::Problem { path: format!("sounds[{i}].path"), message },
+                position: None,
+            })
+        }));
     }
     let text = match args.format {
         InfoFormat::Text => {
             let mut w = summary_text(&args.file, &scene, &problems);
+            // The clips go before the problems.
+            if let Some(at) = w.find("problems:").filter(|_| !sounds.is_empty()) {
+                w = format!("{}{}{}", &w[..at], sounds_text(&sounds), &w[at..]);
+            }
             if let Some(skipped) = &skipped {
                 use std::fmt::Write as _;
                 if skipped.is_empty() {
@@ -148,6 +223,9 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         }
         InfoFormat::Json => {
             let mut doc = summary_json(&args.file, &scene, &problems);
+            if !sounds.is_empty() {
+                doc["sounds"] = sounds_json(&sounds);
+            }
             if let Some(skipped) = &skipped {
                 doc["skipped_channels"] = serde_json::json!(skipped
                     .iter()

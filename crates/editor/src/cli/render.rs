@@ -1,8 +1,10 @@
-//! `keyrig render FILE [--frame F | --frames A..B] [--deformer D] [--size WxH] -o OUT`:
-//! offscreen PNGs of a scene (.ron) or a model (.glb/.gltf: keyrig-io's scene mapping, first
-//! animation; .md2: GPU vertex morphing), through keyrig-render's headless path (the adapter
-//! wgpu finds; lavapipe without a GPU). Models are drawn with their materials (glTF base
-//! colour and texture, MD2 skins) unless `--no-textures` is given.
+//! `keyrig render FILE [--frame F | --frames A..B] [--deformer D] [--size WxH]
+//! [--motion-blur N [--shutter S]] -o OUT`: offscreen PNGs, or a playblast (MP4, GIF, animated
+//! PNG, numbered PNGs: keyrig_editor::playblast) of a scene (.ron) or a model (.glb/.gltf:
+//! keyrig-io's scene mapping, first animation; .md2: GPU vertex morphing), through
+//! keyrig-render's headless path (the adapter wgpu finds; lavapipe without a GPU). Models are
+//! drawn with their materials (glTF base colour and texture, MD2 skins) unless `--no-textures`
+//! is given.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -11,6 +13,7 @@ use std::sync::Arc;
 use anyhow::{bail, Context};
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{Camera, DeformerKind, Material};
+use keyrig_editor::playblast::{self, FrameError, MotionBlur, MovieFormat, Playblast};
 use keyrig_render::{
     Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selected,
     ViewOptions,
@@ -29,7 +32,8 @@ pub struct RenderArgs {
     /// Frame to render (may be fractional); the first frame of the scene's range by default.
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
     pub frame: Option<f64>,
-    /// Inclusive range of frames `A..B`, one numbered PNG each.
+    /// Inclusive range of frames `A..B`: a playblast written as OUT says (a movie or
+    /// numbered PNGs).
     #[arg(long, value_name = "A..B", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Deformer for every skinned object: rigid, linear, bones-blending, dual-quaternion
@@ -62,11 +66,21 @@ pub struct RenderArgs {
     /// `light:NAME`.
     #[arg(long, value_name = "WHAT")]
     pub select: Option<String>,
-    /// Output PNG. For a range: a pattern with `#`s replaced by the zero-padded frame number
-    /// (`out/arm_####.png`), an existing folder (→ `frame_0000.png` …), or a file name that
-    /// gets `_0000` before its extension.
+    /// Output. One frame: a PNG. A range: `shot.mp4` (H.264), `shot.gif` (animated GIF),
+    /// `shot.png` (animated PNG), a pattern with `#`s replaced by the zero-padded frame number
+    /// (`out/arm_####.png`) or an existing folder (→ `frame_0000.png` …) for numbered PNGs.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+    /// Output type of a range, instead of the one OUT's name implies: mp4, gif, apng,
+    /// png-frames (numbered PNGs; a plain OUT name gets `_0000` before its extension).
+    #[arg(long, value_name = "TYPE")]
+    pub format: Option<String>,
+    /// Motion blur: each frame is the average of N renders spread across the shutter (1: none).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub motion_blur: u32,
+    /// Shutter of motion blur, a fraction of the frame interval centred on the frame (0 to 1).
+    #[arg(long, value_name = "S", default_value_t = keyrig_editor::playblast::DEFAULT_SHUTTER)]
+    pub shutter: f64,
 }
 
 /// Parses `WxH`.
@@ -104,29 +118,14 @@ fn parse_range(text: &str) -> anyhow::Result<(i64, i64)> {
     Ok((a, b))
 }
 
-/// The output path of frame `frame` of a range (see [`RenderArgs::output`]).
-fn numbered_output(output: &Path, frame: i64) -> PathBuf {
-    let text = output.to_string_lossy();
-    if let Some(start) = text.find('#') {
-        let width = text[start..].chars().take_while(|&c| c == '#').count();
-        let number = format!("{frame:0width$}");
-        return PathBuf::from(format!("{}{}{}", &text[..start], number, &text[start + width..]));
-    }
-    if output.is_dir() || text.ends_with('/') {
-        return output.join(format!("frame_{frame:04}.png"));
-    }
-    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "frame".into());
-    let extension =
-        output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_else(|| "png".into());
-    output.with_file_name(format!("{stem}_{frame:04}.{extension}"))
-}
-
 /// Renders frames on demand.
 trait FrameSource {
     fn frame(&self, frame: f64) -> anyhow::Result<FrameInput>;
     fn default_frame(&self) -> f64;
     /// Errors when `frame` is outside what the source plays (`what` names the argument).
     fn check(&self, frame: f64, what: &str) -> anyhow::Result<()>;
+    /// Frames per second of the timeline (a movie's frame rate).
+    fn fps(&self) -> f64;
 }
 
 struct SceneSource {
@@ -185,6 +184,10 @@ impl FrameSource for SceneSource {
     fn check(&self, frame: f64, what: &str) -> anyhow::Result<()> {
         super::common::check_frame(self.rig.scene(), frame, what)
     }
+
+    fn fps(&self) -> f64 {
+        self.rig.scene().fps
+    }
 }
 
 struct Md2Source {
@@ -236,6 +239,11 @@ impl FrameSource for Md2Source {
 
     fn default_frame(&self) -> f64 {
         0.0
+    }
+
+    fn fps(&self) -> f64 {
+        // keyrig's timeline rate, on which MD2 frames play at MD2_FRAMES_PER_TIMELINE_FRAME.
+        30.0
     }
 
     fn check(&self, frame: f64, what: &str) -> anyhow::Result<()> {
@@ -391,7 +399,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let range = args.frames.as_deref().map(parse_range).transpose()?;
 
-    // What a PNG must never replace: the file rendered, the models a scene uses, an MD2 skin.
+    // What an output must never replace: the file rendered, the models a scene uses, an MD2 skin.
     let mut inputs = vec![(args.file.clone(), "the input file".to_owned())];
     if has_extension(&args.file, &["md2"]) {
         if let Some(skin) = keyrig_io::md2::skin_of_file(&args.file) {
@@ -455,63 +463,81 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     };
     let (width, height) = explicit_size.or(scene_size).unwrap_or((1280, 720));
 
-    let render_to = |headless: &mut HeadlessRenderer, frame: f64, out: &Path| -> anyhow::Result<()> {
-        let input = source.frame(frame).with_context(|| format!("{}: frame {frame}", args.file.display()))?;
-        let (image, _) = headless
-            .render_image(&input, width, height)
-            .with_context(|| format!("rendering frame {frame}"))?;
-        if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(parent)
-                .with_context(|| format!("creating folder {}", parent.display()))?;
-        }
-        keyrig_io::file_io::refuse_overwriting(out, &inputs)?;
-        // Encoded straight into the temporary file; renamed over `out` only when complete.
-        keyrig_io::file_io::write_atomic_with(out, |w| {
-            use keyrig_render::image::ImageEncoder as _;
-            keyrig_render::image::codecs::png::PngEncoder::new(w)
-                .write_image(
-                    image.as_raw(),
-                    image.width(),
-                    image.height(),
-                    keyrig_render::image::ExtendedColorType::Rgba8,
-                )
-                .map_err(std::io::Error::other)
-        })
-        .with_context(|| format!("writing {}", out.display()))?;
-        Ok(())
+    let motion_blur = MotionBlur { samples: args.motion_blur, shutter: args.shutter };
+    motion_blur.validate()?;
+    let mut frame_input = |frame: f64| -> Result<FrameInput, FrameError> {
+        source.frame(frame).map_err(|e| e.context(format!("{}", args.file.display())).into())
     };
 
     match range {
         None => {
+            if let Some(format) = &args.format {
+                bail!("--format {format}: give --frames A..B for a movie; one --frame writes one PNG");
+            }
             let frame = args.frame.unwrap_or_else(|| source.default_frame());
             source.check(frame, &format!("--frame {frame}"))?;
-            render_to(&mut headless, frame, &args.output)?;
+            keyrig_io::file_io::refuse_overwriting(&args.output, &inputs)?;
+            let image = playblast::render_blurred(
+                &mut headless,
+                &mut frame_input,
+                frame,
+                &motion_blur.offsets(),
+                (width, height),
+            )?;
+            playblast::write_png(&args.output, &image)?;
             eprintln!("keyrig: wrote {} ({width}×{height}, frame {frame})", args.output.display());
         }
         Some((a, b)) => {
-            let bar = indicatif::ProgressBar::new((b - a + 1) as u64);
-            bar.set_style(
-                indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames, {eta} left")
-                    .map_err(|e| anyhow::anyhow!("progress bar template: {e}"))?
-                    .progress_chars("=> "),
-            );
             for end in [a, b] {
                 source.check(
                     end as f64,
                     &format!("--frames {}: frame {end}", args.frames.as_deref().unwrap_or("")),
                 )?;
             }
+            let format = match &args.format {
+                Some(name) => MovieFormat::from_cli_name(name)
+                    .with_context(|| format!("--format `{name}`: expected mp4, gif, apng or png-frames"))?,
+                None => MovieFormat::of_output(&args.output)?,
+            };
+            let blast = Playblast {
+                first: a,
+                last: b,
+                fps: source.fps(),
+                size: (width, height),
+                format,
+                output: args.output.clone(),
+                motion_blur,
+            };
+            blast.validate()?;
+            blast.check_outputs(&inputs)?;
+            let bar = indicatif::ProgressBar::new(u64::from(blast.frame_count()));
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames, {eta} left")
+                    .map_err(|e| anyhow::anyhow!("progress bar template: {e}"))?
+                    .progress_chars("=> "),
+            );
             bar.set_message("rendering");
-            for frame in a..=b {
-                let out = numbered_output(&args.output, frame);
-                render_to(&mut headless, frame as f64, &out)?;
-                bar.inc(1);
-            }
+            let summary = blast.run(&mut headless, &mut frame_input, &mut |progress| {
+                bar.set_position(u64::from(progress.done));
+                std::ops::ControlFlow::Continue(())
+            });
             bar.finish_and_clear();
+            let summary = summary?;
+            let place = match format {
+                MovieFormat::PngFrames => playblast::numbered_output(&args.output, a)
+                    .parent()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_else(|| ".".into()),
+                _ => args.output.display().to_string(),
+            };
             eprintln!(
-                "keyrig: wrote {} frames ({width}×{height}) to {}",
-                b - a + 1,
-                numbered_output(&args.output, a).parent().unwrap_or(Path::new(".")).display()
+                "keyrig: wrote {} frames ({width}×{height}, {} fps, {}) to {place} in {:.1} s (rendering {:.1} s, encoding {:.1} s)",
+                summary.frames,
+                blast.fps,
+                format.cli_name(),
+                summary.wall_time.as_secs_f64(),
+                summary.render_time.as_secs_f64(),
+                summary.encode_time.as_secs_f64(),
             );
         }
     }
@@ -529,12 +555,5 @@ mod tests {
         assert!(parse_size("big").unwrap_err().to_string().contains("WIDTHxHEIGHT"));
         assert_eq!(parse_range("-2..3").unwrap(), (-2, 3));
         assert!(parse_range("5..1").unwrap_err().to_string().contains("after end"));
-    }
-
-    #[test]
-    fn range_outputs_are_numbered() {
-        assert_eq!(numbered_output(Path::new("out/a_###.png"), 7), PathBuf::from("out/a_007.png"));
-        assert_eq!(numbered_output(Path::new("out/a.png"), 12), PathBuf::from("out/a_0012.png"));
-        assert_eq!(numbered_output(Path::new("out/"), 3), PathBuf::from("out/frame_0003.png"));
     }
 }

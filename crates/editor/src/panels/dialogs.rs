@@ -21,6 +21,9 @@ pub fn help_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
         .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
         .default_size(egui::vec2((screen.x * 0.95).min(1250.0), screen.y * 0.97))
         .show(ctx, |ui| {
+            // Rows of 16 points, not egui's 18 (a grid row is at least `interact_size.y`): the
+            // list has no buttons to hit, and all of it fits 800 points.
+            ui.spacing_mut().interact_size.y = 16.0;
             egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
                 let half = Command::ALL.len().div_ceil(2);
                 ui.columns(2, |columns| {

@@ -67,7 +67,7 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
-                for c in [Command::Import, Command::ExportGltf] {
+                for c in [Command::Import, Command::ExportGltf, Command::RenderAnimation] {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();

@@ -15,6 +15,7 @@ pub mod dope_sheet;
 pub mod inspector;
 pub mod menu;
 pub mod outliner;
+pub mod render_dialog;
 pub mod status;
 pub mod timeline;
 pub mod viewport;
@@ -28,4 +29,5 @@ pub struct Panels {
     pub outliner: outliner::Outliner,
     pub inspector: inspector::Inspector,
     pub viewport: viewport::Viewport,
+    pub render: render_dialog::RenderDialog,
 }

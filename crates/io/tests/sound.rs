@@ -1,0 +1,96 @@
+//! Sound clips' files: WAV, FLAC, Ogg Vorbis and MP3 (made by FFmpeg from one known sine,
+//! tests/fixtures/sound/README.md) decode into summaries with the signal's rate, channels,
+//! length and peak; hostile files are refused with the path and the reason.
+
+use std::path::{Path, PathBuf};
+
+use keyrig_io::sound::{decode_sound_file, SoundError};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/sound").join(name)
+}
+
+/// FFmpeg's `sine` source (amplitude 1/8) spread from mono over two channels at −3 dB (`-ac 2`:
+/// each channel gets the centre × √½).
+const PEAK: f32 = 0.125 * std::f32::consts::FRAC_1_SQRT_2;
+const RATE: u32 = 22_050;
+/// Half a second.
+const FRAMES: u64 = 11_025;
+
+#[test]
+fn every_format_decodes_to_the_signal_it_holds() {
+    // (file, codec, frames tolerance, peak tolerance): lossy codecs pad the ends (MP3's
+    // encoder delay and last frame: up to 2 × 1152 + 529 samples; Vorbis's last block, which
+    // Symphonia 0.5 does not trim to the stream's end granule: up to 1024) and move the peak
+    // a little.
+    for (name, codec, frames_slack, peak_slack) in [
+        ("tone.wav", "pcm_s16le", 0, 1e-3),
+        ("tone.flac", "flac", 0, 1e-3),
+        ("tone.ogg", "vorbis", 1024, 0.02),
+        ("tone.mp3", "mp3", 2 * 1152 + 529, 0.02),
+    ] {
+        let sound = decode_sound_file(&fixture(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let summary = &sound.summary;
+        assert_eq!(sound.codec, codec, "{name}");
+        assert_eq!((summary.sample_rate, summary.channels), (RATE, 2), "{name}");
+        assert!(summary.frames.abs_diff(FRAMES) <= frames_slack, "{name}: {} frames", summary.frames);
+        assert_eq!(sound.skipped_packets, 0, "{name}");
+        let [lo, hi] = summary.range(0.0, 1.0).expect("the whole sound");
+        assert!((hi - PEAK).abs() <= peak_slack && (lo + PEAK).abs() <= peak_slack, "{name}: {lo}..{hi}");
+        // A stretch in the middle: a 440 Hz sine swings fully in every 10 ms.
+        let [lo, hi] = summary.range(0.2, 0.21).expect("the middle");
+        assert!(hi > PEAK * 0.9 && lo < -PEAK * 0.9, "{name} 0.2..0.21 s: {lo}..{hi}");
+        assert_eq!(summary.range(0.6, 0.7), None, "{name}: past the end");
+    }
+}
+
+#[test]
+fn hostile_files_are_refused_with_the_path_and_the_reason() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let garbage = dir.path().join("noise.wav");
+    std::fs::write(&garbage, b"RIFF\x10\0\0\0WAVEjunkjunkjunk").expect("write");
+    let truncated = dir.path().join("cut.flac");
+    let flac = std::fs::read(fixture("tone.flac")).expect("read");
+    std::fs::write(&truncated, &flac[..60]).expect("write");
+    let text = dir.path().join("notes.mp3");
+    std::fs::write(&text, "not a sound at all").expect("write");
+    for path in [garbage, truncated, text, dir.path().to_path_buf()] {
+        let err = decode_sound_file(&path).expect_err("refused");
+        let message = err.to_string();
+        assert!(message.contains(&*path.to_string_lossy()), "{message}");
+    }
+    #[cfg(unix)]
+    {
+        let err = decode_sound_file(Path::new("/dev/zero")).expect_err("a device");
+        assert!(
+            matches!(err, SoundError::Read { .. }) && err.to_string().contains("character device"),
+            "{err}"
+        );
+    }
+}
+
+/// Sound files are portable like models: `project::save_scene` names one below the scene's
+/// folder relative to it, `project::load_scene` makes it absolute in memory again, and the
+/// scene's inputs name it (so no output replaces it).
+#[test]
+fn sound_paths_are_relative_to_the_scene_on_disk() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::create_dir(dir.path().join("audio")).expect("folder");
+    let sound = dir.path().join("audio/line.wav");
+    std::fs::copy(fixture("tone.wav"), &sound).expect("copy");
+    let mut scene = keyrig_core::Scene::default();
+    scene.sounds.push(keyrig_core::SoundClip::new(sound.to_str().expect("utf-8"), 4.0));
+    let file = dir.path().join("shot.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+    let text = std::fs::read_to_string(&file).expect("read");
+    assert!(text.contains("path: \"audio/line.wav\""), "{text}");
+    let back = keyrig_io::project::load_scene(&file).expect("load");
+    let path = PathBuf::from(&back.sounds[0].path);
+    assert!(path.is_absolute());
+    assert_eq!(std::fs::canonicalize(&path).expect("found"), std::fs::canonicalize(&sound).expect("sound"));
+    let inputs =
+        keyrig_io::project::scene_inputs(&keyrig_io::scene_file::load(&file).expect("raw"), Some(dir.path()));
+    assert!(inputs
+        .iter()
+        .any(|(p, what)| p == &dir.path().join("audio/line.wav") && what.contains("sounds[0]")));
+}
