@@ -38,6 +38,13 @@ impl Inspector {
                 ui.separator();
                 key_inspector_ui(ui, ctx, actions);
                 ui.separator();
+                // The selected object's or light's attributes, after the key inspector so that
+                // opening them moves nothing above.
+                match ctx.session.selection.item {
+                    Some(Selected::Object(o)) => object_attributes_ui(ui, ctx, actions, o),
+                    Some(Selected::Light(l)) => light_attributes_ui(ui, ctx, actions, l),
+                    _ => {}
+                }
                 deformer_ui(ui, ctx, actions);
             });
         });
@@ -249,7 +256,6 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             channel_editor(ui, ctx, actions, ChannelId::ObjectTranslation(o), "Translation");
             channel_editor(ui, ctx, actions, ChannelId::ObjectRotation(o), "Rotation (°)");
             channel_editor(ui, ctx, actions, ChannelId::ObjectScale(o), "Scale");
-            object_attributes_ui(ui, ctx, actions, o);
             md2_ui(ui, ctx, actions, o);
         }
         Some(Selected::Joint { object, joint }) => {
@@ -298,7 +304,6 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             {
                 channel_editor(ui, ctx, actions, id, label);
             }
-            light_attributes_ui(ui, ctx, actions, l);
         }
     }
 }
@@ -310,8 +315,17 @@ fn set_attribute(actions: &mut Actions, what: &str, f: impl Fn(&mut keyrig_core:
     actions.push(Action::CloseGroup);
 }
 
-/// An object's keyable attributes: visible, opacity, colour (once set), morph weights.
+/// An object's keyable attributes — visible, opacity, colour (once set), morph weights — under
+/// a header that is open while any is set.
 fn object_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
+    let Some(object) = ctx.scene().objects.get(o) else { return };
+    egui::CollapsingHeader::new("Visibility and look")
+        .id_salt(("object attributes", o))
+        .default_open(!object.attributes.is_default())
+        .show(ui, |ui| object_attributes_fields(ui, ctx, actions, o));
+}
+
+fn object_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
     let Some(object) = ctx.scene().objects.get(o) else { return };
     let a = &object.attributes;
     let id = |a: AttributeId| ChannelId::Attribute(a);
@@ -337,8 +351,17 @@ fn object_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, 
     }
 }
 
-/// A light's keyable attributes: visible, range and (spot lights) the cone, once keyed.
+/// A light's keyable attributes — visible, range and (spot lights) the cone — under a header
+/// that is open while any is set.
 fn light_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, l: usize) {
+    let Some(light) = ctx.scene().lights.get(l) else { return };
+    egui::CollapsingHeader::new("Visibility, range and cone")
+        .id_salt(("light attributes", l))
+        .default_open(!light.attributes.is_default())
+        .show(ui, |ui| light_attributes_fields(ui, ctx, actions, l));
+}
+
+fn light_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, l: usize) {
     let Some(light) = ctx.scene().lights.get(l) else { return };
     let a = &light.attributes;
     let id = |a: AttributeId| ChannelId::Attribute(a);

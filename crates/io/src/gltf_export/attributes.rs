@@ -252,6 +252,7 @@ fn base_colour_channel(
 
 /// The light's static range and keyed cone on its `KHR_lights_punctual` entry `entry`, and
 /// pointer channels for its keyed colour, intensity, range and cone.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn light(
     doc: &mut Document,
     light: &keyrig_core::Light,
