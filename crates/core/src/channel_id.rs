@@ -6,9 +6,11 @@
 
 use glam::{EulerRot, Quat, Vec3};
 
-use crate::attributes::AttributeId;
+pub mod attribute_id;
+
 use crate::key::Animated;
 use crate::scene::Scene;
+pub use attribute_id::AttributeId;
 
 /// How rotations are printed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -13,7 +13,9 @@ pub mod scene;
 pub mod track;
 pub mod validate;
 
-pub use attributes::{AttributeId, AttributeProperty, LightAttributes, ObjectAttributes};
+pub use attributes::{LightAttributes, ObjectAttributes};
+pub use channel_id::attribute_id;
+pub use channel_id::attribute_id::{AttributeId, AttributeProperty};
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use scene::{

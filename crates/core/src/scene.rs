@@ -479,6 +479,7 @@ impl Scene {
         let mut bytes = 0;
         for (o, object) in self.objects.iter().enumerate() {
             let theirs = other.objects.get(o);
+            bytes += object.attributes.key_bytes_not_shared_with(theirs.map(|t| &t.attributes));
             bytes += cost(&object.translation, theirs.map(|t| &t.translation))
                 + cost(&object.rotation, theirs.map(|t| &t.rotation))
                 + cost(&object.scale, theirs.map(|t| &t.scale));
@@ -500,11 +501,12 @@ impl Scene {
         }
         for (l, light) in self.lights.iter().enumerate() {
             let theirs = other.lights.get(l);
+            bytes += light.attributes.key_bytes_not_shared_with(theirs.map(|t| &t.attributes));
             bytes += cost(&light.position, theirs.map(|t| &t.position))
                 + cost(&light.direction, theirs.map(|t| &t.direction))
                 + cost(&light.colour, theirs.map(|t| &t.colour))
                 + cost(&light.intensity, theirs.map(|t| &t.intensity));
         }
-        bytes + crate::attributes::key_bytes_not_shared(self, other)
+        bytes
     }
 }

@@ -4,7 +4,6 @@
 
 pub mod demo;
 pub mod file_io;
-mod gltf_attributes;
 pub mod gltf_export;
 pub mod gltf_import;
 pub mod gltf_pointer;

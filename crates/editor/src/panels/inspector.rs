@@ -158,7 +158,7 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             }
         }
         ChannelValue::Scalar(s) if matches!(id, ChannelId::Attribute(AttributeId::Deformer(_))) => {
-            let current = keyrig_core::attributes::deformer_from_value(s).unwrap_or_default();
+            let current = keyrig_core::attribute_id::deformer_from_value(s).unwrap_or_default();
             let mut chosen = current;
             ui.horizontal(|ui| {
                 egui::ComboBox::from_label(label).selected_text(current.label()).show_ui(ui, |ui| {
@@ -170,7 +170,7 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             });
             if chosen != current {
                 actions.push(Action::CloseGroup);
-                let value = ChannelValue::Scalar(keyrig_core::attributes::deformer_value(chosen));
+                let value = ChannelValue::Scalar(keyrig_core::attribute_id::deformer_value(chosen));
                 actions.edit(Edit::Pose { id, value, group });
             }
         }
@@ -779,7 +779,7 @@ fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         .on_hover_text("Key the deformer (Step keys) to switch deformers during the animation")
         .clicked()
     {
-        let value = keyrig_core::attributes::deformer_value(settings.kind);
+        let value = keyrig_core::attribute_id::deformer_value(settings.kind);
         set_attribute(actions, "animate deformer", move |scene| {
             if let Some(obj) = scene.objects.get_mut(o) {
                 obj.attributes.deformer = Some(keyrig_core::Animated::constant(value));
