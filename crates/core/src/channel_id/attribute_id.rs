@@ -138,7 +138,6 @@ impl AttributeId {
     }
 
     /// The object (`Ok`) or light (`Err`) it belongs to.
-    #[must_use]
     pub fn owner(self) -> Result<usize, usize> {
         match self {
             AttributeId::ObjectVisible(o)
