@@ -29,7 +29,7 @@ use std::fmt;
 
 use glam::{Quat, Vec3};
 
-use crate::attributes::{AttributeId, AttributeProperty};
+use crate::channel_id::attribute_id::{AttributeId, AttributeProperty};
 use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef};
 use crate::key::Animated;
 use crate::scene::{Object, Scene};

@@ -6,10 +6,12 @@
 
 use glam::{EulerRot, Quat, Vec3};
 
-use crate::attributes::AttributeId;
+pub mod attribute_id;
+
 use crate::key::Animated;
 use crate::rotation_mode::RotationMode;
 use crate::scene::Scene;
+pub use attribute_id::AttributeId;
 
 /// How rotations are printed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

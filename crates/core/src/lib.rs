@@ -16,7 +16,9 @@ pub mod sound;
 pub mod track;
 pub mod validate;
 
-pub use attributes::{AttributeId, AttributeProperty, LightAttributes, ObjectAttributes};
+pub use attributes::{LightAttributes, ObjectAttributes};
+pub use channel_id::attribute_id;
+pub use channel_id::attribute_id::{AttributeId, AttributeProperty};
 pub use camera_object::{Aim, AimTarget, Lens, Marker, Projection, RenderSize, SceneCamera};
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};

@@ -512,6 +512,7 @@ impl Scene {
         let mut bytes = 0;
         for (o, object) in self.objects.iter().enumerate() {
             let theirs = other.objects.get(o);
+            bytes += object.attributes.key_bytes_not_shared_with(theirs.map(|t| &t.attributes));
             bytes += cost(&object.translation, theirs.map(|t| &t.translation))
                 + cost(&object.rotation, theirs.map(|t| &t.rotation))
                 + cost(&object.scale, theirs.map(|t| &t.scale));
@@ -533,6 +534,7 @@ impl Scene {
         }
         for (l, light) in self.lights.iter().enumerate() {
             let theirs = other.lights.get(l);
+            bytes += light.attributes.key_bytes_not_shared_with(theirs.map(|t| &t.attributes));
             bytes += cost(&light.position, theirs.map(|t| &t.position))
                 + cost(&light.direction, theirs.map(|t| &t.direction))
                 + cost(&light.colour, theirs.map(|t| &t.colour))
@@ -547,7 +549,7 @@ impl Scene {
                 bytes += cost(&aim.roll, theirs.and_then(|t| t.aim.as_ref()).map(|a| &a.roll));
             }
         }
-        bytes + crate::attributes::key_bytes_not_shared(self, other)
+        bytes
     }
 }
 

@@ -672,13 +672,15 @@ impl Scene {
             "light",
             self.lights.iter().enumerate().map(|(i, l)| (format!("lights[{i}].name"), l.name.as_str())),
         );
-        for id in crate::attributes::every(self) {
+        for id in crate::channel_id::attribute_id::every(self) {
             match id.get(self) {
                 Some(crate::channel_id::ChannelRef::Scalar(a)) => c.animated(&id.field_path(), a),
                 Some(crate::channel_id::ChannelRef::Vec3(a)) => c.animated(&id.field_path(), a),
                 _ => {}
             }
-            crate::attributes::attribute_problems(self, id, &mut |path, message| c.push(path, message));
+            crate::channel_id::attribute_id::attribute_problems(self, id, &mut |path, message| {
+                c.push(path, message)
+            });
         }
         c.camera("camera", &self.camera);
         c.cameras_and_markers(self);

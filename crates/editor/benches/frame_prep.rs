@@ -116,7 +116,10 @@ fn with_attributes(scene: &mut keyrig_core::Scene) {
         a.opacity = linear(1.0, 0.3);
         let colour = Animated::new(
             glam::Vec3::ONE,
-            RawTrack::new(vec![Key::new(0.0, glam::Vec3::ONE), Key::new(3.0, glam::Vec3::new(1.0, 0.2, 0.1))]),
+            RawTrack::new(vec![
+                Key::new(0.0, glam::Vec3::ONE),
+                Key::new(3.0, glam::Vec3::new(1.0, 0.2, 0.1)),
+            ]),
         );
         a.colour = Some(colour);
         if object.skeleton.is_some() {

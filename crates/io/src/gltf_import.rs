@@ -25,6 +25,8 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::util::ReadOutputs;
 use keyrig_core::{Interpolation, Key, RawTrack};
 
+mod pointer;
+
 use crate::model::{
     ChannelTarget, ImageData, ImageSource, ImportedModel, ModelAnimation, ModelChannel, ModelLight,
     ModelLightKind, ModelMesh, ModelNode, ModelPrimitive, ModelSkin, MorphTarget, PrimitiveMode, TextureRef,
@@ -225,7 +227,7 @@ const SUPPORTED_REQUIRED: [&str; 3] = ["KHR_lights_punctual", "KHR_node_visibili
 fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> {
     let (json_bytes, chunk_offset, bin) =
         if data.starts_with(GLB_MAGIC) { parse_glb(data)? } else { (data, 0, None) };
-    let (mut root, raw) = crate::gltf_pointer::parse_root(json_bytes, chunk_offset)?;
+    let (mut root, raw) = pointer::parse_root(json_bytes, chunk_offset)?;
     for (i, ext) in root.extensions_required.iter().enumerate() {
         if !SUPPORTED_REQUIRED.contains(&ext.as_str()) {
             return Err(ptr(
@@ -279,7 +281,7 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     check_animation_json(doc.as_json(), &raw)?;
     model.animations =
         doc.animations().map(|a| read_animation(&cx, &model, &a, &raw)).collect::<Result<_, _>>()?;
-    crate::gltf_pointer::read_pointer_channels(&cx, &doc, &mut model, &raw)?;
+    pointer::read_pointer_channels(&cx, &doc, &mut model, &raw)?;
     Ok(model)
 }
 
@@ -1095,7 +1097,7 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), GltfError> {
 
 /// The gltf crate's validation does not check animation channels and samplers fully, and its
 /// accessors unwrap them; so check every index and enum here first.
-fn check_animation_json(root: &gltf::json::Root, raw: &crate::gltf_pointer::Raw) -> Result<(), GltfError> {
+fn check_animation_json(root: &gltf::json::Root, raw: &pointer::Raw) -> Result<(), GltfError> {
     use gltf::json::validation::Checked;
     for (a, anim) in root.animations.iter().enumerate() {
         for (c, ch) in anim.channels.iter().enumerate() {
@@ -1148,14 +1150,14 @@ fn read_animation(
     cx: &Reader<'_, '_>,
     model: &ImportedModel,
     anim: &gltf::Animation<'_>,
-    raw: &crate::gltf_pointer::Raw,
+    raw: &pointer::Raw,
 ) -> Result<ModelAnimation, GltfError> {
     let mut channels = Vec::new();
     for channel in anim.channels() {
         let sampler = channel.sampler();
         let here = format!("/animations/{}/samplers/{}", anim.index(), sampler.index());
         let node = channel.target().node().index();
-        let times = crate::gltf_pointer::key_times(cx, &sampler.input(), &here)?;
+        let times = pointer::key_times(cx, &sampler.input(), &here)?;
         let key_count = times.len();
         let reader = channel.reader(cx.get());
         let interpolation = match sampler.interpolation() {

@@ -5,7 +5,6 @@
 
 pub mod demo;
 pub mod file_io;
-mod gltf_attributes;
 pub mod gltf_camera;
 pub mod gltf_export;
 pub mod gltf_import;

@@ -12,6 +12,8 @@
 
 use std::sync::Arc;
 
+mod attributes;
+
 use glam::{Mat4, Quat, Vec2, Vec3};
 use keyrig_core::{Interpolation, Key, RawTrack};
 
@@ -1017,7 +1019,7 @@ impl ImportedModel {
                     }
                 }
             }
-            crate::gltf_attributes::object_attributes(self, anim, i, &channels_of[i], &mut object);
+            attributes::object_attributes(self, anim, i, &channels_of[i], &mut object);
             scene.objects.push(object);
         }
         let mut uses = vec![0usize; self.lights.len()];
@@ -1051,7 +1053,7 @@ impl ImportedModel {
                 intensity: keyrig_core::Animated::constant(light.intensity),
                 attributes: Default::default(),
             };
-            crate::gltf_attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
+            attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
             scene.lights.push(scene_light);
         }
         add_scene_cameras(self, &world, &channels_of, &mut scene);

@@ -1,6 +1,6 @@
 //! Export of the keyed attributes: visibility (`KHR_node_visibility`), material colour and
-//! opacity, light colour / intensity / range / cone (`KHR_animation_pointer`) and morph
-//! weights. The Khronos validator reports no errors, both extensions are used but not
+//! opacity, light range / cone (`KHR_animation_pointer`) and morph weights; a scene without
+//! attributes exports exactly as before. The Khronos validator reports no errors, both extensions are used but not
 //! required, and an independent reader of the exported JSON (serde_json and a glTF sampler
 //! written here from the specification, not keyrig's importer) finds every animated property
 //! equal to the scene's channel at every key time of either.
@@ -238,14 +238,8 @@ fn attributes_of_a_hand_made_scene_export_and_read_back() {
         f64::to_degrees,
         1e-4,
     );
-    same_at_every_key(
-        &scene,
-        "light/Key/intensity",
-        curve(&curves, &format!("{base}/intensity")),
-        0..1,
-        |v| v,
-        1e-6,
-    );
+    // Intensity keeps its export from before attributes: no pointer channel.
+    assert!(curves.iter().all(|(n, _)| n != &format!("{base}/intensity")));
     same_at_every_key(
         &scene,
         "light/Key/visible",
@@ -254,6 +248,15 @@ fn attributes_of_a_hand_made_scene_export_and_read_back() {
         |v| v,
         0.0,
     );
+}
+
+#[test]
+fn a_scene_without_attributes_exports_no_extension_channels() {
+    let scene = keyrig_io::demo::demo_scene();
+    let exported = export_scene(&scene, &ExportOptions::default()).unwrap();
+    assert_eq!(exported.json["extensionsUsed"], serde_json::json!(["KHR_lights_punctual"]));
+    let channels = exported.json["animations"][0]["channels"].as_array().unwrap();
+    assert!(channels.iter().all(|c| c["target"].get("node").is_some()), "every channel targets a node");
 }
 
 #[test]

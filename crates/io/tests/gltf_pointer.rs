@@ -221,8 +221,8 @@ fn the_scene_holds_colour_opacity_and_visibility_as_channels() {
         ]
     );
     // The invisible node hides its light and every light below it.
-    for l in 0..3 {
-        assert_eq!(scene.lights[l].attributes.visible, keyrig_core::Animated::constant(0.0), "{}", names[l]);
+    for (light, name) in scene.lights.iter().zip(&names).take(3) {
+        assert_eq!(light.attributes.visible, keyrig_core::Animated::constant(0.0), "{name}");
     }
     assert_eq!(scene.lights[3].attributes.visible, keyrig_core::Animated::constant(1.0));
     assert_eq!(scene.lights[4].attributes.visible.track.len(), 11);

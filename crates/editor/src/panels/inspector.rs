@@ -42,6 +42,13 @@ impl Inspector {
                 ui.separator();
                 key_inspector_ui(ui, ctx, actions);
                 ui.separator();
+                // The selected object's or light's attributes, after the key inspector so that
+                // opening them moves nothing above.
+                match ctx.session.selection.item {
+                    Some(Selected::Object(o)) => object_attributes_ui(ui, ctx, actions, o),
+                    Some(Selected::Light(l)) => light_attributes_ui(ui, ctx, actions, l),
+                    _ => {}
+                }
                 deformer_ui(ui, ctx, actions);
             });
         });
@@ -243,7 +250,7 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             }
         }
         ChannelValue::Scalar(s) if matches!(id, ChannelId::Attribute(AttributeId::Deformer(_))) => {
-            let current = keyrig_core::attributes::deformer_from_value(s).unwrap_or_default();
+            let current = keyrig_core::attribute_id::deformer_from_value(s).unwrap_or_default();
             let mut chosen = current;
             ui.horizontal(|ui| {
                 egui::ComboBox::from_label(label).selected_text(current.label()).show_ui(ui, |ui| {
@@ -255,7 +262,7 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             });
             if chosen != current {
                 actions.push(Action::CloseGroup);
-                let value = ChannelValue::Scalar(keyrig_core::attributes::deformer_value(chosen));
+                let value = ChannelValue::Scalar(keyrig_core::attribute_id::deformer_value(chosen));
                 actions.edit(Edit::Pose { id, value, group });
             }
         }
@@ -342,7 +349,6 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             channel_editor(ui, ctx, actions, ChannelId::ObjectTranslation(o), "Translation");
             channel_editor(ui, ctx, actions, ChannelId::ObjectRotation(o), "Rotation (°)");
             channel_editor(ui, ctx, actions, ChannelId::ObjectScale(o), "Scale");
-            object_attributes_ui(ui, ctx, actions, o);
             md2_ui(ui, ctx, actions, o);
         }
         Some(Selected::Joint { object, joint }) => {
@@ -391,7 +397,6 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             {
                 channel_editor(ui, ctx, actions, id, label);
             }
-            light_attributes_ui(ui, ctx, actions, l);
         }
     }
 }
@@ -403,8 +408,17 @@ fn set_attribute(actions: &mut Actions, what: &str, f: impl Fn(&mut keyrig_core:
     actions.push(Action::CloseGroup);
 }
 
-/// An object's keyable attributes: visible, opacity, colour (once set), morph weights.
+/// An object's keyable attributes — visible, opacity, colour (once set), morph weights — under
+/// a header that is open while any is set.
 fn object_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
+    let Some(object) = ctx.scene().objects.get(o) else { return };
+    egui::CollapsingHeader::new("Visibility and look")
+        .id_salt(("object attributes", o))
+        .default_open(!object.attributes.is_default())
+        .show(ui, |ui| object_attributes_fields(ui, ctx, actions, o));
+}
+
+fn object_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
     let Some(object) = ctx.scene().objects.get(o) else { return };
     let a = &object.attributes;
     let id = |a: AttributeId| ChannelId::Attribute(a);
@@ -430,8 +444,17 @@ fn object_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, 
     }
 }
 
-/// A light's keyable attributes: visible, range and (spot lights) the cone, once keyed.
+/// A light's keyable attributes — visible, range and (spot lights) the cone — under a header
+/// that is open while any is set.
 fn light_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, l: usize) {
+    let Some(light) = ctx.scene().lights.get(l) else { return };
+    egui::CollapsingHeader::new("Visibility, range and cone")
+        .id_salt(("light attributes", l))
+        .default_open(!light.attributes.is_default())
+        .show(ui, |ui| light_attributes_fields(ui, ctx, actions, l));
+}
+
+fn light_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, l: usize) {
     let Some(light) = ctx.scene().lights.get(l) else { return };
     let a = &light.attributes;
     let id = |a: AttributeId| ChannelId::Attribute(a);
@@ -882,7 +905,7 @@ fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         .on_hover_text("Key the deformer (Step keys) to switch deformers during the animation")
         .clicked()
     {
-        let value = keyrig_core::attributes::deformer_value(settings.kind);
+        let value = keyrig_core::attribute_id::deformer_value(settings.kind);
         set_attribute(actions, "animate deformer", move |scene| {
             if let Some(obj) = scene.objects.get_mut(o) {
                 obj.attributes.deformer = Some(keyrig_core::Animated::constant(value));

@@ -4,7 +4,7 @@
 //! attributes evaluates as before.
 
 use glam::Vec3;
-use keyrig_core::attributes::{deformer_from_value, AttributeId};
+use keyrig_core::attribute_id::{deformer_from_value, AttributeId};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
 use keyrig_core::{DeformerKind, LightAttributes, LightKind, ObjectAttributes};
 

@@ -2,8 +2,9 @@
 //! (the node's `visible`, and a `KHR_animation_pointer` STEP channel with boolean output when it
 //! is keyed), an object's colour and opacity as its own material's `baseColorFactor` (static at
 //! the start of the frame range, keyed through a pointer channel; `alphaMode` BLEND when the
-//! object is ever translucent), light colour, intensity, range and spot cone through pointer
-//! channels on `KHR_lights_punctual`, morph weights as the mesh node's `weights` channel.
+//! object is ever translucent), a light's range and spot cone through pointer channels on
+//! `KHR_lights_punctual`, morph weights as the mesh node's `weights` channel. A scene without
+//! attributes exports exactly as before.
 //!
 //! Both extensions are declared in `extensionsUsed` only: a viewer without them (Blender 3.4)
 //! still opens the file and shows the rest pose of those properties.
@@ -251,7 +252,8 @@ fn base_colour_channel(
 }
 
 /// The light's static range and keyed cone on its `KHR_lights_punctual` entry `entry`, and
-/// pointer channels for its keyed colour, intensity, range and cone.
+/// pointer channels for its keyed range and cone.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn light(
     doc: &mut Document,
     light: &keyrig_core::Light,
@@ -281,15 +283,11 @@ pub(super) fn light(
         let outer = outer.clamp(1e-4, std::f32::consts::FRAC_PI_2);
         entry["spot"] = json!({"innerConeAngle": inner.clamp(0.0, outer - 1e-4), "outerConeAngle": outer});
     }
-    let identity = (Quat::IDENTITY, Vec3::ZERO);
-    let colour_here = format!("{here}.colour");
-    if let Some(channel) = vec3_channel(0, "pointer", &light.colour, identity, options, range, &colour_here)?
-    {
-        doc.pointers.push(PointerChannel { pointer: format!("{base}/color"), channel, boolean: false });
-    }
+    // Colour and intensity keep their export from before attributes (their values at the start
+    // of the range), so a scene without attributes exports exactly as it did and stays
+    // readable by glTF readers that refuse channels without a node (the gltf crate 1.4).
     let deg = 1f32.to_radians();
-    let scalars: [(Option<&Animated<f32>>, &str, f32, String); 4] = [
-        (Some(&light.intensity), "intensity", 1.0, format!("{here}.intensity")),
+    let scalars: [(Option<&Animated<f32>>, &str, f32, String); 3] = [
         (a.range.as_ref(), "range", 1.0, format!("{here}.attributes.range")),
         (a.cutoff_deg.as_ref(), "spot/outerConeAngle", deg, format!("{here}.attributes.cutoff_deg")),
         (

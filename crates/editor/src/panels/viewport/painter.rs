@@ -19,6 +19,10 @@ pub(super) fn paint_scene(painter: &egui::Painter, projection: &Projection, ctx:
     }
     let scene = ctx.scene();
     for o in 0..scene.objects.len() {
+        // Hidden objects (their visibility attribute) are not drawn, as on the GPU.
+        if ctx.scene.state().and_then(|s| s.objects.get(o)).is_some_and(|s| !s.look.visible) {
+            continue;
+        }
         let (Some(pose), Some((positions, indices))) =
             (ctx.pose(o), ctx.scene.cpu_mesh(o, scene, ctx.meshes, ctx.base_dir()))
         else {

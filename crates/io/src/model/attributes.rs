@@ -1,4 +1,4 @@
-//! What [`crate::model::ImportedModel::to_scene`] takes from a glTF file beyond transforms: node
+//! What [`super::ImportedModel::to_scene`] takes from a glTF file beyond transforms: node
 //! visibility (`KHR_node_visibility`, static and animated), material base colour and opacity,
 //! light colour, intensity, range and spot cone (`KHR_animation_pointer`), and morph-target
 //! weights, as keyrig-core attributes.
@@ -16,8 +16,8 @@
 use glam::{Vec3, Vec4};
 use keyrig_core::{Animated, Interpolation, Key, RawTrack};
 
+use super::{ChannelTarget, ImportedModel, ModelAnimation, PrimitiveMode};
 use crate::gltf_pointer::{PointerKeys, PointerTarget};
-use crate::model::{ChannelTarget, ImportedModel, ModelAnimation, PrimitiveMode};
 
 /// Maps each key's value and tangents through `f` (linear in the value).
 fn map_keys<A: Copy, B>(track: &RawTrack<A>, f: impl Fn(A) -> B) -> RawTrack<B> {
