@@ -9,8 +9,8 @@ use transform_gizmo_egui::math::Transform;
 use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrientation, GizmoResult};
 
 use crate::actions::{Actions, Edit};
-use crate::channels::{ChannelId, ChannelValue};
 use crate::camera::{OrbitCamera, Projection};
+use crate::channels::{ChannelId, ChannelValue};
 use crate::context::FrameCtx;
 use crate::session::Selected;
 use crate::twist::{RingDrag, RingDragState};
