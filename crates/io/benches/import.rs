@@ -8,6 +8,9 @@
 //! before it), and printed as a table. The counting costs a few nanoseconds per
 //! allocation, included in the timings.
 
+#[path = "../tests/support/big_gltf.rs"]
+mod big_gltf;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -106,6 +109,11 @@ fn memory_table() {
         let peak = peak_of(|| drop(black_box(parse_md2(&data).expect("parse"))));
         println!("| {rel} (parse) | {} | {peak} | {:.2} |", data.len(), peak as f64 / data.len() as f64);
     }
+    // Issue 29's case: 100,000 meshes and nodes reusing one accessor (almost all JSON).
+    let data = big_gltf::reused_accessor_meshes(100_000);
+    let peak = peak_of(|| drop(black_box(import_gltf_slice(&data).expect("import"))));
+    let name = "generated: 100,000 meshes reusing one accessor";
+    println!("| {name} | {} | {peak} | {:.2} |", data.len(), peak as f64 / data.len() as f64);
     println!();
 }
 

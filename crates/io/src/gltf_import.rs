@@ -258,15 +258,18 @@ fn import(data: &[u8], base: Option<&Path>) -> Result<ImportedModel, GltfError> 
     let budget = data.len() + buffers.iter().map(|b| b.len()).sum::<usize>();
     let cx = Reader { buffers: &buffers, budget, unbacked: RefCell::default(), cache: Decoded::default() };
 
+    // Meshes first, and their JSON let go before the nodes are read: in a file made of many
+    // meshes that JSON is most of the parsed document (docs/benchmarks.md, "Import memory").
+    let meshes = read_meshes(&cx, &doc)?;
+    let doc = without_mesh_json(doc);
     let nodes = read_nodes(&doc)?;
-    let mut model = ImportedModel { nodes, ..ImportedModel::default() };
+    let mut model = ImportedModel { nodes, meshes, ..ImportedModel::default() };
     model.roots = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(scene) => scene.nodes().map(|n| n.index()).collect(),
         None => (0..model.nodes.len()).filter(|&i| model.nodes[i].parent.is_none()).collect(),
     };
     model.images = read_images(&doc);
     model.image_data = read_image_data(&doc, &buffers, base);
-    model.meshes = doc.meshes().map(|m| read_mesh(&cx, &m)).collect::<Result<_, _>>()?;
     model.skins = doc.skins().map(|s| read_skin(&cx, &s)).collect::<Result<_, _>>()?;
     model.lights = read_lights(&doc)?;
     model.cameras = crate::gltf_camera::read_cameras(&doc).map_err(|e| {
@@ -536,7 +539,8 @@ fn read_nodes(doc: &gltf::Document) -> Result<Vec<ModelNode>, GltfError> {
                 translation: t,
                 rotation,
                 scale: s,
-                mesh: n.mesh().map(|m| m.index()),
+                // From the JSON: the meshes' own JSON is gone (`without_mesh_json`).
+                mesh: doc.as_json().nodes[n.index()].mesh.map(|m| m.value()),
                 skin: n.skin().map(|s| s.index()),
                 light: n.light().map(|l| l.index()),
                 camera: n.camera().map(|c| c.index()),
@@ -811,8 +815,51 @@ fn shared_indices(
     })
 }
 
-fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, GltfError> {
-    let mut primitives = Vec::new();
+/// Reads every mesh. Meshes whose primitives are written identically (the same accessors,
+/// material, mode and targets) share one decoded primitive list: a file that repeats one mesh's
+/// primitives a hundred thousand times holds them once.
+fn read_meshes(cx: &Reader<'_, '_>, doc: &gltf::Document) -> Result<Vec<ModelMesh>, GltfError> {
+    // An `Arc<Vec>`, not an `Arc<[_]>`: the list moves in without a copy.
+    let mut lists: HashMap<String, Arc<Vec<ModelPrimitive>>> = HashMap::new();
+    let mut meshes = Vec::with_capacity(doc.meshes().len());
+    for mesh in doc.meshes() {
+        // The JSON of the mesh's primitives is the key: equal text, equal primitives.
+        let key = serde_json::to_string(&doc.as_json().meshes[mesh.index()].primitives)
+            .map_err(|e| ptr(format!("/meshes/{}", mesh.index()), GltfErrorKind::Invalid(e.to_string())))?;
+        let primitives = match lists.get(&key) {
+            Some(list) => Arc::clone(list),
+            None => {
+                let list = Arc::new(read_primitives(cx, &mesh)?);
+                lists.insert(key, Arc::clone(&list));
+                list
+            }
+        };
+        let weights = mesh.weights().map(<[f32]>::to_vec).unwrap_or_default();
+        if weights.iter().any(|w| !w.is_finite()) {
+            return Err(ptr(
+                format!("/meshes/{}/weights", mesh.index()),
+                GltfErrorKind::NonFinite("morph weight".into()),
+            ));
+        }
+        meshes.push(ModelMesh {
+            name: mesh.name().map_or_else(|| format!("mesh{}", mesh.index()), str::to_owned),
+            primitives,
+            weights,
+        });
+    }
+    Ok(meshes)
+}
+
+/// The document without its meshes' JSON, once [`read_meshes`] has read them. Nothing read
+/// after it reaches a mesh through the document (nodes name their mesh by index, from the JSON).
+fn without_mesh_json(doc: gltf::Document) -> gltf::Document {
+    let mut root = doc.into_json();
+    root.meshes = Vec::new();
+    gltf::Document::from_json_without_validation(root)
+}
+
+fn read_primitives(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<Vec<ModelPrimitive>, GltfError> {
+    let mut primitives = Vec::with_capacity(mesh.primitives().len());
     for prim in mesh.primitives() {
         let here = format!("/meshes/{}/primitives/{}", mesh.index(), prim.index());
         let attr = |name: &str| format!("{here}/attributes/{name}");
@@ -927,18 +974,7 @@ fn read_mesh(cx: &Reader<'_, '_>, mesh: &gltf::Mesh<'_>) -> Result<ModelMesh, Gl
             material: material.index(),
         });
     }
-    let weights = mesh.weights().map(<[f32]>::to_vec).unwrap_or_default();
-    if weights.iter().any(|w| !w.is_finite()) {
-        return Err(ptr(
-            format!("/meshes/{}/weights", mesh.index()),
-            GltfErrorKind::NonFinite("morph weight".into()),
-        ));
-    }
-    Ok(ModelMesh {
-        name: mesh.name().map_or_else(|| format!("mesh{}", mesh.index()), str::to_owned),
-        primitives,
-        weights,
-    })
+    Ok(primitives)
 }
 
 fn check_same_count(

@@ -110,7 +110,8 @@ pub struct ModelPrimitive {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ModelMesh {
     pub name: String,
-    pub primitives: Vec<ModelPrimitive>,
+    /// Shared by meshes whose primitives the file writes identically.
+    pub primitives: Arc<Vec<ModelPrimitive>>,
     pub weights: Vec<f32>,
 }
 

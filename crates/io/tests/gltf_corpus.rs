@@ -43,7 +43,7 @@ fn every_corpus_model_imports_with_expected_structure() {
         }
         assert_eq!(m.animations.len(), animations, "{file}: animations");
         for mesh in &m.meshes {
-            for p in &mesh.primitives {
+            for p in mesh.primitives.iter() {
                 assert!(!p.positions.is_empty());
                 assert!(p.indices.iter().all(|&i| (i as usize) < p.positions.len()), "{file}");
                 assert_eq!(p.joint_sets.len(), p.weight_sets.len());
