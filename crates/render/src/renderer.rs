@@ -629,6 +629,9 @@ struct DrawPipelines {
     /// Objects with opacity below 1: lit and textured as opaque ones, blended over the scene,
     /// depth-tested without writing depth.
     translucent: wgpu::RenderPipeline,
+    /// `solid` and `translucent` for items drawn without a texture: no texture sample.
+    solid_untextured: wgpu::RenderPipeline,
+    translucent_untextured: wgpu::RenderPipeline,
 }
 
 impl DrawPipelines {
@@ -771,6 +774,26 @@ impl DrawPipelines {
                 mesh_layout,
                 "vs_mesh",
                 "fs_lit",
+                TriangleList,
+                LessEqual,
+                false,
+                Some(wgpu::BlendState::ALPHA_BLENDING),
+            ),
+            solid_untextured: pipeline(
+                "keyrig solid untextured",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit_untextured",
+                TriangleList,
+                LessEqual,
+                true,
+                None,
+            ),
+            translucent_untextured: pipeline(
+                "keyrig translucent untextured objects",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit_untextured",
                 TriangleList,
                 LessEqual,
                 false,
@@ -1469,18 +1492,19 @@ impl Renderer {
             if translucent(item) && item.opacity <= 0.0 {
                 continue;
             }
-            let pipeline = if translucent(item) && frame.style == RenderStyle::Solid {
-                &pipelines.translucent
-            } else {
-                pipeline
+            let texture = match &mesh.texture {
+                Some(texture) if frame.textures => Some(texture),
+                _ => None,
+            };
+            let pipeline = match (frame.style, translucent(item), texture.is_some()) {
+                (RenderStyle::Solid, true, true) => &pipelines.translucent,
+                (RenderStyle::Solid, true, false) => &pipelines.translucent_untextured,
+                (RenderStyle::Solid, false, false) => &pipelines.solid_untextured,
+                _ => pipeline,
             };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
-            let texture = match &mesh.texture {
-                Some(texture) if frame.textures => texture,
-                _ => &self.white_texture,
-            };
-            pass.set_bind_group(2, texture, &[]);
+            pass.set_bind_group(2, texture.unwrap_or(&self.white_texture), &[]);
             pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
             pass.set_vertex_buffer(1, mesh.uvs.slice(..));
             match frame.style {
