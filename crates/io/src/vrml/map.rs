@@ -26,7 +26,7 @@
 //! interpolators blend in HSV: they are resampled into linear RGB keys within
 //! [`COLOUR_TOLERANCE`]. A `CoordinateInterpolator` on a shape's `Coordinate` makes that shape
 //! a vertex-morphing mesh (its keys are the morph frames, at their own times), as an MD2 model
-//! plays.
+//! plays. X3D's spline and squad interpolators are converted in [`super::splines`].
 //!
 //! Everything the mapping does not take is listed in [`VrmlModel::skipped`] with where it is.
 
@@ -39,6 +39,7 @@ use keyrig_core::{Animated, Cycle, Interpolation, Key, Material, RawTrack};
 
 use super::expand::base_field;
 use super::geometry::{self, PolyMesh, Solid, Tessellation};
+use super::splines;
 use super::tree::{Document, Encoding, NodeId, Place, Value};
 use super::{VrmlError, VrmlErrorKind};
 
@@ -503,6 +504,20 @@ fn resample_colour(keys: &[Key<Vec3>]) -> Vec<Key<Vec3>> {
     out
 }
 
+/// The first `n` triples of `values` (read `arity` at a time) as vectors.
+fn vec3s(values: &[f64], arity: usize, n: usize) -> Vec<Vec3> {
+    values.chunks_exact(arity).take(n).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect()
+}
+
+/// `closed`, `keyVelocity` and `normalizeVelocity` of a spline interpolator.
+fn spline_fields<'a, T>(doc: &Document, id: NodeId, velocity: &'a [T]) -> splines::SplineFields<'a, T> {
+    splines::SplineFields {
+        closed: boolean(doc, id, "closed", false),
+        velocity,
+        normalize: boolean(doc, id, "normalizeVelocity", false),
+    }
+}
+
 struct Animation {
     channels: HashMap<(NodeId, String), Channel>,
     duration: f64,
@@ -586,25 +601,55 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
         let n = fractions.len();
         let arity = |a: usize| -> Option<usize> { (values.len() >= n * a).then_some(a) };
         let channel = match from.kind.as_str() {
-            "PositionInterpolator" | "SplinePositionInterpolator" => arity(3).map(|a| {
-                let v: Vec<Vec3> = values
-                    .chunks_exact(a)
-                    .take(n)
-                    .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-                    .collect();
-                let keys = if from.kind == "SplinePositionInterpolator" {
-                    spline_keys(doc, interp, fractions, &v, timing.cycle)
-                } else {
-                    keyed(fractions, &v, timing.cycle, Vec3::lerp)
-                };
-                Channel::Vec3(RawTrack::new(keys), timing)
+            "SplinePositionInterpolator" | "SplineScalarInterpolator" | "SquadOrientationInterpolator"
+                if fractions.windows(2).any(|w| w[1] <= w[0]) =>
+            {
+                skipped.add(
+                    from.kind.clone(),
+                    "equal keys (a jump) in a spline interpolator: the specification leaves the curve undefined",
+                    from.place,
+                );
+                continue;
+            }
+            "PositionInterpolator" => arity(3).map(|a| {
+                let v = vec3s(values, a, n);
+                Channel::Vec3(RawTrack::new(keyed(fractions, &v, timing.cycle, Vec3::lerp)), timing)
+            }),
+            "SplinePositionInterpolator" => arity(3).map(|a| {
+                let v = vec3s(values, a, n);
+                let velocity = vec3s(numbers(doc, interp, "keyVelocity").unwrap_or(&[]), 3, usize::MAX);
+                let fields = spline_fields(doc, interp, &velocity);
+                Channel::Vec3(
+                    RawTrack::new(splines::spline_keys(fractions, &v, &fields, timing.cycle)),
+                    timing,
+                )
+            }),
+            "SplineScalarInterpolator" => arity(1).map(|_| {
+                let v: Vec<f32> = values.iter().take(n).map(|&x| x as f32).collect();
+                let velocity: Vec<f32> =
+                    numbers(doc, interp, "keyVelocity").unwrap_or(&[]).iter().map(|&x| x as f32).collect();
+                let fields = spline_fields(doc, interp, &velocity);
+                Channel::Scalar(
+                    RawTrack::new(splines::spline_keys(fractions, &v, &fields, timing.cycle)),
+                    timing,
+                )
+            }),
+            "SquadOrientationInterpolator" => arity(4).map(|a| {
+                let v: Vec<Quat> = values.chunks_exact(a).take(n).map(axis_angle).collect();
+                if boolean(doc, interp, "normalizeVelocity", false) {
+                    skipped.add(
+                        "SquadOrientationInterpolator normalizeVelocity",
+                        "a squad has no velocities to normalize: ignored",
+                        from.place,
+                    );
+                }
+                let closed = boolean(doc, interp, "closed", false);
+                let (keys, _exact) =
+                    splines::squad_keys(fractions, &v, closed, timing.cycle, Channel::cycles(timing));
+                Channel::Quat(RawTrack::new(keys), timing)
             }),
             "ColorInterpolator" => arity(3).map(|a| {
-                let v: Vec<Vec3> = values
-                    .chunks_exact(a)
-                    .take(n)
-                    .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-                    .collect();
+                let v = vec3s(values, a, n);
                 let keys = keyed(fractions, &v, timing.cycle, hsv_lerp);
                 Channel::Vec3(RawTrack::new(resample_colour(&keys)), timing)
             }),
@@ -659,86 +704,6 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
         }
     }
     Animation { channels, duration }
-}
-
-/// X3D SplinePositionInterpolator (ISO/IEC 19775-1 §19.4.6) as Hermite keys: the spline's
-/// tangents per unit of the fraction become keyrig's per-second tangents, so every segment is
-/// the same cubic. Tangents: `keyVelocity` when given (normalized to the chord length when
-/// `normalizeVelocity`), else Catmull–Rom `(v[i+1] − v[i−1]) / 2`; the one per key tangent
-/// `Tᵢ` enters segment i as `F⁺ᵢ·Tᵢ` and segment i−1 as `F⁻ᵢ·Tᵢ`,
-/// `F⁻ᵢ = 2·(t[i+1]−t[i]) / (t[i+1]−t[i−1])`, `F⁺ᵢ = 2·(t[i]−t[i−1]) / (t[i+1]−t[i−1])`
-/// (the spec's names: the outgoing tangent is scaled by the preceding interval).
-fn spline_keys(doc: &Document, id: NodeId, fractions: &[f64], values: &[Vec3], cycle: f64) -> Vec<Key<Vec3>> {
-    let n = fractions.len().min(values.len());
-    let closed = boolean(doc, id, "closed", false) && n > 2 && values[0] == values[n - 1];
-    let velocity: Vec<Vec3> = numbers(doc, id, "keyVelocity")
-        .unwrap_or(&[])
-        .chunks_exact(3)
-        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-        .collect();
-    let normalize = boolean(doc, id, "normalizeVelocity", false);
-    let chord: f32 = values[..n].windows(2).map(|w| (w[1] - w[0]).length()).sum();
-    let tangent = |i: usize| -> Vec3 {
-        if velocity.len() == n {
-            let v = velocity[i];
-            return if normalize { v.normalize_or_zero() * chord } else { v };
-        }
-        if velocity.len() == 2 && (i == 0 || i == n - 1) && !closed {
-            let v = velocity[if i == 0 { 0 } else { 1 }];
-            return if normalize { v.normalize_or_zero() * chord } else { v };
-        }
-        match (i, closed) {
-            (0, true) | (_, true) if i == 0 || i == n - 1 => (values[1] - values[n - 2]) * 0.5,
-            (0, false) => Vec3::ZERO,
-            (i, false) if i == n - 1 => Vec3::ZERO,
-            (i, _) => (values[i + 1] - values[i - 1]) * 0.5,
-        }
-    };
-    let span = |i: usize| -> (f64, f64) {
-        let before = if i > 0 {
-            fractions[i] - fractions[i - 1]
-        } else if closed {
-            fractions[n - 1] - fractions[n - 2]
-        } else {
-            0.0
-        };
-        let after = if i + 1 < n {
-            fractions[i + 1] - fractions[i]
-        } else if closed {
-            fractions[1] - fractions[0]
-        } else {
-            0.0
-        };
-        (before, after)
-    };
-    let mut keys = Vec::with_capacity(n + 2);
-    if fractions[0] > 0.0 {
-        keys.push(Key::new(0.0, values[0]).with_interpolation(Interpolation::Linear));
-    }
-    for i in 0..n {
-        let (before, after) = span(i);
-        let total = before + after;
-        let (f_out, f_in) = if (i == 0 || i == n - 1) && !closed || total <= 0.0 {
-            (1.0, 1.0)
-        } else {
-            (2.0 * before / total, 2.0 * after / total)
-        };
-        let t = tangent(i);
-        // Per-fraction tangents → per-second: divide by the segment's length in seconds.
-        let out = if after > 0.0 { t * (f_out / (after * cycle)) as f32 } else { Vec3::ZERO };
-        let inn = if before > 0.0 { t * (f_in / (before * cycle)) as f32 } else { Vec3::ZERO };
-        let mut key = Key::new(fractions[i] * cycle, values[i]).with_interpolation(Interpolation::Hermite);
-        key.out_tangent = Some(out);
-        key.in_tangent = Some(inn);
-        keys.push(key);
-    }
-    if fractions[n - 1] < 1.0 {
-        if let Some(last) = keys.last_mut() {
-            last.interpolation = Interpolation::Linear;
-        }
-        keys.push(Key::new(cycle, values[n - 1]).with_interpolation(Interpolation::Linear));
-    }
-    keys
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1994,13 +1959,18 @@ impl Mapper<'_> {
         // Into world space: an affine image of linear keys is the same image of the line.
         if m != Mat4::IDENTITY {
             light.position.value = m.transform_point3(light.position.value);
+            let r = Mat3::from_mat4(m);
             for k in light.position.track.keys.iter_mut() {
                 k.value = m.transform_point3(k.value);
+                // Spline tangents are differences: the linear part alone.
+                k.in_tangent = k.in_tangent.map(|t| r * t);
+                k.out_tangent = k.out_tangent.map(|t| r * t);
             }
-            let r = Mat3::from_mat4(m);
             light.direction.value = r * light.direction.value;
             for k in light.direction.track.keys.iter_mut() {
                 k.value = r * k.value;
+                k.in_tangent = k.in_tangent.map(|t| r * t);
+                k.out_tangent = k.out_tangent.map(|t| r * t);
             }
         }
         light
