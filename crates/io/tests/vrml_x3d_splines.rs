@@ -333,3 +333,202 @@ fn spline_interpolators_with_equal_keys_are_listed_not_imported() {
     );
     assert!(model.objects[0].rotation.track.keys.is_empty());
 }
+
+// ---------------------------------------------------------------------------------------
+// Export: keyrig keys → X3D spline and squad interpolators
+
+fn tcb(tension: f32, bias: f32) -> keyrig_core::Tcb {
+    keyrig_core::Tcb { tension, continuity: 0.0, bias, clamped: false }
+}
+
+/// A scene whose channels are X3D splines exactly (evenly spaced TCB keys with C = 0; for the
+/// rotation T = C = B = 0 inside and X_ITE's open ends, bias −1 first and +1 last) beside
+/// channels that are not (uneven keys; T = C = B = 0 rotation ends).
+fn spline_scene() -> keyrig_core::Scene {
+    use glam::{Quat, Vec3};
+    use keyrig_core::{Animated, Key, RawTrack};
+    let even = [0.0, 0.5, 1.0, 1.5, 2.0];
+    let points = [
+        Vec3::ZERO,
+        Vec3::new(1.0, 2.0, 0.5),
+        Vec3::new(2.5, 0.0, 1.0),
+        Vec3::new(3.0, 3.0, -1.0),
+        Vec3::new(5.0, 1.0, 0.0),
+    ];
+    let turns = [
+        Quat::IDENTITY,
+        Quat::from_axis_angle(Vec3::X, 1.2),
+        Quat::from_axis_angle(Vec3::Y, 2.0),
+        Quat::from_axis_angle(Vec3::new(1.0, 1.0, 0.0).normalize(), -1.0),
+        Quat::from_axis_angle(Vec3::Z, 0.7),
+    ];
+    let mut a = keyrig_core::Object::new("Even");
+    a.translation = Animated::new(
+        Vec3::ZERO,
+        RawTrack::new(
+            even.iter()
+                .zip(points)
+                .enumerate()
+                .map(|(i, (&t, p))| Key::new(t, p).with_tcb(tcb(0.1 * i as f32, 0.3 - 0.2 * i as f32)))
+                .collect(),
+        ),
+    );
+    a.rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(
+            even.iter()
+                .zip(turns)
+                .enumerate()
+                .map(|(i, (&t, q))| {
+                    Key::new(t, q).with_tcb(tcb(
+                        0.0,
+                        if i == 0 {
+                            -1.0
+                        } else if i == 4 {
+                            1.0
+                        } else {
+                            0.0
+                        },
+                    ))
+                })
+                .collect(),
+        ),
+    );
+    let uneven = [0.0, 0.3, 1.2, 1.4, 2.0];
+    let mut b = keyrig_core::Object::new("Uneven");
+    b.translation = Animated::new(
+        Vec3::ZERO,
+        RawTrack::new(uneven.iter().zip(points).map(|(&t, p)| Key::new(t, p)).collect()),
+    );
+    b.rotation = Animated::new(
+        Quat::IDENTITY,
+        RawTrack::new(even.iter().zip(turns).map(|(&t, q)| Key::new(t, q)).collect()),
+    );
+    let levels = [0.3, 0.6, 0.4, 0.7, 0.5];
+    let light = keyrig_core::Light {
+        name: "Lamp".into(),
+        kind: keyrig_core::LightKind::Point,
+        enabled: true,
+        position: Animated::constant(Vec3::new(0.0, 4.0, 0.0)),
+        direction: Animated::constant(-Vec3::Y),
+        colour: Animated::constant(Vec3::ONE),
+        intensity: Animated::new(
+            0.3,
+            RawTrack::new(even.iter().zip(levels).map(|(&t, v)| Key::new(t, v)).collect()),
+        ),
+        attributes: Default::default(),
+    };
+    keyrig_core::Scene { objects: vec![a, b], lights: vec![light], ..keyrig_core::Scene::default() }
+}
+
+/// One interpolator of an exported `.x3d`: its type, fields and where it is routed.
+struct Written {
+    kind: String,
+    key: Vec<f64>,
+    value: Vec<f64>,
+    velocity: Vec<f64>,
+}
+
+fn floats(text: Option<&str>) -> Vec<f64> {
+    text.unwrap_or("")
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse().unwrap())
+        .collect()
+}
+
+/// The interpolators of an exported X3D XML document by `target.field`.
+fn interpolators(text: &str) -> HashMap<String, Written> {
+    let doc = roxmltree::Document::parse(text).unwrap();
+    let mut by_def = HashMap::new();
+    for n in doc.descendants().filter(|n| n.tag_name().name().ends_with("Interpolator")) {
+        by_def.insert(
+            n.attribute("DEF").unwrap().to_owned(),
+            Written {
+                kind: n.tag_name().name().to_owned(),
+                key: floats(n.attribute("key")),
+                value: floats(n.attribute("keyValue")),
+                velocity: floats(n.attribute("keyVelocity")),
+            },
+        );
+    }
+    let mut out = HashMap::new();
+    for r in doc.descendants().filter(|n| n.tag_name().name() == "ROUTE") {
+        if let Some(w) = by_def.remove(r.attribute("fromNode").unwrap()) {
+            out.insert(format!("{}.{}", r.attribute("toNode").unwrap(), r.attribute("toField").unwrap()), w);
+        }
+    }
+    out
+}
+
+/// keyrig's keys that X3D's spline and squad interpolators hold exactly are written as those
+/// (and the others resampled as before); the exported keys, evaluated by the specification's
+/// formulas written in this test, equal `keyrig sample` of the scene at every frame.
+#[test]
+fn exported_spline_and_squad_interpolators_play_what_keyrig_plays() {
+    let scene = spline_scene();
+    let text = keyrig_io::vrml::export::export_scene(
+        &scene,
+        keyrig_io::vrml::export::ExportFormat::X3dXml,
+        &keyrig_io::vrml::export::VrmlExportOptions::default(),
+    )
+    .unwrap();
+    let written = interpolators(&text);
+    let kind = |k: &str| written[k].kind.as_str();
+    assert_eq!(kind("Even.translation"), "SplinePositionInterpolator");
+    assert_eq!(kind("Even.rotation"), "SquadOrientationInterpolator");
+    assert_eq!(kind("Lamp.intensity"), "SplineScalarInterpolator");
+    assert_eq!(kind("Uneven.translation"), "PositionInterpolator");
+    assert_eq!(
+        kind("Uneven.rotation"),
+        "OrientationInterpolator",
+        "T = C = B = 0 ends are not X_ITE's squad ends"
+    );
+    for k in ["Even.translation", "Even.rotation", "Lamp.intensity"] {
+        assert_eq!(written[k].key.len(), 5, "{k}: key for key");
+    }
+    let evaluator = SceneEvaluator::new(&scene, &HashMap::new());
+    let at = |id, t| evaluator.value(id, t, &Overrides::default()).unwrap();
+    let (mut worst_position, mut worst_angle, mut worst_scalar) = (0.0f64, 0.0f64, 0.0f64);
+    for frame in 0..=scene.frame_range.end {
+        let t = f64::from(frame) / scene.fps;
+        let f = t / 2.0;
+        let w = &written["Even.translation"];
+        let ChannelValue::Vec3(p) = at(ChannelId::ObjectTranslation(0), t) else { panic!() };
+        for c in 0..3 {
+            let values: Vec<f64> = w.value.iter().skip(c).step_by(3).copied().collect();
+            let velocity: Vec<f64> = w.velocity.iter().skip(c).step_by(3).copied().collect();
+            let spec = hermite_spec(&w.key, &values, Some(&velocity), f);
+            worst_position = worst_position.max((spec - f64::from(p[c])).abs());
+        }
+        let w = &written["Even.rotation"];
+        let rotations: Vec<[f64; 4]> = w.value.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+        let ChannelValue::Rotation(q) = at(ChannelId::ObjectRotation(0), t) else { panic!() };
+        let spec = squad_spec(&w.key, &rotations, false, f);
+        worst_angle = worst_angle.max(degrees_between(spec, [q.w, q.x, q.y, q.z].map(f64::from)));
+        let w = &written["Lamp.intensity"];
+        let ChannelValue::Scalar(i) = at(ChannelId::LightIntensity(0), t) else { panic!() };
+        let spec = hermite_spec(&w.key, &w.value, Some(&w.velocity), f);
+        worst_scalar = worst_scalar.max((spec - f64::from(i)).abs());
+    }
+    assert!(worst_position < 1e-5, "positions: worst {worst_position}");
+    assert!(worst_angle < 1e-3, "rotations: worst {worst_angle}°");
+    assert!(worst_scalar < 1e-5, "intensity: worst {worst_scalar}");
+    // The classic encoding writes the same nodes; VRML97 and Inventor have none of them.
+    let classic = keyrig_io::vrml::export::export_scene(
+        &scene,
+        keyrig_io::vrml::export::ExportFormat::X3dClassic,
+        &keyrig_io::vrml::export::VrmlExportOptions::default(),
+    )
+    .unwrap();
+    assert!(
+        classic.contains("SplinePositionInterpolator") && classic.contains("SquadOrientationInterpolator")
+    );
+    let wrl = keyrig_io::vrml::export::export_scene(
+        &scene,
+        keyrig_io::vrml::export::ExportFormat::Vrml97,
+        &keyrig_io::vrml::export::VrmlExportOptions::default(),
+    )
+    .unwrap();
+    assert!(!wrl.contains("Spline") && !wrl.contains("Squad"));
+}

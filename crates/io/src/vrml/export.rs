@@ -13,7 +13,13 @@
 //!   interpolator's straight line (slerp for rotations, HSV for colours) would leave keyrig's
 //!   curve by more than the tolerances ([`VrmlExportOptions`]): halving the interval until the
 //!   midpoint and quarter points are within them. Rotation samples are never 90° or more
-//!   apart, so that each slerp turns the way keyrig turns.
+//!   apart, so that each slerp turns the way keyrig turns. In X3D, a channel whose keys
+//!   X3D's `SplinePositionInterpolator`, `SplineScalarInterpolator` or
+//!   `SquadOrientationInterpolator` holds exactly (evenly spaced TCB keys, no cycles; for the
+//!   squad T = C = B = 0 inside and X3D's open ends) is written as one, key for key, after
+//!   checking it at every frame ([`Channels`]).
+//! - The writers of one value kind are one each ([`Channels::vec3`], [`Channels::scalar`],
+//!   [`Channels::rotation`]) for objects and lights alike.
 //! - keyrig's own scene (its keys with tension, continuity and bias, cycles, spins, skeletons)
 //!   goes into the file as metadata — a `WorldInfo` `info` string (an Inventor `Info` node's
 //!   `string`) that starts with [`METADATA_TAG`] and holds the scene as RON — and the importer
@@ -31,10 +37,11 @@ use std::sync::Arc;
 
 use glam::{Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
-use keyrig_core::{MeshSource, Scene};
+use keyrig_core::{Animated, Cycles, Interpolation, MeshSource, RawTrack, Scene, Track, TrackValue};
 use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator};
 
 use super::map::hsv_lerp;
+use super::splines::{self, SplineValue};
 
 pub use super::tree::METADATA_TAG;
 
@@ -406,19 +413,18 @@ pub fn export_scene(
     }
     let size = if lo.cmple(hi).all() { f64::from((hi - lo).length()).max(1.0) } else { 1.0 };
     let pos_tol = (options.position_tolerance * size) as f32;
-    let rot_tol = options.rotation_tolerance_deg.to_radians() as f32;
-    let col_tol = options.colour_tolerance as f32;
-    let lerp_close =
-        |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| (a.lerp(*b, u) - *m).abs().max_element() <= pos_tol;
-    let slerp_close = |a: &Quat, b: &Quat, m: &Quat, u: f32| {
-        a.angle_between(*b) < std::f32::consts::FRAC_PI_2
-            && crate::model::slerp_short(*a, *b, u).angle_between(*m) <= rot_tol
-    };
-    let hsv_close =
-        |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| (hsv_lerp(*a, *b, u) - *m).abs().max_element() <= col_tol;
-    let scalar_close = |a: &f32, b: &f32, m: &f32, u: f32| (a + (b - a) * u - m).abs() <= pos_tol.max(1e-6);
     let animated = duration > 0.0;
     let fraction = |t: f64| if duration > 0.0 { (t - t0) / duration } else { 0.0 };
+    let ch = Channels {
+        eval: &eval,
+        t0,
+        t1,
+        fps,
+        pos_tol,
+        rot_tol: options.rotation_tolerance_deg.to_radians() as f32,
+        col_tol: options.colour_tolerance as f32,
+        x3d: matches!(format, ExportFormat::X3dClassic | ExportFormat::X3dXml),
+    };
 
     let (object_defs, light_defs, mut used) = exported_names(scene);
     let clock = def_name("KeyrigClock", &mut used);
@@ -442,7 +448,6 @@ pub fn export_scene(
     let mut out = Animations { used, clock: clock.clone(), interpolators: Vec::new(), routes: Vec::new() };
     for (o, object) in scene.objects.iter().enumerate() {
         let def = object_defs[o].clone();
-        let key_times = |track: &[f64]| track.to_vec();
         let translation = vec3_of(at(ChannelId::ObjectTranslation(o), t0));
         let rotation = quat_of(at(ChannelId::ObjectRotation(o), t0));
         let scale = vec3_of(at(ChannelId::ObjectScale(o), t0));
@@ -451,60 +456,17 @@ pub fn export_scene(
             ("rotation", WValue::Numbers(axis_angle(rotation).to_vec(), 4)),
             ("scale", WValue::Numbers(scale.to_array().map(f64::from).to_vec(), 3)),
         ];
-        if animated && object.translation.is_animated() {
-            let times: Vec<f64> =
-                key_times(&object.translation.track.keys.iter().map(|k| k.time).collect::<Vec<_>>());
-            let s = schedule(
-                &|t| vec3_of(at(ChannelId::ObjectTranslation(o), t)),
-                &lerp_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "PositionInterpolator",
+        if animated {
+            ch.vec3(
+                &mut out,
+                ChannelId::ObjectTranslation(o),
+                &object.translation,
+                Vec3Blend::Position,
                 &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
                 "translation",
             );
-        }
-        if animated && object.scale.is_animated() {
-            let times: Vec<f64> = object.scale.track.keys.iter().map(|k| k.time).collect();
-            let s =
-                schedule(&|t| vec3_of(at(ChannelId::ObjectScale(o), t)), &lerp_close, t0, t1, fps, &times);
-            out.interp(
-                "PositionInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "scale",
-            );
-        }
-        if animated && object.rotation.is_animated() {
-            let times: Vec<f64> = object.rotation.track.keys.iter().map(|k| k.time).collect();
-            let s = schedule(
-                &|t| quat_of(at(ChannelId::ObjectRotation(o), t)),
-                &slerp_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "OrientationInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, q)| axis_angle(*q)).collect(),
-                4,
-                def.clone(),
-                "rotation",
-            );
+            ch.vec3(&mut out, ChannelId::ObjectScale(o), &object.scale, Vec3Blend::Position, &def, "scale");
+            ch.rotation(&mut out, ChannelId::ObjectRotation(o), &object.rotation, &def, "rotation");
         }
         let mut children = Vec::new();
         if let Some(m) = &meshes[o] {
@@ -556,13 +518,13 @@ pub fn export_scene(
                         .all(|((a, b), m)| (a.lerp(*b, u) - *m).abs().max_element() <= pos_tol)
                 };
                 let s = schedule(&|t| deformed(t).unwrap_or_else(|| rest.clone()), &fits, t0, t1, fps, &[]);
-                out.interp(
+                out.interp_with(
                     "CoordinateInterpolator",
-                    &def,
+                    (&def, &shape_def),
                     s.iter().map(|(t, _)| fraction(*t)).collect(),
                     s.iter().flat_map(|(_, v)| v.iter().flat_map(|p| p.to_array().map(f64::from))).collect(),
                     3,
-                    shape_def.clone(),
+                    Vec::new(),
                     "point",
                 );
             }
@@ -653,73 +615,29 @@ pub fn export_scene(
             fields.push(("cutOffAngle", WValue::Numbers(vec![f64::from(cutoff_deg.to_radians())], 1)));
             fields.push(("beamWidth", WValue::Numbers(vec![f64::from(inner_angle_deg.to_radians())], 1)));
         }
-        if animated && light.position.is_animated() && kind != "DirectionalLight" {
-            let times: Vec<f64> = light.position.track.keys.iter().map(|k| k.time).collect();
-            let s =
-                schedule(&|t| vec3_of(at(ChannelId::LightPosition(l), t)), &lerp_close, t0, t1, fps, &times);
-            out.interp(
-                "PositionInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "location",
-            );
-        }
-        if animated && light.direction.is_animated() && kind != "PointLight" {
-            let times: Vec<f64> = light.direction.track.keys.iter().map(|k| k.time).collect();
-            let s =
-                schedule(&|t| vec3_of(at(ChannelId::LightDirection(l), t)), &lerp_close, t0, t1, fps, &times);
-            out.interp(
-                "PositionInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "direction",
-            );
-        }
-        if animated && light.colour.is_animated() {
-            let times: Vec<f64> = light.colour.track.keys.iter().map(|k| k.time).collect();
-            let s = schedule(
-                &|t| vec3_of(at(ChannelId::LightColour(l), t)).clamp(Vec3::ZERO, Vec3::ONE),
-                &hsv_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "ColorInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "color",
-            );
-        }
-        if animated && light.intensity.is_animated() {
-            let times: Vec<f64> = light.intensity.track.keys.iter().map(|k| k.time).collect();
-            let s = schedule(
-                &|t| scalar_of(at(ChannelId::LightIntensity(l), t)).clamp(0.0, 1.0),
-                &scalar_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "ScalarInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().map(|(_, v)| f64::from(*v)).collect(),
-                1,
-                def.clone(),
-                "intensity",
-            );
+        if animated {
+            if kind != "DirectionalLight" {
+                ch.vec3(
+                    &mut out,
+                    ChannelId::LightPosition(l),
+                    &light.position,
+                    Vec3Blend::Position,
+                    &def,
+                    "location",
+                );
+            }
+            if kind != "PointLight" {
+                ch.vec3(
+                    &mut out,
+                    ChannelId::LightDirection(l),
+                    &light.direction,
+                    Vec3Blend::Position,
+                    &def,
+                    "direction",
+                );
+            }
+            ch.vec3(&mut out, ChannelId::LightColour(l), &light.colour, Vec3Blend::Colour, &def, "color");
+            ch.scalar(&mut out, ChannelId::LightIntensity(l), &light.intensity, &def, "intensity");
         }
         roots.push(WNode { kind, def: Some(def), fields });
     }
@@ -732,6 +650,270 @@ pub fn export_scene(
     })
 }
 
+/// How a vector channel blends: VRML's straight line, or its HSV colour blend (clamped to
+/// VRML's 0..1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Vec3Blend {
+    Position,
+    Colour,
+}
+
+/// What the channel writers share: the evaluator, the range, the tolerances and whether the
+/// format has X3D's spline and squad interpolators.
+struct Channels<'a> {
+    eval: &'a SceneEvaluator,
+    t0: f64,
+    t1: f64,
+    fps: f64,
+    pos_tol: f32,
+    rot_tol: f32,
+    col_tol: f32,
+    x3d: bool,
+}
+
+/// keyrig's own keys of a channel when they might be one X3D spline: two or more, TCB up to the
+/// last, Hold at both ends, not muted.
+fn spline_candidate<T: TrackValue>(animated: &Animated<T>) -> Option<Track<T>> {
+    let keys = &animated.track.keys;
+    if animated.muted || animated.cycles() != Cycles::HOLD || keys.len() < 2 {
+        return None;
+    }
+    if keys[..keys.len() - 1].iter().any(|k| k.interpolation != Interpolation::Tcb) {
+        return None;
+    }
+    Track::with_cycles(&animated.track, Cycles::HOLD).ok()
+}
+
+/// X3D's one velocity per key (per unit of the segment parameter) from keyrig's segment
+/// tangents (per second): the tangent leaving each key, the one arriving at the last.
+fn key_velocities<T: SplineValue>(
+    times: &[f64],
+    tangent: impl Fn(usize) -> Option<(T, T)>,
+) -> Option<Vec<T>> {
+    let n = times.len();
+    (0..n)
+        .map(|i| {
+            if i + 1 < n {
+                tangent(i).map(|(out, _)| out.scale((times[i + 1] - times[i]) as f32))
+            } else {
+                tangent(n - 2).map(|(_, arriving)| arriving.scale((times[n - 1] - times[n - 2]) as f32))
+            }
+        })
+        .collect()
+}
+
+impl Channels<'_> {
+    fn at(&self, id: ChannelId, t: f64) -> Option<ChannelValue> {
+        self.eval.value(id, t, &Overrides::default())
+    }
+
+    fn fraction(&self, t: f64) -> f64 {
+        (t - self.t0) / (self.t1 - self.t0)
+    }
+
+    fn schedule<T: Clone>(
+        &self,
+        value: &dyn Fn(f64) -> T,
+        close: &dyn Fn(&T, &T, &T, f32) -> bool,
+        keys: &[f64],
+    ) -> Vec<(f64, T)> {
+        schedule(value, close, self.t0, self.t1, self.fps, keys)
+    }
+
+    /// Where an exported spline is compared with keyrig: every frame, three points between
+    /// frames, and the key times in the range.
+    fn check_times(&self, keys: &[f64]) -> Vec<f64> {
+        let frames = ((self.t1 - self.t0) * self.fps).round().max(0.0) as i64;
+        let mut times: Vec<f64> = (0..=frames * 4)
+            .map(|q| self.t0 + q as f64 / (4.0 * self.fps))
+            .filter(|&t| t <= self.t1)
+            .collect();
+        times.extend(keys.iter().copied().filter(|&k| k >= self.t0 && k <= self.t1));
+        times
+    }
+
+    /// The fractions of an X3D spline with these keys and velocities when it plays `value`
+    /// within `tolerance` at every [`Channels::check_times`] (read back as keyrig reads it).
+    fn exact_spline<T: TrackValue + SplineValue>(
+        &self,
+        times: &[f64],
+        values: &[T],
+        velocity: &[T],
+        value: impl Fn(f64) -> T,
+        distance: impl Fn(T, T) -> f32,
+        tolerance: f32,
+    ) -> Option<Vec<f64>> {
+        let fractions: Vec<f64> = times.iter().map(|&t| self.fraction(t)).collect();
+        let fields = splines::SplineFields { closed: false, velocity, normalize: false };
+        let keys = splines::spline_keys(&fractions, values, &fields, self.t1 - self.t0);
+        let track = Track::new(&RawTrack::new(keys)).ok()?;
+        self.check_times(times)
+            .into_iter()
+            .all(|t| distance(track.sample(t - self.t0), value(t)) <= tolerance)
+            .then_some(fractions)
+    }
+
+    /// A vector channel: X3D's `SplinePositionInterpolator` where it is exact, else a
+    /// `PositionInterpolator` (or `ColorInterpolator`) resampled within the tolerance.
+    fn vec3(
+        &self,
+        out: &mut Animations,
+        id: ChannelId,
+        animated: &Animated<Vec3>,
+        blend: Vec3Blend,
+        name: &str,
+        field: &'static str,
+    ) {
+        if !animated.is_animated() {
+            return;
+        }
+        let key_times: Vec<f64> = animated.track.keys.iter().map(|k| k.time).collect();
+        let flat = |v: &mut dyn Iterator<Item = Vec3>| v.flat_map(|v| v.to_array().map(f64::from)).collect();
+        if blend == Vec3Blend::Colour {
+            let close = |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| {
+                (hsv_lerp(*a, *b, u) - *m).abs().max_element() <= self.col_tol
+            };
+            let s =
+                self.schedule(&|t| vec3_of(self.at(id, t)).clamp(Vec3::ZERO, Vec3::ONE), &close, &key_times);
+            let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+            out.interp("ColorInterpolator", name, fractions, flat(&mut s.iter().map(|(_, v)| *v)), 3, field);
+            return;
+        }
+        let value = |t: f64| vec3_of(self.at(id, t));
+        if let Some(track) = spline_candidate(animated).filter(|_| self.x3d) {
+            let times = track.key_times();
+            let exact = key_velocities(times, |i| track.segment_tangents(i)).and_then(|velocity| {
+                let distance = |a: Vec3, b: Vec3| (a - b).abs().max_element();
+                let fractions = self.exact_spline(
+                    times,
+                    track.key_values(),
+                    &velocity,
+                    value,
+                    distance,
+                    self.pos_tol / 10.0,
+                )?;
+                Some((fractions, velocity))
+            });
+            if let Some((fractions, velocity)) = exact {
+                out.interp_with(
+                    "SplinePositionInterpolator",
+                    (name, name),
+                    fractions,
+                    flat(&mut track.key_values().iter().copied()),
+                    3,
+                    vec![("keyVelocity", WValue::Numbers(flat(&mut velocity.into_iter()), 3))],
+                    field,
+                );
+                return;
+            }
+        }
+        let close =
+            |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| (a.lerp(*b, u) - *m).abs().max_element() <= self.pos_tol;
+        let s = self.schedule(&value, &close, &key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        out.interp("PositionInterpolator", name, fractions, flat(&mut s.iter().map(|(_, v)| *v)), 3, field);
+    }
+
+    /// A scalar channel (clamped to VRML's 0..1): X3D's `SplineScalarInterpolator` where it is
+    /// exact, else a resampled `ScalarInterpolator`.
+    fn scalar(
+        &self,
+        out: &mut Animations,
+        id: ChannelId,
+        animated: &Animated<f32>,
+        name: &str,
+        field: &'static str,
+    ) {
+        if !animated.is_animated() {
+            return;
+        }
+        let value = |t: f64| scalar_of(self.at(id, t)).clamp(0.0, 1.0);
+        if let Some(track) = spline_candidate(animated).filter(|_| self.x3d) {
+            let times = track.key_times();
+            let exact = key_velocities(times, |i| track.segment_tangents(i)).and_then(|velocity| {
+                let fractions = self.exact_spline(
+                    times,
+                    track.key_values(),
+                    &velocity,
+                    value,
+                    |a, b| (a - b).abs(),
+                    1e-5,
+                )?;
+                Some((fractions, velocity))
+            });
+            if let Some((fractions, velocity)) = exact {
+                let numbers = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect();
+                out.interp_with(
+                    "SplineScalarInterpolator",
+                    (name, name),
+                    fractions,
+                    numbers(track.key_values()),
+                    1,
+                    vec![("keyVelocity", WValue::Numbers(numbers(&velocity), 1))],
+                    field,
+                );
+                return;
+            }
+        }
+        let key_times: Vec<f64> = animated.track.keys.iter().map(|k| k.time).collect();
+        let close = |a: &f32, b: &f32, m: &f32, u: f32| (a + (b - a) * u - m).abs() <= self.pos_tol.max(1e-6);
+        let s = self.schedule(&value, &close, &key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        out.interp(
+            "ScalarInterpolator",
+            name,
+            fractions,
+            s.iter().map(|(_, v)| f64::from(*v)).collect(),
+            1,
+            field,
+        );
+    }
+
+    /// A rotation channel: X3D's `SquadOrientationInterpolator` where it is exact, else an
+    /// `OrientationInterpolator` resampled within the tolerance, no two samples 90° apart.
+    fn rotation(
+        &self,
+        out: &mut Animations,
+        id: ChannelId,
+        animated: &Animated<Quat>,
+        name: &str,
+        field: &'static str,
+    ) {
+        if !animated.is_animated() {
+            return;
+        }
+        let value = |t: f64| quat_of(self.at(id, t));
+        if let Some(track) = spline_candidate(animated).filter(|t| self.x3d && !t.has_spin()) {
+            let fractions: Vec<f64> = track.key_times().iter().map(|&t| self.fraction(t)).collect();
+            let curve = splines::SquadCurve::new(&fractions, track.key_values(), false);
+            let tolerance = f64::from(self.rot_tol) / 10.0;
+            let exact = self.check_times(track.key_times()).into_iter().all(|t| {
+                splines::rotation_angle(curve.eval(self.fraction(t)), value(t).as_dquat()) <= tolerance
+            });
+            if exact {
+                let values = track.key_values().iter().flat_map(|q| axis_angle(*q)).collect();
+                out.interp("SquadOrientationInterpolator", name, fractions, values, 4, field);
+                return;
+            }
+        }
+        let key_times: Vec<f64> = animated.track.keys.iter().map(|k| k.time).collect();
+        let close = |a: &Quat, b: &Quat, m: &Quat, u: f32| {
+            a.angle_between(*b) < std::f32::consts::FRAC_PI_2
+                && crate::model::slerp_short(*a, *b, u).angle_between(*m) <= self.rot_tol
+        };
+        let s = self.schedule(&value, &close, &key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        out.interp(
+            "OrientationInterpolator",
+            name,
+            fractions,
+            s.iter().flat_map(|(_, q)| axis_angle(*q)).collect(),
+            4,
+            field,
+        );
+    }
+}
+
 /// The interpolators and routes being written.
 struct Animations {
     used: HashMap<String, usize>,
@@ -742,8 +924,7 @@ struct Animations {
 
 impl Animations {
     /// An interpolator of `kind` with `keys` (fractions) and `values` (`arity` numbers each),
-    /// driven by the clock and routed to `target.field`.
-    #[allow(clippy::too_many_arguments)]
+    /// driven by the clock and routed to `name.field` (`name` is the target's DEF).
     fn interp(
         &mut self,
         kind: &'static str,
@@ -751,17 +932,31 @@ impl Animations {
         keys: Vec<f64>,
         values: Vec<f64>,
         arity: usize,
-        target: String,
+        field: &'static str,
+    ) {
+        self.interp_with(kind, (name, name), keys, values, arity, Vec::new(), field);
+    }
+
+    /// [`Animations::interp`] with more fields (a spline's `keyVelocity`); `(name, target)`:
+    /// the interpolator is named `name_field` and routed to `target.field`.
+    #[allow(clippy::too_many_arguments)]
+    fn interp_with(
+        &mut self,
+        kind: &'static str,
+        (name, target): (&str, &str),
+        keys: Vec<f64>,
+        values: Vec<f64>,
+        arity: usize,
+        more: Vec<(&'static str, WValue)>,
         field: &'static str,
     ) {
         let def = def_name(&format!("{name}_{field}"), &mut self.used);
-        self.interpolators.push(WNode {
-            kind,
-            def: Some(def.clone()),
-            fields: vec![("key", WValue::Numbers(keys, 1)), ("keyValue", WValue::Numbers(values, arity))],
-        });
+        let mut fields =
+            vec![("key", WValue::Numbers(keys, 1)), ("keyValue", WValue::Numbers(values, arity))];
+        fields.extend(more);
+        self.interpolators.push(WNode { kind, def: Some(def.clone()), fields });
         self.routes.push((self.clock.clone(), "fraction_changed", def.clone(), "set_fraction"));
-        self.routes.push((def, "value_changed", target, field));
+        self.routes.push((def, "value_changed", target.to_owned(), field));
     }
 }
 

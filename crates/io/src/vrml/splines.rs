@@ -223,7 +223,7 @@ impl SquadCurve {
         if n == 0 {
             return DQuat::IDENTITY;
         }
-        if !(f > self.fractions[0]) {
+        if f.is_nan() || f <= self.fractions[0] {
             return self.keys[0];
         }
         if f >= self.fractions[n - 1] {
@@ -238,8 +238,13 @@ impl SquadCurve {
 }
 
 /// The rotation angle (radians) between two unit quaternions (either sign).
-fn angle(a: DQuat, b: DQuat) -> f64 {
-    2.0 * a.dot(b).abs().min(1.0).acos()
+#[must_use]
+pub fn rotation_angle(a: DQuat, b: DQuat) -> f64 {
+    // 4·atan2(|a − b|, |a + b|) with b turned to a's sign: exact near 0, where acos of a dot
+    // product of f32-rounded quaternions loses half its digits.
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    let (a, b) = (glam::DVec4::from(a), glam::DVec4::from(b));
+    4.0 * (a - b).length().atan2((a + b).length())
 }
 
 /// X3D `SquadOrientationInterpolator` keys over a cycle of `cycle` seconds played with
@@ -314,7 +319,7 @@ pub(super) fn squad_keys(
         fractions[..n].windows(2).all(|w| {
             (1..8).all(|k| {
                 let f = w[0] + (w[1] - w[0]) * f64::from(k) / 8.0;
-                angle(track.sample_wide(f * cycle), curve.eval(f)) <= SQUAD_EXACT_RAD
+                rotation_angle(track.sample_wide(f * cycle), curve.eval(f)) <= SQUAD_EXACT_RAD
             })
         })
     });
@@ -345,7 +350,7 @@ fn resample_squad(curve: &SquadCurve, cycle: f64) -> Vec<Key<Quat>> {
             let (q0, q1) = (curve.eval(f0), curve.eval(f1));
             let fits = (1..8).all(|k| {
                 let s = f64::from(k) / 8.0;
-                angle(slerp(q0, q1, s), curve.eval(f0 + (f1 - f0) * s)) <= tolerance
+                rotation_angle(slerp(q0, q1, s), curve.eval(f0 + (f1 - f0) * s)) <= tolerance
             });
             // Bounded: at most 4096 pieces a segment, none shorter than 10⁻⁶ of the cycle
             // (so at most a million pieces besides the keys, whatever the file holds).
@@ -376,6 +381,6 @@ mod tests {
         // Keys evenly along one axis: Shoemake's intermediate quaternion is the key itself.
         let q = |a: f64| DQuat::from_axis_angle(glam::DVec3::Z, a);
         let s = intermediate(q(0.0), q(0.5), q(1.0));
-        assert!(angle(s, q(0.5)) < 1e-12);
+        assert!(rotation_angle(s, q(0.5)) < 1e-12);
     }
 }
