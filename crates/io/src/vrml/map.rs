@@ -108,7 +108,8 @@ pub struct VrmlMesh {
     pub baked: Mat4,
 }
 
-/// A `Viewpoint` (or Inventor camera), kept as a named view until keyrig scenes have cameras.
+/// A `Viewpoint` (or Inventor camera) at rest, in world space; [`VrmlModel::cameras`] holds it
+/// as a keyrig scene camera with its animation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
     pub name: String,
@@ -116,6 +117,9 @@ pub struct View {
     pub orientation: Quat,
     /// Radians.
     pub field_of_view: f32,
+    /// The height of the view of an orthographic camera (`OrthoViewpoint`, Inventor's
+    /// `OrthographicCamera`), scene units.
+    pub orthographic: Option<f32>,
 }
 
 /// A whole imported VRML/X3D/Inventor file.
@@ -128,6 +132,9 @@ pub struct VrmlModel {
     pub meshes: Vec<VrmlMesh>,
     pub lights: Vec<keyrig_core::Light>,
     pub views: Vec<View>,
+    /// The views as scene cameras (`camera/<name>/…` channels), with the animation of their
+    /// `position`, `orientation` and `fieldOfView`; the first is the one VRML binds first.
+    pub cameras: Vec<keyrig_core::SceneCamera>,
     /// Seconds of animation (the longest cycle); 0 without animation.
     pub duration: f64,
     pub skipped: Vec<Skipped>,
@@ -166,11 +173,14 @@ impl VrmlModel {
         if let Some(view) = self.views.first() {
             scene.camera = self.camera_of(view);
         }
+        scene.cameras = self.cameras.clone();
         if let Some(original) = &self.metadata_scene {
             scene.fps = original.fps;
             scene.frame_range = original.frame_range;
             scene.ambient = original.ambient;
             scene.camera = original.camera;
+            scene.active_camera.clone_from(&original.active_camera);
+            scene.markers.clone_from(&original.markers);
         }
         scene
     }
@@ -353,6 +363,18 @@ impl Channel {
 
 fn animated<T: Copy>(value: T, track: &RawTrack<T>, timing: Timing) -> Animated<T> {
     Animated::new(value, track.clone()).with_cycles(Channel::cycles(timing))
+}
+
+/// `track` with every value mapped by `value` and every tangent by `tangent` (an affine map:
+/// the same curve, mapped).
+fn scaled<T: Copy>(track: &RawTrack<T>, value: impl Fn(T) -> T, tangent: impl Fn(T) -> T) -> RawTrack<T> {
+    let mut out = track.clone();
+    for k in out.keys.iter_mut() {
+        k.value = value(k.value);
+        k.in_tangent = k.in_tangent.map(&tangent);
+        k.out_tangent = k.out_tangent.map(&tangent);
+    }
+    out
 }
 
 fn is_interpolator(kind: &str) -> bool {
@@ -725,6 +747,8 @@ pub(crate) struct ShapeInstance {
     pub frames: Vec<Frame>,
     pub geometry: GeometryRef,
     pub material: Material,
+    /// The VRML/X3D `Material` node (for its animation).
+    pub material_node: Option<NodeId>,
     pub place: Place,
 }
 
@@ -803,7 +827,8 @@ pub(crate) struct Traversal<'d> {
     pub skips: Skips,
     pub shapes: Vec<ShapeInstance>,
     pub lights: Vec<LightInstance>,
-    pub views: Vec<(View, Vec<Frame>)>,
+    /// Each view with the transforms above it and its node (for its animation).
+    pub views: Vec<(View, Vec<Frame>, Option<NodeId>)>,
     visits: usize,
     geometry_cache: HashMap<NodeId, Option<GeometryRef>>,
     texture_cache: HashMap<NodeId, Option<Arc<keyrig_core::TextureImage>>>,
@@ -926,13 +951,23 @@ impl<'d> Traversal<'d> {
                     .clone()
                     .or_else(|| strings(doc, id, "description").first().cloned())
                     .unwrap_or_else(|| format!("View {}", self.views.len() + 1));
+                // OrthoViewpoint's fieldOfView is the view's box (minX, minY, maxX, maxY).
+                let orthographic = (node.kind == "OrthoViewpoint").then(|| {
+                    let b = numbers(doc, id, "fieldOfView").filter(|b| b.len() >= 4).unwrap_or(&[-1.0, -1.0, 1.0, 1.0]);
+                    ((b[3] - b[1]) as f32).abs().max(1e-3)
+                });
                 let view = View {
                     name,
                     position: vec3(doc, id, "position", Vec3::new(0.0, 0.0, 10.0)),
                     orientation: rotation(doc, id, "orientation"),
-                    field_of_view: float(doc, id, "fieldOfView", std::f32::consts::FRAC_PI_4),
+                    field_of_view: if orthographic.is_some() {
+                        std::f32::consts::FRAC_PI_4
+                    } else {
+                        float(doc, id, "fieldOfView", std::f32::consts::FRAC_PI_4)
+                    },
+                    orthographic,
                 };
-                self.views.push((view, frames.clone()));
+                self.views.push((view, frames.clone(), Some(id)));
             }
             "WorldInfo" if node.value("info").is_some_and(|v| matches!(v, Value::Strings(s) if s.iter().any(|s| s.starts_with(super::tree::METADATA_TAG)))) => {}
             "WorldInfo" | "NavigationInfo" | "Background" | "TextureBackground" | "Fog" | "Sound"
@@ -965,7 +1000,9 @@ impl<'d> Traversal<'d> {
         let node = doc.node(id);
         let Some(geometry) = node_field(doc, id, "geometry") else { return Ok(()) };
         let Some(g) = self.geometry(geometry) else { return Ok(()) };
-        let material = self.appearance(node_field(doc, id, "appearance"));
+        let appearance = node_field(doc, id, "appearance");
+        let material = self.appearance(appearance);
+        let material_node = appearance.and_then(|a| node_field(doc, a, "material"));
         let mut hints: Vec<String> = names.iter().rev().cloned().collect();
         if let Some(def) = &doc.node(geometry).def {
             hints.push(def.clone());
@@ -976,6 +1013,7 @@ impl<'d> Traversal<'d> {
             frames: frames.to_vec(),
             geometry: g,
             material,
+            material_node,
             place: node.place,
         });
         Ok(())
@@ -1733,10 +1771,16 @@ pub(crate) fn map_document(
     for l in &traversal.lights {
         lights.push(mapper.light(l, &mut light_names));
     }
+    let mut camera_names = HashMap::new();
+    let cameras: Vec<keyrig_core::SceneCamera> = traversal
+        .views
+        .iter()
+        .map(|(v, frames, node)| mapper.camera(v, frames, *node, &mut camera_names))
+        .collect();
     let views: Vec<View> = traversal
         .views
         .iter()
-        .map(|(v, frames)| {
+        .map(|(v, frames, _)| {
             let m = frames.iter().fold(Mat4::IDENTITY, |acc, f| acc * frame_matrix(doc, f));
             let (_, r, _) = m.to_scale_rotation_translation();
             View {
@@ -1746,7 +1790,7 @@ pub(crate) fn map_document(
             }
         })
         .collect();
-    for (v, _) in &traversal.views {
+    for (v, _, _) in &traversal.views {
         let up = v.orientation * Vec3::Y;
         let forward = v.orientation * -Vec3::Z;
         let level_up = (Vec3::Y - forward * forward.dot(Vec3::Y)).normalize_or(up);
@@ -1770,13 +1814,14 @@ pub(crate) fn map_document(
                     "DirectionalLight" | "PointLight" | "SpotLight",
                     "location" | "direction" | "color" | "intensity"
                 )
+                | ("SpotLight", "cutOffAngle" | "beamWidth")
+                | ("Viewpoint", "position" | "orientation" | "fieldOfView")
+                | ("OrthoViewpoint", "position" | "orientation")
+                | ("Material", "diffuseColor" | "transparency")
         );
         if !taken {
             let why = match kind {
-                "Viewpoint" | "OrthoViewpoint" => {
-                    "camera animation: keyrig scenes have no cameras yet (the view is kept at rest)"
-                }
-                "Material" => "keyrig does not animate material colours yet",
+                "Material" => "keyrig animates a material's diffuse colour and transparency only",
                 _ => "keyrig has no channel for this field",
             };
             mapper.skips.add(format!("{kind}.{field} animation"), why, doc.node(*node).place);
@@ -1790,6 +1835,7 @@ pub(crate) fn map_document(
         meshes,
         lights,
         views,
+        cameras,
         duration: mapper.anim.duration,
         skipped,
         metadata_scene: None,
@@ -1922,7 +1968,76 @@ impl Mapper<'_> {
             vertex_points,
             baked: bake_matrix,
         };
+        self.material_animation(shape, &mut object);
         (object, mesh)
+    }
+
+    /// A `Material`'s animated `diffuseColor` and `transparency` as the object's colour and
+    /// opacity attributes (opacity = 1 − transparency, an affine map of the keys: exact).
+    fn material_animation(&self, shape: &ShapeInstance, object: &mut keyrig_core::Object) {
+        let Some(m) = shape.material_node else { return };
+        let field = |f: &str| self.anim.channels.get(&(m, f.to_owned()));
+        if let Some(Channel::Vec3(track, timing)) = field("diffuseColor") {
+            let rest = Vec3::from_slice(&shape.material.base_colour[..3]);
+            object.attributes.colour = Some(animated(rest, track, *timing));
+        }
+        if let Some(Channel::Scalar(track, timing)) = field("transparency") {
+            let opaque = scaled(track, |t: f32| 1.0 - t, |t: f32| -t);
+            object.attributes.opacity = animated(shape.material.base_colour[3], &opaque, *timing);
+        }
+    }
+
+    /// A view as a scene camera, placed by the transforms above it, with the animation of its
+    /// `position`, `orientation` and `fieldOfView` (radians → the lens in degrees).
+    fn camera(
+        &mut self,
+        view: &View,
+        frames: &[Frame],
+        node: Option<NodeId>,
+        names: &mut HashMap<String, usize>,
+    ) -> keyrig_core::SceneCamera {
+        let doc = self.doc;
+        let base = view.name.replace('/', "_");
+        let n = names.entry(base.clone()).or_insert(0);
+        *n += 1;
+        let name = if *n > 1 { format!("{base} {n}") } else { base };
+        let m = frames.iter().fold(Mat4::IDENTITY, |acc, f| acc * frame_matrix(doc, f));
+        let (_, r, _) = m.to_scale_rotation_translation();
+        let linear = Mat3::from_mat4(m);
+        let mut camera = keyrig_core::SceneCamera::new(name, m.transform_point3(view.position));
+        camera.rotation = Animated::constant((r * view.orientation).normalize());
+        camera.far = None;
+        match view.orthographic {
+            Some(height) => {
+                camera.projection = keyrig_core::Projection::Orthographic;
+                camera.lens = Animated::constant(height);
+            }
+            None => camera.lens = Animated::constant(view.field_of_view.to_degrees()),
+        }
+        let Some(node) = node else { return camera };
+        if frames.iter().any(|f| self.frame_animated(f)) {
+            self.skips.add(
+                "Viewpoint under an animated Transform",
+                "the camera stays where the transforms put it at rest",
+                doc.node(node).place,
+            );
+        }
+        let field = |f: &str| self.anim.channels.get(&(node, f.to_owned()));
+        if let Some(Channel::Vec3(track, timing)) = field("position") {
+            // Into world space: the same affine image of the curve (tangents by the linear part).
+            let keys = scaled(track, |p| m.transform_point3(p), |t| linear * t);
+            camera.translation = animated(camera.translation.value, &keys, *timing);
+        }
+        if let Some(Channel::Quat(track, timing)) = field("orientation") {
+            // r·q for every key: slerp and squad commute with a fixed rotation in front.
+            let keys = scaled(track, |q| (r * q).normalize(), |t| r * t);
+            camera.rotation = animated(camera.rotation.value, &keys, *timing);
+        }
+        if let (Some(Channel::Scalar(track, timing)), None) = (field("fieldOfView"), view.orthographic) {
+            let keys = scaled(track, |v: f32| v.to_degrees(), |v: f32| v.to_degrees());
+            camera.lens = animated(camera.lens.value, &keys, *timing);
+        }
+        camera
     }
 
     fn light(&mut self, l: &LightInstance, names: &mut HashMap<String, usize>) -> keyrig_core::Light {
@@ -1955,6 +2070,23 @@ impl Mapper<'_> {
         }
         if let Some(Channel::Scalar(track, timing)) = field("intensity") {
             light.intensity = animated(light.intensity.value, &track, timing);
+        }
+        // A spot's cone in radians → the cone attributes in degrees (a scale: exact).
+        if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
+            let degrees = |f: &str, rest: f32| match field(f) {
+                Some(Channel::Scalar(track, timing)) => Some(animated(
+                    rest,
+                    &scaled(&track, |v: f32| v.to_degrees(), |v: f32| v.to_degrees()),
+                    timing,
+                )),
+                _ => None,
+            };
+            if let Some(a) = degrees("cutOffAngle", cutoff_deg) {
+                light.attributes.cutoff_deg = Some(a);
+            }
+            if let Some(a) = degrees("beamWidth", inner_angle_deg) {
+                light.attributes.inner_angle_deg = Some(a);
+            }
         }
         // Into world space: an affine image of linear keys is the same image of the line.
         if m != Mat4::IDENTITY {
