@@ -426,7 +426,8 @@ pub fn export_scene(
         x3d: matches!(format, ExportFormat::X3dClassic | ExportFormat::X3dXml),
     };
 
-    let (object_defs, light_defs, mut used) = exported_names(scene);
+    let ExportedNames { objects: object_defs, lights: light_defs, cameras: camera_defs, mut used } =
+        exported_names(scene);
     let clock = def_name("KeyrigClock", &mut used);
     let mut roots: Vec<WNode> = Vec::new();
     let ron = crate::scene_file::to_string(scene).map_err(|e| VrmlExportError::Metadata(e.to_string()))?;
@@ -541,7 +542,35 @@ pub fn export_scene(
                 .chunks_exact(3)
                 .flat_map(|t| [f64::from(t[0]), f64::from(t[1]), f64::from(t[2]), -1.0])
                 .collect();
-            let c = m.colour;
+            // The colour and opacity attributes replace the mesh's colour and scale its alpha.
+            let mut c = m.colour;
+            if let Some(colour) = object
+                .attributes
+                .colour
+                .as_ref()
+                .map(|_| vec3_of(at(ChannelId::Attribute(keyrig_core::AttributeId::ObjectColour(o)), t0)))
+            {
+                c[..3].copy_from_slice(&colour.to_array());
+            }
+            let alpha = c[3];
+            c[3] = alpha
+                * scalar_of(at(ChannelId::Attribute(keyrig_core::AttributeId::ObjectOpacity(o)), t0))
+                    .clamp(0.0, 1.0);
+            let colour_keys = object.attributes.colour.as_ref().filter(|a| a.is_animated());
+            let opacity_keys = Some(&object.attributes.opacity).filter(|a| a.is_animated());
+            let material_def = (animated && (colour_keys.is_some() || opacity_keys.is_some()))
+                .then(|| def_name(&format!("{def}_material"), &mut out.used));
+            if let Some(mdef) = &material_def {
+                if let Some(keys) = colour_keys {
+                    let id = ChannelId::Attribute(keyrig_core::AttributeId::ObjectColour(o));
+                    ch.vec3(&mut out, id, keys, Vec3Blend::Colour, mdef, "diffuseColor");
+                }
+                if let Some(keys) = opacity_keys {
+                    let id = ChannelId::Attribute(keyrig_core::AttributeId::ObjectOpacity(o));
+                    let transparency = |t: f64| 1.0 - alpha * scalar_of(ch.at(id, t)).clamp(0.0, 1.0);
+                    ch.scalar_resampled(&mut out, &transparency, &key_times(keys), mdef, "transparency");
+                }
+            }
             children.push(WNode {
                 kind: "Shape",
                 def: None,
@@ -555,7 +584,7 @@ pub fn export_scene(
                                 "material",
                                 WValue::Node(Box::new(WNode {
                                     kind: "Material",
-                                    def: None,
+                                    def: material_def,
                                     fields: vec![
                                         (
                                             "diffuseColor",
@@ -612,8 +641,32 @@ pub fn export_scene(
             fields.push(("direction", WValue::Numbers(d.to_array().map(f64::from).to_vec(), 3)));
         }
         if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
-            fields.push(("cutOffAngle", WValue::Numbers(vec![f64::from(cutoff_deg.to_radians())], 1)));
-            fields.push(("beamWidth", WValue::Numbers(vec![f64::from(inner_angle_deg.to_radians())], 1)));
+            // The cone attributes replace the kind's angles; keyed, they are interpolated
+            // (degrees in keyrig, radians in VRML).
+            let cone = [
+                (
+                    "cutOffAngle",
+                    cutoff_deg,
+                    &light.attributes.cutoff_deg,
+                    keyrig_core::AttributeId::LightCutoff(l),
+                ),
+                (
+                    "beamWidth",
+                    inner_angle_deg,
+                    &light.attributes.inner_angle_deg,
+                    keyrig_core::AttributeId::LightInnerAngle(l),
+                ),
+            ];
+            for (field, rest, attribute, id) in cone {
+                let radians = |t: f64| match attribute {
+                    Some(_) => scalar_of(ch.at(ChannelId::Attribute(id), t)).to_radians(),
+                    None => rest.to_radians(),
+                };
+                fields.push((field, WValue::Numbers(vec![f64::from(radians(t0))], 1)));
+                if let Some(keys) = attribute.as_ref().filter(|a| animated && a.is_animated()) {
+                    ch.scalar_resampled(&mut out, &radians, &key_times(keys), &def, field);
+                }
+            }
         }
         if animated {
             if kind != "DirectionalLight" {
@@ -641,6 +694,12 @@ pub fn export_scene(
         }
         roots.push(WNode { kind, def: Some(def), fields });
     }
+    // Cameras: the active one first (VRML binds the first Viewpoint when the world loads).
+    let first = scene.active_camera_at(f64::from(scene.frame_range.start));
+    let order = first.into_iter().chain((0..scene.cameras.len()).filter(|&c| Some(c) != first));
+    for c in order {
+        roots.push(camera_node(scene, &eval, &ch, &mut out, c, &camera_defs[c], animated));
+    }
     let routes = out.routes;
     roots.extend(out.interpolators);
     Ok(match format {
@@ -648,6 +707,70 @@ pub fn export_scene(
         ExportFormat::X3dXml => xml(&roots, &routes),
         ExportFormat::Inventor => inventor(&roots, &routes),
     })
+}
+
+fn key_times<T>(animated: &Animated<T>) -> Vec<f64> {
+    animated.track.keys.iter().map(|k| k.time).collect()
+}
+
+/// Scene camera `c` as a `Viewpoint` (`position`, `orientation`, `fieldOfView` as the
+/// evaluator has them at the range's start), with interpolators for what moves: the keyed
+/// translation and rotation as any transform's; an aimed camera's orientation and a lens
+/// (as the vertical field of view in radians) resampled from the evaluated camera.
+/// Orthographic cameras are written as perspective Viewpoints (VRML97 has no other); their
+/// lens stays in the metadata.
+fn camera_node(
+    scene: &Scene,
+    eval: &SceneEvaluator,
+    ch: &Channels<'_>,
+    out: &mut Animations,
+    c: usize,
+    def: &str,
+    animated: bool,
+) -> WNode {
+    let camera = &scene.cameras[c];
+    let none = Overrides::default();
+    let state = |t: f64| eval.camera_at(c, t, &none);
+    let orientation = |t: f64| {
+        state(t).map_or(Quat::IDENTITY, |s| Quat::from_mat3a(&s.world_from_camera.matrix3).normalize())
+    };
+    let fov = |t: f64| match state(t).map(|s| s.lens) {
+        Some(keyrig_core::Lens::Perspective { fov_y }) => fov_y,
+        _ => std::f32::consts::FRAC_PI_4,
+    };
+    let t0 = ch.t0;
+    let position = state(t0).map_or(Vec3::ZERO, |s| s.eye());
+    let fields = vec![
+        ("description", WValue::String(camera.name.clone())),
+        ("position", WValue::Numbers(position.to_array().map(f64::from).to_vec(), 3)),
+        ("orientation", WValue::Numbers(axis_angle(orientation(t0)).to_vec(), 4)),
+        ("fieldOfView", WValue::Numbers(vec![f64::from(fov(t0))], 1)),
+    ];
+    if animated {
+        ch.vec3(
+            out,
+            ChannelId::CameraTranslation(c),
+            &camera.translation,
+            Vec3Blend::Position,
+            def,
+            "position",
+        );
+        if camera.aim.is_none() {
+            ch.rotation(out, ChannelId::CameraRotation(c), &camera.rotation, def, "orientation");
+        } else {
+            // Where it looks follows its target and its own motion: written when it turns.
+            let turns =
+                ch.frame_times().iter().any(|&t| orientation(t).angle_between(orientation(t0)) > 1e-6);
+            if turns {
+                ch.rotation_resampled(out, &orientation, &[], def, "orientation");
+            }
+        }
+        let perspective = camera.projection != keyrig_core::Projection::Orthographic;
+        if perspective && camera.lens.is_animated() {
+            ch.scalar_resampled(out, &fov, &key_times(&camera.lens), def, "fieldOfView");
+        }
+    }
+    WNode { kind: "Viewpoint", def: Some(def.to_owned()), fields }
 }
 
 /// How a vector channel blends: VRML's straight line, or its HSV colour blend (clamped to
@@ -718,6 +841,55 @@ impl Channels<'_> {
         keys: &[f64],
     ) -> Vec<(f64, T)> {
         schedule(value, close, self.t0, self.t1, self.fps, keys)
+    }
+
+    /// Every frame of the range.
+    fn frame_times(&self) -> Vec<f64> {
+        let frames = ((self.t1 - self.t0) * self.fps).round().max(0.0) as i64;
+        (0..=frames).map(|f| self.t0 + f as f64 / self.fps).collect()
+    }
+
+    /// A `ScalarInterpolator` following `value` within the tolerance (an absolute 10⁻⁴ of
+    /// the scene's size, at least 10⁻⁶).
+    fn scalar_resampled(
+        &self,
+        out: &mut Animations,
+        value: &dyn Fn(f64) -> f32,
+        key_times: &[f64],
+        name: &str,
+        field: &'static str,
+    ) {
+        let close = |a: &f32, b: &f32, m: &f32, u: f32| (a + (b - a) * u - m).abs() <= self.pos_tol.max(1e-6);
+        let s = self.schedule(value, &close, key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        out.interp(
+            "ScalarInterpolator",
+            name,
+            fractions,
+            s.iter().map(|(_, v)| f64::from(*v)).collect(),
+            1,
+            field,
+        );
+    }
+
+    /// An `OrientationInterpolator` following `value` within the rotation tolerance, no two
+    /// samples 90° apart (so that every slerp turns the way keyrig turns).
+    fn rotation_resampled(
+        &self,
+        out: &mut Animations,
+        value: &dyn Fn(f64) -> Quat,
+        key_times: &[f64],
+        name: &str,
+        field: &'static str,
+    ) {
+        let close = |a: &Quat, b: &Quat, m: &Quat, u: f32| {
+            a.angle_between(*b) < std::f32::consts::FRAC_PI_2
+                && crate::model::slerp_short(*a, *b, u).angle_between(*m) <= self.rot_tol
+        };
+        let s = self.schedule(value, &close, key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        let values = s.iter().flat_map(|(_, q)| axis_angle(*q)).collect();
+        out.interp("OrientationInterpolator", name, fractions, values, 4, field);
     }
 
     /// Where an exported spline is compared with keyrig: every frame, three points between
@@ -855,18 +1027,7 @@ impl Channels<'_> {
                 return;
             }
         }
-        let key_times: Vec<f64> = animated.track.keys.iter().map(|k| k.time).collect();
-        let close = |a: &f32, b: &f32, m: &f32, u: f32| (a + (b - a) * u - m).abs() <= self.pos_tol.max(1e-6);
-        let s = self.schedule(&value, &close, &key_times);
-        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
-        out.interp(
-            "ScalarInterpolator",
-            name,
-            fractions,
-            s.iter().map(|(_, v)| f64::from(*v)).collect(),
-            1,
-            field,
-        );
+        self.scalar_resampled(out, &value, &key_times(animated), name, field);
     }
 
     /// A rotation channel: X3D's `SquadOrientationInterpolator` where it is exact, else an
@@ -896,21 +1057,7 @@ impl Channels<'_> {
                 return;
             }
         }
-        let key_times: Vec<f64> = animated.track.keys.iter().map(|k| k.time).collect();
-        let close = |a: &Quat, b: &Quat, m: &Quat, u: f32| {
-            a.angle_between(*b) < std::f32::consts::FRAC_PI_2
-                && crate::model::slerp_short(*a, *b, u).angle_between(*m) <= self.rot_tol
-        };
-        let s = self.schedule(&value, &close, &key_times);
-        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
-        out.interp(
-            "OrientationInterpolator",
-            name,
-            fractions,
-            s.iter().flat_map(|(_, q)| axis_angle(*q)).collect(),
-            4,
-            field,
-        );
+        self.rotation_resampled(out, &value, &key_times(animated), name, field);
     }
 }
 
@@ -962,11 +1109,20 @@ impl Animations {
 
 /// The DEF names of the scene's objects and lights, in order (the same for the export and for
 /// reading it back), and the names taken.
-fn exported_names(scene: &Scene) -> (Vec<String>, Vec<String>, HashMap<String, usize>) {
+fn exported_names(scene: &Scene) -> ExportedNames {
     let mut used = HashMap::new();
     let objects = scene.objects.iter().map(|o| def_name(&o.name, &mut used)).collect();
     let lights = scene.lights.iter().map(|l| def_name(&l.name, &mut used)).collect();
-    (objects, lights, used)
+    let cameras = scene.cameras.iter().map(|c| def_name(&c.name, &mut used)).collect();
+    ExportedNames { objects, lights, cameras, used }
+}
+
+/// The DEF names of a scene's objects, lights and cameras, and every name taken.
+struct ExportedNames {
+    objects: Vec<String>,
+    lights: Vec<String>,
+    cameras: Vec<String>,
+    used: HashMap<String, usize>,
 }
 
 fn quote(s: &str) -> String {
@@ -1169,6 +1325,32 @@ fn inventor(roots: &[WNode], routes: &[(String, &'static str, String, &'static s
             _ => None,
         })
     };
+    // Viewpoints as perspective cameras before the shapes: the first one views the scene,
+    // the others wait in a Switch that shows none of them (their connections still play).
+    let cameras: Vec<&WNode> = roots.iter().filter(|n| n.kind == "Viewpoint").collect();
+    for (i, n) in cameras.iter().enumerate() {
+        if i == 1 {
+            out.push_str("  Switch {\n    whichChild -1\n");
+        }
+        let def = n.def.clone().unwrap_or_default();
+        let field = |vrml: &str, default: Vec<f64>| {
+            format!(
+                "{}{}",
+                nums(&num_field(n, vrml).unwrap_or(default)),
+                connection(&def, vrml).unwrap_or_default()
+            )
+        };
+        let _ = writeln!(
+            out,
+            "  DEF {def} PerspectiveCamera {{\n    position {}\n    orientation {}\n    heightAngle {}\n  }}",
+            field("position", vec![0.0, 0.0, 10.0]),
+            field("orientation", vec![0.0, 0.0, 1.0, 0.0]),
+            field("fieldOfView", vec![std::f64::consts::FRAC_PI_4])
+        );
+        if i > 0 && i + 1 == cameras.len() {
+            out.push_str("  }\n");
+        }
+    }
     for n in roots {
         match n.kind {
             "WorldInfo" => {
@@ -1208,11 +1390,15 @@ fn inventor(roots: &[WNode], routes: &[(String, &'static str, String, &'static s
                         {
                             let d = num_field(m, "diffuseColor").unwrap_or(vec![0.8; 3]);
                             let tr = num_field(m, "transparency").unwrap_or(vec![0.0]);
+                            let mdef = m.def.clone().unwrap_or_default();
                             let _ = writeln!(
                                 out,
-                                "    Material {{ diffuseColor {} transparency {} }}",
+                                "    {}Material {{ diffuseColor {}{} transparency {}{} }}",
+                                m.def.as_ref().map(|d| format!("DEF {d} ")).unwrap_or_default(),
                                 nums(&d),
-                                nums(&tr)
+                                connection(&mdef, "diffuseColor").unwrap_or_default(),
+                                nums(&tr),
+                                connection(&mdef, "transparency").unwrap_or_default()
                             );
                         }
                         if let Some((_, WValue::Node(c))) = geo.fields.iter().find(|(f, _)| *f == "coord") {
@@ -1289,7 +1475,8 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
     let Ok(scene) = crate::scene_file::from_str(text.trim_start(), Path::new("metadata")) else {
         return false;
     };
-    let (object_defs, light_defs, _) = exported_names(&scene);
+    let ExportedNames { objects: object_defs, lights: light_defs, cameras: camera_defs, .. } =
+        exported_names(&scene);
     for object in &mut model.objects {
         let Some(o) = object_defs.iter().position(|d| *d == object.name) else { continue };
         let original = &scene.objects[o];
@@ -1301,6 +1488,12 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
             object.translation = original.translation.clone();
             object.rotation = original.rotation.clone();
             object.scale = original.scale.clone();
+            object.attributes = original.attributes.clone();
+        } else {
+            // The morph it came back as still shows, colours and fades as it did.
+            object.attributes.visible = original.attributes.visible.clone();
+            object.attributes.colour.clone_from(&original.attributes.colour);
+            object.attributes.opacity = original.attributes.opacity.clone();
         }
     }
     for light in &mut model.lights {
@@ -1308,6 +1501,13 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
             *light = scene.lights[l].clone();
         }
     }
+    for camera in &mut model.cameras {
+        if let Some(c) = camera_defs.iter().position(|d| *d == camera.name) {
+            *camera = scene.cameras[c].clone();
+        }
+    }
+    // What the metadata gives back is not missing.
+    model.skipped.retain(|s| !s.why.contains("keyrig's own export carries it"));
     model.metadata_scene = Some(scene);
     true
 }

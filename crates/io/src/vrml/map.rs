@@ -179,6 +179,7 @@ impl VrmlModel {
             scene.frame_range = original.frame_range;
             scene.ambient = original.ambient;
             scene.camera = original.camera;
+            scene.cameras.clone_from(&original.cameras);
             scene.active_camera.clone_from(&original.active_camera);
             scene.markers.clone_from(&original.markers);
         }
@@ -1790,20 +1791,6 @@ pub(crate) fn map_document(
             }
         })
         .collect();
-    for (v, _, _) in &traversal.views {
-        let up = v.orientation * Vec3::Y;
-        let forward = v.orientation * -Vec3::Z;
-        let level_up = (Vec3::Y - forward * forward.dot(Vec3::Y)).normalize_or(up);
-        if up.angle_between(level_up) > 1e-3 {
-            mapper.skips.add(
-                "Viewpoint roll",
-                format!("`{}` is rolled; keyrig's view keeps the horizon level", v.name),
-                doc.roots
-                    .first()
-                    .map_or(Place { file: super::tree::FileId(0), at: 0 }, |r| doc.node(*r).place),
-            );
-        }
-    }
     for ((node, field), _) in mapper.anim.channels.iter() {
         let kind = doc.node(*node).kind.as_str();
         let taken = matches!(
@@ -1815,12 +1802,16 @@ pub(crate) fn map_document(
                     "location" | "direction" | "color" | "intensity"
                 )
                 | ("SpotLight", "cutOffAngle" | "beamWidth")
-                | ("Viewpoint", "position" | "orientation" | "fieldOfView")
-                | ("OrthoViewpoint", "position" | "orientation")
-                | ("Material", "diffuseColor" | "transparency")
-        );
+                | ("Viewpoint" | "PerspectiveCamera", "position" | "orientation" | "fieldOfView")
+                | ("PerspectiveCamera", "heightAngle")
+                | ("OrthoViewpoint" | "OrthographicCamera", "position" | "orientation")
+        ) || (encoding != Encoding::Inventor
+            && matches!((kind, field.as_str()), ("Material", "diffuseColor" | "transparency")));
         if !taken {
             let why = match kind {
+                "Material" if encoding == Encoding::Inventor => {
+                    "an Inventor material's animation is not imported (keyrig's own export carries it as metadata)"
+                }
                 "Material" => "keyrig animates a material's diffuse colour and transparency only",
                 _ => "keyrig has no channel for this field",
             };
@@ -2033,7 +2024,8 @@ impl Mapper<'_> {
             let keys = scaled(track, |q| (r * q).normalize(), |t| r * t);
             camera.rotation = animated(camera.rotation.value, &keys, *timing);
         }
-        if let (Some(Channel::Scalar(track, timing)), None) = (field("fieldOfView"), view.orthographic) {
+        let fov = field("fieldOfView").or_else(|| field("heightAngle"));
+        if let (Some(Channel::Scalar(track, timing)), None) = (fov, view.orthographic) {
             let keys = scaled(track, |v: f32| v.to_degrees(), |v: f32| v.to_degrees());
             camera.lens = animated(camera.lens.value, &keys, *timing);
         }
