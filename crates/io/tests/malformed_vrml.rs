@@ -160,6 +160,34 @@ fn huge_spline_and_squad_interpolators_stay_bounded() {
     assert!(start.elapsed().as_secs() < 120, "bounded work");
 }
 
+/// Cameras, materials and spot cones with values out of every range import into a scene
+/// keyrig's validator accepts (lenses, opacities and cone angles kept in their ranges).
+#[test]
+fn cameras_materials_and_cones_out_of_range_stay_valid() {
+    let text = "#VRML V2.0 utf8\n\
+        DEF T TimeSensor { cycleInterval 1 loop TRUE }\n\
+        DEF V Viewpoint { fieldOfView 1e30 orientation 0 0 0 0 }\n\
+        DEF W Viewpoint { fieldOfView -4 }\n\
+        DEF F ScalarInterpolator { key [ 0 1 ] keyValue [ -5 1e30 ] }\n\
+        Shape { appearance Appearance { material DEF M Material { transparency 9 } } geometry Box { } }\n\
+        DEF A ScalarInterpolator { key [ 0 1 ] keyValue [ -3 7 ] }\n\
+        DEF S SpotLight { cutOffAngle 3 beamWidth 9 }\n\
+        DEF K ScalarInterpolator { key [ 0 1 ] keyValue [ 0 100 ] }\n\
+        DEF B ScalarInterpolator { key [ 0 1 ] keyValue [ -1 50 ] }\n\
+        ROUTE T.fraction_changed TO F.set_fraction\nROUTE T.fraction_changed TO A.set_fraction\n\
+        ROUTE T.fraction_changed TO K.set_fraction\nROUTE T.fraction_changed TO B.set_fraction\n\
+        ROUTE F.value_changed TO V.set_fieldOfView\nROUTE F.value_changed TO W.set_fieldOfView\n\
+        ROUTE A.value_changed TO M.set_transparency\n\
+        ROUTE K.value_changed TO S.set_cutOffAngle\nROUTE B.value_changed TO S.set_beamWidth\n";
+    let model = import_vrml_slice(text.as_bytes(), "ranges.wrl").unwrap();
+    let scene = model.to_scene("ranges.wrl");
+    assert_eq!(scene.cameras.len(), 2);
+    assert!(scene.objects[0].attributes.opacity.is_animated());
+    assert!(scene.lights[0].attributes.cutoff_deg.is_some());
+    let problems: Vec<String> = scene.problems().iter().map(ToString::to_string).collect();
+    assert!(problems.is_empty(), "{problems:?}");
+}
+
 #[test]
 fn seventy_thousand_character_names_are_clipped_in_messages() {
     let name = "n".repeat(70_000);

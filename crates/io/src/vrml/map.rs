@@ -366,6 +366,15 @@ fn animated<T: Copy>(value: T, track: &RawTrack<T>, timing: Timing) -> Animated<
     Animated::new(value, track.clone()).with_cycles(Channel::cycles(timing))
 }
 
+/// A VRML field of view (radians) as keyrig's lens: degrees within (0°, 180°).
+fn lens_degrees(radians: f32) -> f32 {
+    if radians.is_finite() {
+        radians.to_degrees().clamp(0.01, 179.9)
+    } else {
+        45.0
+    }
+}
+
 /// `track` with every value mapped by `value` and every tangent by `tangent` (an affine map:
 /// the same curve, mapped).
 fn scaled<T: Copy>(track: &RawTrack<T>, value: impl Fn(T) -> T, tangent: impl Fn(T) -> T) -> RawTrack<T> {
@@ -1475,8 +1484,17 @@ impl Traversal<'_> {
             "DirectionalLight" => keyrig_core::LightKind::Directional,
             "PointLight" => keyrig_core::LightKind::Point,
             _ => {
-                let cutoff = float(doc, id, "cutOffAngle", std::f32::consts::FRAC_PI_4).to_degrees();
-                let beam = float(doc, id, "beamWidth", std::f32::consts::FRAC_PI_2).to_degrees();
+                // VRML allows up to π/2 (and files hold more); keyrig's spot is within (0°, 90°].
+                let angle = |f: &str, rest: f32| {
+                    let a = float(doc, id, f, rest).to_degrees();
+                    if a.is_finite() {
+                        a.clamp(0.01, 90.0)
+                    } else {
+                        rest.to_degrees()
+                    }
+                };
+                let cutoff = angle("cutOffAngle", std::f32::consts::FRAC_PI_4);
+                let beam = angle("beamWidth", std::f32::consts::FRAC_PI_2);
                 keyrig_core::LightKind::Spot {
                     cutoff_deg: cutoff,
                     inner_angle_deg: beam.min(cutoff),
@@ -1973,7 +1991,7 @@ impl Mapper<'_> {
             object.attributes.colour = Some(animated(rest, track, *timing));
         }
         if let Some(Channel::Scalar(track, timing)) = field("transparency") {
-            let opaque = scaled(track, |t: f32| 1.0 - t, |t: f32| -t);
+            let opaque = scaled(track, |t: f32| 1.0 - t.clamp(0.0, 1.0), |t: f32| -t);
             object.attributes.opacity = animated(shape.material.base_colour[3], &opaque, *timing);
         }
     }
@@ -2002,8 +2020,10 @@ impl Mapper<'_> {
             Some(height) => {
                 camera.projection = keyrig_core::Projection::Orthographic;
                 camera.lens = Animated::constant(height);
+                // keyrig's orthographic cameras need a far plane; VRML's has none.
+                camera.far = Some(1e6);
             }
-            None => camera.lens = Animated::constant(view.field_of_view.to_degrees()),
+            None => camera.lens = Animated::constant(lens_degrees(view.field_of_view)),
         }
         let Some(node) = node else { return camera };
         if frames.iter().any(|f| self.frame_animated(f)) {
@@ -2026,7 +2046,7 @@ impl Mapper<'_> {
         }
         let fov = field("fieldOfView").or_else(|| field("heightAngle"));
         if let (Some(Channel::Scalar(track, timing)), None) = (fov, view.orthographic) {
-            let keys = scaled(track, |v: f32| v.to_degrees(), |v: f32| v.to_degrees());
+            let keys = scaled(track, lens_degrees, |v: f32| v.to_degrees());
             camera.lens = animated(camera.lens.value, &keys, *timing);
         }
         camera
@@ -2064,21 +2084,23 @@ impl Mapper<'_> {
             light.intensity = animated(light.intensity.value, &track, timing);
         }
         // A spot's cone in radians → the cone attributes in degrees (a scale: exact).
+        // Within keyrig's 0 < inner ≤ cutoff ≤ 90° (VRML's beam wider than the cut-off has no
+        // falloff: the inner angle is the cut-off).
         if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
-            let degrees = |f: &str, rest: f32| match field(f) {
+            let degrees = |f: &str, rest: f32, most: f32| match field(f) {
                 Some(Channel::Scalar(track, timing)) => Some(animated(
                     rest,
-                    &scaled(&track, |v: f32| v.to_degrees(), |v: f32| v.to_degrees()),
+                    &scaled(&track, |v: f32| v.to_degrees().clamp(0.01, most), |v: f32| v.to_degrees()),
                     timing,
                 )),
                 _ => None,
             };
-            if let Some(a) = degrees("cutOffAngle", cutoff_deg) {
-                light.attributes.cutoff_deg = Some(a);
-            }
-            if let Some(a) = degrees("beamWidth", inner_angle_deg) {
+            let cutoff = degrees("cutOffAngle", cutoff_deg, 90.0);
+            let most_inner = if cutoff.is_some() { 90.0 } else { cutoff_deg };
+            if let Some(a) = degrees("beamWidth", inner_angle_deg, most_inner) {
                 light.attributes.inner_angle_deg = Some(a);
             }
+            light.attributes.cutoff_deg = cutoff;
         }
         // Into world space: an affine image of linear keys is the same image of the line.
         if m != Mat4::IDENTITY {
