@@ -1,5 +1,6 @@
-//! The node tree mapped onto keyrig: shapes → objects with meshes, lights, viewpoints → named
-//! views, and `TimeSensor` → interpolator → `ROUTE` chains → keyrig tracks.
+//! The node tree mapped onto keyrig: shapes → objects with meshes, lights, viewpoints → scene
+//! cameras, and `TimeSensor` → interpolator → `ROUTE` chains → keyrig tracks (also of
+//! viewpoints, materials and spot cones).
 //!
 //! **Objects.** Every Shape instance (a Shape reached through `USE` twice is two instances)
 //! becomes one object named after the nearest `DEF` (the Shape's own, else the nearest
