@@ -124,6 +124,70 @@ fn a_million_element_array_imports() {
     assert!(skipped.contains("out of range") && skipped.contains("million_bad.wrl:2:"), "{skipped}");
 }
 
+/// X3D's spline and squad interpolators with 200,000 unevenly spaced, wildly turning keys:
+/// the squad is resampled within bounded work (at most a million pieces besides the keys),
+/// and a key list longer than its values is listed.
+#[test]
+fn huge_spline_and_squad_interpolators_stay_bounded() {
+    let n = 200_000;
+    let key: Vec<String> =
+        (0..n).map(|i| format!("{}", (i as f64 + 0.3 * ((i % 3) as f64)) / (n as f64 + 1.0))).collect();
+    let rotations: Vec<String> =
+        (0..n).map(|i| format!("{} 1 {} {}", i % 7, i % 5, (i % 11) as f64 * 0.5)).collect();
+    let scalars: Vec<String> = (0..n).map(|i| format!("{}", (i % 13) as f64 / 13.0)).collect();
+    let text = format!(
+        "#X3D V3.3 utf8\nPROFILE Immersive\nDEF T TimeSensor {{ cycleInterval 10 loop TRUE }}\n\
+         DEF S SquadOrientationInterpolator {{ key [ {k} ] keyValue [ {r} ] }}\n\
+         DEF A SplineScalarInterpolator {{ key [ {k} ] keyValue [ {s} ] }}\n\
+         DEF B SplineScalarInterpolator {{ key [ {k} ] keyValue [ 0.5 ] }}\n\
+         DEF X Transform {{ children Shape {{ geometry Box {{ }} }} }}\n\
+         DEF L PointLight {{ }}\nDEF M PointLight {{ }}\n\
+         ROUTE T.fraction_changed TO S.set_fraction\nROUTE T.fraction_changed TO A.set_fraction\n\
+         ROUTE T.fraction_changed TO B.set_fraction\nROUTE S.value_changed TO X.set_rotation\n\
+         ROUTE A.value_changed TO L.set_intensity\nROUTE B.value_changed TO M.set_intensity\n",
+        k = key.join(" "),
+        r = rotations.join(", "),
+        s = scalars.join(" ")
+    );
+    let start = std::time::Instant::now();
+    let (_dir, model) = import_bytes("squad.x3dv", text.as_bytes());
+    let model = model.unwrap();
+    let keys = model.objects[0].rotation.track.keys.len();
+    assert!(keys > n && keys <= n + 1_000_002, "{keys} rotation keys");
+    assert!(model.lights[0].intensity.track.keys.len() >= n);
+    let skipped = model.skipped_lines().join("\n");
+    assert!(skipped.contains("SplineScalarInterpolator") && skipped.contains("fewer values"), "{skipped}");
+    assert!(start.elapsed().as_secs() < 120, "bounded work");
+}
+
+/// Cameras, materials and spot cones with values out of every range import into a scene
+/// keyrig's validator accepts (lenses, opacities and cone angles kept in their ranges).
+#[test]
+fn cameras_materials_and_cones_out_of_range_stay_valid() {
+    let text = "#VRML V2.0 utf8\n\
+        DEF T TimeSensor { cycleInterval 1 loop TRUE }\n\
+        DEF V Viewpoint { fieldOfView 1e30 orientation 0 0 0 0 }\n\
+        DEF W Viewpoint { fieldOfView -4 }\n\
+        DEF F ScalarInterpolator { key [ 0 1 ] keyValue [ -5 1e30 ] }\n\
+        Shape { appearance Appearance { material DEF M Material { transparency 9 } } geometry Box { } }\n\
+        DEF A ScalarInterpolator { key [ 0 1 ] keyValue [ -3 7 ] }\n\
+        DEF S SpotLight { cutOffAngle 3 beamWidth 9 }\n\
+        DEF K ScalarInterpolator { key [ 0 1 ] keyValue [ 0 100 ] }\n\
+        DEF B ScalarInterpolator { key [ 0 1 ] keyValue [ -1 50 ] }\n\
+        ROUTE T.fraction_changed TO F.set_fraction\nROUTE T.fraction_changed TO A.set_fraction\n\
+        ROUTE T.fraction_changed TO K.set_fraction\nROUTE T.fraction_changed TO B.set_fraction\n\
+        ROUTE F.value_changed TO V.set_fieldOfView\nROUTE F.value_changed TO W.set_fieldOfView\n\
+        ROUTE A.value_changed TO M.set_transparency\n\
+        ROUTE K.value_changed TO S.set_cutOffAngle\nROUTE B.value_changed TO S.set_beamWidth\n";
+    let model = import_vrml_slice(text.as_bytes(), "ranges.wrl").unwrap();
+    let scene = model.to_scene("ranges.wrl");
+    assert_eq!(scene.cameras.len(), 2);
+    assert!(scene.objects[0].attributes.opacity.is_animated());
+    assert!(scene.lights[0].attributes.cutoff_deg.is_some());
+    let problems: Vec<String> = scene.problems().iter().map(ToString::to_string).collect();
+    assert!(problems.is_empty(), "{problems:?}");
+}
+
 #[test]
 fn seventy_thousand_character_names_are_clipped_in_messages() {
     let name = "n".repeat(70_000);

@@ -327,6 +327,15 @@ fn check(python: &str, file: &Path) -> (usize, usize) {
                     "direction" => (ChannelId::LightDirection(l), r.values.clone()),
                     "location" => (ChannelId::LightPosition(l), r.values.clone()),
                     "intensity" => (ChannelId::LightIntensity(l), r.values.clone()),
+                    "cutOffAngle" | "beamWidth" => {
+                        let id = if field == "cutOffAngle" {
+                            keyrig_core::AttributeId::LightCutoff(l)
+                        } else {
+                            keyrig_core::AttributeId::LightInnerAngle(l)
+                        };
+                        let degrees = r.values.iter().map(|v| vec![v[0].to_degrees()]).collect();
+                        (ChannelId::Attribute(id), degrees)
+                    }
                     "color" => {
                         let spec = spec_colours(file, &r.interpolator, r.cycle, r.looping, fps, last);
                         let (coin_vs_spec, _) = worst(false, &spec, &r.values);
@@ -345,6 +354,68 @@ fn check(python: &str, file: &Path) -> (usize, usize) {
                 let tolerance = if field == "color" { 1.5e-3 } else { 1e-5 };
                 let (d, f) = worst(false, &sample(id), &expected);
                 assert!(d <= tolerance, "{here}: differs by {d} at frame {f}");
+                compared += 1;
+            }
+            ("Viewpoint", field @ ("position" | "orientation" | "fieldOfView")) => {
+                let c = scene
+                    .cameras
+                    .iter()
+                    .position(|c| is_instance_of(&c.name, &r.target))
+                    .unwrap_or_else(|| panic!("{here}: no camera"));
+                let (id, expected) = match field {
+                    "position" => (ChannelId::CameraTranslation(c), r.values.clone()),
+                    "orientation" => (ChannelId::CameraRotation(c), r.values.clone()),
+                    // VRML's field of view in radians; keyrig's lens in degrees.
+                    _ => (
+                        ChannelId::CameraLens(c),
+                        r.values.iter().map(|v| v.iter().map(|x| x.to_degrees()).collect()).collect(),
+                    ),
+                };
+                let rotation = field == "orientation";
+                // f32 precision of the values (the castle's camera flies 300 units out).
+                let size = expected.iter().flatten().fold(1.0f64, |m, x| m.max(x.abs()));
+                let tolerance = if rotation { 1e-3 } else { 1e-5 * size };
+                let (d, f) = worst(rotation, &sample(id), &expected);
+                assert!(
+                    d <= tolerance,
+                    "{here}: camera {} differs by {d} at frame {f}",
+                    scene.cameras[c].name
+                );
+                compared += 1;
+            }
+            ("Material", field @ ("diffuseColor" | "transparency")) => {
+                // Every object whose material this is has the attribute; at least one is
+                // driven by this interpolator.
+                let expected = if field == "diffuseColor" {
+                    // The specification's HSV (Coin's RGB agrees only where the blend keeps
+                    // its hue and saturation).
+                    spec_colours(file, &r.interpolator, r.cycle, r.looping, fps, last)
+                } else {
+                    r.values.iter().map(|v| vec![1.0 - v[0]]).collect()
+                };
+                let results: Vec<(String, f64)> = scene
+                    .objects
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(o, object)| {
+                        let id = if field == "diffuseColor" {
+                            object.attributes.colour.as_ref()?;
+                            keyrig_core::AttributeId::ObjectColour(o)
+                        } else {
+                            object.attributes.opacity.is_animated().then_some(())?;
+                            keyrig_core::AttributeId::ObjectOpacity(o)
+                        };
+                        Some((
+                            object.name.clone(),
+                            worst(false, &sample(ChannelId::Attribute(id)), &expected).0,
+                        ))
+                    })
+                    .collect();
+                let tolerance = if field == "diffuseColor" { 1.5e-3 } else { 1e-5 };
+                assert!(
+                    results.iter().any(|(_, d)| *d <= tolerance),
+                    "{here}: no object's {field} equals: {results:?}"
+                );
                 compared += 1;
             }
             ("Coordinate", "point") => {
@@ -550,4 +621,47 @@ fn equal_keys_jump_as_coin_does() {
         let (channels, frames) = check(&python, &path);
         assert_eq!((channels, frames), (2, 61), "{looping}");
     }
+}
+
+/// Viewpoints are scene cameras, a Material's diffuse colour and transparency the colour and
+/// opacity of its objects, a spot light's cone its cone attributes: keyrig's channels equal
+/// Coin's evaluation at every frame (colours against the specification's HSV, as for lights;
+/// the field of view and the cone in degrees).
+#[test]
+fn cameras_materials_and_light_cones_play_as_coin_plays_them() {
+    let python = python();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cameras.wrl");
+    std::fs::write(
+        &path,
+        "#VRML V2.0 utf8\n\
+         DEF T TimeSensor { cycleInterval 3 loop TRUE }\n\
+         DEF Cam Viewpoint { position 0 1 8 description \"front\" }\n\
+         DEF P PositionInterpolator { key [ 0 0.4 1 ] keyValue [ 0 1 8, 3 2 6, 0 1 4 ] }\n\
+         DEF O OrientationInterpolator { key [ 0 0.5 1 ] keyValue [ 0 1 0 0, 0 1 0 0.8, 1 0 0 -0.3 ] }\n\
+         DEF F ScalarInterpolator { key [ 0 1 ] keyValue [ 0.785 0.4 ] }\n\
+         DEF Box Transform { children Shape { appearance Appearance { material DEF M Material { diffuseColor 1 0 0 } }\n\
+           geometry Box { } } }\n\
+         DEF C ColorInterpolator { key [ 0 0.5 1 ] keyValue [ 1 0 0, 0 0 1, 0 1 0 ] }\n\
+         DEF A ScalarInterpolator { key [ 0 0.7 1 ] keyValue [ 0 0.6 0.2 ] }\n\
+         DEF Spot SpotLight { location 0 5 0 direction 0 -1 0 }\n\
+         DEF K ScalarInterpolator { key [ 0 1 ] keyValue [ 0.3 1.2 ] }\n\
+         DEF W ScalarInterpolator { key [ 0 0.5 1 ] keyValue [ 0.1 0.25 0.2 ] }\n\
+         ROUTE T.fraction_changed TO P.set_fraction\nROUTE T.fraction_changed TO O.set_fraction\n\
+         ROUTE T.fraction_changed TO F.set_fraction\nROUTE T.fraction_changed TO C.set_fraction\n\
+         ROUTE T.fraction_changed TO A.set_fraction\nROUTE T.fraction_changed TO K.set_fraction\n\
+         ROUTE T.fraction_changed TO W.set_fraction\n\
+         ROUTE P.value_changed TO Cam.set_position\nROUTE O.value_changed TO Cam.set_orientation\n\
+         ROUTE F.value_changed TO Cam.set_fieldOfView\nROUTE C.value_changed TO M.set_diffuseColor\n\
+         ROUTE A.value_changed TO M.set_transparency\nROUTE K.value_changed TO Spot.set_cutOffAngle\n\
+         ROUTE W.value_changed TO Spot.set_beamWidth\n",
+    )
+    .unwrap();
+    let model = keyrig_io::vrml::import_vrml_file(&path).unwrap();
+    assert!(model.skipped.is_empty(), "{:?}", model.skipped_lines());
+    let scene = model.to_scene("cameras.wrl");
+    assert_eq!(scene.cameras.len(), 1);
+    assert_eq!(scene.cameras[0].name, "Cam");
+    let (channels, frames) = check(&python, &path);
+    assert_eq!((channels, frames), (7, 91));
 }

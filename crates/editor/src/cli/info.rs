@@ -248,7 +248,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
 }
 
 /// `keyrig info` of a VRML97, X3D or Open Inventor file: the scene it maps to, as for a scene,
-/// then its encoding, its views (Viewpoints, kept as named views until scenes have cameras),
+/// then its encoding, its views (Viewpoints, which its scene has as cameras),
 /// the meshes that morph, and every kind of thing the mapping did not import, with where.
 fn vrml_info(args: &InfoArgs) -> anyhow::Result<()> {
     let model = keyrig_io::vrml::import_vrml_file(&args.file)?;

@@ -13,7 +13,13 @@
 //!   interpolator's straight line (slerp for rotations, HSV for colours) would leave keyrig's
 //!   curve by more than the tolerances ([`VrmlExportOptions`]): halving the interval until the
 //!   midpoint and quarter points are within them. Rotation samples are never 90° or more
-//!   apart, so that each slerp turns the way keyrig turns.
+//!   apart, so that each slerp turns the way keyrig turns. In X3D, a channel whose keys
+//!   X3D's `SplinePositionInterpolator`, `SplineScalarInterpolator` or
+//!   `SquadOrientationInterpolator` holds exactly (evenly spaced TCB keys, no cycles; for the
+//!   squad T = C = B = 0 inside and X3D's open ends) is written as one, key for key, after
+//!   checking it at every frame ([`Channels`]).
+//! - The writers of one value kind are one each ([`Channels::vec3`], [`Channels::scalar`],
+//!   [`Channels::rotation`]) for objects and lights alike.
 //! - keyrig's own scene (its keys with tension, continuity and bias, cycles, spins, skeletons)
 //!   goes into the file as metadata — a `WorldInfo` `info` string (an Inventor `Info` node's
 //!   `string`) that starts with [`METADATA_TAG`] and holds the scene as RON — and the importer
@@ -31,10 +37,11 @@ use std::sync::Arc;
 
 use glam::{Quat, Vec3};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
-use keyrig_core::{MeshSource, Scene};
+use keyrig_core::{Animated, Cycles, Interpolation, MeshSource, RawTrack, Scene, Track, TrackValue};
 use keyrig_eval::{LoadedMesh, Overrides, SceneEvaluator};
 
 use super::map::hsv_lerp;
+use super::splines::{self, SplineValue};
 
 pub use super::tree::METADATA_TAG;
 
@@ -406,21 +413,21 @@ pub fn export_scene(
     }
     let size = if lo.cmple(hi).all() { f64::from((hi - lo).length()).max(1.0) } else { 1.0 };
     let pos_tol = (options.position_tolerance * size) as f32;
-    let rot_tol = options.rotation_tolerance_deg.to_radians() as f32;
-    let col_tol = options.colour_tolerance as f32;
-    let lerp_close =
-        |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| (a.lerp(*b, u) - *m).abs().max_element() <= pos_tol;
-    let slerp_close = |a: &Quat, b: &Quat, m: &Quat, u: f32| {
-        a.angle_between(*b) < std::f32::consts::FRAC_PI_2
-            && crate::model::slerp_short(*a, *b, u).angle_between(*m) <= rot_tol
-    };
-    let hsv_close =
-        |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| (hsv_lerp(*a, *b, u) - *m).abs().max_element() <= col_tol;
-    let scalar_close = |a: &f32, b: &f32, m: &f32, u: f32| (a + (b - a) * u - m).abs() <= pos_tol.max(1e-6);
     let animated = duration > 0.0;
     let fraction = |t: f64| if duration > 0.0 { (t - t0) / duration } else { 0.0 };
+    let ch = Channels {
+        eval: &eval,
+        t0,
+        t1,
+        fps,
+        pos_tol,
+        rot_tol: options.rotation_tolerance_deg.to_radians() as f32,
+        col_tol: options.colour_tolerance as f32,
+        x3d: matches!(format, ExportFormat::X3dClassic | ExportFormat::X3dXml),
+    };
 
-    let (object_defs, light_defs, mut used) = exported_names(scene);
+    let ExportedNames { objects: object_defs, lights: light_defs, cameras: camera_defs, mut used } =
+        exported_names(scene);
     let clock = def_name("KeyrigClock", &mut used);
     let mut roots: Vec<WNode> = Vec::new();
     let ron = crate::scene_file::to_string(scene).map_err(|e| VrmlExportError::Metadata(e.to_string()))?;
@@ -442,7 +449,6 @@ pub fn export_scene(
     let mut out = Animations { used, clock: clock.clone(), interpolators: Vec::new(), routes: Vec::new() };
     for (o, object) in scene.objects.iter().enumerate() {
         let def = object_defs[o].clone();
-        let key_times = |track: &[f64]| track.to_vec();
         let translation = vec3_of(at(ChannelId::ObjectTranslation(o), t0));
         let rotation = quat_of(at(ChannelId::ObjectRotation(o), t0));
         let scale = vec3_of(at(ChannelId::ObjectScale(o), t0));
@@ -451,60 +457,17 @@ pub fn export_scene(
             ("rotation", WValue::Numbers(axis_angle(rotation).to_vec(), 4)),
             ("scale", WValue::Numbers(scale.to_array().map(f64::from).to_vec(), 3)),
         ];
-        if animated && object.translation.is_animated() {
-            let times: Vec<f64> =
-                key_times(&object.translation.track.keys.iter().map(|k| k.time).collect::<Vec<_>>());
-            let s = schedule(
-                &|t| vec3_of(at(ChannelId::ObjectTranslation(o), t)),
-                &lerp_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "PositionInterpolator",
+        if animated {
+            ch.vec3(
+                &mut out,
+                ChannelId::ObjectTranslation(o),
+                &object.translation,
+                Vec3Blend::Position,
                 &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
                 "translation",
             );
-        }
-        if animated && object.scale.is_animated() {
-            let times: Vec<f64> = object.scale.track.keys.iter().map(|k| k.time).collect();
-            let s =
-                schedule(&|t| vec3_of(at(ChannelId::ObjectScale(o), t)), &lerp_close, t0, t1, fps, &times);
-            out.interp(
-                "PositionInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "scale",
-            );
-        }
-        if animated && object.rotation.is_animated() {
-            let times: Vec<f64> = object.rotation.track.keys.iter().map(|k| k.time).collect();
-            let s = schedule(
-                &|t| quat_of(at(ChannelId::ObjectRotation(o), t)),
-                &slerp_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "OrientationInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, q)| axis_angle(*q)).collect(),
-                4,
-                def.clone(),
-                "rotation",
-            );
+            ch.vec3(&mut out, ChannelId::ObjectScale(o), &object.scale, Vec3Blend::Position, &def, "scale");
+            ch.rotation(&mut out, ChannelId::ObjectRotation(o), &object.rotation, &def, "rotation");
         }
         let mut children = Vec::new();
         if let Some(m) = &meshes[o] {
@@ -556,13 +519,13 @@ pub fn export_scene(
                         .all(|((a, b), m)| (a.lerp(*b, u) - *m).abs().max_element() <= pos_tol)
                 };
                 let s = schedule(&|t| deformed(t).unwrap_or_else(|| rest.clone()), &fits, t0, t1, fps, &[]);
-                out.interp(
+                out.interp_with(
                     "CoordinateInterpolator",
-                    &def,
+                    (&def, &shape_def),
                     s.iter().map(|(t, _)| fraction(*t)).collect(),
                     s.iter().flat_map(|(_, v)| v.iter().flat_map(|p| p.to_array().map(f64::from))).collect(),
                     3,
-                    shape_def.clone(),
+                    Vec::new(),
                     "point",
                 );
             }
@@ -579,7 +542,35 @@ pub fn export_scene(
                 .chunks_exact(3)
                 .flat_map(|t| [f64::from(t[0]), f64::from(t[1]), f64::from(t[2]), -1.0])
                 .collect();
-            let c = m.colour;
+            // The colour and opacity attributes replace the mesh's colour and scale its alpha.
+            let mut c = m.colour;
+            if let Some(colour) = object
+                .attributes
+                .colour
+                .as_ref()
+                .map(|_| vec3_of(at(ChannelId::Attribute(keyrig_core::AttributeId::ObjectColour(o)), t0)))
+            {
+                c[..3].copy_from_slice(&colour.to_array());
+            }
+            let alpha = c[3];
+            c[3] = alpha
+                * scalar_of(at(ChannelId::Attribute(keyrig_core::AttributeId::ObjectOpacity(o)), t0))
+                    .clamp(0.0, 1.0);
+            let colour_keys = object.attributes.colour.as_ref().filter(|a| a.is_animated());
+            let opacity_keys = Some(&object.attributes.opacity).filter(|a| a.is_animated());
+            let material_def = (animated && (colour_keys.is_some() || opacity_keys.is_some()))
+                .then(|| def_name(&format!("{def}_material"), &mut out.used));
+            if let Some(mdef) = &material_def {
+                if let Some(keys) = colour_keys {
+                    let id = ChannelId::Attribute(keyrig_core::AttributeId::ObjectColour(o));
+                    ch.vec3(&mut out, id, keys, Vec3Blend::Colour, mdef, "diffuseColor");
+                }
+                if let Some(keys) = opacity_keys {
+                    let id = ChannelId::Attribute(keyrig_core::AttributeId::ObjectOpacity(o));
+                    let transparency = |t: f64| 1.0 - alpha * scalar_of(ch.at(id, t)).clamp(0.0, 1.0);
+                    ch.scalar_resampled(&mut out, &transparency, &key_times(keys), mdef, "transparency");
+                }
+            }
             children.push(WNode {
                 kind: "Shape",
                 def: None,
@@ -593,7 +584,7 @@ pub fn export_scene(
                                 "material",
                                 WValue::Node(Box::new(WNode {
                                     kind: "Material",
-                                    def: None,
+                                    def: material_def,
                                     fields: vec![
                                         (
                                             "diffuseColor",
@@ -650,78 +641,64 @@ pub fn export_scene(
             fields.push(("direction", WValue::Numbers(d.to_array().map(f64::from).to_vec(), 3)));
         }
         if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
-            fields.push(("cutOffAngle", WValue::Numbers(vec![f64::from(cutoff_deg.to_radians())], 1)));
-            fields.push(("beamWidth", WValue::Numbers(vec![f64::from(inner_angle_deg.to_radians())], 1)));
+            // The cone attributes replace the kind's angles; keyed, they are interpolated
+            // (degrees in keyrig, radians in VRML).
+            let cone = [
+                (
+                    "cutOffAngle",
+                    cutoff_deg,
+                    &light.attributes.cutoff_deg,
+                    keyrig_core::AttributeId::LightCutoff(l),
+                ),
+                (
+                    "beamWidth",
+                    inner_angle_deg,
+                    &light.attributes.inner_angle_deg,
+                    keyrig_core::AttributeId::LightInnerAngle(l),
+                ),
+            ];
+            for (field, rest, attribute, id) in cone {
+                let radians = |t: f64| match attribute {
+                    Some(_) => scalar_of(ch.at(ChannelId::Attribute(id), t)).to_radians(),
+                    None => rest.to_radians(),
+                };
+                fields.push((field, WValue::Numbers(vec![f64::from(radians(t0))], 1)));
+                if let Some(keys) = attribute.as_ref().filter(|a| animated && a.is_animated()) {
+                    ch.scalar_resampled(&mut out, &radians, &key_times(keys), &def, field);
+                }
+            }
         }
-        if animated && light.position.is_animated() && kind != "DirectionalLight" {
-            let times: Vec<f64> = light.position.track.keys.iter().map(|k| k.time).collect();
-            let s =
-                schedule(&|t| vec3_of(at(ChannelId::LightPosition(l), t)), &lerp_close, t0, t1, fps, &times);
-            out.interp(
-                "PositionInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "location",
-            );
-        }
-        if animated && light.direction.is_animated() && kind != "PointLight" {
-            let times: Vec<f64> = light.direction.track.keys.iter().map(|k| k.time).collect();
-            let s =
-                schedule(&|t| vec3_of(at(ChannelId::LightDirection(l), t)), &lerp_close, t0, t1, fps, &times);
-            out.interp(
-                "PositionInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "direction",
-            );
-        }
-        if animated && light.colour.is_animated() {
-            let times: Vec<f64> = light.colour.track.keys.iter().map(|k| k.time).collect();
-            let s = schedule(
-                &|t| vec3_of(at(ChannelId::LightColour(l), t)).clamp(Vec3::ZERO, Vec3::ONE),
-                &hsv_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "ColorInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().flat_map(|(_, v)| v.to_array().map(f64::from)).collect(),
-                3,
-                def.clone(),
-                "color",
-            );
-        }
-        if animated && light.intensity.is_animated() {
-            let times: Vec<f64> = light.intensity.track.keys.iter().map(|k| k.time).collect();
-            let s = schedule(
-                &|t| scalar_of(at(ChannelId::LightIntensity(l), t)).clamp(0.0, 1.0),
-                &scalar_close,
-                t0,
-                t1,
-                fps,
-                &times,
-            );
-            out.interp(
-                "ScalarInterpolator",
-                &def,
-                s.iter().map(|(t, _)| fraction(*t)).collect(),
-                s.iter().map(|(_, v)| f64::from(*v)).collect(),
-                1,
-                def.clone(),
-                "intensity",
-            );
+        if animated {
+            if kind != "DirectionalLight" {
+                ch.vec3(
+                    &mut out,
+                    ChannelId::LightPosition(l),
+                    &light.position,
+                    Vec3Blend::Position,
+                    &def,
+                    "location",
+                );
+            }
+            if kind != "PointLight" {
+                ch.vec3(
+                    &mut out,
+                    ChannelId::LightDirection(l),
+                    &light.direction,
+                    Vec3Blend::Position,
+                    &def,
+                    "direction",
+                );
+            }
+            ch.vec3(&mut out, ChannelId::LightColour(l), &light.colour, Vec3Blend::Colour, &def, "color");
+            ch.scalar(&mut out, ChannelId::LightIntensity(l), &light.intensity, &def, "intensity");
         }
         roots.push(WNode { kind, def: Some(def), fields });
+    }
+    // Cameras: the active one first (VRML binds the first Viewpoint when the world loads).
+    let first = scene.active_camera_at(f64::from(scene.frame_range.start));
+    let order = first.into_iter().chain((0..scene.cameras.len()).filter(|&c| Some(c) != first));
+    for c in order {
+        roots.push(camera_node(scene, &eval, &ch, &mut out, c, &camera_defs[c], animated));
     }
     let routes = out.routes;
     roots.extend(out.interpolators);
@@ -730,6 +707,358 @@ pub fn export_scene(
         ExportFormat::X3dXml => xml(&roots, &routes),
         ExportFormat::Inventor => inventor(&roots, &routes),
     })
+}
+
+fn key_times<T>(animated: &Animated<T>) -> Vec<f64> {
+    animated.track.keys.iter().map(|k| k.time).collect()
+}
+
+/// Scene camera `c` as a `Viewpoint` (`position`, `orientation`, `fieldOfView` as the
+/// evaluator has them at the range's start), with interpolators for what moves: the keyed
+/// translation and rotation as any transform's; an aimed camera's orientation and a lens
+/// (as the vertical field of view in radians) resampled from the evaluated camera.
+/// Orthographic cameras are written as perspective Viewpoints (VRML97 has no other); their
+/// lens stays in the metadata.
+fn camera_node(
+    scene: &Scene,
+    eval: &SceneEvaluator,
+    ch: &Channels<'_>,
+    out: &mut Animations,
+    c: usize,
+    def: &str,
+    animated: bool,
+) -> WNode {
+    let camera = &scene.cameras[c];
+    let none = Overrides::default();
+    let state = |t: f64| eval.camera_at(c, t, &none);
+    let orientation = |t: f64| {
+        state(t).map_or(Quat::IDENTITY, |s| Quat::from_mat3a(&s.world_from_camera.matrix3).normalize())
+    };
+    let fov = |t: f64| match state(t).map(|s| s.lens) {
+        Some(keyrig_core::Lens::Perspective { fov_y }) => fov_y,
+        _ => std::f32::consts::FRAC_PI_4,
+    };
+    let t0 = ch.t0;
+    let position = state(t0).map_or(Vec3::ZERO, |s| s.eye());
+    let fields = vec![
+        ("description", WValue::String(camera.name.clone())),
+        ("position", WValue::Numbers(position.to_array().map(f64::from).to_vec(), 3)),
+        ("orientation", WValue::Numbers(axis_angle(orientation(t0)).to_vec(), 4)),
+        ("fieldOfView", WValue::Numbers(vec![f64::from(fov(t0))], 1)),
+    ];
+    if animated {
+        ch.vec3(
+            out,
+            ChannelId::CameraTranslation(c),
+            &camera.translation,
+            Vec3Blend::Position,
+            def,
+            "position",
+        );
+        if camera.aim.is_none() {
+            ch.rotation(out, ChannelId::CameraRotation(c), &camera.rotation, def, "orientation");
+        } else {
+            // Where it looks follows its target and its own motion: written when it turns.
+            let turns =
+                ch.frame_times().iter().any(|&t| orientation(t).angle_between(orientation(t0)) > 1e-6);
+            if turns {
+                ch.rotation_resampled(out, &orientation, &[], def, "orientation");
+            }
+        }
+        let perspective = camera.projection != keyrig_core::Projection::Orthographic;
+        if perspective && camera.lens.is_animated() {
+            ch.scalar_resampled(out, &fov, &key_times(&camera.lens), def, "fieldOfView");
+        }
+    }
+    WNode { kind: "Viewpoint", def: Some(def.to_owned()), fields }
+}
+
+/// How a vector channel blends: VRML's straight line, or its HSV colour blend (clamped to
+/// VRML's 0..1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Vec3Blend {
+    Position,
+    Colour,
+}
+
+/// What the channel writers share: the evaluator, the range, the tolerances and whether the
+/// format has X3D's spline and squad interpolators.
+struct Channels<'a> {
+    eval: &'a SceneEvaluator,
+    t0: f64,
+    t1: f64,
+    fps: f64,
+    pos_tol: f32,
+    rot_tol: f32,
+    col_tol: f32,
+    x3d: bool,
+}
+
+/// keyrig's own keys of a channel when they might be one X3D spline: two or more, TCB up to the
+/// last, Hold at both ends, not muted.
+fn spline_candidate<T: TrackValue>(animated: &Animated<T>) -> Option<Track<T>> {
+    let keys = &animated.track.keys;
+    if animated.muted || animated.cycles() != Cycles::HOLD || keys.len() < 2 {
+        return None;
+    }
+    if keys[..keys.len() - 1].iter().any(|k| k.interpolation != Interpolation::Tcb) {
+        return None;
+    }
+    Track::with_cycles(&animated.track, Cycles::HOLD).ok()
+}
+
+/// X3D's one velocity per key (per unit of the segment parameter) from keyrig's segment
+/// tangents (per second): the tangent leaving each key, the one arriving at the last.
+fn key_velocities<T: SplineValue>(
+    times: &[f64],
+    tangent: impl Fn(usize) -> Option<(T, T)>,
+) -> Option<Vec<T>> {
+    let n = times.len();
+    (0..n)
+        .map(|i| {
+            if i + 1 < n {
+                tangent(i).map(|(out, _)| out.scale((times[i + 1] - times[i]) as f32))
+            } else {
+                tangent(n - 2).map(|(_, arriving)| arriving.scale((times[n - 1] - times[n - 2]) as f32))
+            }
+        })
+        .collect()
+}
+
+impl Channels<'_> {
+    fn at(&self, id: ChannelId, t: f64) -> Option<ChannelValue> {
+        self.eval.value(id, t, &Overrides::default())
+    }
+
+    fn fraction(&self, t: f64) -> f64 {
+        (t - self.t0) / (self.t1 - self.t0)
+    }
+
+    fn schedule<T: Clone>(
+        &self,
+        value: &dyn Fn(f64) -> T,
+        close: &dyn Fn(&T, &T, &T, f32) -> bool,
+        keys: &[f64],
+    ) -> Vec<(f64, T)> {
+        schedule(value, close, self.t0, self.t1, self.fps, keys)
+    }
+
+    /// Every frame of the range.
+    fn frame_times(&self) -> Vec<f64> {
+        let frames = ((self.t1 - self.t0) * self.fps).round().max(0.0) as i64;
+        (0..=frames).map(|f| self.t0 + f as f64 / self.fps).collect()
+    }
+
+    /// A `ScalarInterpolator` following `value` within the tolerance (an absolute 10⁻⁴ of
+    /// the scene's size, at least 10⁻⁶).
+    fn scalar_resampled(
+        &self,
+        out: &mut Animations,
+        value: &dyn Fn(f64) -> f32,
+        key_times: &[f64],
+        name: &str,
+        field: &'static str,
+    ) {
+        let close = |a: &f32, b: &f32, m: &f32, u: f32| (a + (b - a) * u - m).abs() <= self.pos_tol.max(1e-6);
+        let s = self.schedule(value, &close, key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        out.interp(
+            "ScalarInterpolator",
+            name,
+            fractions,
+            s.iter().map(|(_, v)| f64::from(*v)).collect(),
+            1,
+            field,
+        );
+    }
+
+    /// An `OrientationInterpolator` following `value` within the rotation tolerance, no two
+    /// samples 90° apart (so that every slerp turns the way keyrig turns).
+    fn rotation_resampled(
+        &self,
+        out: &mut Animations,
+        value: &dyn Fn(f64) -> Quat,
+        key_times: &[f64],
+        name: &str,
+        field: &'static str,
+    ) {
+        let close = |a: &Quat, b: &Quat, m: &Quat, u: f32| {
+            a.angle_between(*b) < std::f32::consts::FRAC_PI_2
+                && crate::model::slerp_short(*a, *b, u).angle_between(*m) <= self.rot_tol
+        };
+        let s = self.schedule(value, &close, key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        let values = s.iter().flat_map(|(_, q)| axis_angle(*q)).collect();
+        out.interp("OrientationInterpolator", name, fractions, values, 4, field);
+    }
+
+    /// Where an exported spline is compared with keyrig: every frame, three points between
+    /// frames, and the key times in the range.
+    fn check_times(&self, keys: &[f64]) -> Vec<f64> {
+        let frames = ((self.t1 - self.t0) * self.fps).round().max(0.0) as i64;
+        let mut times: Vec<f64> = (0..=frames * 4)
+            .map(|q| self.t0 + q as f64 / (4.0 * self.fps))
+            .filter(|&t| t <= self.t1)
+            .collect();
+        times.extend(keys.iter().copied().filter(|&k| k >= self.t0 && k <= self.t1));
+        times
+    }
+
+    /// The fractions of an X3D spline with these keys and velocities when it plays `value`
+    /// within `tolerance` at every [`Channels::check_times`] (read back as keyrig reads it).
+    fn exact_spline<T: TrackValue + SplineValue>(
+        &self,
+        times: &[f64],
+        values: &[T],
+        velocity: &[T],
+        value: impl Fn(f64) -> T,
+        distance: impl Fn(T, T) -> f32,
+        tolerance: f32,
+    ) -> Option<Vec<f64>> {
+        let fractions: Vec<f64> = times.iter().map(|&t| self.fraction(t)).collect();
+        let fields = splines::SplineFields { closed: false, velocity, normalize: false };
+        let keys = splines::spline_keys(&fractions, values, &fields, self.t1 - self.t0);
+        let track = Track::new(&RawTrack::new(keys)).ok()?;
+        self.check_times(times)
+            .into_iter()
+            .all(|t| distance(track.sample(t - self.t0), value(t)) <= tolerance)
+            .then_some(fractions)
+    }
+
+    /// A vector channel: X3D's `SplinePositionInterpolator` where it is exact, else a
+    /// `PositionInterpolator` (or `ColorInterpolator`) resampled within the tolerance.
+    fn vec3(
+        &self,
+        out: &mut Animations,
+        id: ChannelId,
+        animated: &Animated<Vec3>,
+        blend: Vec3Blend,
+        name: &str,
+        field: &'static str,
+    ) {
+        if !animated.is_animated() {
+            return;
+        }
+        let key_times: Vec<f64> = animated.track.keys.iter().map(|k| k.time).collect();
+        let flat = |v: &mut dyn Iterator<Item = Vec3>| v.flat_map(|v| v.to_array().map(f64::from)).collect();
+        if blend == Vec3Blend::Colour {
+            let close = |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| {
+                (hsv_lerp(*a, *b, u) - *m).abs().max_element() <= self.col_tol
+            };
+            let s =
+                self.schedule(&|t| vec3_of(self.at(id, t)).clamp(Vec3::ZERO, Vec3::ONE), &close, &key_times);
+            let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+            out.interp("ColorInterpolator", name, fractions, flat(&mut s.iter().map(|(_, v)| *v)), 3, field);
+            return;
+        }
+        let value = |t: f64| vec3_of(self.at(id, t));
+        if let Some(track) = spline_candidate(animated).filter(|_| self.x3d) {
+            let times = track.key_times();
+            let exact = key_velocities(times, |i| track.segment_tangents(i)).and_then(|velocity| {
+                let distance = |a: Vec3, b: Vec3| (a - b).abs().max_element();
+                let fractions = self.exact_spline(
+                    times,
+                    track.key_values(),
+                    &velocity,
+                    value,
+                    distance,
+                    self.pos_tol / 10.0,
+                )?;
+                Some((fractions, velocity))
+            });
+            if let Some((fractions, velocity)) = exact {
+                out.interp_with(
+                    "SplinePositionInterpolator",
+                    (name, name),
+                    fractions,
+                    flat(&mut track.key_values().iter().copied()),
+                    3,
+                    vec![("keyVelocity", WValue::Numbers(flat(&mut velocity.into_iter()), 3))],
+                    field,
+                );
+                return;
+            }
+        }
+        let close =
+            |a: &Vec3, b: &Vec3, m: &Vec3, u: f32| (a.lerp(*b, u) - *m).abs().max_element() <= self.pos_tol;
+        let s = self.schedule(&value, &close, &key_times);
+        let fractions = s.iter().map(|(t, _)| self.fraction(*t)).collect();
+        out.interp("PositionInterpolator", name, fractions, flat(&mut s.iter().map(|(_, v)| *v)), 3, field);
+    }
+
+    /// A scalar channel (clamped to VRML's 0..1): X3D's `SplineScalarInterpolator` where it is
+    /// exact, else a resampled `ScalarInterpolator`.
+    fn scalar(
+        &self,
+        out: &mut Animations,
+        id: ChannelId,
+        animated: &Animated<f32>,
+        name: &str,
+        field: &'static str,
+    ) {
+        if !animated.is_animated() {
+            return;
+        }
+        let value = |t: f64| scalar_of(self.at(id, t)).clamp(0.0, 1.0);
+        if let Some(track) = spline_candidate(animated).filter(|_| self.x3d) {
+            let times = track.key_times();
+            let exact = key_velocities(times, |i| track.segment_tangents(i)).and_then(|velocity| {
+                let fractions = self.exact_spline(
+                    times,
+                    track.key_values(),
+                    &velocity,
+                    value,
+                    |a, b| (a - b).abs(),
+                    1e-5,
+                )?;
+                Some((fractions, velocity))
+            });
+            if let Some((fractions, velocity)) = exact {
+                let numbers = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect();
+                out.interp_with(
+                    "SplineScalarInterpolator",
+                    (name, name),
+                    fractions,
+                    numbers(track.key_values()),
+                    1,
+                    vec![("keyVelocity", WValue::Numbers(numbers(&velocity), 1))],
+                    field,
+                );
+                return;
+            }
+        }
+        self.scalar_resampled(out, &value, &key_times(animated), name, field);
+    }
+
+    /// A rotation channel: X3D's `SquadOrientationInterpolator` where it is exact, else an
+    /// `OrientationInterpolator` resampled within the tolerance, no two samples 90° apart.
+    fn rotation(
+        &self,
+        out: &mut Animations,
+        id: ChannelId,
+        animated: &Animated<Quat>,
+        name: &str,
+        field: &'static str,
+    ) {
+        if !animated.is_animated() {
+            return;
+        }
+        let value = |t: f64| quat_of(self.at(id, t));
+        if let Some(track) = spline_candidate(animated).filter(|t| self.x3d && !t.has_spin()) {
+            let fractions: Vec<f64> = track.key_times().iter().map(|&t| self.fraction(t)).collect();
+            let curve = splines::SquadCurve::new(&fractions, track.key_values(), false);
+            let tolerance = f64::from(self.rot_tol) / 10.0;
+            let exact = self.check_times(track.key_times()).into_iter().all(|t| {
+                splines::rotation_angle(curve.eval(self.fraction(t)), value(t).as_dquat()) <= tolerance
+            });
+            if exact {
+                let values = track.key_values().iter().flat_map(|q| axis_angle(*q)).collect();
+                out.interp("SquadOrientationInterpolator", name, fractions, values, 4, field);
+                return;
+            }
+        }
+        self.rotation_resampled(out, &value, &key_times(animated), name, field);
+    }
 }
 
 /// The interpolators and routes being written.
@@ -742,8 +1071,7 @@ struct Animations {
 
 impl Animations {
     /// An interpolator of `kind` with `keys` (fractions) and `values` (`arity` numbers each),
-    /// driven by the clock and routed to `target.field`.
-    #[allow(clippy::too_many_arguments)]
+    /// driven by the clock and routed to `name.field` (`name` is the target's DEF).
     fn interp(
         &mut self,
         kind: &'static str,
@@ -751,27 +1079,50 @@ impl Animations {
         keys: Vec<f64>,
         values: Vec<f64>,
         arity: usize,
-        target: String,
+        field: &'static str,
+    ) {
+        self.interp_with(kind, (name, name), keys, values, arity, Vec::new(), field);
+    }
+
+    /// [`Animations::interp`] with more fields (a spline's `keyVelocity`); `(name, target)`:
+    /// the interpolator is named `name_field` and routed to `target.field`.
+    #[allow(clippy::too_many_arguments)]
+    fn interp_with(
+        &mut self,
+        kind: &'static str,
+        (name, target): (&str, &str),
+        keys: Vec<f64>,
+        values: Vec<f64>,
+        arity: usize,
+        more: Vec<(&'static str, WValue)>,
         field: &'static str,
     ) {
         let def = def_name(&format!("{name}_{field}"), &mut self.used);
-        self.interpolators.push(WNode {
-            kind,
-            def: Some(def.clone()),
-            fields: vec![("key", WValue::Numbers(keys, 1)), ("keyValue", WValue::Numbers(values, arity))],
-        });
+        let mut fields =
+            vec![("key", WValue::Numbers(keys, 1)), ("keyValue", WValue::Numbers(values, arity))];
+        fields.extend(more);
+        self.interpolators.push(WNode { kind, def: Some(def.clone()), fields });
         self.routes.push((self.clock.clone(), "fraction_changed", def.clone(), "set_fraction"));
-        self.routes.push((def, "value_changed", target, field));
+        self.routes.push((def, "value_changed", target.to_owned(), field));
     }
 }
 
 /// The DEF names of the scene's objects and lights, in order (the same for the export and for
 /// reading it back), and the names taken.
-fn exported_names(scene: &Scene) -> (Vec<String>, Vec<String>, HashMap<String, usize>) {
+fn exported_names(scene: &Scene) -> ExportedNames {
     let mut used = HashMap::new();
     let objects = scene.objects.iter().map(|o| def_name(&o.name, &mut used)).collect();
     let lights = scene.lights.iter().map(|l| def_name(&l.name, &mut used)).collect();
-    (objects, lights, used)
+    let cameras = scene.cameras.iter().map(|c| def_name(&c.name, &mut used)).collect();
+    ExportedNames { objects, lights, cameras, used }
+}
+
+/// The DEF names of a scene's objects, lights and cameras, and every name taken.
+struct ExportedNames {
+    objects: Vec<String>,
+    lights: Vec<String>,
+    cameras: Vec<String>,
+    used: HashMap<String, usize>,
 }
 
 fn quote(s: &str) -> String {
@@ -974,6 +1325,32 @@ fn inventor(roots: &[WNode], routes: &[(String, &'static str, String, &'static s
             _ => None,
         })
     };
+    // Viewpoints as perspective cameras before the shapes: the first one views the scene,
+    // the others wait in a Switch that shows none of them (their connections still play).
+    let cameras: Vec<&WNode> = roots.iter().filter(|n| n.kind == "Viewpoint").collect();
+    for (i, n) in cameras.iter().enumerate() {
+        if i == 1 {
+            out.push_str("  Switch {\n    whichChild -1\n");
+        }
+        let def = n.def.clone().unwrap_or_default();
+        let field = |vrml: &str, default: Vec<f64>| {
+            format!(
+                "{}{}",
+                nums(&num_field(n, vrml).unwrap_or(default)),
+                connection(&def, vrml).unwrap_or_default()
+            )
+        };
+        let _ = writeln!(
+            out,
+            "  DEF {def} PerspectiveCamera {{\n    position {}\n    orientation {}\n    heightAngle {}\n  }}",
+            field("position", vec![0.0, 0.0, 10.0]),
+            field("orientation", vec![0.0, 0.0, 1.0, 0.0]),
+            field("fieldOfView", vec![std::f64::consts::FRAC_PI_4])
+        );
+        if i > 0 && i + 1 == cameras.len() {
+            out.push_str("  }\n");
+        }
+    }
     for n in roots {
         match n.kind {
             "WorldInfo" => {
@@ -1013,11 +1390,15 @@ fn inventor(roots: &[WNode], routes: &[(String, &'static str, String, &'static s
                         {
                             let d = num_field(m, "diffuseColor").unwrap_or(vec![0.8; 3]);
                             let tr = num_field(m, "transparency").unwrap_or(vec![0.0]);
+                            let mdef = m.def.clone().unwrap_or_default();
                             let _ = writeln!(
                                 out,
-                                "    Material {{ diffuseColor {} transparency {} }}",
+                                "    {}Material {{ diffuseColor {}{} transparency {}{} }}",
+                                m.def.as_ref().map(|d| format!("DEF {d} ")).unwrap_or_default(),
                                 nums(&d),
-                                nums(&tr)
+                                connection(&mdef, "diffuseColor").unwrap_or_default(),
+                                nums(&tr),
+                                connection(&mdef, "transparency").unwrap_or_default()
                             );
                         }
                         if let Some((_, WValue::Node(c))) = geo.fields.iter().find(|(f, _)| *f == "coord") {
@@ -1094,7 +1475,8 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
     let Ok(scene) = crate::scene_file::from_str(text.trim_start(), Path::new("metadata")) else {
         return false;
     };
-    let (object_defs, light_defs, _) = exported_names(&scene);
+    let ExportedNames { objects: object_defs, lights: light_defs, cameras: camera_defs, .. } =
+        exported_names(&scene);
     for object in &mut model.objects {
         let Some(o) = object_defs.iter().position(|d| *d == object.name) else { continue };
         let original = &scene.objects[o];
@@ -1106,6 +1488,12 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
             object.translation = original.translation.clone();
             object.rotation = original.rotation.clone();
             object.scale = original.scale.clone();
+            object.attributes = original.attributes.clone();
+        } else {
+            // The morph it came back as still shows, colours and fades as it did.
+            object.attributes.visible = original.attributes.visible.clone();
+            object.attributes.colour.clone_from(&original.attributes.colour);
+            object.attributes.opacity = original.attributes.opacity.clone();
         }
     }
     for light in &mut model.lights {
@@ -1113,6 +1501,13 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
             *light = scene.lights[l].clone();
         }
     }
+    for camera in &mut model.cameras {
+        if let Some(c) = camera_defs.iter().position(|d| *d == camera.name) {
+            *camera = scene.cameras[c].clone();
+        }
+    }
+    // What the metadata gives back is not missing.
+    model.skipped.retain(|s| !s.why.contains("keyrig's own export carries it"));
     model.metadata_scene = Some(scene);
     true
 }

@@ -281,14 +281,16 @@ fn visit(t: &mut Traversal<'_>, id: NodeId, state: &mut State) -> Result<(), Vrm
             });
         }
         "PerspectiveCamera" | "OrthographicCamera" => {
-            let (_, r, _) = state.matrix.to_scale_rotation_translation();
+            // In the camera's own frame; the mapping places it by the state's matrix.
             let view = View {
                 name: node.def.clone().unwrap_or_else(|| format!("View {}", t.views.len() + 1)),
-                position: state.matrix.transform_point3(v3(t, id, "position", Vec3::new(0.0, 0.0, 1.0))),
-                orientation: (r * rot(t, id, "orientation")).normalize(),
+                position: v3(t, id, "position", Vec3::new(0.0, 0.0, 1.0)),
+                orientation: rot(t, id, "orientation").normalize(),
                 field_of_view: num(t, id, "heightAngle", std::f32::consts::FRAC_PI_4),
+                orthographic: (kind == "OrthographicCamera")
+                    .then(|| num(t, id, "height", 2.0).abs().max(1e-3)),
             };
-            t.views.push((view, Vec::new()));
+            t.views.push((view, vec![Frame::Matrix(state.matrix)], Some(id)));
         }
         "Info" => {
             let metadata = matches!(node.value("string"), Some(Value::Strings(s)) if s.iter().any(|s| s.starts_with(super::tree::METADATA_TAG)));
@@ -338,6 +340,7 @@ fn push_shape(t: &mut Traversal<'_>, id: NodeId, state: &State, geometry: Geomet
         frames: vec![Frame::Matrix(state.matrix)],
         geometry,
         material,
+        material_node: None,
         place: node.place,
     });
 }

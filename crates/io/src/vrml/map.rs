@@ -1,5 +1,6 @@
-//! The node tree mapped onto keyrig: shapes → objects with meshes, lights, viewpoints → named
-//! views, and `TimeSensor` → interpolator → `ROUTE` chains → keyrig tracks.
+//! The node tree mapped onto keyrig: shapes → objects with meshes, lights, viewpoints → scene
+//! cameras, and `TimeSensor` → interpolator → `ROUTE` chains → keyrig tracks (also of
+//! viewpoints, materials and spot cones).
 //!
 //! **Objects.** Every Shape instance (a Shape reached through `USE` twice is two instances)
 //! becomes one object named after the nearest `DEF` (the Shape's own, else the nearest
@@ -26,7 +27,7 @@
 //! interpolators blend in HSV: they are resampled into linear RGB keys within
 //! [`COLOUR_TOLERANCE`]. A `CoordinateInterpolator` on a shape's `Coordinate` makes that shape
 //! a vertex-morphing mesh (its keys are the morph frames, at their own times), as an MD2 model
-//! plays.
+//! plays. X3D's spline and squad interpolators are converted in [`super::splines`].
 //!
 //! Everything the mapping does not take is listed in [`VrmlModel::skipped`] with where it is.
 
@@ -39,6 +40,7 @@ use keyrig_core::{Animated, Cycle, Interpolation, Key, Material, RawTrack};
 
 use super::expand::base_field;
 use super::geometry::{self, PolyMesh, Solid, Tessellation};
+use super::splines;
 use super::tree::{Document, Encoding, NodeId, Place, Value};
 use super::{VrmlError, VrmlErrorKind};
 
@@ -107,7 +109,8 @@ pub struct VrmlMesh {
     pub baked: Mat4,
 }
 
-/// A `Viewpoint` (or Inventor camera), kept as a named view until keyrig scenes have cameras.
+/// A `Viewpoint` (or Inventor camera) at rest, in world space; [`VrmlModel::cameras`] holds it
+/// as a keyrig scene camera with its animation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
     pub name: String,
@@ -115,6 +118,9 @@ pub struct View {
     pub orientation: Quat,
     /// Radians.
     pub field_of_view: f32,
+    /// The height of the view of an orthographic camera (`OrthoViewpoint`, Inventor's
+    /// `OrthographicCamera`), scene units.
+    pub orthographic: Option<f32>,
 }
 
 /// A whole imported VRML/X3D/Inventor file.
@@ -127,6 +133,9 @@ pub struct VrmlModel {
     pub meshes: Vec<VrmlMesh>,
     pub lights: Vec<keyrig_core::Light>,
     pub views: Vec<View>,
+    /// The views as scene cameras (`camera/<name>/…` channels), with the animation of their
+    /// `position`, `orientation` and `fieldOfView`; the first is the one VRML binds first.
+    pub cameras: Vec<keyrig_core::SceneCamera>,
     /// Seconds of animation (the longest cycle); 0 without animation.
     pub duration: f64,
     pub skipped: Vec<Skipped>,
@@ -165,11 +174,15 @@ impl VrmlModel {
         if let Some(view) = self.views.first() {
             scene.camera = self.camera_of(view);
         }
+        scene.cameras = self.cameras.clone();
         if let Some(original) = &self.metadata_scene {
             scene.fps = original.fps;
             scene.frame_range = original.frame_range;
             scene.ambient = original.ambient;
             scene.camera = original.camera;
+            scene.cameras.clone_from(&original.cameras);
+            scene.active_camera.clone_from(&original.active_camera);
+            scene.markers.clone_from(&original.markers);
         }
         scene
     }
@@ -354,6 +367,27 @@ fn animated<T: Copy>(value: T, track: &RawTrack<T>, timing: Timing) -> Animated<
     Animated::new(value, track.clone()).with_cycles(Channel::cycles(timing))
 }
 
+/// A VRML field of view (radians) as keyrig's lens: degrees within (0°, 180°).
+fn lens_degrees(radians: f32) -> f32 {
+    if radians.is_finite() {
+        radians.to_degrees().clamp(0.01, 179.9)
+    } else {
+        45.0
+    }
+}
+
+/// `track` with every value mapped by `value` and every tangent by `tangent` (an affine map:
+/// the same curve, mapped).
+fn scaled<T: Copy>(track: &RawTrack<T>, value: impl Fn(T) -> T, tangent: impl Fn(T) -> T) -> RawTrack<T> {
+    let mut out = track.clone();
+    for k in out.keys.iter_mut() {
+        k.value = value(k.value);
+        k.in_tangent = k.in_tangent.map(&tangent);
+        k.out_tangent = k.out_tangent.map(&tangent);
+    }
+    out
+}
+
 fn is_interpolator(kind: &str) -> bool {
     kind.ends_with("Interpolator")
 }
@@ -503,6 +537,20 @@ fn resample_colour(keys: &[Key<Vec3>]) -> Vec<Key<Vec3>> {
     out
 }
 
+/// The first `n` triples of `values` (read `arity` at a time) as vectors.
+fn vec3s(values: &[f64], arity: usize, n: usize) -> Vec<Vec3> {
+    values.chunks_exact(arity).take(n).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect()
+}
+
+/// `closed`, `keyVelocity` and `normalizeVelocity` of a spline interpolator.
+fn spline_fields<'a, T>(doc: &Document, id: NodeId, velocity: &'a [T]) -> splines::SplineFields<'a, T> {
+    splines::SplineFields {
+        closed: boolean(doc, id, "closed", false),
+        velocity,
+        normalize: boolean(doc, id, "normalizeVelocity", false),
+    }
+}
+
 struct Animation {
     channels: HashMap<(NodeId, String), Channel>,
     duration: f64,
@@ -586,25 +634,55 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
         let n = fractions.len();
         let arity = |a: usize| -> Option<usize> { (values.len() >= n * a).then_some(a) };
         let channel = match from.kind.as_str() {
-            "PositionInterpolator" | "SplinePositionInterpolator" => arity(3).map(|a| {
-                let v: Vec<Vec3> = values
-                    .chunks_exact(a)
-                    .take(n)
-                    .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-                    .collect();
-                let keys = if from.kind == "SplinePositionInterpolator" {
-                    spline_keys(doc, interp, fractions, &v, timing.cycle)
-                } else {
-                    keyed(fractions, &v, timing.cycle, Vec3::lerp)
-                };
-                Channel::Vec3(RawTrack::new(keys), timing)
+            "SplinePositionInterpolator" | "SplineScalarInterpolator" | "SquadOrientationInterpolator"
+                if fractions.windows(2).any(|w| w[1] <= w[0]) =>
+            {
+                skipped.add(
+                    from.kind.clone(),
+                    "equal keys (a jump) in a spline interpolator: the specification leaves the curve undefined",
+                    from.place,
+                );
+                continue;
+            }
+            "PositionInterpolator" => arity(3).map(|a| {
+                let v = vec3s(values, a, n);
+                Channel::Vec3(RawTrack::new(keyed(fractions, &v, timing.cycle, Vec3::lerp)), timing)
+            }),
+            "SplinePositionInterpolator" => arity(3).map(|a| {
+                let v = vec3s(values, a, n);
+                let velocity = vec3s(numbers(doc, interp, "keyVelocity").unwrap_or(&[]), 3, usize::MAX);
+                let fields = spline_fields(doc, interp, &velocity);
+                Channel::Vec3(
+                    RawTrack::new(splines::spline_keys(fractions, &v, &fields, timing.cycle)),
+                    timing,
+                )
+            }),
+            "SplineScalarInterpolator" => arity(1).map(|_| {
+                let v: Vec<f32> = values.iter().take(n).map(|&x| x as f32).collect();
+                let velocity: Vec<f32> =
+                    numbers(doc, interp, "keyVelocity").unwrap_or(&[]).iter().map(|&x| x as f32).collect();
+                let fields = spline_fields(doc, interp, &velocity);
+                Channel::Scalar(
+                    RawTrack::new(splines::spline_keys(fractions, &v, &fields, timing.cycle)),
+                    timing,
+                )
+            }),
+            "SquadOrientationInterpolator" => arity(4).map(|a| {
+                let v: Vec<Quat> = values.chunks_exact(a).take(n).map(axis_angle).collect();
+                if boolean(doc, interp, "normalizeVelocity", false) {
+                    skipped.add(
+                        "SquadOrientationInterpolator normalizeVelocity",
+                        "a squad has no velocities to normalize: ignored",
+                        from.place,
+                    );
+                }
+                let closed = boolean(doc, interp, "closed", false);
+                let (keys, _exact) =
+                    splines::squad_keys(fractions, &v, closed, timing.cycle, Channel::cycles(timing));
+                Channel::Quat(RawTrack::new(keys), timing)
             }),
             "ColorInterpolator" => arity(3).map(|a| {
-                let v: Vec<Vec3> = values
-                    .chunks_exact(a)
-                    .take(n)
-                    .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-                    .collect();
+                let v = vec3s(values, a, n);
                 let keys = keyed(fractions, &v, timing.cycle, hsv_lerp);
                 Channel::Vec3(RawTrack::new(resample_colour(&keys)), timing)
             }),
@@ -661,86 +739,6 @@ fn analyse_animation(doc: &Document, skipped: &mut Skips) -> Animation {
     Animation { channels, duration }
 }
 
-/// X3D SplinePositionInterpolator (ISO/IEC 19775-1 §19.4.6) as Hermite keys: the spline's
-/// tangents per unit of the fraction become keyrig's per-second tangents, so every segment is
-/// the same cubic. Tangents: `keyVelocity` when given (normalized to the chord length when
-/// `normalizeVelocity`), else Catmull–Rom `(v[i+1] − v[i−1]) / 2`; the one per key tangent
-/// `Tᵢ` enters segment i as `F⁺ᵢ·Tᵢ` and segment i−1 as `F⁻ᵢ·Tᵢ`,
-/// `F⁻ᵢ = 2·(t[i+1]−t[i]) / (t[i+1]−t[i−1])`, `F⁺ᵢ = 2·(t[i]−t[i−1]) / (t[i+1]−t[i−1])`
-/// (the spec's names: the outgoing tangent is scaled by the preceding interval).
-fn spline_keys(doc: &Document, id: NodeId, fractions: &[f64], values: &[Vec3], cycle: f64) -> Vec<Key<Vec3>> {
-    let n = fractions.len().min(values.len());
-    let closed = boolean(doc, id, "closed", false) && n > 2 && values[0] == values[n - 1];
-    let velocity: Vec<Vec3> = numbers(doc, id, "keyVelocity")
-        .unwrap_or(&[])
-        .chunks_exact(3)
-        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-        .collect();
-    let normalize = boolean(doc, id, "normalizeVelocity", false);
-    let chord: f32 = values[..n].windows(2).map(|w| (w[1] - w[0]).length()).sum();
-    let tangent = |i: usize| -> Vec3 {
-        if velocity.len() == n {
-            let v = velocity[i];
-            return if normalize { v.normalize_or_zero() * chord } else { v };
-        }
-        if velocity.len() == 2 && (i == 0 || i == n - 1) && !closed {
-            let v = velocity[if i == 0 { 0 } else { 1 }];
-            return if normalize { v.normalize_or_zero() * chord } else { v };
-        }
-        match (i, closed) {
-            (0, true) | (_, true) if i == 0 || i == n - 1 => (values[1] - values[n - 2]) * 0.5,
-            (0, false) => Vec3::ZERO,
-            (i, false) if i == n - 1 => Vec3::ZERO,
-            (i, _) => (values[i + 1] - values[i - 1]) * 0.5,
-        }
-    };
-    let span = |i: usize| -> (f64, f64) {
-        let before = if i > 0 {
-            fractions[i] - fractions[i - 1]
-        } else if closed {
-            fractions[n - 1] - fractions[n - 2]
-        } else {
-            0.0
-        };
-        let after = if i + 1 < n {
-            fractions[i + 1] - fractions[i]
-        } else if closed {
-            fractions[1] - fractions[0]
-        } else {
-            0.0
-        };
-        (before, after)
-    };
-    let mut keys = Vec::with_capacity(n + 2);
-    if fractions[0] > 0.0 {
-        keys.push(Key::new(0.0, values[0]).with_interpolation(Interpolation::Linear));
-    }
-    for i in 0..n {
-        let (before, after) = span(i);
-        let total = before + after;
-        let (f_out, f_in) = if (i == 0 || i == n - 1) && !closed || total <= 0.0 {
-            (1.0, 1.0)
-        } else {
-            (2.0 * before / total, 2.0 * after / total)
-        };
-        let t = tangent(i);
-        // Per-fraction tangents → per-second: divide by the segment's length in seconds.
-        let out = if after > 0.0 { t * (f_out / (after * cycle)) as f32 } else { Vec3::ZERO };
-        let inn = if before > 0.0 { t * (f_in / (before * cycle)) as f32 } else { Vec3::ZERO };
-        let mut key = Key::new(fractions[i] * cycle, values[i]).with_interpolation(Interpolation::Hermite);
-        key.out_tangent = Some(out);
-        key.in_tangent = Some(inn);
-        keys.push(key);
-    }
-    if fractions[n - 1] < 1.0 {
-        if let Some(last) = keys.last_mut() {
-            last.interpolation = Interpolation::Linear;
-        }
-        keys.push(Key::new(cycle, values[n - 1]).with_interpolation(Interpolation::Linear));
-    }
-    keys
-}
-
 // ---------------------------------------------------------------------------------------
 // Traversal
 
@@ -760,6 +758,8 @@ pub(crate) struct ShapeInstance {
     pub frames: Vec<Frame>,
     pub geometry: GeometryRef,
     pub material: Material,
+    /// The VRML/X3D `Material` node (for its animation).
+    pub material_node: Option<NodeId>,
     pub place: Place,
 }
 
@@ -838,7 +838,8 @@ pub(crate) struct Traversal<'d> {
     pub skips: Skips,
     pub shapes: Vec<ShapeInstance>,
     pub lights: Vec<LightInstance>,
-    pub views: Vec<(View, Vec<Frame>)>,
+    /// Each view with the transforms above it and its node (for its animation).
+    pub views: Vec<(View, Vec<Frame>, Option<NodeId>)>,
     visits: usize,
     geometry_cache: HashMap<NodeId, Option<GeometryRef>>,
     texture_cache: HashMap<NodeId, Option<Arc<keyrig_core::TextureImage>>>,
@@ -961,13 +962,23 @@ impl<'d> Traversal<'d> {
                     .clone()
                     .or_else(|| strings(doc, id, "description").first().cloned())
                     .unwrap_or_else(|| format!("View {}", self.views.len() + 1));
+                // OrthoViewpoint's fieldOfView is the view's box (minX, minY, maxX, maxY).
+                let orthographic = (node.kind == "OrthoViewpoint").then(|| {
+                    let b = numbers(doc, id, "fieldOfView").filter(|b| b.len() >= 4).unwrap_or(&[-1.0, -1.0, 1.0, 1.0]);
+                    ((b[3] - b[1]) as f32).abs().max(1e-3)
+                });
                 let view = View {
                     name,
                     position: vec3(doc, id, "position", Vec3::new(0.0, 0.0, 10.0)),
                     orientation: rotation(doc, id, "orientation"),
-                    field_of_view: float(doc, id, "fieldOfView", std::f32::consts::FRAC_PI_4),
+                    field_of_view: if orthographic.is_some() {
+                        std::f32::consts::FRAC_PI_4
+                    } else {
+                        float(doc, id, "fieldOfView", std::f32::consts::FRAC_PI_4)
+                    },
+                    orthographic,
                 };
-                self.views.push((view, frames.clone()));
+                self.views.push((view, frames.clone(), Some(id)));
             }
             "WorldInfo" if node.value("info").is_some_and(|v| matches!(v, Value::Strings(s) if s.iter().any(|s| s.starts_with(super::tree::METADATA_TAG)))) => {}
             "WorldInfo" | "NavigationInfo" | "Background" | "TextureBackground" | "Fog" | "Sound"
@@ -1000,7 +1011,9 @@ impl<'d> Traversal<'d> {
         let node = doc.node(id);
         let Some(geometry) = node_field(doc, id, "geometry") else { return Ok(()) };
         let Some(g) = self.geometry(geometry) else { return Ok(()) };
-        let material = self.appearance(node_field(doc, id, "appearance"));
+        let appearance = node_field(doc, id, "appearance");
+        let material = self.appearance(appearance);
+        let material_node = appearance.and_then(|a| node_field(doc, a, "material"));
         let mut hints: Vec<String> = names.iter().rev().cloned().collect();
         if let Some(def) = &doc.node(geometry).def {
             hints.push(def.clone());
@@ -1011,6 +1024,7 @@ impl<'d> Traversal<'d> {
             frames: frames.to_vec(),
             geometry: g,
             material,
+            material_node,
             place: node.place,
         });
         Ok(())
@@ -1471,8 +1485,17 @@ impl Traversal<'_> {
             "DirectionalLight" => keyrig_core::LightKind::Directional,
             "PointLight" => keyrig_core::LightKind::Point,
             _ => {
-                let cutoff = float(doc, id, "cutOffAngle", std::f32::consts::FRAC_PI_4).to_degrees();
-                let beam = float(doc, id, "beamWidth", std::f32::consts::FRAC_PI_2).to_degrees();
+                // VRML allows up to π/2 (and files hold more); keyrig's spot is within (0°, 90°].
+                let angle = |f: &str, rest: f32| {
+                    let a = float(doc, id, f, rest).to_degrees();
+                    if a.is_finite() {
+                        a.clamp(0.01, 90.0)
+                    } else {
+                        rest.to_degrees()
+                    }
+                };
+                let cutoff = angle("cutOffAngle", std::f32::consts::FRAC_PI_4);
+                let beam = angle("beamWidth", std::f32::consts::FRAC_PI_2);
                 keyrig_core::LightKind::Spot {
                     cutoff_deg: cutoff,
                     inner_angle_deg: beam.min(cutoff),
@@ -1768,10 +1791,16 @@ pub(crate) fn map_document(
     for l in &traversal.lights {
         lights.push(mapper.light(l, &mut light_names));
     }
+    let mut camera_names = HashMap::new();
+    let cameras: Vec<keyrig_core::SceneCamera> = traversal
+        .views
+        .iter()
+        .map(|(v, frames, node)| mapper.camera(v, frames, *node, &mut camera_names))
+        .collect();
     let views: Vec<View> = traversal
         .views
         .iter()
-        .map(|(v, frames)| {
+        .map(|(v, frames, _)| {
             let m = frames.iter().fold(Mat4::IDENTITY, |acc, f| acc * frame_matrix(doc, f));
             let (_, r, _) = m.to_scale_rotation_translation();
             View {
@@ -1781,20 +1810,6 @@ pub(crate) fn map_document(
             }
         })
         .collect();
-    for (v, _) in &traversal.views {
-        let up = v.orientation * Vec3::Y;
-        let forward = v.orientation * -Vec3::Z;
-        let level_up = (Vec3::Y - forward * forward.dot(Vec3::Y)).normalize_or(up);
-        if up.angle_between(level_up) > 1e-3 {
-            mapper.skips.add(
-                "Viewpoint roll",
-                format!("`{}` is rolled; keyrig's view keeps the horizon level", v.name),
-                doc.roots
-                    .first()
-                    .map_or(Place { file: super::tree::FileId(0), at: 0 }, |r| doc.node(*r).place),
-            );
-        }
-    }
     for ((node, field), _) in mapper.anim.channels.iter() {
         let kind = doc.node(*node).kind.as_str();
         let taken = matches!(
@@ -1805,13 +1820,18 @@ pub(crate) fn map_document(
                     "DirectionalLight" | "PointLight" | "SpotLight",
                     "location" | "direction" | "color" | "intensity"
                 )
-        );
+                | ("SpotLight", "cutOffAngle" | "beamWidth")
+                | ("Viewpoint" | "PerspectiveCamera", "position" | "orientation" | "fieldOfView")
+                | ("PerspectiveCamera", "heightAngle")
+                | ("OrthoViewpoint" | "OrthographicCamera", "position" | "orientation")
+        ) || (encoding != Encoding::Inventor
+            && matches!((kind, field.as_str()), ("Material", "diffuseColor" | "transparency")));
         if !taken {
             let why = match kind {
-                "Viewpoint" | "OrthoViewpoint" => {
-                    "camera animation: keyrig scenes have no cameras yet (the view is kept at rest)"
+                "Material" if encoding == Encoding::Inventor => {
+                    "an Inventor material's animation is not imported (keyrig's own export carries it as metadata)"
                 }
-                "Material" => "keyrig does not animate material colours yet",
+                "Material" => "keyrig animates a material's diffuse colour and transparency only",
                 _ => "keyrig has no channel for this field",
             };
             mapper.skips.add(format!("{kind}.{field} animation"), why, doc.node(*node).place);
@@ -1825,6 +1845,7 @@ pub(crate) fn map_document(
         meshes,
         lights,
         views,
+        cameras,
         duration: mapper.anim.duration,
         skipped,
         metadata_scene: None,
@@ -1957,7 +1978,79 @@ impl Mapper<'_> {
             vertex_points,
             baked: bake_matrix,
         };
+        self.material_animation(shape, &mut object);
         (object, mesh)
+    }
+
+    /// A `Material`'s animated `diffuseColor` and `transparency` as the object's colour and
+    /// opacity attributes (opacity = 1 − transparency, an affine map of the keys: exact).
+    fn material_animation(&self, shape: &ShapeInstance, object: &mut keyrig_core::Object) {
+        let Some(m) = shape.material_node else { return };
+        let field = |f: &str| self.anim.channels.get(&(m, f.to_owned()));
+        if let Some(Channel::Vec3(track, timing)) = field("diffuseColor") {
+            let rest = Vec3::from_slice(&shape.material.base_colour[..3]);
+            object.attributes.colour = Some(animated(rest, track, *timing));
+        }
+        if let Some(Channel::Scalar(track, timing)) = field("transparency") {
+            let opaque = scaled(track, |t: f32| 1.0 - t.clamp(0.0, 1.0), |t: f32| -t);
+            object.attributes.opacity = animated(shape.material.base_colour[3], &opaque, *timing);
+        }
+    }
+
+    /// A view as a scene camera, placed by the transforms above it, with the animation of its
+    /// `position`, `orientation` and `fieldOfView` (radians → the lens in degrees).
+    fn camera(
+        &mut self,
+        view: &View,
+        frames: &[Frame],
+        node: Option<NodeId>,
+        names: &mut HashMap<String, usize>,
+    ) -> keyrig_core::SceneCamera {
+        let doc = self.doc;
+        let base = view.name.replace('/', "_");
+        let n = names.entry(base.clone()).or_insert(0);
+        *n += 1;
+        let name = if *n > 1 { format!("{base} {n}") } else { base };
+        let m = frames.iter().fold(Mat4::IDENTITY, |acc, f| acc * frame_matrix(doc, f));
+        let (_, r, _) = m.to_scale_rotation_translation();
+        let linear = Mat3::from_mat4(m);
+        let mut camera = keyrig_core::SceneCamera::new(name, m.transform_point3(view.position));
+        camera.rotation = Animated::constant((r * view.orientation).normalize());
+        camera.far = None;
+        match view.orthographic {
+            Some(height) => {
+                camera.projection = keyrig_core::Projection::Orthographic;
+                camera.lens = Animated::constant(height);
+                // keyrig's orthographic cameras need a far plane; VRML's has none.
+                camera.far = Some(1e6);
+            }
+            None => camera.lens = Animated::constant(lens_degrees(view.field_of_view)),
+        }
+        let Some(node) = node else { return camera };
+        if frames.iter().any(|f| self.frame_animated(f)) {
+            self.skips.add(
+                "Viewpoint under an animated Transform",
+                "the camera stays where the transforms put it at rest",
+                doc.node(node).place,
+            );
+        }
+        let field = |f: &str| self.anim.channels.get(&(node, f.to_owned()));
+        if let Some(Channel::Vec3(track, timing)) = field("position") {
+            // Into world space: the same affine image of the curve (tangents by the linear part).
+            let keys = scaled(track, |p| m.transform_point3(p), |t| linear * t);
+            camera.translation = animated(camera.translation.value, &keys, *timing);
+        }
+        if let Some(Channel::Quat(track, timing)) = field("orientation") {
+            // r·q for every key: slerp and squad commute with a fixed rotation in front.
+            let keys = scaled(track, |q| (r * q).normalize(), |t| r * t);
+            camera.rotation = animated(camera.rotation.value, &keys, *timing);
+        }
+        let fov = field("fieldOfView").or_else(|| field("heightAngle"));
+        if let (Some(Channel::Scalar(track, timing)), None) = (fov, view.orthographic) {
+            let keys = scaled(track, lens_degrees, |v: f32| v.to_degrees());
+            camera.lens = animated(camera.lens.value, &keys, *timing);
+        }
+        camera
     }
 
     fn light(&mut self, l: &LightInstance, names: &mut HashMap<String, usize>) -> keyrig_core::Light {
@@ -1991,16 +2084,40 @@ impl Mapper<'_> {
         if let Some(Channel::Scalar(track, timing)) = field("intensity") {
             light.intensity = animated(light.intensity.value, &track, timing);
         }
+        // A spot's cone in radians → the cone attributes in degrees (a scale: exact).
+        // Within keyrig's 0 < inner ≤ cutoff ≤ 90° (VRML's beam wider than the cut-off has no
+        // falloff: the inner angle is the cut-off).
+        if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
+            let degrees = |f: &str, rest: f32, most: f32| match field(f) {
+                Some(Channel::Scalar(track, timing)) => Some(animated(
+                    rest,
+                    &scaled(&track, |v: f32| v.to_degrees().clamp(0.01, most), |v: f32| v.to_degrees()),
+                    timing,
+                )),
+                _ => None,
+            };
+            let cutoff = degrees("cutOffAngle", cutoff_deg, 90.0);
+            let most_inner = if cutoff.is_some() { 90.0 } else { cutoff_deg };
+            if let Some(a) = degrees("beamWidth", inner_angle_deg, most_inner) {
+                light.attributes.inner_angle_deg = Some(a);
+            }
+            light.attributes.cutoff_deg = cutoff;
+        }
         // Into world space: an affine image of linear keys is the same image of the line.
         if m != Mat4::IDENTITY {
             light.position.value = m.transform_point3(light.position.value);
+            let r = Mat3::from_mat4(m);
             for k in light.position.track.keys.iter_mut() {
                 k.value = m.transform_point3(k.value);
+                // Spline tangents are differences: the linear part alone.
+                k.in_tangent = k.in_tangent.map(|t| r * t);
+                k.out_tangent = k.out_tangent.map(|t| r * t);
             }
-            let r = Mat3::from_mat4(m);
             light.direction.value = r * light.direction.value;
             for k in light.direction.track.keys.iter_mut() {
                 k.value = r * k.value;
+                k.in_tangent = k.in_tangent.map(|t| r * t);
+                k.out_tangent = k.out_tangent.map(|t| r * t);
             }
         }
         light

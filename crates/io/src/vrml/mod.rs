@@ -20,6 +20,7 @@ pub mod geometry;
 mod inventor;
 mod lex;
 pub mod map;
+pub mod splines;
 pub mod tree;
 pub mod xml;
 
