@@ -40,6 +40,7 @@ pub mod render_job;
 pub mod scene_frame;
 pub mod session;
 pub mod skinning;
+pub mod sounds;
 pub mod theme;
 pub mod twist;
 pub mod view;

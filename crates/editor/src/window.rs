@@ -137,6 +137,7 @@ impl EditorApp {
             view: &self.view,
             scene: &self.scene,
             meshes: &self.meshes,
+            sounds: &self.sounds,
             results: &self.results,
             status: self.status.as_ref(),
             imports: &self.imports,

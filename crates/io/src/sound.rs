@@ -3,20 +3,25 @@
 //!
 //! The file is opened like every input ([`crate::file_io::open_regular_file`]: a regular file
 //! of at most [`MAX_SOUND_BYTES`]) and decoded packet by packet into the summary, so memory is
-//! the summary's (about 1.5 kB a second at 48 kHz), not the decoded sound's. A packet that does
+//! the summary's (about 1.5 kB a second at 48 kHz), not the decoded sound's. Each packet is
+//! summarised from the decoder's own planes in their own sample type (the smallest and largest
+//! `i16` of a bucket's run, say, converted to `f32` once), never copied or converted sample by
+//! sample: for WAV that is most of the work (`benches/sound.rs`). A packet that does
 //! not decode is skipped and counted (as players do), so a damaged stretch does not lose the
 //! rest of the track; a file in which no packet decodes is an error.
 
 use std::path::{Path, PathBuf};
 
 use keyrig_core::{SummaryBuilder, WaveformSummary};
-use symphonia::core::audio::SampleBuffer;
+use symphonia::core::audio::{AudioBuffer, AudioBufferRef, Signal};
 use symphonia::core::codecs::{DecoderOptions, CODEC_TYPE_NULL};
+use symphonia::core::conv::FromSample;
 use symphonia::core::errors::Error as SymphoniaError;
 use symphonia::core::formats::FormatOptions;
 use symphonia::core::io::MediaSourceStream;
 use symphonia::core::meta::MetadataOptions;
 use symphonia::core::probe::Hint;
+use symphonia::core::sample::{i24, u24, Sample};
 
 /// Largest sound file keyrig reads: 2 GiB (a WAV of about 3 hours at 48 kHz stereo 16-bit).
 pub const MAX_SOUND_BYTES: u64 = 2 << 30;
@@ -49,10 +54,26 @@ pub struct DecodedSound {
 /// is not recognised, it has no audio track, or no packet of it decodes.
 pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
     let read_error = |source| SoundError::Read { path: path.to_path_buf(), source };
+    let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
+    decode_sound(Box::new(file), path)
+}
+
+/// Decodes a sound file's `bytes` (its format found from its content; `name`, whose extension
+/// is a hint, names it in errors).
+///
+/// # Errors
+/// As [`decode_sound_file`], but for reading.
+pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, SoundError> {
+    decode_sound(Box::new(std::io::Cursor::new(bytes)), name)
+}
+
+fn decode_sound(
+    source: Box<dyn symphonia::core::io::MediaSource>,
+    path: &Path,
+) -> Result<DecodedSound, SoundError> {
     let format_error =
         |e: SymphoniaError| SoundError::Format { path: path.to_path_buf(), message: e.to_string() };
-    let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
-    let stream = MediaSourceStream::new(Box::new(file), Default::default());
+    let stream = MediaSourceStream::new(source, Default::default());
     let mut hint = Hint::new();
     if let Some(extension) = path.extension().and_then(|e| e.to_str()) {
         hint.with_extension(extension);
@@ -75,7 +96,6 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
     let declared = (track.codec_params.sample_rate, track.codec_params.channels.map(|c| c.count()));
 
     let mut builder = None;
-    let mut buffer: Option<SampleBuffer<f32>> = None;
     let (mut skipped, mut decoded, mut last_error) = (0u64, 0u64, None);
     loop {
         let packet = match format.next_packet() {
@@ -104,13 +124,7 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
                         declared.1.map_or(channels, |c| c as u16),
                     )
                 });
-                let capacity = audio.capacity() as u64;
-                let buf = match &mut buffer {
-                    Some(b) if b.capacity() as u64 >= capacity * spec.channels.count() as u64 => b,
-                    _ => buffer.insert(SampleBuffer::new(capacity, spec)),
-                };
-                buf.copy_interleaved_ref(audio);
-                builder.push_interleaved(buf.samples());
+                summarise(builder, &audio);
                 decoded += 1;
             }
             Err(SymphoniaError::DecodeError(message)) => {
@@ -139,4 +153,67 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
             },
         }),
     }
+}
+
+/// Adds a decoded packet to the summary from its planes, in their own sample type.
+fn summarise(builder: &mut SummaryBuilder, audio: &AudioBufferRef<'_>) {
+    match audio {
+        AudioBufferRef::U8(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::U16(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::U24(b) => summarise_planes(builder, b, ordered_extremes::<u24>),
+        AudioBufferRef::U32(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::S8(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::S16(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::S24(b) => summarise_planes(builder, b, ordered_extremes::<i24>),
+        AudioBufferRef::S32(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::F32(b) => summarise_planes(builder, b, float_extremes),
+        AudioBufferRef::F64(b) => summarise_planes(builder, b, float_extremes),
+    }
+}
+
+/// Runs of `buffer`'s frames that end where the summary's buckets end, each added as the
+/// extremes `extremes` finds over every plane.
+fn summarise_planes<S: Sample>(
+    builder: &mut SummaryBuilder,
+    buffer: &AudioBuffer<S>,
+    extremes: impl Fn(&[S]) -> [f32; 2],
+) {
+    let planes = buffer.planes();
+    let planes = planes.planes();
+    let frames = buffer.frames();
+    let mut at = 0;
+    while at < frames {
+        let n = usize::try_from(builder.bucket_room()).unwrap_or(usize::MAX).min(frames - at);
+        let mut bounds = [f32::INFINITY, f32::NEG_INFINITY];
+        for plane in planes.iter() {
+            let [lo, hi] = extremes(plane.get(at..at + n).unwrap_or_default());
+            bounds = [bounds[0].min(lo), bounds[1].max(hi)];
+        }
+        builder.push_extremes(n as u64, bounds);
+        at += n;
+    }
+}
+
+/// The smallest and largest of integer samples, found as integers (their order is their
+/// value's) and converted to `f32` once each.
+fn ordered_extremes<S: Sample + Ord>(samples: &[S]) -> [f32; 2]
+where
+    f32: FromSample<S>,
+{
+    match (samples.iter().min(), samples.iter().max()) {
+        (Some(&lo), Some(&hi)) => [f32::from_sample(lo), f32::from_sample(hi)],
+        _ => [f32::INFINITY, f32::NEG_INFINITY],
+    }
+}
+
+/// The smallest and largest of floating-point samples, non-finite ones counting as silence.
+fn float_extremes<S: Sample>(samples: &[S]) -> [f32; 2]
+where
+    f32: FromSample<S>,
+{
+    samples.iter().fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], &s| {
+        let s = f32::from_sample(s);
+        let s = if s.is_finite() { s } else { 0.0 };
+        [lo.min(s), hi.max(s)]
+    })
 }
