@@ -68,6 +68,8 @@ pub struct EditorApp {
     pub(crate) meshes: files::MeshStore,
     /// Sound files of the scene's clips, decoded on their threads (the dope sheet's waveforms).
     pub(crate) sounds: crate::sounds::SoundStore,
+    /// The sound device and how playback follows it.
+    pub(crate) audio: crate::audio::Audio,
     /// The frame's preparation: the evaluator, the evaluated scene, CPU skinning, bounds.
     pub(crate) scene: SceneFrame,
     /// The panels, each with its own gesture and view state.
@@ -121,6 +123,7 @@ impl EditorApp {
             dialog_purpose: None,
             meshes: files::MeshStore::default(),
             sounds: crate::sounds::SoundStore::default(),
+            audio: crate::audio::Audio::default(),
             scene: SceneFrame::default(),
             panels: Panels::default(),
             actions: Actions::default(),

@@ -16,6 +16,7 @@ use std::path::PathBuf;
 
 pub mod actions;
 pub mod app;
+pub mod audio;
 pub mod autosave;
 pub mod camera;
 pub mod camera_edits;

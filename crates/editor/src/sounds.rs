@@ -1,7 +1,8 @@
 //! The decoded sound files of the scene's clips, for the waveforms under the dope sheet's ruler.
 //!
-//! Each file is decoded once, on a thread of its own ([`keyrig_io::sound::decode_sound_file`]
-//! into a min/max summary), so opening a scene with a long track never holds up a frame; the
+//! Each file is decoded once, on a thread of its own
+//! ([`keyrig_io::sound::decode_sound_file_for_playback`] into a min/max summary and the samples
+//! [`crate::audio`] plays), so opening a scene with a long track never holds up a frame; the
 //! waveform appears when its thread is done. Files are keyed by their full path (resolved
 //! against the scene's folder like model files), so two clips of one file share a summary.
 
@@ -11,6 +12,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::Arc;
 
 use keyrig_core::{Scene, WaveformSummary};
+use keyrig_io::sound::{SoundPcm, MAX_PLAYBACK_FRAMES};
 
 /// Where one sound file's decoding stands.
 #[derive(Clone, Debug)]
@@ -27,13 +29,20 @@ pub enum SoundLoad {
 #[derive(Default)]
 pub struct SoundStore {
     files: HashMap<PathBuf, SoundLoad>,
-    running: Vec<(PathBuf, Receiver<Result<WaveformSummary, String>>)>,
+    /// The samples of decoded files, for playing them ([`crate::audio`]); a file longer than
+    /// [`keyrig_io::sound::MAX_PLAYBACK_FRAMES`] has none and plays silently.
+    pcm: HashMap<PathBuf, Arc<SoundPcm>>,
+    running: Vec<(PathBuf, Receiver<Decoded>)>,
 }
+
+/// What a decoding thread answers.
+type Decoded = Result<(WaveformSummary, Option<SoundPcm>), String>;
 
 impl std::fmt::Debug for SoundStore {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SoundStore")
             .field("files", &self.files.len())
+            .field("pcm", &self.pcm.len())
             .field("running", &self.running.len())
             .finish()
     }
@@ -59,8 +68,9 @@ impl SoundStore {
             let (send, receive) = mpsc::channel();
             let file = path.clone();
             let spawned = std::thread::Builder::new().name("keyrig-sound".into()).spawn(move || {
-                let decoded =
-                    keyrig_io::sound::decode_sound_file(&file).map(|d| d.summary).map_err(|e| e.to_string());
+                let decoded = keyrig_io::sound::decode_sound_file_for_playback(&file, MAX_PLAYBACK_FRAMES)
+                    .map(|d| (d.summary, d.pcm))
+                    .map_err(|e| e.to_string());
                 // The store may be gone (the editor closed): nobody waits for the answer then.
                 let _ = send.send(decoded);
             });
@@ -80,10 +90,15 @@ impl SoundStore {
     /// bar), each once.
     pub fn poll(&mut self) -> Vec<String> {
         let mut failures = Vec::new();
-        let files = &mut self.files;
+        let (files, pcms) = (&mut self.files, &mut self.pcm);
         self.running.retain(|(path, receive)| {
             let outcome = match receive.try_recv() {
-                Ok(Ok(summary)) => SoundLoad::Ready(Arc::new(summary)),
+                Ok(Ok((summary, pcm))) => {
+                    if let Some(pcm) = pcm {
+                        pcms.insert(path.clone(), Arc::new(pcm));
+                    }
+                    SoundLoad::Ready(Arc::new(summary))
+                }
                 Ok(Err(message)) => SoundLoad::Failed(message),
                 Err(TryRecvError::Empty) => return true,
                 Err(TryRecvError::Disconnected) => SoundLoad::Failed(format!(
@@ -119,6 +134,12 @@ impl SoundStore {
             Some(SoundLoad::Ready(summary)) => Some(summary),
             _ => None,
         }
+    }
+
+    /// The samples of the clip file `path`, once decoded (for playing it).
+    #[must_use]
+    pub fn pcm(&self, base_dir: Option<&Path>, path: &str) -> Option<&Arc<SoundPcm>> {
+        self.pcm.get(&full_path(base_dir, path))
     }
 
     /// Waits (at most `limit`) for every decoding under way; for tests and the command line.
@@ -160,6 +181,9 @@ mod tests {
         assert!(failures[0].contains("missing.wav"), "{failures:?}");
         let summary = store.summary(Some(&fixtures()), "tone.flac").expect("decoded");
         assert_eq!((summary.sample_rate, summary.channels, summary.frames), (22_050, 2, 11_025));
+        let pcm = store.pcm(Some(&fixtures()), "tone.flac").expect("samples to play");
+        assert_eq!(pcm.frames(), 11_025);
+        assert!(store.pcm(Some(&fixtures()), "missing.wav").is_none());
         // Requested again (every frame does): nothing restarts, the failure is not repeated.
         store.request(&scene, Some(&fixtures()));
         assert!(!store.is_loading());

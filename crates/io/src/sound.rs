@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use keyrig_core::{SummaryBuilder, WaveformSummary};
-use symphonia::core::audio::{AudioBuffer, AudioBufferRef, Signal};
+use symphonia::core::audio::{AudioBuffer, AudioBufferRef, SampleBuffer, Signal};
 use symphonia::core::codecs::{DecoderOptions, CODEC_TYPE_NULL};
 use symphonia::core::conv::FromSample;
 use symphonia::core::errors::Error as SymphoniaError;
@@ -45,7 +45,31 @@ pub struct DecodedSound {
     pub summary: WaveformSummary,
     /// Packets that did not decode and were skipped.
     pub skipped_packets: u64,
+    /// The samples, for playing the sound: asked of [`decode_sound_file_for_playback`], and
+    /// `None` for a sound longer than it allows.
+    pub pcm: Option<SoundPcm>,
 }
+
+/// A sound's samples as a player takes them: 16-bit, interleaved.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SoundPcm {
+    pub sample_rate: u32,
+    pub channels: u16,
+    /// `channels` samples a frame.
+    pub samples: Vec<i16>,
+}
+
+impl SoundPcm {
+    /// Frames (samples per channel).
+    #[must_use]
+    pub fn frames(&self) -> usize {
+        self.samples.len() / usize::from(self.channels.max(1))
+    }
+}
+
+/// The most frames [`decode_sound_file_for_playback`] keeps by default: 20 minutes at
+/// 48 kHz (230 MB of 16-bit stereo).
+pub const MAX_PLAYBACK_FRAMES: u64 = 20 * 60 * 48_000;
 
 /// Decodes `path` into its waveform summary.
 ///
@@ -55,7 +79,18 @@ pub struct DecodedSound {
 pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
     let read_error = |source| SoundError::Read { path: path.to_path_buf(), source };
     let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
-    decode_sound(Box::new(file), path)
+    decode_sound(Box::new(file), path, None)
+}
+
+/// Decodes `path` into its waveform summary and, when it has at most `max_frames` frames, its
+/// samples ([`DecodedSound::pcm`]) for playing it: one pass over the file.
+///
+/// # Errors
+/// As [`decode_sound_file`].
+pub fn decode_sound_file_for_playback(path: &Path, max_frames: u64) -> Result<DecodedSound, SoundError> {
+    let read_error = |source| SoundError::Read { path: path.to_path_buf(), source };
+    let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
+    decode_sound(Box::new(file), path, Some(max_frames))
 }
 
 /// Decodes a sound file's `bytes` (its format found from its content; `name`, whose extension
@@ -64,12 +99,15 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
 /// # Errors
 /// As [`decode_sound_file`], but for reading.
 pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, SoundError> {
-    decode_sound(Box::new(std::io::Cursor::new(bytes)), name)
+    decode_sound(Box::new(std::io::Cursor::new(bytes)), name, Some(MAX_PLAYBACK_FRAMES))
 }
 
+/// Decodes into the summary and, with `keep_frames`, the samples of a sound of at most that
+/// many frames.
 fn decode_sound(
     source: Box<dyn symphonia::core::io::MediaSource>,
     path: &Path,
+    keep_frames: Option<u64>,
 ) -> Result<DecodedSound, SoundError> {
     let format_error =
         |e: SymphoniaError| SoundError::Format { path: path.to_path_buf(), message: e.to_string() };
@@ -96,6 +134,10 @@ fn decode_sound(
     let declared = (track.codec_params.sample_rate, track.codec_params.channels.map(|c| c.count()));
 
     let mut builder = None;
+    // The samples while they are kept, and the buffer that converts a packet's to 16 bits.
+    let mut pcm: Option<SoundPcm> = None;
+    let mut keeping = keep_frames.is_some();
+    let mut packet_samples: Option<SampleBuffer<i16>> = None;
     let (mut skipped, mut decoded, mut last_error) = (0u64, 0u64, None);
     loop {
         let packet = match format.next_packet() {
@@ -126,6 +168,32 @@ fn decode_sound(
                 });
                 summarise(builder, &audio);
                 decoded += 1;
+                if keeping {
+                    let pcm = pcm.get_or_insert_with(|| SoundPcm {
+                        sample_rate: spec.rate,
+                        channels,
+                        samples: Vec::new(),
+                    });
+                    let capacity = audio.capacity() as u64;
+                    let buffer = match &mut packet_samples {
+                        Some(b) if b.capacity() as u64 >= capacity * u64::from(channels) => b,
+                        _ => packet_samples.insert(SampleBuffer::new(capacity, spec)),
+                    };
+                    buffer.copy_interleaved_ref(audio);
+                    let room = keep_frames.unwrap_or(0).saturating_mul(u64::from(channels));
+                    if pcm.channels != channels
+                        || pcm.sample_rate != spec.rate
+                        || (pcm.samples.len() + buffer.samples().len()) as u64 > room
+                    {
+                        // Longer than allowed, or the stream changed its layout: not kept.
+                        keeping = false;
+                    } else {
+                        pcm.samples.extend_from_slice(buffer.samples());
+                    }
+                }
+                if !keeping {
+                    pcm = None;
+                }
             }
             Err(SymphoniaError::DecodeError(message)) => {
                 skipped += 1;
@@ -142,7 +210,7 @@ fn decode_sound(
     }
     match builder {
         Some(builder) if decoded > 0 => {
-            Ok(DecodedSound { codec, summary: builder.finish(), skipped_packets: skipped })
+            Ok(DecodedSound { codec, summary: builder.finish(), skipped_packets: skipped, pcm })
         }
         _ => Err(SoundError::Decode {
             path: path.to_path_buf(),
