@@ -57,7 +57,11 @@ const FFMPEG: &[Need] = &[Need {
 /// Building the editor: `cpal` (sound clips played in the editor) links ALSA, found with
 /// pkg-config.
 const SOUND: &[Need] = &[
-    Need { package: "libasound2-dev", command: None, why: "ALSA's headers, which the editor's sound output (cpal) builds against" },
+    Need {
+        package: "libasound2-dev",
+        command: None,
+        why: "ALSA's headers, which the editor's sound output (cpal) builds against",
+    },
     Need { package: "pkg-config", command: Some("pkg-config"), why: "finding ALSA when the editor builds" },
 ];
 

@@ -139,7 +139,11 @@ impl Audio {
         let State::Open(out) = &self.state else { return notice };
         let Ok(mut transport) = out.transport.lock() else { return notice };
         let fps = scene.fps.max(1e-9);
-        let key = (doc_key, fps.to_bits(), scene.sounds.iter().filter(|c| sounds.pcm(base_dir, &c.path).is_some()).count());
+        let key = (
+            doc_key,
+            fps.to_bits(),
+            scene.sounds.iter().filter(|c| sounds.pcm(base_dir, &c.path).is_some()).count(),
+        );
         if self.mix_key != Some(key) {
             transport.mix = Arc::new(mix_of(scene, base_dir, sounds));
             self.mix_key = Some(key);

@@ -61,7 +61,9 @@ fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), String> {
         cpal::SampleFormat::I16 => build::<i16>(&device, &config, &transport),
         cpal::SampleFormat::U16 => build::<u16>(&device, &config, &transport),
         cpal::SampleFormat::I32 => build::<i32>(&device, &config, &transport),
-        other => return Err(format!("the output device takes {other:?} samples, which keyrig does not write")),
+        other => {
+            return Err(format!("the output device takes {other:?} samples, which keyrig does not write"))
+        }
     }?;
     stream.play().map_err(|e| format!("the output device does not start: {e}"))?;
     Ok((stream, transport))

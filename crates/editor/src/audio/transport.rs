@@ -59,7 +59,8 @@ impl Transport {
         let channels = usize::from(self.channels);
         let frames = out.len() / channels;
         out.fill(0.0);
-        let sounding = if self.playing { frames } else { frames.min(usize::try_from(self.burst).unwrap_or(usize::MAX)) };
+        let sounding =
+            if self.playing { frames } else { frames.min(usize::try_from(self.burst).unwrap_or(usize::MAX)) };
         if sounding > 0 {
             mix_into(&self.mix, &mut out[..sounding * channels], channels, self.rate, self.cursor);
             self.cursor += sounding as f64 / f64::from(self.rate);
@@ -130,10 +131,8 @@ mod tests {
         let mut out = vec![0.0; 8];
         mix_into(&clips, &mut out, 2, 2000, 1.1);
         // Frames at source positions 100, 100.5, 101, 101.5, on both channels.
-        let expect: Vec<f32> = [1000.0, 1005.0, 1010.0, 1015.0]
-            .iter()
-            .flat_map(|v| [v / 32768.0, v / 32768.0])
-            .collect();
+        let expect: Vec<f32> =
+            [1000.0, 1005.0, 1010.0, 1015.0].iter().flat_map(|v| [v / 32768.0, v / 32768.0]).collect();
         for (a, b) in out.iter().zip(&expect) {
             assert!((a - b).abs() < 1e-6, "{out:?} vs {expect:?}");
         }
