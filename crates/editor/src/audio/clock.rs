@@ -57,9 +57,7 @@ mod tests {
         transport.playing = true;
         let mut out = vec![0.0f32; buffer * 2];
         let mut follower = AudioFollower::default();
-        let mut playback = Playback::default();
-        playback.playing = true;
-        playback.looping = false;
+        let mut playback = Playback { playing: true, looping: false, ..Playback::default() };
         let mut wall_playback = playback.clone();
         // The device renders a buffer whenever its clock has consumed the last one.
         let (mut wall, mut device_due) = (0.0f64, 0.0f64);
