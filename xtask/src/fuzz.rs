@@ -25,6 +25,7 @@ const TARGETS: &[Target] = &[
     Target { name: "vrml", seeds: &[("tests/corpus/vrml", &["wrl"]), ("tests/corpus/x3d", &["x3dv"])] },
     Target { name: "x3d", seeds: &[("tests/corpus/x3d", &["x3d"])] },
     Target { name: "inventor", seeds: &[("tests/corpus/iv", &["iv"])] },
+    Target { name: "sound", seeds: &[("crates/io/tests/fixtures/sound", &["wav", "flac", "ogg", "mp3"])] },
 ];
 
 /// Largest seed file copied: libFuzzer's default `-max_len` follows the largest seed, and inputs

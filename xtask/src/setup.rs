@@ -9,7 +9,8 @@
 //!   second view format the renderer gives its colour target (`DownlevelFlags::VIEW_FORMATS`;
 //!   docs/testing.md, "Which GPU the tests use");
 //! - the glTF export tests: Node.js, npm and the Khronos glTF-Validator from its lockfile;
-//! - the VRML/X3D/Inventor reference tests: Coin3D through Python (`python3-pivy`).
+//! - the VRML/X3D/Inventor reference tests: Coin3D through Python (`python3-pivy`);
+//! - building the editor: ALSA's headers (`libasound2-dev`) and pkg-config for `cpal`.
 //!
 //! On Debian as root (or with password-less sudo) the missing packages are installed with
 //! `apt-get`; elsewhere the task stops and prints the one command to run.
@@ -53,6 +54,17 @@ const FFMPEG: &[Need] = &[Need {
     why: "FFmpeg's ffprobe and ffmpeg, the independent decoders of the playblast tests (MP4, GIF, APNG)",
 }];
 
+/// Building the editor: `cpal` (sound clips played in the editor) links ALSA, found with
+/// pkg-config.
+const SOUND: &[Need] = &[
+    Need {
+        package: "libasound2-dev",
+        command: None,
+        why: "ALSA's headers, which the editor's sound output (cpal) builds against",
+    },
+    Need { package: "pkg-config", command: Some("pkg-config"), why: "finding ALSA when the editor builds" },
+];
+
 const NODE: &[Need] = &[
     Need { package: "nodejs", command: Some("node"), why: "the Khronos glTF-Validator" },
     Need { package: "npm", command: Some("npm"), why: "installing the glTF-Validator" },
@@ -68,7 +80,7 @@ const LAVAPIPE: &[Need] = &[
 /// # Errors
 /// What is missing and cannot be installed here, with the command that installs it.
 pub fn run(validator: bool) -> Result<(), String> {
-    let mut needs: Vec<&Need> = WINDOW.iter().chain(COIN).chain(FFMPEG).collect();
+    let mut needs: Vec<&Need> = WINDOW.iter().chain(COIN).chain(FFMPEG).chain(SOUND).collect();
     if validator && (!on_path("node") || !on_path("npm")) {
         needs.extend(NODE);
     }

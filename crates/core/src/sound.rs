@@ -116,6 +116,17 @@ impl WaveformSummary {
             })
         })
     }
+
+    /// `[min, max]` of each of `count` consecutive spans of `step` seconds, the first starting
+    /// `from` seconds into the sound (`None` for a span that misses it): the columns of a
+    /// waveform drawn at `step` seconds a column. Each costs one [`WaveformSummary::range`],
+    /// so the whole costs `count` lookups whatever the sound's length.
+    pub fn columns(&self, from: f64, step: f64, count: usize) -> impl Iterator<Item = Option<[f32; 2]>> + '_ {
+        (0..count).map(move |c| {
+            let start = from + step * c as f64;
+            self.range(start, start + step)
+        })
+    }
 }
 
 /// Builds a [`WaveformSummary`] from interleaved samples pushed in any chunks.
@@ -167,6 +178,36 @@ impl SummaryBuilder {
             self.push_frame(frame);
         }
         self.carry.extend_from_slice(frames.remainder());
+    }
+
+    /// Frames the bucket being filled takes before it is complete (1 to [`SUMMARY_BUCKET`]).
+    #[must_use]
+    pub fn bucket_room(&self) -> u64 {
+        SUMMARY_BUCKET - self.in_bucket
+    }
+
+    /// Adds `frames` whole frames whose samples (every channel's) lie between `lo` and `hi`,
+    /// as a decoder that found them from its own planes says (non-finite bounds count as
+    /// silence). Exact when `frames` is at most [`SummaryBuilder::bucket_room`]; more frames
+    /// give every bucket they reach the same bounds. A partial frame left by
+    /// [`SummaryBuilder::push_interleaved`] stays where it is.
+    pub fn push_extremes(&mut self, frames: u64, [lo, hi]: [f32; 2]) {
+        let finite = |s: f32| if s.is_finite() { s } else { 0.0 };
+        let (lo, hi) = (finite(lo), finite(hi));
+        let mut left = frames;
+        while left > 0 {
+            let n = left.min(self.bucket_room());
+            self.current[0] = self.current[0].min(lo);
+            self.current[1] = self.current[1].max(hi);
+            self.frames += n;
+            self.in_bucket += n;
+            left -= n;
+            if self.in_bucket == SUMMARY_BUCKET {
+                self.finest.push(self.current);
+                self.current = [f32::INFINITY, f32::NEG_INFINITY];
+                self.in_bucket = 0;
+            }
+        }
     }
 
     fn push_frame(&mut self, frame: &[f32]) {
@@ -254,8 +295,44 @@ mod tests {
             assert!(hi > 0.99 && lo < -0.99, "{from}..{to}: {lo}..{hi}");
         }
         assert_eq!(summary.range(2.5, 3.0), None);
+        // Columns of half a second from -0.5 s: before the sound, four of it, after it.
+        let columns: Vec<_> = summary.columns(-0.5, 0.5, 6).collect();
+        assert_eq!(columns.len(), 6);
+        assert_eq!((columns[0], columns[5]), (None, None));
+        for column in &columns[1..5] {
+            let [lo, hi] = column.expect("in the sound");
+            assert!(hi > 0.99 && lo < -0.99, "{lo}..{hi}");
+        }
         assert_eq!(summary.range(1.0, 1.0), None);
         assert_eq!(summary.range(f64::NAN, 1.0), None);
+    }
+
+    #[test]
+    fn extremes_pushed_per_bucket_give_the_summary_of_the_samples() {
+        let samples = sine(0.5);
+        let mut by_samples = SummaryBuilder::new(48_000, 2);
+        by_samples.push_interleaved(&samples);
+        // The same sound as a decoder's planes give it: runs that end at bucket ends.
+        let mut by_extremes = SummaryBuilder::new(48_000, 2);
+        let mut at = 0;
+        let frames = samples.len() / 2;
+        while at < frames {
+            let n = (by_extremes.bucket_room() as usize).min(frames - at).min(100);
+            let run = &samples[2 * at..2 * (at + n)];
+            let lo = run.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = run.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            by_extremes.push_extremes(n as u64, [lo, hi]);
+            at += n;
+        }
+        assert_eq!(by_extremes.finish(), by_samples.finish());
+        // More frames than the bucket takes: every bucket reached gets the bounds.
+        let mut builder = SummaryBuilder::new(1000, 1);
+        builder.push_extremes(10, [-0.25, 0.5]);
+        assert_eq!(builder.bucket_room(), SUMMARY_BUCKET - 10);
+        builder.push_extremes(SUMMARY_BUCKET * 2, [f32::NEG_INFINITY, f32::NAN]);
+        let summary = builder.finish();
+        assert_eq!(summary.frames, 10 + 2 * SUMMARY_BUCKET);
+        assert_eq!(summary.levels[0], vec![[-0.25, 0.5], [0.0, 0.0], [0.0, 0.0]]);
     }
 
     #[test]

@@ -66,6 +66,10 @@ pub struct EditorApp {
     pub(crate) dialog_purpose: Option<DialogPurpose>,
     /// Meshes of model files the scene refers to.
     pub(crate) meshes: files::MeshStore,
+    /// Sound files of the scene's clips, decoded on their threads (the dope sheet's waveforms).
+    pub(crate) sounds: crate::sounds::SoundStore,
+    /// The sound device and how playback follows it.
+    pub(crate) audio: crate::audio::Audio,
     /// The frame's preparation: the evaluator, the evaluated scene, CPU skinning, bounds.
     pub(crate) scene: SceneFrame,
     /// The panels, each with its own gesture and view state.
@@ -118,6 +122,8 @@ impl EditorApp {
             file_dialog: egui_file_dialog::FileDialog::new(),
             dialog_purpose: None,
             meshes: files::MeshStore::default(),
+            sounds: crate::sounds::SoundStore::default(),
+            audio: crate::audio::Audio::default(),
             scene: SceneFrame::default(),
             panels: Panels::default(),
             actions: Actions::default(),
@@ -1141,6 +1147,19 @@ impl EditorApp {
         if self.render.is_some() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
+        self.poll_sounds();
+        if self.sounds.is_loading() {
+            ctx.request_repaint_after(Duration::from_millis(50));
+        }
+    }
+
+    /// Starts decoding the sound files of clips that are new, and reports those that failed.
+    fn poll_sounds(&mut self) {
+        let base_dir = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        self.sounds.request(self.doc.scene(), base_dir.as_deref());
+        for failure in self.sounds.poll() {
+            self.error(format!("Sound clip: {failure}"));
+        }
     }
 
     /// Starts File ▸ Render animation on its own thread, from a copy of the scene seen by the
@@ -1175,6 +1194,10 @@ impl EditorApp {
     pub fn wait_for_background_work(&mut self) {
         for import in std::mem::take(&mut self.imports) {
             self.apply_import(import);
+        }
+        self.poll_sounds();
+        for failure in self.sounds.wait(Duration::from_secs(60)) {
+            self.error(format!("Sound clip: {failure}"));
         }
     }
 

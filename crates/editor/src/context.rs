@@ -54,6 +54,8 @@ pub struct FrameCtx<'a> {
     pub scene: &'a SceneFrame,
     /// Meshes of model files the scene refers to.
     pub meshes: &'a MeshStore,
+    /// Sound files of the scene's clips, decoded or being decoded.
+    pub sounds: &'a crate::sounds::SoundStore,
     /// What the last frame's edits reported (whether a key move was taken).
     pub results: &'a EditResults,
     /// The status-bar message, if any.

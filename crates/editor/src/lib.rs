@@ -16,6 +16,7 @@ use std::path::PathBuf;
 
 pub mod actions;
 pub mod app;
+pub mod audio;
 pub mod autosave;
 pub mod camera;
 pub mod camera_edits;
@@ -40,6 +41,7 @@ pub mod render_job;
 pub mod scene_frame;
 pub mod session;
 pub mod skinning;
+pub mod sounds;
 pub mod theme;
 pub mod twist;
 pub mod view;

@@ -56,6 +56,8 @@ impl EditorApp {
         let scene = self.doc.scene();
         let (fps, range) = (scene.fps, scene.frame_range);
         if self.session.playback.playing {
+            // While the sound plays, the clock follows the sound's (crate::audio::clock).
+            let dt = self.audio.played_seconds().unwrap_or(dt);
             self.session.playback.advance(dt, fps, range.start, range.end);
             ctx.request_repaint();
             let raw = ctx.input(|i| i.unstable_dt);
@@ -94,6 +96,7 @@ impl EditorApp {
         if self.apply_actions(&ctx) {
             ctx.request_repaint();
         }
+        self.follow_audio(&ctx);
         // A drag (slider, gizmo, key drag) ends when the pointer is released, after its edits.
         if !ctx.input(|i| i.pointer.any_down()) {
             self.doc.close_group();
@@ -137,6 +140,7 @@ impl EditorApp {
             view: &self.view,
             scene: &self.scene,
             meshes: &self.meshes,
+            sounds: &self.sounds,
             results: &self.results,
             status: self.status.as_ref(),
             imports: &self.imports,

@@ -681,3 +681,106 @@ fn a_mirrored_pose_paste_on_cesium_man_in_a_real_x_window() {
         }
     }
 }
+
+/// A mono 16-bit PCM WAV file of `samples` at `rate` (the canonical 44-byte header of the
+/// RIFF/WAVE format: "fmt " chunk of 16 bytes, then "data").
+fn write_wav(path: &Path, rate: u32, samples: &[f32]) {
+    let data_len = u32::try_from(samples.len() * 2).expect("a short sound");
+    let mut bytes = Vec::with_capacity(44 + samples.len() * 2);
+    bytes.extend_from_slice(b"RIFF");
+    bytes.extend_from_slice(&(36 + data_len).to_le_bytes());
+    bytes.extend_from_slice(b"WAVEfmt ");
+    bytes.extend_from_slice(&16u32.to_le_bytes());
+    bytes.extend_from_slice(&1u16.to_le_bytes()); // PCM
+    bytes.extend_from_slice(&1u16.to_le_bytes()); // mono
+    bytes.extend_from_slice(&rate.to_le_bytes());
+    bytes.extend_from_slice(&(rate * 2).to_le_bytes()); // bytes a second
+    bytes.extend_from_slice(&2u16.to_le_bytes()); // bytes a frame
+    bytes.extend_from_slice(&16u16.to_le_bytes());
+    bytes.extend_from_slice(b"data");
+    bytes.extend_from_slice(&data_len.to_le_bytes());
+    for s in samples {
+        bytes.extend_from_slice(&((s.clamp(-1.0, 1.0) * 32767.0) as i16).to_le_bytes());
+    }
+    std::fs::write(path, bytes).expect("write the WAV file");
+}
+
+/// Pixels of `png` inside `rect` whose colour is near `colour` (each channel within 40).
+fn pixels_like(png: &Path, rect: egui::Rect, colour: [u8; 3]) -> usize {
+    let image = image::open(png).expect("screenshot").to_rgb8();
+    let mut n = 0;
+    for y in (rect.top().max(0.0) as u32)..(rect.bottom() as u32).min(image.height()) {
+        for x in (rect.left().max(0.0) as u32)..(rect.right() as u32).min(image.width()) {
+            let p = image.get_pixel(x, y).0;
+            if p.iter().zip(colour).all(|(&a, b)| a.abs_diff(b) <= 40) {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// Issue 28 in the real window: a scene with a sound clip shows the clip's waveform under the
+/// dope sheet's ruler; a real drag of the waveform moves the clip by whole frames, Ctrl+Z undoes
+/// the whole drag in one step, and the saved files say so.
+#[test]
+fn a_sound_clips_waveform_moves_with_a_drag_in_a_real_x_window() {
+    let session = Session::new();
+    let dir = tempfile::tempdir().expect("temp dir");
+    // Two seconds of a 220 Hz tone whose loudness swells and fades like spoken syllables.
+    let rate = 22_050;
+    let samples: Vec<f32> = (0..2 * rate)
+        .map(|i| {
+            let t = f64::from(i) / f64::from(rate);
+            let envelope = (t * std::f64::consts::PI * 2.5).sin().abs() * (0.3 + 0.6 * (t / 2.0));
+            (envelope * (t * 2.0 * std::f64::consts::PI * 220.0).sin()) as f32
+        })
+        .collect();
+    write_wav(&dir.path().join("line.wav"), rate, &samples);
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron");
+    let mut scene = keyrig_io::scene_file::load(&demo).expect("the demo scene");
+    scene.sounds.push(keyrig_core::SoundClip::new("line.wav", 10.0));
+    let file = dir.path().join("dialogue.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save the scene");
+
+    let (_keyrig, _window) = session.start_keyrig(&["edit", file.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(file.clone()));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    session.wait_idle();
+    let shot = session.screenshot("guide_sound");
+    let bar = h.get_by_label("sound clip line.wav frame 10").rect();
+    // The waveform's green (110, 205, 165) fills much of the bar: frames 10 to 70 at 30 fps.
+    let green = pixels_like(&shot, bar, [110, 205, 165]);
+    let area = (bar.width() * bar.height()) as usize;
+    assert!(green > area / 8 && green < area, "waveform pixels in the bar {bar:?}: {green} of {area}");
+
+    // Drag it 12 frames later: the bar is 2 s × 30 fps = 60 frames wide.
+    let per_frame = bar.width() / 60.0;
+    let from = bar.center();
+    let path: Vec<Pos2> =
+        (0..=6).map(|i| from + egui::vec2(12.0 * per_frame * i as f32 / 6.0, 0.0)).collect();
+    session.drag(&path);
+    model_drag(&mut h, &path);
+    assert_eq!(h.state().doc.scene().sounds[0].start_frame, 22.0, "the model's drag");
+    session.wait_idle();
+    let moved = session.screenshot("probe-sound-moved");
+    assert!(changed_pixels(&shot, &moved, bar.expand2(egui::vec2(13.0 * per_frame, 0.0))) > 100);
+
+    let saved_frame = |session: &Session| {
+        let before = std::fs::metadata(&file).and_then(|m| m.modified()).ok();
+        session.key("ctrl+s");
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while std::fs::metadata(&file).and_then(|m| m.modified()).ok() == before && Instant::now() < deadline
+        {
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        std::thread::sleep(Duration::from_millis(200));
+        keyrig_io::project::load_scene(&file).expect("the saved scene").sounds[0].start_frame
+    };
+    assert_eq!(saved_frame(&session), 22.0, "the real window's drag moved the clip 12 frames");
+    session.key("ctrl+z");
+    session.wait_idle();
+    assert_eq!(saved_frame(&session), 10.0, "one Ctrl+Z undoes the whole drag");
+}

@@ -3,20 +3,25 @@
 //!
 //! The file is opened like every input ([`crate::file_io::open_regular_file`]: a regular file
 //! of at most [`MAX_SOUND_BYTES`]) and decoded packet by packet into the summary, so memory is
-//! the summary's (about 1.5 kB a second at 48 kHz), not the decoded sound's. A packet that does
+//! the summary's (about 1.5 kB a second at 48 kHz), not the decoded sound's. Each packet is
+//! summarised from the decoder's own planes in their own sample type (the smallest and largest
+//! `i16` of a bucket's run, say, converted to `f32` once), never copied or converted sample by
+//! sample: for WAV that is most of the work (`benches/sound.rs`). A packet that does
 //! not decode is skipped and counted (as players do), so a damaged stretch does not lose the
 //! rest of the track; a file in which no packet decodes is an error.
 
 use std::path::{Path, PathBuf};
 
 use keyrig_core::{SummaryBuilder, WaveformSummary};
-use symphonia::core::audio::SampleBuffer;
+use symphonia::core::audio::{AudioBuffer, AudioBufferRef, SampleBuffer, Signal};
 use symphonia::core::codecs::{DecoderOptions, CODEC_TYPE_NULL};
+use symphonia::core::conv::FromSample;
 use symphonia::core::errors::Error as SymphoniaError;
 use symphonia::core::formats::FormatOptions;
 use symphonia::core::io::MediaSourceStream;
 use symphonia::core::meta::MetadataOptions;
 use symphonia::core::probe::Hint;
+use symphonia::core::sample::{i24, u24, Sample};
 
 /// Largest sound file keyrig reads: 2 GiB (a WAV of about 3 hours at 48 kHz stereo 16-bit).
 pub const MAX_SOUND_BYTES: u64 = 2 << 30;
@@ -40,7 +45,31 @@ pub struct DecodedSound {
     pub summary: WaveformSummary,
     /// Packets that did not decode and were skipped.
     pub skipped_packets: u64,
+    /// The samples, for playing the sound: asked of [`decode_sound_file_for_playback`], and
+    /// `None` for a sound longer than it allows.
+    pub pcm: Option<SoundPcm>,
 }
+
+/// A sound's samples as a player takes them: 16-bit, interleaved.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SoundPcm {
+    pub sample_rate: u32,
+    pub channels: u16,
+    /// `channels` samples a frame.
+    pub samples: Vec<i16>,
+}
+
+impl SoundPcm {
+    /// Frames (samples per channel).
+    #[must_use]
+    pub fn frames(&self) -> usize {
+        self.samples.len() / usize::from(self.channels.max(1))
+    }
+}
+
+/// The most frames [`decode_sound_file_for_playback`] keeps by default: 20 minutes at
+/// 48 kHz (230 MB of 16-bit stereo).
+pub const MAX_PLAYBACK_FRAMES: u64 = 20 * 60 * 48_000;
 
 /// Decodes `path` into its waveform summary.
 ///
@@ -49,10 +78,40 @@ pub struct DecodedSound {
 /// is not recognised, it has no audio track, or no packet of it decodes.
 pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
     let read_error = |source| SoundError::Read { path: path.to_path_buf(), source };
+    let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
+    decode_sound(Box::new(file), path, None)
+}
+
+/// Decodes `path` into its waveform summary and, when it has at most `max_frames` frames, its
+/// samples ([`DecodedSound::pcm`]) for playing it: one pass over the file.
+///
+/// # Errors
+/// As [`decode_sound_file`].
+pub fn decode_sound_file_for_playback(path: &Path, max_frames: u64) -> Result<DecodedSound, SoundError> {
+    let read_error = |source| SoundError::Read { path: path.to_path_buf(), source };
+    let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
+    decode_sound(Box::new(file), path, Some(max_frames))
+}
+
+/// Decodes a sound file's `bytes` (its format found from its content; `name`, whose extension
+/// is a hint, names it in errors).
+///
+/// # Errors
+/// As [`decode_sound_file`], but for reading.
+pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, SoundError> {
+    decode_sound(Box::new(std::io::Cursor::new(bytes)), name, Some(MAX_PLAYBACK_FRAMES))
+}
+
+/// Decodes into the summary and, with `keep_frames`, the samples of a sound of at most that
+/// many frames.
+fn decode_sound(
+    source: Box<dyn symphonia::core::io::MediaSource>,
+    path: &Path,
+    keep_frames: Option<u64>,
+) -> Result<DecodedSound, SoundError> {
     let format_error =
         |e: SymphoniaError| SoundError::Format { path: path.to_path_buf(), message: e.to_string() };
-    let (file, _) = crate::file_io::open_regular_file(path, MAX_SOUND_BYTES).map_err(read_error)?;
-    let stream = MediaSourceStream::new(Box::new(file), Default::default());
+    let stream = MediaSourceStream::new(source, Default::default());
     let mut hint = Hint::new();
     if let Some(extension) = path.extension().and_then(|e| e.to_str()) {
         hint.with_extension(extension);
@@ -75,7 +134,10 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
     let declared = (track.codec_params.sample_rate, track.codec_params.channels.map(|c| c.count()));
 
     let mut builder = None;
-    let mut buffer: Option<SampleBuffer<f32>> = None;
+    // The samples while they are kept, and the buffer that converts a packet's to 16 bits.
+    let mut pcm: Option<SoundPcm> = None;
+    let mut keeping = keep_frames.is_some();
+    let mut packet_samples: Option<SampleBuffer<i16>> = None;
     let (mut skipped, mut decoded, mut last_error) = (0u64, 0u64, None);
     loop {
         let packet = match format.next_packet() {
@@ -104,14 +166,34 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
                         declared.1.map_or(channels, |c| c as u16),
                     )
                 });
-                let capacity = audio.capacity() as u64;
-                let buf = match &mut buffer {
-                    Some(b) if b.capacity() as u64 >= capacity * spec.channels.count() as u64 => b,
-                    _ => buffer.insert(SampleBuffer::new(capacity, spec)),
-                };
-                buf.copy_interleaved_ref(audio);
-                builder.push_interleaved(buf.samples());
+                summarise(builder, &audio);
                 decoded += 1;
+                if keeping {
+                    let pcm = pcm.get_or_insert_with(|| SoundPcm {
+                        sample_rate: spec.rate,
+                        channels,
+                        samples: Vec::new(),
+                    });
+                    let capacity = audio.capacity() as u64;
+                    let buffer = match &mut packet_samples {
+                        Some(b) if b.capacity() as u64 >= capacity * u64::from(channels) => b,
+                        _ => packet_samples.insert(SampleBuffer::new(capacity, spec)),
+                    };
+                    buffer.copy_interleaved_ref(audio);
+                    let room = keep_frames.unwrap_or(0).saturating_mul(u64::from(channels));
+                    if pcm.channels != channels
+                        || pcm.sample_rate != spec.rate
+                        || (pcm.samples.len() + buffer.samples().len()) as u64 > room
+                    {
+                        // Longer than allowed, or the stream changed its layout: not kept.
+                        keeping = false;
+                    } else {
+                        pcm.samples.extend_from_slice(buffer.samples());
+                    }
+                }
+                if !keeping {
+                    pcm = None;
+                }
             }
             Err(SymphoniaError::DecodeError(message)) => {
                 skipped += 1;
@@ -128,7 +210,7 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
     }
     match builder {
         Some(builder) if decoded > 0 => {
-            Ok(DecodedSound { codec, summary: builder.finish(), skipped_packets: skipped })
+            Ok(DecodedSound { codec, summary: builder.finish(), skipped_packets: skipped, pcm })
         }
         _ => Err(SoundError::Decode {
             path: path.to_path_buf(),
@@ -139,4 +221,67 @@ pub fn decode_sound_file(path: &Path) -> Result<DecodedSound, SoundError> {
             },
         }),
     }
+}
+
+/// Adds a decoded packet to the summary from its planes, in their own sample type.
+fn summarise(builder: &mut SummaryBuilder, audio: &AudioBufferRef<'_>) {
+    match audio {
+        AudioBufferRef::U8(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::U16(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::U24(b) => summarise_planes(builder, b, ordered_extremes::<u24>),
+        AudioBufferRef::U32(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::S8(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::S16(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::S24(b) => summarise_planes(builder, b, ordered_extremes::<i24>),
+        AudioBufferRef::S32(b) => summarise_planes(builder, b, ordered_extremes),
+        AudioBufferRef::F32(b) => summarise_planes(builder, b, float_extremes),
+        AudioBufferRef::F64(b) => summarise_planes(builder, b, float_extremes),
+    }
+}
+
+/// Runs of `buffer`'s frames that end where the summary's buckets end, each added as the
+/// extremes `extremes` finds over every plane.
+fn summarise_planes<S: Sample>(
+    builder: &mut SummaryBuilder,
+    buffer: &AudioBuffer<S>,
+    extremes: impl Fn(&[S]) -> [f32; 2],
+) {
+    let planes = buffer.planes();
+    let planes = planes.planes();
+    let frames = buffer.frames();
+    let mut at = 0;
+    while at < frames {
+        let n = usize::try_from(builder.bucket_room()).unwrap_or(usize::MAX).min(frames - at);
+        let mut bounds = [f32::INFINITY, f32::NEG_INFINITY];
+        for plane in planes.iter() {
+            let [lo, hi] = extremes(plane.get(at..at + n).unwrap_or_default());
+            bounds = [bounds[0].min(lo), bounds[1].max(hi)];
+        }
+        builder.push_extremes(n as u64, bounds);
+        at += n;
+    }
+}
+
+/// The smallest and largest of integer samples, found as integers (their order is their
+/// value's) and converted to `f32` once each.
+fn ordered_extremes<S: Sample + Ord>(samples: &[S]) -> [f32; 2]
+where
+    f32: FromSample<S>,
+{
+    match (samples.iter().min(), samples.iter().max()) {
+        (Some(&lo), Some(&hi)) => [f32::from_sample(lo), f32::from_sample(hi)],
+        _ => [f32::INFINITY, f32::NEG_INFINITY],
+    }
+}
+
+/// The smallest and largest of floating-point samples, non-finite ones counting as silence.
+fn float_extremes<S: Sample>(samples: &[S]) -> [f32; 2]
+where
+    f32: FromSample<S>,
+{
+    samples.iter().fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], &s| {
+        let s = f32::from_sample(s);
+        let s = if s.is_finite() { s } else { 0.0 };
+        [lo.min(s), hi.max(s)]
+    })
 }

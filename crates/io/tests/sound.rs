@@ -94,3 +94,30 @@ fn sound_paths_are_relative_to_the_scene_on_disk() {
         .iter()
         .any(|(p, what)| p == &dir.path().join("audio/line.wav") && what.contains("sounds[0]")));
 }
+
+#[test]
+fn samples_for_playback_are_the_files_own() {
+    use keyrig_io::sound::decode_sound_file_for_playback;
+    // The WAV's samples are 16-bit already: kept as they are in the file (its last
+    // 4 × FRAMES bytes: the data chunk, interleaved little-endian, after FFmpeg's header).
+    let bytes = std::fs::read(fixture("tone.wav")).expect("read");
+    let data = bytes.len() - 4 * FRAMES as usize;
+    let in_file: Vec<i16> = bytes[data..].chunks_exact(2).map(|b| i16::from_le_bytes([b[0], b[1]])).collect();
+    let sound = decode_sound_file_for_playback(&fixture("tone.wav"), FRAMES).expect("decodes");
+    let pcm = sound.pcm.expect("kept");
+    assert_eq!((pcm.sample_rate, pcm.channels, pcm.frames() as u64), (RATE, 2, FRAMES));
+    assert_eq!(pcm.samples, in_file);
+    // Every format gives its sound's samples (within the lossy codecs' padding).
+    for name in ["tone.flac", "tone.ogg", "tone.mp3"] {
+        let sound = decode_sound_file_for_playback(&fixture(name), 2 * FRAMES).expect("decodes");
+        let pcm = sound.pcm.unwrap_or_else(|| panic!("{name}: kept"));
+        assert_eq!(pcm.frames() as u64, sound.summary.frames, "{name}");
+        let peak = pcm.samples.iter().map(|s| s.unsigned_abs()).max().unwrap_or(0);
+        assert!((f32::from(peak) / 32768.0 - PEAK).abs() < 0.02, "{name}: peak {peak}");
+    }
+    // Longer than allowed: the summary, without the samples.
+    let sound = decode_sound_file_for_playback(&fixture("tone.flac"), FRAMES / 2).expect("decodes");
+    assert!(sound.pcm.is_none());
+    assert_eq!(sound.summary.frames, FRAMES);
+    assert!(decode_sound_file(&fixture("tone.flac")).expect("decodes").pcm.is_none());
+}

@@ -46,16 +46,32 @@ fn is_scene(path: &Path) -> bool {
 /// A scene's sound clips with their decoded files (or why a file does not decode).
 type ClipInfo = (keyrig_core::SoundClip, Result<keyrig_io::sound::DecodedSound, String>);
 
+/// Each clip's file is decoded on a thread of its own (the editor's way too), so a scene of
+/// several long tracks takes about the time of its longest on a machine with the cores.
 fn sound_clips(scene: &Scene, base_dir: &Path) -> Vec<ClipInfo> {
-    scene
-        .sounds
-        .iter()
-        .map(|clip| {
-            let decoded =
-                keyrig_io::sound::decode_sound_file(&base_dir.join(&clip.path)).map_err(|e| e.to_string());
-            (clip.clone(), decoded)
-        })
-        .collect()
+    let decode = |clip: &keyrig_core::SoundClip| {
+        keyrig_io::sound::decode_sound_file(&base_dir.join(&clip.path)).map_err(|e| e.to_string())
+    };
+    std::thread::scope(|scope| {
+        // A thread that cannot be started leaves its clip to be decoded here.
+        let running: Vec<_> = scene
+            .sounds
+            .iter()
+            .map(|clip| (clip, std::thread::Builder::new().spawn_scoped(scope, move || decode(clip)).ok()))
+            .collect();
+        running
+            .into_iter()
+            .map(|(clip, thread)| {
+                let decoded = match thread {
+                    Some(thread) => {
+                        thread.join().unwrap_or_else(|_| Err(format!("{}: the decoder panicked", clip.path)))
+                    }
+                    None => decode(clip),
+                };
+                (clip.clone(), decoded)
+            })
+            .collect()
+    })
 }
 
 fn sounds_text(sounds: &[ClipInfo]) -> String {

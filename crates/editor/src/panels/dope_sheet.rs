@@ -31,6 +31,8 @@ use crate::widgets::publish_painted;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
 
+mod sound_rows;
+
 const ROW_HEIGHT: f32 = 17.0;
 const RULER_HEIGHT: f32 = 20.0;
 /// Space between the name column and the keys, and at the keys' right end, points: room for
@@ -80,6 +82,8 @@ pub struct DopeSheet {
     /// The key move pushed in the last frame and the whole frames the gesture has applied once
     /// it is taken (a move onto another key is refused).
     pending_move: Option<(Ticket, i32)>,
+    /// A sound clip being dragged in time.
+    sound_drag: Option<sound_rows::SoundDrag>,
 }
 
 /// What a row stands for.
@@ -443,6 +447,11 @@ impl DopeSheet {
 
         let (header, _) = ui.allocate_exact_size(Vec2::new(full.width(), RULER_HEIGHT), Sense::hover());
         self.header_ui(ui, ctx, actions, header, &geo);
+        if !scene.sounds.is_empty() {
+            let height = sound_rows::SOUND_ROW_HEIGHT * scene.sounds.len() as f32;
+            let (strip, _) = ui.allocate_exact_size(Vec2::new(full.width(), height), Sense::hover());
+            self.sound_rows_ui(ui, ctx, actions, strip, &geo);
+        }
 
         let body_top = ui.cursor().top();
         egui::ScrollArea::vertical()
@@ -495,6 +504,7 @@ impl DopeSheet {
         }
         let painter = painter.with_clip_rect(ruler);
         shade_outside_range(&painter, ctx.scene(), geo, ruler, visuals.extreme_bg_color.gamma_multiply(0.8));
+        sound_rows::ruler_waveforms(&painter, ctx, geo, ruler);
         let step = tick_step(geo.view.end - geo.view.start, geo.keys.1 - geo.keys.0);
         let mut f = (geo.view.start / step as f64).floor() as i64 * step;
         while (f as f64) <= geo.view.end {

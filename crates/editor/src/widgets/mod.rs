@@ -9,6 +9,7 @@ pub mod key_diamond;
 pub mod measure;
 pub mod tcb_slider;
 pub mod time_axis;
+pub mod waveform;
 
 /// Tells accessibility tools (and UI tests) about something painted rather than laid out as a
 /// widget — a key diamond, a curve point, a dope-sheet row — at `rect` (screen points), with the

@@ -1,0 +1,97 @@
+//! The sound device: the default output of the system's default host (ALSA on Linux, through
+//! `cpal`), opened on a thread of its own that owns the stream (a `cpal::Stream` may not leave
+//! the thread that made it, and a device that is slow to open holds up no frame). Its callback
+//! renders the shared [`Transport`].
+
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+
+use cpal::traits::{DeviceTrait, HostTrait, StreamTrait};
+
+use super::transport::Transport;
+
+/// An open output stream; dropping it stops the stream and ends its thread.
+pub struct Output {
+    pub transport: Arc<Mutex<Transport>>,
+    /// Dropped to end the stream's thread.
+    _stop: mpsc::Sender<()>,
+}
+
+/// What opening the device gave: the stream, or why there is none.
+pub type Opened = Result<Output, String>;
+
+/// Starts opening the default output device on a thread; the answer comes on the receiver.
+#[must_use]
+pub fn open() -> mpsc::Receiver<Opened> {
+    let (answer, receive) = mpsc::channel();
+    let spawned = std::thread::Builder::new().name("keyrig-audio".into()).spawn({
+        let answer = answer.clone();
+        move || {
+            let (stop, stopped) = mpsc::channel::<()>();
+            match start_stream() {
+                Ok((stream, transport)) => {
+                    if answer.send(Ok(Output { transport, _stop: stop })).is_ok() {
+                        // Holds the stream until the editor drops the Output (or exits).
+                        let _ = stopped.recv();
+                    }
+                    drop(stream);
+                }
+                Err(e) => {
+                    let _ = answer.send(Err(e));
+                }
+            }
+        }
+    });
+    if let Err(e) = spawned {
+        let _ = answer.send(Err(format!("cannot start the sound thread: {e}")));
+    }
+    receive
+}
+
+/// Opens the default output and starts its stream (rendering silence until told to play).
+fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), String> {
+    let host = cpal::default_host();
+    let device = host.default_output_device().ok_or_else(|| "no output device".to_owned())?;
+    let supported = device.default_output_config().map_err(|e| format!("no output device ({e})"))?;
+    let format = supported.sample_format();
+    let config: cpal::StreamConfig = supported.into();
+    let transport = Arc::new(Mutex::new(Transport::new(config.sample_rate.0, config.channels)));
+    let stream = match format {
+        cpal::SampleFormat::F32 => build::<f32>(&device, &config, &transport),
+        cpal::SampleFormat::I16 => build::<i16>(&device, &config, &transport),
+        cpal::SampleFormat::U16 => build::<u16>(&device, &config, &transport),
+        cpal::SampleFormat::I32 => build::<i32>(&device, &config, &transport),
+        other => {
+            return Err(format!("the output device takes {other:?} samples, which keyrig does not write"))
+        }
+    }?;
+    stream.play().map_err(|e| format!("the output device does not start: {e}"))?;
+    Ok((stream, transport))
+}
+
+fn build<T: cpal::SizedSample + cpal::FromSample<f32>>(
+    device: &cpal::Device,
+    config: &cpal::StreamConfig,
+    transport: &Arc<Mutex<Transport>>,
+) -> Result<cpal::Stream, String> {
+    let transport = Arc::clone(transport);
+    let mut mixed: Vec<f32> = Vec::new();
+    device
+        .build_output_stream(
+            config,
+            move |data: &mut [T], _: &cpal::OutputCallbackInfo| {
+                mixed.resize(data.len(), 0.0);
+                match transport.lock() {
+                    Ok(mut t) => t.render(&mut mixed),
+                    Err(_) => mixed.fill(0.0),
+                }
+                for (out, &s) in data.iter_mut().zip(&mixed) {
+                    *out = <T as cpal::Sample>::from_sample(s);
+                }
+            },
+            // A stream error (the device unplugged) leaves the sound silent; the editor goes on.
+            |_| {},
+            None,
+        )
+        .map_err(|e| format!("no output device ({e})"))
+}
