@@ -63,6 +63,11 @@ const SOUND: &[Need] = &[
         why: "ALSA's headers, which the editor's sound output (cpal) builds against",
     },
     Need { package: "pkg-config", command: Some("pkg-config"), why: "finding ALSA when the editor builds" },
+    Need {
+        package: "g++",
+        command: Some("g++"),
+        why: "OpenH264's bundled C++ source, which the MP4 playblast encoder builds",
+    },
 ];
 
 const NODE: &[Need] = &[
