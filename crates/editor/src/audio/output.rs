@@ -51,8 +51,8 @@ pub fn open() -> mpsc::Receiver<Opened> {
 /// Opens the default output and starts its stream (rendering silence until told to play).
 fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), String> {
     let host = cpal::default_host();
-    let device = host.default_output_device().ok_or_else(|| "no output device".to_owned())?;
-    let supported = device.default_output_config().map_err(|e| format!("no output device ({e})"))?;
+    let device = host.default_output_device().ok_or_else(|| "the system reports none".to_owned())?;
+    let supported = device.default_output_config().map_err(|e| e.to_string())?;
     let format = supported.sample_format();
     let config: cpal::StreamConfig = supported.into();
     let transport = Arc::new(Mutex::new(Transport::new(config.sample_rate.0, config.channels)));
@@ -93,5 +93,5 @@ fn build<T: cpal::SizedSample + cpal::FromSample<f32>>(
             |_| {},
             None,
         )
-        .map_err(|e| format!("no output device ({e})"))
+        .map_err(|e| e.to_string())
 }
