@@ -1187,6 +1187,16 @@ impl EditorApp {
                 return;
             }
         };
+        // An added model stands beside what the scene holds (its box at rest against the
+        // scene's as drawn now), moved in the import's own undo step.
+        let offset = match purpose {
+            ImportPurpose::Import => files::placement::model_bounds(&imported.scene, &imported.meshes)
+                .map_or(glam::Vec3::ZERO, |model| {
+                    self.bounds_now();
+                    files::placement::offset_beside(self.scene.bounds_of(None), model)
+                }),
+            ImportPurpose::Open => glam::Vec3::ZERO,
+        };
         // A mesh that failed to load is stored with its error: the viewport reports it over
         // the object, as for a scene file that names a broken model.
         for ((file, mesh), loaded) in imported.meshes {
@@ -1213,7 +1223,8 @@ impl EditorApp {
                 self.info(format!("Opened {} ({seconds:.2} s){skipped}", path.display()));
             }
             ImportPurpose::Import => {
-                let scene = imported.scene;
+                let mut scene = imported.scene;
+                files::placement::move_by(&mut scene, offset);
                 let n = scene.objects.len();
                 let first = self.doc.scene().objects.len();
                 self.actions.push(Action::FrameObjects((first..first + n).collect()));
@@ -1241,8 +1252,13 @@ impl EditorApp {
                 } else {
                     String::new()
                 };
+                let placed = if offset == glam::Vec3::ZERO {
+                    String::new()
+                } else {
+                    format!("; placed beside the scene ({:+.2} along X)", offset.x)
+                };
                 self.info(format!(
-                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}{skipped}",
+                    "Imported {n} object(s) from {} ({seconds:.2} s){placed}{extended}{skipped}",
                     path.display()
                 ));
             }

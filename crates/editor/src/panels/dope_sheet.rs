@@ -28,6 +28,7 @@ use crate::session::{KeyRef, Selected, Selection};
 use crate::widgets::flat_fill;
 use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
 use crate::widgets::publish_painted;
+use crate::widgets::range_watch::RangeWatch;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
 
@@ -80,6 +81,8 @@ pub struct DopeSheet {
     /// The key move pushed in the last frame and the whole frames the gesture has applied once
     /// it is taken (a move onto another key is refused).
     pending_move: Option<(Ticket, i32)>,
+    /// The frame range last laid out: a range that grew refits the view ([`RangeWatch`]).
+    range_watch: RangeWatch,
 }
 
 /// What a row stands for.
@@ -427,6 +430,11 @@ impl DopeSheet {
             }
         }
         let scene = ctx.scene();
+        // A range that grew (an import that extended it) shows all of it, as *View all*.
+        if self.range_watch.grew(ctx.doc.cache_key().0, scene.frame_range) {
+            let all = view_all(scene);
+            self.view = (all != range_view(scene)).then_some(all);
+        }
         let rows = rows(scene, &ctx.session.selection, &self.collapsed);
         let full = ui.available_rect_before_wrap();
         let max_name = (full.width() - 120.0).max(MIN_NAME_WIDTH);

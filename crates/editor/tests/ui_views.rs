@@ -1,0 +1,134 @@
+//! Views that follow and a tidy outliner (issue 30, item 4), with real pointer and wheel
+//! events: a zoomed dope sheet and curve editor refit when an import grows the frame range and
+//! keep the animator's zoom otherwise (undo, a frame change); imported models stand beside
+//! what the scene holds instead of on top of it, each in one undo step; an object's skeleton
+//! folds away in the outliner and stays folded for the session.
+
+mod common;
+
+use common::{corpus, harness, press};
+
+use egui::{Event, Key, Modifiers, MouseWheelUnit, Pos2};
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use keyrig_editor::EditorApp;
+
+fn wheel(h: &mut Harness<'_, EditorApp>, at: Pos2, modifiers: Modifiers) {
+    h.event(Event::PointerMoved(at));
+    h.event(Event::MouseWheel {
+        unit: MouseWheelUnit::Line,
+        delta: egui::vec2(0.0, 3.0),
+        modifiers,
+        phase: egui::TouchPhase::Move,
+    });
+    h.run();
+}
+
+fn import(h: &mut Harness<'_, EditorApp>, relative: &str) {
+    h.input_mut()
+        .dropped_files
+        .push(egui::DroppedFile { path: Some(corpus(relative)), ..Default::default() });
+    h.step();
+    h.state_mut().wait_for_background_work();
+    h.run();
+}
+
+/// Object `o`'s box as the viewport drew it last.
+fn drawn_bounds(h: &Harness<'_, EditorApp>, o: usize) -> keyrig_editor::camera::Bounds {
+    h.state().object_bounds().get(o).copied().flatten().unwrap_or_else(|| panic!("object {o} has bounds"))
+}
+
+#[test]
+fn an_import_that_grows_the_range_refits_zoomed_views_and_stands_beside_the_scene() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    // The arm's elbow: its curves are shown.
+    h.get_by_label("elbow").click();
+    h.run();
+
+    // Zoom the dope sheet (Ctrl+wheel over its keys) and the curves (wheel over the plot).
+    let ctrl = Modifiers { ctrl: true, command: true, ..Modifiers::NONE };
+    let sheet = h.get_by_label("↔ View all").rect().center() + egui::vec2(400.0, 40.0);
+    wheel(&mut h, sheet, ctrl);
+    let zoomed = h.state().dope_sheet_view();
+    assert!(zoomed.end - zoomed.start < 80.0, "the dope sheet zoomed: {zoomed:?}");
+    let plot = h.state().curves_rect().expect("laid out").center();
+    wheel(&mut h, plot, Modifiers::NONE);
+    let curves = h.state().panels().curves.view.expect("the curves zoomed");
+    assert!(curves.end - curves.start < 80.0, "{curves:?}");
+
+    // A frame change keeps both zooms.
+    press(&mut h, Modifiers::NONE, Key::ArrowRight);
+    assert_eq!(h.state().dope_sheet_view(), zoomed);
+    assert_eq!(h.state().panels().curves.view, Some(curves));
+
+    // Sydney's loop is longer than the demo's 90 frames: the range grows and both views show it.
+    let demo = h.state().doc.scene().objects.len();
+    let demo_box = (0..demo)
+        .filter_map(|o| h.state().object_bounds().get(o).copied().flatten())
+        .reduce(keyrig_editor::camera::Bounds::union);
+    let demo_box = demo_box.expect("the demo has bounds");
+    import(&mut h, "md2/sydney/sydney.md2");
+    let end = h.state().doc.scene().frame_range.end;
+    assert!(end > 90, "range end {end}");
+    let view = h.state().dope_sheet_view();
+    assert!(view.start <= 0.0 && view.end >= f64::from(end), "the dope sheet shows 0–{end}: {view:?}");
+    assert_eq!(h.state().panels().curves.view, None, "the curves fit the grown range");
+    let status = h.state().status().cloned().expect("a message");
+    assert!(status.text.contains("placed beside the scene"), "{status:?}");
+
+    // Sydney stands beside the demo, on the ground as her file puts her, not on top of it.
+    let sydney = drawn_bounds(&h, demo);
+    assert!(sydney.min.x > demo_box.max.x, "Sydney {sydney:?} is right of the demo {demo_box:?}");
+    let gap = sydney.min.x - demo_box.max.x;
+    assert!(
+        gap < sydney.max.x - sydney.min.x + demo_box.max.x - demo_box.min.x,
+        "beside, not far off: {gap}"
+    );
+    // A second model stands beside both.
+    import(&mut h, "md2/faerie/faerie.md2");
+    let faerie = drawn_bounds(&h, demo + 1);
+    assert!(faerie.min.x > sydney.max.x, "the faerie {faerie:?} is right of Sydney {sydney:?}");
+
+    // Zoomed again, an undo that shrinks the range leaves the zoom alone.
+    wheel(&mut h, sheet, ctrl);
+    let zoomed = h.state().dope_sheet_view();
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene().objects.len(), demo + 1, "the faerie's import is one undo step");
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene().objects.len(), demo, "and Sydney's, her move with it");
+    assert_eq!(h.state().doc.scene().frame_range.end, 90);
+    assert_eq!(h.state().dope_sheet_view(), zoomed, "a range that shrank keeps the zoom");
+}
+
+#[test]
+fn a_skeleton_folds_away_in_the_outliner_for_the_session() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let name = h.state().doc.scene().objects[0].name.clone();
+    assert!(h.query_by_label("wrist").is_some(), "the arm's joints are listed");
+    h.get_by_label(&format!("fold the skeleton of {name}")).click();
+    h.run();
+    assert!(h.query_by_label("wrist").is_none(), "the skeleton folded away");
+    assert!(h.state().panels().outliner.is_collapsed(&name));
+    // The object stays listed (the outliner's entry is the leftmost of those named so) and
+    // selects; a frame change and a selection leave the skeleton folded.
+    let entry = h.query_all_by_label(&name).map(|n| n.rect().center()).min_by(|a, b| a.x.total_cmp(&b.x));
+    let entry = entry.expect("the object stays listed");
+    press(&mut h, Modifiers::NONE, Key::ArrowRight);
+    h.event(Event::PointerMoved(entry));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: entry,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+    assert_eq!(h.state().session.selection.item, Some(keyrig_editor::session::Selected::Object(0)));
+    assert!(h.query_by_label("wrist").is_none());
+    h.get_by_label(&format!("unfold the skeleton of {name}")).click();
+    h.run();
+    assert!(h.query_by_label("wrist").is_some(), "the skeleton shows again");
+}
