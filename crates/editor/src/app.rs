@@ -534,6 +534,9 @@ impl EditorApp {
                 }
             }
         });
+        if let Selected::Object(_) = item {
+            self.session.hidden.rename(&old, name);
+        }
         self.info(format!("Renamed {old} to {name}"));
         true
     }
@@ -926,6 +929,8 @@ impl EditorApp {
             Command::LookThroughCamera => self.toggle_look_through(),
             Command::CameraToView => self.camera_to_view(),
             Command::AddCamera => self.add_camera(),
+            Command::HideSelected => self.hide_selected(),
+            Command::ShowHidden => self.show_hidden(),
             Command::ToggleMarker => self.toggle_marker(),
             Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }

@@ -30,6 +30,8 @@ pub mod files;
 pub mod fonts;
 pub mod frame_bench;
 pub mod gpu_view;
+pub mod hidden;
+pub mod hide;
 pub mod ik_constraints;
 pub mod ik_posing;
 pub mod mirror;

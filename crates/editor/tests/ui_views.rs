@@ -132,3 +132,45 @@ fn a_skeleton_folds_away_in_the_outliner_for_the_session() {
     h.run();
     assert!(h.query_by_label("wrist").is_some(), "the skeleton shows again");
 }
+
+#[test]
+fn h_hides_the_selection_in_the_viewport_and_alt_h_shows_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let wrist = common::on_screen(h.state(), common::joint_world(h.state(), 0, 3));
+    // A joint selected: H hides its object and deselects it.
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::H);
+    let scene = h.state().doc.scene().clone();
+    assert!(h.state().session.hidden.object(&scene, 0), "the arm is hidden");
+    assert_eq!(h.state().session.selection.item, None);
+    assert!(!h.state().doc.is_dirty(), "hiding is not an edit of the scene");
+    // A click on the hidden wrist selects nothing.
+    let click = |h: &mut Harness<'_, EditorApp>, at: Pos2| {
+        h.event(Event::PointerMoved(at));
+        for pressed in [true, false] {
+            h.event(Event::PointerButton {
+                pos: at,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: Modifiers::NONE,
+            });
+        }
+        h.run();
+    };
+    click(&mut h, wrist);
+    assert_eq!(h.state().session.selection.item, None, "a hidden joint is not picked");
+    // The outliner still selects it; Alt+H shows it, and the click picks the wrist again.
+    assert!(h.query_by_label("wrist").is_some());
+    press(&mut h, Modifiers::ALT, Key::H);
+    assert!(h.state().session.hidden.is_empty());
+    let status = h.state().status().cloned().expect("a message");
+    assert!(status.text.contains("Showed 1 hidden object"), "{status:?}");
+    click(&mut h, wrist);
+    assert_eq!(
+        h.state().session.selection.item,
+        Some(keyrig_editor::session::Selected::Joint { object: 0, joint: 3 }),
+        "shown again, the wrist is picked"
+    );
+}

@@ -97,6 +97,9 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 command_button(ui, ctx, actions, Command::ToggleGrid, Some(view.grid));
                 command_button(ui, ctx, actions, Command::ToggleBones, Some(view.bones));
                 command_button(ui, ctx, actions, Command::ToggleOnionSkin, Some(view.onion.enabled));
+                for c in [Command::HideSelected, Command::ShowHidden] {
+                    command_button(ui, ctx, actions, c, None);
+                }
                 ui.menu_button("Onion skin settings", |ui| {
                     let mut onion = view.onion;
                     onion_settings_ui(ui, &mut onion);
