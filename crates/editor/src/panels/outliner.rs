@@ -120,8 +120,15 @@ impl Outliner {
                             }
                             return;
                         }
+                        // An object hidden in the viewport (H) reads dimmed and slanted.
+                        let hidden = match item {
+                            Selected::Object(o) => ctx.session.hidden.object(scene, o),
+                            _ => false,
+                        };
+                        let text = egui::RichText::new(name);
+                        let text = if hidden { text.weak().italics() } else { text };
                         let response =
-                            ui.selectable_label(selection.contains(item), name).on_hover_text(name);
+                            ui.selectable_label(selection.contains(item), text).on_hover_text(name);
                         // A quick click before a double click makes egui count three: rename on either.
                         if response.double_clicked() || response.triple_clicked() {
                             *renaming = Some(Renaming { item, text: name.to_owned(), focused: false });
