@@ -848,7 +848,8 @@ impl EditorApp {
 
     /// Runs a command.
     pub fn run_command(&mut self, ctx: &Context, command: Command) {
-        let range = self.doc.scene().frame_range;
+        // Playback, Home and End keep to the preview range while one is set.
+        let range = self.doc.scene().playback_range();
         match command {
             Command::New => self.request(PendingAction::New),
             Command::Open => self.request(PendingAction::Open(None)),
@@ -931,6 +932,7 @@ impl EditorApp {
             Command::AddCamera => self.add_camera(),
             Command::HideSelected => self.hide_selected(),
             Command::ShowHidden => self.show_hidden(),
+            Command::TogglePreviewRange => self.toggle_preview_range(),
             Command::ToggleMarker => self.toggle_marker(),
             Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }

@@ -53,6 +53,7 @@ pub enum Command {
     BindCameraToMarker,
     HideSelected,
     ShowHidden,
+    TogglePreviewRange,
     ShowHelp,
 }
 
@@ -68,7 +69,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 50] = [
+    pub const ALL: [Command; 51] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -90,6 +91,8 @@ impl Command {
         Command::CopyPose,
         Command::PastePoseMirrored,
         Command::PastePose,
+        // Ctrl+Alt+P before Ctrl+P (Play / pause), which would take it too.
+        Command::TogglePreviewRange,
         Command::PlayPause,
         Command::ToggleLoop,
         Command::NextFrame,
@@ -171,6 +174,7 @@ impl Command {
             Command::BindCameraToMarker => "Bind camera to marker",
             Command::HideSelected => "Hide selected",
             Command::ShowHidden => "Show hidden",
+            Command::TogglePreviewRange => "Preview range",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -256,6 +260,9 @@ impl Command {
                 "Hide the selected objects in the viewport (not in renders; the outliner still lists them)"
             }
             Command::ShowHidden => "Show every object hidden in the viewport again",
+            Command::TogglePreviewRange => {
+                "Loop playback over part of the range (the selected keys' frames, else from here to the end), or the whole range again"
+            }
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -313,6 +320,7 @@ impl Command {
             Command::BindCameraToMarker => vec![sc(CMD, Key::B)],
             Command::HideSelected => vec![sc(NONE, Key::H)],
             Command::ShowHidden => vec![sc(Modifiers::ALT, Key::H)],
+            Command::TogglePreviewRange => vec![sc(CMD.plus(Modifiers::ALT), Key::P)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

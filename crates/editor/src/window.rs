@@ -54,7 +54,7 @@ impl EditorApp {
         // Playback clock.
         let dt = ctx.input(|i| f64::from(i.stable_dt));
         let scene = self.doc.scene();
-        let (fps, range) = (scene.fps, scene.frame_range);
+        let (fps, range) = (scene.fps, scene.playback_range());
         if self.session.playback.playing {
             self.session.playback.advance(dt, fps, range.start, range.end);
             ctx.request_repaint();

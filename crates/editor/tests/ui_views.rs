@@ -174,3 +174,54 @@ fn h_hides_the_selection_in_the_viewport_and_alt_h_shows_it() {
         "shown again, the wrist is picked"
     );
 }
+
+#[test]
+fn the_preview_range_keeps_playback_home_and_end_to_its_frames_and_is_saved() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    common::go_to_frame(&mut h, 30);
+    // Ctrl+Alt+P with no key selected: from the current frame to the range's end.
+    press(&mut h, Modifiers::COMMAND.plus(Modifiers::ALT), Key::P);
+    let range = |start, end| keyrig_core::FrameRange { start, end };
+    assert_eq!(h.state().doc.scene().preview_range, Some(range(30, 90)));
+    // The End field of the preview range, typed as a screen reader sets it.
+    common::set_value(&mut h, egui::accesskit::Role::SpinButton, "Preview end", 45.0);
+    assert_eq!(h.state().doc.scene().preview_range, Some(range(30, 45)));
+    assert_eq!(h.state().doc.undo_label(), Some("preview range 30–45"));
+
+    // Playing (every frame: one frame a step) loops over 30–45 only.
+    h.get_by_label("Every frame").click();
+    h.run();
+    h.key_press(Key::Space);
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..120 {
+        h.step();
+        seen.insert(h.state().session.playback.whole_frame());
+    }
+    assert!(h.state().session.playback.playing);
+    h.key_press(Key::Space);
+    h.run();
+    assert!(seen.iter().all(|f| (30..=45).contains(f)), "played frames {seen:?}");
+    assert!(seen.contains(&31) && seen.contains(&44), "it went round: {seen:?}");
+    // Home and End go to its ends.
+    press(&mut h, Modifiers::NONE, Key::End);
+    assert_eq!(h.state().session.playback.whole_frame(), 45);
+    press(&mut h, Modifiers::NONE, Key::Home);
+    assert_eq!(h.state().session.playback.whole_frame(), 30);
+
+    // Saved with the scene; a scene without one writes no field.
+    let text = keyrig_io::scene_file::to_string(h.state().doc.scene()).expect("saved");
+    let compact: String = text.split_whitespace().collect();
+    assert!(compact.contains("preview_range:Some((start:30,end:45,))"), "{text}");
+    let reread = keyrig_io::scene_file::from_str(&text, std::path::Path::new("p.ron")).expect("read");
+    assert_eq!(reread.preview_range, Some(range(30, 45)));
+    // Ctrl+Alt+P again clears it (an undo step), and Home goes to the range's start again.
+    press(&mut h, Modifiers::COMMAND.plus(Modifiers::ALT), Key::P);
+    assert_eq!(h.state().doc.scene().preview_range, None);
+    let text = keyrig_io::scene_file::to_string(h.state().doc.scene()).expect("saved");
+    assert!(!text.contains("preview_range"), "{text}");
+    press(&mut h, Modifiers::NONE, Key::Home);
+    assert_eq!(h.state().session.playback.whole_frame(), 0);
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene().preview_range, Some(range(30, 45)), "undo brings it back");
+}

@@ -522,9 +522,23 @@ impl DopeSheet {
             }
             f += step;
         }
+        preview_band(&painter, ctx.scene(), geo, ruler);
         marker_flags(&painter, ctx.scene(), geo, ruler);
         current_frame_line(&painter, ctx, geo, ruler);
     }
+}
+
+/// The preview range, while one is set: an orange band along the ruler's bottom over its
+/// frames ([`crate::widgets::preview_range`]).
+fn preview_band(painter: &egui::Painter, scene: &Scene, geo: &Geometry, ruler: Rect) {
+    if scene.preview_range.is_none() {
+        return;
+    }
+    let range = scene.playback_range();
+    let (x0, x1) = (geo.x(f64::from(range.start)), geo.x(f64::from(range.end)));
+    let band =
+        Rect::from_min_max(Pos2::new(x0, ruler.bottom() - 3.0), Pos2::new(x1.max(x0 + 1.0), ruler.bottom()));
+    painter.rect_filled(band, 0.0, crate::widgets::preview_range::PREVIEW_COLOUR);
 }
 
 /// The scene's timeline markers on the ruler: a flag at each marker's frame with its name (and
