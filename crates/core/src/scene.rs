@@ -186,6 +186,11 @@ pub enum ProceduralMesh {
     Hand,
     /// A unit cube centred on the origin.
     Cube,
+    /// A UV sphere of diameter 1 centred on the origin (16 rings of 32 vertices between the
+    /// poles), smooth-shaded.
+    Sphere,
+    /// A 1 × 1 square in the XZ plane centred on the origin, facing +Y (a ground or a card).
+    Plane,
 }
 
 /// A joint hierarchy with its rest pose and animation. Joints are stored parents first.

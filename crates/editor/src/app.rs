@@ -1360,6 +1360,7 @@ impl EditorApp {
                 }
             }
             Action::ImportFinished(import) => self.apply_import(import),
+            Action::Add(kind) => self.add_item(kind),
             Action::StartRender(blast) => self.start_render(blast),
             Action::CancelRender => {
                 if let Some(job) = &self.render {

@@ -38,6 +38,7 @@ pub mod onion;
 pub mod panels;
 pub mod playblast;
 pub mod render_job;
+pub mod scene_add;
 pub mod scene_frame;
 pub mod session;
 pub mod skinning;

@@ -1,8 +1,10 @@
 //! Staple commands on the editor: hide the selected objects in the viewport and show every
 //! hidden one again (H, Alt+H; [`crate::hidden`] says what hiding means); turn the preview
-//! range on or off (Ctrl+Alt+P; [`crate::widgets::preview_range`]).
+//! range on or off (Ctrl+Alt+P; [`crate::widgets::preview_range`]); add an item from the Add
+//! menu ([`crate::scene_add`]).
 
-use crate::app::EditorApp;
+use crate::app::{unique_name, EditorApp};
+use crate::scene_add::{AddKind, Added};
 use crate::session::Selected;
 
 impl EditorApp {
@@ -83,5 +85,41 @@ impl EditorApp {
             "Preview range {}–{}: playback, Home and End keep to it (Ctrl+Alt+P clears it)",
             preview.start, preview.end
         ));
+    }
+
+    /// Adds what the Add menu's `kind` adds where the view looks, as one undo step, and selects
+    /// it.
+    pub fn add_item(&mut self, kind: AddKind) {
+        if kind == AddKind::Camera {
+            self.add_camera();
+            return;
+        }
+        let scene = self.doc.scene();
+        let base = kind.base_name();
+        let taken: Vec<&str> = if kind.is_light() {
+            scene.lights.iter().map(|l| l.name.as_str()).collect()
+        } else {
+            scene.objects.iter().map(|o| o.name.as_str()).collect()
+        };
+        let name = if taken.contains(&base) { unique_name(base, taken.into_iter()) } else { base.to_owned() };
+        let Some(added) = crate::scene_add::build(kind, name.clone(), self.view.camera.target) else {
+            return;
+        };
+        let label = format!("add {} {name}", kind.label().to_lowercase());
+        let selected = match added {
+            Added::Object(object) => {
+                let o = scene.objects.len();
+                self.doc.edit(&label, move |s| s.objects.push(*object));
+                Selected::Object(o)
+            }
+            Added::Light(light) => {
+                let l = scene.lights.len();
+                self.doc.edit(&label, move |s| s.lights.push(light));
+                Selected::Light(l)
+            }
+        };
+        self.session.selection.select_only(Some(selected));
+        self.session.selection.keys.clear();
+        self.info(format!("Added {name}"));
     }
 }

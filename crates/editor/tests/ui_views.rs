@@ -225,3 +225,62 @@ fn the_preview_range_keeps_playback_home_and_end_to_its_frames_and_is_saved() {
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert_eq!(h.state().doc.scene().preview_range, Some(range(30, 45)), "undo brings it back");
 }
+
+#[test]
+fn the_add_menu_adds_primitives_empties_and_lights_where_the_view_looks() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let (objects, lights) = (h.state().doc.scene().objects.len(), h.state().doc.scene().lights.len());
+    let target = h.state().view.camera.target;
+    let add = |h: &mut Harness<'_, EditorApp>, entry: &str| {
+        h.get_by_label("Add").click();
+        h.run();
+        // The menu's entry: the popup is the last layer (an added "Sphere" is also listed in
+        // the outliner and the dope sheet).
+        let target = h.query_all_by_label(entry).last().expect("the menu entry").rect().center();
+        common::pointer(h, Event::PointerMoved(target));
+        for pressed in [true, false] {
+            common::pointer(
+                h,
+                Event::PointerButton {
+                    pos: target,
+                    button: egui::PointerButton::Primary,
+                    pressed,
+                    modifiers: Modifiers::NONE,
+                },
+            );
+        }
+    };
+    add(&mut h, "Sphere");
+    let scene = h.state().doc.scene();
+    assert_eq!(scene.objects.len(), objects + 1);
+    let sphere = &scene.objects[objects];
+    assert_eq!(sphere.name, "Sphere");
+    assert_eq!(sphere.mesh, Some(keyrig_core::MeshSource::Procedural(keyrig_core::ProceduralMesh::Sphere)));
+    assert_eq!(sphere.translation.value, target);
+    assert_eq!(h.state().session.selection.item, Some(keyrig_editor::session::Selected::Object(objects)));
+    assert_eq!(h.state().doc.undo_label(), Some("add sphere Sphere"));
+    // The viewport skinned and drew it: it has bounds about the target, 1 unit from pole to
+    // pole (and within 0.5 % of it across: its rings miss the equator).
+    let bounds = drawn_bounds(&h, objects);
+    assert!((bounds.max.y - bounds.min.y - 1.0).abs() < 1e-3, "{bounds:?}");
+    assert!((bounds.max.x - bounds.min.x - 1.0).abs() < 5e-3, "{bounds:?}");
+    assert!((((bounds.min + bounds.max) * 0.5) - target).length() < 1e-3, "{bounds:?}");
+
+    // A second sphere gets a free name; an empty and a spot light.
+    add(&mut h, "Sphere");
+    assert_eq!(h.state().doc.scene().objects[objects + 1].name, "Sphere.001");
+    add(&mut h, "Empty");
+    assert_eq!(h.state().doc.scene().objects[objects + 2].mesh, None);
+    add(&mut h, "Spot light");
+    let scene = h.state().doc.scene();
+    assert_eq!(scene.lights.len(), lights + 1);
+    assert!(matches!(scene.lights[lights].kind, keyrig_core::LightKind::Spot { .. }));
+    assert_eq!(h.state().session.selection.item, Some(keyrig_editor::session::Selected::Light(lights)));
+    // Each is one undo step.
+    for _ in 0..4 {
+        press(&mut h, Modifiers::COMMAND, Key::Z);
+    }
+    assert_eq!(h.state().doc.scene().objects.len(), objects);
+    assert_eq!(h.state().doc.scene().lights.len(), lights);
+}
