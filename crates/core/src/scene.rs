@@ -45,6 +45,11 @@ pub struct Scene {
     /// Sound clips on the timeline (docs/scene-format.md); none in most scenes.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sounds: Vec<crate::sound::SoundClip>,
+    /// The preview range: the frames playback loops over while it is set, inside
+    /// `frame_range` (Blender's preview range); renders and exports keep the frame range.
+    /// Left out of a scene file while unset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preview_range: Option<FrameRange>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -65,6 +70,22 @@ impl Default for Scene {
             markers: Vec::new(),
             render_size: None,
             sounds: Vec::new(),
+            preview_range: None,
+        }
+    }
+}
+
+impl Scene {
+    /// The frames playback runs over: the preview range where one is set and overlaps the
+    /// frame range (cut to it), else the frame range.
+    #[must_use]
+    pub fn playback_range(&self) -> FrameRange {
+        let range = self.frame_range;
+        match self.preview_range {
+            Some(p) if p.start <= p.end && p.start <= range.end && p.end >= range.start => {
+                FrameRange { start: p.start.max(range.start), end: p.end.min(range.end) }
+            }
+            _ => range,
         }
     }
 }
@@ -165,6 +186,11 @@ pub enum ProceduralMesh {
     Hand,
     /// A unit cube centred on the origin.
     Cube,
+    /// A UV sphere of diameter 1 centred on the origin (16 rings of 32 vertices between the
+    /// poles), smooth-shaded.
+    Sphere,
+    /// A 1 × 1 square in the XZ plane centred on the origin, facing +Y (a ground or a card).
+    Plane,
 }
 
 /// A joint hierarchy with its rest pose and animation. Joints are stored parents first.
@@ -575,5 +601,26 @@ impl Scene {
         from_marker
             .or_else(|| self.active_camera.as_deref().and_then(|n| self.camera_index(n)))
             .or_else(|| (!self.cameras.is_empty()).then_some(0))
+    }
+}
+
+#[cfg(test)]
+mod preview_range_tests {
+    use super::*;
+
+    #[test]
+    fn playback_runs_over_the_preview_range_cut_to_the_frame_range() {
+        let range = |start, end| FrameRange { start, end };
+        let mut scene = Scene { frame_range: range(0, 90), ..Scene::default() };
+        assert_eq!(scene.playback_range(), range(0, 90), "no preview range");
+        scene.preview_range = Some(range(20, 40));
+        assert_eq!(scene.playback_range(), range(20, 40));
+        scene.preview_range = Some(range(-10, 40));
+        assert_eq!(scene.playback_range(), range(0, 40), "cut to the frame range");
+        scene.preview_range = Some(range(100, 120));
+        assert_eq!(scene.playback_range(), range(0, 90), "outside the frame range: ignored");
+        scene.preview_range = Some(range(40, 20));
+        assert_eq!(scene.playback_range(), range(0, 90), "empty: ignored");
+        assert_eq!(scene.problems().len(), 1, "and reported by validation");
     }
 }

@@ -657,6 +657,9 @@ impl Scene {
                 ),
             );
         }
+        if let Some(p) = self.preview_range.filter(|p| p.start > p.end) {
+            c.push("preview_range", format!("empty range: start {} is after end {}", p.start, p.end));
+        }
         c.value("ambient", &self.ambient);
         for (i, object) in self.objects.iter().enumerate() {
             c.object(&format!("objects[{i}]"), object);

@@ -90,6 +90,8 @@ pub enum Action {
     StartRender(crate::playblast::Playblast),
     /// Stops the running render (its movie is not written).
     CancelRender,
+    /// Adds an empty, a primitive, a light or a camera where the view looks (the Add menu).
+    Add(crate::scene_add::AddKind),
 }
 
 /// A change of the document: one undo step, or one step per gesture.

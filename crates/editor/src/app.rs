@@ -540,6 +540,9 @@ impl EditorApp {
                 }
             }
         });
+        if let Selected::Object(_) = item {
+            self.session.hidden.rename(&old, name);
+        }
         self.info(format!("Renamed {old} to {name}"));
         true
     }
@@ -851,7 +854,8 @@ impl EditorApp {
 
     /// Runs a command.
     pub fn run_command(&mut self, ctx: &Context, command: Command) {
-        let range = self.doc.scene().frame_range;
+        // Playback, Home and End keep to the preview range while one is set.
+        let range = self.doc.scene().playback_range();
         match command {
             Command::New => self.request(PendingAction::New),
             Command::Open => self.request(PendingAction::Open(None)),
@@ -932,6 +936,9 @@ impl EditorApp {
             Command::LookThroughCamera => self.toggle_look_through(),
             Command::CameraToView => self.camera_to_view(),
             Command::AddCamera => self.add_camera(),
+            Command::HideSelected => self.hide_selected(),
+            Command::ShowHidden => self.show_hidden(),
+            Command::TogglePreviewRange => self.toggle_preview_range(),
             Command::ToggleMarker => self.toggle_marker(),
             Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }
@@ -1210,6 +1217,16 @@ impl EditorApp {
                 return;
             }
         };
+        // An added model stands beside what the scene holds (its box at rest against the
+        // scene's as drawn now), moved in the import's own undo step.
+        let offset = match purpose {
+            ImportPurpose::Import => files::placement::model_bounds(&imported.scene, &imported.meshes)
+                .map_or(glam::Vec3::ZERO, |model| {
+                    self.bounds_now();
+                    files::placement::offset_beside(self.scene.bounds_of(None), model)
+                }),
+            ImportPurpose::Open => glam::Vec3::ZERO,
+        };
         // A mesh that failed to load is stored with its error: the viewport reports it over
         // the object, as for a scene file that names a broken model.
         for ((file, mesh), loaded) in imported.meshes {
@@ -1236,7 +1253,8 @@ impl EditorApp {
                 self.info(format!("Opened {} ({seconds:.2} s){skipped}", path.display()));
             }
             ImportPurpose::Import => {
-                let scene = imported.scene;
+                let mut scene = imported.scene;
+                files::placement::move_by(&mut scene, offset);
                 let n = scene.objects.len();
                 let first = self.doc.scene().objects.len();
                 self.actions.push(Action::FrameObjects((first..first + n).collect()));
@@ -1264,8 +1282,13 @@ impl EditorApp {
                 } else {
                     String::new()
                 };
+                let placed = if offset == glam::Vec3::ZERO {
+                    String::new()
+                } else {
+                    format!("; placed beside the scene ({:+.2} along X)", offset.x)
+                };
                 self.info(format!(
-                    "Imported {n} object(s) from {} ({seconds:.2} s){extended}{skipped}",
+                    "Imported {n} object(s) from {} ({seconds:.2} s){placed}{extended}{skipped}",
                     path.display()
                 ));
             }
@@ -1360,6 +1383,7 @@ impl EditorApp {
                 }
             }
             Action::ImportFinished(import) => self.apply_import(import),
+            Action::Add(kind) => self.add_item(kind),
             Action::StartRender(blast) => self.start_render(blast),
             Action::CancelRender => {
                 if let Some(job) = &self.render {

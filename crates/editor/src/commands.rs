@@ -51,6 +51,9 @@ pub enum Command {
     AddCamera,
     ToggleMarker,
     BindCameraToMarker,
+    HideSelected,
+    ShowHidden,
+    TogglePreviewRange,
     ShowHelp,
 }
 
@@ -66,7 +69,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 48] = [
+    pub const ALL: [Command; 51] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -88,6 +91,8 @@ impl Command {
         Command::CopyPose,
         Command::PastePoseMirrored,
         Command::PastePose,
+        // Ctrl+Alt+P before Ctrl+P (Play / pause), which would take it too.
+        Command::TogglePreviewRange,
         Command::PlayPause,
         Command::ToggleLoop,
         Command::NextFrame,
@@ -114,6 +119,8 @@ impl Command {
         Command::AddCamera,
         Command::ToggleMarker,
         Command::BindCameraToMarker,
+        Command::ShowHidden,
+        Command::HideSelected,
         Command::ShowHelp,
     ];
 
@@ -165,6 +172,9 @@ impl Command {
             Command::AddCamera => "Add camera",
             Command::ToggleMarker => "Add or remove marker",
             Command::BindCameraToMarker => "Bind camera to marker",
+            Command::HideSelected => "Hide selected",
+            Command::ShowHidden => "Show hidden",
+            Command::TogglePreviewRange => "Preview range",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -246,6 +256,13 @@ impl Command {
             Command::BindCameraToMarker => {
                 "Make the selected camera the active one from this frame on (a marker)"
             }
+            Command::HideSelected => {
+                "Hide the selected objects in the viewport (not in renders; the outliner still lists them)"
+            }
+            Command::ShowHidden => "Show every object hidden in the viewport again",
+            Command::TogglePreviewRange => {
+                "Loop playback over part of the range (the selected keys' frames, else from here to the end), or the whole range again"
+            }
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -301,6 +318,9 @@ impl Command {
             Command::AddCamera => vec![sc(CMD_SHIFT, Key::C)],
             Command::ToggleMarker => vec![sc(NONE, Key::M)],
             Command::BindCameraToMarker => vec![sc(CMD, Key::B)],
+            Command::HideSelected => vec![sc(NONE, Key::H)],
+            Command::ShowHidden => vec![sc(Modifiers::ALT, Key::H)],
+            Command::TogglePreviewRange => vec![sc(CMD.plus(Modifiers::ALT), Key::P)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }
@@ -417,7 +437,8 @@ mod tests {
         let mut seen = HashSet::new();
         for command in Command::ALL {
             for s in &command.shortcuts() {
-                assert!(seen.insert((s.modifiers.command, s.modifiers.shift, s.logical_key)), "{command:?}");
+                let key = (s.modifiers.command, s.modifiers.shift, s.modifiers.alt, s.logical_key);
+                assert!(seen.insert(key), "{command:?}");
             }
         }
     }

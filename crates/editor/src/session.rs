@@ -28,6 +28,8 @@ pub struct Session {
     pub pose_clipboard: Vec<(ChannelId, ChannelValue)>,
     /// IK posing: on or off, the chain length per end joint, the pole of each chain's last drag.
     pub ik: IkPosing,
+    /// Objects hidden in the viewport (H; Alt+H shows them).
+    pub hidden: crate::hidden::Hidden,
 }
 
 impl Session {

@@ -54,7 +54,7 @@ impl EditorApp {
         // Playback clock.
         let dt = ctx.input(|i| f64::from(i.stable_dt));
         let scene = self.doc.scene();
-        let (fps, range) = (scene.fps, scene.frame_range);
+        let (fps, range) = (scene.fps, scene.playback_range());
         if self.session.playback.playing {
             // While the sound plays, the clock follows the sound's (crate::audio::clock).
             let dt = self.audio.played_seconds().unwrap_or(dt);

@@ -338,7 +338,7 @@ pub fn scene_skeleton_for(kind: ProceduralMesh) -> Option<Skeleton> {
     match kind {
         ProceduralMesh::ArmLowPoly | ProceduralMesh::ArmHighPoly => Some(arm_scene_skeleton()),
         ProceduralMesh::Hand => Some(hand_scene_skeleton()),
-        ProceduralMesh::Cube => None,
+        ProceduralMesh::Cube | ProceduralMesh::Sphere | ProceduralMesh::Plane => None,
     }
 }
 
@@ -454,12 +454,98 @@ pub fn mesh_for(kind: ProceduralMesh) -> SkinnedMesh {
         ProceduralMesh::ArmHighPoly => arm(50, 25, 43.744, 40.12),
         ProceduralMesh::Hand => hand(),
         ProceduralMesh::Cube => cube(),
+        ProceduralMesh::Sphere => sphere(16, 32),
+        ProceduralMesh::Plane => plane(),
     }
+}
+
+/// A mesh bound rigidly to one root joint at the origin (the cube, the sphere, the plane).
+fn rigid(positions: Vec<Vec3>, normals: Vec<Vec3>, indices: Vec<u32>) -> SkinnedMesh {
+    let skeleton =
+        RestSkeleton::new(&[crate::skeleton::RestJoint::new("root", None, Vec3::ZERO, Quat::IDENTITY)])
+            .expect("a one-joint skeleton is valid");
+    let n = positions.len();
+    SkinnedMesh::new(
+        positions,
+        normals,
+        indices,
+        vec![[0; 4]; n],
+        vec![[1.0, 0.0, 0.0, 0.0]; n],
+        Some(vec![0; n]),
+        skeleton,
+    )
+    .expect("a rigid primitive is valid by construction")
+}
+
+/// A UV sphere of radius 0.5: a vertex at each pole and `rings` rings of `segments` vertices
+/// between them (at polar angles π·i/(rings + 1)), normals pointing out; triangles wind
+/// counter-clockwise seen from outside.
+fn sphere(rings: usize, segments: usize) -> SkinnedMesh {
+    use std::f32::consts::{PI, TAU};
+    let mut normals = vec![Vec3::Y];
+    for i in 1..=rings {
+        let polar = PI * i as f32 / (rings + 1) as f32;
+        for s in 0..segments {
+            let azimuth = TAU * s as f32 / segments as f32;
+            normals.push(Vec3::new(polar.sin() * azimuth.cos(), polar.cos(), -polar.sin() * azimuth.sin()));
+        }
+    }
+    normals.push(-Vec3::Y);
+    let positions: Vec<Vec3> = normals.iter().map(|n| *n * 0.5).collect();
+    let (top, bottom) = (0u32, (normals.len() - 1) as u32);
+    let at = |ring: usize, s: usize| (1 + ring * segments + s % segments) as u32;
+    let mut indices = Vec::with_capacity(6 * rings * segments);
+    for s in 0..segments {
+        indices.extend_from_slice(&[top, at(0, s), at(0, s + 1)]);
+        indices.extend_from_slice(&[bottom, at(rings - 1, s + 1), at(rings - 1, s)]);
+    }
+    for r in 0..rings - 1 {
+        for s in 0..segments {
+            let (a, b, c, d) = (at(r, s), at(r, s + 1), at(r + 1, s), at(r + 1, s + 1));
+            indices.extend_from_slice(&[a, c, d, a, d, b]);
+        }
+    }
+    rigid(positions, normals, indices)
+}
+
+/// A 1 × 1 square in the XZ plane, facing +Y.
+fn plane() -> SkinnedMesh {
+    let positions = vec![
+        Vec3::new(-0.5, 0.0, 0.5),
+        Vec3::new(0.5, 0.0, 0.5),
+        Vec3::new(0.5, 0.0, -0.5),
+        Vec3::new(-0.5, 0.0, -0.5),
+    ];
+    rigid(positions, vec![Vec3::Y; 4], vec![0, 1, 2, 0, 2, 3])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each triangle of a closed primitive faces outward: its counter-clockwise normal points
+    /// away from the centre; the sphere's vertices lie on radius 0.5 with outward unit normals,
+    /// and the plane faces +Y.
+    #[test]
+    fn sphere_and_plane_have_their_shapes_and_face_out() {
+        let sphere = mesh_for(ProceduralMesh::Sphere);
+        assert_eq!(sphere.positions.len(), 2 + 16 * 32);
+        assert_eq!(sphere.indices.len(), 3 * (2 * 32 + 2 * 32 * 15));
+        for (p, n) in sphere.positions.iter().zip(&sphere.normals) {
+            assert!((p.length() - 0.5).abs() < 1e-5 && (n.length() - 1.0).abs() < 1e-5);
+            assert!(p.normalize().dot(*n) > 0.9999);
+        }
+        for t in sphere.indices.chunks(3) {
+            let [a, b, c] = [0, 1, 2].map(|i| sphere.positions[t[i] as usize]);
+            let facing = (b - a).cross(c - a);
+            assert!(facing.dot((a + b + c) / 3.0) > 0.0, "triangle {t:?} faces in");
+        }
+        let plane = mesh_for(ProceduralMesh::Plane);
+        let [a, b, c] = [0, 1, 2].map(|i| plane.positions[plane.indices[i] as usize]);
+        assert!((b - a).cross(c - a).normalize().dot(Vec3::Y) > 0.9999, "the plane faces +Y");
+        assert!(plane.positions.iter().all(|p| p.y == 0.0 && p.x.abs() == 0.5 && p.z.abs() == 0.5));
+        assert!(scene_skeleton_for(ProceduralMesh::Sphere).is_none());
+    }
 
     /// The hand: a palm tube of 7 rings of 12 vertices along x ∈ [0, 9] and three finger tubes
     /// of 9 rings of 8 vertices from x = 8 (1 cm inside the palm) to x = 17; finger vertices
@@ -656,7 +742,12 @@ mod tests {
     #[test]
     fn procedural_meshes_are_closed_and_outward() {
         // (The cube has split vertices per face for its hard normals; its volume is checked below.)
-        for kind in [ProceduralMesh::ArmLowPoly, ProceduralMesh::ArmHighPoly, ProceduralMesh::Hand] {
+        for kind in [
+            ProceduralMesh::ArmLowPoly,
+            ProceduralMesh::ArmHighPoly,
+            ProceduralMesh::Hand,
+            ProceduralMesh::Sphere,
+        ] {
             let mesh = mesh_for(kind);
             mesh.validate().unwrap();
             // Every edge is used once in each direction.

@@ -146,6 +146,13 @@ pub(super) fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh], own_came
         frame_model_scene(scene, std::iter::empty());
         return;
     }
+    let points = rest_points(scene, meshes);
+    frame_model_scene(scene, points);
+}
+
+/// The world positions at rest (un-animated transforms, [`FileMesh::rest_positions`]) of every
+/// vertex of the meshes of `scene`'s model-file objects found in `meshes`.
+pub(super) fn rest_points(scene: &Scene, meshes: &[LoadedMesh]) -> Vec<Vec3> {
     let mut points = Vec::new();
     // Found by key, not by a search per object (quadratic for 100,000 objects).
     let by_key: HashMap<(&Path, Option<usize>), &FileMesh> = meshes
@@ -160,7 +167,7 @@ pub(super) fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh], own_came
         let world = rest_world_from_object(object);
         points.extend(data.rest_positions().into_iter().map(|p| world.transform_point3(p)));
     }
-    frame_model_scene(scene, points);
+    points
 }
 
 /// An object's world transform from its un-animated translation, rotation and scale.

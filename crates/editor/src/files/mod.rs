@@ -6,10 +6,13 @@
 //! - [`import`]: reading a model as a scene, on a background thread ([`BackgroundImport`]): the
 //!   UI keeps drawing, the status bar shows the stage, a fraction where one is known and the
 //!   elapsed time, and the result is applied as one undoable edit (or as the new document).
+//! - [`placement`]: where an imported model goes — beside what the scene holds, not on top of
+//!   it at the origin.
 //! - [`recovery`]: the autosave recovery file and the recent-files list.
 
 pub mod import;
 pub mod meshes;
+pub mod placement;
 pub mod recovery;
 
 use std::path::{Path, PathBuf};

@@ -27,6 +27,7 @@ use crate::eval::{continuous_euler, PoseOverrides};
 use crate::scene_frame::EvalKey;
 use crate::session::{KeyRef, Selection};
 use crate::widgets::publish_painted;
+use crate::widgets::range_watch::RangeWatch;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
 use keyrig_core::channel_id::rotation_mode;
@@ -97,6 +98,8 @@ pub struct CurveEditor {
     samples: HashMap<SampleKey, (EvalKey, Rc<Vec<Curve>>, bool)>,
     /// The key points of the last plot, kept while it and the document stay the same.
     points: Option<(PointsKey, Rc<Vec<KeyPoint>>)>,
+    /// The frame range last laid out: a range that grew refits the view ([`RangeWatch`]).
+    range_watch: RangeWatch,
 }
 
 /// The axis whose unwrapped turn the curve view draws for a rotation channel: the first spin
@@ -746,6 +749,10 @@ impl CurveEditor {
             }
         }
         let scene = ctx.scene();
+        // A range that grew (an import that extended it) is shown whole, as *Fit* shows it.
+        if self.range_watch.grew(ctx.doc.cache_key().0, scene.frame_range) {
+            self.view = None;
+        }
         let ids = shown_channels(scene, &ctx.session.selection);
         ui.horizontal(|ui| {
             let title = match ids.as_slice() {

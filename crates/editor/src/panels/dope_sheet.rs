@@ -28,6 +28,7 @@ use crate::session::{KeyRef, Selected, Selection};
 use crate::widgets::flat_fill;
 use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
 use crate::widgets::publish_painted;
+use crate::widgets::range_watch::RangeWatch;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
 
@@ -84,6 +85,8 @@ pub struct DopeSheet {
     pending_move: Option<(Ticket, i32)>,
     /// A sound clip being dragged in time.
     sound_drag: Option<sound_rows::SoundDrag>,
+    /// The frame range last laid out: a range that grew refits the view ([`RangeWatch`]).
+    range_watch: RangeWatch,
 }
 
 /// What a row stands for.
@@ -431,6 +434,11 @@ impl DopeSheet {
             }
         }
         let scene = ctx.scene();
+        // A range that grew (an import that extended it) shows all of it, as *View all*.
+        if self.range_watch.grew(ctx.doc.cache_key().0, scene.frame_range) {
+            let all = view_all(scene);
+            self.view = (all != range_view(scene)).then_some(all);
+        }
         let rows = rows(scene, &ctx.session.selection, &self.collapsed);
         let full = ui.available_rect_before_wrap();
         let max_name = (full.width() - 120.0).max(MIN_NAME_WIDTH);
@@ -524,9 +532,23 @@ impl DopeSheet {
             }
             f += step;
         }
+        preview_band(&painter, ctx.scene(), geo, ruler);
         marker_flags(&painter, ctx.scene(), geo, ruler);
         current_frame_line(&painter, ctx, geo, ruler);
     }
+}
+
+/// The preview range, while one is set: an orange band along the ruler's bottom over its
+/// frames ([`crate::widgets::preview_range`]).
+fn preview_band(painter: &egui::Painter, scene: &Scene, geo: &Geometry, ruler: Rect) {
+    if scene.preview_range.is_none() {
+        return;
+    }
+    let range = scene.playback_range();
+    let (x0, x1) = (geo.x(f64::from(range.start)), geo.x(f64::from(range.end)));
+    let band =
+        Rect::from_min_max(Pos2::new(x0, ruler.bottom() - 3.0), Pos2::new(x1.max(x0 + 1.0), ruler.bottom()));
+    painter.rect_filled(band, 0.0, crate::widgets::preview_range::PREVIEW_COLOUR);
 }
 
 /// The scene's timeline markers on the ruler: a flag at each marker's frame with its name (and

@@ -92,11 +92,28 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 command_button(ui, ctx, actions, Command::ToggleRecord, Some(record));
                 command_button(ui, ctx, actions, Command::ToggleIk, Some(ik));
             });
+            ui.menu_button("Add", |ui| {
+                for kind in crate::scene_add::AddKind::ALL {
+                    if matches!(
+                        kind,
+                        crate::scene_add::AddKind::PointLight | crate::scene_add::AddKind::Camera
+                    ) {
+                        ui.separator();
+                    }
+                    if ui.button(kind.label()).on_hover_text(kind.tooltip()).clicked() {
+                        actions.push(Action::Add(kind));
+                        ui.close();
+                    }
+                }
+            });
             ui.menu_button("View", |ui| {
                 let view = ctx.view;
                 command_button(ui, ctx, actions, Command::ToggleGrid, Some(view.grid));
                 command_button(ui, ctx, actions, Command::ToggleBones, Some(view.bones));
                 command_button(ui, ctx, actions, Command::ToggleOnionSkin, Some(view.onion.enabled));
+                for c in [Command::HideSelected, Command::ShowHidden] {
+                    command_button(ui, ctx, actions, c, None);
+                }
                 ui.menu_button("Onion skin settings", |ui| {
                     let mut onion = view.onion;
                     onion_settings_ui(ui, &mut onion);

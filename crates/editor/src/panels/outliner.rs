@@ -1,6 +1,11 @@
 //! The outliner: objects (with their skeleton as an indented tree, [`keyrig_core::Skeleton::depth_first`])
 //! lights and scene cameras. A click selects one item, Shift- or Ctrl-click adds or removes one; double-click
-//! renames; the context menu renames, duplicates and deletes.
+//! renames; the context menu renames, duplicates and deletes. An object's skeleton folds away
+//! with the triangle before its name (Shift+click: every skeleton), so two characters do not
+//! make a long scroll; what is folded is remembered for the session (by object name, for the
+//! open document), never saved.
+
+use std::collections::BTreeSet;
 
 use egui::Ui;
 
@@ -30,10 +35,19 @@ enum Choice {
     Command(Command),
 }
 
-/// The outliner and its own state: the name field of an item being renamed.
+/// The outliner and its own state: the name field of an item being renamed, and the objects
+/// whose skeletons are folded away.
 #[derive(Debug, Default)]
 pub struct Outliner {
     renaming: Option<Renaming>,
+    /// Objects (by name) whose skeleton is folded away, for the document of that id.
+    collapsed: (u64, BTreeSet<String>),
+}
+
+/// A click on a skeleton's triangle: fold or unfold `object`, or with Shift every skeleton.
+struct Fold {
+    object: usize,
+    every: bool,
 }
 
 impl Outliner {
@@ -48,6 +62,12 @@ impl Outliner {
         self.renaming = Some(Renaming { item, text: name, focused: false });
     }
 
+    /// Whether object `name`'s skeleton is folded away in the outliner.
+    #[must_use]
+    pub fn is_collapsed(&self, name: &str) -> bool {
+        self.collapsed.1.contains(name)
+    }
+
     /// Forgets a rename in progress (the document was replaced).
     pub fn cancel_rename(&mut self) {
         self.renaming = None;
@@ -58,10 +78,16 @@ impl Outliner {
             ui.heading("Outliner");
             // Only the rows in view are laid out (a scene of thousands of items costs what shows).
             let scene = ctx.scene();
+            let doc = ctx.doc.cache_key().0;
+            if self.collapsed.0 != doc {
+                self.collapsed = (doc, BTreeSet::new());
+            }
+            let collapsed = &self.collapsed.1;
             let mut entries: Vec<Option<(Selected, usize)>> = Vec::new();
             for (o, object) in scene.objects.iter().enumerate() {
                 entries.push(Some((Selected::Object(o), 0)));
-                if let Some(skeleton) = &object.skeleton {
+                if let Some(skeleton) = object.skeleton.as_ref().filter(|_| !collapsed.contains(&object.name))
+                {
                     entries.extend(
                         skeleton
                             .depth_first()
@@ -77,6 +103,7 @@ impl Outliner {
                 entries.extend((0..scene.cameras.len()).map(|c| Some((Selected::Camera(c), 0))));
             }
             let row_height = ui.spacing().interact_size.y;
+            let mut fold = None;
             egui::ScrollArea::vertical().auto_shrink([false, false]).show_rows(
                 ui,
                 row_height,
@@ -93,8 +120,15 @@ impl Outliner {
                             }
                             return;
                         }
+                        // An object hidden in the viewport (H) reads dimmed and slanted.
+                        let hidden = match item {
+                            Selected::Object(o) => ctx.session.hidden.object(scene, o),
+                            _ => false,
+                        };
+                        let text = egui::RichText::new(name);
+                        let text = if hidden { text.weak().italics() } else { text };
                         let response =
-                            ui.selectable_label(selection.contains(item), name).on_hover_text(name);
+                            ui.selectable_label(selection.contains(item), text).on_hover_text(name);
                         // A quick click before a double click makes egui count three: rename on either.
                         if response.double_clicked() || response.triple_clicked() {
                             *renaming = Some(Renaming { item, text: name.to_owned(), focused: false });
@@ -127,7 +161,21 @@ impl Outliner {
                             Selected::Light(l) => scene.lights[l].name.as_str(),
                             Selected::Camera(c) => scene.cameras[c].name.as_str(),
                         };
-                        if depth == 0 {
+                        let skeleton = match item {
+                            Selected::Object(o) => scene.objects[o].skeleton.is_some(),
+                            _ => false,
+                        };
+                        if skeleton {
+                            ui.horizontal(|ui| {
+                                if fold_toggle(ui, name, collapsed.contains(name)) {
+                                    let every = ui.input(|i| i.modifiers.shift);
+                                    if let Selected::Object(object) = item {
+                                        fold = Some(Fold { object, every });
+                                    }
+                                }
+                                row(ui, item, name);
+                            });
+                        } else if depth == 0 {
                             row(ui, item, name);
                         } else {
                             ui.horizontal(|ui| {
@@ -158,8 +206,44 @@ impl Outliner {
                     }
                 },
             );
+            if let Some(Fold { object, every }) = fold {
+                self.fold(scene, object, every);
+            }
         });
     }
+}
+
+impl Outliner {
+    /// Folds `object`'s skeleton away, or unfolds it; with `every`, every skeleton takes the
+    /// state `object`'s takes.
+    fn fold(&mut self, scene: &keyrig_core::Scene, object: usize, every: bool) {
+        let Some(name) = scene.objects.get(object).map(|o| o.name.clone()) else { return };
+        let collapse = !self.collapsed.1.contains(&name);
+        let names: Vec<String> = if every {
+            scene.objects.iter().filter(|o| o.skeleton.is_some()).map(|o| o.name.clone()).collect()
+        } else {
+            vec![name]
+        };
+        for name in names {
+            if collapse {
+                self.collapsed.1.insert(name);
+            } else {
+                self.collapsed.1.remove(&name);
+            }
+        }
+    }
+}
+
+/// The triangle that folds an object's skeleton away (▶ folded, ▼ open); true when clicked.
+/// Accessibility tools read it as "fold the skeleton of NAME" or "unfold the skeleton of NAME".
+fn fold_toggle(ui: &mut Ui, name: &str, collapsed: bool) -> bool {
+    let text = if collapsed { "▶" } else { "▼" };
+    let response = ui
+        .add(egui::Button::new(egui::RichText::new(text).small()).frame(false))
+        .on_hover_text("Fold the skeleton away or show it (Shift+click: every skeleton)");
+    let label = format!("{} the skeleton of {name}", if collapsed { "unfold" } else { "fold" });
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::WidgetType::Button, true, label.clone()));
+    response.clicked()
 }
 
 /// The name field of an item being renamed: `Some(true)` when Enter or a click elsewhere

@@ -100,6 +100,8 @@ impl Timeline {
             if !ui.input(|i| i.pointer.any_down()) {
                 self.fps_drag_origin = None;
             }
+            ui.separator();
+            crate::widgets::preview_range::preview_range_ui(ui, ctx, actions);
             markers_ui(ui, ctx, actions);
         });
     }

@@ -7,6 +7,8 @@ pub mod field;
 pub mod flat_fill;
 pub mod key_diamond;
 pub mod measure;
+pub mod preview_range;
+pub mod range_watch;
 pub mod tcb_slider;
 pub mod time_axis;
 pub mod waveform;

@@ -203,6 +203,9 @@ fn pick_targets(projection: &Projection, ctx: &FrameCtx<'_>) -> Vec<(Pos2, Selec
     let mut targets = Vec::new();
     for (o, pose) in ctx.scene.poses().iter().enumerate() {
         let Some(pose) = pose else { continue };
+        if ctx.session.hidden.object(scene, o) {
+            continue;
+        }
         if let Some(p) = projection.project(pose.world_from_object.translation.into()) {
             targets.push((p, Selected::Object(o)));
         }
@@ -363,6 +366,9 @@ impl Viewport {
         let Some(gpu) = self.gpu.as_mut() else { return false };
         let Some(state) = ctx.scene.state() else { return false };
         let scene = ctx.scene();
+        // Objects hidden with H are left out of what is drawn.
+        let state = ctx.session.hidden.drawn(scene, state);
+        let state = state.as_ref();
         let eval = ctx.evaluator();
         let c = ctx.view.camera;
         let view = keyrig_render::ViewOptions {

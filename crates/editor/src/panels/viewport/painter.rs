@@ -20,7 +20,9 @@ pub(super) fn paint_scene(painter: &egui::Painter, projection: &Projection, ctx:
     let scene = ctx.scene();
     for o in 0..scene.objects.len() {
         // Hidden objects (their visibility attribute) are not drawn, as on the GPU.
-        if ctx.scene.state().and_then(|s| s.objects.get(o)).is_some_and(|s| !s.look.visible) {
+        if ctx.scene.state().and_then(|s| s.objects.get(o)).is_some_and(|s| !s.look.visible)
+            || ctx.session.hidden.object(scene, o)
+        {
             continue;
         }
         let (Some(pose), Some((positions, indices))) =
@@ -42,6 +44,9 @@ pub(super) fn paint_bones(painter: &egui::Painter, projection: &Projection, ctx:
     for (o, pose) in ctx.scene.poses().iter().enumerate() {
         let Some(pose) = pose else { continue };
         let Some(skeleton) = &scene.objects[o].skeleton else { continue };
+        if ctx.session.hidden.object(scene, o) {
+            continue;
+        }
         for (j, joint) in skeleton.joints.iter().enumerate() {
             let world = pose.world_from_object * pose.object_from_joint[j];
             let at: Vec3 = world.translation.into();
@@ -70,7 +75,11 @@ pub(super) fn paint_bones(painter: &egui::Painter, projection: &Projection, ctx:
 
 /// The axes of objects without a mesh (empties, skeletons alone).
 pub(super) fn paint_axes(painter: &egui::Painter, projection: &Projection, ctx: &FrameCtx<'_>) {
-    for (object, pose) in ctx.scene().objects.iter().zip(ctx.scene.poses()) {
+    let scene = ctx.scene();
+    for (o, (object, pose)) in scene.objects.iter().zip(ctx.scene.poses()).enumerate() {
+        if ctx.session.hidden.object(scene, o) {
+            continue;
+        }
         if let (None, Some(pose)) = (&object.mesh, pose) {
             draw_axes(painter, projection, pose.world_from_object);
         }
