@@ -1,7 +1,8 @@
 //! `assets/showcase.ron`, the shipped scene of issue 31 item 4: a camera that dollies and
 //! zooms, a marker that cuts to a second camera tracking the twisting arm, a spot light that
 //! changes colour and cone, a cube that fades out and is hidden, and the arm's deformer
-//! switching from linear blend to bones blending in the middle of its twist. The file opens
+//! switching from linear blend to bones blending in the middle of its twist, then its blend
+//! zone widening. The file opens
 //! without problems, is in the scene writer's own form (saving it writes the same bytes), and
 //! the scene evaluator plays each of those changes at the times the guide names.
 //! (`crates/editor/tests/cli_showcase.rs` renders it through its cameras.)
@@ -13,6 +14,7 @@ use keyrig_core::channel::{ChannelPath, ChannelValue};
 use keyrig_core::{AimTarget, DeformerKind, Lens, LightKind, Projection};
 use keyrig_eval::SceneEvaluator;
 use keyrig_io::scene_file;
+use keyrig_skin::BlendZone;
 
 fn path() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/showcase.ron")
@@ -92,6 +94,16 @@ fn showcase_plays_what_the_guide_says() {
     assert_eq!(at(2.5 - 1.0 / fps).objects[arm].look.deformer, DeformerKind::LinearBlend);
     assert_eq!(at(2.5).objects[arm].look.deformer, DeformerKind::BonesBlending);
     assert_eq!(at(0.0).objects[arm].look.deformer, DeformerKind::LinearBlend);
+    // Then the bones-blending zone widens from a quarter of each bone to 0.6 over a second.
+    assert_eq!(at(2.5).objects[arm].look.blend_zone, Some(BlendZone::default()));
+    let wide = at(3.5).objects[arm].look.blend_zone.expect("keyed zone");
+    assert!((wide.parent_fraction - 0.6).abs() < 1e-6 && (wide.child_fraction - 0.6).abs() < 1e-6);
+    let state = at(3.5);
+    let (zone, bindings) = state.objects[arm].zone_bindings.as_ref().expect("bound for the keyed zone");
+    assert_eq!(*zone, wide);
+    let skin = eval.skin(arm).expect("skinned");
+    assert_eq!(**bindings, skin.mesh.bindings(wide).expect("bindings"));
+    assert_ne!(bindings.bones_blending, skin.bindings.bones_blending, "a wider zone blends more vertices");
 
     // The cube fades from opaque (0.2 s) to clear (1 s) and is hidden from 1 s on.
     let cube = scene.objects.iter().position(|o| o.name == "Cube").expect("Cube");
