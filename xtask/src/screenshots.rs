@@ -25,7 +25,11 @@ const SHOWCASE: &str = "assets/showcase.ron";
 
 const PICTURES: &[Picture] = &[
     Picture { name: "guide-cesium-man", file: "tests/corpus/gltf/CesiumMan/CesiumMan.glb", keys: &[] },
-    Picture { name: "guide-md2-ratamahatta", file: "tests/corpus/md2/ratamahatta/ratamahatta.md2", keys: &[] },
+    Picture {
+        name: "guide-md2-ratamahatta",
+        file: "tests/corpus/md2/ratamahatta/ratamahatta.md2",
+        keys: &[],
+    },
     // The orbit view at frame 20: both cameras' frustums, the marker on the ruler.
     Picture { name: "guide-showcase-cameras", file: SHOWCASE, keys: &[("Right", 20)] },
     // Through the active camera (Track, from the marker on) at frame 74 and 75: the deformer
@@ -89,7 +93,11 @@ pub fn run(args: &[String]) -> Result<(), String> {
             x(&display, "xdotool", &["windowfocus", "--sync", &window])?;
             for (key, times) in *keys {
                 let times = times.to_string();
-                x(&display, "xdotool", &["key", "--clearmodifiers", "--delay", "40", "--repeat", &times, key])?;
+                x(
+                    &display,
+                    "xdotool",
+                    &["key", "--clearmodifiers", "--delay", "40", "--repeat", &times, key],
+                )?;
             }
             wait_idle(&display, &home)?;
         }

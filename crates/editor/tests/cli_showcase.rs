@@ -35,7 +35,8 @@ fn render(dir: &Path, frames: &str) -> impl Fn(u32) -> RgbaImage {
     assert!(out.status.success(), "keyrig render failed: {}", String::from_utf8_lossy(&out.stderr));
     let dir = dir.to_path_buf();
     move |n| {
-        let image = keyrig_render::image::open(dir.join(format!("show_{n:03}.png"))).expect("a PNG").to_rgba8();
+        let image =
+            keyrig_render::image::open(dir.join(format!("show_{n:03}.png"))).expect("a PNG").to_rgba8();
         assert_eq!(image.dimensions(), (WIDTH, HEIGHT), "the scene's render size");
         image
     }
@@ -144,7 +145,13 @@ fn the_cut_at_the_marker_changes_the_camera_and_the_switch_repairs_the_twist() {
         (*columns.iter().min().unwrap(), *columns.iter().max().unwrap())
     };
     let (pinched, full) = narrowest(&frame(74));
-    assert!(f64::from(pinched) < 0.65 * f64::from(full), "linear blend at 178.8°: {pinched} of {full} pixels");
+    assert!(
+        f64::from(pinched) < 0.65 * f64::from(full),
+        "linear blend at 178.8°: {pinched} of {full} pixels"
+    );
     let (round, full) = narrowest(&frame(75));
-    assert!(f64::from(round) > 0.75 * f64::from(full) && round > pinched + 40, "bones blending at 180°: {round} of {full} pixels");
+    assert!(
+        f64::from(round) > 0.75 * f64::from(full) && round > pinched + 40,
+        "bones blending at 180°: {round} of {full} pixels"
+    );
 }

@@ -43,7 +43,8 @@ fn the_blend_zone_keys_in_record_mode_and_reshapes_the_arm() {
     assert_eq!((keys[0].time, keys[0].value), (2.0, 0.6));
     // The dope sheet lists an object's attribute rows from `AttributeId::of_object`.
     assert!(
-        AttributeId::of_object(h.state().doc.scene(), 0).contains(&ChannelId::Attribute(AttributeId::BlendChild(0))),
+        AttributeId::of_object(h.state().doc.scene(), 0)
+            .contains(&ChannelId::Attribute(AttributeId::BlendChild(0))),
         "a dope-sheet row"
     );
 

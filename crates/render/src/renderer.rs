@@ -1235,7 +1235,8 @@ impl Renderer {
             match (&item.deform, &mesh.deformation) {
                 (Deform::Skin { deformer, joints, bindings }, Deformation::Skinned(skin)) => {
                     stats.joint_bytes += self.skinner.write_joints(&self.queue, skin, item.mesh, joints)?;
-                    stats.joint_bytes += self.skinner.write_bindings(&self.queue, skin, item.mesh, bindings.as_ref())?;
+                    stats.joint_bytes +=
+                        self.skinner.write_bindings(&self.queue, skin, item.mesh, bindings.as_ref())?;
                     self.skinner.encode(encoder, skin, *deformer);
                     stats.deformed_vertices += u64::from(skin.vertex_count);
                 }

@@ -5,7 +5,9 @@
 //! back.
 
 use glam::Quat;
-use keyrig_core::{Animated, DeformerKind, Interpolation, Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene};
+use keyrig_core::{
+    Animated, DeformerKind, Interpolation, Key, MeshSource, Object, ProceduralMesh, RawTrack, Scene,
+};
 use keyrig_eval::Overrides;
 use keyrig_render::headless::HeadlessRenderer;
 use keyrig_render::{SceneRig, SkinnedVertex, ViewOptions};

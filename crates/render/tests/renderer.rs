@@ -147,7 +147,8 @@ fn bad_input_is_a_typed_error() {
     // Skinning a static mesh, and a skin with the wrong number of joints.
     let mut frame = floor_frame(vec![]);
     let pose = JointPose::from_rigid(Mat4::IDENTITY, Mat4::IDENTITY, Quat::IDENTITY);
-    frame.items[0].deform = Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose], bindings: None };
+    frame.items[0].deform =
+        Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose], bindings: None };
     let err = r.render_image(&frame, SIZE, SIZE).unwrap_err();
     assert!(err.to_string().contains("not a skinned mesh"), "{err}");
 

@@ -35,7 +35,10 @@ pub enum AttributeId {
     ObjectVisible(usize),
     ObjectColour(usize),
     ObjectOpacity(usize),
-    MorphWeight { object: usize, target: usize },
+    MorphWeight {
+        object: usize,
+        target: usize,
+    },
     Deformer(usize),
     /// The bones-blending zone's reach into the parent bone (`blend_parent_fraction`).
     BlendParent(usize),
@@ -570,10 +573,8 @@ mod tests {
         s.objects[0].attributes.opacity.value = 1.5;
         s.lights[0].kind = LightKind::Point;
         s.objects[0].attributes.deformer = Some(Animated::constant(7.0));
-        s.objects[0].attributes.blend_parent_fraction = Some(Animated::new(
-            0.25,
-            RawTrack::new(vec![Key::new(0.0, 0.25), Key::new(1.0, -0.5)]),
-        ));
+        s.objects[0].attributes.blend_parent_fraction =
+            Some(Animated::new(0.25, RawTrack::new(vec![Key::new(0.0, 0.25), Key::new(1.0, -0.5)])));
         s.objects[0].attributes.blend_child_fraction = Some(Animated::constant(1.5));
         let problems: Vec<String> = s.problems().iter().map(ToString::to_string).collect();
         for expected in [
@@ -592,7 +593,8 @@ mod tests {
     #[test]
     fn blend_zone_channels_exist_once_set() {
         let mut s = scene();
-        let sample = |s: &Scene, p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(s)).map(|c| c.sample(0.5));
+        let sample =
+            |s: &Scene, p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(s)).map(|c| c.sample(0.5));
         let err = sample(&s, "object/Cube/blend_child_fraction").unwrap_err().to_string();
         assert!(
             err.contains("has no blend_child_fraction channel; it is set in the scene file as objects[0].attributes.blend_child_fraction"),

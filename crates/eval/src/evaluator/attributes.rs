@@ -87,7 +87,10 @@ impl ObjectAttributeRig {
                 .blend_parent_fraction
                 .as_ref()
                 .map(|f| Slot::new(f, id(AttributeId::BlendParent(o)))),
-            blend_child: a.blend_child_fraction.as_ref().map(|f| Slot::new(f, id(AttributeId::BlendChild(o)))),
+            blend_child: a
+                .blend_child_fraction
+                .as_ref()
+                .map(|f| Slot::new(f, id(AttributeId::BlendChild(o)))),
         }))
     }
 
@@ -206,8 +209,16 @@ impl ObjectAttributeRig {
             None => setting,
         };
         look.blend_zone = (r.blend_parent.is_some() || r.blend_child.is_some()).then(|| BlendZone {
-            parent_fraction: fraction(&r.blend_parent, AttributeId::BlendParent(o), settings.blend_parent_fraction),
-            child_fraction: fraction(&r.blend_child, AttributeId::BlendChild(o), settings.blend_child_fraction),
+            parent_fraction: fraction(
+                &r.blend_parent,
+                AttributeId::BlendParent(o),
+                settings.blend_parent_fraction,
+            ),
+            child_fraction: fraction(
+                &r.blend_child,
+                AttributeId::BlendChild(o),
+                settings.blend_child_fraction,
+            ),
         });
     }
 
