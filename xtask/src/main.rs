@@ -7,8 +7,9 @@
 //! - `cargo xtask fuzz [--seconds N] [TARGET…]`: every fuzz target (or those named) for N
 //!   seconds each (60 by default) from its seed corpus, on the stable toolchain
 //!   (docs/fuzzing.md).
-//! - `cargo xtask screenshots`: the guide's pictures of imported models, taken from the real
-//!   editor window under Xvfb (docs/guide.md).
+//! - `cargo xtask screenshots [--dev] [NAME…]`: the guide's pictures of imported models and
+//!   shipped scenes (all, or those named), taken from the real editor window under Xvfb with a
+//!   release build (`--dev`: the dev profile's) of `keyrig` (docs/guide.md).
 //!
 //! Only the standard library: the task must build on a fresh machine before anything else is
 //! installed.
@@ -26,7 +27,7 @@ fn main() -> ExitCode {
         Some("test") => setup::run(true).and_then(|()| test(&args[1..])),
         Some("setup") => setup::run(true),
         Some("fuzz") => fuzz::run(&args[1..]),
-        Some("screenshots") => setup::run(false).and_then(|()| screenshots::run()),
+        Some("screenshots") => setup::run(false).and_then(|()| screenshots::run(&args[1..])),
         Some("help" | "--help" | "-h") | None => {
             println!("{}", USAGE);
             Ok(())
@@ -43,7 +44,7 @@ fn main() -> ExitCode {
 }
 
 const USAGE: &str =
-    "usage: cargo xtask test [CARGO TEST ARGS…] | setup | fuzz [--seconds N] [TARGET…] | screenshots";
+    "usage: cargo xtask test [CARGO TEST ARGS…] | setup | fuzz [--seconds N] [TARGET…] | screenshots [--dev] [NAME…]";
 
 /// The repository's root (the folder above `xtask/`).
 pub fn root() -> PathBuf {

@@ -1,7 +1,8 @@
-//! `cargo xtask screenshots`: the guide's pictures of imported models (docs/guide.md), each the
-//! real `keyrig edit MODEL` window on an X server without a screen (Xvfb, 1280×800), captured
-//! with ImageMagick's `import` once the window has stopped drawing (two equal captures
-//! 300 ms apart), and written atomically into `docs/screenshots/`.
+//! `cargo xtask screenshots`: the guide's pictures of imported models and of the shipped
+//! scenes (docs/guide.md), each the real `keyrig edit FILE` window on an X server without a
+//! screen (Xvfb, 1280×800), driven with `xdotool` keys where the picture needs a frame or a
+//! view, captured with ImageMagick's `import` once the window has stopped drawing (two equal
+//! captures 300 ms apart), and written atomically into `docs/screenshots/`.
 //!
 //! The real-window tests (`crates/editor/tests/e2e_xdotool.rs`) take the guide's other
 //! pictures while they assert, and copy them with `KEYRIG_UPDATE_SCREENSHOTS=1`.
@@ -12,10 +13,29 @@ use std::time::{Duration, Instant};
 
 use crate::{cargo, root, run_status};
 
-/// (picture, model under `tests/corpus/`).
-const PICTURES: &[(&str, &str)] = &[
-    ("guide-cesium-man", "gltf/CesiumMan/CesiumMan.glb"),
-    ("guide-md2-ratamahatta", "md2/ratamahatta/ratamahatta.md2"),
+/// One picture: the file opened (relative to the repository) and the keys pressed before the
+/// capture, each `(xdotool key name, times)`.
+struct Picture {
+    name: &'static str,
+    file: &'static str,
+    keys: &'static [(&'static str, u32)],
+}
+
+const SHOWCASE: &str = "assets/showcase.ron";
+
+const PICTURES: &[Picture] = &[
+    Picture { name: "guide-cesium-man", file: "tests/corpus/gltf/CesiumMan/CesiumMan.glb", keys: &[] },
+    Picture {
+        name: "guide-md2-ratamahatta",
+        file: "tests/corpus/md2/ratamahatta/ratamahatta.md2",
+        keys: &[],
+    },
+    // The orbit view at frame 20: both cameras' frustums, the marker on the ruler.
+    Picture { name: "guide-showcase-cameras", file: SHOWCASE, keys: &[("Right", 20)] },
+    // Through the active camera (Track, from the marker on) at frame 74 and 75: the deformer
+    // switches from linear blend to bones blending between them.
+    Picture { name: "guide-showcase-wrapper", file: SHOWCASE, keys: &[("Right", 74), ("0", 1)] },
+    Picture { name: "guide-showcase-repaired", file: SHOWCASE, keys: &[("Right", 75), ("0", 1)] },
 ];
 
 /// A child process killed and reaped when dropped.
@@ -28,18 +48,31 @@ impl Drop for Guard {
     }
 }
 
-pub fn run() -> Result<(), String> {
+/// Takes the pictures named in `args` (every picture when none is named); `--dev` takes them
+/// with the dev profile's `keyrig` (optimized too, `Cargo.toml`), which a machine that has
+/// built the tests has already, instead of a release build.
+pub fn run(args: &[String]) -> Result<(), String> {
+    let dev = args.iter().any(|a| a == "--dev");
+    let names: Vec<&String> = args.iter().filter(|a| *a != "--dev").collect();
+    if let Some(unknown) = names.iter().find(|n| !PICTURES.iter().any(|p| p.name == n.as_str())) {
+        let known: Vec<&str> = PICTURES.iter().map(|p| p.name).collect();
+        return Err(format!("no picture named `{unknown}` (pictures: {})", known.join(", ")));
+    }
     let root = root();
     let mut build = cargo();
-    build.current_dir(&root).args(["build", "--release", "-p", "keyrig-editor", "--bin", "keyrig"]);
-    run_status(&mut build, "cargo build --release -p keyrig-editor")?;
-    let keyrig = root.join("target/release/keyrig");
+    build.current_dir(&root).args(["build", "-p", "keyrig-editor", "--bin", "keyrig"]);
+    if !dev {
+        build.arg("--release");
+    }
+    run_status(&mut build, "cargo build -p keyrig-editor --bin keyrig")?;
+    let keyrig = root.join(if dev { "target/debug/keyrig" } else { "target/release/keyrig" });
     let (_xvfb, display) = start_xvfb()?;
     let home = std::env::temp_dir().join(format!("keyrig-screenshots-{}", std::process::id()));
     std::fs::create_dir_all(&home).map_err(|e| format!("{}: {e}", home.display()))?;
     let docs = root.join("docs/screenshots");
-    for (name, model) in PICTURES {
-        let model = root.join("tests/corpus").join(model);
+    let wanted = PICTURES.iter().filter(|p| names.is_empty() || names.iter().any(|n| *n == p.name));
+    for Picture { name, file, keys } in wanted {
+        let model = root.join(file);
         let mut command = Command::new(&keyrig);
         command
             .arg("edit")
@@ -56,6 +89,18 @@ pub fn run() -> Result<(), String> {
         x(&display, "xdotool", &["windowmove", "--sync", &window, "0", "0"])?;
         x(&display, "xdotool", &["windowsize", "--sync", &window, "1280", "800"])?;
         wait_idle(&display, &home)?;
+        if !keys.is_empty() {
+            x(&display, "xdotool", &["windowfocus", "--sync", &window])?;
+            for (key, times) in *keys {
+                let times = times.to_string();
+                x(
+                    &display,
+                    "xdotool",
+                    &["key", "--clearmodifiers", "--delay", "40", "--repeat", &times, key],
+                )?;
+            }
+            wait_idle(&display, &home)?;
+        }
         let out = docs.join(format!("{name}.png"));
         let temp = docs.join(format!(".{name}.png.tmp.png"));
         x(&display, "import", &["-window", "root", &temp.to_string_lossy()])?;

@@ -1,8 +1,8 @@
 //! Keyed attributes beyond transforms (issue 31, after the IAnimEd thesis §10.2: "more or all
 //! possible attributes such as scale, visibility, deformation etc."): an object's visibility,
 //! material colour and opacity, morph-target weights and deformer; a light's visibility, range
-//! and spot cone. (The bones-blending zone is not keyed yet: its bindings are rest data,
-//! built when the settings change.)
+//! and spot cone; the bones-blending zone (its two fractions, replacing the object's
+//! `DeformerSettings` fractions; the evaluator binds the mesh again for each zone it samples).
 //!
 //! Every attribute is an [`Animated`] value, so it has the keys, interpolation modes, cycles,
 //! validation, undo, dope-sheet row and curve of every other channel
@@ -51,6 +51,14 @@ pub struct ObjectAttributes {
     /// blending, 3 dual quaternion; Step keys), replacing `deformer.kind`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deformer: Option<Animated<f32>>,
+    /// Bones blending: how far the blend zone reaches into the parent bone, as a fraction of its
+    /// length in [0, 1], replacing `deformer.blend_parent_fraction`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend_parent_fraction: Option<Animated<f32>>,
+    /// Bones blending: how far the blend zone reaches into the child bone (0..=1), replacing
+    /// `deformer.blend_child_fraction`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend_child_fraction: Option<Animated<f32>>,
 }
 
 impl Default for ObjectAttributes {
@@ -61,6 +69,8 @@ impl Default for ObjectAttributes {
             opacity: shown(),
             morph_weights: Vec::new(),
             deformer: None,
+            blend_parent_fraction: None,
+            blend_child_fraction: None,
         }
     }
 }
@@ -126,8 +136,14 @@ impl ObjectAttributes {
         for (i, w) in self.morph_weights.iter().enumerate() {
             bytes += cost(w, other.and_then(|o| o.morph_weights.get(i)));
         }
-        if let Some(d) = &self.deformer {
-            bytes += cost(d, other.and_then(|o| o.deformer.as_ref()));
+        for (mine, theirs) in [
+            (&self.deformer, other.and_then(|o| o.deformer.as_ref())),
+            (&self.blend_parent_fraction, other.and_then(|o| o.blend_parent_fraction.as_ref())),
+            (&self.blend_child_fraction, other.and_then(|o| o.blend_child_fraction.as_ref())),
+        ] {
+            if let Some(a) = mine {
+                bytes += cost(a, theirs);
+            }
         }
         bytes
     }

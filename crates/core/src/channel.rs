@@ -37,7 +37,7 @@ use crate::track::{AnimatedTrack, TrackError};
 use crate::validate::track_error_path;
 
 /// Properties of an object.
-pub const OBJECT_PROPERTIES: [&str; 11] = [
+pub const OBJECT_PROPERTIES: [&str; 13] = [
     "translation",
     "rotation",
     "scale",
@@ -49,6 +49,8 @@ pub const OBJECT_PROPERTIES: [&str; 11] = [
     "opacity",
     "morph",
     "deformer",
+    "blend_parent_fraction",
+    "blend_child_fraction",
 ];
 /// Properties of a joint.
 pub const JOINT_PROPERTIES: [&str; 3] = ["translation", "rotation", "scale"];

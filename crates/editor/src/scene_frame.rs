@@ -321,7 +321,7 @@ impl SceneFrame {
         self.skinned[o] = true;
         self.deform_errors[o] = None;
         if let (Some(skin), Some(palette)) = (eval.skin(o), &state.palette) {
-            if let Err(e) = self.skin.skin(o, skin, palette, object.deformer.kind) {
+            if let Err(e) = self.skin.skin(o, skin, state.bindings(skin), palette, state.look.deformer) {
                 self.deform_errors[o] = Some(format!("{}: {e}", object.name));
             }
             return;

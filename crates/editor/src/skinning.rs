@@ -13,7 +13,8 @@ use glam::{Affine3A, Vec3};
 use keyrig_core::DeformerKind;
 use keyrig_eval::SkinRig;
 use keyrig_skin::{
-    deform_mesh_into, joint_cross_section, CrossSection, Deformed, Execution, JointPalette, SkinnedMesh,
+    deform_mesh_into, joint_cross_section, CrossSection, Deformed, Execution, JointPalette, MeshBindings,
+    SkinnedMesh,
 };
 
 /// One object's last skinned frame.
@@ -48,7 +49,8 @@ pub struct DeformError {
 }
 
 impl SkinCache {
-    /// Skins object `index`'s mesh (`skin`, from the evaluator) with `palette` and `kind`.
+    /// Skins object `index`'s mesh (`skin`, from the evaluator) with `palette`, `kind` and
+    /// `bindings` (the skin's own, or those of a keyed blend zone: `ObjectState::bindings`).
     ///
     /// # Errors
     /// The deformer's error (e.g. a dual quaternion of a scaled joint), with the deformer.
@@ -56,6 +58,7 @@ impl SkinCache {
         &mut self,
         index: usize,
         skin: &SkinRig,
+        bindings: &MeshBindings,
         palette: &JointPalette,
         kind: DeformerKind,
     ) -> Result<SkinnedView<'_>, DeformError> {
@@ -69,7 +72,7 @@ impl SkinCache {
             entry.mesh = Arc::clone(&skin.mesh);
         }
         entry.palette.clone_from(palette);
-        deform_mesh_into(&skin.mesh, &skin.bindings, palette, kind, Execution::Parallel, &mut entry.deformed)
+        deform_mesh_into(&skin.mesh, bindings, palette, kind, Execution::Parallel, &mut entry.deformed)
             .map_err(|source| DeformError { kind, source })?;
         Ok(SkinnedView {
             positions: &entry.deformed.positions,

@@ -222,8 +222,13 @@ pub struct ObjectState {
     pub palette_error: Option<SkinError>,
     /// The frames a vertex-animated mesh shows.
     pub morph: Option<Result<MorphBlend, MorphError>>,
-    /// Visibility, opacity, colour, deformer and morph weights at this time.
+    /// Visibility, opacity, colour, deformer, morph weights and blend zone at this time.
     pub look: ObjectLook,
+    /// Bindings of the skinned mesh for a keyed bones-blending zone (`look.blend_zone`) with
+    /// the zone they were built for; `None` while the zone is not keyed (the rig's own
+    /// bindings apply) or the mesh's bindings do not depend on it (glTF skins). An evaluation
+    /// into a state that holds bindings for the same zone keeps them.
+    pub zone_bindings: Option<(BlendZone, Arc<MeshBindings>)>,
 }
 
 impl ObjectState {
@@ -236,7 +241,15 @@ impl ObjectState {
             palette_error: None,
             morph: None,
             look: ObjectLook::new(DeformerKind::LinearBlend),
+            zone_bindings: None,
         }
+    }
+
+    /// The bindings to deform object's skin `skin` with at this time: those of the keyed blend
+    /// zone, else the skin's own.
+    #[must_use]
+    pub fn bindings<'a>(&'a self, skin: &'a SkinRig) -> &'a Arc<MeshBindings> {
+        self.zone_bindings.as_ref().map_or(&skin.bindings, |(_, b)| b)
     }
 }
 
@@ -672,9 +685,19 @@ impl SceneEvaluator {
             o,
             time,
             overrides,
-            rig.deformer,
+            &rig.built_from.deformer,
             &mut state.look,
         );
+        match (state.look.blend_zone, &rig.skin) {
+            (Some(zone), Some(skin)) if skin.mesh.bones.is_some() => {
+                if !matches!(&state.zone_bindings, Some((built, _)) if *built == zone) {
+                    // The zone is in [0, 1] and the mesh bound once already: this cannot fail;
+                    // were it to, the rig's own bindings apply.
+                    state.zone_bindings = skin.mesh.bindings(zone).ok().map(|b| (zone, Arc::new(b)));
+                }
+            }
+            _ => state.zone_bindings = None,
+        }
     }
 
     /// Light `l` at `time` seconds; `None` when there is no such light.

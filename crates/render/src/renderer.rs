@@ -6,10 +6,12 @@
 //! editor (eframe's device and queue, the viewport's colour texture shown as an egui image).
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec2, Vec3};
 use keyrig_core::{Camera, DeformerKind, LightKind, TextureImage};
+use keyrig_skin::MeshBindings;
 
 use crate::camera;
 use crate::gpu::with_error_scope;
@@ -95,8 +97,11 @@ impl RenderStyle {
 pub enum Deform {
     /// Drawn as uploaded (static meshes; skinned/morph meshes keep their last output).
     None,
-    /// Skin with `deformer` and one [`JointPose`] per joint.
-    Skin { deformer: DeformerKind, joints: Vec<JointPose> },
+    /// Skin with `deformer` and one [`JointPose`] per joint. `bindings`: the bones-blending
+    /// bindings of a keyed blend zone at this frame (keyrig-eval's `ObjectState::zone_bindings`),
+    /// written over the uploaded ones when they are other bindings than the mesh holds (compared
+    /// by identity); `None` puts the uploaded ones back.
+    Skin { deformer: DeformerKind, joints: Vec<JointPose>, bindings: Option<Arc<MeshBindings>> },
     /// Interpolate morph frames `frame_a` → `frame_b` by `t` in 0..=1.
     Morph { frame_a: u32, frame_b: u32, t: f32 },
 }
@@ -1251,8 +1256,10 @@ impl Renderer {
                 });
             }
             match (&item.deform, &mesh.deformation) {
-                (Deform::Skin { deformer, joints }, Deformation::Skinned(skin)) => {
+                (Deform::Skin { deformer, joints, bindings }, Deformation::Skinned(skin)) => {
                     stats.joint_bytes += self.skinner.write_joints(&self.queue, skin, item.mesh, joints)?;
+                    stats.joint_bytes +=
+                        self.skinner.write_bindings(&self.queue, skin, item.mesh, bindings.as_ref())?;
                     self.skinner.encode(encoder, skin, *deformer);
                     stats.deformed_vertices += u64::from(skin.vertex_count);
                 }

@@ -688,6 +688,7 @@ impl SceneRig {
                 deform: Deform::Skin {
                     deformer: view.deformer.unwrap_or(state.look.deformer),
                     joints: joint_poses(palette),
+                    bindings: state.zone_bindings.as_ref().map(|(_, b)| Arc::clone(b)),
                 },
                 colour,
                 opacity,

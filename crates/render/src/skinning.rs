@@ -361,6 +361,13 @@ pub struct GpuSkinner {
 /// The GPU buffers of one skinned mesh.
 pub struct SkinBuffers {
     params: wgpu::Buffer,
+    /// The rest vertices ([`GpuSkinVertex`]), rewritten when a keyed blend zone brings other
+    /// bones-blending bindings ([`GpuSkinner::write_bindings`]).
+    vertices: wgpu::Buffer,
+    /// The rest vertices as uploaded, and the keyed bindings now written over them (`None`:
+    /// the vertices are as uploaded).
+    rest: Vec<GpuSkinVertex>,
+    written: std::sync::Mutex<Option<std::sync::Arc<MeshBindings>>>,
     joints: wgpu::Buffer,
     /// The skinned output: [`SkinnedVertex`] per vertex; usable as a vertex buffer.
     pub output: wgpu::Buffer,
@@ -509,11 +516,12 @@ impl GpuSkinner {
             bytemuck::cast_slice(&[vertex_count as u32, joint_count as u32, 0, 0]),
             wgpu::BufferUsages::UNIFORM,
         );
+        let rest = input.gpu_vertices();
         let vertices = buffer_init(
             device,
             "keyrig skin vertices",
-            bytemuck::cast_slice(&input.gpu_vertices()),
-            wgpu::BufferUsages::STORAGE,
+            bytemuck::cast_slice(&rest),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let identity = JointPose::from_rigid(Mat4::IDENTITY, Mat4::IDENTITY, Quat::IDENTITY).to_gpu();
         let joints = buffer_init(
@@ -543,6 +551,9 @@ impl GpuSkinner {
         });
         Ok(SkinBuffers {
             params,
+            vertices,
+            rest,
+            written: std::sync::Mutex::new(None),
             joints,
             output,
             bind_group,
@@ -582,6 +593,59 @@ impl GpuSkinner {
         let frames: Vec<GpuJointFrame> = poses.iter().map(JointPose::to_gpu).collect();
         let bytes: &[u8] = bytemuck::cast_slice(&frames);
         queue.write_buffer(&skin.joints, 0, bytes);
+        Ok(bytes.len() as u64)
+    }
+
+    /// Writes the bones-blending bindings of a keyed blend zone over `skin`'s rest vertices
+    /// (`None`: the rest vertices as uploaded) unless they are there already (the same shared
+    /// bindings); returns the number of bytes uploaded.
+    ///
+    /// # Errors
+    /// [`RenderError::BadCount`] when the bindings are not one per vertex or name a joint the
+    /// mesh does not have, [`RenderError::NonFinite`] for a non-finite blend parameter.
+    pub fn write_bindings(
+        &self,
+        queue: &wgpu::Queue,
+        skin: &SkinBuffers,
+        mesh_id: u64,
+        bindings: Option<&std::sync::Arc<MeshBindings>>,
+    ) -> Result<u64, RenderError> {
+        let mut written = skin.written.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let same = match (written.as_ref(), bindings) {
+            (None, None) => true,
+            (Some(a), Some(b)) => std::sync::Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        if same {
+            return Ok(0);
+        }
+        let mut vertices = skin.rest.clone();
+        if let Some(bindings) = bindings {
+            let blend = &bindings.bones_blending;
+            if blend.len() != vertices.len() {
+                return Err(RenderError::BadCount(format!(
+                    "mesh {mesh_id}: {} bones-blending bindings for {} vertices",
+                    blend.len(),
+                    vertices.len()
+                )));
+            }
+            for (index, (vertex, b)) in vertices.iter_mut().zip(blend.iter()).enumerate() {
+                if b.joint >= skin.joint_count {
+                    return Err(RenderError::BadCount(format!(
+                        "mesh {mesh_id}: vertex {index} blends at joint {} of {}",
+                        b.joint, skin.joint_count
+                    )));
+                }
+                if !b.t.is_finite() {
+                    return Err(RenderError::NonFinite { what: "blend.t", index });
+                }
+                vertex.blend_joint = b.joint;
+                vertex.blend_t = b.t.clamp(0.0, 1.0);
+            }
+        }
+        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+        queue.write_buffer(&skin.vertices, 0, bytes);
+        *written = bindings.cloned();
         Ok(bytes.len() as u64)
     }
 

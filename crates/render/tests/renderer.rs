@@ -147,7 +147,8 @@ fn bad_input_is_a_typed_error() {
     // Skinning a static mesh, and a skin with the wrong number of joints.
     let mut frame = floor_frame(vec![]);
     let pose = JointPose::from_rigid(Mat4::IDENTITY, Mat4::IDENTITY, Quat::IDENTITY);
-    frame.items[0].deform = Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose] };
+    frame.items[0].deform =
+        Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose], bindings: None };
     let err = r.render_image(&frame, SIZE, SIZE).unwrap_err();
     assert!(err.to_string().contains("not a skinned mesh"), "{err}");
 
@@ -213,7 +214,7 @@ fn skinned_item_moves_with_its_joints() {
             Mat4::from_translation(shift),
             Quat::IDENTITY,
         );
-        frame.items[0].deform = Deform::Skin { deformer, joints: vec![pose] };
+        frame.items[0].deform = Deform::Skin { deformer, joints: vec![pose], bindings: None };
         let (_, stats) = r.render_image(&frame, SIZE, SIZE).expect("render");
         assert_eq!(stats.joint_bytes, 240);
         let out = r.renderer().read_vertices(1).expect("readback");

@@ -38,7 +38,7 @@ fn frame_has_the_skinned_arm_its_skeleton_and_the_selected_path() {
     let frame = rig.frame(1.0, &view).expect("frame");
     assert_eq!(frame.style, RenderStyle::Wireframe);
     assert_eq!(frame.items.len(), 1);
-    let Deform::Skin { deformer, joints } = &frame.items[0].deform else { panic!("the arm is skinned") };
+    let Deform::Skin { deformer, joints, .. } = &frame.items[0].deform else { panic!("the arm is skinned") };
     assert_eq!(*deformer, DeformerKind::DualQuaternion);
     assert_eq!(joints.len(), 4);
     // Halfway through the translation track.

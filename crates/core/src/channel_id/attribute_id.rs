@@ -35,8 +35,15 @@ pub enum AttributeId {
     ObjectVisible(usize),
     ObjectColour(usize),
     ObjectOpacity(usize),
-    MorphWeight { object: usize, target: usize },
+    MorphWeight {
+        object: usize,
+        target: usize,
+    },
     Deformer(usize),
+    /// The bones-blending zone's reach into the parent bone (`blend_parent_fraction`).
+    BlendParent(usize),
+    /// The bones-blending zone's reach into the child bone (`blend_child_fraction`).
+    BlendChild(usize),
     LightVisible(usize),
     LightRange(usize),
     LightCutoff(usize),
@@ -52,13 +59,16 @@ pub enum AttributeProperty {
     /// `morph/<target index>`.
     Morph(usize),
     Deformer,
+    BlendParent,
+    BlendChild,
     Range,
     Cutoff,
     InnerAngle,
 }
 
 /// Object attributes by path name (`morph/<i>` aside).
-pub const OBJECT_ATTRIBUTES: [&str; 5] = ["visible", "colour", "opacity", "morph", "deformer"];
+pub const OBJECT_ATTRIBUTES: [&str; 7] =
+    ["visible", "colour", "opacity", "morph", "deformer", "blend_parent_fraction", "blend_child_fraction"];
 /// Light attributes by path name.
 pub const LIGHT_ATTRIBUTES: [&str; 4] = ["visible", "range", "cutoff_deg", "inner_angle_deg"];
 
@@ -72,6 +82,8 @@ impl AttributeProperty {
             AttributeProperty::Opacity => "opacity".into(),
             AttributeProperty::Morph(i) => format!("morph/{i}"),
             AttributeProperty::Deformer => "deformer".into(),
+            AttributeProperty::BlendParent => "blend_parent_fraction".into(),
+            AttributeProperty::BlendChild => "blend_child_fraction".into(),
             AttributeProperty::Range => "range".into(),
             AttributeProperty::Cutoff => "cutoff_deg".into(),
             AttributeProperty::InnerAngle => "inner_angle_deg".into(),
@@ -86,6 +98,8 @@ impl AttributeProperty {
             "colour" | "color" => AttributeProperty::Colour,
             "opacity" => AttributeProperty::Opacity,
             "deformer" => AttributeProperty::Deformer,
+            "blend_parent_fraction" => AttributeProperty::BlendParent,
+            "blend_child_fraction" => AttributeProperty::BlendChild,
             _ => return None,
         })
     }
@@ -111,6 +125,8 @@ impl AttributeProperty {
             AttributeProperty::Opacity => AttributeId::ObjectOpacity(o),
             AttributeProperty::Morph(target) => AttributeId::MorphWeight { object: o, target },
             AttributeProperty::Deformer => AttributeId::Deformer(o),
+            AttributeProperty::BlendParent => AttributeId::BlendParent(o),
+            AttributeProperty::BlendChild => AttributeId::BlendChild(o),
             _ => return None,
         })
     }
@@ -144,7 +160,9 @@ impl AttributeId {
             | AttributeId::ObjectColour(o)
             | AttributeId::ObjectOpacity(o)
             | AttributeId::MorphWeight { object: o, .. }
-            | AttributeId::Deformer(o) => Ok(o),
+            | AttributeId::Deformer(o)
+            | AttributeId::BlendParent(o)
+            | AttributeId::BlendChild(o) => Ok(o),
             AttributeId::LightVisible(l)
             | AttributeId::LightRange(l)
             | AttributeId::LightCutoff(l)
@@ -161,6 +179,8 @@ impl AttributeId {
             AttributeId::ObjectOpacity(_) => AttributeId::ObjectOpacity(i),
             AttributeId::MorphWeight { target, .. } => AttributeId::MorphWeight { object: i, target },
             AttributeId::Deformer(_) => AttributeId::Deformer(i),
+            AttributeId::BlendParent(_) => AttributeId::BlendParent(i),
+            AttributeId::BlendChild(_) => AttributeId::BlendChild(i),
             AttributeId::LightVisible(_) => AttributeId::LightVisible(i),
             AttributeId::LightRange(_) => AttributeId::LightRange(i),
             AttributeId::LightCutoff(_) => AttributeId::LightCutoff(i),
@@ -176,6 +196,8 @@ impl AttributeId {
             AttributeId::ObjectOpacity(_) => AttributeProperty::Opacity,
             AttributeId::MorphWeight { target, .. } => AttributeProperty::Morph(target),
             AttributeId::Deformer(_) => AttributeProperty::Deformer,
+            AttributeId::BlendParent(_) => AttributeProperty::BlendParent,
+            AttributeId::BlendChild(_) => AttributeProperty::BlendChild,
             AttributeId::LightRange(_) => AttributeProperty::Range,
             AttributeId::LightCutoff(_) => AttributeProperty::Cutoff,
             AttributeId::LightInnerAngle(_) => AttributeProperty::InnerAngle,
@@ -191,6 +213,8 @@ impl AttributeId {
             AttributeId::ObjectOpacity(_) => "opacity",
             AttributeId::MorphWeight { .. } => "morph weight",
             AttributeId::Deformer(_) => "deformer",
+            AttributeId::BlendParent(_) => "blend zone (parent)",
+            AttributeId::BlendChild(_) => "blend zone (child)",
             AttributeId::LightRange(_) => "range",
             AttributeId::LightCutoff(_) => "cutoff",
             AttributeId::LightInnerAngle(_) => "inner angle",
@@ -243,6 +267,7 @@ impl AttributeId {
         if a.deformer.is_some() {
             out.push(AttributeId::Deformer(o));
         }
+        push_blend_zone(a, o, &mut out);
         out.into_iter().map(ChannelId::Attribute).collect()
     }
 
@@ -280,6 +305,8 @@ impl AttributeId {
                         ChannelRef::Scalar(a.morph_weights.get(target)?)
                     }
                     AttributeId::Deformer(_) => ChannelRef::Scalar(a.deformer.as_ref()?),
+                    AttributeId::BlendParent(_) => ChannelRef::Scalar(a.blend_parent_fraction.as_ref()?),
+                    AttributeId::BlendChild(_) => ChannelRef::Scalar(a.blend_child_fraction.as_ref()?),
                     _ => return None,
                 })
             }
@@ -310,6 +337,8 @@ impl AttributeId {
                         ChannelMut::Scalar(a.morph_weights.get_mut(target)?)
                     }
                     AttributeId::Deformer(_) => ChannelMut::Scalar(a.deformer.as_mut()?),
+                    AttributeId::BlendParent(_) => ChannelMut::Scalar(a.blend_parent_fraction.as_mut()?),
+                    AttributeId::BlendChild(_) => ChannelMut::Scalar(a.blend_child_fraction.as_mut()?),
                     _ => return None,
                 })
             }
@@ -331,7 +360,9 @@ impl AttributeId {
     pub fn value_range(self) -> Option<(f32, f32)> {
         match self {
             AttributeId::ObjectVisible(_) | AttributeId::LightVisible(_) => Some((0.0, 1.0)),
-            AttributeId::ObjectOpacity(_) => Some((0.0, 1.0)),
+            AttributeId::ObjectOpacity(_) | AttributeId::BlendParent(_) | AttributeId::BlendChild(_) => {
+                Some((0.0, 1.0))
+            }
             AttributeId::Deformer(_) => Some((0.0, (DeformerKind::ALL.len() - 1) as f32)),
             AttributeId::LightCutoff(_) | AttributeId::LightInnerAngle(_) => Some((0.0, 90.0)),
             AttributeId::LightRange(_) => Some((0.0, f32::INFINITY)),
@@ -346,6 +377,16 @@ impl AttributeId {
             self,
             AttributeId::ObjectVisible(_) | AttributeId::LightVisible(_) | AttributeId::Deformer(_)
         )
+    }
+}
+
+/// The bones-blending zone channels of object `o` that are set.
+fn push_blend_zone(a: &crate::attributes::ObjectAttributes, o: usize, out: &mut Vec<AttributeId>) {
+    if a.blend_parent_fraction.is_some() {
+        out.push(AttributeId::BlendParent(o));
+    }
+    if a.blend_child_fraction.is_some() {
+        out.push(AttributeId::BlendChild(o));
     }
 }
 
@@ -365,6 +406,7 @@ pub fn every(scene: &Scene) -> Vec<AttributeId> {
         if a.deformer.is_some() {
             out.push(AttributeId::Deformer(o));
         }
+        push_blend_zone(a, o, &mut out);
     }
     for (l, light) in scene.lights.iter().enumerate() {
         let a = &light.attributes;
@@ -508,6 +550,8 @@ mod tests {
             "object/Cube/morph/3",
             "light/Spot/inner_angle_deg",
             "object/Cube/deformer",
+            "object/Cube/blend_parent_fraction",
+            "object/Cube/blend_child_fraction",
         ] {
             assert_eq!(ChannelPath::parse(text).map(|p| p.to_string()), Ok(text.to_string()));
         }
@@ -529,16 +573,45 @@ mod tests {
         s.objects[0].attributes.opacity.value = 1.5;
         s.lights[0].kind = LightKind::Point;
         s.objects[0].attributes.deformer = Some(Animated::constant(7.0));
+        s.objects[0].attributes.blend_parent_fraction =
+            Some(Animated::new(0.25, RawTrack::new(vec![Key::new(0.0, 0.25), Key::new(1.0, -0.5)])));
+        s.objects[0].attributes.blend_child_fraction = Some(Animated::constant(1.5));
         let problems: Vec<String> = s.problems().iter().map(ToString::to_string).collect();
         for expected in [
             "objects[0].attributes.visible.track[1].value: 0.5: visible is a whole number (Step keys)",
             "objects[0].attributes.visible.track[0].interpolation: visible keys are Step keys, not Linear",
             "objects[0].attributes.opacity.value: 1.5: opacity must be in [0, 1]",
             "objects[0].attributes.deformer.value: 7: deformer must be in [0, 3]",
+            "objects[0].attributes.blend_parent_fraction.track[1].value: -0.5: blend zone (parent) must be in [0, 1]",
+            "objects[0].attributes.blend_child_fraction.value: 1.5: blend zone (child) must be in [0, 1]",
             "lights[0].attributes.cutoff_deg: light 0 is not a spot light, so it has no cone",
         ] {
             assert!(problems.iter().any(|p| p == expected), "{expected}\n{problems:#?}");
         }
+    }
+
+    #[test]
+    fn blend_zone_channels_exist_once_set() {
+        let mut s = scene();
+        let sample =
+            |s: &Scene, p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(s)).map(|c| c.sample(0.5));
+        let err = sample(&s, "object/Cube/blend_child_fraction").unwrap_err().to_string();
+        assert!(
+            err.contains("has no blend_child_fraction channel; it is set in the scene file as objects[0].attributes.blend_child_fraction"),
+            "{err}"
+        );
+        s.objects[0].attributes.blend_child_fraction =
+            Some(Animated::new(0.1, RawTrack::new(vec![Key::new(0.0, 0.1), Key::new(1.0, 0.9)])));
+        let listed: Vec<String> = crate::channel::list_channels(&s).iter().map(ToString::to_string).collect();
+        assert!(listed.contains(&"object/Cube/blend_child_fraction".into()), "{listed:?}");
+        assert!(!listed.contains(&"object/Cube/blend_parent_fraction".into()));
+        match sample(&s, "object/Cube/blend_child_fraction") {
+            Ok(ChannelValue::Scalar(v)) => assert!((v - 0.5).abs() < 1e-6, "{v}"),
+            other => panic!("{other:?}"),
+        }
+        assert!(every(&s).contains(&AttributeId::BlendChild(0)));
+        assert_eq!(AttributeId::BlendChild(0).field_path(), "objects[0].attributes.blend_child_fraction");
+        assert!(!AttributeId::BlendChild(0).is_switch());
     }
 
     #[test]

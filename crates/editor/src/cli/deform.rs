@@ -192,9 +192,10 @@ fn skinned_output(
     if let Some(error) = state.palette_error {
         return Err(error).with_context(at);
     }
+    let bindings = Arc::clone(state.bindings(skin));
     let palette = state.palette.with_context(|| format!("{}: no joint palette", at()))?;
     let mut out = Deformed::default();
-    deform_mesh_into(&skin.mesh, &skin.bindings, &palette, args.deformer, Execution::Reference, &mut out)
+    deform_mesh_into(&skin.mesh, &bindings, &palette, args.deformer, Execution::Reference, &mut out)
         .with_context(|| format!("{}: {} deformer", at(), args.deformer.cli_name()))?;
     // A skinned glTF node's skeleton reaches up to the file's scene root, so its model space
     // is the file's world space, where the glTF specification skins.

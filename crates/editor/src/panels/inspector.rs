@@ -266,7 +266,14 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
                 actions.edit(Edit::Pose { id, value, group });
             }
         }
-        ChannelValue::Scalar(mut s) if matches!(id, ChannelId::Attribute(AttributeId::ObjectOpacity(_))) => {
+        ChannelValue::Scalar(mut s)
+            if matches!(
+                id,
+                ChannelId::Attribute(
+                    AttributeId::ObjectOpacity(_) | AttributeId::BlendParent(_) | AttributeId::BlendChild(_)
+                )
+            ) =>
+        {
             let changed = ui
                 .horizontal(|ui| {
                     let r = ui.add(egui::Slider::new(&mut s, 0.0..=1.0).text(label));
@@ -890,11 +897,16 @@ fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             ui.selectable_value(&mut settings.kind, k, k.label());
         }
     });
-    if settings.kind == DeformerKind::BonesBlending {
+    let zone_keyed =
+        object.attributes.blend_parent_fraction.is_some() || object.attributes.blend_child_fraction.is_some();
+    if settings.kind == DeformerKind::BonesBlending && !zone_keyed {
         ui.add(egui::Slider::new(&mut settings.blend_parent_fraction, 0.0..=1.0).text("Zone into parent"))
             .on_hover_text("How far the blend zone reaches into the parent bone (fraction of its length)");
         ui.add(egui::Slider::new(&mut settings.blend_child_fraction, 0.0..=1.0).text("Zone into child"))
             .on_hover_text("How far the blend zone reaches into the child bone (fraction of its length)");
+    }
+    if settings.kind == DeformerKind::BonesBlending || object.attributes.deformer.is_some() || zone_keyed {
+        blend_zone_channels(ui, ctx, actions, o, &settings);
     }
     // The deformer as a channel: keyed with Step keys, so one take can switch deformers.
     let keyed = ChannelId::Attribute(AttributeId::Deformer(o));
@@ -920,5 +932,41 @@ fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 obj.deformer = settings;
             }
         }));
+    }
+}
+
+/// The bones-blending zone as channels: its two fractions keyed like any channel once
+/// *Animate blend zone* made them channels (from the object's settings), so one take can
+/// widen the zone while the arm twists.
+fn blend_zone_channels(
+    ui: &mut Ui,
+    ctx: &FrameCtx<'_>,
+    actions: &mut Actions,
+    o: usize,
+    settings: &keyrig_core::DeformerSettings,
+) {
+    let Some(object) = ctx.scene().objects.get(o) else { return };
+    let a = &object.attributes;
+    if a.blend_parent_fraction.is_some() || a.blend_child_fraction.is_some() {
+        for (set, id, label) in [
+            (a.blend_parent_fraction.is_some(), AttributeId::BlendParent(o), "Keyed zone into parent"),
+            (a.blend_child_fraction.is_some(), AttributeId::BlendChild(o), "Keyed zone into child"),
+        ] {
+            if set {
+                channel_editor(ui, ctx, actions, ChannelId::Attribute(id), label);
+            }
+        }
+    } else if ui
+        .button("Animate blend zone")
+        .on_hover_text("Key the bones-blending zone's reach into the parent and child bones")
+        .clicked()
+    {
+        let (parent, child) = (settings.blend_parent_fraction, settings.blend_child_fraction);
+        set_attribute(actions, "animate blend zone", move |scene| {
+            if let Some(obj) = scene.objects.get_mut(o) {
+                obj.attributes.blend_parent_fraction = Some(keyrig_core::Animated::constant(parent));
+                obj.attributes.blend_child_fraction = Some(keyrig_core::Animated::constant(child));
+            }
+        });
     }
 }

@@ -1,12 +1,14 @@
 //! The evaluator's attribute channels (keyrig-core's `attributes`): an object's visibility,
-//! colour, opacity, morph weights and deformer; a light's visibility, range and cone. An
+//! colour, opacity, morph weights, deformer and bones-blending zone; a light's visibility,
+//! range and cone. An
 //! object or light whose attributes are all default has no slots at all, so a scene without
 //! attributes evaluates as before.
 
 use glam::Vec3;
 use keyrig_core::attribute_id::{deformer_from_value, AttributeId};
 use keyrig_core::channel_id::{ChannelId, ChannelValue};
-use keyrig_core::{DeformerKind, LightAttributes, LightKind, ObjectAttributes};
+use keyrig_core::{DeformerKind, DeformerSettings, LightAttributes, LightKind, ObjectAttributes};
+use keyrig_skin::BlendZone;
 
 use super::{EvalProblem, Overrides, Slot};
 
@@ -23,11 +25,22 @@ pub struct ObjectLook {
     pub deformer: DeformerKind,
     /// Keyed morph-target weights by target; empty: the mesh's own weights.
     pub morph_weights: Vec<f32>,
+    /// The bones-blending zone at this time while either of its fractions is keyed (each
+    /// clamped to [0, 1]; the one not keyed is the object's setting); `None`: the object's
+    /// setting, which its bindings were built for.
+    pub blend_zone: Option<BlendZone>,
 }
 
 impl ObjectLook {
     pub(super) fn new(deformer: DeformerKind) -> Self {
-        ObjectLook { visible: true, opacity: 1.0, colour: None, deformer, morph_weights: Vec::new() }
+        ObjectLook {
+            visible: true,
+            opacity: 1.0,
+            colour: None,
+            deformer,
+            morph_weights: Vec::new(),
+            blend_zone: None,
+        }
     }
 }
 
@@ -38,6 +51,8 @@ pub(super) struct ObjectAttributeRig {
     opacity: Slot<f32>,
     morph: Vec<Slot<f32>>,
     deformer: Option<Slot<f32>>,
+    blend_parent: Option<Slot<f32>>,
+    blend_child: Option<Slot<f32>>,
 }
 
 fn id(a: AttributeId) -> ChannelId {
@@ -68,11 +83,23 @@ impl ObjectAttributeRig {
                 .map(|(target, w)| Slot::new(w, id(AttributeId::MorphWeight { object: o, target })))
                 .collect(),
             deformer: a.deformer.as_ref().map(|d| Slot::new(d, id(AttributeId::Deformer(o)))),
+            blend_parent: a
+                .blend_parent_fraction
+                .as_ref()
+                .map(|f| Slot::new(f, id(AttributeId::BlendParent(o)))),
+            blend_child: a
+                .blend_child_fraction
+                .as_ref()
+                .map(|f| Slot::new(f, id(AttributeId::BlendChild(o)))),
         }))
     }
 
     pub(super) fn channel_count(&self) -> usize {
-        2 + usize::from(self.colour.is_some()) + self.morph.len() + usize::from(self.deformer.is_some())
+        2 + usize::from(self.colour.is_some())
+            + self.morph.len()
+            + usize::from(self.deformer.is_some())
+            + usize::from(self.blend_parent.is_some())
+            + usize::from(self.blend_child.is_some())
     }
 
     /// Brings `rig` in step with `a`; returns the number of channels rebuilt.
@@ -83,6 +110,8 @@ impl ObjectAttributeRig {
                 r.colour.is_some() == a.colour.is_some()
                     && r.morph.len() == a.morph_weights.len()
                     && r.deformer.is_some() == a.deformer.is_some()
+                    && r.blend_parent.is_some() == a.blend_parent_fraction.is_some()
+                    && r.blend_child.is_some() == a.blend_child_fraction.is_some()
             }
         };
         let Some(r) = rig.as_deref_mut().filter(|_| same_shape) else {
@@ -97,14 +126,25 @@ impl ObjectAttributeRig {
         for (target, (slot, w)) in r.morph.iter_mut().zip(&a.morph_weights).enumerate() {
             n += usize::from(slot.refresh(w, id(AttributeId::MorphWeight { object: o, target })));
         }
-        if let (Some(slot), Some(d)) = (&mut r.deformer, &a.deformer) {
-            n += usize::from(slot.refresh(d, id(AttributeId::Deformer(o))));
+        for (slot, v, at) in [
+            (&mut r.deformer, &a.deformer, AttributeId::Deformer(o)),
+            (&mut r.blend_parent, &a.blend_parent_fraction, AttributeId::BlendParent(o)),
+            (&mut r.blend_child, &a.blend_child_fraction, AttributeId::BlendChild(o)),
+        ] {
+            if let (Some(slot), Some(v)) = (slot, v) {
+                n += usize::from(slot.refresh(v, id(at)));
+            }
         }
         n
     }
 
     pub(super) fn for_each_problem(&self, f: &mut dyn FnMut(&EvalProblem)) {
-        let scalars = [&self.visible, &self.opacity].into_iter().chain(&self.morph).chain(&self.deformer);
+        let scalars = [&self.visible, &self.opacity]
+            .into_iter()
+            .chain(&self.morph)
+            .chain(&self.deformer)
+            .chain(&self.blend_parent)
+            .chain(&self.blend_child);
         for p in scalars
             .filter_map(|s| s.problem.as_ref())
             .chain(self.colour.iter().filter_map(|c| c.problem.as_ref()))
@@ -119,15 +159,17 @@ impl ObjectAttributeRig {
         o: usize,
         time: f64,
         overrides: &Overrides,
-        setting: DeformerKind,
+        settings: &DeformerSettings,
         look: &mut ObjectLook,
     ) {
+        let setting = settings.kind;
         look.morph_weights.clear();
         let Some(r) = rig else {
             look.visible = true;
             look.opacity = 1.0;
             look.colour = None;
             look.deformer = setting;
+            look.blend_zone = None;
             // Overrides of attributes that are not set yet (a slider dragged before keying).
             if overrides.is_empty() {
                 return;
@@ -155,6 +197,29 @@ impl ObjectAttributeRig {
             .as_ref()
             .and_then(|slot| deformer_from_value(scalar(overrides, AttributeId::Deformer(o), slot, time)))
             .unwrap_or(setting);
+        let fraction = |slot: &Option<Slot<f32>>, a: AttributeId, setting: f32| match slot {
+            Some(slot) => {
+                let v = scalar(overrides, a, slot, time);
+                if v.is_nan() {
+                    setting
+                } else {
+                    v.clamp(0.0, 1.0)
+                }
+            }
+            None => setting,
+        };
+        look.blend_zone = (r.blend_parent.is_some() || r.blend_child.is_some()).then(|| BlendZone {
+            parent_fraction: fraction(
+                &r.blend_parent,
+                AttributeId::BlendParent(o),
+                settings.blend_parent_fraction,
+            ),
+            child_fraction: fraction(
+                &r.blend_child,
+                AttributeId::BlendChild(o),
+                settings.blend_child_fraction,
+            ),
+        });
     }
 
     /// The value of one of these channels at `time` (no overrides).
@@ -172,6 +237,8 @@ impl ObjectAttributeRig {
                 ChannelValue::Scalar(r.morph.get(target)?.sample(time))
             }
             AttributeId::Deformer(_) => ChannelValue::Scalar(r.deformer.as_ref()?.sample(time)),
+            AttributeId::BlendParent(_) => ChannelValue::Scalar(r.blend_parent.as_ref()?.sample(time)),
+            AttributeId::BlendChild(_) => ChannelValue::Scalar(r.blend_child.as_ref()?.sample(time)),
             _ => return None,
         })
     }

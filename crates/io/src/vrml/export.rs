@@ -488,11 +488,12 @@ pub fn export_scene(
                 }
                 let skin = eval.skin(o)?;
                 let state = eval.object_at(o, t, &none)?;
+                let bindings = std::sync::Arc::clone(state.bindings(skin));
                 let palette = state.palette?;
                 let mut out = keyrig_skin::Deformed::default();
                 keyrig_skin::deform_mesh_into(
                     &skin.mesh,
-                    &skin.bindings,
+                    &bindings,
                     &palette,
                     object.deformer.kind,
                     keyrig_skin::Execution::Reference,
