@@ -1469,6 +1469,33 @@ pub fn unique_name<'a>(name: &str, taken: impl Iterator<Item = &'a str>) -> Stri
         .expect("a free name")
 }
 
+/// The sound output ([`crate::audio`]), followed once a frame.
+impl EditorApp {
+    /// The sound after the frame's actions: see [`crate::audio::Audio::follow`].
+    pub(crate) fn follow_audio(&mut self, ctx: &egui::Context) {
+        let base_dir = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
+        let notice = self.audio.follow(
+            self.doc.scene(),
+            self.doc.cache_key(),
+            base_dir.as_deref(),
+            &self.sounds,
+            &self.session.playback,
+        );
+        if let Some(notice) = notice {
+            self.info(notice);
+        }
+        if self.audio.is_opening() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(50));
+        }
+    }
+
+    /// Where the sound device stands.
+    #[must_use]
+    pub fn audio_availability(&self) -> crate::audio::Availability {
+        self.audio.availability()
+    }
+}
+
 #[cfg(test)]
 mod status_tests {
     use super::Status;

@@ -180,29 +180,3 @@ impl Audio {
         matches!(self.state, State::Opening(_))
     }
 }
-
-impl crate::app::EditorApp {
-    /// The sound after the frame's actions: see [`Audio::follow`].
-    pub(crate) fn follow_audio(&mut self, ctx: &egui::Context) {
-        let base_dir = self.doc.path().and_then(std::path::Path::parent).map(std::path::Path::to_path_buf);
-        let notice = self.audio.follow(
-            self.doc.scene(),
-            self.doc.cache_key(),
-            base_dir.as_deref(),
-            &self.sounds,
-            &self.session.playback,
-        );
-        if let Some(notice) = notice {
-            self.info(notice);
-        }
-        if self.audio.is_opening() {
-            ctx.request_repaint_after(std::time::Duration::from_millis(50));
-        }
-    }
-
-    /// Where the sound device stands.
-    #[must_use]
-    pub fn audio_availability(&self) -> Availability {
-        self.audio.availability()
-    }
-}
