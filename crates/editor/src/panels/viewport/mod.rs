@@ -458,7 +458,12 @@ fn overlay_ui(painter: &egui::Painter, rect: Rect, ctx: &FrameCtx<'_>, errors: &
     {
         if let Some(object) = ctx.scene().objects.get(o) {
             if object.skeleton.is_some() {
-                lines.push(format!("{}: {}", object.name, object.deformer.kind.label()));
+                // The deformer the frame uses: a keyed deformer's value at this time, else the
+                // object's setting.
+                let evaluated = ctx.scene.state().and_then(|s| s.objects.get(o)).map(|s| s.look.deformer);
+                let kind = evaluated.unwrap_or(object.deformer.kind);
+                let keyed = if kind == object.deformer.kind { "" } else { " (keyed)" };
+                lines.push(format!("{}: {}{keyed}", object.name, kind.label()));
             }
         }
     }
