@@ -102,15 +102,66 @@ pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, S
     decode_sound(Box::new(std::io::Cursor::new(bytes)), name, Some(MAX_PLAYBACK_FRAMES))
 }
 
+/// Refuses a RIFF/WAVE file whose `fmt ` chunk (within the first 4 KiB) gives a sample rate of
+/// 0, which Symphonia 0.5's WAV reader asserts against instead of returning an error; leaves
+/// the source at its start.
+fn check_wav_rate(source: &mut Box<dyn symphonia::core::io::MediaSource>) -> Result<(), String> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut head = Vec::with_capacity(4096);
+    let read = source.by_ref().take(4096).read_to_end(&mut head);
+    source.seek(SeekFrom::Start(0)).map_err(|e| format!("cannot read it again: {e}"))?;
+    read.map_err(|e| e.to_string())?;
+    if head.len() < 12 || &head[0..4] != b"RIFF" || &head[8..12] != b"WAVE" {
+        return Ok(());
+    }
+    let u32_at = |at: usize| head.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let mut at = 12usize;
+    while let (Some(id), Some(size)) = (head.get(at..at + 4), u32_at(at + 4)) {
+        if id == b"fmt " {
+            if u32_at(at + 12) == Some(0) {
+                return Err(format!("the fmt chunk gives a sample rate of 0 (byte {})", at + 12));
+            }
+            break;
+        }
+        // Chunks are padded to an even length.
+        at = at.saturating_add(8).saturating_add(size as usize).saturating_add(size as usize & 1);
+    }
+    Ok(())
+}
+
 /// Decodes into the summary and, with `keep_frames`, the samples of a sound of at most that
-/// many frames.
+/// many frames. Symphonia asserts on some malformed headers instead of returning an error (a
+/// WAV whose sample rate is 0 panics in `TimeBase::new`, found by the `sound` fuzz target): a
+/// panic inside it is caught and reported as the file's format error, so a damaged sound file
+/// never takes the editor down.
 fn decode_sound(
     source: Box<dyn symphonia::core::io::MediaSource>,
     path: &Path,
     keep_frames: Option<u64>,
 ) -> Result<DecodedSound, SoundError> {
+    // Nothing outlives the call but its result: no state is left half-updated by a panic.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        decode_sound_unguarded(source, path, keep_frames)
+    }))
+    .unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "the decoder stopped".to_owned());
+        Err(SoundError::Format { path: path.to_path_buf(), message: format!("malformed: {what}") })
+    })
+}
+
+fn decode_sound_unguarded(
+    mut source: Box<dyn symphonia::core::io::MediaSource>,
+    path: &Path,
+    keep_frames: Option<u64>,
+) -> Result<DecodedSound, SoundError> {
     let format_error =
         |e: SymphoniaError| SoundError::Format { path: path.to_path_buf(), message: e.to_string() };
+    check_wav_rate(&mut source)
+        .map_err(|message| SoundError::Format { path: path.to_path_buf(), message })?;
     let stream = MediaSourceStream::new(source, Default::default());
     let mut hint = Hint::new();
     if let Some(extension) = path.extension().and_then(|e| e.to_str()) {

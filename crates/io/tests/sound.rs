@@ -69,6 +69,32 @@ fn hostile_files_are_refused_with_the_path_and_the_reason() {
     }
 }
 
+/// A WAV whose `fmt ` chunk says 0 samples a second (the `sound` fuzz target's first crash,
+/// minimised from its input): Symphonia's WAV reader panics on it (`TimeBase cannot have 0
+/// numerator or denominator`); keyrig checks the rate first and answers with the file's format
+/// error (a panic inside Symphonia would be caught and reported the same way).
+#[test]
+fn a_wav_with_a_zero_sample_rate_is_refused_not_a_panic() {
+    let bytes: Vec<u8> = vec![
+        82, 73, 70, 70, 138, 172, 0, 0, 87, 65, 86, 69, 102, 109, 116, 32, 16, 0, 0, 0, 1, 0, 2, 0, 0, 0, 0,
+        0, 0, 0, 0, 20, 4, 0, 16, 0, 76, 73, 83, 84, 26, 0, 0, 0, 73, 78, 70, 76, 97, 118, 99, 54, 48, 46,
+        19, 55, 0, 0, 133,
+    ];
+    let name = Path::new("zero-rate.wav");
+    let err = keyrig_io::sound::decode_sound_bytes(bytes.clone(), name).expect_err("refused");
+    assert!(matches!(err, SoundError::Format { .. }), "{err}");
+    assert!(
+        err.to_string().contains("zero-rate.wav") && err.to_string().contains("sample rate of 0"),
+        "{err}"
+    );
+    // The same from a file on disk.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("zero-rate.wav");
+    std::fs::write(&path, &bytes).expect("write");
+    let err = decode_sound_file(&path).expect_err("refused");
+    assert!(err.to_string().contains(&*path.to_string_lossy()), "{err}");
+}
+
 /// Sound files are portable like models: `project::save_scene` names one below the scene's
 /// folder relative to it, `project::load_scene` makes it absolute in memory again, and the
 /// scene's inputs name it (so no output replaces it).
