@@ -102,29 +102,32 @@ pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, S
     decode_sound(Box::new(std::io::Cursor::new(bytes)), name, Some(MAX_PLAYBACK_FRAMES))
 }
 
-/// Refuses a RIFF/WAVE file whose `fmt ` chunk (within the first 4 KiB) gives a sample rate of
-/// 0, which Symphonia 0.5's WAV reader asserts against instead of returning an error; leaves
-/// the source at its start.
+/// Refuses a file holding a RIFF/WAVE header within its first 4 KiB (Symphonia's probe finds
+/// one anywhere near the start) whose `fmt ` chunk gives a sample rate of 0, which Symphonia
+/// 0.5's WAV reader asserts against instead of returning an error; leaves the source at its
+/// start. Further in, the panic is caught ([`decode_sound`]).
 fn check_wav_rate(source: &mut Box<dyn symphonia::core::io::MediaSource>) -> Result<(), String> {
     use std::io::{Read, Seek, SeekFrom};
     let mut head = Vec::with_capacity(4096);
     let read = source.by_ref().take(4096).read_to_end(&mut head);
     source.seek(SeekFrom::Start(0)).map_err(|e| format!("cannot read it again: {e}"))?;
     read.map_err(|e| e.to_string())?;
-    if head.len() < 12 || &head[0..4] != b"RIFF" || &head[8..12] != b"WAVE" {
-        return Ok(());
-    }
     let u32_at = |at: usize| head.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-    let mut at = 12usize;
-    while let (Some(id), Some(size)) = (head.get(at..at + 4), u32_at(at + 4)) {
-        if id == b"fmt " {
-            if u32_at(at + 12) == Some(0) {
-                return Err(format!("the fmt chunk gives a sample rate of 0 (byte {})", at + 12));
-            }
-            break;
+    for riff in (0..head.len().saturating_sub(11)).filter(|&i| &head[i..i + 4] == b"RIFF") {
+        if &head[riff + 8..riff + 12] != b"WAVE" {
+            continue;
         }
-        // Chunks are padded to an even length.
-        at = at.saturating_add(8).saturating_add(size as usize).saturating_add(size as usize & 1);
+        let mut at = riff + 12;
+        while let (Some(id), Some(size)) = (head.get(at..at + 4), u32_at(at + 4)) {
+            if id == b"fmt " {
+                if u32_at(at + 12) == Some(0) {
+                    return Err(format!("the fmt chunk gives a sample rate of 0 (byte {})", at + 12));
+                }
+                break;
+            }
+            // Chunks are padded to an even length.
+            at = at.saturating_add(8).saturating_add(size as usize).saturating_add(size as usize & 1);
+        }
     }
     Ok(())
 }

@@ -95,6 +95,23 @@ fn a_wav_with_a_zero_sample_rate_is_refused_not_a_panic() {
     assert!(err.to_string().contains(&*path.to_string_lossy()), "{err}");
 }
 
+/// The fuzz target's second input of this kind: the RIFF/WAVE header 14 bytes into the file,
+/// after junk, where Symphonia's probe still finds it (150 bytes).
+#[test]
+fn a_zero_rate_wav_header_after_junk_is_refused_too() {
+    let bytes: Vec<u8> = vec![
+        82, 73, 70, 0, 0, 0, 138, 255, 172, 2, 70, 97, 53, 199, 82, 73, 70, 70, 138, 172, 0, 0, 87, 65, 86,
+        69, 102, 109, 116, 32, 16, 0, 0, 0, 1, 0, 1, 0, 0, 0, 0, 0, 14, 79, 1, 0, 4, 0, 16, 0, 76, 73, 83,
+        84, 82, 73, 0, 0, 73, 78, 70, 79, 73, 83, 70, 84, 14, 0, 0, 0, 76, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 99, 118, 102, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 73,
+        68, 128,
+    ];
+    let err = keyrig_io::sound::decode_sound_bytes(bytes, Path::new("junk.wav")).expect_err("refused");
+    assert!(matches!(err, SoundError::Format { .. }), "{err}");
+    assert!(err.to_string().contains("sample rate of 0 (byte 38)"), "{err}");
+}
+
 /// Sound files are portable like models: `project::save_scene` names one below the scene's
 /// folder relative to it, `project::load_scene` makes it absolute in memory again, and the
 /// scene's inputs name it (so no output replaces it).
