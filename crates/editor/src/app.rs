@@ -48,6 +48,9 @@ pub struct EditorApp {
     /// Whether the window is cleared with the panels' background colour (eframe, through
     /// [`eframe::App::clear_color`]); otherwise each frame paints it ([`crate::theme`]).
     pub(crate) window_clears_background: bool,
+    /// The depth format of egui's render pass in the window (set before [`EditorApp::attach_gpu`]
+    /// when eframe was asked for a depth buffer): the viewport is then drawn straight into it.
+    pub(crate) window_depth: Option<egui_wgpu::wgpu::TextureFormat>,
     /// The scene and its undo history.
     pub doc: Document,
     /// Selection, clock, record mode, overrides, clipboard.
@@ -105,6 +108,7 @@ impl EditorApp {
         EditorApp {
             fonts_installed: false,
             window_clears_background: false,
+            window_depth: None,
             doc: Document::new(scene, path),
             session,
             view,
@@ -269,7 +273,7 @@ impl EditorApp {
     /// Gives the editor keyrig-render on eframe's wgpu device; on a CPU rasterizer the viewport
     /// renders without anti-aliasing (see [`crate::gpu_view::GpuView::new`]).
     pub fn attach_gpu(&mut self, render_state: &egui_wgpu::RenderState) {
-        let gpu = crate::gpu_view::GpuView::new(render_state);
+        let gpu = crate::gpu_view::GpuView::new(render_state, self.window_depth);
         self.view.antialiasing = gpu.antialiasing();
         self.panels.viewport.attach_gpu(gpu);
     }

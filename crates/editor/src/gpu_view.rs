@@ -39,7 +39,7 @@ struct Blit {
 }
 
 impl Blit {
-    fn new(device: &wgpu::Device, target: wgpu::TextureFormat) -> Self {
+    fn new(device: &wgpu::Device, target: wgpu::TextureFormat, depth: Option<wgpu::TextureFormat>) -> Self {
         let module = device.create_shader_module(wgpu::include_wgsl!("shaders/viewport_blit.wgsl"));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("viewport blit"),
@@ -62,7 +62,7 @@ impl Blit {
                 },
             ],
         });
-        let pipeline = callback_pipeline(device, &module, target, "fs_blit", Some(&layout), None);
+        let pipeline = callback_pipeline(device, &module, (target, depth), "fs_blit", Some(&layout), None);
         let sampler = |filter: wgpu::FilterMode| {
             device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("viewport blit"),
@@ -104,7 +104,7 @@ pub struct FlatFillPipeline {
 }
 
 impl FlatFillPipeline {
-    fn new(device: &wgpu::Device, target: wgpu::TextureFormat) -> Self {
+    fn new(device: &wgpu::Device, target: wgpu::TextureFormat, depth: Option<wgpu::TextureFormat>) -> Self {
         let module = device.create_shader_module(wgpu::include_wgsl!("shaders/viewport_blit.wgsl"));
         let constant = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::Constant,
@@ -112,17 +112,18 @@ impl FlatFillPipeline {
             operation: wgpu::BlendOperation::Add,
         };
         let blend = wgpu::BlendState { color: constant, alpha: constant };
-        let pipeline = callback_pipeline(device, &module, target, "fs_flat_fill", None, Some(blend));
+        let pipeline = callback_pipeline(device, &module, (target, depth), "fs_flat_fill", None, Some(blend));
         FlatFillPipeline { pipeline, srgb_target: target.is_srgb() }
     }
 }
 
 /// A pipeline of `shaders/viewport_blit.wgsl` for a paint callback in egui's render pass: one
-/// triangle over the callback's rect (`vs_blit`), fragment entry `fs`, one sample, no depth.
+/// triangle over the callback's rect (`vs_blit`), fragment entry `fs`, one sample; depth
+/// neither tested nor written, in a pass with a depth attachment of format `depth`.
 fn callback_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
-    target: wgpu::TextureFormat,
+    (target, depth): (wgpu::TextureFormat, Option<wgpu::TextureFormat>),
     fs: &str,
     bind_group: Option<&wgpu::BindGroupLayout>,
     blend: Option<wgpu::BlendState>,
@@ -152,7 +153,13 @@ fn callback_pipeline(
             })],
         }),
         primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
+        depth_stencil: depth.map(|format| wgpu::DepthStencilState {
+            format,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        }),
         multisample: wgpu::MultisampleState::default(),
         multiview_mask: None,
         cache: None,
@@ -182,16 +189,17 @@ impl egui_wgpu::CallbackTrait for FlatFill {
     }
 }
 
-/// A rendered viewport image, drawn into egui's render pass by a paint callback over the
-/// viewport's rect ([`ViewportImage::paint_callback`]).
+/// The viewport in egui's render pass, drawn by a paint callback over the viewport's rect
+/// ([`ViewportImage::paint_callback`]): the offscreen image copied in, or the frame's draws
+/// (background first) recorded straight into the pass.
 #[derive(Clone)]
-pub struct ViewportImage {
-    pipeline: wgpu::RenderPipeline,
-    bind_group: wgpu::BindGroup,
+pub enum ViewportImage {
+    Copy { pipeline: wgpu::RenderPipeline, bind_group: wgpu::BindGroup },
+    Direct(keyrig_render::FrameDraws),
 }
 
 impl ViewportImage {
-    /// The egui shape that copies the image into `rect`.
+    /// The egui shape that paints the viewport into `rect`.
     #[must_use]
     pub fn paint_callback(self, rect: egui::Rect) -> egui::PaintCallback {
         egui_wgpu::Callback::new_paint_callback(rect, self)
@@ -205,11 +213,21 @@ impl egui_wgpu::CallbackTrait for ViewportImage {
         render_pass: &mut wgpu::RenderPass<'static>,
         _resources: &egui_wgpu::CallbackResources,
     ) {
-        render_pass.set_pipeline(&self.pipeline);
-        render_pass.set_bind_group(0, &self.bind_group, &[]);
-        render_pass.draw(0..3, 0..1);
+        match self {
+            ViewportImage::Copy { pipeline, bind_group } => {
+                render_pass.set_pipeline(pipeline);
+                render_pass.set_bind_group(0, bind_group, &[]);
+                render_pass.draw(0..3, 0..1);
+            }
+            ViewportImage::Direct(draws) => draws.record(render_pass),
+        }
     }
 }
+
+/// The depth buffer eframe gives egui's render pass in the window on a CPU rasterizer, so that
+/// the viewport can be drawn straight into it ([`GpuView::new`]): 32 bits, keyrig-render's
+/// [`keyrig_render::DEPTH_FORMAT`].
+pub const WINDOW_DEPTH_BITS: u8 = 32;
 
 /// The colour format of the offscreen viewport (sRGB: the shaders write linear colour).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -243,6 +261,13 @@ pub struct GpuView {
     /// The offscreen image and the blit's bind groups reading it.
     target: Option<(Viewport, [wgpu::BindGroup; 2])>,
     blit: Blit,
+    /// Samples per pixel the viewport is drawn with (4× MSAA or 1).
+    samples: u32,
+    /// The depth format of egui's render pass in the window, when it has a depth attachment:
+    /// then a viewport at one sample per pixel, shown pixel for pixel, is drawn straight into
+    /// that pass instead of into the offscreen image and copied (docs/rendering.md,
+    /// "Embedding in the editor").
+    window_depth: Option<wgpu::TextureFormat>,
     rig: Option<((u64, u64, u64), SceneRig)>,
     /// The ghost meshes on the GPU: (object, count) for the current rig.
     ghost_meshes: Option<(usize, usize)>,
@@ -289,10 +314,12 @@ impl FrameLog {
 impl GpuView {
     /// Creates the renderer on eframe's device: with 4× MSAA on a GPU, without anti-aliasing
     /// on a CPU rasterizer, where clearing and resolving four samples per pixel cost more than
-    /// the whole rest of the viewport (docs/benchmarks.md, "Editor").
+    /// the whole rest of the viewport (docs/benchmarks.md, "Editor"). `window_depth` is the
+    /// depth format of egui's render pass ([`WINDOW_DEPTH_BITS`]), `None` when it has none.
     #[must_use]
-    pub fn new(render_state: &RenderState) -> Self {
-        let fills = FlatFillPipeline::new(&render_state.device, render_state.target_format);
+    pub fn new(render_state: &RenderState, window_depth: Option<wgpu::TextureFormat>) -> Self {
+        let target = render_state.target_format;
+        let fills = FlatFillPipeline::new(&render_state.device, target, window_depth);
         render_state.renderer.write().callback_resources.insert(fills);
         let samples = if is_cpu(render_state) { 1 } else { keyrig_render::SAMPLE_COUNT };
         let (device, queue) = (&render_state.device, &render_state.queue);
@@ -300,7 +327,9 @@ impl GpuView {
             .unwrap_or_else(|_| Renderer::new(device, queue, FORMAT));
         GpuView {
             render_state: render_state.clone(),
-            blit: Blit::new(device, render_state.target_format),
+            blit: Blit::new(device, target, window_depth),
+            samples: renderer.sample_count(),
+            window_depth,
             renderer,
             target: None,
             rig: None,
@@ -320,17 +349,18 @@ impl GpuView {
     /// Whether the viewport renders with 4× MSAA (otherwise one sample per pixel).
     #[must_use]
     pub fn antialiasing(&self) -> bool {
-        self.renderer.sample_count() > 1
+        self.samples > 1
     }
 
     /// Turns 4× MSAA on or off; the next frame rebuilds the draw pipelines and the viewport
     /// texture when this changes anything (the uploaded meshes stay).
     ///
     /// # Errors
-    /// The renderer's error (it cannot refuse 1 or 4 samples).
+    /// None today: 1 and 4 samples are both supported (the renderer's error type is kept for
+    /// the next frame's rebuild).
     pub fn set_antialiasing(&mut self, on: bool) -> Result<(), GpuViewError> {
-        let samples = if on { keyrig_render::SAMPLE_COUNT } else { 1 };
-        Ok(self.renderer.set_sample_count(samples)?)
+        self.samples = if on { keyrig_render::SAMPLE_COUNT } else { 1 };
+        Ok(())
     }
 
     /// The adapter's name and backend, for the status bar and benchmarks.
@@ -341,7 +371,7 @@ impl GpuView {
     }
 
     fn ensure_target(&mut self, width: u32, height: u32) -> Result<(), GpuViewError> {
-        let samples = self.renderer.sample_count();
+        let samples = self.samples;
         if let Some((viewport, _)) = &self.target {
             if viewport.size() == (width, height) && viewport.sample_count() == samples {
                 return Ok(());
@@ -361,9 +391,11 @@ impl GpuView {
         self.rig.as_ref().is_none_or(|(key, _)| *key != rig_key)
     }
 
-    /// Renders the frame into a texture of `size_px` pixels and returns the image to paint;
-    /// `one_to_one` when it is shown pixel for pixel (sampled without filtering), otherwise it
-    /// is scaled up with bilinear filtering.
+    /// Renders the frame for a viewport of `size_px` pixels and returns what paints it;
+    /// `one_to_one` when it is shown pixel for pixel. Drawn straight into egui's pass when the
+    /// window has a depth attachment, the viewport one sample per pixel and shown pixel for
+    /// pixel (the draws are recorded there); otherwise rendered into the offscreen texture
+    /// and copied in, sampled without filtering when `one_to_one`, else scaled up bilinearly.
     pub fn render(
         &mut self,
         frame: GpuFrame<'_>,
@@ -371,19 +403,25 @@ impl GpuView {
         one_to_one: bool,
     ) -> Result<ViewportImage, GpuViewError> {
         let started = std::time::Instant::now();
-        let result = self.render_inner(frame, size_px).and_then(|()| {
-            let Some((_, bind_groups)) = &self.target else { return Err(GpuViewError::NoTarget) };
-            Ok(ViewportImage {
-                pipeline: self.blit.pipeline.clone(),
-                bind_group: bind_groups[usize::from(!one_to_one)].clone(),
-            })
-        });
+        let direct =
+            self.window_depth == Some(keyrig_render::DEPTH_FORMAT) && self.samples == 1 && one_to_one;
+        let result = self.render_inner(frame, [size_px[0].max(1), size_px[1].max(1)], direct, one_to_one);
         self.last_render_time = started.elapsed();
+        if let Some(log) = &mut self.frame_log {
+            log.tick(size_px, self.samples);
+        }
         result
     }
 
-    fn render_inner(&mut self, frame: GpuFrame<'_>, size_px: [u32; 2]) -> Result<(), GpuViewError> {
-        self.ensure_target(size_px[0].max(1), size_px[1].max(1))?;
+    fn render_inner(
+        &mut self,
+        frame: GpuFrame<'_>,
+        size_px: [u32; 2],
+        direct: bool,
+        one_to_one: bool,
+    ) -> Result<ViewportImage, GpuViewError> {
+        let format = if direct { self.render_state.target_format } else { FORMAT };
+        self.renderer.set_target(format, self.samples)?;
         if self.needs_rig(frame.rig_key) {
             let rig = SceneRig::with_evaluator(frame.scene, frame.evaluator, &frame.morph_meshes)
                 .with_materials(&frame.materials);
@@ -414,12 +452,19 @@ impl GpuView {
         if frame.view.cameras {
             input.camera_gizmos = rig.camera_gizmos(&frame.view, frame.state);
         }
-        let Some((viewport, _)) = &self.target else { return Err(GpuViewError::NoTarget) };
-        self.last_stats = Some(self.renderer.render(&input, viewport)?);
-        if let Some(log) = &mut self.frame_log {
-            log.tick(size_px, self.renderer.sample_count());
+        if direct {
+            // The offscreen image is not used while drawing straight into egui's pass.
+            self.target = None;
+            let (draws, stats) = self.renderer.prepare(&input, (size_px[0], size_px[1]))?;
+            self.last_stats = Some(stats);
+            return Ok(ViewportImage::Direct(draws));
         }
-        Ok(())
+        self.ensure_target(size_px[0], size_px[1])?;
+        let Some((viewport, bind_groups)) = &self.target else { return Err(GpuViewError::NoTarget) };
+        self.last_stats = Some(self.renderer.render(&input, viewport)?);
+        // Pixel for pixel without filtering, else scaled up bilinearly.
+        let bind_group = bind_groups[usize::from(!one_to_one)].clone();
+        Ok(ViewportImage::Copy { pipeline: self.blit.pipeline.clone(), bind_group })
     }
 }
 

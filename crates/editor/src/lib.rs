@@ -107,10 +107,15 @@ pub fn run_editor(
         ..Default::default()
     };
     // On a CPU rasterizer, waiting for vsync costs a quarter of the frames (docs/benchmarks.md,
-    // "Editor"); a GPU keeps vsync.
-    if gpu_view::default_adapter_is_cpu() {
+    // "Editor"), and the viewport is drawn straight into egui's pass, which then needs a depth
+    // buffer (docs/rendering.md, "Embedding in the editor"); a GPU keeps vsync and draws the
+    // viewport with MSAA into its own image.
+    let cpu = gpu_view::default_adapter_is_cpu();
+    if cpu {
         options.wgpu_options.present_mode = egui_wgpu::wgpu::PresentMode::AutoNoVsync;
+        options.depth_buffer = gpu_view::WINDOW_DEPTH_BITS;
     }
+    let window_depth = egui_wgpu::depth_format_from_bits(options.depth_buffer, options.stencil_buffer);
     eframe::run_native(
         "keyrig",
         options,
@@ -119,6 +124,7 @@ pub fn run_editor(
             theme::install(&cc.egui_ctx);
             app.fonts_installed = true;
             app.window_clears_background = true;
+            app.window_depth = window_depth;
             // The GPU viewport needs eframe's wgpu device; without it the painter draws.
             if let Some(render_state) = &cc.wgpu_render_state {
                 app.attach_gpu(render_state);

@@ -43,8 +43,8 @@ pub use headless::{HeadlessRenderer, HEADLESS_FORMAT};
 pub use image;
 pub use overlay::{CameraGizmo, LightGizmo, MotionPath, SkeletonOverlay};
 pub use renderer::{
-    Deform, DrawItem, FrameInput, FrameStats, Ghost, LightInput, MeshData, MeshId, RenderStyle, Renderer,
-    Viewport, SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
+    Deform, DrawItem, FrameDraws, FrameInput, FrameStats, Ghost, LightInput, MeshData, MeshId, RenderStyle,
+    Renderer, Viewport, DEPTH_FORMAT, SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,
 };
 pub use scene_frame::{
     MorphBlend, MorphClip, MorphError, MorphMesh, SceneFrameError, SceneRig, Selected, ViewOptions,

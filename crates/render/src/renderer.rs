@@ -557,6 +557,8 @@ struct GpuGlobals {
     ambient: [f32; 4],
     counts: [u32; 4],
     lights: [GpuLight; MAX_LIGHTS],
+    /// The background (linear RGB): what the fill of a frame drawn into another pass paints.
+    background: [f32; 4],
 }
 
 #[repr(C)]
@@ -637,6 +639,9 @@ struct DrawPipelines {
     /// `solid` and `translucent` for items drawn without a texture: no texture sample.
     solid_untextured: wgpu::RenderPipeline,
     translucent_untextured: wgpu::RenderPipeline,
+    /// The background over the whole viewport at the far plane (colour and depth), for a
+    /// frame drawn into a pass that was not cleared for it ([`Renderer::prepare`]).
+    fill: wgpu::RenderPipeline,
 }
 
 impl DrawPipelines {
@@ -666,6 +671,10 @@ impl DrawPipelines {
         // Meshes: deformed position and normal (slot 0) and the static texture coordinates
         // (slot 1). Overlay lines: position and colour (slot 0).
         let mesh_buffers = [vertex_layout.clone(), uv_layout];
+        // The shaders write linear colour: a target that does not encode sRGB on write gets it
+        // encoded by the shaders (`ENCODE_SRGB` in draw.wgsl).
+        let encode: &[(&str, f64)] = if color_format.is_srgb() { &[] } else { &[("ENCODE_SRGB", 1.0)] };
+        let fragment_options = wgpu::PipelineCompilationOptions { constants: encode, ..Default::default() };
         let pipeline = |label: &str,
                         layout: &wgpu::PipelineLayout,
                         vs: &str,
@@ -681,10 +690,10 @@ impl DrawPipelines {
                     module,
                     entry_point: Some(vs),
                     compilation_options: Default::default(),
-                    buffers: if vs == "vs_mesh" {
-                        &mesh_buffers
-                    } else {
-                        std::slice::from_ref(&vertex_layout)
+                    buffers: match vs {
+                        "vs_mesh" => &mesh_buffers,
+                        "vs_fill" => &[],
+                        _ => std::slice::from_ref(&vertex_layout),
                     },
                 },
                 primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
@@ -699,7 +708,7 @@ impl DrawPipelines {
                 fragment: Some(wgpu::FragmentState {
                     module,
                     entry_point: Some(fs),
-                    compilation_options: Default::default(),
+                    compilation_options: fragment_options.clone(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: color_format,
                         blend,
@@ -804,6 +813,16 @@ impl DrawPipelines {
                 false,
                 Some(wgpu::BlendState::ALPHA_BLENDING),
             ),
+            fill: pipeline(
+                "keyrig background",
+                line_layout,
+                "vs_fill",
+                "fs_fill",
+                TriangleList,
+                Always,
+                true,
+                None,
+            ),
         }
     }
 }
@@ -816,6 +835,73 @@ struct OverlayLines {
     grid_vertices: u32,
     /// All vertices; those after the grid are drawn on top.
     line_vertices: u64,
+}
+
+/// A frame's draws, ready to record into a render pass ([`Renderer::prepare`]): each holds
+/// what it binds, so the list outlives the renderer's borrow (an egui paint callback keeps it
+/// until egui records its pass).
+#[derive(Clone, Debug)]
+pub struct FrameDraws {
+    globals: wgpu::BindGroup,
+    objects: wgpu::BindGroup,
+    draws: Vec<Draw>,
+}
+
+/// One draw call: a mesh item (with its object slot, texture and texture coordinates) or a
+/// run of overlay lines.
+#[derive(Clone, Debug)]
+struct Draw {
+    pipeline: wgpu::RenderPipeline,
+    mesh: Option<MeshDrawBindings>,
+    /// Vertex slot 0: deformed vertices, or line vertices (none for the background fill).
+    vertices: Option<wgpu::Buffer>,
+    indices: Option<wgpu::Buffer>,
+    /// Indices when `indices` is set, otherwise vertices.
+    range: std::ops::Range<u32>,
+}
+
+#[derive(Clone, Debug)]
+struct MeshDrawBindings {
+    object_offset: u32,
+    texture: wgpu::BindGroup,
+    uvs: wgpu::Buffer,
+}
+
+impl FrameDraws {
+    /// Records the draws into `pass` (the area must already be cleared or filled).
+    pub fn record(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_bind_group(0, &self.globals, &[]);
+        for draw in &self.draws {
+            pass.set_pipeline(&draw.pipeline);
+            if let Some(mesh) = &draw.mesh {
+                pass.set_bind_group(1, &self.objects, &[mesh.object_offset]);
+                pass.set_bind_group(2, &mesh.texture, &[]);
+                pass.set_vertex_buffer(1, mesh.uvs.slice(..));
+            }
+            if let Some(vertices) = &draw.vertices {
+                pass.set_vertex_buffer(0, vertices.slice(..));
+            }
+            match &draw.indices {
+                Some(indices) => {
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(draw.range.clone(), 0, 0..1);
+                }
+                None => pass.draw(draw.range.clone(), 0..1),
+            }
+        }
+    }
+
+    /// How many draw calls [`FrameDraws::record`] makes.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.draws.len()
+    }
+
+    /// Whether the frame draws nothing.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.draws.is_empty()
+    }
 }
 
 impl Renderer {
@@ -855,15 +941,27 @@ impl Renderer {
     /// # Errors
     /// [`RenderError::UnsupportedSampleCount`] for a count not in [`SUPPORTED_SAMPLE_COUNTS`].
     pub fn set_sample_count(&mut self, samples: u32) -> Result<(), RenderError> {
+        self.set_target(self.color_format, samples)
+    }
+
+    /// Rebuilds the draw pipelines for targets of `color_format` with `samples` per pixel,
+    /// keeping the uploaded meshes; nothing happens when both are already these. A format that
+    /// is not sRGB gets the shaders' linear colour encoded by the shaders themselves (the
+    /// editor's window, when the viewport is drawn straight into egui's pass).
+    ///
+    /// # Errors
+    /// [`RenderError::UnsupportedSampleCount`] for a count not in [`SUPPORTED_SAMPLE_COUNTS`].
+    pub fn set_target(&mut self, color_format: wgpu::TextureFormat, samples: u32) -> Result<(), RenderError> {
         check_sample_count(samples)?;
-        if samples != self.pipelines.samples {
+        if samples != self.pipelines.samples || color_format != self.color_format {
             self.pipelines = DrawPipelines::new(
                 &self.device,
                 &self.module,
                 (&self.mesh_layout, &self.line_layout),
-                self.color_format,
+                color_format,
                 samples,
             );
+            self.color_format = color_format;
         }
         Ok(())
     }
@@ -1180,8 +1278,7 @@ impl Renderer {
         Ok(command_buffer.1)
     }
 
-    /// Like [`Renderer::render`] but returns the command buffer instead of submitting it (for
-    /// an egui-wgpu callback's `prepare`, which hands command buffers to egui).
+    /// Like [`Renderer::render`] but returns the command buffer instead of submitting it.
     ///
     /// # Errors
     /// As [`Renderer::render`].
@@ -1190,30 +1287,90 @@ impl Renderer {
         frame: &FrameInput,
         viewport: &Viewport,
     ) -> Result<(wgpu::CommandBuffer, FrameStats), RenderError> {
-        self.check_frame(frame, viewport)?;
-        let mut stats = FrameStats::default();
+        self.check_viewport(viewport)?;
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig frame") });
+        let (draws, stats) = self.prepare_in(&mut encoder, frame, viewport.size(), false)?;
+        // The render pass, cleared to the background.
+        let mut pass = Self::begin_render_pass(&mut encoder, viewport, frame.background);
+        draws.record(&mut pass);
+        drop(pass);
+        Ok((encoder.finish(), stats))
+    }
+
+    /// Prepares a frame for a render pass the caller owns, `size` pixels wide and high, whose
+    /// colour target has the renderer's format and sample count and whose depth attachment is
+    /// [`DEPTH_FORMAT`], with the pass's viewport (and scissor) set to the frame's rect:
+    /// submits the frame's uploads and compute passes, and returns the draws to record into
+    /// that pass, the first of which fills the rect with the background at the far plane
+    /// (colour and depth), so the rect needs no clearing. The editor draws its viewport
+    /// straight into egui's pass this way (docs/rendering.md, "Embedding in the editor").
+    ///
+    /// # Errors
+    /// As [`Renderer::render`].
+    pub fn prepare(
+        &mut self,
+        frame: &FrameInput,
+        size: (u32, u32),
+    ) -> Result<(FrameDraws, FrameStats), RenderError> {
+        let device = self.device.clone();
+        let (command_buffer, draws, stats) = with_error_scope(&device, || {
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig frame") });
+            let (draws, stats) = self.prepare_in(&mut encoder, frame, size, true)?;
+            Ok::<_, RenderError>((encoder.finish(), draws, stats))
+        })??;
+        self.queue.submit([command_buffer]);
+        Ok((draws, stats))
+    }
+
+    /// The steps of a frame before its render pass: the compute passes, the uniforms, the
+    /// overlay lines, and the draws.
+    fn prepare_in(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInput,
+        size: (u32, u32),
+        fill: bool,
+    ) -> Result<(FrameDraws, FrameStats), RenderError> {
+        self.check_frame(frame)?;
+        let mut stats = FrameStats::default();
 
         // 1. Per-frame uploads and compute passes.
-        self.encode_deformations(&mut encoder, frame, &mut stats)?;
+        self.encode_deformations(encoder, frame, &mut stats)?;
 
         // 2. Uniforms.
-        self.write_globals(frame, viewport, &mut stats);
+        self.write_globals(frame, size, &mut stats);
         self.write_objects(frame, &mut stats);
 
         // 3. Overlay lines: grid (depth-tested) first, then skeletons and paths (on top).
         let lines = self.write_overlay_lines(frame, &mut stats)?;
 
-        // 4. The render pass.
-        self.encode_render_pass(&mut encoder, frame, viewport, lines, &mut stats);
-        Ok((encoder.finish(), stats))
+        // 4. The draws, after the background where the pass was not cleared for the frame.
+        let mut draws = FrameDraws {
+            globals: self.globals_bind_group.clone(),
+            objects: self.objects_bind_group.clone(),
+            draws: Vec::with_capacity(frame.items.len() + 3),
+        };
+        if fill {
+            draws.draws.push(Draw {
+                pipeline: self.pipelines.fill.clone(),
+                mesh: None,
+                vertices: None,
+                indices: None,
+                range: 0..3,
+            });
+        }
+        self.draw_items(&mut draws, frame);
+        self.draw_lines(&mut draws, lines);
+        stats.draw_calls += draws.draws.len() as u32;
+        Ok((draws, stats))
     }
 
-    /// Refuses a viewport of another colour format or sample count than the renderer's, and
-    /// a camera that cannot be projected.
-    fn check_frame(&self, frame: &FrameInput, viewport: &Viewport) -> Result<(), RenderError> {
+    /// Refuses a viewport of another colour format or sample count than the renderer's.
+    fn check_viewport(&self, viewport: &Viewport) -> Result<(), RenderError> {
         if viewport.format != self.color_format {
             return Err(RenderError::Gpu(format!(
                 "viewport format {:?} differs from the renderer's {:?}",
@@ -1226,6 +1383,11 @@ impl Renderer {
                 viewport.samples, self.pipelines.samples
             )));
         }
+        Ok(())
+    }
+
+    /// Refuses a camera that cannot be projected.
+    fn check_frame(&self, frame: &FrameInput) -> Result<(), RenderError> {
         if !camera::is_usable(&frame.camera) {
             return Err(RenderError::NonFinite { what: "camera (or distance ≤ 0)", index: 0 });
         }
@@ -1284,8 +1446,7 @@ impl Renderer {
     /// Writes the frame's globals: the camera's projection for the viewport's aspect ratio,
     /// its position, the ambient light and the first [`MAX_LIGHTS`] lights (the others are
     /// counted in [`FrameStats::lights_dropped`]).
-    fn write_globals(&self, frame: &FrameInput, viewport: &Viewport, stats: &mut FrameStats) {
-        let (width, height) = viewport.size();
+    fn write_globals(&self, frame: &FrameInput, (width, height): (u32, u32), stats: &mut FrameStats) {
         let aspect = width as f32 / height as f32;
         let mut lights = [GpuLight::zeroed(); MAX_LIGHTS];
         let mut light_count = 0usize;
@@ -1310,6 +1471,7 @@ impl Renderer {
             ambient: frame.ambient.extend(0.0).to_array(),
             counts: [light_count as u32, 0, 0, 0],
             lights,
+            background: frame.background.extend(1.0).to_array(),
         };
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
         stats.uniform_bytes += std::mem::size_of::<GpuGlobals>() as u64;
@@ -1400,22 +1562,6 @@ impl Renderer {
         Ok(OverlayLines { grid_vertices, line_vertices })
     }
 
-    /// Records the render pass: cleared to the background, the draw items
-    /// ([`Renderer::draw_items`]), then the overlay lines ([`Renderer::draw_lines`]).
-    fn encode_render_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        frame: &FrameInput,
-        viewport: &Viewport,
-        lines: OverlayLines,
-        stats: &mut FrameStats,
-    ) {
-        let mut pass = Self::begin_render_pass(encoder, viewport, frame.background);
-        pass.set_bind_group(0, &self.globals_bind_group, &[]);
-        self.draw_items(&mut pass, frame, stats);
-        self.draw_lines(&mut pass, lines, stats);
-    }
-
     /// Begins the viewport's render pass, clearing colour to `background` and depth to 1.
     fn begin_render_pass<'e>(
         encoder: &'e mut wgpu::CommandEncoder,
@@ -1459,10 +1605,10 @@ impl Renderer {
         })
     }
 
-    /// Draws the items in the frame's style, opaque items first, then ghosts blended over
-    /// them; a mesh without the primitives the style needs (triangles for Solid, edges for
-    /// Wireframe) is drawn as points.
-    fn draw_items(&self, pass: &mut wgpu::RenderPass<'_>, frame: &FrameInput, stats: &mut FrameStats) {
+    /// The draws of the items in the frame's style, opaque items first, then ghosts blended
+    /// over them; a mesh without the primitives the style needs (triangles for Solid, edges
+    /// for Wireframe) is drawn as points.
+    fn draw_items(&self, draws: &mut FrameDraws, frame: &FrameInput) {
         let pipelines = &self.pipelines;
         let pipeline = match frame.style {
             RenderStyle::Solid => &pipelines.solid,
@@ -1482,18 +1628,25 @@ impl Renderer {
         for (i, item) in order {
             // Checked in encode_deformations.
             let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
+            let mesh_draw = |pipeline: &wgpu::RenderPipeline, texture: &wgpu::BindGroup| Draw {
+                pipeline: pipeline.clone(),
+                mesh: Some(MeshDrawBindings {
+                    object_offset: (i as u64 * OBJECT_STRIDE) as u32,
+                    texture: texture.clone(),
+                    uvs: mesh.uvs.clone(),
+                }),
+                vertices: Some(mesh.vertex_buffer().clone()),
+                indices: None,
+                range: 0..mesh.vertex_count,
+            };
             if item.ghost.is_some() {
-                if mesh.triangle_index_count == 0 {
-                    continue;
+                if mesh.triangle_index_count > 0 {
+                    draws.draws.push(Draw {
+                        indices: Some(mesh.triangles.clone()),
+                        range: 0..mesh.triangle_index_count,
+                        ..mesh_draw(&pipelines.ghost, &self.white_texture)
+                    });
                 }
-                pass.set_pipeline(&pipelines.ghost);
-                pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
-                pass.set_bind_group(2, &self.white_texture, &[]);
-                pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
-                pass.set_vertex_buffer(1, mesh.uvs.slice(..));
-                pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
-                stats.draw_calls += 1;
                 continue;
             }
             if translucent(item) && item.opacity <= 0.0 {
@@ -1509,45 +1662,39 @@ impl Renderer {
                 (RenderStyle::Solid, false, false) => &pipelines.solid_untextured,
                 _ => pipeline,
             };
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(1, &self.objects_bind_group, &[(i as u64 * OBJECT_STRIDE) as u32]);
-            pass.set_bind_group(2, texture.unwrap_or(&self.white_texture), &[]);
-            pass.set_vertex_buffer(0, mesh.vertex_buffer().slice(..));
-            pass.set_vertex_buffer(1, mesh.uvs.slice(..));
-            match frame.style {
-                RenderStyle::Solid if mesh.triangle_index_count > 0 => {
-                    pass.set_index_buffer(mesh.triangles.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..mesh.triangle_index_count, 0, 0..1);
-                }
+            let draw = mesh_draw(pipeline, texture.unwrap_or(&self.white_texture));
+            draws.draws.push(match frame.style {
+                RenderStyle::Solid if mesh.triangle_index_count > 0 => Draw {
+                    indices: Some(mesh.triangles.clone()),
+                    range: 0..mesh.triangle_index_count,
+                    ..draw
+                },
                 RenderStyle::Wireframe if mesh.edge_index_count > 0 => {
-                    pass.set_index_buffer(mesh.edges.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..mesh.edge_index_count, 0, 0..1);
+                    Draw { indices: Some(mesh.edges.clone()), range: 0..mesh.edge_index_count, ..draw }
                 }
                 RenderStyle::Solid | RenderStyle::Wireframe => {
-                    pass.set_pipeline(&pipelines.points);
-                    pass.draw(0..mesh.vertex_count, 0..1);
+                    Draw { pipeline: pipelines.points.clone(), ..draw }
                 }
-                RenderStyle::Points => pass.draw(0..mesh.vertex_count, 0..1),
-            }
-            stats.draw_calls += 1;
+                RenderStyle::Points => draw,
+            });
         }
     }
 
-    /// Draws the overlay lines: the grid depth-tested, the rest on top of everything.
-    fn draw_lines(&self, pass: &mut wgpu::RenderPass<'_>, lines: OverlayLines, stats: &mut FrameStats) {
+    /// The draws of the overlay lines: the grid depth-tested, the rest on top of everything.
+    fn draw_lines(&self, draws: &mut FrameDraws, lines: OverlayLines) {
         let OverlayLines { grid_vertices, line_vertices } = lines;
-        if line_vertices > 0 {
-            pass.set_vertex_buffer(0, self.line_buffer.slice(..));
-            if grid_vertices > 0 {
-                pass.set_pipeline(&self.pipelines.lines_depth);
-                pass.draw(0..grid_vertices, 0..1);
-                stats.draw_calls += 1;
-            }
-            if line_vertices as u32 > grid_vertices {
-                pass.set_pipeline(&self.pipelines.lines_on_top);
-                pass.draw(grid_vertices..line_vertices as u32, 0..1);
-                stats.draw_calls += 1;
-            }
+        let line_draw = |pipeline: &wgpu::RenderPipeline, range: std::ops::Range<u32>| Draw {
+            pipeline: pipeline.clone(),
+            mesh: None,
+            vertices: Some(self.line_buffer.clone()),
+            indices: None,
+            range,
+        };
+        if grid_vertices > 0 {
+            draws.draws.push(line_draw(&self.pipelines.lines_depth, 0..grid_vertices));
+        }
+        if line_vertices as u32 > grid_vertices {
+            draws.draws.push(line_draw(&self.pipelines.lines_on_top, grid_vertices..line_vertices as u32));
         }
     }
 

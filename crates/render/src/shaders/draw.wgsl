@@ -13,6 +13,27 @@
 //   alpha = the object's opacity (colour.a): the translucent pipeline blends with it.
 
 const MAX_LIGHTS: u32 = 8u;
+
+// Set for a target whose format is not sRGB (the editor's window, when the viewport is drawn
+// straight into egui's render pass): the fragment shaders then encode their linear colour with
+// the sRGB transfer function (IEC 61966-2-1), as an sRGB target does on write.
+override ENCODE_SRGB: bool = false;
+
+// The colour a fragment shader writes: `c` (linear), encoded when the target is not sRGB.
+// The curve 1.055·x^(1/2.4) − 0.055 is approximated from three square roots (Ian Taylor's
+// fit, as published on chilliant.com, "sRGB Approximations for HLSL"): within a quarter of an
+// 8-bit step everywhere, and far cheaper than pow on a CPU rasterizer.
+fn target_colour(c: vec4<f32>) -> vec4<f32> {
+    if !ENCODE_SRGB {
+        return c;
+    }
+    let x = clamp(c.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    let s1 = sqrt(x);
+    let s2 = sqrt(s1);
+    let s3 = sqrt(s2);
+    let curve = 0.662002687 * s1 + 0.684122060 * s2 - 0.323583601 * s3 - 0.0225411470 * x;
+    return vec4<f32>(select(curve, x * 12.92, x <= vec3<f32>(0.0031308)), c.a);
+}
 const KIND_DIRECTIONAL: u32 = 0u;
 const KIND_POINT: u32 = 1u;
 const KIND_SPOT: u32 = 2u;
@@ -35,6 +56,8 @@ struct Globals {
     // x = number of lights
     counts: vec4<u32>,
     lights: array<Light, 8>,
+    // linear RGB of the background (the fill of a frame drawn into another pass)
+    background: vec4<f32>,
 };
 
 struct Object {
@@ -81,12 +104,12 @@ fn vs_mesh(
 fn fs_lit(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     // Sampled first, in uniform control flow (implicit derivatives pick the mip level).
     let texel = textureSample(base_colour_texture, base_colour_sampler, in.uv);
-    return lit(in, front, texel.rgb);
+    return target_colour(lit(in, front, texel.rgb));
 }
 
 @fragment
 fn fs_lit_untextured(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    return lit(in, front, vec3<f32>(1.0));
+    return target_colour(lit(in, front, vec3<f32>(1.0)));
 }
 
 // Lit colour of a point whose base-colour texel is `texel`.
@@ -174,16 +197,16 @@ fn fs_ghost(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<
     let rim = 1.0 - abs(dot(n, to_eye));
     let shaded = object.colour.rgb * clamp(diffuse, vec3<f32>(0.25), vec3<f32>(1.0));
     let colour = mix(shaded, object.tint.rgb, 0.55 + 0.3 * rim);
-    return vec4<f32>(colour, object.tint.w);
+    return target_colour(vec4<f32>(colour, object.tint.w));
 }
 
 // Wireframe and points: the object's colour (orange when selected), unlit.
 @fragment
 fn fs_flat(in: VsOut) -> @location(0) vec4<f32> {
     if object.flags.x > 0.5 {
-        return vec4<f32>(1.0, 0.45, 0.05, 1.0);
+        return target_colour(vec4<f32>(1.0, 0.45, 0.05, 1.0));
     }
-    return vec4<f32>(object.colour.rgb, 1.0);
+    return target_colour(vec4<f32>(object.colour.rgb, 1.0));
 }
 
 // Overlay lines (grid, bones, motion paths): world-space positions with a colour.
@@ -202,5 +225,19 @@ fn vs_line(@location(0) position: vec4<f32>, @location(1) colour: vec4<f32>) -> 
 
 @fragment
 fn fs_line(in: LineOut) -> @location(0) vec4<f32> {
-    return in.colour;
+    return target_colour(in.colour);
+}
+
+// The background over the whole viewport at the far plane: one triangle that covers it, for a
+// frame drawn into a render pass that was not cleared for it (the editor's window).
+@vertex
+fn vs_fill(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let x = f32(index & 1u) * 4.0 - 1.0;
+    let y = f32(index >> 1u) * 4.0 - 1.0;
+    return vec4<f32>(x, y, 1.0, 1.0);
+}
+
+@fragment
+fn fs_fill() -> @location(0) vec4<f32> {
+    return target_colour(vec4<f32>(globals.background.rgb, 1.0));
 }
