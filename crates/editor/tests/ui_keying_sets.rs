@@ -39,6 +39,9 @@ fn i_keys_only_the_active_sets_channels() {
     let mut h = harness(dir.path(), None);
     h.get_by_label("Cube").click();
     h.run();
+    // The box beside *Key* leaves the toolbar's last button in the window.
+    let last = h.get_by_label("Elbow").rect();
+    assert!(last.right() <= common::WINDOW[0], "the toolbar fits the window: {last:?}");
     choose(&mut h, "Location only");
     assert_eq!(h.state().session.keying_set, KeyingSet::Location);
     go_to_frame(&mut h, 10);

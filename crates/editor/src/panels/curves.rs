@@ -11,6 +11,10 @@
 //! their turns with `Track::spin_degrees`), so a 720° segment climbs to 720 instead of
 //! wrapping at ±180°. A channel with cycles (`before`/`after` other than Hold) is drawn over the
 //! whole range, its repeats included; the stretches beyond its keys are shaded and named.
+//! *Normalize* scales each curve to −1 … 1; *Stacked* gives each kind of curve (translation,
+//! rotation, scale, other) a lane of its own framed to its values, with its own ruler, all
+//! sharing the time axis ([`Lane`]: every curve's [`ValueMap`] then puts it in its lane, so
+//! picking and dragging read the lane's scale).
 
 use std::collections::{BTreeSet, HashMap};
 use std::rc::Rc;
