@@ -80,7 +80,8 @@ pub enum KeyType {
 
 impl KeyType {
     /// Every type, in the order menus list them.
-    pub const ALL: [KeyType; 4] = [KeyType::Keyframe, KeyType::Breakdown, KeyType::MovingHold, KeyType::Extreme];
+    pub const ALL: [KeyType; 4] =
+        [KeyType::Keyframe, KeyType::Breakdown, KeyType::MovingHold, KeyType::Extreme];
 
     /// Whether this is the default type (scene files leave the field out).
     #[must_use]

@@ -123,8 +123,12 @@ impl KeyingSet {
             KeyingSet::Selected => {
                 "Every channel of the selection: an object's own and, for a character, every joint's"
             }
-            KeyingSet::Location => "The translation (position) of each selected object, joint, light or camera",
-            KeyingSet::Rotation => "The rotation (a light's direction) of each selected object, joint, light or camera",
+            KeyingSet::Location => {
+                "The translation (position) of each selected object, joint, light or camera"
+            }
+            KeyingSet::Rotation => {
+                "The rotation (a light's direction) of each selected object, joint, light or camera"
+            }
             KeyingSet::Scale => "The scale of each selected object or joint",
             KeyingSet::LocRotScale => "Translation, rotation and scale of each selected item",
             KeyingSet::WholeCharacter => {
@@ -164,7 +168,9 @@ impl KeyingSet {
                 },
                 _ => push_new(
                     &mut out,
-                    item_channels(item, scene).into_iter().filter(|&id| part(id).is_some_and(|p| self.takes(p))),
+                    item_channels(item, scene)
+                        .into_iter()
+                        .filter(|&id| part(id).is_some_and(|p| self.takes(p))),
                 ),
             }
         }
@@ -183,9 +189,10 @@ impl KeyingSet {
                 character(scene, o)
             }
             (KeyingSet::WholeCharacter, other) => item_channels(other, scene),
-            (set, item) => {
-                item_channels(item, scene).into_iter().filter(|&c| part(c).is_some_and(|p| set.takes(p))).collect()
-            }
+            (set, item) => item_channels(item, scene)
+                .into_iter()
+                .filter(|&c| part(c).is_some_and(|p| set.takes(p)))
+                .collect(),
         };
         ids.into_iter().filter(|&c| c != id).collect()
     }
@@ -227,4 +234,3 @@ pub(crate) fn item_channels(item: Selected, scene: &Scene) -> Vec<ChannelId> {
         Selected::Camera(c) => ChannelId::of_camera(scene, c),
     }
 }
-

@@ -9,8 +9,8 @@ use keyrig_core::Scene;
 use crate::channels::{ChannelId, ChannelValue, KeyCopy};
 
 use crate::eval::PoseOverrides;
-use crate::keying_sets::{item_channels, item_exists, KeyingSet};
 use crate::ik_posing::IkPosing;
+use crate::keying_sets::{item_channels, item_exists, KeyingSet};
 /// What can be selected in the scene: keyrig-render's one type (object, joint, light).
 pub use keyrig_render::Selected;
 

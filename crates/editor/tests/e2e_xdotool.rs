@@ -1011,5 +1011,9 @@ fn the_stacked_curve_view_and_a_breakdown_key_in_a_real_x_window() {
     let small = h.get_by_label(label).rect();
     assert!(small.width() < diamond.width(), "the model draws it smaller too");
     let saved = save_as(&session, "e2e-breakdown");
-    assert_eq!(channels::key_type(&saved, id, 1), Some(keyrig_core::KeyType::Breakdown), "saved with its type");
+    assert_eq!(
+        channels::key_type(&saved, id, 1),
+        Some(keyrig_core::KeyType::Breakdown),
+        "saved with its type"
+    );
 }

@@ -48,7 +48,11 @@ fn i_keys_only_the_active_sets_channels() {
     press(&mut h, Modifiers::NONE, Key::I);
     assert!(keyed_at(&h, ChannelId::ObjectTranslation(CUBE), 10), "location keyed");
     assert!(!keyed_at(&h, ChannelId::ObjectRotation(CUBE), 10), "rotation not keyed");
-    assert_eq!(channels::key_count(h.state().doc.scene(), ChannelId::ObjectScale(CUBE)), 0, "scale not keyed");
+    assert_eq!(
+        channels::key_count(h.state().doc.scene(), ChannelId::ObjectScale(CUBE)),
+        0,
+        "scale not keyed"
+    );
 
     choose(&mut h, "Scale only");
     go_to_frame(&mut h, 20);
@@ -59,7 +63,9 @@ fn i_keys_only_the_active_sets_channels() {
     choose(&mut h, "Location, rotation & scale");
     go_to_frame(&mut h, 40);
     press(&mut h, Modifiers::NONE, Key::I);
-    for id in [ChannelId::ObjectTranslation(CUBE), ChannelId::ObjectRotation(CUBE), ChannelId::ObjectScale(CUBE)] {
+    for id in
+        [ChannelId::ObjectTranslation(CUBE), ChannelId::ObjectRotation(CUBE), ChannelId::ObjectScale(CUBE)]
+    {
         assert!(keyed_at(&h, id, 40), "{id:?} keyed at 40");
     }
 }

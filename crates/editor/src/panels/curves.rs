@@ -1468,7 +1468,8 @@ impl CurveEditor {
             lanes.iter().map(|lane| (lane.map(), lane.lo, lane.hi)).collect()
         };
         for &(map, low, high) in &rulers {
-            let height = (plot.pos(view.start, map.apply(low)).y - plot.pos(view.start, map.apply(high)).y).abs();
+            let height =
+                (plot.pos(view.start, map.apply(low)).y - plot.pos(view.start, map.apply(high)).y).abs();
             let vstep = nice_step(f64::from(high - low), height, 28.0);
             let mut v = (f64::from(low) / vstep).ceil() * vstep;
             while v <= f64::from(high) {
@@ -1514,7 +1515,14 @@ impl CurveEditor {
                 plot.pos(view.start, top).y..=plot.pos(view.start, bottom).y,
             );
             let name = format!("curve lane {}", lane.kind.label());
-            publish_painted(ui.ctx(), egui::Id::new(("curve lane", lane.index)), Role::Group, band, move || name, None);
+            publish_painted(
+                ui.ctx(),
+                egui::Id::new(("curve lane", lane.index)),
+                Role::Group,
+                band,
+                move || name,
+                None,
+            );
         }
 
         // Cycles: the curves go on beyond the keys (sampled like everything else); the stretches

@@ -744,7 +744,8 @@ impl DopeSheet {
                 } else {
                     // Each key type its own size and colour (breakdowns small and blue, …).
                     let key_type = b.key_type.unwrap_or_default();
-                    let radius = (if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS }) * type_scale(key_type);
+                    let radius =
+                        (if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS }) * type_scale(key_type);
                     let hovered =
                         hover.is_some_and(|p| (p.x - x).abs() <= DIAMOND_RADIUS && rect.contains(p));
                     let fill = match type_fill(key_type, selected) {
