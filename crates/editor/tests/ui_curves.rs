@@ -179,6 +179,30 @@ fn the_context_menu_clamps_the_selected_keys() {
     assert_eq!(h.state().doc.undo_label(), Some("interpolation TCB spline, clamped"));
 }
 
+/// The curve view's context menu sets the selected keys' type too (the dope sheet's menu):
+/// both selected keys become extremes in one undo step, named by what it changed.
+#[test]
+fn the_context_menu_sets_the_selected_keys_type() {
+    let (_dir, mut h) = with_elbow_key();
+    h.get_by_label("key elbow rotation frame 45").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    let steps = h.state().doc.undo_len();
+    open_context_menu(&mut h);
+    h.get_by_label("Extreme").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    for index in [2, 3] {
+        assert_eq!(
+            channels::key_type(scene, ELBOW, index),
+            Some(keyrig_core::KeyType::Extreme),
+            "key {index}"
+        );
+    }
+    assert_eq!(channels::key_type(scene, ELBOW, 1), Some(keyrig_core::KeyType::Keyframe), "not selected");
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step");
+    assert_eq!(h.state().doc.undo_label(), Some("key type extreme on 2 key(s)"));
+}
+
 /// "Hermite handles" turns a TCB key into explicit tangents without changing the curve; its
 /// handles then shape the curve, one undo step per drag.
 #[test]
