@@ -61,6 +61,46 @@ impl Tcb {
     }
 }
 
+/// What a key means to the animator (Blender's keyframe types): it changes nothing in how
+/// the track plays; the dope sheet draws each type in its own shape and colour so that the
+/// story poses, the in-betweens and the holds read apart. Left out of scene files while it is
+/// [`KeyType::Keyframe`], the default and what files without the field load as.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum KeyType {
+    /// A main pose (a key).
+    #[default]
+    Keyframe,
+    /// An in-between pose that shapes the motion from one key to the next.
+    Breakdown,
+    /// A pose held with a little motion so that it stays alive.
+    MovingHold,
+    /// The extreme of a motion (the farthest point of an arc).
+    Extreme,
+}
+
+impl KeyType {
+    /// Every type, in the order menus list them.
+    pub const ALL: [KeyType; 4] =
+        [KeyType::Keyframe, KeyType::Breakdown, KeyType::MovingHold, KeyType::Extreme];
+
+    /// Whether this is the default type (scene files leave the field out).
+    #[must_use]
+    pub fn is_keyframe(&self) -> bool {
+        *self == KeyType::Keyframe
+    }
+
+    /// The type's name as menus and the dope sheet's tooltips say it.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            KeyType::Keyframe => "Keyframe",
+            KeyType::Breakdown => "Breakdown",
+            KeyType::MovingHold => "Moving hold",
+            KeyType::Extreme => "Extreme",
+        }
+    }
+}
+
 /// Most whole turns a [`Spin`] may add or describe (1000 turns, 360 000°). Beyond that a
 /// spin is refused as absurd: a segment of a second would turn faster than 60 000 rpm, and
 /// `sin`/`cos` of the half-angle would start to lose digits.
@@ -151,6 +191,10 @@ pub struct Key<T> {
     /// what files without the field load as, is the short way.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spin: Option<Spin>,
+    /// What the key means to the animator ([`KeyType`]); playback ignores it. Left out of
+    /// scene files while it is a plain keyframe.
+    #[serde(default, skip_serializing_if = "KeyType::is_keyframe")]
+    pub key_type: KeyType,
 }
 
 impl<T> Key<T> {
@@ -165,7 +209,15 @@ impl<T> Key<T> {
             in_tangent: None,
             out_tangent: None,
             spin: None,
+            key_type: KeyType::Keyframe,
         }
+    }
+
+    /// Sets what the key means to the animator ([`KeyType`]).
+    #[must_use]
+    pub fn with_key_type(mut self, key_type: KeyType) -> Self {
+        self.key_type = key_type;
+        self
     }
 
     #[must_use]

@@ -20,7 +20,9 @@ pub use attributes::{LightAttributes, ObjectAttributes};
 pub use camera_object::{Aim, AimTarget, Lens, Marker, Projection, RenderSize, SceneCamera};
 pub use channel_id::attribute_id;
 pub use channel_id::attribute_id::{AttributeId, AttributeProperty};
-pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
+pub use key::{
+    Animated, Cycle, Cycles, Interpolation, Key, KeyType, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS,
+};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
 pub use rotation_mode::{EulerOrder, RotationMode};
 pub use scene::{

@@ -976,6 +976,7 @@ mod tests {
                         in_tangent,
                         out_tangent,
                         spin,
+                        key_type: crate::KeyType::Keyframe,
                     }
                 })
                 .collect()

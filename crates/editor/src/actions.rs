@@ -151,6 +151,8 @@ pub enum SessionChange {
     SetFrame(i32),
     /// Every-frame playback on or off.
     EveryFrame(bool),
+    /// The active keying set: what `I` keys ([`crate::keying_sets`]).
+    KeyingSet(crate::keying_sets::KeyingSet),
     /// The length of the IK chain that ends at a joint.
     ChainBones { object: usize, joint: usize, bones: usize },
     /// The pole an IK drag ended with, kept for the chain's next drag.

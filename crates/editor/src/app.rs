@@ -369,10 +369,12 @@ impl EditorApp {
         self.panels.viewport.ring_drag()
     }
 
-    /// Keys the current values of the selection's channels at the current frame; in IK posing,
-    /// with a joint selected, also the joints of its chain (what an IK drag poses).
+    /// Keys the current values of the active keying set's channels of the selection at the
+    /// current frame ([`crate::keying_sets`]); in IK posing, with a joint selected, also the
+    /// joints of its chain (what an IK drag poses).
     pub fn insert_key(&mut self) {
-        let mut ids = self.session.selection.key_channels(self.doc.scene());
+        let set = self.session.keying_set;
+        let mut ids = set.channels(self.doc.scene(), self.session.selection.items());
         if let (true, Some(Selected::Joint { object, joint })) =
             (self.session.ik.enabled, self.session.selection.item)
         {
@@ -399,7 +401,12 @@ impl EditorApp {
             self.session.overrides.remove(&id);
         }
         self.session.selection.retain_valid(self.doc.scene());
-        self.info(format!("Keyed {} channel(s) at frame {frame}", values.len()));
+        match set {
+            crate::keying_sets::KeyingSet::Selected => {
+                self.info(format!("Keyed {} channel(s) at frame {frame}", values.len()));
+            }
+            set => self.info(format!("Keyed {} channel(s) at frame {frame} ({})", values.len(), set.label())),
+        }
     }
 
     /// Deletes the selected object or light (undoable); a joint is not deleted on its own.
@@ -1416,6 +1423,7 @@ impl EditorApp {
             }
             SessionChange::SetFrame(frame) => self.set_frame(frame),
             SessionChange::EveryFrame(on) => self.session.playback.every_frame = on,
+            SessionChange::KeyingSet(set) => self.session.keying_set = set,
             SessionChange::ChainBones { object, joint, bones } => {
                 self.session.ik.set_chain_bones(object, joint, bones);
             }

@@ -17,7 +17,7 @@
 //!   spin that makes its segment turn the way the hand went.
 
 use glam::{DVec3, Quat, Vec3};
-use keyrig_core::{Cycles, Interpolation, Key, RawTrack, Scene, Spin, Tcb, Track};
+use keyrig_core::{Cycles, Interpolation, Key, KeyType, RawTrack, Scene, Spin, Tcb, Track};
 
 use crate::twist::{nearest_turn, spin_toward, twist_degrees};
 
@@ -33,6 +33,9 @@ pub struct KeyCopy {
     pub value: ChannelValue,
     pub interpolation: Interpolation,
     pub tcb: Tcb,
+    /// The key's type (breakdown, …); left out of the clipboard's JSON for a plain keyframe.
+    #[serde(default, skip_serializing_if = "KeyType::is_keyframe")]
+    pub key_type: KeyType,
 }
 
 /// The first line of keys copied to the system clipboard; JSON of the keys follows.
@@ -232,6 +235,35 @@ pub fn set_key_params(scene: &mut Scene, id: ChannelId, index: usize, mode: Inte
         Some(k) => {
             k.interpolation = mode;
             k.tcb = tcb;
+            true
+        }
+        None => false,
+    })
+}
+
+/// What key `index` of channel `id` means to the animator ([`KeyType`]); `None` when it does
+/// not exist.
+#[must_use]
+pub fn key_type(scene: &Scene, id: ChannelId, index: usize) -> Option<KeyType> {
+    let c = channel(scene, id)?;
+    with_track!(c, t => t.keys.get(index).map(|k| k.key_type))
+}
+
+/// The types of keys `first .. first + count` of channel `id` (fewer where the track ends;
+/// none when it does not exist): what the dope sheet draws for the keys in view.
+#[must_use]
+pub fn key_types(scene: &Scene, id: ChannelId, first: usize, count: usize) -> Vec<KeyType> {
+    let Some(c) = channel(scene, id) else { return Vec::new() };
+    with_track!(c, t => t.keys.iter().skip(first).take(count).map(|k| k.key_type).collect())
+}
+
+/// Sets the type of one key (breakdown, …). Returns false when the key does not exist or its
+/// channel is locked.
+pub fn set_key_type(scene: &mut Scene, id: ChannelId, index: usize, key_type: KeyType) -> bool {
+    let Some(c) = channel_mut(scene, id) else { return false };
+    with_track_mut!(c, t => match t.keys.get_mut(index) {
+        Some(k) => {
+            k.key_type = key_type;
             true
         }
         None => false,
@@ -694,27 +726,28 @@ fn delete_rotation_keys(track: &mut RawTrack<Quat>, indices: &[usize]) -> usize 
 /// Copies one key.
 #[must_use]
 pub fn copy_key(scene: &Scene, id: ChannelId, index: usize) -> Option<KeyCopy> {
-    let (time, value, interpolation, tcb) = match channel(scene, id)? {
+    let (time, value, interpolation, tcb, key_type) = match channel(scene, id)? {
         ChannelRef::Vec3(a) => {
             let k = a.track.keys.get(index)?;
-            (k.time, ChannelValue::Vec3(k.value), k.interpolation, k.tcb)
+            (k.time, ChannelValue::Vec3(k.value), k.interpolation, k.tcb, k.key_type)
         }
         ChannelRef::Rotation(a) => {
             let k = a.track.keys.get(index)?;
-            (k.time, ChannelValue::Rotation(k.value), k.interpolation, k.tcb)
+            (k.time, ChannelValue::Rotation(k.value), k.interpolation, k.tcb, k.key_type)
         }
         ChannelRef::Scalar(a) => {
             let k = a.track.keys.get(index)?;
-            (k.time, ChannelValue::Scalar(k.value), k.interpolation, k.tcb)
+            (k.time, ChannelValue::Scalar(k.value), k.interpolation, k.tcb, k.key_type)
         }
     };
-    Some(KeyCopy { channel: id, time, value, interpolation, tcb })
+    Some(KeyCopy { channel: id, time, value, interpolation, tcb, key_type })
 }
 
 /// Pastes a copied key into its channel at `time`. Returns the new key's index.
 pub fn paste_key(scene: &mut Scene, copy: &KeyCopy, time: f64) -> Option<usize> {
     let index = set_key(scene, copy.channel, time, copy.value)?;
     set_key_params(scene, copy.channel, index, copy.interpolation, copy.tcb);
+    set_key_type(scene, copy.channel, index, copy.key_type);
     Some(index)
 }
 
@@ -786,6 +819,7 @@ mod tests {
             value: ChannelValue::Rotation(Quat::from_rotation_z(0.3)),
             interpolation: Interpolation::Linear,
             tcb: Tcb::new(0.1, -0.2, 0.3),
+            key_type: KeyType::Breakdown,
         }];
         let text = keys_to_clipboard_text(&keys);
         assert!(text.starts_with(CLIPBOARD_HEADER), "{text}");

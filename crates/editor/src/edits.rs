@@ -44,10 +44,17 @@ impl EditorApp {
         if self.session.record {
             let time = self.session.key_time(self.doc.scene().fps);
             let label = format!("key {}", id.label(self.doc.scene()));
+            let with = self.keyed_with(&[id]);
             self.doc.edit_continuous(group, &label, |scene| {
                 channels::set_key(scene, id, time, value);
+                for &(c, v) in &with {
+                    channels::set_key(scene, c, time, v);
+                }
             });
             self.session.overrides.remove(&id);
+            for (c, _) in &with {
+                self.session.overrides.remove(c);
+            }
         } else if animated {
             self.session.overrides.insert(id, value);
         } else {
@@ -68,12 +75,14 @@ impl EditorApp {
             rotations.iter().map(|&(id, q)| (id, ChannelValue::Rotation(q.normalize()))).collect();
         if self.session.record {
             let time = self.session.key_time(self.doc.scene().fps);
+            let ids: Vec<ChannelId> = values.iter().map(|&(id, _)| id).collect();
+            let with = self.keyed_with(&ids);
             self.doc.edit_continuous(IK_DRAG_GROUP, label, |scene| {
-                for &(id, value) in &values {
+                for &(id, value) in values.iter().chain(&with) {
                     channels::set_key(scene, id, time, value);
                 }
             });
-            for (id, _) in &values {
+            for (id, _) in values.iter().chain(&with) {
                 self.session.overrides.remove(id);
             }
             return;
@@ -104,10 +113,37 @@ impl EditorApp {
         }
         let time = self.session.key_time(self.doc.scene().fps);
         let label = format!("key {}", id.label(self.doc.scene()));
+        let with = self.keyed_with(&[id]);
         self.doc.edit_continuous(group, &label, |scene| {
             channels::set_rotation_key(scene, id, time, value, Some(turn));
+            for &(c, v) in &with {
+                channels::set_key(scene, c, time, v);
+            }
         });
         self.session.overrides.remove(&id);
+        for (c, _) in &with {
+            self.session.overrides.remove(c);
+        }
+    }
+
+    /// In record mode, what is keyed together with the channels `ids` a pose change keys: the
+    /// active keying set's other channels of their items ([`KeyingSet::companions`]: a whole
+    /// character's joints, or an object's location and scale with its rotation) at their
+    /// values now; nothing with the default set.
+    ///
+    /// [`KeyingSet::companions`]: crate::keying_sets::KeyingSet::companions
+    fn keyed_with(&self, ids: &[ChannelId]) -> Vec<(ChannelId, ChannelValue)> {
+        let set = self.session.keying_set;
+        let scene = self.doc.scene();
+        let mut with: Vec<ChannelId> = Vec::new();
+        for &id in ids {
+            for c in set.companions(scene, id) {
+                if !ids.contains(&c) && !with.contains(&c) {
+                    with.push(c);
+                }
+            }
+        }
+        with.into_iter().filter_map(|c| self.value_now(c).map(|v| (c, v))).collect()
     }
 
     /// Moves every selected key by `delta` seconds as one continuous edit. Refused (returns

@@ -34,6 +34,7 @@ pub mod gpu_view;
 pub mod hidden;
 pub mod ik_constraints;
 pub mod ik_posing;
+pub mod keying_sets;
 pub mod mirror;
 pub mod onion;
 pub mod panels;

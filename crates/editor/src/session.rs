@@ -10,6 +10,7 @@ use crate::channels::{ChannelId, ChannelValue, KeyCopy};
 
 use crate::eval::PoseOverrides;
 use crate::ik_posing::IkPosing;
+use crate::keying_sets::{item_channels, item_exists, KeyingSet};
 /// What can be selected in the scene: keyrig-render's one type (object, joint, light).
 pub use keyrig_render::Selected;
 
@@ -30,6 +31,9 @@ pub struct Session {
     pub ik: IkPosing,
     /// Objects hidden in the viewport (H; Alt+H shows them).
     pub hidden: crate::hidden::Hidden,
+    /// What `I` keys, and in record mode what is keyed with a changed channel
+    /// ([`crate::keying_sets`]).
+    pub keying_set: KeyingSet,
 }
 
 impl Session {
@@ -161,23 +165,11 @@ impl Selection {
         self.item == Some(item) || self.others.contains(&item)
     }
 
-    /// The channels `I` keys: every selected joint's and light's, and for a selected object
-    /// its own and (a character) every joint's of its skeleton.
+    /// The channels `I` keys with the default keying set: every selected joint's and light's,
+    /// and for a selected object its own and (a character) every joint's of its skeleton.
     #[must_use]
     pub fn key_channels(&self, scene: &Scene) -> Vec<ChannelId> {
-        let mut out = Vec::new();
-        for item in self.items() {
-            let ids = match item {
-                Selected::Object(o) if o < scene.objects.len() => ChannelId::of_object(scene, o),
-                other => item_channels(other, scene),
-            };
-            for id in ids {
-                if !out.contains(&id) {
-                    out.push(id);
-                }
-            }
-        }
-        out
+        KeyingSet::Selected.channels(scene, self.items())
     }
 
     /// The channels the selected item owns (a joint's rotation, an object's transform, a light's
@@ -192,43 +184,6 @@ impl Selection {
         self.item = self.item.filter(|&item| item_exists(item, scene));
         self.others.retain(|&item| item_exists(item, scene));
         self.keys.retain(|k| k.index < crate::channels::key_count(scene, k.channel));
-    }
-}
-
-/// Whether `item` exists in `scene`.
-fn item_exists(item: Selected, scene: &Scene) -> bool {
-    match item {
-        Selected::Object(o) => o < scene.objects.len(),
-        Selected::Joint { object, joint } => scene
-            .objects
-            .get(object)
-            .and_then(|o| o.skeleton.as_ref())
-            .is_some_and(|s| joint < s.joints.len()),
-        Selected::Light(l) => l < scene.lights.len(),
-        Selected::Camera(c) => c < scene.cameras.len(),
-    }
-}
-
-/// The channels `item` owns: an object's transform, a joint's channels (rotation, and
-/// translation and scale where used), a light's; none when it does not exist.
-fn item_channels(item: Selected, scene: &Scene) -> Vec<ChannelId> {
-    if !item_exists(item, scene) {
-        return Vec::new();
-    }
-    match item {
-        Selected::Object(o) => {
-            vec![ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)]
-        }
-        Selected::Joint { object, joint } => ChannelId::of_object(scene, object)
-            .into_iter()
-            .filter(|id| {
-                matches!(id, ChannelId::JointTranslation { joint: j, .. }
-                    | ChannelId::JointRotation { joint: j, .. }
-                    | ChannelId::JointScale { joint: j, .. } if *j == joint)
-            })
-            .collect(),
-        Selected::Light(l) => ChannelId::of_light(l).to_vec(),
-        Selected::Camera(c) => ChannelId::of_camera(scene, c),
     }
 }
 

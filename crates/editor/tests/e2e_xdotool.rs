@@ -944,3 +944,76 @@ fn the_add_menu_and_a_preview_range_in_a_real_x_window() {
     assert!(sphere.translation.value.distance(model.translation.value) < 1e-4, "where the view looks");
     assert_eq!(scene.preview_range, Some(keyrig_core::FrameRange { start: 30, end: 90 }));
 }
+
+/// Issue 30 in the real window: the Cube's curves stacked (a click on *Stacked*), translation
+/// and its 0 … 360 spin each in a lane of its own, then a right click on the Cube's rotation key
+/// at frame 30 in the dope sheet and *Breakdown* from its menu: the key is drawn as a small
+/// blue breakdown (docs/guide.md, "The curve editor" and "Key types").
+#[test]
+fn the_stacked_curve_view_and_a_breakdown_key_in_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+
+    let cube = h.get_by_label("Cube").rect().center();
+    session.click(cube);
+    h.get_by_label("Cube").click();
+    h.run();
+    session.wait_idle();
+    let shared = session.screenshot("probe-curves-shared");
+    let stacked_button = h.get_by_label("Stacked").rect().center();
+    session.click(stacked_button);
+    h.get_by_label("Stacked").click();
+    h.run();
+    assert!(h.state().panels().curves.stacked);
+    std::thread::sleep(Duration::from_millis(500));
+    session.wait_idle();
+    let stacked = session.screenshot("guide_curve_stacked");
+    let curves = h.state().curves_rect().expect("the curve editor is laid out");
+    let redrawn = changed_pixels(&shared, &stacked, curves);
+    assert!(redrawn > 1000, "the curves are drawn in lanes in the real window: {redrawn} pixels changed");
+    let upper = h.get_by_label("curve lane Translation").rect();
+    let lower = h.get_by_label("curve lane Rotation (°)").rect();
+    assert!(upper.bottom() <= lower.top() + 1.0, "translation above rotation");
+
+    // A breakdown from the dope sheet's context menu.
+    let label = "key Cube rotation frame 30";
+    let diamond = h.get_by_label(label).rect();
+    session.mouse_to(diamond.center());
+    session.xdo(&["mousedown", "3"]);
+    session.xdo(&["mouseup", "3"]);
+    h.event(Event::PointerMoved(diamond.center()));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: diamond.center(),
+            button: PointerButton::Secondary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+    session.wait_idle();
+    let item = h.get_by_label("Breakdown").rect().center();
+    session.click(item);
+    h.get_by_label("Breakdown").click();
+    h.run();
+    let id = ChannelId::ObjectRotation(1);
+    assert_eq!(channels::key_type(h.state().doc.scene(), id, 1), Some(keyrig_core::KeyType::Breakdown));
+    // Away from the key, so that it is drawn without the hover ring.
+    session.mouse_to(diamond.center() + egui::vec2(0.0, 120.0));
+    std::thread::sleep(Duration::from_millis(500));
+    session.wait_idle();
+    let typed = session.screenshot("guide_key_types");
+    let around = diamond.expand(3.0);
+    let changed = changed_pixels(&stacked, &typed, around);
+    assert!(changed > 10, "the key is drawn as a breakdown in the real window: {changed} pixels changed");
+    let small = h.get_by_label(label).rect();
+    assert!(small.width() < diamond.width(), "the model draws it smaller too");
+    let saved = save_as(&session, "e2e-breakdown");
+    assert_eq!(
+        channels::key_type(&saved, id, 1),
+        Some(keyrig_core::KeyType::Breakdown),
+        "saved with its type"
+    );
+}

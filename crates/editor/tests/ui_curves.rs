@@ -179,6 +179,30 @@ fn the_context_menu_clamps_the_selected_keys() {
     assert_eq!(h.state().doc.undo_label(), Some("interpolation TCB spline, clamped"));
 }
 
+/// The curve view's context menu sets the selected keys' type too (the dope sheet's menu):
+/// both selected keys become extremes in one undo step, named by what it changed.
+#[test]
+fn the_context_menu_sets_the_selected_keys_type() {
+    let (_dir, mut h) = with_elbow_key();
+    h.get_by_label("key elbow rotation frame 45").click_modifiers(Modifiers::SHIFT);
+    h.run();
+    let steps = h.state().doc.undo_len();
+    open_context_menu(&mut h);
+    h.get_by_label("Extreme").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    for index in [2, 3] {
+        assert_eq!(
+            channels::key_type(scene, ELBOW, index),
+            Some(keyrig_core::KeyType::Extreme),
+            "key {index}"
+        );
+    }
+    assert_eq!(channels::key_type(scene, ELBOW, 1), Some(keyrig_core::KeyType::Keyframe), "not selected");
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step");
+    assert_eq!(h.state().doc.undo_label(), Some("key type extreme on 2 key(s)"));
+}
+
 /// "Hermite handles" turns a TCB key into explicit tangents without changing the curve; its
 /// handles then shape the curve, one undo step per drag.
 #[test]
@@ -488,4 +512,84 @@ fn mute_and_lock_per_channel() {
         scene.objects[1].translation.track,
         "a locked channel's keys stay"
     );
+}
+
+/// The Cube's key at `index` of `channel` as numbers: translation X Y Z, or its rotation's
+/// Euler angles in the Cube's order nearest `near`.
+fn cube_key(h: &Harness<'_, EditorApp>, channel: ChannelId, index: usize, near: glam::Vec3) -> glam::Vec3 {
+    let scene = h.state().doc.scene();
+    match channels::key_value(scene, channel, index) {
+        Some(ChannelValue::Vec3(v)) => v,
+        Some(ChannelValue::Rotation(q)) => {
+            let order = keyrig_core::channel_id::rotation_mode(scene, channel).euler().expect("Euler");
+            order.angles_near(q, near)
+        }
+        other => panic!("a key, got {other:?}"),
+    }
+}
+
+/// Stacked: the Cube's translation (±1) and its 0 … 360 spin each get a lane of their own with
+/// their own scale, sharing the time axis. A drag of a key in either lane changes it by that
+/// lane's scale (measured on the lane's own keys), one undo step each.
+#[test]
+fn the_stacked_view_gives_each_kind_its_lane_and_a_drag_moves_a_key_by_its_lanes_scale() {
+    const MOVE: ChannelId = ChannelId::ObjectTranslation(1);
+    const TURN: ChannelId = ChannelId::ObjectRotation(1);
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    let frames = [0, 30, 60, 75, 90];
+    let shared = key_span(&h, "Cube translation Y", &frames);
+    let x_at_30_shared = h.get_by_label("curve key Cube translation X frame 30").rect().center().x;
+    click_with(&mut h, "Stacked", Modifiers::NONE);
+    assert!(h.state().panels().curves.stacked);
+    let upper = h.get_by_label("curve lane Translation").rect();
+    let lower = h.get_by_label("curve lane Rotation (°)").rect();
+    assert!(upper.bottom() <= lower.top() + 1.0, "translation above rotation: {upper:?}, {lower:?}");
+    for f in frames {
+        for c in ["X", "Y", "Z"] {
+            let at = h.get_by_label(&format!("curve key Cube translation {c} frame {f}")).rect().center();
+            assert!(upper.contains(at), "translation {c} at frame {f} in its lane: {at:?} not in {upper:?}");
+        }
+    }
+    for f in [0, 30, 60, 90] {
+        let at = h.get_by_label(&format!("curve key Cube rotation Y frame {f}")).rect().center();
+        assert!(lower.contains(at), "rotation Y at frame {f} in its lane: {at:?} not in {lower:?}");
+    }
+    let x_at_30 = h.get_by_label("curve key Cube translation X frame 30").rect().center().x;
+    assert!((x_at_30 - x_at_30_shared).abs() < 0.5, "the lanes share the time axis");
+    let stacked = key_span(&h, "Cube translation Y", &frames);
+    assert!(
+        stacked > 20.0 * shared && stacked > 0.15 * upper.height(),
+        "translation Y reads on its own scale: {stacked} points (shared: {shared})"
+    );
+    let original = h.state().doc.scene().clone();
+
+    // The second lane: the spin's key at frame 30 (Y 120°), 10 points up. The lane's scale is
+    // measured on its keys at frames 0 (0°) and 90 (360°).
+    let y0 = h.get_by_label("curve key Cube rotation Y frame 0").rect().center().y;
+    let y90 = h.get_by_label("curve key Cube rotation Y frame 90").rect().center().y;
+    let degrees_per_point = 360.0 / (y0 - y90);
+    let key = h.get_by_label("curve key Cube rotation Y frame 30").rect().center();
+    drag(&mut h, key, key + egui::vec2(0.0, -10.0));
+    let y = cube_key(&h, TURN, 1, glam::Vec3::new(0.0, 120.0, 0.0)).y;
+    let expected = 120.0 + 10.0 * degrees_per_point;
+    assert!((y - expected).abs() < 0.03 * (expected - 120.0), "Y {y}, expected {expected}");
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original, "the drag is one undo step");
+
+    // The first lane: translation X at frame 30 (0.0), 10 points down; the lane's scale from
+    // its keys at frames 0 (−0.8) and 60 (0.8).
+    let x0 = h.get_by_label("curve key Cube translation X frame 0").rect().center().y;
+    let x60 = h.get_by_label("curve key Cube translation X frame 60").rect().center().y;
+    let units_per_point = 1.6 / (x0 - x60);
+    let key = h.get_by_label("curve key Cube translation X frame 30").rect().center();
+    drag(&mut h, key, key + egui::vec2(0.0, 10.0));
+    let x = cube_key(&h, MOVE, 1, glam::Vec3::ZERO).x;
+    let expected = -10.0 * units_per_point;
+    assert!((x - expected).abs() < 0.03 * expected.abs(), "X {x}, expected {expected}");
+    assert!(units_per_point < 0.1 * degrees_per_point, "each lane its own scale");
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original, "the drag is one undo step");
 }

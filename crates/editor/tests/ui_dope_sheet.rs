@@ -269,3 +269,73 @@ fn ik_constraint_channels_have_rows_and_curves() {
     assert_eq!(h.state().session.selection.keys.iter().next().map(|k| k.channel), Some(blend));
     assert!(h.query_by_label("Curves: Reach IK blend").is_some(), "the curve view shows the blend");
 }
+
+/// A right click, as the mouse gives it, at `at`.
+fn right_click(h: &mut Harness<'_, EditorApp>, at: Pos2) {
+    h.event(Event::PointerMoved(at));
+    for pressed in [true, false] {
+        h.event(Event::PointerButton {
+            pos: at,
+            button: egui::PointerButton::Secondary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+    }
+    h.run();
+}
+
+/// The demo's elbow key at frame 15 made a breakdown from the dope sheet's context menu (a
+/// right click on the key selects it): drawn smaller than its keyframe neighbours and said to
+/// be a breakdown, one undo step; an extreme is drawn larger; the type is saved and read back.
+#[test]
+fn a_right_click_on_a_key_makes_it_a_breakdown_drawn_smaller_and_saved() {
+    use keyrig_core::KeyType;
+    const ELBOW: ChannelId = ChannelId::JointRotation { object: 0, joint: 1 };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let original = h.state().doc.scene().clone();
+    let size = |h: &Harness<'_, EditorApp>, frame: i32| {
+        h.get_by_label(&format!("key elbow rotation frame {frame}")).rect().width()
+    };
+    let description = |h: &Harness<'_, EditorApp>, frame: i32| {
+        h.get_by_label(&format!("key elbow rotation frame {frame}")).accesskit_node().description()
+    };
+    let keyframe = size(&h, 15);
+    assert_eq!(description(&h, 15), None, "a keyframe says nothing of its type");
+
+    let at = h.get_by_label("key elbow rotation frame 15").rect().center();
+    right_click(&mut h, at);
+    let selected: Vec<KeyRef> = h.state().session.selection.keys.iter().copied().collect();
+    assert_eq!(selected, [KeyRef { channel: ELBOW, index: 1 }], "the right click selects the key");
+    h.get_by_label("Breakdown").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    assert_eq!(channels::key_type(scene, ELBOW, 1), Some(KeyType::Breakdown));
+    assert_eq!(channels::key_type(scene, ELBOW, 2), Some(KeyType::Keyframe), "only the selected key");
+    assert!(size(&h, 15) < 0.8 * keyframe, "a breakdown is drawn smaller: {} vs {keyframe}", size(&h, 15));
+    assert_eq!(description(&h, 15).as_deref(), Some("Breakdown"));
+    assert_eq!(size(&h, 30), keyframe, "its neighbour stays a keyframe");
+
+    // Saved and read back with its type; the playback does not change.
+    let path = dir.path().join("typed.ron");
+    keyrig_io::scene_file::save(&path, h.state().doc.scene()).expect("saves");
+    let text = std::fs::read_to_string(&path).expect("reads");
+    assert_eq!(text.matches("key_type: Breakdown").count(), 1, "one typed key in the file");
+    assert_eq!(&keyrig_io::scene_file::load(&path).expect("loads"), h.state().doc.scene());
+    assert_eq!(
+        channels::key_value(h.state().doc.scene(), ELBOW, 1),
+        channels::key_value(&original, ELBOW, 1),
+        "the type changes no value"
+    );
+
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene(), &original, "one undo step");
+
+    // An extreme is drawn larger than a keyframe.
+    let at = h.get_by_label("key elbow rotation frame 30").rect().center();
+    right_click(&mut h, at);
+    h.get_by_label("Extreme").click();
+    h.run();
+    assert_eq!(channels::key_type(h.state().doc.scene(), ELBOW, 2), Some(KeyType::Extreme));
+    assert!(size(&h, 30) > 1.1 * keyframe, "an extreme is drawn larger");
+}

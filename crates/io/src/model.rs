@@ -1082,6 +1082,7 @@ fn animated<T: Copy>(
             in_tangent: key.in_tangent.map(&tangent),
             out_tangent: key.out_tangent.map(&tangent),
             spin: None,
+            key_type: key.key_type,
         })
         .collect();
     match keys.first() {

@@ -313,6 +313,32 @@ fn demo_round_trip_is_byte_identical() {
     assert_eq!(fs::read(&a).unwrap(), fs::read(&b).unwrap());
 }
 
+/// Key types are saved only where a key is not a plain keyframe (`key_type: Breakdown`), read
+/// back to the same scene and written again to the same bytes; keyframes add nothing to the
+/// file (the demo's bytes stay those of `demo_round_trip_is_byte_identical`).
+#[test]
+fn key_types_are_saved_only_where_not_keyframes() {
+    use keyrig_core::KeyType;
+    let mut scene = Scene::default();
+    let mut o = Object::new("Ball");
+    o.translation.track = RawTrack::new(vec![
+        Key::new(0.0, Vec3::ZERO),
+        Key::new(0.5, Vec3::Y).with_key_type(KeyType::Breakdown),
+        Key::new(1.0, Vec3::X).with_key_type(KeyType::Extreme),
+        Key::new(1.5, Vec3::X).with_key_type(KeyType::MovingHold),
+    ]);
+    scene.objects.push(o);
+    let text = scene_file::to_string(&scene).unwrap();
+    assert_eq!(text.matches("key_type").count(), 3, "{text}");
+    for line in ["key_type: Breakdown", "key_type: Extreme", "key_type: MovingHold"] {
+        assert!(text.contains(line), "{line} in {text}");
+    }
+    let back = scene_file::from_str(&text, origin()).expect("loads");
+    assert_eq!(back, scene);
+    assert_eq!(scene_file::to_string(&back).unwrap(), text);
+    assert!(!DEMO_RON.contains("key_type"), "the demo's keys are keyframes and say nothing of it");
+}
+
 #[test]
 fn hermite_keys_and_comments_round_trip() {
     let mut scene = Scene::default();
@@ -326,6 +352,7 @@ fn hermite_keys_and_comments_round_trip() {
             in_tangent: Some(Vec3::X),
             out_tangent: Some(Vec3::new(1e-30, -0.0, 3.4e38)),
             spin: None,
+            key_type: keyrig_core::KeyType::Keyframe,
         },
         Key { in_tangent: Some(Vec3::Y), ..Key::new(1.0 / 3.0, Vec3::ONE) },
     ]);

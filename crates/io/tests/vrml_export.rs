@@ -42,8 +42,8 @@ fn write(dir: &Path, scene: &keyrig_core::Scene, name: &str) -> PathBuf {
     path
 }
 
-/// `assets/cameras.ron` with keyed attributes: the arm changes colour and fades, a spot light
-/// opens its cone.
+/// `assets/cameras.ron` with keyed attributes: the arm changes colour (through a breakdown key)
+/// and fades, a spot light opens its cone.
 fn attributes_scene() -> keyrig_core::Scene {
     use keyrig_core::{Animated, Key, RawTrack};
     let mut scene = keyrig_io::project::load_scene(&assets().join("cameras.ron")).unwrap();
@@ -52,7 +52,8 @@ fn attributes_scene() -> keyrig_core::Scene {
         Vec3::new(0.8, 0.2, 0.1),
         RawTrack::new(vec![
             Key::new(0.0, Vec3::new(0.8, 0.2, 0.1)),
-            Key::new(1.0, Vec3::new(0.1, 0.3, 0.9)),
+            // Key types travel in the metadata scene (a breakdown between two keyframes).
+            Key::new(1.0, Vec3::new(0.1, 0.3, 0.9)).with_key_type(keyrig_core::KeyType::Breakdown),
             Key::new(2.0, Vec3::new(0.2, 0.9, 0.2)),
         ]),
     ));

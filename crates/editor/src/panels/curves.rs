@@ -11,6 +11,10 @@
 //! their turns with `Track::spin_degrees`), so a 720° segment climbs to 720 instead of
 //! wrapping at ±180°. A channel with cycles (`before`/`after` other than Hold) is drawn over the
 //! whole range, its repeats included; the stretches beyond its keys are shaded and named.
+//! *Normalize* scales each curve to −1 … 1; *Stacked* gives each kind of curve (translation,
+//! rotation, scale, other) a lane of its own framed to its values, with its own ruler, all
+//! sharing the time axis ([`Lane`]: every curve's [`ValueMap`] then puts it in its lane, so
+//! picking and dragging read the lane's scale).
 
 use std::collections::{BTreeSet, HashMap};
 use std::rc::Rc;
@@ -88,6 +92,9 @@ pub struct CurveEditor {
     pub hidden: BTreeSet<(ChannelId, usize)>,
     /// Each shown curve scaled to −1 … 1 over the frame range (Blender's Normalize).
     pub normalized: bool,
+    /// One lane per kind of curve (translation, rotation, scale, other), stacked and sharing
+    /// the time axis, each framed to its own values with its own ruler (Maya's stacked view).
+    pub stacked: bool,
     /// Where the curve view was laid out in the last frame (F over it frames its keys).
     rect: Option<egui::Rect>,
     /// The key move pushed in the last frame and the whole frames the gesture has applied once
@@ -437,26 +444,28 @@ fn value_extent(all: &[(ChannelId, Rc<Vec<Curve>>)]) -> Option<(f32, f32)> {
     (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
 
-/// How one curve is drawn: its values scaled about `mid` (normalised view), or hidden.
+/// How one curve is drawn: its values scaled about `mid` and moved by `offset` (normalised
+/// view, stacked lanes): plotted = (value − mid) × scale + offset.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ValueMap {
     pub mid: f32,
     pub scale: f32,
+    pub offset: f32,
 }
 
 impl ValueMap {
-    pub const IDENTITY: ValueMap = ValueMap { mid: 0.0, scale: 1.0 };
+    pub const IDENTITY: ValueMap = ValueMap { mid: 0.0, scale: 1.0, offset: 0.0 };
 
     /// The plotted value of a curve value.
     #[must_use]
     pub fn apply(self, v: f32) -> f32 {
-        (v - self.mid) * self.scale
+        (v - self.mid) * self.scale + self.offset
     }
 
     /// The curve value of a plotted value.
     #[must_use]
     pub fn invert(self, y: f32) -> f32 {
-        y / self.scale + self.mid
+        (y - self.offset) / self.scale + self.mid
     }
 
     /// The map that puts `lo … hi` on −1 … 1 (a flat curve is centred, not stretched).
@@ -464,7 +473,101 @@ impl ValueMap {
     pub fn normalizing(lo: f32, hi: f32) -> Self {
         let mid = 0.5 * (lo + hi);
         let half = 0.5 * (hi - lo);
-        ValueMap { mid, scale: if half > 1e-6 { 1.0 / half } else { 1.0 } }
+        ValueMap { mid, scale: if half > 1e-6 { 1.0 / half } else { 1.0 }, offset: 0.0 }
+    }
+
+    /// This map followed by `then`: `then.apply(self.apply(v))`.
+    #[must_use]
+    pub fn then(self, then: ValueMap) -> Self {
+        ValueMap {
+            mid: self.mid,
+            scale: self.scale * then.scale,
+            offset: (self.offset - then.mid) * then.scale + then.offset,
+        }
+    }
+}
+
+/// What a lane of the stacked view holds: curves that share a unit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum LaneKind {
+    /// Positions: object, joint, root and camera translation, light positions, IK targets.
+    Translation,
+    /// Rotations read as angles (Euler degrees, twists, unwrapped turns).
+    Rotation,
+    /// Rotations read as quaternion components (−1 … 1).
+    Quaternion,
+    /// Object and joint scale.
+    Scale,
+    /// Everything else: attributes, light colour and intensity, IK blend, camera lens …
+    Other,
+}
+
+impl LaneKind {
+    /// The lane that `id`'s curves go to (rotations by how their channel's mode reads them).
+    #[must_use]
+    pub fn of(scene: &Scene, id: ChannelId, twist: bool) -> Self {
+        match id {
+            ChannelId::ObjectTranslation(_)
+            | ChannelId::RootTranslation(_)
+            | ChannelId::JointTranslation { .. }
+            | ChannelId::LightPosition(_)
+            | ChannelId::CameraTranslation(_)
+            | ChannelId::IkTarget { .. } => LaneKind::Translation,
+            ChannelId::ObjectScale(_) | ChannelId::JointScale { .. } => LaneKind::Scale,
+            _ if id.kind() == channels::ChannelKind::Rotation => {
+                if !twist && rotation_mode(scene, id).euler().is_none() {
+                    LaneKind::Quaternion
+                } else {
+                    LaneKind::Rotation
+                }
+            }
+            _ => LaneKind::Other,
+        }
+    }
+
+    /// The lane's name, drawn in its top-left corner.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            LaneKind::Translation => "Translation",
+            LaneKind::Rotation => "Rotation (°)",
+            LaneKind::Quaternion => "Rotation (quaternion)",
+            LaneKind::Scale => "Scale",
+            LaneKind::Other => "Other",
+        }
+    }
+}
+
+/// The part of each lane's height its curves use (the rest is a margin above and below).
+const LANE_FILL: f32 = 0.84;
+
+/// One lane of the stacked view: a band of the plotted values (`index` counted from the top;
+/// lane `i` of `n` spans plotted `n − 1 − i … n − i`) where the values `lo … hi` of its curves
+/// (as the normalised view reads them, when on) are framed on their own scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lane {
+    pub kind: LaneKind,
+    pub index: usize,
+    pub lo: f32,
+    pub hi: f32,
+    /// How many lanes are stacked.
+    pub count: usize,
+}
+
+impl Lane {
+    /// The map from the lane's values to the plotted values.
+    #[must_use]
+    pub fn map(&self) -> ValueMap {
+        let bottom = (self.count - 1 - self.index) as f32;
+        let k = LANE_FILL / (self.hi - self.lo).max(1e-9);
+        ValueMap { mid: self.lo, scale: k, offset: bottom + 0.5 * (1.0 - LANE_FILL) }
+    }
+
+    /// The plotted values the lane spans (bottom, top).
+    #[must_use]
+    pub fn band(&self) -> (f32, f32) {
+        let bottom = (self.count - 1 - self.index) as f32;
+        (bottom, bottom + 1.0)
     }
 }
 
@@ -627,8 +730,94 @@ impl CurveEditor {
     }
 
     /// How each curve of `ids` is drawn: hidden, scaled to −1 … 1 over the frame range
-    /// (normalised view), or as it is.
+    /// (normalised view), into its lane (stacked view), or as it is.
     fn maps(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> Maps {
+        self.layout(ctx, ids).0
+    }
+
+    /// How each curve of `ids` is drawn ([`CurveEditor::maps`]) and, in the stacked view, the
+    /// lanes: one per kind of the shown curves, top to bottom in [`LaneKind`]'s order, each
+    /// framed to what its curves take over the frame range (as the normalised view reads them
+    /// when it is on).
+    fn layout(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> (Maps, Vec<Lane>) {
+        let base = self.curve_maps(ctx, ids);
+        if !self.stacked {
+            return (base, Vec::new());
+        }
+        let scene = ctx.scene();
+        let range = scene.frame_range;
+        let (start, end) = (f64::from(range.start), f64::from(range.end.max(range.start + 1)));
+        let whole = self.curves_over(ctx, ids, (start, end), 200);
+        let twist = self.rotation_as_twist;
+        let mut extents: std::collections::BTreeMap<LaneKind, (f32, f32)> = Default::default();
+        for (n, &id) in ids.iter().enumerate() {
+            let kind = LaneKind::of(scene, id, twist);
+            let Some((_, curves)) = whole.get(n) else { continue };
+            for (c, curve) in curves.iter().enumerate() {
+                let Some(map) = base.get(n).and_then(|m| m.get(c)).copied().flatten() else { continue };
+                let extent = extents.entry(kind).or_insert((f32::INFINITY, f32::NEG_INFINITY));
+                for &(_, v) in curve {
+                    let v = map.apply(v);
+                    if v.is_finite() {
+                        *extent = (extent.0.min(v), extent.1.max(v));
+                    }
+                }
+            }
+        }
+        let count = extents.len();
+        let lanes: Vec<Lane> = extents
+            .into_iter()
+            .enumerate()
+            .map(|(index, (kind, (lo, hi)))| {
+                let (lo, hi) = if !(lo.is_finite() && hi.is_finite()) {
+                    (-1.0, 1.0)
+                } else if hi - lo < 1e-4 * lo.abs().max(hi.abs()).max(1.0) {
+                    // A flat lane: its value in the middle, half a unit each way.
+                    (lo - 0.5, hi + 0.5)
+                } else {
+                    (lo, hi)
+                };
+                Lane { kind, index, lo, hi, count }
+            })
+            .collect();
+        let maps = ids
+            .iter()
+            .enumerate()
+            .map(|(n, &id)| {
+                let kind = LaneKind::of(scene, id, twist);
+                let lane = lanes.iter().find(|l| l.kind == kind).map(Lane::map);
+                base.get(n)
+                    .map(|curves| {
+                        curves.iter().map(|m| m.and_then(|m| lane.map(|lane| m.then(lane)))).collect()
+                    })
+                    .unwrap_or_default()
+            })
+            .collect();
+        (maps, lanes)
+    }
+
+    /// The view the curves are drawn in: the one zoomed or framed to, else *Fit*'s; in the
+    /// stacked view, every lane's values whatever the zoom (the lanes frame their own).
+    fn current_view(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> CurveView {
+        let view = match self.view {
+            Some(view) => view,
+            None => self.fit_view(ctx, ids),
+        };
+        self.with_lanes(ctx, ids, view)
+    }
+
+    /// `view` with, in the stacked view, the plotted values of every lane.
+    fn with_lanes(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId], view: CurveView) -> CurveView {
+        if !self.stacked {
+            return view;
+        }
+        let lanes = self.layout(ctx, ids).1.len().max(1);
+        CurveView { low: 0.0, high: lanes as f32, ..view }
+    }
+
+    /// How each curve of `ids` is drawn before lanes: hidden, scaled to −1 … 1 over the frame
+    /// range (normalised view), or as it is.
+    fn curve_maps(&mut self, ctx: &FrameCtx<'_>, ids: &[ChannelId]) -> Maps {
         let scene = ctx.scene();
         let range = scene.frame_range;
         let (start, end) = (f64::from(range.start), f64::from(range.end.max(range.start + 1)));
@@ -676,7 +865,7 @@ impl CurveEditor {
             hi += 0.5;
         }
         let pad = (hi - lo) * 0.08;
-        CurveView { start, end, low: lo - pad, high: hi + pad }
+        self.with_lanes(ctx, ids, CurveView { start, end, low: lo - pad, high: hi + pad })
     }
 
     /// Frames the selected keys (all shown keys when none is selected): F over the curve view.
@@ -729,7 +918,8 @@ impl CurveEditor {
         let grow_v = (min_span - (v1 - v0)).max(0.0) * 0.5;
         let (v0, v1) = (v0 - grow_v, v1 + grow_v);
         let (df, dv) = ((f1 - f0) * 0.08, (v1 - v0).max(1e-3) * 0.08);
-        self.view = Some(CurveView { start: f0 - df, end: f1 + df, low: v0 - dv, high: v1 + dv });
+        let framed = CurveView { start: f0 - df, end: f1 + df, low: v0 - dv, high: v1 + dv };
+        self.view = Some(self.with_lanes(ctx, ids, framed));
     }
 
     /// The curve view: its header (title, legend, Fit), the plot and its rulers. The pointer
@@ -773,6 +963,14 @@ impl CurveEditor {
                     self.normalized = !self.normalized;
                     self.view = None;
                 }
+                let stacked = ui.selectable_label(self.stacked, "Stacked").on_hover_text(
+                    "One lane per kind (translation, rotation, scale, other), each on its own value \
+                     scale, sharing the time axis",
+                );
+                if stacked.clicked() {
+                    self.stacked = !self.stacked;
+                    self.view = None;
+                }
                 if !self.hidden.is_empty() && ui.small_button("Show all").clicked() {
                     self.hidden.clear();
                 }
@@ -807,10 +1005,7 @@ impl CurveEditor {
         if std::mem::take(&mut self.frame_keys) {
             self.frame_selected_keys(ctx, ids);
         }
-        let view = match self.view {
-            Some(view) => view,
-            None => self.fit_view(ctx, ids),
-        };
+        let view = self.current_view(ctx, ids);
         let plot = Plot { rect: plot_rect(rect), view };
         let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
         let all = self.curves_over(ctx, ids, (view.start, view.end), samples);
@@ -950,7 +1145,7 @@ impl CurveEditor {
             Some(CurveGesture::Pan { from }) if delta.is_some() => {
                 let delta = delta.unwrap_or_default();
                 let frames = -f64::from(delta.x) * plot.frames_per_point();
-                let values = delta.y * plot.values_per_point();
+                let values = if self.stacked { 0.0 } else { delta.y * plot.values_per_point() };
                 self.view = Some(CurveView {
                     start: from.start + frames,
                     end: from.end + frames,
@@ -1026,10 +1221,13 @@ impl CurveEditor {
         if scroll.y.abs() > 0.0 {
             let factor = (scroll.y * 0.004).exp();
             zoom_time(&mut view, f64::from(factor));
-            let span = ((view.high - view.low) / factor).max(1e-3);
-            let t = (anchor_value - view.low) / (view.high - view.low).max(1e-9);
-            view.low = anchor_value - t * span;
-            view.high = view.low + span;
+            // The stacked view's lanes frame their own values: the wheel zooms time only.
+            if !self.stacked {
+                let span = ((view.high - view.low) / factor).max(1e-3);
+                let t = (anchor_value - view.low) / (view.high - view.low).max(1e-9);
+                view.low = anchor_value - t * span;
+                view.high = view.low + span;
+            }
         }
         if scroll.x.abs() > 0.0 {
             let shift = -f64::from(scroll.x) * plot.frames_per_point();
@@ -1129,8 +1327,8 @@ impl CurveEditor {
     }
 }
 
-/// The curve view's context menu: the interpolation of the selected keys (one undo step), and
-/// deleting them.
+/// The curve view's context menu: the interpolation and the type of the selected keys (one undo
+/// step each), and deleting them.
 fn key_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Actions) {
     use keyrig_core::Interpolation;
     let keys: Vec<KeyRef> = selection.keys.iter().copied().collect();
@@ -1179,6 +1377,8 @@ fn key_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Actions) {
         ui.close();
     }
     ui.separator();
+    crate::widgets::key_type_menu::key_type_menu_ui(ui, selection, actions);
+    ui.separator();
     if ui.button("Delete keys").clicked() {
         actions.command(Command::Delete);
         ui.close();
@@ -1214,16 +1414,13 @@ impl CurveEditor {
         if ids.is_empty() {
             return;
         }
-        let view = match self.view {
-            Some(view) => view,
-            None => self.fit_view(ctx, ids),
-        };
+        let view = self.current_view(ctx, ids);
         let plot = Plot { rect: plot_rect(rect), view };
         let scene = ctx.scene();
         let fps = scene.fps.max(1e-9);
         let samples = (plot.rect.width() / 2.0).clamp(16.0, 800.0) as usize;
         let all = self.curves_over(ctx, ids, (view.start, view.end), samples);
-        let maps = self.maps(ctx, ids);
+        let (maps, lanes) = self.layout(ctx, ids);
         let shown = displayed(&all, &maps);
         let weak = visuals.weak_text_color();
         let grid = Stroke::new(1.0, visuals.faint_bg_color);
@@ -1264,27 +1461,68 @@ impl CurveEditor {
             );
             f += step;
         }
-        let vstep = nice_step(f64::from(view.high - view.low), plot.rect.height(), 28.0);
-        let mut v = (f64::from(view.low) / vstep).ceil() * vstep;
-        while v <= f64::from(view.high) {
-            // A tick at zero reads 0, not "-0" (the running sum lands a rounding error below it).
-            let tick = if v.abs() < vstep * 1e-6 { 0.0 } else { v };
-            let y = plot.pos(view.start, tick as f32).y;
-            plot_painter
-                .line_segment([Pos2::new(plot.rect.left(), y), Pos2::new(plot.rect.right(), y)], grid);
-            let text = if vstep >= 1.0 {
-                format!("{tick:.0}")
-            } else {
-                format!("{tick:.*}", (-vstep.log10()).ceil() as usize)
-            };
-            painter.text(
-                Pos2::new(plot.rect.left() - 4.0, y),
-                Align2::RIGHT_CENTER,
-                text,
-                FontId::proportional(9.5),
+        // One value ruler for the whole plot, or one per lane in its own units.
+        let rulers: Vec<(ValueMap, f32, f32)> = if lanes.is_empty() {
+            vec![(ValueMap::IDENTITY, view.low, view.high)]
+        } else {
+            lanes.iter().map(|lane| (lane.map(), lane.lo, lane.hi)).collect()
+        };
+        for &(map, low, high) in &rulers {
+            let height =
+                (plot.pos(view.start, map.apply(low)).y - plot.pos(view.start, map.apply(high)).y).abs();
+            let vstep = nice_step(f64::from(high - low), height, 28.0);
+            let mut v = (f64::from(low) / vstep).ceil() * vstep;
+            while v <= f64::from(high) {
+                // A tick at zero reads 0, not "-0" (the running sum lands a rounding error below it).
+                let tick = if v.abs() < vstep * 1e-6 { 0.0 } else { v };
+                let y = plot.pos(view.start, map.apply(tick as f32)).y;
+                plot_painter
+                    .line_segment([Pos2::new(plot.rect.left(), y), Pos2::new(plot.rect.right(), y)], grid);
+                let text = if vstep >= 1.0 {
+                    format!("{tick:.0}")
+                } else {
+                    format!("{tick:.*}", (-vstep.log10()).ceil() as usize)
+                };
+                painter.text(
+                    Pos2::new(plot.rect.left() - 4.0, y),
+                    Align2::RIGHT_CENTER,
+                    text,
+                    FontId::proportional(9.5),
+                    weak,
+                );
+                v += vstep;
+            }
+        }
+        // The stacked view's lanes: a line between two, each named in its top-left corner.
+        for lane in &lanes {
+            let (bottom, top) = lane.band();
+            let y_top = plot.pos(view.start, top).y;
+            if lane.index > 0 {
+                painter.line_segment(
+                    [Pos2::new(rect.left(), y_top), Pos2::new(plot.rect.right(), y_top)],
+                    Stroke::new(1.0, visuals.widgets.noninteractive.bg_stroke.color),
+                );
+            }
+            plot_painter.text(
+                Pos2::new(plot.rect.left() + 4.0, y_top + 2.0),
+                Align2::LEFT_TOP,
+                lane.kind.label(),
+                FontId::proportional(10.0),
                 weak,
             );
-            v += vstep;
+            let band = egui::Rect::from_x_y_ranges(
+                plot.rect.x_range(),
+                plot.pos(view.start, top).y..=plot.pos(view.start, bottom).y,
+            );
+            let name = format!("curve lane {}", lane.kind.label());
+            publish_painted(
+                ui.ctx(),
+                egui::Id::new(("curve lane", lane.index)),
+                Role::Group,
+                band,
+                move || name,
+                None,
+            );
         }
 
         // Cycles: the curves go on beyond the keys (sampled like everything else); the stretches
@@ -1322,13 +1560,25 @@ impl CurveEditor {
             }
         }
 
-        // Curves and their keys.
+        // Curves and their keys (in the stacked view each within its lane).
         for (n, (id, curves)) in shown.iter().enumerate() {
             let values = value_count(scene, *id, self.rotation_as_twist);
+            let kind = LaneKind::of(scene, *id, self.rotation_as_twist);
+            let curve_painter = match lanes.iter().find(|l| l.kind == kind) {
+                Some(lane) => {
+                    let (bottom, top) = lane.band();
+                    let band = egui::Rect::from_x_y_ranges(
+                        plot.rect.x_range(),
+                        plot.pos(view.start, top).y..=plot.pos(view.start, bottom).y,
+                    );
+                    plot_painter.with_clip_rect(band.intersect(plot_painter.clip_rect()))
+                }
+                None => plot_painter.clone(),
+            };
             for (c, curve) in curves.iter().enumerate() {
                 let colour = curve_colour(n, c, c >= values);
                 let points: Vec<Pos2> = curve.iter().map(|&(f, v)| plot.pos(f, v)).collect();
-                plot_painter.add(Shape::line(points, Stroke::new(1.5, colour)));
+                curve_painter.add(Shape::line(points, Stroke::new(1.5, colour)));
             }
         }
         let points = self.key_points(ctx, ids, &plot, &all, &maps);

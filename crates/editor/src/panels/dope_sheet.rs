@@ -19,14 +19,15 @@
 use std::collections::BTreeSet;
 
 use egui::{Align2, Color32, CursorIcon, FontId, PointerButton, Pos2, Rect, Sense, Stroke, Ui, Vec2};
-use keyrig_core::Scene;
+use keyrig_core::{KeyType, Scene};
 
 use crate::actions::{Action, Actions, Edit, SessionChange, Ticket};
 use crate::channels::{self, ChannelId};
 use crate::context::FrameCtx;
 use crate::session::{KeyRef, Selected, Selection};
 use crate::widgets::flat_fill;
-use crate::widgets::key_diamond::{paint_diamond, DIAMOND_RADIUS};
+use crate::widgets::key_diamond::{paint_diamond, type_fill, type_scale, DIAMOND_RADIUS};
+use crate::widgets::key_type_menu::key_type_menu_ui;
 use crate::widgets::publish_painted;
 use crate::widgets::range_watch::RangeWatch;
 use crate::widgets::time_axis::TimeAxis;
@@ -325,6 +326,8 @@ struct Bucket {
     selected: usize,
     /// Set for a bucket of exactly one key: that key.
     single: Option<KeyRef>,
+    /// The type of its keys when they share one (a mix is drawn as keyframes).
+    key_type: Option<KeyType>,
 }
 
 /// The row's keys in view, one bucket per pixel column, sorted by column; and the number of
@@ -338,12 +341,14 @@ fn buckets(ctx: &FrameCtx<'_>, row: &Row, geo: &Geometry) -> (Vec<Bucket>, Marke
         let window = channels::keys_between(scene, id, from, to);
         before.add(window.before, window.nearest_before.map(|t| t * geo.fps), f64::max);
         after.add(window.after, window.nearest_after.map(|t| t * geo.fps), f64::min);
+        let types = channels::key_types(scene, id, window.first, window.times.len());
         for (i, time) in window.times.iter().enumerate() {
             let frame = time * geo.fps;
             let px = geo.x(frame).round() as i32;
             let key = KeyRef { channel: id, index: window.first + i };
             let selected = usize::from(ctx.session.selection.keys.contains(&key));
-            columns.push(Bucket { px, frame, count: 1, selected, single: Some(key) });
+            let key_type = types.get(i).copied();
+            columns.push(Bucket { px, frame, count: 1, selected, single: Some(key), key_type });
         }
     }
     if row.shows.len() > 1 {
@@ -357,6 +362,7 @@ fn buckets(ctx: &FrameCtx<'_>, row: &Row, geo: &Geometry) -> (Vec<Bucket>, Marke
                 last.selected += b.selected;
                 last.single = None;
                 last.frame = last.frame.min(b.frame);
+                last.key_type = last.key_type.filter(|&t| Some(t) == b.key_type);
             }
             _ => merged.push(b),
         }
@@ -736,14 +742,22 @@ impl DopeSheet {
                         }
                     }
                 } else {
-                    let radius = if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS };
+                    // Each key type its own size and colour (breakdowns small and blue, …).
+                    let key_type = b.key_type.unwrap_or_default();
+                    let radius =
+                        (if summary { DIAMOND_RADIUS - 1.5 } else { DIAMOND_RADIUS }) * type_scale(key_type);
                     let hovered =
                         hover.is_some_and(|p| (p.x - x).abs() <= DIAMOND_RADIUS && rect.contains(p));
+                    let fill = match type_fill(key_type, selected) {
+                        Some(fill) if outside => fill.gamma_multiply(0.55),
+                        Some(fill) => fill,
+                        None => key_colour(selected, summary, outside),
+                    };
                     paint_diamond(
                         &keys_painter,
                         Pos2::new(x, y),
                         radius + if hovered { 1.0 } else { 0.0 },
-                        key_colour(selected, summary, outside),
+                        fill,
                         selected,
                     );
                 }
@@ -806,6 +820,16 @@ impl DopeSheet {
                 Hit::Empty => actions.session(SessionChange::SetKeys(BTreeSet::new())),
             }
         }
+        // A right click on keys that are not selected selects them; the menu sets the type of
+        // the selected keys (Blender's R in the dope sheet; R here is record).
+        if let Some(pos) = body.interact_pointer_pos().filter(|_| body.secondary_clicked()) {
+            if let Hit::Keys(r, keys) = hit_at(pos) {
+                if !keys.iter().all(|k| selection.keys.contains(k)) {
+                    select_keys(selection, actions, &rows[r], keys, false);
+                }
+            }
+        }
+        body.context_menu(|ui| key_type_menu_ui(ui, selection, actions));
         let press = ui.input(|i| i.pointer.press_origin());
         if let Some(origin_pos) = press.filter(|_| body.drag_started_by(PointerButton::Primary)) {
             self.gesture = match hit_at(origin_pos) {
@@ -929,7 +953,9 @@ fn publish_key(ui: &Ui, scene: &Scene, row: &Row, bucket: &Bucket, centre: Pos2)
         (Some(key), RowKind::Channel(_)) => ui.id().with(("key", key.channel, key.index)),
         _ => ui.id().with(("keys", row.item, row.shows.first().copied(), bucket.px)),
     };
-    let rect = Rect::from_center_size(centre, Vec2::splat(DIAMOND_RADIUS * 2.0 + 2.0));
+    // The size the key is drawn at (a breakdown smaller, an extreme larger).
+    let scale = type_scale(bucket.key_type.unwrap_or_default());
+    let rect = Rect::from_center_size(centre, Vec2::splat(DIAMOND_RADIUS * 2.0 * scale + 2.0));
     let label = || {
         let frame = bucket.frame.round() as i64;
         match (bucket.single, &row.kind) {
@@ -940,6 +966,10 @@ fn publish_key(ui: &Ui, scene: &Scene, row: &Row, bucket: &Bucket, centre: Pos2)
         }
     };
     publish_painted(ui.ctx(), id, Role::Button, rect, label, Some(bucket.selected > 0));
+    // A key that is not a plain keyframe says its type ("Breakdown").
+    if let Some(key_type) = bucket.key_type.filter(|t| !t.is_keyframe()) {
+        ui.ctx().accesskit_node_builder(id, |node| node.set_description(key_type.label()));
+    }
 }
 
 /// Tells accessibility tools (and UI tests) about the count of a row's keys out of view:

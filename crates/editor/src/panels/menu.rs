@@ -4,7 +4,7 @@
 use egui::{Button, Ui};
 use keyrig_core::DeformerKind;
 
-use crate::actions::{Action, Actions, PendingAction, ViewChange};
+use crate::actions::{Action, Actions, PendingAction, SessionChange, ViewChange};
 use crate::commands::{current_deformer, Command};
 use crate::context::FrameCtx;
 use crate::view::RenderStyle;
@@ -227,6 +227,30 @@ fn onion_settings_ui(ui: &mut Ui, onion: &mut crate::onion::OnionSkin) {
     }
 }
 
+/// The active keying set, beside *Key* (Blender's Keying menu of the timeline): what `I` keys,
+/// and in record mode what is keyed with a changed channel.
+fn keying_set_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+    use crate::keying_sets::KeyingSet;
+    let current = ctx.session.keying_set;
+    let mut chosen = current;
+    egui::ComboBox::from_label("Keying set")
+        .selected_text(current.label())
+        .show_ui(ui, |ui| {
+            for set in KeyingSet::ALL {
+                ui.selectable_value(&mut chosen, set, set.label()).on_hover_text(set.description());
+            }
+        })
+        .response
+        .on_hover_text(format!(
+            "What I keys: {}. In record mode a changed channel is keyed with the set's other \
+             channels of its item (Whole character: every joint).",
+            current.description()
+        ));
+    if chosen != current {
+        actions.session(SessionChange::KeyingSet(chosen));
+    }
+}
+
 fn toolbar_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     ui.horizontal(|ui| {
         let record = ctx.session.record;
@@ -248,6 +272,7 @@ fn toolbar_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             actions.command(Command::ToggleRecord);
         }
         tool_button(ui, actions, Command::InsertKey, "◆ Key", false);
+        keying_set_ui(ui, ctx, actions);
         let ik = ctx.session.ik.enabled;
         tool_button(ui, actions, Command::ToggleIk, "IK", ik);
         ui.separator();

@@ -6,6 +6,7 @@ pub mod command_button;
 pub mod field;
 pub mod flat_fill;
 pub mod key_diamond;
+pub mod key_type_menu;
 pub mod measure;
 pub mod preview_range;
 pub mod range_watch;

@@ -39,6 +39,7 @@ fn lift(a: &Animated<f32>) -> Animated<Vec3> {
         in_tangent: k.in_tangent.map(|t| Vec3::new(t, 0.0, 0.0)),
         out_tangent: k.out_tangent.map(|t| Vec3::new(t, 0.0, 0.0)),
         spin: None,
+        key_type: k.key_type,
     };
     Animated::new(Vec3::new(a.value, 0.0, 0.0), RawTrack::new(a.track.keys.iter().map(key).collect()))
         .with_cycles(a.cycles())
@@ -355,6 +356,7 @@ pub(super) fn weights_track(
                         weights.iter().map(|w| w.track.keys[k].out_tangent.unwrap_or(0.0)).collect()
                     }),
                     spin: None,
+                    key_type: first[k].key_type,
                 }
             })
             .collect();

@@ -33,6 +33,7 @@ fn map_keys<A: Copy, B>(track: &RawTrack<A>, f: impl Fn(A) -> B) -> RawTrack<B> 
                 in_tangent: k.in_tangent.map(&f),
                 out_tangent: k.out_tangent.map(&f),
                 spin: None,
+                key_type: k.key_type,
             })
             .collect(),
     )
@@ -147,6 +148,7 @@ pub(crate) fn object_attributes(
                                 in_tangent: key.in_tangent.as_ref().map(|t| t[k]),
                                 out_tangent: key.out_tangent.as_ref().map(|t| t[k]),
                                 spin: None,
+                                key_type: key.key_type,
                             })
                             .collect();
                         keyed(RawTrack::new(keys), rest)
