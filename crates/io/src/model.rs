@@ -964,8 +964,9 @@ impl ImportedModel {
     ///   direction (−Z), spot cone angles in degrees;
     /// - each node holding a camera → a scene camera (`add_scene_cameras`).
     ///
-    /// What the scene does not take from the file: morph weights, animated lights, the
-    /// animation of unskinned nodes below other nodes, and the other animations.
+    /// What the scene does not take from the file: the animation of unskinned nodes below other
+    /// nodes, the pointer channels listed in [`ImportedModel::skipped_channels`], and the other
+    /// animations.
     ///
     /// # Errors
     /// A skin that cannot be mapped.
@@ -1057,7 +1058,7 @@ impl ImportedModel {
             attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
             scene.lights.push(scene_light);
         }
-        add_scene_cameras(self, &world, &channels_of, &mut scene);
+        add_scene_cameras(self, &world, &channels_of, anim, &mut scene);
         Ok(scene)
     }
 }
@@ -1122,15 +1123,18 @@ impl ModelProjection {
 /// a root node. A perspective camera's `yfov` (radians) becomes a field of view in degrees, an
 /// orthographic camera's `ymag` (half the view's height) a view height of `2·ymag`. The first
 /// camera with an aspect ratio (`aspectRatio`, or `xmag / ymag`) sets the scene's render size
-/// (720 pixels tall).
+/// (720 pixels tall). Its visibility and its keyed `yfov` / `ymag` (`KHR_node_visibility`,
+/// `KHR_animation_pointer`) come from `attributes::camera_attributes`.
 fn add_scene_cameras(
     model: &ImportedModel,
     world: &[Mat4],
     channels_of: &[Vec<&ChannelTarget>],
+    anim: Option<&ModelAnimation>,
     scene: &mut keyrig_core::Scene,
 ) {
     for (i, node) in model.nodes.iter().enumerate() {
         let Some(camera) = node.camera.and_then(|c| model.cameras.get(c)) else { continue };
+        let camera_index = node.camera.unwrap_or_default();
         let (_, rotation, translation) = world[i].to_scale_rotation_translation();
         // The node's name, unless the file left it out (then the camera's).
         let base = if node.name == format!("node{i}") { camera.name.clone() } else { node.name.clone() };
@@ -1163,6 +1167,7 @@ fn add_scene_cameras(
                 }
             }
         }
+        attributes::camera_attributes(model, anim, i, camera_index, &mut out);
         if scene.render_size.is_none() {
             if let Some(aspect) = camera.projection.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0) {
                 let width = (720.0 * aspect).round().clamp(1.0, f32::from(u16::MAX)) as u32;

@@ -597,7 +597,7 @@ impl SceneRig {
         Ok(frame)
     }
 
-    /// Frustums of the scene cameras of `state` but the one looked through (the selected one
+    /// Frustums of the scene cameras of `state` but the one looked through and the hidden ones (the selected one
     /// highlighted, the active one at `state.time` brighter), in the scene's render aspect.
     #[must_use]
     pub fn camera_gizmos(&self, view: &ViewOptions, state: &SceneState) -> Vec<CameraGizmo> {
@@ -607,7 +607,7 @@ impl SceneRig {
             .cameras
             .iter()
             .enumerate()
-            .filter(|&(c, camera)| view.look_through != Some(c) && camera.is_usable())
+            .filter(|&(c, camera)| view.look_through != Some(c) && camera.is_usable() && camera.visible)
             .map(|(c, camera)| CameraGizmo {
                 camera: *camera,
                 aspect,
