@@ -321,7 +321,9 @@ impl SceneFrame {
         self.skinned[o] = true;
         self.deform_errors[o] = None;
         if let (Some(skin), Some(palette)) = (eval.skin(o), &state.palette) {
-            if let Err(e) = self.skin.skin(o, skin, state.bindings(skin), palette, state.look.deformer) {
+            let (bindings, deformer, weights) =
+                (state.bindings(skin), state.look.deformer, &state.look.morph_weights);
+            if let Err(e) = self.skin.skin(o, skin, bindings, palette, deformer, weights) {
                 self.deform_errors[o] = Some(format!("{}: {e}", object.name));
             }
             return;

@@ -605,6 +605,37 @@ impl MergedTriangles {
     }
 }
 
+/// The morph targets of `mesh`'s triangle primitives merged as [`MergedTriangles`] merges
+/// their vertices: target i of each primitive (zero displacements where a primitive has fewer
+/// targets or no positions in it); normal displacements where any primitive has them.
+fn merged_morph_targets(mesh: &ModelMesh) -> Vec<keyrig_skin::MorphTarget> {
+    let prims: Vec<&ModelPrimitive> =
+        mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles).collect();
+    let count = prims.iter().map(|p| p.morph_targets.len()).max().unwrap_or(0);
+    (0..count)
+        .map(|t| {
+            let any_normals = prims.iter().any(|p| p.morph_targets.get(t).is_some_and(|m| m.normals.is_some()));
+            let mut positions = Vec::new();
+            let mut normals = Vec::new();
+            for p in &prims {
+                let n = p.positions.len();
+                let target = p.morph_targets.get(t);
+                match target.and_then(|m| m.positions.as_ref()).filter(|d| d.len() == n) {
+                    Some(d) => positions.extend_from_slice(d),
+                    None => positions.resize(positions.len() + n, Vec3::ZERO),
+                }
+                if any_normals {
+                    match target.and_then(|m| m.normals.as_ref()).filter(|d| d.len() == n) {
+                        Some(d) => normals.extend_from_slice(d),
+                        None => normals.resize(normals.len() + n, Vec3::ZERO),
+                    }
+                }
+            }
+            keyrig_skin::MorphTarget { positions, normals }
+        })
+        .collect()
+}
+
 /// How a skin maps onto a keyrig skeleton: the skin's joints and every ancestor node of them
 /// up to the scene root, parents first, so that the keyrig skeleton's F(j) is exactly the
 /// file's global transform of joint j's node (docs/design.md §4; glTF 2.0 §3.7.3). When the nodes
@@ -801,6 +832,8 @@ impl ImportedModel {
             Some(vec![0; n]),
             skeleton,
         )
+        .map_err(|e| bad(e.to_string()))?
+        .with_morph_targets(merged_morph_targets(model_mesh))
         .map_err(|e| bad(e.to_string()))?;
         if has_uvs {
             rigid.with_uvs(uvs).map_err(|e| bad(e.to_string()))
@@ -905,6 +938,7 @@ impl ImportedModel {
             .map_err(|source| MappingError::Skin { skin, source })?;
         let mesh =
             keyrig_skin::SkinnedMesh::new(positions, normals, indices, joints, weights, None, skeleton)
+                .and_then(|m| m.with_morph_targets(merged_morph_targets(&self.meshes[mesh])))
                 .map_err(|source| MappingError::Skin { skin, source })?;
         if has_uvs {
             mesh.with_uvs(uvs).map_err(|source| MappingError::Skin { skin, source })

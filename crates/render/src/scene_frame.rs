@@ -681,7 +681,11 @@ impl SceneRig {
                 source: error.clone(),
             });
         }
-        if let (Some(_), Some(palette)) = (self.eval.skin(i), &state.palette) {
+        if let (Some(skin), Some(palette)) = (self.eval.skin(i), &state.palette) {
+            // glTF morph targets: the rest vertices morphed by the evaluator's weights.
+            let morph = skin.mesh.morphed(&state.look.morph_weights).map(|(positions, normals)| {
+                positions.iter().zip(&normals).map(|(&p, &n)| SkinnedVertex::new(p, n)).collect::<Arc<[_]>>()
+            });
             items.push(DrawItem {
                 mesh,
                 world_from_model,
@@ -689,6 +693,7 @@ impl SceneRig {
                     deformer: view.deformer.unwrap_or(state.look.deformer),
                     joints: joint_poses(palette),
                     bindings: state.zone_bindings.as_ref().map(|(_, b)| Arc::clone(b)),
+                    morph,
                 },
                 colour,
                 opacity,
