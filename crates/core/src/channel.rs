@@ -859,7 +859,7 @@ mod tests {
             .contains("light properties are: position, direction, colour, intensity"));
         assert!(err("object/Arm/joint/elbow/size").contains("unknown joint property \"size\""));
         assert!(err("camera/x/y").contains(
-            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll"
+            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll, visible"
         ));
         assert!(err("lamp/x/y").contains("unknown kind \"lamp\""));
         assert!(err("object/Arm").contains("missing property"));

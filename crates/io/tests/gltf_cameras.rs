@@ -358,11 +358,11 @@ fn keyed_cameras_export_equal_at_every_key_and_frame() {
     let top = again.cameras.iter().find(|c| c.name == "Top").unwrap();
     let original = &scene.cameras[1];
     let read = AnimatedTrack::new(&top.lens).unwrap();
-    for k in &original.lens.track.keys {
+    for k in original.lens.track.keys.iter() {
         assert!((read.sample(k.time) - k.value).abs() < 1e-5, "lens at {}", k.time);
     }
     assert_eq!(top.visible.track.keys.len(), 3);
-    for (a, b) in top.visible.track.keys.iter().zip(&original.visible.track.keys) {
+    for (a, b) in top.visible.track.keys.iter().zip(original.visible.track.keys.iter()) {
         assert_eq!((a.time as f32, a.value, a.interpolation), (b.time as f32, b.value, b.interpolation));
     }
     let follow = again.cameras.iter().find(|c| c.name == "Follow").unwrap();

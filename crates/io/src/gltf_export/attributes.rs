@@ -337,7 +337,7 @@ pub(super) fn camera_lens(
     }
     let here = format!("{here}.lens");
     let pointer = |field: &str| format!("/cameras/{index}/{field}");
-    let mut push = |doc: &mut Document, field: &str, channel: Option<Channel>| {
+    let push = |doc: &mut Document, field: &str, channel: Option<Channel>| {
         if let Some(channel) = channel {
             doc.pointers.push(PointerChannel { pointer: pointer(field), channel, boolean: false });
         }
