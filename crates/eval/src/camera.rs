@@ -219,9 +219,9 @@ impl CameraRig {
             &self.lens.problem,
             &self.visible.problem,
         ]
-            .into_iter()
-            .chain(self.aim.as_ref().map(|a| &a.roll.problem))
-            .flatten()
+        .into_iter()
+        .chain(self.aim.as_ref().map(|a| &a.roll.problem))
+        .flatten()
         {
             f(p);
         }

@@ -982,7 +982,6 @@ impl Document {
         }
         json!({"name": "keyrig", "channels": chans, "samplers": samplers})
     }
-
 }
 
 /// Writes scene camera `c` ([`crate::gltf_camera`]): a root node holding the camera, its

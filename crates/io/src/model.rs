@@ -614,7 +614,8 @@ fn merged_morph_targets(mesh: &ModelMesh) -> Vec<keyrig_skin::MorphTarget> {
     let count = prims.iter().map(|p| p.morph_targets.len()).max().unwrap_or(0);
     (0..count)
         .map(|t| {
-            let any_normals = prims.iter().any(|p| p.morph_targets.get(t).is_some_and(|m| m.normals.is_some()));
+            let any_normals =
+                prims.iter().any(|p| p.morph_targets.get(t).is_some_and(|m| m.normals.is_some()));
             let mut positions = Vec::new();
             let mut normals = Vec::new();
             for p in &prims {

@@ -123,7 +123,8 @@ impl Glb {
         let a = &self.json["accessors"][sampler["output"].as_u64().unwrap() as usize];
         assert_eq!(a["componentType"], 5121, "unsigned bytes");
         let view = &self.json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
-        let start = (view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        let start =
+            (view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
         (times, self.bin[start..start + a["count"].as_u64().unwrap() as usize].to_vec())
     }
 

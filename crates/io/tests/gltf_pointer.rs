@@ -325,6 +325,11 @@ fn camera_pointers_become_lens_keys_and_the_rest_are_skipped_and_named() {
         persp.visible.track.keys.iter().map(|k| (k.time, k.value, k.interpolation)).collect();
     assert_eq!(shown, vec![(0.0, 1.0, Interpolation::Step), (1.0, 0.0, Interpolation::Step)]);
     assert!(!ortho.visible.is_animated() && ortho.visible.value == 0.0);
-    let listed: Vec<String> = keyrig_core::channel::list_channels(&scene).iter().map(ToString::to_string).collect();
-    assert!(listed.contains(&"camera/Persp/visible".to_owned()) && listed.contains(&"camera/Ortho/visible".to_owned()), "{listed:?}");
+    let listed: Vec<String> =
+        keyrig_core::channel::list_channels(&scene).iter().map(ToString::to_string).collect();
+    assert!(
+        listed.contains(&"camera/Persp/visible".to_owned())
+            && listed.contains(&"camera/Ortho/visible".to_owned()),
+        "{listed:?}"
+    );
 }

@@ -358,10 +358,15 @@ fn gltf_morph_targets_are_drawn_with_the_evaluated_weights() {
                 }
             }
             for (d, n) in drawn.iter().zip(&n) {
-                assert!((d.normal() - n.normalize()).length() < 1e-4, "t {time}: normal {} vs {n}", d.normal());
+                assert!(
+                    (d.normal() - n.normalize()).length() < 1e-4,
+                    "t {time}: normal {} vs {n}",
+                    d.normal()
+                );
             }
         }
-        morphed_somewhere |= drawn.iter().zip(&prim.positions[..]).any(|(d, p)| (d.position() - *p).length() > 1e-3);
+        morphed_somewhere |=
+            drawn.iter().zip(&prim.positions[..]).any(|(d, p)| (d.position() - *p).length() > 1e-3);
     }
     assert!(morphed_somewhere, "the weights move the cube at some time");
 }

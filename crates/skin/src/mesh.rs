@@ -135,7 +135,10 @@ impl SkinnedMesh {
             }
             let bad = target.positions.iter().chain(&target.normals).position(|d| !d.is_finite());
             if let Some(v) = bad {
-                return Err(SkinError::NonFiniteVertex { vertex: v % n.max(1), what: "morph target displacement" });
+                return Err(SkinError::NonFiniteVertex {
+                    vertex: v % n.max(1),
+                    what: "morph target displacement",
+                });
             }
         }
         self.morph_targets = targets;

@@ -349,7 +349,8 @@ pub(super) fn camera_lens(
         }
         keyrig_core::Projection::Orthographic => {
             let ymag = scalar_channel(&camera.lens, 0.5, options, range, &here)?;
-            let xmag = scalar_channel(&camera.lens, 0.5 * aspect.unwrap_or(16.0 / 9.0), options, range, &here)?;
+            let xmag =
+                scalar_channel(&camera.lens, 0.5 * aspect.unwrap_or(16.0 / 9.0), options, range, &here)?;
             push(doc, "orthographic/ymag", ymag);
             push(doc, "orthographic/xmag", xmag);
         }
@@ -369,7 +370,8 @@ pub(super) fn camera_lens(
                 })
                 .collect();
             let times = times.iter().map(|&t| t as f32).collect();
-            let channel = Channel { node: 0, path: "pointer", interpolation: "LINEAR", times, values, width: 1 };
+            let channel =
+                Channel { node: 0, path: "pointer", interpolation: "LINEAR", times, values, width: 1 };
             push(doc, "perspective/yfov", Some(channel));
         }
     }
