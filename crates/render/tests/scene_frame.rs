@@ -370,3 +370,30 @@ fn gltf_morph_targets_are_drawn_with_the_evaluated_weights() {
     }
     assert!(morphed_somewhere, "the weights move the cube at some time");
 }
+
+/// Issue 31: a scene camera's visibility channel hides its frustum while it is 0 (Step keys),
+/// and a hidden camera can still be looked through.
+#[test]
+fn hidden_cameras_draw_no_frustum() {
+    use keyrig_core::{Interpolation, SceneCamera};
+    let mut scene = arm_scene();
+    let step = |t: f64, v: f32| Key::new(t, v).with_interpolation(Interpolation::Step);
+    let mut blinking = SceneCamera::new("Blinking", Vec3::new(0.0, 1.0, 5.0));
+    blinking.visible = Animated::new(1.0, RawTrack::new(vec![step(0.0, 1.0), step(1.0, 0.0), step(1.5, 1.0)]));
+    let mut hidden = SceneCamera::new("Hidden", Vec3::new(3.0, 1.0, 5.0));
+    hidden.visible = Animated::constant(0.0);
+    scene.cameras = vec![blinking, hidden];
+    assert_eq!(scene.problems(), Vec::new());
+    let rig = SceneRig::new(&scene).expect("rig");
+    let view = ViewOptions { cameras: true, ..ViewOptions::default() };
+    let shown = |time: f64, view: &ViewOptions| -> Vec<Vec3> {
+        let frame = rig.frame(time, view).expect("frame");
+        frame.camera_gizmos.iter().map(|g| g.camera.eye()).collect()
+    };
+    assert_eq!(shown(0.5, &view), vec![Vec3::new(0.0, 1.0, 5.0)], "only the shown camera");
+    assert_eq!(shown(1.2, &view), Vec::<Vec3>::new(), "both hidden");
+    assert_eq!(shown(1.5, &view), vec![Vec3::new(0.0, 1.0, 5.0)]);
+    let state = rig.evaluator().evaluate(1.2, &Overrides::new());
+    assert!(!state.cameras[0].visible && !state.cameras[1].visible);
+    assert!(state.cameras[1].is_usable(), "a hidden camera can still be looked through");
+}
