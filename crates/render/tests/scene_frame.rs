@@ -379,7 +379,8 @@ fn hidden_cameras_draw_no_frustum() {
     let mut scene = arm_scene();
     let step = |t: f64, v: f32| Key::new(t, v).with_interpolation(Interpolation::Step);
     let mut blinking = SceneCamera::new("Blinking", Vec3::new(0.0, 1.0, 5.0));
-    blinking.visible = Animated::new(1.0, RawTrack::new(vec![step(0.0, 1.0), step(1.0, 0.0), step(1.5, 1.0)]));
+    blinking.visible =
+        Animated::new(1.0, RawTrack::new(vec![step(0.0, 1.0), step(1.0, 0.0), step(1.5, 1.0)]));
     let mut hidden = SceneCamera::new("Hidden", Vec3::new(3.0, 1.0, 5.0));
     hidden.visible = Animated::constant(0.0);
     scene.cameras = vec![blinking, hidden];
