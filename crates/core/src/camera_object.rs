@@ -44,6 +44,19 @@ pub struct SceneCamera {
     /// Points the camera at something instead of its keyed rotation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub aim: Option<Aim>,
+    /// 1 shown, 0 hidden (Step keys, channel `camera/<name>/visible`): a hidden camera's
+    /// frustum is not drawn (glTF `KHR_node_visibility` on its node). Left out of the file
+    /// while always shown.
+    #[serde(default = "shown", skip_serializing_if = "is_shown")]
+    pub visible: Animated<f32>,
+}
+
+fn shown() -> Animated<f32> {
+    Animated::constant(1.0)
+}
+
+fn is_shown(a: &Animated<f32>) -> bool {
+    !a.is_animated() && a.value == 1.0
 }
 
 impl SceneCamera {
@@ -60,6 +73,7 @@ impl SceneCamera {
             translation: Animated::constant(translation),
             rotation: Animated::constant(Quat::IDENTITY),
             aim: None,
+            visible: shown(),
         }
     }
 }

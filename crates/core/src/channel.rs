@@ -61,7 +61,7 @@ pub const LIGHT_PROPERTIES: [&str; 8] =
     ["position", "direction", "colour", "intensity", "visible", "range", "cutoff_deg", "inner_angle_deg"];
 
 /// Properties of a scene camera.
-pub const CAMERA_PROPERTIES: [&str; 4] = ["translation", "rotation", "lens", "roll"];
+pub const CAMERA_PROPERTIES: [&str; 5] = ["translation", "rotation", "lens", "roll", "visible"];
 
 /// One animated value of a scene camera.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -70,6 +70,7 @@ pub enum CameraProperty {
     Rotation,
     Lens,
     Roll,
+    Visible,
 }
 
 impl CameraProperty {
@@ -80,6 +81,7 @@ impl CameraProperty {
             CameraProperty::Rotation => "rotation",
             CameraProperty::Lens => "lens",
             CameraProperty::Roll => "roll",
+            CameraProperty::Visible => "visible",
         }
     }
 }
@@ -396,6 +398,7 @@ impl ChannelPath {
                     "rotation" => CameraProperty::Rotation,
                     "lens" => CameraProperty::Lens,
                     "roll" => CameraProperty::Roll,
+                    "visible" => CameraProperty::Visible,
                     other => {
                         return Err(ChannelError::UnknownProperty {
                             path: path.to_string(),
@@ -546,6 +549,7 @@ impl ChannelPath {
                         }
                         ChannelId::CameraRoll(i)
                     }
+                    CameraProperty::Visible => ChannelId::CameraVisible(i),
                 }
             }
         })
@@ -652,6 +656,9 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
         }
         if c.aim.is_some() {
             out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Roll });
+        }
+        if c.visible.is_animated() || c.visible.value != 1.0 {
+            out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Visible });
         }
     }
     out
@@ -852,7 +859,7 @@ mod tests {
             .contains("light properties are: position, direction, colour, intensity"));
         assert!(err("object/Arm/joint/elbow/size").contains("unknown joint property \"size\""));
         assert!(err("camera/x/y").contains(
-            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll"
+            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll, visible"
         ));
         assert!(err("lamp/x/y").contains("unknown kind \"lamp\""));
         assert!(err("object/Arm").contains("missing property"));

@@ -71,6 +71,8 @@ pub enum ChannelId {
     CameraLens(usize),
     /// The roll (degrees) of an aimed scene camera.
     CameraRoll(usize),
+    /// A scene camera's visibility: 1 shown, 0 hidden (Step keys).
+    CameraVisible(usize),
 }
 
 /// What kind of value a channel holds.
@@ -92,7 +94,8 @@ impl ChannelId {
             ChannelId::LightIntensity(_)
             | ChannelId::IkBlend { .. }
             | ChannelId::CameraLens(_)
-            | ChannelId::CameraRoll(_) => ChannelKind::Scalar,
+            | ChannelId::CameraRoll(_)
+            | ChannelId::CameraVisible(_) => ChannelKind::Scalar,
             _ => ChannelKind::Vec3,
         }
     }
@@ -116,6 +119,7 @@ impl ChannelId {
             ChannelId::CameraRotation(_) => "rotation",
             ChannelId::CameraLens(_) => "lens",
             ChannelId::CameraRoll(_) => "roll",
+            ChannelId::CameraVisible(_) => "visible",
         }
     }
 
@@ -152,6 +156,7 @@ impl ChannelId {
             ChannelId::CameraRotation(c) => format!("cameras[{c}].rotation"),
             ChannelId::CameraLens(c) => format!("cameras[{c}].lens"),
             ChannelId::CameraRoll(c) => format!("cameras[{c}].aim.roll"),
+            ChannelId::CameraVisible(c) => format!("cameras[{c}].visible"),
         }
     }
 
@@ -203,8 +208,9 @@ impl ChannelId {
         ]
     }
 
-    /// The channels of a scene camera: translation, rotation, lens, and its roll while it is
-    /// aimed.
+    /// The channels of a scene camera: translation, rotation, lens, its roll while it is
+    /// aimed, and its visibility while keyed or hidden (as an object's: every camera has the
+    /// channel, keying it lists it).
     #[must_use]
     pub fn of_camera(scene: &Scene, camera: usize) -> Vec<ChannelId> {
         let mut out = vec![
@@ -212,10 +218,34 @@ impl ChannelId {
             ChannelId::CameraRotation(camera),
             ChannelId::CameraLens(camera),
         ];
-        if scene.cameras.get(camera).is_some_and(|c| c.aim.is_some()) {
+        let Some(c) = scene.cameras.get(camera) else { return out };
+        if c.aim.is_some() {
             out.push(ChannelId::CameraRoll(camera));
         }
+        if c.visible.is_animated() || c.visible.value != 1.0 {
+            out.push(ChannelId::CameraVisible(camera));
+        }
         out
+    }
+
+    /// True for switches: whole-number values keyed with Step keys (visibility, the deformer).
+    #[must_use]
+    pub fn is_switch(self) -> bool {
+        match self {
+            ChannelId::Attribute(a) => a.is_switch(),
+            ChannelId::CameraVisible(_) => true,
+            _ => false,
+        }
+    }
+
+    /// True for visibility channels (a 0/1 switch shown as a check box).
+    #[must_use]
+    pub fn is_visibility(self) -> bool {
+        matches!(
+            self,
+            ChannelId::Attribute(AttributeId::ObjectVisible(_) | AttributeId::LightVisible(_))
+                | ChannelId::CameraVisible(_)
+        )
     }
 
     /// Every channel of the scene: objects, lights, then cameras.
@@ -258,7 +288,8 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
         ChannelId::CameraTranslation(c)
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
-        | ChannelId::CameraRoll(c) => scene.cameras.get(c)?.name.clone(),
+        | ChannelId::CameraRoll(c)
+        | ChannelId::CameraVisible(c) => scene.cameras.get(c)?.name.clone(),
     })
 }
 
@@ -337,6 +368,7 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::CameraRotation(c) => ChannelRef::Rotation(&scene.cameras.get(c)?.rotation),
         ChannelId::CameraLens(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.roll),
+        ChannelId::CameraVisible(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.visible),
     })
 }
 
@@ -374,6 +406,7 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::CameraRotation(c) => ChannelMut::Rotation(&mut scene.cameras.get_mut(c)?.rotation),
         ChannelId::CameraLens(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.roll),
+        ChannelId::CameraVisible(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.visible),
     })
 }
 

@@ -32,7 +32,7 @@
 //!     keys in range for the projection (field of view in (0°, 180°), focal length > 0 with a
 //!     sensor height > 0, orthographic height > 0); near > 0, far > near when given, an
 //!     orthographic camera has a far plane; an aim's up not zero, its object (and joint)
-//!     existing, its point finite. Markers name existing cameras; `active_camera` names an
+//!     existing, its point finite; its visibility 0 or 1 with Step keys. Markers name existing cameras; `active_camera` names an
 //!     existing camera; a render size has sides in 1..=16384.
 
 use std::collections::HashMap;
@@ -536,6 +536,12 @@ impl Checker {
         self.animated(&join(path, "translation"), &camera.translation);
         self.animated(&join(path, "rotation"), &camera.rotation);
         self.animated(&join(path, "lens"), &camera.lens);
+        self.animated(&join(path, "visible"), &camera.visible);
+        crate::channel_id::attribute_id::visibility_problems(
+            &join(path, "visible"),
+            &camera.visible,
+            &mut |at, message| self.push(at, message),
+        );
         let (range, what): (fn(f32) -> bool, &str) = match camera.projection {
             Projection::Perspective => (|v| v > 0.0 && v < 180.0, "a field of view must be in (0°, 180°)"),
             Projection::FocalLength { sensor_height_mm } => {

@@ -146,6 +146,7 @@ mod tests {
             lens: keyrig_core::Lens::Perspective { fov_y: 45f32.to_radians() },
             near: 0.1,
             far: Some(100.0),
+            visible: true,
         };
         // The same view matrix as the orbit camera's (keyrig-render's look-at).
         let orbit = keyrig_render::camera::view_from_world(&view);

@@ -467,7 +467,7 @@ pub fn set_key(scene: &mut Scene, id: ChannelId, time: f64, value: ChannelValue)
         (ChannelMut::Scalar(a), ChannelValue::Scalar(s)) => {
             // Switches (visibility, the deformer) are whole numbers keyed with Step keys.
             let key = match id {
-                ChannelId::Attribute(at) if at.is_switch() => {
+                id if id.is_switch() => {
                     Key::new(time, s.round()).with_interpolation(keyrig_core::Interpolation::Step)
                 }
                 _ => Key::new(time, s),

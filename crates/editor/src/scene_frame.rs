@@ -321,7 +321,9 @@ impl SceneFrame {
         self.skinned[o] = true;
         self.deform_errors[o] = None;
         if let (Some(skin), Some(palette)) = (eval.skin(o), &state.palette) {
-            if let Err(e) = self.skin.skin(o, skin, state.bindings(skin), palette, state.look.deformer) {
+            let (bindings, deformer, weights) =
+                (state.bindings(skin), state.look.deformer, &state.look.morph_weights);
+            if let Err(e) = self.skin.skin(o, skin, bindings, palette, deformer, weights) {
                 self.deform_errors[o] = Some(format!("{}: {e}", object.name));
             }
             return;
@@ -557,6 +559,38 @@ mod tests {
     use glam::Quat;
     use keyrig_core::ProceduralMesh;
     use keyrig_skin::{deform_mesh, mesh_for, JointPalette, Pose};
+
+    /// Issue 31: the painter's CPU path draws a glTF mesh morphed by the weights the evaluator
+    /// gives (AnimatedMorphCube's weights channel as the scene's `morph/<i>` channels): the
+    /// CPU-deformed positions are the glTF specification's morph of the file at each time
+    /// (`base + Σ wᵢ·Δᵢ` with the file's weights, computed from keyrig-io's reading of it).
+    #[test]
+    fn the_cpu_path_draws_gltf_morph_targets_with_the_evaluated_weights() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/corpus/gltf/AnimatedMorphCube/AnimatedMorphCube.glb");
+        let model = keyrig_io::gltf_import::import_gltf_file(&file).expect("import");
+        let name = file.to_str().expect("utf-8 path");
+        let scene = model.to_scene(name, Some(0)).expect("scene");
+        let doc = Document::new(scene, None);
+        let mut meshes = MeshStore::default();
+        let mut frame = SceneFrame::default();
+        let node = model.nodes.iter().position(|n| n.mesh == Some(0)).expect("mesh node");
+        let prim = &model.meshes[0].primitives[0];
+        let mut moved = false;
+        for time in [0.0, 0.7, 1.4, 2.5] {
+            let wanted = Wanted { cpu_meshes: true, ..Wanted::default() };
+            frame.prepare(&doc, &mut meshes, time, &Overrides::new(), wanted);
+            let (positions, _) = frame.cpu_mesh(0, doc.scene(), &meshes, None).expect("drawn on the CPU");
+            let weights = &model.pose_at(Some(0), time).weights[node];
+            let want = keyrig_io::model::ImportedModel::morphed_positions(prim, weights);
+            assert_eq!(positions.len(), want.len());
+            for (p, w) in positions.iter().zip(&want) {
+                assert!((*p - *w).length() < 1e-5, "t {time}: {p} vs {w}");
+            }
+            moved |= positions.iter().zip(&prim.positions[..]).any(|(p, b)| (*p - *b).length() > 1e-3);
+        }
+        assert!(moved, "the weights move the cube at some time");
+    }
 
     /// Every vertex the linear-blend and rigid deformers move lies in the reach box, for poses
     /// that bend, twist, translate and scale the arm's joints (the deformers are keyrig-skin's,

@@ -292,7 +292,8 @@ pub fn owner_of(channel: ChannelId) -> Selected {
         ChannelId::CameraTranslation(c)
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
-        | ChannelId::CameraRoll(c) => Selected::Camera(c),
+        | ChannelId::CameraRoll(c)
+        | ChannelId::CameraVisible(c) => Selected::Camera(c),
     }
 }
 
@@ -340,6 +341,7 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         (C::CameraRotation(c), Selected::Camera(r)) => C::CameraRotation(shift(c, r)?),
         (C::CameraLens(c), Selected::Camera(r)) => C::CameraLens(shift(c, r)?),
         (C::CameraRoll(c), Selected::Camera(r)) => C::CameraRoll(shift(c, r)?),
+        (C::CameraVisible(c), Selected::Camera(r)) => C::CameraVisible(shift(c, r)?),
         (id, _) => id,
     })
 }

@@ -4,7 +4,9 @@
 //! Also the cross-section measure of docs/design.md §6 for the selected joint.
 //!
 //! Vertex-animated (MD2) meshes are morphed here too, on the CPU, for the painter fallback
-//! and for tests ([`SkinCache::morph`]); the GPU viewport morphs them in keyrig-render.
+//! and for tests ([`SkinCache::morph`]); the GPU viewport morphs them in keyrig-render. A glTF
+//! mesh's morph targets are applied before it is skinned, with the weights the evaluator gives
+//! ([`SkinCache::skin`]), as keyrig-render does on the GPU path.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -20,6 +22,9 @@ use keyrig_skin::{
 /// One object's last skinned frame.
 struct Entry {
     mesh: Arc<SkinnedMesh>,
+    /// A copy of `mesh` morphed by the frame's morph-target weights (glTF targets), reused from
+    /// frame to frame; `None` while no target weighs.
+    morphed: Option<SkinnedMesh>,
     palette: JointPalette,
     deformed: Deformed,
 }
@@ -50,7 +55,9 @@ pub struct DeformError {
 
 impl SkinCache {
     /// Skins object `index`'s mesh (`skin`, from the evaluator) with `palette`, `kind` and
-    /// `bindings` (the skin's own, or those of a keyed blend zone: `ObjectState::bindings`).
+    /// `bindings` (the skin's own, or those of a keyed blend zone: `ObjectState::bindings`),
+    /// morphed first by `morph_weights` (the evaluator's `look.morph_weights`; glTF morph
+    /// targets) when any of its targets weighs.
     ///
     /// # Errors
     /// The deformer's error (e.g. a dual quaternion of a scaled joint), with the deformer.
@@ -61,18 +68,30 @@ impl SkinCache {
         bindings: &MeshBindings,
         palette: &JointPalette,
         kind: DeformerKind,
+        morph_weights: &[f32],
     ) -> Result<SkinnedView<'_>, DeformError> {
         self.morphs.remove(&index);
         let entry = self.entries.entry(index).or_insert_with(|| Entry {
             mesh: Arc::clone(&skin.mesh),
+            morphed: None,
             palette: JointPalette::default(),
             deformed: Deformed::default(),
         });
         if !Arc::ptr_eq(&entry.mesh, &skin.mesh) {
             entry.mesh = Arc::clone(&skin.mesh);
+            entry.morphed = None;
         }
         entry.palette.clone_from(palette);
-        deform_mesh_into(&skin.mesh, bindings, palette, kind, Execution::Parallel, &mut entry.deformed)
+        let mesh: &SkinnedMesh = match skin.mesh.morphed(morph_weights) {
+            Some((positions, normals)) => {
+                let morphed = entry.morphed.get_or_insert_with(|| (*skin.mesh).clone());
+                morphed.positions = positions;
+                morphed.normals = normals;
+                morphed
+            }
+            None => &skin.mesh,
+        };
+        deform_mesh_into(mesh, bindings, palette, kind, Execution::Parallel, &mut entry.deformed)
             .map_err(|source| DeformError { kind, source })?;
         Ok(SkinnedView {
             positions: &entry.deformed.positions,

@@ -356,6 +356,47 @@ fn gltf_morph_target_models_deform_as_base_plus_weighted_targets() {
     assert!(moved, "the targets move the cube at some time");
 }
 
+/// Issue 31: a scene's own morph-weight keys morph its glTF object. The scene evaluator gives
+/// the weights (`object/<name>/morph/<i>`); the model file only the base and the targets. The
+/// scene made from AnimatedMorphCube is given keys of its own: target 0 at 1 and target 1 at 0
+/// at t = 0.5 s, which the file's weights channel never reaches; the vertices (in the object's
+/// model space) are the file's base plus target 0's displacements.
+#[test]
+fn a_scene_s_own_morph_weight_keys_morph_its_gltf_object() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = corpus("gltf/AnimatedMorphCube/AnimatedMorphCube.glb");
+    let path = dir.path().join("morph.ron");
+    let o = keyrig(&["import", file.to_str().unwrap(), "-o", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut scene = keyrig_io::scene_file::load(&path).unwrap();
+    let weights = &mut scene.objects[0].attributes.morph_weights;
+    assert_eq!(weights.len(), 2, "one channel per target");
+    for (target, value) in [(0usize, 1.0f32), (1, 0.0)] {
+        weights[target] = Animated::new(
+            value,
+            RawTrack::new(vec![
+                Key::new(0.0, value).with_interpolation(Interpolation::Linear),
+                Key::new(1.0, value).with_interpolation(Interpolation::Linear),
+            ]),
+        );
+    }
+    keyrig_io::scene_file::save(&path, &scene).unwrap();
+    let json = deform_json(&path, &["--time", "0.5"], "linear", dir.path());
+    assert_eq!(json["animation"], "morph");
+    assert_eq!(json["space"], "model");
+    let got = positions(&json, "positions");
+    let model = keyrig_io::gltf_import::import_gltf_file(&file).unwrap();
+    let prim = &model.meshes[0].primitives[0];
+    let want = keyrig_io::model::ImportedModel::morphed_positions(prim, &[1.0, 0.0]);
+    assert_eq!(got.len(), want.len());
+    let mut moved = false;
+    for ((g, w), base) in got.iter().zip(&want).zip(&prim.positions[..]) {
+        assert!((*g - *w).length() < 1e-6, "{g} vs {w}");
+        moved |= (*w - *base).length() > 1e-3;
+    }
+    assert!(moved, "target 0 moves the cube");
+}
+
 /// Issue 29: a scene made from a model (`keyrig import`) deforms like the model file itself
 /// where the scene has not changed it: every skinned model of the corpus, every deformer, at a
 /// time inside its animation. The scene reads the mesh from the model file (the path it holds

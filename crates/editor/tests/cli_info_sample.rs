@@ -569,3 +569,59 @@ fn sample_prints_the_unwrapped_angle_of_spin_segments() {
     ]);
     assert_eq!(stdout(&o), "frame,time,x,y,z,w\n30,1,0,0,0,1\n");
 }
+
+/// Issue 31: `keyrig info` of a glTF file lists the animation pointers it skipped, with why —
+/// here an orthographic camera's `xmag` (its width follows the height and the render aspect),
+/// exported by keyrig next to the `ymag` channel it reads — and `keyrig sample` reads the
+/// camera's lens and visibility channels from the file.
+#[test]
+fn info_lists_skipped_camera_pointers_and_sample_reads_camera_channels() {
+    use keyrig_core::{Animated, Interpolation, Key, Projection, RawTrack, Scene, SceneCamera};
+    let dir = tempfile::tempdir().unwrap();
+    let mut top = SceneCamera::new("Top", glam::Vec3::new(0.0, 10.0, 0.0));
+    top.projection = Projection::Orthographic;
+    top.far = Some(50.0);
+    let linear = |t: f64, v: f32| Key::new(t, v).with_interpolation(Interpolation::Linear);
+    top.lens = Animated::new(6.0, RawTrack::new(vec![linear(0.0, 6.0), linear(1.0, 3.0)]));
+    let step = |t: f64, v: f32| Key::new(t, v).with_interpolation(Interpolation::Step);
+    top.visible = Animated::new(1.0, RawTrack::new(vec![step(0.0, 1.0), step(0.5, 0.0)]));
+    let scene = Scene { cameras: vec![top], ..Scene::default() };
+    let exported =
+        keyrig_io::gltf_export::export_scene(&scene, &keyrig_io::gltf_export::ExportOptions::default())
+            .unwrap();
+    let file = dir.path().join("top.glb");
+    exported.write(&file).unwrap();
+
+    let o = keyrig(&["info", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("skipped channels: 1\n"), "{out}");
+    assert!(
+        out.contains("(/cameras/0/orthographic/xmag): keyrig's orthographic view width follows its height (ymag) and the scene's render aspect"),
+        "{out}"
+    );
+    let o = keyrig(&[
+        "sample",
+        file.to_str().unwrap(),
+        "--channel",
+        "camera/Top/lens",
+        "--frames",
+        "0..30",
+        "--step",
+        "15",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stdout(&o), "frame,time,value\n0,0,6\n15,0.5,4.5\n30,1,3\n");
+    let o = keyrig(&[
+        "sample",
+        file.to_str().unwrap(),
+        "--channel",
+        "camera/Top/visible",
+        "--frames",
+        "0..30",
+        "--step",
+        "15",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stdout(&o), "frame,time,value\n0,0,1\n15,0.5,0\n30,1,0\n");
+}

@@ -1,5 +1,6 @@
 //! Scene cameras and markers in the editor, as a user works with them (issue 31): selecting a
-//! camera in the outliner, keying its fields in record mode, looking through it (0) and
+//! camera in the outliner, keying its fields in record mode (its visibility with a Step key),
+//! looking through it (0) and
 //! leaving by orbiting, setting it to the view (Ctrl+Alt+0), adding one (Ctrl+Shift+C),
 //! markers (M, Ctrl+B), and deleting a camera bound to a marker.
 
@@ -53,6 +54,22 @@ fn a_camera_is_selected_keyed_and_looked_through() {
     assert!(matches!(h.state().value_now(lens), Some(ChannelValue::Scalar(v)) if (v - 35.0).abs() < 1e-4));
     let key = scene.cameras[0].translation.track.keys.iter().find(|k| (k.time - time).abs() < 1e-9);
     assert_eq!(key.map(|k| k.value.x), Some(1.25));
+    // The Visible check box keys the camera's visibility with a Step key; the channel is then
+    // listed (its dope-sheet row and curve), and the evaluated camera is hidden.
+    let visible = ChannelId::CameraVisible(0);
+    assert!(!ChannelId::of_camera(h.state().doc.scene(), 0).contains(&visible), "not listed while shown");
+    h.get_by_label("Visible").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    let keys = &scene.cameras[0].visible.track.keys;
+    assert_eq!(keys.len(), 1);
+    assert_eq!((keys[0].value, keys[0].interpolation), (0.0, keyrig_core::Interpolation::Step));
+    assert!((keys[0].time - time).abs() < 1e-9);
+    assert!(ChannelId::of_camera(scene, 0).contains(&visible), "listed once keyed");
+    assert!(matches!(h.state().value_now(visible), Some(ChannelValue::Scalar(v)) if v == 0.0));
+    assert_eq!(scene.problems(), Vec::new());
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert!(h.state().doc.scene().cameras[0].visible.track.keys.is_empty(), "one undo step");
     press(&mut h, Modifiers::NONE, Key::R);
 
     // 0 looks through the selected camera; 0 again, or orbiting, returns to the view.

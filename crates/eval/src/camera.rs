@@ -22,6 +22,9 @@ pub struct CameraState {
     pub near: f32,
     /// Far plane; `None` for an infinite one.
     pub far: Option<f32>,
+    /// Its visibility channel at this time (a hidden camera's frustum is not drawn; it can
+    /// still be looked and rendered through).
+    pub visible: bool,
 }
 
 impl CameraState {
@@ -125,6 +128,7 @@ pub(crate) struct CameraRig {
     pub(crate) translation: Slot<Vec3>,
     pub(crate) rotation: Slot<Quat>,
     pub(crate) lens: Slot<f32>,
+    pub(crate) visible: Slot<f32>,
     pub(crate) aim: Option<AimRig>,
     problem: Option<EvalProblem>,
 }
@@ -159,6 +163,7 @@ impl CameraRig {
             translation: Slot::new(&camera.translation, ChannelId::CameraTranslation(c)),
             rotation: Slot::new(&camera.rotation, ChannelId::CameraRotation(c)),
             lens: Slot::new(&camera.lens, ChannelId::CameraLens(c)),
+            visible: Slot::new(&camera.visible, ChannelId::CameraVisible(c)),
             aim: None,
             problem: None,
         };
@@ -177,7 +182,8 @@ impl CameraRig {
         let mut n =
             usize::from(self.translation.refresh(&camera.translation, ChannelId::CameraTranslation(c)))
                 + usize::from(self.rotation.refresh(&camera.rotation, ChannelId::CameraRotation(c)))
-                + usize::from(self.lens.refresh(&camera.lens, ChannelId::CameraLens(c)));
+                + usize::from(self.lens.refresh(&camera.lens, ChannelId::CameraLens(c)))
+                + usize::from(self.visible.refresh(&camera.visible, ChannelId::CameraVisible(c)));
         self.problem = None;
         match (&mut self.aim, &camera.aim) {
             (_, None) => self.aim = None,
@@ -202,14 +208,20 @@ impl CameraRig {
     }
 
     pub(crate) fn channel_count(&self) -> usize {
-        3 + usize::from(self.aim.is_some())
+        4 + usize::from(self.aim.is_some())
     }
 
     pub(crate) fn for_each_problem(&self, f: &mut dyn FnMut(&EvalProblem)) {
-        for p in [&self.problem, &self.translation.problem, &self.rotation.problem, &self.lens.problem]
-            .into_iter()
-            .chain(self.aim.as_ref().map(|a| &a.roll.problem))
-            .flatten()
+        for p in [
+            &self.problem,
+            &self.translation.problem,
+            &self.rotation.problem,
+            &self.lens.problem,
+            &self.visible.problem,
+        ]
+        .into_iter()
+        .chain(self.aim.as_ref().map(|a| &a.roll.problem))
+        .flatten()
         {
             f(p);
         }
@@ -252,11 +264,16 @@ impl CameraRig {
             Some(ChannelValue::Scalar(v)) => *v,
             _ => self.lens.sample(time),
         };
+        let visible = match overrides.get(&ChannelId::CameraVisible(c)) {
+            Some(ChannelValue::Scalar(v)) => *v,
+            _ => self.visible.sample(time),
+        };
         CameraState {
             world_from_camera: Affine3A::from_rotation_translation(rotation, eye),
             lens: Lens::of(self.projection, lens),
             near: self.near,
             far: self.far,
+            visible: visible >= 0.5,
         }
     }
 }
@@ -305,7 +322,7 @@ mod tests {
     }
 
     fn state(lens: Lens, near: f32, far: Option<f32>) -> CameraState {
-        CameraState { world_from_camera: Affine3A::IDENTITY, lens, near, far }
+        CameraState { world_from_camera: Affine3A::IDENTITY, lens, near, far, visible: true }
     }
 
     #[test]

@@ -473,6 +473,9 @@ impl SceneEvaluator {
             ChannelId::CameraRoll(c) => {
                 Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.roll.sample(time)))
             }
+            ChannelId::CameraVisible(c) => {
+                Some(ChannelValue::Scalar(self.cameras.get(c)?.visible.sample(time)))
+            }
         }
     }
 

@@ -33,7 +33,10 @@
 //!   rotation (glTF has no constraints) is sampled from the scene evaluator at every frame of
 //!   the range and resampled like a rotation track; an animated lens is written as a
 //!   `KHR_animation_pointer` channel on `/cameras/i/perspective/yfov` (orthographic: `ymag`
-//!   and `xmag`), LINEAR keys at every frame of the range.
+//!   and `xmag`): key for key when the map from keyrig's lens is linear (a field of view in
+//!   degrees, an orthographic height), else (a focal length) LINEAR keys at every frame of the
+//!   range and every key time; its visibility as `KHR_node_visibility`. Every pointer channel,
+//!   cameras' and attributes', goes through the one writer `Document::write_pointers`.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -352,15 +355,6 @@ struct Channel {
     width: usize,
 }
 
-/// A KHR_animation_pointer channel: LINEAR keys of a property named by a JSON pointer.
-struct PointerChannel {
-    pointer: String,
-    times: Vec<f32>,
-    /// `width` numbers per key.
-    values: Vec<f32>,
-    width: usize,
-}
-
 /// The material of one exported primitive: base colour factor and texture.
 #[derive(Clone, Debug, PartialEq)]
 struct MaterialData {
@@ -423,9 +417,8 @@ struct Document {
     meshes: Vec<Value>,
     skins: Vec<Value>,
     channels: Vec<Channel>,
-    /// The `cameras` entries, and the KHR_animation_pointer channels that animate them.
+    /// The `cameras` entries (their lens channels are in `pointers`).
     cameras: Vec<Value>,
-    pointer_channels: Vec<PointerChannel>,
     images: Vec<Value>,
     textures: Vec<Value>,
     materials: Vec<Value>,
@@ -895,10 +888,10 @@ impl Document {
     /// channel ([`Document::animation`], its accessors after the meshes'), and the buffer
     /// padded to a multiple of 4 bytes.
     fn into_gltf(mut self, lights: Vec<Value>) -> ExportedGltf {
-        // Camera lenses (keyrig_io::gltf_camera) and the attributes (gltf_attributes) both
-        // animate through KHR_animation_pointer; they share the one animation.
-        let camera_pointers = std::mem::take(&mut self.pointer_channels);
-        let animated = !self.channels.is_empty() || !self.pointers.is_empty() || !camera_pointers.is_empty();
+        // Camera lenses and the attributes animate through KHR_animation_pointer channels,
+        // written by the one writer (`write_pointers`) after the node channels of the one
+        // animation.
+        let animated = !self.channels.is_empty() || !self.pointers.is_empty();
         let animation = animated.then(|| {
             let channels = std::mem::take(&mut self.channels);
             let mut animation = Self::animation(&mut self.b, &channels);
@@ -912,14 +905,13 @@ impl Document {
             self.write_pointers(&mut samplers, &mut chans);
             animation["samplers"] = json!(samplers);
             animation["channels"] = json!(chans);
-            Self::pointer_animation(&mut self.b, &camera_pointers, &mut animation);
             animation
         });
         let mut used: Vec<&str> = Vec::new();
         if !lights.is_empty() {
             used.push("KHR_lights_punctual");
         }
-        if self.animation_pointer || !camera_pointers.is_empty() {
+        if self.animation_pointer {
             used.push("KHR_animation_pointer");
         }
         if self.node_visibility {
@@ -990,28 +982,12 @@ impl Document {
         }
         json!({"name": "keyrig", "channels": chans, "samplers": samplers})
     }
-
-    /// Adds the KHR_animation_pointer `channels` to `animation`: a LINEAR sampler each, and a
-    /// channel whose target names no node, only the pointer (path `pointer`).
-    fn pointer_animation(b: &mut Builder, channels: &[PointerChannel], animation: &mut Value) {
-        for c in channels {
-            let input = b.floats(&c.times, 1, "SCALAR", None, true);
-            let type_ = if c.width == 1 { "SCALAR" } else { "VEC3" };
-            let output = b.floats(&c.values, c.width, type_, None, false);
-            let samplers = animation["samplers"].as_array_mut().expect("samplers");
-            samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
-            let sampler = samplers.len() - 1;
-            animation["channels"].as_array_mut().expect("channels").push(json!({
-                "sampler": sampler,
-                "target": {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": c.pointer}}},
-            }));
-        }
-    }
 }
 
 /// Writes scene camera `c` ([`crate::gltf_camera`]): a root node holding the camera, its
 /// translation channel, its rotation channel (an aimed camera's sampled from `eval` at every
-/// frame), and its lens channel as KHR_animation_pointer keys at every frame.
+/// frame), its lens as KHR_animation_pointer channels ([`attributes::camera_lens`]) and its
+/// visibility as KHR_node_visibility ([`attributes::visibility`]).
 fn export_camera(
     doc: &mut Document,
     scene: &Scene,
@@ -1081,51 +1057,8 @@ fn export_camera(
             &rotation_here,
         )?);
     }
-    if camera.lens.is_animated() && frames.len() > 1 {
-        let times: Vec<f32> = frames.iter().map(|&t| t as f32).collect();
-        let lens: Vec<keyrig_core::Lens> =
-            frames.iter().map(|&t| keyrig_core::Lens::of(camera.projection, lens_track.sample(t))).collect();
-        let pointer = |field: &str| format!("/cameras/{camera_index}/{field}");
-        match camera.projection {
-            keyrig_core::Projection::Orthographic => {
-                let ymag: Vec<f32> = lens
-                    .iter()
-                    .map(|l| match l {
-                        keyrig_core::Lens::Orthographic { height } => height * 0.5,
-                        keyrig_core::Lens::Perspective { .. } => 0.0,
-                    })
-                    .collect();
-                let xmag = ymag.iter().map(|y| y * aspect.unwrap_or(16.0 / 9.0)).collect();
-                doc.pointer_channels.push(PointerChannel {
-                    pointer: pointer("orthographic/ymag"),
-                    times: times.clone(),
-                    values: ymag,
-                    width: 1,
-                });
-                doc.pointer_channels.push(PointerChannel {
-                    pointer: pointer("orthographic/xmag"),
-                    times,
-                    values: xmag,
-                    width: 1,
-                });
-            }
-            _ => {
-                let yfov = lens
-                    .iter()
-                    .map(|l| match l {
-                        keyrig_core::Lens::Perspective { fov_y } => *fov_y,
-                        keyrig_core::Lens::Orthographic { .. } => 0.0,
-                    })
-                    .collect();
-                doc.pointer_channels.push(PointerChannel {
-                    pointer: pointer("perspective/yfov"),
-                    times,
-                    values: yfov,
-                    width: 1,
-                });
-            }
-        }
-    }
+    attributes::camera_lens(doc, camera, camera_index, &lens_track, aspect, &frames, options, range, &here)?;
+    attributes::visibility(doc, node, &camera.visible, t0, &format!("{here}.visible"))?;
     Ok(())
 }
 

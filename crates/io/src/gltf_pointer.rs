@@ -16,6 +16,12 @@
 //! | `/materials/M/pbrMetallicRoughness/baseColorFactor` | [`PointerTarget::MaterialBaseColour`] (RGBA) |
 //! | `/extensions/KHR_lights_punctual/lights/L/color`, `intensity`, `range` | light channels |
 //! | `/extensions/KHR_lights_punctual/lights/L/spot/innerConeAngle`, `outerConeAngle` | cone angles (radians) |
+//! | `/cameras/C/perspective/yfov` | [`PointerTarget::CameraYfov`]: the lens (field of view, radians → degrees) |
+//! | `/cameras/C/orthographic/ymag` | [`PointerTarget::CameraYmag`]: the lens (view height `2·ymag`) |
+//!
+//! Skipped with their reason: a camera's `znear` / `zfar` (keyrig's clip planes are not keyed),
+//! `xmag` (the width follows the height and the render aspect), `aspectRatio` (the scene's
+//! render size).
 //!
 //! Every other channel is left out and listed in [`crate::model::ImportedModel::skipped_channels`]
 //! with why (`keyrig info` prints them).
@@ -42,6 +48,10 @@ pub enum PointerTarget {
     LightInnerCone(usize),
     /// The spot light's `outerConeAngle` (radians).
     LightOuterCone(usize),
+    /// A perspective camera's `yfov` (radians).
+    CameraYfov(usize),
+    /// An orthographic camera's `ymag` (half the view's height).
+    CameraYmag(usize),
 }
 
 /// The keys of a pointer channel, with the file's interpolation (CUBICSPLINE tangents kept).

@@ -605,6 +605,38 @@ impl MergedTriangles {
     }
 }
 
+/// The morph targets of `mesh`'s triangle primitives merged as [`MergedTriangles`] merges
+/// their vertices: target i of each primitive (zero displacements where a primitive has fewer
+/// targets or no positions in it); normal displacements where any primitive has them.
+fn merged_morph_targets(mesh: &ModelMesh) -> Vec<keyrig_skin::MorphTarget> {
+    let prims: Vec<&ModelPrimitive> =
+        mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles).collect();
+    let count = prims.iter().map(|p| p.morph_targets.len()).max().unwrap_or(0);
+    (0..count)
+        .map(|t| {
+            let any_normals =
+                prims.iter().any(|p| p.morph_targets.get(t).is_some_and(|m| m.normals.is_some()));
+            let mut positions = Vec::new();
+            let mut normals = Vec::new();
+            for p in &prims {
+                let n = p.positions.len();
+                let target = p.morph_targets.get(t);
+                match target.and_then(|m| m.positions.as_ref()).filter(|d| d.len() == n) {
+                    Some(d) => positions.extend_from_slice(d),
+                    None => positions.resize(positions.len() + n, Vec3::ZERO),
+                }
+                if any_normals {
+                    match target.and_then(|m| m.normals.as_ref()).filter(|d| d.len() == n) {
+                        Some(d) => normals.extend_from_slice(d),
+                        None => normals.resize(normals.len() + n, Vec3::ZERO),
+                    }
+                }
+            }
+            keyrig_skin::MorphTarget { positions, normals }
+        })
+        .collect()
+}
+
 /// How a skin maps onto a keyrig skeleton: the skin's joints and every ancestor node of them
 /// up to the scene root, parents first, so that the keyrig skeleton's F(j) is exactly the
 /// file's global transform of joint j's node (docs/design.md §4; glTF 2.0 §3.7.3). When the nodes
@@ -801,6 +833,8 @@ impl ImportedModel {
             Some(vec![0; n]),
             skeleton,
         )
+        .map_err(|e| bad(e.to_string()))?
+        .with_morph_targets(merged_morph_targets(model_mesh))
         .map_err(|e| bad(e.to_string()))?;
         if has_uvs {
             rigid.with_uvs(uvs).map_err(|e| bad(e.to_string()))
@@ -905,6 +939,7 @@ impl ImportedModel {
             .map_err(|source| MappingError::Skin { skin, source })?;
         let mesh =
             keyrig_skin::SkinnedMesh::new(positions, normals, indices, joints, weights, None, skeleton)
+                .and_then(|m| m.with_morph_targets(merged_morph_targets(&self.meshes[mesh])))
                 .map_err(|source| MappingError::Skin { skin, source })?;
         if has_uvs {
             mesh.with_uvs(uvs).map_err(|source| MappingError::Skin { skin, source })
@@ -964,8 +999,9 @@ impl ImportedModel {
     ///   direction (−Z), spot cone angles in degrees;
     /// - each node holding a camera → a scene camera (`add_scene_cameras`).
     ///
-    /// What the scene does not take from the file: morph weights, animated lights, the
-    /// animation of unskinned nodes below other nodes, and the other animations.
+    /// What the scene does not take from the file: the animation of unskinned nodes below other
+    /// nodes, the pointer channels listed in [`ImportedModel::skipped_channels`], and the other
+    /// animations.
     ///
     /// # Errors
     /// A skin that cannot be mapped.
@@ -1057,7 +1093,7 @@ impl ImportedModel {
             attributes::light_attributes(self, anim, i, light_index, &mut scene_light);
             scene.lights.push(scene_light);
         }
-        add_scene_cameras(self, &world, &channels_of, &mut scene);
+        add_scene_cameras(self, &world, &channels_of, anim, &mut scene);
         Ok(scene)
     }
 }
@@ -1123,15 +1159,18 @@ impl ModelProjection {
 /// a root node. A perspective camera's `yfov` (radians) becomes a field of view in degrees, an
 /// orthographic camera's `ymag` (half the view's height) a view height of `2·ymag`. The first
 /// camera with an aspect ratio (`aspectRatio`, or `xmag / ymag`) sets the scene's render size
-/// (720 pixels tall).
+/// (720 pixels tall). Its visibility and its keyed `yfov` / `ymag` (`KHR_node_visibility`,
+/// `KHR_animation_pointer`) come from `attributes::camera_attributes`.
 fn add_scene_cameras(
     model: &ImportedModel,
     world: &[Mat4],
     channels_of: &[Vec<&ChannelTarget>],
+    anim: Option<&ModelAnimation>,
     scene: &mut keyrig_core::Scene,
 ) {
     for (i, node) in model.nodes.iter().enumerate() {
         let Some(camera) = node.camera.and_then(|c| model.cameras.get(c)) else { continue };
+        let camera_index = node.camera.unwrap_or_default();
         let (_, rotation, translation) = world[i].to_scale_rotation_translation();
         // The node's name, unless the file left it out (then the camera's).
         let base = if node.name == format!("node{i}") { camera.name.clone() } else { node.name.clone() };
@@ -1164,6 +1203,7 @@ fn add_scene_cameras(
                 }
             }
         }
+        attributes::camera_attributes(model, anim, i, camera_index, &mut out);
         if scene.render_size.is_none() {
             if let Some(aspect) = camera.projection.aspect_ratio().filter(|a| a.is_finite() && *a > 0.0) {
                 let width = (720.0 * aspect).round().clamp(1.0, f32::from(u16::MAX)) as u32;

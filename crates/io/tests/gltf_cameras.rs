@@ -8,6 +8,9 @@
 //!   property equal at every key time and every frame, read back by an independent reader of
 //!   the GLB written here (chunks, accessors and the specification's samplers, not keyrig-io's
 //!   importer), lens animation as `KHR_animation_pointer` channels;
+//! - a camera's keyed visibility exports as `KHR_node_visibility` with a STEP pointer channel
+//!   and a hidden camera as `visible: false`; keyrig's importer reads the lens and visibility
+//!   channels back and names the pointer it skips (`xmag`);
 //! - the Khronos glTF-Validator reports 0 errors and 0 warnings on both exports.
 
 use std::path::{Path, PathBuf};
@@ -105,6 +108,26 @@ impl Glb {
         })
     }
 
+    /// The STEP boolean channel on `pointer` (KHR_node_visibility): key times and 0/1 bytes.
+    fn visibility(&self, pointer: &str) -> (Vec<f64>, Vec<u8>) {
+        let animation = &self.json["animations"][0];
+        let channel = animation["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["target"]["extensions"]["KHR_animation_pointer"]["pointer"] == pointer)
+            .expect("visibility channel");
+        let sampler = &animation["samplers"][channel["sampler"].as_u64().unwrap() as usize];
+        assert_eq!(sampler["interpolation"], "STEP");
+        let times = self.floats(sampler["input"].as_u64().unwrap()).into_iter().map(|v| v[0]).collect();
+        let a = &self.json["accessors"][sampler["output"].as_u64().unwrap() as usize];
+        assert_eq!(a["componentType"], 5121, "unsigned bytes");
+        let view = &self.json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let start =
+            (view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0)) as usize;
+        (times, self.bin[start..start + a["count"].as_u64().unwrap() as usize].to_vec())
+    }
+
     fn node_named(&self, name: &str) -> usize {
         self.json["nodes"].as_array().unwrap().iter().position(|n| n["name"] == name).expect("node")
     }
@@ -190,6 +213,14 @@ fn scene() -> Scene {
     top.rotation = Animated::constant(Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2));
     top.lens = Animated::new(6.0, RawTrack::new(vec![Key::new(0.0, 6.0), Key::new(1.5, 3.0)]));
     top.far = Some(50.0);
+    top.visible = Animated::new(
+        1.0,
+        RawTrack::new(vec![
+            Key::new(0.0, 1.0).with_interpolation(Interpolation::Step),
+            Key::new(1.0, 0.0).with_interpolation(Interpolation::Step),
+            Key::new(1.5, 1.0).with_interpolation(Interpolation::Step),
+        ]),
+    );
     let mut follow = SceneCamera::new("Follow", Vec3::new(4.0, 2.0, 4.0));
     follow.aim = Some(Aim {
         up: Vec3::Y,
@@ -197,6 +228,7 @@ fn scene() -> Scene {
         target: AimTarget::Object("Cube".into()),
     });
     follow.far = None;
+    follow.visible = Animated::constant(0.0);
     Scene {
         objects: vec![cube],
         cameras: vec![dolly, top, follow],
@@ -215,7 +247,12 @@ fn keyed_cameras_export_equal_at_every_key_and_frame() {
     let (errors, warnings, report) = validate(&path);
     assert_eq!((errors, warnings), (0, 0), "{report}");
     let glb = Glb::read(&std::fs::read(&path).unwrap());
-    assert_eq!(glb.json["extensionsUsed"], serde_json::json!(["KHR_animation_pointer"]));
+    assert_eq!(
+        glb.json["extensionsUsed"],
+        serde_json::json!(["KHR_animation_pointer", "KHR_node_visibility"]),
+        "used, never required"
+    );
+    assert!(glb.json.get("extensionsRequired").is_none());
     let eval = keyrig_eval::SceneEvaluator::new(&scene, &std::collections::HashMap::new());
     let none = keyrig_eval::Overrides::new();
     let frames: Vec<f64> = (0..=60).map(|f| f64::from(f) / 30.0).collect();
@@ -277,18 +314,30 @@ fn keyed_cameras_export_equal_at_every_key_and_frame() {
     let xmag =
         glb.channel(None, "pointer", Some(&format!("/cameras/{camera_index}/orthographic/xmag"))).unwrap();
     let height = AnimatedTrack::new(&scene.cameras[1].lens).unwrap();
-    for &t in &frames {
+    let key_times = scene.cameras[1].lens.track.keys.iter().map(|k| k.time);
+    for t in frames.iter().copied().chain(key_times) {
         let want = f64::from(height.sample(t)) / 2.0;
         assert!((ymag.at(t, false)[0] - want).abs() < 1e-5, "ymag at {t}");
         assert!((xmag.at(t, false)[0] - want * aspect).abs() < 1e-4, "xmag at {t}");
     }
     assert!(glb.channel(Some(node), "rotation", None).is_none(), "an unkeyed rotation has no channel");
+    // Its keyed visibility: KHR_node_visibility on its node, a STEP boolean pointer channel equal
+    // to the scene's at every key time and frame.
+    assert_eq!(glb.json["nodes"][node]["extensions"]["KHR_node_visibility"]["visible"], true);
+    let visible = glb.visibility(&format!("/nodes/{node}/extensions/KHR_node_visibility/visible"));
+    assert_eq!(visible.0.len(), 3);
+    let keyrig_visible = AnimatedTrack::new(&scene.cameras[1].visible).unwrap();
+    for t in frames.iter().copied().chain(visible.0.iter().copied()) {
+        let k = visible.0.partition_point(|&x| x <= t).max(1) - 1;
+        assert_eq!(f32::from(visible.1[k]), keyrig_visible.sample(t), "visible at {t}");
+    }
 
     // Follow: aimed at the moving cube; glTF has no constraints, so its rotation is baked and
     // must look at the cube, rolled, at every frame. Infinite far plane: no zfar.
     let node = glb.node_named("Follow");
     let camera_index = glb.json["nodes"][node]["camera"].as_u64().unwrap() as usize;
     assert!(glb.json["cameras"][camera_index]["perspective"].get("zfar").is_none());
+    assert_eq!(glb.json["nodes"][node]["extensions"]["KHR_node_visibility"]["visible"], false, "hidden");
     let rotation = glb.channel(Some(node), "rotation", None).expect("baked rotation");
     let cube = AnimatedTrack::new(&scene.objects[0].translation).unwrap();
     for &t in &frames {
@@ -299,6 +348,27 @@ fn keyed_cameras_export_equal_at_every_key_and_frame() {
         let to_cube = (cube.sample(t) - Vec3::new(4.0, 2.0, 4.0)).normalize();
         assert!((q * Vec3::NEG_Z).abs_diff_eq(to_cube, 2e-3), "looks at the cube at {t}");
     }
+
+    // keyrig's importer reads the pointer channels back: the orthographic lens key for key
+    // (ymag → 2·ymag), the visibility keys, the hidden camera; xmag is skipped and named.
+    let back = keyrig_io::gltf_import::import_gltf_file(&path).expect("re-import");
+    let skipped: Vec<String> = back.skipped_channels.iter().map(ToString::to_string).collect();
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert!(skipped[0].contains("orthographic/xmag"), "{skipped:?}");
+    let again = back.to_scene("cameras.glb", Some(0)).expect("scene");
+    let top = again.cameras.iter().find(|c| c.name == "Top").unwrap();
+    let original = &scene.cameras[1];
+    let read = AnimatedTrack::new(&top.lens).unwrap();
+    for k in original.lens.track.keys.iter() {
+        assert!((read.sample(k.time) - k.value).abs() < 1e-5, "lens at {}", k.time);
+    }
+    assert_eq!(top.visible.track.keys.len(), 3);
+    for (a, b) in top.visible.track.keys.iter().zip(original.visible.track.keys.iter()) {
+        assert_eq!((a.time as f32, a.value, a.interpolation), (b.time as f32, b.value, b.interpolation));
+    }
+    let follow = again.cameras.iter().find(|c| c.name == "Follow").unwrap();
+    assert_eq!(follow.visible.value, 0.0);
+    assert_eq!(again.problems(), Vec::new());
 }
 
 /// The glTF 2.0 projection matrices (§3.10.3), from the specification, row by row, in

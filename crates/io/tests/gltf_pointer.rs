@@ -152,7 +152,7 @@ fn unknown_pointers_and_nodeless_channels_are_skipped_and_named() {
         "{}",
         skipped[0]
     );
-    assert!(skipped[1].contains("cameras"), "{}", skipped[1]);
+    assert!(skipped[1].contains("camera 0 does not exist (the file has 0)"), "{}", skipped[1]);
     assert!(skipped[2].starts_with("/animations/0/channels/2: no node"), "{}", skipped[2]);
     assert!(skipped[3].contains("node 7 does not exist (the file has 1)"), "{}", skipped[3]);
 }
@@ -245,4 +245,91 @@ fn morph_weights_become_one_channel_per_target() {
             assert_eq!(channel.track.keys[k].value, key.value[t]);
         }
     }
+}
+
+/// A .gltf with a perspective camera (node 0, keyed visibility), an orthographic one (node 1,
+/// hidden) and pointer channels on both: yfov and ymag (kept), znear and xmag (skipped).
+fn camera_file() -> Vec<u8> {
+    let mut bytes = Vec::new();
+    // 0: times (0, 1); 8: yfov (0.5, 1.0); 16: ymag (1.5, 3.0); 24: znear (0.1, 0.2);
+    // 32: visibility (1, 0) as unsigned bytes.
+    for f in [0.0f32, 1.0, 0.5, 1.0, 1.5, 3.0, 0.1, 0.2] {
+        bytes.extend_from_slice(&f.to_le_bytes());
+    }
+    bytes.extend_from_slice(&[1, 0, 0, 0]);
+    let b64 = base64(&bytes);
+    let pointer = |sampler: usize, p: &str| {
+        format!(
+            r#"{{"sampler":{sampler},"target":{{"path":"pointer","extensions":{{"KHR_animation_pointer":{{"pointer":"{p}"}}}}}}}}"#
+        )
+    };
+    let channels = [
+        pointer(0, "/cameras/0/perspective/yfov"),
+        pointer(1, "/cameras/1/orthographic/ymag"),
+        pointer(2, "/cameras/0/perspective/znear"),
+        pointer(1, "/cameras/1/orthographic/xmag"),
+        pointer(3, "/nodes/0/extensions/KHR_node_visibility/visible"),
+    ]
+    .join(",");
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},
+        "extensionsUsed":["KHR_animation_pointer","KHR_node_visibility"],
+        "cameras":[{{"type":"perspective","perspective":{{"yfov":0.5,"znear":0.1,"zfar":100}}}},
+                   {{"type":"orthographic","orthographic":{{"xmag":1.5,"ymag":1.5,"znear":0.1,"zfar":50}}}}],
+        "nodes":[{{"name":"Persp","camera":0,"translation":[0,1,5]}},
+                 {{"name":"Ortho","camera":1,"extensions":{{"KHR_node_visibility":{{"visible":false}}}}}}],
+        "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":8}},{{"buffer":0,"byteOffset":8,"byteLength":8}},
+                       {{"buffer":0,"byteOffset":16,"byteLength":8}},{{"buffer":0,"byteOffset":24,"byteLength":8}},
+                       {{"buffer":0,"byteOffset":32,"byteLength":2}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]}},
+                     {{"bufferView":1,"componentType":5126,"count":2,"type":"SCALAR"}},
+                     {{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR"}},
+                     {{"bufferView":3,"componentType":5126,"count":2,"type":"SCALAR"}},
+                     {{"bufferView":4,"componentType":5121,"count":2,"type":"SCALAR"}}],
+        "animations":[{{"channels":[{channels}],
+            "samplers":[{{"input":0,"output":1}},{{"input":0,"output":2}},{{"input":0,"output":3}},
+                        {{"input":0,"output":4,"interpolation":"STEP"}}]}}]}}"#
+    )
+    .into_bytes()
+}
+
+#[test]
+fn camera_pointers_become_lens_keys_and_the_rest_are_skipped_and_named() {
+    let model = import_gltf_slice(&camera_file()).unwrap_or_else(|e| panic!("{e}"));
+    let targets: Vec<PointerTarget> = model.animations[0].pointers.iter().map(|p| p.target).collect();
+    assert_eq!(
+        targets,
+        vec![PointerTarget::CameraYfov(0), PointerTarget::CameraYmag(1), PointerTarget::NodeVisible(0)]
+    );
+    let skipped: Vec<String> = model.skipped_channels.iter().map(ToString::to_string).collect();
+    assert_eq!(skipped.len(), 2, "{skipped:#?}");
+    assert_eq!(
+        skipped[0],
+        "/animations/0/channels/2 (/cameras/0/perspective/znear): keyrig's clip planes are not keyed: the camera keeps the file's"
+    );
+    assert!(skipped[1].starts_with("/animations/0/channels/3 (/cameras/1/orthographic/xmag): keyrig's orthographic view width follows"), "{}", skipped[1]);
+
+    let scene = model.to_scene("cameras.gltf", Some(0)).unwrap();
+    assert_eq!(scene.problems(), Vec::new());
+    let (persp, ortho) = (&scene.cameras[0], &scene.cameras[1]);
+    // yfov radians → field of view in degrees, key for key; ymag → view height 2·ymag.
+    let lens: Vec<(f64, f32)> = persp.lens.track.keys.iter().map(|k| (k.time, k.value)).collect();
+    assert_eq!(lens, vec![(0.0, 0.5f32.to_degrees()), (1.0, 1.0f32.to_degrees())]);
+    assert!(persp.lens.track.keys.iter().all(|k| k.interpolation == Interpolation::Linear));
+    let height: Vec<(f64, f32)> = ortho.lens.track.keys.iter().map(|k| (k.time, k.value)).collect();
+    assert_eq!(height, vec![(0.0, 3.0), (1.0, 6.0)]);
+    assert_eq!((persp.near, persp.far), (0.1, Some(100.0)), "the file's clip planes");
+    // Visibility: the perspective camera's keyed (Step), the orthographic camera's hidden.
+    let shown: Vec<(f64, f32, Interpolation)> =
+        persp.visible.track.keys.iter().map(|k| (k.time, k.value, k.interpolation)).collect();
+    assert_eq!(shown, vec![(0.0, 1.0, Interpolation::Step), (1.0, 0.0, Interpolation::Step)]);
+    assert!(!ortho.visible.is_animated() && ortho.visible.value == 0.0);
+    let listed: Vec<String> =
+        keyrig_core::channel::list_channels(&scene).iter().map(ToString::to_string).collect();
+    assert!(
+        listed.contains(&"camera/Persp/visible".to_owned())
+            && listed.contains(&"camera/Ortho/visible".to_owned()),
+        "{listed:?}"
+    );
 }

@@ -289,6 +289,7 @@ mod tests {
             lens: keyrig_core::Lens::Perspective { fov_y: 90f32.to_radians() },
             near: 0.1,
             far: Some(100.0),
+            visible: true,
         };
         let gizmo = CameraGizmo { camera, aspect: 2.0, selected: false, active: true };
         let mut lines = Lines::default();

@@ -100,8 +100,16 @@ pub enum Deform {
     /// Skin with `deformer` and one [`JointPose`] per joint. `bindings`: the bones-blending
     /// bindings of a keyed blend zone at this frame (keyrig-eval's `ObjectState::zone_bindings`),
     /// written over the uploaded ones when they are other bindings than the mesh holds (compared
-    /// by identity); `None` puts the uploaded ones back.
-    Skin { deformer: DeformerKind, joints: Vec<JointPose>, bindings: Option<Arc<MeshBindings>> },
+    /// by identity); `None` puts the uploaded ones back. `morph`: the rest positions and normals
+    /// morphed by the frame's morph-target weights (glTF targets; keyrig-skin's
+    /// `SkinnedMesh::morphed`), one per vertex, written over the uploaded ones likewise before
+    /// skinning; `None` while no target weighs.
+    Skin {
+        deformer: DeformerKind,
+        joints: Vec<JointPose>,
+        bindings: Option<Arc<MeshBindings>>,
+        morph: Option<Arc<[SkinnedVertex]>>,
+    },
     /// Interpolate morph frames `frame_a` → `frame_b` by `t` in 0..=1.
     Morph { frame_a: u32, frame_b: u32, t: f32 },
 }
@@ -1418,10 +1426,15 @@ impl Renderer {
                 });
             }
             match (&item.deform, &mesh.deformation) {
-                (Deform::Skin { deformer, joints, bindings }, Deformation::Skinned(skin)) => {
+                (Deform::Skin { deformer, joints, bindings, morph }, Deformation::Skinned(skin)) => {
                     stats.joint_bytes += self.skinner.write_joints(&self.queue, skin, item.mesh, joints)?;
-                    stats.joint_bytes +=
-                        self.skinner.write_bindings(&self.queue, skin, item.mesh, bindings.as_ref())?;
+                    stats.joint_bytes += self.skinner.write_bindings(
+                        &self.queue,
+                        skin,
+                        item.mesh,
+                        bindings.as_ref(),
+                        morph.as_ref(),
+                    )?;
                     self.skinner.encode(encoder, skin, *deformer);
                     stats.deformed_vertices += u64::from(skin.vertex_count);
                 }

@@ -597,7 +597,7 @@ impl SceneRig {
         Ok(frame)
     }
 
-    /// Frustums of the scene cameras of `state` but the one looked through (the selected one
+    /// Frustums of the scene cameras of `state` but the one looked through and the hidden ones (the selected one
     /// highlighted, the active one at `state.time` brighter), in the scene's render aspect.
     #[must_use]
     pub fn camera_gizmos(&self, view: &ViewOptions, state: &SceneState) -> Vec<CameraGizmo> {
@@ -607,7 +607,7 @@ impl SceneRig {
             .cameras
             .iter()
             .enumerate()
-            .filter(|&(c, camera)| view.look_through != Some(c) && camera.is_usable())
+            .filter(|&(c, camera)| view.look_through != Some(c) && camera.is_usable() && camera.visible)
             .map(|(c, camera)| CameraGizmo {
                 camera: *camera,
                 aspect,
@@ -681,7 +681,11 @@ impl SceneRig {
                 source: error.clone(),
             });
         }
-        if let (Some(_), Some(palette)) = (self.eval.skin(i), &state.palette) {
+        if let (Some(skin), Some(palette)) = (self.eval.skin(i), &state.palette) {
+            // glTF morph targets: the rest vertices morphed by the evaluator's weights.
+            let morph = skin.mesh.morphed(&state.look.morph_weights).map(|(positions, normals)| {
+                positions.iter().zip(&normals).map(|(&p, &n)| SkinnedVertex::new(p, n)).collect::<Arc<[_]>>()
+            });
             items.push(DrawItem {
                 mesh,
                 world_from_model,
@@ -689,6 +693,7 @@ impl SceneRig {
                     deformer: view.deformer.unwrap_or(state.look.deformer),
                     joints: joint_poses(palette),
                     bindings: state.zone_bindings.as_ref().map(|(_, b)| Arc::clone(b)),
+                    morph,
                 },
                 colour,
                 opacity,

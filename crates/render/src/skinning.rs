@@ -362,12 +362,13 @@ pub struct GpuSkinner {
 pub struct SkinBuffers {
     params: wgpu::Buffer,
     /// The rest vertices ([`GpuSkinVertex`]), rewritten when a keyed blend zone brings other
-    /// bones-blending bindings ([`GpuSkinner::write_bindings`]).
+    /// bones-blending bindings or morph-target weights bring other rest positions
+    /// ([`GpuSkinner::write_bindings`]).
     vertices: wgpu::Buffer,
-    /// The rest vertices as uploaded, and the keyed bindings now written over them (`None`:
-    /// the vertices are as uploaded).
+    /// The rest vertices as uploaded, and the keyed bindings and morphed rest positions now
+    /// written over them (`None`: as uploaded).
     rest: Vec<GpuSkinVertex>,
-    written: std::sync::Mutex<Option<std::sync::Arc<MeshBindings>>>,
+    written: std::sync::Mutex<Written>,
     joints: wgpu::Buffer,
     /// The skinned output: [`SkinnedVertex`] per vertex; usable as a vertex buffer.
     pub output: wgpu::Buffer,
@@ -375,6 +376,9 @@ pub struct SkinBuffers {
     pub vertex_count: u32,
     pub joint_count: u32,
 }
+
+/// The keyed bindings and the morphed rest vertices written over a skinned mesh's rest vertices.
+type Written = (Option<std::sync::Arc<MeshBindings>>, Option<std::sync::Arc<[SkinnedVertex]>>);
 
 /// The GPU buffers of one morphing (MD2) mesh.
 pub struct MorphBuffers {
@@ -553,7 +557,7 @@ impl GpuSkinner {
             params,
             vertices,
             rest,
-            written: std::sync::Mutex::new(None),
+            written: std::sync::Mutex::new((None, None)),
             joints,
             output,
             bind_group,
@@ -596,30 +600,54 @@ impl GpuSkinner {
         Ok(bytes.len() as u64)
     }
 
-    /// Writes the bones-blending bindings of a keyed blend zone over `skin`'s rest vertices
-    /// (`None`: the rest vertices as uploaded) unless they are there already (the same shared
-    /// bindings); returns the number of bytes uploaded.
+    /// Writes the bones-blending bindings of a keyed blend zone and the morphed rest positions
+    /// and normals of morph-target weights (glTF) over `skin`'s rest vertices (`None`: as
+    /// uploaded) unless they are there already (the same shared values); returns the number of
+    /// bytes uploaded.
     ///
     /// # Errors
-    /// [`RenderError::BadCount`] when the bindings are not one per vertex or name a joint the
-    /// mesh does not have, [`RenderError::NonFinite`] for a non-finite blend parameter.
+    /// [`RenderError::BadCount`] when the bindings or morphed vertices are not one per vertex
+    /// or a binding names a joint the mesh does not have, [`RenderError::NonFinite`] for a
+    /// non-finite blend parameter or morphed vertex.
     pub fn write_bindings(
         &self,
         queue: &wgpu::Queue,
         skin: &SkinBuffers,
         mesh_id: u64,
         bindings: Option<&std::sync::Arc<MeshBindings>>,
+        morph: Option<&std::sync::Arc<[SkinnedVertex]>>,
     ) -> Result<u64, RenderError> {
         let mut written = skin.written.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        let same = match (written.as_ref(), bindings) {
+        let same_bindings = match (written.0.as_ref(), bindings) {
             (None, None) => true,
             (Some(a), Some(b)) => std::sync::Arc::ptr_eq(a, b),
             _ => false,
         };
-        if same {
+        let same_morph = match (written.1.as_ref(), morph) {
+            (None, None) => true,
+            (Some(a), Some(b)) => std::sync::Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        if same_bindings && same_morph {
             return Ok(0);
         }
         let mut vertices = skin.rest.clone();
+        if let Some(morph) = morph {
+            if morph.len() != vertices.len() {
+                return Err(RenderError::BadCount(format!(
+                    "mesh {mesh_id}: {} morphed vertices for {} vertices",
+                    morph.len(),
+                    vertices.len()
+                )));
+            }
+            for (index, (vertex, m)) in vertices.iter_mut().zip(morph.iter()).enumerate() {
+                if !(m.position().is_finite() && m.normal().is_finite()) {
+                    return Err(RenderError::NonFinite { what: "morphed vertex", index });
+                }
+                vertex.position = m.position;
+                vertex.normal = m.normal;
+            }
+        }
         if let Some(bindings) = bindings {
             let blend = &bindings.bones_blending;
             if blend.len() != vertices.len() {
@@ -645,7 +673,7 @@ impl GpuSkinner {
         }
         let bytes: &[u8] = bytemuck::cast_slice(&vertices);
         queue.write_buffer(&skin.vertices, 0, bytes);
-        *written = bindings.cloned();
+        *written = (bindings.cloned(), morph.cloned());
         Ok(bytes.len() as u64)
     }
 

@@ -148,7 +148,7 @@ fn bad_input_is_a_typed_error() {
     let mut frame = floor_frame(vec![]);
     let pose = JointPose::from_rigid(Mat4::IDENTITY, Mat4::IDENTITY, Quat::IDENTITY);
     frame.items[0].deform =
-        Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose], bindings: None };
+        Deform::Skin { deformer: DeformerKind::LinearBlend, joints: vec![pose], bindings: None, morph: None };
     let err = r.render_image(&frame, SIZE, SIZE).unwrap_err();
     assert!(err.to_string().contains("not a skinned mesh"), "{err}");
 
@@ -214,7 +214,7 @@ fn skinned_item_moves_with_its_joints() {
             Mat4::from_translation(shift),
             Quat::IDENTITY,
         );
-        frame.items[0].deform = Deform::Skin { deformer, joints: vec![pose], bindings: None };
+        frame.items[0].deform = Deform::Skin { deformer, joints: vec![pose], bindings: None, morph: None };
         let (_, stats) = r.render_image(&frame, SIZE, SIZE).expect("render");
         assert_eq!(stats.joint_bytes, 240);
         let out = r.renderer().read_vertices(1).expect("readback");

@@ -30,7 +30,8 @@ pub use influences::{
 };
 pub use measure::{enclosed_volume, joint_cross_section, CrossSection};
 pub use mesh::{
-    mesh_for, scene_skeleton_for, MeshBindings, SkinnedMesh, ARM_BONES, ARM_JOINT_NAMES, ARM_LENGTH_CM,
+    mesh_for, scene_skeleton_for, MeshBindings, MorphTarget, SkinnedMesh, ARM_BONES, ARM_JOINT_NAMES,
+    ARM_LENGTH_CM,
 };
 pub use pose::{BonesBlendJoint, JointPalette, Pose};
 pub use skeleton::{RestJoint, RestSkeleton, MAX_JOINTS};

@@ -42,6 +42,19 @@ pub struct SkinnedMesh {
     /// Texture coordinates per vertex (glTF TEXCOORD_0: (0, 0) is the image's top-left
     /// corner), for drawing only; the deformers ignore them. `None`: the mesh has none.
     pub uvs: Option<Vec<Vec2>>,
+    /// Morph targets (glTF), each with one displacement per vertex: the mesh deformed is
+    /// `positions + Σ wᵢ·Δᵢ` for the weights of the frame ([`SkinnedMesh::morphed`]) before
+    /// it is skinned. Empty for a mesh without targets.
+    pub morph_targets: Vec<MorphTarget>,
+}
+
+/// One morph target of a [`SkinnedMesh`]: a position displacement per vertex, and a normal
+/// displacement per vertex or none.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MorphTarget {
+    pub positions: Vec<Vec3>,
+    /// Empty when the target does not move normals.
+    pub normals: Vec<Vec3>,
 }
 
 /// Per-vertex data the deformers need besides the weights, computed once per mesh and blend
@@ -67,7 +80,16 @@ impl SkinnedMesh {
         skeleton: RestSkeleton,
     ) -> Result<Self, SkinError> {
         let influences = Influences::new(joints, weights, skeleton.len())?;
-        let mesh = SkinnedMesh { positions, normals, indices, influences, bones, skeleton, uvs: None };
+        let mesh = SkinnedMesh {
+            positions,
+            normals,
+            indices,
+            influences,
+            bones,
+            skeleton,
+            uvs: None,
+            morph_targets: Vec::new(),
+        };
         mesh.validate()?;
         Ok(mesh)
     }
@@ -86,6 +108,72 @@ impl SkinnedMesh {
         }
         self.uvs = Some(uvs);
         Ok(self)
+    }
+
+    /// The mesh with morph targets.
+    ///
+    /// # Errors
+    /// [`SkinError::LengthMismatch`] when a target does not have one displacement per vertex
+    /// (normals: one per vertex or none); [`SkinError::NonFiniteVertex`] for a displacement
+    /// that is not finite.
+    pub fn with_morph_targets(mut self, targets: Vec<MorphTarget>) -> Result<Self, SkinError> {
+        let n = self.positions.len();
+        for target in &targets {
+            if target.positions.len() != n {
+                return Err(SkinError::LengthMismatch {
+                    what: "morph target positions",
+                    expected: n,
+                    found: target.positions.len(),
+                });
+            }
+            if !target.normals.is_empty() && target.normals.len() != n {
+                return Err(SkinError::LengthMismatch {
+                    what: "morph target normals",
+                    expected: n,
+                    found: target.normals.len(),
+                });
+            }
+            let bad = target.positions.iter().chain(&target.normals).position(|d| !d.is_finite());
+            if let Some(v) = bad {
+                return Err(SkinError::NonFiniteVertex {
+                    vertex: v % n.max(1),
+                    what: "morph target displacement",
+                });
+            }
+        }
+        self.morph_targets = targets;
+        Ok(self)
+    }
+
+    /// Positions and unit normals morphed by `weights` (one per target; missing ones 0):
+    /// `p + Σ wᵢ·Δpᵢ`, `normalize(n + Σ wᵢ·Δnᵢ)`, as glTF defines morphing. `None` when no
+    /// target has a non-zero finite weight (the mesh is drawn as it is).
+    #[must_use]
+    pub fn morphed(&self, weights: &[f32]) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
+        let active: Vec<(&MorphTarget, f32)> = self
+            .morph_targets
+            .iter()
+            .zip(weights)
+            .filter(|(_, w)| w.is_finite() && **w != 0.0)
+            .map(|(t, &w)| (t, w))
+            .collect();
+        if active.is_empty() {
+            return None;
+        }
+        let mut positions = self.positions.clone();
+        let mut normals = self.normals.clone();
+        for (target, w) in active {
+            for (p, d) in positions.iter_mut().zip(&target.positions) {
+                *p += w * *d;
+            }
+            for (n, d) in normals.iter_mut().zip(&target.normals) {
+                *n += w * *d;
+            }
+        }
+        for n in &mut normals {
+            *n = n.normalize_or_zero();
+        }
+        Some((positions, normals))
     }
 
     /// A single-weight mesh with smooth 4-influence weights derived across each joint

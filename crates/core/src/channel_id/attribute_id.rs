@@ -429,6 +429,12 @@ pub fn every(scene: &Scene) -> Vec<AttributeId> {
 /// that are not Step, a spot cone on a light that is not a spot. `push(path, message)`.
 pub(crate) fn attribute_problems(scene: &Scene, id: AttributeId, push: &mut dyn FnMut(String, String)) {
     let field = id.field_path();
+    if matches!(id, AttributeId::ObjectVisible(_) | AttributeId::LightVisible(_)) {
+        if let Some(ChannelRef::Scalar(a)) = id.get(scene) {
+            visibility_problems(&field, a, push);
+        }
+        return;
+    }
     match id.get(scene) {
         Some(ChannelRef::Scalar(a)) => {
             let values = std::iter::once((format!("{field}.value"), a.value)).chain(
@@ -482,6 +488,32 @@ pub(crate) fn attribute_problems(scene: &Scene, id: AttributeId, push: &mut dyn 
     if let AttributeId::LightCutoff(l) | AttributeId::LightInnerAngle(l) = id {
         if scene.lights.get(l).is_some_and(|light| !matches!(light.kind, LightKind::Spot { .. })) {
             push(field, format!("light {l} is not a spot light, so it has no cone"));
+        }
+    }
+}
+
+/// The problems of a visibility channel (of an object, a light or a scene camera) at `field`
+/// beyond its track's: values other than 0 and 1, keys that are not Step.
+pub(crate) fn visibility_problems(field: &str, a: &Animated<f32>, push: &mut dyn FnMut(String, String)) {
+    let values = std::iter::once((format!("{field}.value"), a.value))
+        .chain(a.track.keys.iter().enumerate().map(|(i, k)| (format!("{field}.track[{i}].value"), k.value)));
+    for (path, v) in values {
+        if !v.is_finite() {
+            continue; // The track check reports it.
+        }
+        if !(0.0..=1.0).contains(&v) {
+            push(path.clone(), format!("{v}: visible must be in [0, 1]"));
+        }
+        if v.fract() != 0.0 {
+            push(path, format!("{v}: visible is a whole number (Step keys)"));
+        }
+    }
+    for (i, k) in a.track.keys.iter().enumerate() {
+        if k.interpolation != Interpolation::Step {
+            push(
+                format!("{field}.track[{i}].interpolation"),
+                format!("visible keys are Step keys, not {:?}", k.interpolation),
+            );
         }
     }
 }

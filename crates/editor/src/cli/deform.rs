@@ -13,10 +13,13 @@
 //! (on its own, or an MD2 object of a scene) is morphed between its frames as the editor
 //! plays it (every frame, or the object's clip, at the object's rate —
 //! [`keyrig_core::MD2_DEFAULT_FPS`] for a model opened on its own — looping), in the file's
-//! Quake units and axes (`md2` space); an unskinned glTF mesh node is morphed as glTF
-//! defines it (`base + Σ wᵢ·Δᵢ` with the animation's weights, normals likewise) and placed by
-//! its node's world transform (`gltf-world` space). OBJ gets `v`, `vn` and `f` lines; JSON
-//! gets positions and unit normals as arrays of [x, y, z].
+//! Quake units and axes (`md2` space); a glTF mesh with morph targets is morphed as glTF
+//! defines it (`base + Σ wᵢ·Δᵢ`, normals likewise) with the weights the scene evaluator gives
+//! its object at that time (its `morph/<i>` channels: the file's weights channel for a model
+//! opened on its own, the scene's own keys for a scene's object; the model file is read only
+//! for rest data), placed by the object's world transform for a model opened on its own
+//! (`gltf-world` space) and in the object's model space for a scene's object (`model`). OBJ
+//! gets `v`, `vn` and `f` lines; JSON gets positions and unit normals as arrays of [x, y, z].
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -95,7 +98,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
         inputs.extend(keyrig_io::project::scene_inputs(&scene, None));
         (time, morph_object(file, &scene, None, args.object.as_deref(), time)?)
     } else {
-        let (scene, loaded, gltf) = if has_extension(file, &["ron"]) {
+        let (scene, loaded, gltf): (Scene, _, Option<GltfSource>) = if has_extension(file, &["ron"]) {
             let scene = keyrig_io::scene_file::load(file)?;
             let loaded = scene_meshes(file, &scene)?;
             (scene, loaded, None)
@@ -122,10 +125,19 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
             let node = *g.nodes.get(index)?;
             g.model.nodes[node].skin.is_none().then_some((g, node))
         });
+        let scene_morph = match gltf {
+            None => scene_morph_mesh(file, &scene, index)?,
+            Some(_) => None,
+        };
         let out = if is_md2_object {
             morph_object(file, &scene, base_dir.as_deref(), args.object.as_deref(), time)?
         } else if let Some((g, node)) = unskinned_gltf {
-            gltf_morph(file, &scene.objects[index].name, g, node, time)?
+            let n = &g.model.nodes[node];
+            let mesh = n.mesh.with_context(|| format!("{}: node {node} has no mesh", file.display()))?;
+            let rest = g.model.rest_pose().weights.swap_remove(node);
+            gltf_morph(file, &scene, index, &g.model, mesh, &rest, time, true)?
+        } else if let Some((model, mesh, rest)) = &scene_morph {
+            gltf_morph(file, &scene, index, model, *mesh, rest, time, false)?
         } else {
             skinned_output(&args, &scene, loaded, gltf.as_ref(), index, time)?
         };
@@ -271,28 +283,49 @@ fn morph_object(
     })
 }
 
-/// An unskinned glTF mesh node at `time` of the model's first animation: every triangle
-/// primitive morphed (`base + Σ wᵢ·Δᵢ`, normals likewise, or computed from the morphed
-/// triangles when the file has none) and placed by the node's world transform.
-fn gltf_morph(file: &Path, object: &str, g: &GltfSource, node: usize, time: f64) -> anyhow::Result<Output> {
+/// A glTF mesh with morph targets at `time`, posed by the scene evaluator as the editor and
+/// `render` pose it: the object's morph-weight channels (`object/<name>/morph/<i>`, the file's
+/// weights channel when it was imported) and its placement come from the evaluator; the model
+/// file gives only rest data (base positions and normals, the targets' displacements, the
+/// default weights of targets the object does not key). Every triangle primitive is morphed
+/// (`base + Σ wᵢ·Δᵢ`, normals likewise, or computed from the morphed triangles when the file
+/// has none). With `place` the vertices are placed by the object's world transform (a glTF
+/// file opened on its own: its nodes' world space), else they stay in the object's model space.
+#[allow(clippy::too_many_arguments)]
+fn gltf_morph(
+    file: &Path,
+    scene: &Scene,
+    index: usize,
+    model: &keyrig_io::model::ImportedModel,
+    mesh: usize,
+    rest_weights: &[f32],
+    time: f64,
+    place: bool,
+) -> anyhow::Result<Output> {
     use keyrig_io::model::{ImportedModel, PrimitiveMode};
-    let model = &g.model;
-    let mesh = model.nodes[node]
-        .mesh
-        .and_then(|m| model.meshes.get(m))
-        .with_context(|| format!("{}: node {node} has no mesh", file.display()))?;
-    let pose = model.pose_at(g.animation, time);
-    let world = model.world_matrices(&pose)[node];
+    let object = &scene.objects[index].name;
+    let at = || format!("{}: object `{object}`", file.display());
+    let mesh = model.meshes.get(mesh).with_context(|| format!("{}: mesh {mesh} does not exist", at()))?;
+    let eval = SceneEvaluator::new(scene, &HashMap::new());
+    if let Some(problem) = eval.problems().first() {
+        bail!("{}: {problem}", file.display());
+    }
+    let state = eval.object_at(index, time, &Overrides::new()).with_context(at)?;
+    let mut weights = rest_weights.to_vec();
+    if weights.len() < state.look.morph_weights.len() {
+        weights.resize(state.look.morph_weights.len(), 0.0);
+    }
+    weights[..state.look.morph_weights.len()].copy_from_slice(&state.look.morph_weights);
+    let world = if place { glam::Mat4::from(state.world_from_object) } else { glam::Mat4::IDENTITY };
     let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
-    let weights = &pose.weights[node];
     let (mut positions, mut normals, mut indices) = (Vec::new(), Vec::new(), Vec::new());
     for prim in mesh.primitives.iter().filter(|p| p.mode == PrimitiveMode::Triangles) {
         let base = positions.len() as u32;
-        let morphed = ImportedModel::morphed_positions(prim, weights);
+        let morphed = ImportedModel::morphed_positions(prim, &weights);
         let prim_normals = match &prim.normals {
             Some(n) => {
                 let mut n = n.to_vec();
-                for (target, &w) in prim.morph_targets.iter().zip(weights) {
+                for (target, &w) in prim.morph_targets.iter().zip(&weights) {
                     if let Some(d) = &target.normals {
                         for (n, d) in n.iter_mut().zip(d.iter()) {
                             *n += w * *d;
@@ -308,16 +341,41 @@ fn gltf_morph(file: &Path, object: &str, g: &GltfSource, node: usize, time: f64)
         indices.extend(prim.indices.iter().map(|&i| base + i));
     }
     if positions.is_empty() {
-        bail!("{}: node {node} (`{object}`) has no triangles", file.display());
+        bail!("{}: its mesh `{}` has no triangles", at(), mesh.name);
     }
     Ok(Output {
-        object: object.to_owned(),
-        space: "gltf-world",
+        object: object.clone(),
+        space: if place { "gltf-world" } else { "model" },
         animation: "morph",
         positions,
         normals,
         indices,
     })
+}
+
+/// The glTF model file and mesh of scene object `index` when it is an unskinned glTF mesh with
+/// morph targets (read for its rest data), with the mesh's default weights.
+fn scene_morph_mesh(
+    file: &Path,
+    scene: &Scene,
+    index: usize,
+) -> anyhow::Result<Option<(keyrig_io::model::ImportedModel, usize, Vec<f32>)>> {
+    let Some(MeshSource::File { path, mesh, .. }) = &scene.objects[index].mesh else { return Ok(None) };
+    if !has_extension(Path::new(path), &["glb", "gltf"]) {
+        return Ok(None);
+    }
+    let full = keyrig_io::file_io::parent_or_dot(file).join(path);
+    let model = keyrig_io::gltf_import::import_gltf_file(&full)
+        .with_context(|| format!("{}: objects[{index}].mesh: {}", file.display(), full.display()))?;
+    let m = mesh.unwrap_or(0);
+    let Some(found) = model.meshes.get(m) else { return Ok(None) };
+    let morphs = found.primitives.iter().any(|p| !p.morph_targets.is_empty());
+    let skinned = model.nodes.iter().any(|n| n.mesh == Some(m) && n.skin.is_some());
+    if !morphs || skinned {
+        return Ok(None);
+    }
+    let weights = found.weights.clone();
+    Ok(Some((model, m, weights)))
 }
 
 /// The object to deform and its mesh. Scene objects with a procedural mesh get it generated
@@ -345,14 +403,13 @@ fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, G
             None => None,
         });
     }
-    Ok((scene, loaded, GltfSource { model, animation, nodes }))
+    Ok((scene, loaded, GltfSource { model, nodes }))
 }
 
-/// The glTF model behind a scene made by [`gltf_scene`]: the model, the animation used and the
-/// node of each scene object (by object index).
+/// The glTF model behind a scene made by [`gltf_scene`]: the model (rest data) and the node of
+/// each scene object (by object index).
 struct GltfSource {
     model: keyrig_io::model::ImportedModel,
-    animation: Option<usize>,
     nodes: Vec<usize>,
 }
 

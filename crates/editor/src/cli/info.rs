@@ -549,6 +549,7 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
                 C::Rotation => span(&c.rotation.track.keys),
                 C::Lens => span(&c.lens.track.keys),
                 C::Roll => c.aim.as_ref().map_or((0, None), |a| span(&a.roll.track.keys)),
+                C::Visible => span(&c.visible.track.keys),
             }
         }
     }

@@ -232,8 +232,7 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
                 twist_ui(ui, ctx, actions, id, q, &group);
             }
         }
-        ChannelValue::Scalar(s) if matches!(id, ChannelId::Attribute(a) if a.is_switch() && a.value_range() == Some((0.0, 1.0))) =>
-        {
+        ChannelValue::Scalar(s) if id.is_visibility() => {
             // Visibility: a check box, keyed (Step) in record mode like any channel.
             let mut shown = s >= 0.5;
             let changed = ui

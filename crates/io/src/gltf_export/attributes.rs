@@ -1,4 +1,6 @@
-//! Export of the keyed attributes (keyrig-core `attributes`): visibility as `KHR_node_visibility`
+//! Export of the keyed attributes (keyrig-core `attributes`) and of a scene camera's lens and
+//! visibility, and the one writer of every `KHR_animation_pointer` channel
+//! ([`Document::write_pointers`]): visibility as `KHR_node_visibility`
 //! (the node's `visible`, and a `KHR_animation_pointer` STEP channel with boolean output when it
 //! is keyed), an object's colour and opacity as its own material's `baseColorFactor` (static at
 //! the start of the frame range, keyed through a pointer channel; `alphaMode` BLEND when the
@@ -309,6 +311,69 @@ pub(super) fn light(
                 channel,
                 boolean: false,
             });
+        }
+    }
+    Ok(())
+}
+
+/// Pointer channels of scene camera `camera`'s keyed lens (entry `index` of `cameras`), for
+/// images of `aspect`: a field of view in degrees as `perspective/yfov` in radians and an
+/// orthographic height as `orthographic/ymag` (half of it) and `xmag` (`ymag · aspect`), key for
+/// key through [`scalar_channel`] (linear maps, exact); a focal length, whose field of view is
+/// not linear in it, as LINEAR `yfov` keys at every frame of `frames` and every key time.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn camera_lens(
+    doc: &mut Document,
+    camera: &keyrig_core::SceneCamera,
+    index: usize,
+    lens: &AnimatedTrack<f32>,
+    aspect: Option<f32>,
+    frames: &[f64],
+    options: &ExportOptions,
+    range: (f64, f64),
+    here: &str,
+) -> Result<(), ExportError> {
+    if !camera.lens.is_animated() {
+        return Ok(());
+    }
+    let here = format!("{here}.lens");
+    let pointer = |field: &str| format!("/cameras/{index}/{field}");
+    let push = |doc: &mut Document, field: &str, channel: Option<Channel>| {
+        if let Some(channel) = channel {
+            doc.pointers.push(PointerChannel { pointer: pointer(field), channel, boolean: false });
+        }
+    };
+    match camera.projection {
+        keyrig_core::Projection::Perspective => {
+            let c = scalar_channel(&camera.lens, 1f32.to_radians(), options, range, &here)?;
+            push(doc, "perspective/yfov", c);
+        }
+        keyrig_core::Projection::Orthographic => {
+            let ymag = scalar_channel(&camera.lens, 0.5, options, range, &here)?;
+            let xmag =
+                scalar_channel(&camera.lens, 0.5 * aspect.unwrap_or(16.0 / 9.0), options, range, &here)?;
+            push(doc, "orthographic/ymag", ymag);
+            push(doc, "orthographic/xmag", xmag);
+        }
+        keyrig_core::Projection::FocalLength { .. } => {
+            let mut times: Vec<f64> = frames.to_vec();
+            times.extend(camera.lens.track.keys.iter().map(|k| k.time));
+            times.sort_by(f64::total_cmp);
+            times.dedup();
+            if times.len() < 2 {
+                return Ok(());
+            }
+            let values = times
+                .iter()
+                .map(|&t| match keyrig_core::Lens::of(camera.projection, lens.sample(t)) {
+                    keyrig_core::Lens::Perspective { fov_y } => fov_y,
+                    keyrig_core::Lens::Orthographic { height } => height,
+                })
+                .collect();
+            let times = times.iter().map(|&t| t as f32).collect();
+            let channel =
+                Channel { node: 0, path: "pointer", interpolation: "LINEAR", times, values, width: 1 };
+            push(doc, "perspective/yfov", Some(channel));
         }
     }
     Ok(())

@@ -8,7 +8,7 @@ use serde_json::Value;
 
 use super::{at, check_accessor, count_matches, make_track, ptr, GltfError, GltfErrorKind, Location, Reader};
 use crate::gltf_pointer::{PointerChannel, PointerKeys, PointerTarget, SkippedChannel};
-use crate::model::{ChannelTarget, ImportedModel, ModelChannel, WeightsTrack};
+use crate::model::{ChannelTarget, ImportedModel, ModelChannel, ModelProjection, WeightsTrack};
 
 /// A channel without `node`, taken out of the JSON before gltf-json reads it.
 #[derive(Clone, Debug)]
@@ -229,7 +229,28 @@ fn parse_pointer(pointer: &str, model: &ImportedModel, materials: usize) -> Resu
                 _ => Err("keyrig animates a light's color, intensity, range and spot cone angles".into()),
             }
         }
-        ["cameras", ..] => Err("keyrig's glTF import does not read cameras".into()),
+        ["cameras", c, rest @ ..] => {
+            let c = index(c, "camera", model.cameras.len())?;
+            let orthographic = matches!(model.cameras[c].projection, ModelProjection::Orthographic { .. });
+            match (rest, orthographic) {
+                (["perspective", "yfov"], false) => Ok(Parsed::Target(PointerTarget::CameraYfov(c))),
+                (["orthographic", "ymag"], true) => Ok(Parsed::Target(PointerTarget::CameraYmag(c))),
+                (["orthographic", "xmag"], true) => Err(
+                    "keyrig's orthographic view width follows its height (ymag) and the scene's render aspect"
+                        .into(),
+                ),
+                (["perspective", "aspectRatio"], false) => {
+                    Err("keyrig's aspect ratio is the scene's render size, not keyed".into())
+                }
+                (["perspective" | "orthographic", "znear" | "zfar"], _) => {
+                    Err("keyrig's clip planes are not keyed: the camera keeps the file's".into())
+                }
+                (["perspective", ..], true) | (["orthographic", ..], false) => {
+                    Err(format!("camera {c} is not {}", rest[0]))
+                }
+                _ => Err("keyrig animates a camera's yfov (perspective) or ymag (orthographic)".into()),
+            }
+        }
         _ => Err("keyrig holds no animated property there".into()),
     }
 }
@@ -414,6 +435,8 @@ pub(crate) fn read_pointer_channels(
                         interpolation,
                     )),
                     PointerTarget::LightIntensity(_)
+                    | PointerTarget::CameraYfov(_)
+                    | PointerTarget::CameraYmag(_)
                     | PointerTarget::LightRange(_)
                     | PointerTarget::LightInnerCone(_)
                     | PointerTarget::LightOuterCone(_) => PointerKeys::Scalar(make_track(

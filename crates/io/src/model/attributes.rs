@@ -1,15 +1,16 @@
 //! What [`super::ImportedModel::to_scene`] takes from a glTF file beyond transforms: node
-//! visibility (`KHR_node_visibility`, static and animated), material base colour and opacity,
-//! light colour, intensity, range and spot cone (`KHR_animation_pointer`), and morph-target
-//! weights, as keyrig-core attributes.
+//! visibility (`KHR_node_visibility`, static and animated) of objects, lights and cameras,
+//! material base colour and opacity, light colour, intensity, range and spot cone, a camera's
+//! `yfov` / `ymag` (`KHR_animation_pointer`), and morph-target weights, as keyrig-core
+//! attributes and camera channels.
 //!
 //! Every mapping is key for key with the file's interpolation: a component of a vector track
 //! (alpha of a base colour, one weight of a weights track) is the same curve on that component,
 //! and radians → degrees is linear, so STEP, LINEAR and CUBICSPLINE curves are kept exactly
 //! (tangents through the same linear map).
 //!
-//! glTF hides a node's whole subtree when the node is invisible. keyrig objects and lights have
-//! no parents, so each gets the visibility of its node and every ancestor combined: hidden when
+//! glTF hides a node's whole subtree when the node is invisible. keyrig objects, lights and
+//! cameras have no parents, so each gets the visibility of its node and every ancestor combined: hidden when
 //! any of them is. Animated visibilities of several ancestors are combined on the union of their
 //! key times (Step keys, so the combination is exact).
 
@@ -189,6 +190,36 @@ pub(crate) fn light_attributes(
             }
             (PointerTarget::LightOuterCone(l), PointerKeys::Scalar(t)) if *l == light_index => {
                 light.attributes.cutoff_deg = Some(keyed(map_keys(t, f32::to_degrees), 45.0));
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Sets the visibility and the keyed lens of the scene camera made from node `node` (camera
+/// `camera_index` of the file): `yfov` keys (radians) as field-of-view keys in degrees, `ymag`
+/// keys as view-height keys `2·ymag`, key for key (both maps are linear, so every
+/// interpolation is kept exactly).
+pub(crate) fn camera_attributes(
+    model: &ImportedModel,
+    anim: Option<&ModelAnimation>,
+    node: usize,
+    camera_index: usize,
+    camera: &mut keyrig_core::SceneCamera,
+) {
+    camera.visible = combined_visibility(model, anim, node);
+    let Some(anim) = anim else { return };
+    for p in &anim.pointers {
+        match (&p.target, &p.keys, camera.projection) {
+            (PointerTarget::CameraYfov(c), PointerKeys::Scalar(t), keyrig_core::Projection::Perspective)
+                if *c == camera_index && !t.keys.is_empty() =>
+            {
+                camera.lens = keyed(map_keys(t, f32::to_degrees), camera.lens.value);
+            }
+            (PointerTarget::CameraYmag(c), PointerKeys::Scalar(t), keyrig_core::Projection::Orthographic)
+                if *c == camera_index && !t.keys.is_empty() =>
+            {
+                camera.lens = keyed(map_keys(t, |y: f32| 2.0 * y), camera.lens.value);
             }
             _ => {}
         }

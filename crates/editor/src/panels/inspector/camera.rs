@@ -1,5 +1,5 @@
 //! The inspector's section for a scene camera: its keyed channels (translation, rotation,
-//! lens, an aimed camera's roll: keyed in record mode like every channel), its projection,
+//! lens, an aimed camera's roll, visibility: keyed in record mode like every channel), its projection,
 //! clip planes and aim target, and the buttons that look through it and set it to the view.
 
 use egui::Ui;
@@ -36,6 +36,7 @@ pub(super) fn camera_ui(
         Projection::Orthographic => "View height",
     };
     channel_editor(ui, ctx, actions, ChannelId::CameraLens(c), lens_label);
+    channel_editor(ui, ctx, actions, ChannelId::CameraVisible(c), "Visible");
 
     let name = camera.name.clone();
     let mut chosen = projection;

@@ -113,7 +113,7 @@ pub(super) fn paint_lights(painter: &egui::Painter, projection: &Projection, ctx
     }
 }
 
-/// Each scene camera but the one looked through as its frustum (keyrig-render's lines, drawn
+/// Each shown scene camera but the one looked through as its frustum (keyrig-render's lines, drawn
 /// by the painter when the GPU does not draw).
 pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ctx: &FrameCtx<'_>) {
     let Some(state) = ctx.scene.state() else { return };
@@ -127,7 +127,7 @@ pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ct
         None => ctx.view.camera.distance * 0.008,
     };
     for (c, camera) in state.cameras.iter().enumerate() {
-        if ctx.view.look_through == Some(c) || !camera.is_usable() {
+        if ctx.view.look_through == Some(c) || !camera.is_usable() || !camera.visible {
             continue;
         }
         let gizmo = keyrig_render::CameraGizmo {
