@@ -67,3 +67,30 @@ fn sound_clips_play_silently_without_a_device_and_it_is_said_once() {
     assert!(!said(&h), "said once only: {:?}", h.state().status());
     assert_eq!(h.state().audio_availability(), availability, "it is not opened again");
 }
+
+/// *↔ View all* shows every sound clip whole, from its first to its last sample, where it lies
+/// outside the frame range and the keys.
+#[test]
+fn view_all_shows_the_sound_clips_whole() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound");
+    std::fs::copy(fixtures.join("tone.wav"), dir.path().join("tone.wav")).expect("copy");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron");
+    let mut scene = keyrig_io::scene_file::load(&demo).expect("the demo scene");
+    // The demo's range and keys: frames 0–90 at 30 fps. The tone lasts half a second (15
+    // frames): one clip from frame −20 and one to frame 100 + 15.
+    assert_eq!((scene.frame_range.start, scene.frame_range.end, scene.fps), (0, 90, 30.0));
+    scene.sounds.push(keyrig_core::SoundClip::new("tone.wav", -20.0));
+    scene.sounds.push(keyrig_core::SoundClip::new("tone.wav", 100.0));
+    let file = dir.path().join("scene.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+
+    let mut h = common::harness(dir.path(), Some(file));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    h.get_by_label("↔ View all").click();
+    h.run();
+    let view = h.state().dope_sheet_view();
+    assert!(view.start <= -20.0 && view.end >= 115.0, "both clips whole: {view:?}");
+    assert!(view.start > -30.0 && view.end < 125.0, "and not much more: {view:?}");
+}

@@ -12,7 +12,8 @@
 //! than a diamond's width are drawn as ticks of a band (motion-capture density).
 //!
 //! The time axis zooms with Ctrl+wheel (about the pointer) and pans with Shift+wheel, a
-//! horizontal wheel or a middle-button drag; *View all* fits the frame range and every key.
+//! horizontal wheel or a middle-button drag; *View all* fits the frame range, every key and every
+//! sound clip.
 //! Keys out of view are marked at the row's ends (◀ 12, 3 ▶); a click on a marker brings them
 //! into view. Frames outside the scene's range are shaded.
 
@@ -296,10 +297,15 @@ fn range_view(scene: &Scene) -> TimeView {
     TimeView { start: f64::from(range.start), end: f64::from(range.end.max(range.start + 1)) }
 }
 
-/// The view that shows the frame range and every key of the scene.
-fn view_all(scene: &Scene) -> TimeView {
+/// The view that shows the frame range, every key of the scene and every sound clip (`clips`:
+/// their first and last frames).
+fn view_all(scene: &Scene, clips: &[(f64, f64)]) -> TimeView {
     let fps = scene.fps.max(1e-9);
     let mut view = range_view(scene);
+    for &(first, last) in clips.iter().filter(|(a, b)| a.is_finite() && b.is_finite()) {
+        view.start = view.start.min(first.floor());
+        view.end = view.end.max(last.ceil());
+    }
     for id in ChannelId::all(scene) {
         let window = channels::keys_between(scene, id, f64::NEG_INFINITY, f64::INFINITY);
         if let (Some(first), Some(last)) = (window.times.first(), window.times.last()) {
@@ -436,7 +442,7 @@ impl DopeSheet {
         let scene = ctx.scene();
         // A range that grew (an import that extended it) shows all of it, as *View all*.
         if self.range_watch.grew(ctx.doc.cache_key().0, scene.frame_range) {
-            let all = view_all(scene);
+            let all = view_all(scene, &sound_rows::clip_spans(ctx));
             self.view = (all != range_view(scene)).then_some(all);
         }
         let rows = rows(scene, &ctx.session.selection, &self.collapsed);
@@ -497,7 +503,7 @@ impl DopeSheet {
             .on_hover_text("Show the whole frame range and every key (Ctrl+wheel zooms, Shift+wheel pans)")
             .clicked()
         {
-            self.view = Some(view_all(ctx.scene()));
+            self.view = Some(view_all(ctx.scene(), &sound_rows::clip_spans(ctx)));
         }
         let ruler = Rect::from_min_max(
             Pos2::new(geo.keys.0 - PAD, header.top()),

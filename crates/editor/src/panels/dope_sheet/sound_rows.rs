@@ -45,6 +45,13 @@ fn clip_frames(ctx: &FrameCtx<'_>, clip: &SoundClip, fps: f64) -> (f64, f64) {
     (clip.start_frame, clip.start_frame + seconds * fps)
 }
 
+/// Every clip's frames on the timeline ([`clip_frames`]): what *View all* shows besides the
+/// range and the keys.
+pub(super) fn clip_spans(ctx: &FrameCtx<'_>) -> Vec<(f64, f64)> {
+    let fps = ctx.scene().fps.max(1e-9);
+    ctx.scene().sounds.iter().map(|clip| clip_frames(ctx, clip, fps)).collect()
+}
+
 impl DopeSheet {
     /// The clips' rows in `strip` (one [`SOUND_ROW_HEIGHT`] each, under the ruler).
     pub(super) fn sound_rows_ui(
