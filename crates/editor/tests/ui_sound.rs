@@ -9,6 +9,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use egui::{Key, Modifiers};
+use egui_kittest::kittest::Queryable;
 use keyrig_editor::audio::Availability;
 
 const NO_DEVICE: &str = "No sound output device";
