@@ -230,15 +230,20 @@ fn numbered_frames_stay_as_they_were_and_take_motion_blur() {
 #[test]
 fn an_mp4_carries_the_scenes_sound_clips_mixed() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let fixture = |name: &str| Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound").join(name);
+    let fixture =
+        |name: &str| Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound").join(name);
     std::fs::create_dir(dir.path().join("audio")).expect("folder");
     std::fs::copy(fixture("tone.flac"), dir.path().join("audio/line.flac")).expect("copy");
     std::fs::copy(fixture("tone.wav"), dir.path().join("audio/muted.wav")).expect("copy");
     let mut scene = keyrig_io::demo::demo_scene();
     assert_eq!(scene.fps, 30.0);
     // Frame 10 of a render from frame 2: 8 frames, 0.2667 s, into the movie; gain 0.5.
-    scene.sounds.push(keyrig_core::SoundClip { gain: 0.5, ..keyrig_core::SoundClip::new("audio/line.flac", 10.0) });
-    scene.sounds.push(keyrig_core::SoundClip { mute: true, ..keyrig_core::SoundClip::new("audio/muted.wav", 2.0) });
+    scene
+        .sounds
+        .push(keyrig_core::SoundClip { gain: 0.5, ..keyrig_core::SoundClip::new("audio/line.flac", 10.0) });
+    scene
+        .sounds
+        .push(keyrig_core::SoundClip { mute: true, ..keyrig_core::SoundClip::new("audio/muted.wav", 2.0) });
     let scene_path = dir.path().join("shot.ron");
     keyrig_io::save(&scene_path, &scene).expect("save");
     let out = dir.path().join("shot.mp4");
@@ -247,7 +252,14 @@ fn an_mp4_carries_the_scenes_sound_clips_mixed() {
     assert!(result.status.success(), "{}", stderr(&result));
 
     let probe = Command::new("ffprobe")
-        .args(["-v", "error", "-select_streams", "a:0", "-show_entries", "stream=codec_name,sample_rate,channels,duration"])
+        .args([
+            "-v",
+            "error",
+            "-select_streams",
+            "a:0",
+            "-show_entries",
+            "stream=codec_name,sample_rate,channels,duration",
+        ])
         .args(["-of", "default=noprint_wrappers=1", utf8(&out)])
         .output()
         .expect("ffprobe");
@@ -264,11 +276,8 @@ fn an_mp4_carries_the_scenes_sound_clips_mixed() {
         .output()
         .expect("ffmpeg");
     assert!(pcm.status.success(), "{}", stderr(&pcm));
-    let samples: Vec<f64> = pcm
-        .stdout
-        .chunks_exact(2)
-        .map(|b| f64::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0)
-        .collect();
+    let samples: Vec<f64> =
+        pcm.stdout.chunks_exact(2).map(|b| f64::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).collect();
     assert_eq!(samples.len(), 2 * 48_000, "one second of stereo");
     let left: Vec<f64> = samples.iter().step_by(2).copied().collect();
     let right: Vec<f64> = samples.iter().skip(1).step_by(2).copied().collect();
@@ -277,7 +286,10 @@ fn an_mp4_carries_the_scenes_sound_clips_mixed() {
     let loud: Vec<usize> = (0..left.len()).filter(|&i| left[i].abs() > 0.005).collect();
     let (start, end) = (8.0 / 30.0 * 48_000.0, (8.0 / 30.0 + 0.5) * 48_000.0);
     let (first, last) = (*loud.first().expect("sound") as f64, *loud.last().expect("sound") as f64);
-    assert!((first - start).abs() <= 8.0 && (last - end).abs() <= 8.0, "the tone at {first}..{last}, not {start}..{end}");
+    assert!(
+        (first - start).abs() <= 8.0 && (last - end).abs() <= 8.0,
+        "the tone at {first}..{last}, not {start}..{end}"
+    );
     // Its samples: the tone at half gain, in phase from the clip's start (correlation and
     // level against 0.5 × ⅛ × √½ × sin(2π · 440 · t)).
     let peak = 0.5 * 0.125 * std::f64::consts::FRAC_1_SQRT_2;

@@ -165,7 +165,11 @@ pub fn decode_sound_file_on_threads(
 /// As [`decode_sound_file`], but for reading.
 pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, SoundError> {
     guarded(name, || {
-        decode_pass(open_stream(Box::new(std::io::Cursor::new(bytes)), name)?, name, Some(MAX_PLAYBACK_FRAMES))
+        decode_pass(
+            open_stream(Box::new(std::io::Cursor::new(bytes)), name)?,
+            name,
+            Some(MAX_PLAYBACK_FRAMES),
+        )
     })
 }
 
@@ -387,9 +391,7 @@ fn interleaved_i16<'b>(buffer: &'b mut Option<SampleBuffer<i16>>, audio: AudioBu
 fn plan_parts(stream: &OpenStream, threads: usize) -> Option<Vec<u64>> {
     let frames = stream.frames?;
     let parts = (frames / MIN_PART_FRAMES).min(threads.min(MAX_PARTS) as u64);
-    (parts >= 2).then(|| {
-        (1..parts).map(|k| frames * k / parts / SUMMARY_BUCKET * SUMMARY_BUCKET).collect()
-    })
+    (parts >= 2).then(|| (1..parts).map(|k| frames * k / parts / SUMMARY_BUCKET * SUMMARY_BUCKET).collect())
 }
 
 /// One part of a sound, decoded.
@@ -437,7 +439,8 @@ fn decode_parts(
     keep_frames: Option<u64>,
 ) -> Option<DecodedSound> {
     // The samples are kept when the sound may be short enough; whether it is, its length says.
-    let keep = keep_frames.is_some_and(|k| stream.frames.is_some_and(|f| f <= k.saturating_add(MIN_PART_FRAMES)));
+    let keep =
+        keep_frames.is_some_and(|k| stream.frames.is_some_and(|f| f <= k.saturating_add(MIN_PART_FRAMES)));
     let bounds: Vec<(u64, Option<u64>)> = std::iter::once(0)
         .chain(cuts.iter().copied())
         .zip(cuts.iter().copied().map(Some).chain(std::iter::once(None)))

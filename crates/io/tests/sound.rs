@@ -181,9 +181,23 @@ fn a_long_sound_decoded_in_parts_is_the_one_pass_decode_sample_for_sample() {
         ("noise.ogg", &["-c:a", "libvorbis", "-q:a", "3"][..]),
     ] {
         let path = dir.path().join(name);
-        let noise = |seed: u32| format!("anoisesrc=color=pink:sample_rate=48000:duration=45.3:amplitude=0.5:seed={seed}");
+        let noise = |seed: u32| {
+            format!("anoisesrc=color=pink:sample_rate=48000:duration=45.3:amplitude=0.5:seed={seed}")
+        };
         let out = Command::new("ffmpeg")
-            .args(["-loglevel", "error", "-y", "-f", "lavfi", "-i", &noise(1), "-f", "lavfi", "-i", &noise(2)])
+            .args([
+                "-loglevel",
+                "error",
+                "-y",
+                "-f",
+                "lavfi",
+                "-i",
+                &noise(1),
+                "-f",
+                "lavfi",
+                "-i",
+                &noise(2),
+            ])
             .args(["-filter_complex", "amerge=inputs=2"])
             .args(args)
             .arg(&path)
@@ -196,11 +210,19 @@ fn a_long_sound_decoded_in_parts_is_the_one_pass_decode_sample_for_sample() {
         assert_eq!((whole.parts, parts.parts), (1, 4), "{name}: decoded in four parts");
         assert_eq!(parts.codec, whole.codec, "{name}");
         let (a, b) = (whole.pcm.expect("kept"), parts.pcm.expect("kept"));
-        assert_eq!((b.sample_rate, b.channels, b.frames()), (a.sample_rate, a.channels, a.frames()), "{name}");
+        assert_eq!(
+            (b.sample_rate, b.channels, b.frames()),
+            (a.sample_rate, a.channels, a.frames()),
+            "{name}"
+        );
         assert!(a.frames() > 45 * 48_000, "{name}: {} frames", a.frames());
         // Not silence: both channels swing, each its own way.
         assert!(a.samples.iter().step_by(2).zip(a.samples.iter().skip(1).step_by(2)).any(|(l, r)| l != r));
-        assert!(a.samples == b.samples, "{name}: the samples differ at {:?}", a.samples.iter().zip(&b.samples).position(|(x, y)| x != y));
+        assert!(
+            a.samples == b.samples,
+            "{name}: the samples differ at {:?}",
+            a.samples.iter().zip(&b.samples).position(|(x, y)| x != y)
+        );
         assert_eq!(parts.summary, whole.summary, "{name}");
         // The summary alone, and a sound longer than the samples kept: as in one pass.
         let summary = decode_sound_file_on_threads(&path, None, 4).expect("decodes");

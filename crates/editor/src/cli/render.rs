@@ -437,7 +437,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
             let scene = keyrig_io::scene_file::load(&args.file)?;
             inputs.extend(keyrig_io::project::scene_inputs(&scene, args.file.parent()));
-            sound = SceneSound { clips: scene.sounds.clone(), base_dir: args.file.parent().map(Path::to_path_buf) };
+            sound = SceneSound {
+                clips: scene.sounds.clone(),
+                base_dir: args.file.parent().map(Path::to_path_buf),
+            };
             let meshes = keyrig_editor::files::render_meshes(&scene, args.file.parent())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
             (scene, meshes.skinned, meshes.morphs, meshes.materials)

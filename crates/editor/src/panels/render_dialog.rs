@@ -177,7 +177,10 @@ impl RenderDialog {
             } else {
                 MotionBlur::OFF
             },
-            sound: SceneSound { clips: frame.scene().sounds.clone(), base_dir: frame.base_dir().map(Path::to_path_buf) },
+            sound: SceneSound {
+                clips: frame.scene().sounds.clone(),
+                base_dir: frame.base_dir().map(Path::to_path_buf),
+            },
         };
         blast.validate().map_err(|e| format!("Render animation: {e}"))?;
         Ok(blast)

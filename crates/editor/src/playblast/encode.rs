@@ -502,7 +502,9 @@ fn add_sound_track<F: io::Read + Write + io::Seek>(file: &mut F, sound: &MovieSo
         let mut size = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
         if size == 1 {
             file.read_exact(&mut head[8..])?;
-            size = u64::from_be_bytes([head[8], head[9], head[10], head[11], head[12], head[13], head[14], head[15]]);
+            size = u64::from_be_bytes([
+                head[8], head[9], head[10], head[11], head[12], head[13], head[14], head[15],
+            ]);
         } else if size == 0 {
             size = end - at;
         }
@@ -529,14 +531,17 @@ fn add_sound_track<F: io::Read + Write + io::Seek>(file: &mut F, sound: &MovieSo
     let (mut timescale, mut track_id) = (None, 0u32);
     let mut c = 0;
     while c + 8 <= children.len() {
-        let size = u32::from_be_bytes([children[c], children[c + 1], children[c + 2], children[c + 3]]) as usize;
+        let size =
+            u32::from_be_bytes([children[c], children[c + 1], children[c + 2], children[c + 3]]) as usize;
         if size < 8 || c + size > children.len() {
             return Err(bad("a malformed box in moov"));
         }
         if &children[c + 4..c + 8] == b"mvhd" && size >= 32 {
             let body = c + 8;
             let at = if children[body] == 1 { body + 20 } else { body + 12 };
-            let word = |i: usize| u32::from_be_bytes([children[i], children[i + 1], children[i + 2], children[i + 3]]);
+            let word = |i: usize| {
+                u32::from_be_bytes([children[i], children[i + 1], children[i + 2], children[i + 3]])
+            };
             timescale = Some(word(at));
             let next = c + size - 4;
             track_id = word(next);

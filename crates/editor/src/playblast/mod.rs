@@ -264,7 +264,11 @@ impl SceneSound {
                     keyrig_io::sound::MAX_PLAYBACK_FRAMES / 48_000 / 60
                 ))
             })?;
-            clips.push(MixClip { pcm: std::sync::Arc::new(pcm), start: clip.start_frame / fps, gain: clip.gain });
+            clips.push(MixClip {
+                pcm: std::sync::Arc::new(pcm),
+                start: clip.start_frame / fps,
+                gain: clip.gain,
+            });
         }
         Ok(clips)
     }
