@@ -461,11 +461,8 @@ impl DopeSheet {
 
         let (header, _) = ui.allocate_exact_size(Vec2::new(full.width(), RULER_HEIGHT), Sense::hover());
         self.header_ui(ui, ctx, actions, header, &geo);
-        if !scene.sounds.is_empty() {
-            let height = sound_rows::SOUND_ROW_HEIGHT * scene.sounds.len() as f32;
-            let (strip, _) = ui.allocate_exact_size(Vec2::new(full.width(), height), Sense::hover());
-            self.sound_rows_ui(ui, ctx, actions, strip, &geo);
-        }
+        // The sound clips' rows head the rows and scroll with them.
+        let strip_height = sound_rows::SOUND_ROW_HEIGHT * scene.sounds.len() as f32;
 
         let body_top = ui.cursor().top();
         egui::ScrollArea::vertical()
@@ -475,7 +472,14 @@ impl DopeSheet {
                 drag: false,
                 ..egui::scroll_area::ScrollSource::ALL
             })
-            .show_viewport(ui, |ui, viewport| self.body_ui(ui, ctx, actions, &rows, &geo, viewport));
+            .show_viewport(ui, |ui, viewport| {
+                let top_left = ui.max_rect().min;
+                self.body_ui(ui, ctx, actions, &rows, &geo, viewport, strip_height);
+                if strip_height > 0.0 {
+                    let strip = Rect::from_min_size(top_left, Vec2::new(ui.max_rect().width(), strip_height));
+                    self.sound_rows_ui(ui, ctx, actions, strip, &geo);
+                }
+            });
         let sheet =
             Rect::from_min_max(full.min, Pos2::new(full.right(), ui.min_rect().bottom().max(body_top)));
 
@@ -622,8 +626,10 @@ fn current_frame_line(painter: &egui::Painter, ctx: &FrameCtx<'_>, geo: &Geometr
 }
 
 impl DopeSheet {
-    /// The rows: laid out as one area the height of every row, painted and hit-tested only
-    /// where `viewport` (the visible part, in content coordinates) shows them.
+    /// The rows: laid out as one area the height of every row, `top` points down the scrolled
+    /// content (under the sound clips' rows), painted and hit-tested only where `viewport` (the
+    /// visible part, in content coordinates) shows them.
+    #[allow(clippy::too_many_arguments)]
     fn body_ui(
         &mut self,
         ui: &mut Ui,
@@ -632,12 +638,17 @@ impl DopeSheet {
         rows: &[Row],
         geo: &Geometry,
         viewport: Rect,
+        top: f32,
     ) {
         let scene = ctx.scene();
-        let origin = ui.max_rect().min;
+        // The rows start `top` points into the scrolled content, under the sound clips' rows.
+        let origin = ui.max_rect().min + Vec2::new(0.0, top);
+        let viewport = viewport.translate(Vec2::new(0.0, -top));
         let height = ROW_HEIGHT * rows.len() as f32 + 4.0;
-        let content =
-            Rect::from_min_size(origin, Vec2::new(ui.max_rect().width(), height.max(viewport.height())));
+        let content = Rect::from_min_size(
+            origin,
+            Vec2::new(ui.max_rect().width(), height.max(viewport.height() - top)),
+        );
         let body = ui.allocate_rect(content, Sense::click_and_drag());
         let visible = Rect::from_min_max(origin + viewport.min.to_vec2(), origin + viewport.max.to_vec2());
         let first = ((viewport.min.y / ROW_HEIGHT).floor().max(0.0) as usize).min(rows.len());
