@@ -258,7 +258,7 @@ fn an_mp4_carries_the_scenes_sound_clips_mixed() {
             "-select_streams",
             "a:0",
             "-show_entries",
-            "stream=codec_name,sample_rate,channels,duration",
+            "stream=codec_name,sample_rate,channels,channel_layout,duration",
         ])
         .args(["-of", "default=noprint_wrappers=1", utf8(&out)])
         .output()
@@ -266,6 +266,7 @@ fn an_mp4_carries_the_scenes_sound_clips_mixed() {
     let probe = String::from_utf8_lossy(&probe.stdout).into_owned();
     assert_eq!(field(&probe, "codec_name"), "pcm_s16le", "{probe}");
     assert_eq!((field(&probe, "sample_rate"), field(&probe, "channels")), ("48000", "2"), "{probe}");
+    assert_eq!(field(&probe, "channel_layout"), "stereo", "the track says left and right: {probe}");
     let duration: f64 = field(&probe, "duration").parse().expect("seconds");
     assert!((duration - 1.0).abs() < 1e-3, "30 frames at 30 fps: {duration} s");
     // The video is still there.

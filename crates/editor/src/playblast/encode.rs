@@ -671,7 +671,8 @@ fn sound_trak(
     let url = mp4_full_box(b"url ", 0, 1, &[]);
     let dref = mp4_full_box(b"dref", 0, 0, &[be32(1).as_slice(), &url].concat());
     let dinf = mp4_box(b"dinf", &dref);
-    // stsd: one `sowt` entry (QuickTime's sound sample description, version 0).
+    // stsd: one `sowt` entry (QuickTime's sound sample description, version 0) with its
+    // channel layout.
     let mut sowt = vec![0; 6];
     sowt.extend_from_slice(&1u16.to_be_bytes());
     sowt.extend_from_slice(&[0; 8]);
@@ -679,6 +680,9 @@ fn sound_trak(
     sowt.extend_from_slice(&16u16.to_be_bytes());
     sowt.extend_from_slice(&[0; 4]);
     sowt.extend_from_slice(&be32(SOUND_RATE << 16));
+    // chan: the channels are left and right (kAudioChannelLayoutTag_Stereo), so that players
+    // need not guess.
+    sowt.extend_from_slice(&mp4_full_box(b"chan", 0, 0, &[be32(0x0065_0002), be32(0), be32(0)].concat()));
     let stsd = mp4_full_box(b"stsd", 0, 0, &[be32(1).as_slice(), &mp4_box(b"sowt", &sowt)].concat());
     // Every sample (frame) lasts one tick of the track's clock.
     let frames32 = u32::try_from(frames).unwrap_or(u32::MAX);
