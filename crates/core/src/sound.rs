@@ -210,6 +210,23 @@ impl SummaryBuilder {
         }
     }
 
+    /// Appends `later`, the summary of the frames that follow this builder's, as if they had
+    /// been pushed here (a sound summarised in parts, each on a thread of its own). Exact only
+    /// where this builder ends on a bucket boundary, so that `later`'s buckets are this
+    /// builder's next ones: otherwise nothing is appended and `false` is returned.
+    #[must_use]
+    pub fn append(&mut self, later: SummaryBuilder) -> bool {
+        if self.in_bucket != 0 || !self.carry.is_empty() {
+            return false;
+        }
+        self.finest.extend(later.finest);
+        self.frames += later.frames;
+        self.current = later.current;
+        self.in_bucket = later.in_bucket;
+        self.carry = later.carry;
+        true
+    }
+
     fn push_frame(&mut self, frame: &[f32]) {
         for &s in frame {
             let s = if s.is_finite() { s } else { 0.0 };
@@ -305,6 +322,26 @@ mod tests {
         }
         assert_eq!(summary.range(1.0, 1.0), None);
         assert_eq!(summary.range(f64::NAN, 1.0), None);
+    }
+
+    #[test]
+    fn a_sound_summarised_in_parts_is_the_sound_summarised_whole() {
+        let samples = sine(0.5);
+        let mut whole = SummaryBuilder::new(48_000, 2);
+        whole.push_interleaved(&samples);
+        // Parts that start on bucket boundaries (the last one ends inside a bucket).
+        let cut = 2 * 256 * 37;
+        let mut first = SummaryBuilder::new(48_000, 2);
+        first.push_interleaved(&samples[..cut]);
+        let mut second = SummaryBuilder::new(48_000, 2);
+        second.push_interleaved(&samples[cut..]);
+        assert!(first.append(second));
+        assert_eq!(first.finish(), whole.finish());
+        // A part that ends inside a bucket takes nothing after it.
+        let mut ragged = SummaryBuilder::new(48_000, 2);
+        ragged.push_interleaved(&samples[..2 * 300]);
+        assert!(!ragged.append(SummaryBuilder::new(48_000, 2)));
+        assert_eq!(ragged.finish().frames, 300);
     }
 
     #[test]

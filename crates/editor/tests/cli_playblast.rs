@@ -221,3 +221,88 @@ fn numbered_frames_stay_as_they_were_and_take_motion_blur() {
     let difference = mean_difference(&blurred, &sharp);
     assert!(difference > 0.0 && difference < 10.0, "mean difference {difference}");
 }
+
+/// The MP4 of a scene with sound clips carries their mix as a second track, which FFmpeg
+/// decodes: 16-bit stereo PCM at 48 kHz lasting the movie, silent until the clip's start
+/// frame, then the clip's 440 Hz tone (tests/fixtures/sound: half a second at 22,050 Hz,
+/// amplitude ⅛ spread over two channels) for its half second at its gain, then silent again.
+/// A muted clip is not heard.
+#[test]
+fn an_mp4_carries_the_scenes_sound_clips_mixed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fixture =
+        |name: &str| Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound").join(name);
+    std::fs::create_dir(dir.path().join("audio")).expect("folder");
+    std::fs::copy(fixture("tone.flac"), dir.path().join("audio/line.flac")).expect("copy");
+    std::fs::copy(fixture("tone.wav"), dir.path().join("audio/muted.wav")).expect("copy");
+    let mut scene = keyrig_io::demo::demo_scene();
+    assert_eq!(scene.fps, 30.0);
+    // Frame 10 of a render from frame 2: 8 frames, 0.2667 s, into the movie; gain 0.5.
+    scene
+        .sounds
+        .push(keyrig_core::SoundClip { gain: 0.5, ..keyrig_core::SoundClip::new("audio/line.flac", 10.0) });
+    scene
+        .sounds
+        .push(keyrig_core::SoundClip { mute: true, ..keyrig_core::SoundClip::new("audio/muted.wav", 2.0) });
+    let scene_path = dir.path().join("shot.ron");
+    keyrig_io::save(&scene_path, &scene).expect("save");
+    let out = dir.path().join("shot.mp4");
+    let result =
+        keyrig(&["render", utf8(&scene_path), "--frames", "2..31", "--size", "96x64", "-o", utf8(&out)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+
+    let probe = Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-select_streams",
+            "a:0",
+            "-show_entries",
+            "stream=codec_name,sample_rate,channels,channel_layout,duration",
+        ])
+        .args(["-of", "default=noprint_wrappers=1", utf8(&out)])
+        .output()
+        .expect("ffprobe");
+    let probe = String::from_utf8_lossy(&probe.stdout).into_owned();
+    assert_eq!(field(&probe, "codec_name"), "pcm_s16le", "{probe}");
+    assert_eq!((field(&probe, "sample_rate"), field(&probe, "channels")), ("48000", "2"), "{probe}");
+    assert_eq!(field(&probe, "channel_layout"), "stereo", "the track says left and right: {probe}");
+    let duration: f64 = field(&probe, "duration").parse().expect("seconds");
+    assert!((duration - 1.0).abs() < 1e-3, "30 frames at 30 fps: {duration} s");
+    // The video is still there.
+    assert_eq!(field(&ffprobe(&out, "stream=nb_read_frames"), "nb_read_frames"), "30");
+
+    let pcm = Command::new("ffmpeg")
+        .args(["-v", "error", "-i", utf8(&out), "-map", "0:a", "-f", "s16le", "-c:a", "pcm_s16le", "-"])
+        .output()
+        .expect("ffmpeg");
+    assert!(pcm.status.success(), "{}", stderr(&pcm));
+    let samples: Vec<f64> =
+        pcm.stdout.chunks_exact(2).map(|b| f64::from(i16::from_le_bytes([b[0], b[1]])) / 32767.0).collect();
+    assert_eq!(samples.len(), 2 * 48_000, "one second of stereo");
+    let left: Vec<f64> = samples.iter().step_by(2).copied().collect();
+    let right: Vec<f64> = samples.iter().skip(1).step_by(2).copied().collect();
+    assert_eq!(left, right, "the same tone on both channels");
+    // Where the tone sounds: from the clip's start frame for half a second.
+    let loud: Vec<usize> = (0..left.len()).filter(|&i| left[i].abs() > 0.005).collect();
+    let (start, end) = (8.0 / 30.0 * 48_000.0, (8.0 / 30.0 + 0.5) * 48_000.0);
+    let (first, last) = (*loud.first().expect("sound") as f64, *loud.last().expect("sound") as f64);
+    assert!(
+        (first - start).abs() <= 8.0 && (last - end).abs() <= 8.0,
+        "the tone at {first}..{last}, not {start}..{end}"
+    );
+    // Its samples: the tone at half gain, in phase from the clip's start (correlation and
+    // level against 0.5 × ⅛ × √½ × sin(2π · 440 · t)).
+    let peak = 0.5 * 0.125 * std::f64::consts::FRAC_1_SQRT_2;
+    let span = start.ceil() as usize + 100..end.floor() as usize - 100;
+    let expect: Vec<f64> = span
+        .clone()
+        .map(|i| peak * (2.0 * std::f64::consts::PI * 440.0 * (i as f64 - start) / 48_000.0).sin())
+        .collect();
+    let got = &left[span];
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let correlation = dot(got, &expect) / (dot(got, got).sqrt() * dot(&expect, &expect).sqrt());
+    assert!(correlation > 0.999, "correlation {correlation}");
+    let rms = |a: &[f64]| (dot(a, a) / a.len() as f64).sqrt();
+    assert!((rms(got) / rms(&expect) - 1.0).abs() < 0.02, "level {} of {}", rms(got), rms(&expect));
+}

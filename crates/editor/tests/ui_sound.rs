@@ -9,6 +9,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use egui::{Key, Modifiers};
+use egui_kittest::kittest::Queryable;
 use keyrig_editor::audio::Availability;
 
 const NO_DEVICE: &str = "No sound output device";
@@ -66,4 +67,81 @@ fn sound_clips_play_silently_without_a_device_and_it_is_said_once() {
     assert_eq!(h.state().session.playback.whole_frame(), 7);
     assert!(!said(&h), "said once only: {:?}", h.state().status());
     assert_eq!(h.state().audio_availability(), availability, "it is not opened again");
+}
+
+/// *↔ View all* shows every sound clip whole, from its first to its last sample, where it lies
+/// outside the frame range and the keys.
+#[test]
+fn view_all_shows_the_sound_clips_whole() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound");
+    std::fs::copy(fixtures.join("tone.wav"), dir.path().join("tone.wav")).expect("copy");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron");
+    let mut scene = keyrig_io::scene_file::load(&demo).expect("the demo scene");
+    // The demo's range and keys: frames 0–90 at 30 fps. The tone lasts half a second (15
+    // frames): one clip from frame −20 and one to frame 100 + 15.
+    assert_eq!((scene.frame_range.start, scene.frame_range.end, scene.fps), (0, 90, 30.0));
+    scene.sounds.push(keyrig_core::SoundClip::new("tone.wav", -20.0));
+    scene.sounds.push(keyrig_core::SoundClip::new("tone.wav", 100.0));
+    let file = dir.path().join("scene.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+
+    let mut h = common::harness(dir.path(), Some(file));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    h.get_by_label("↔ View all").click();
+    h.run();
+    let view = h.state().dope_sheet_view();
+    assert!(view.start <= -20.0 && view.end >= 115.0, "both clips whole: {view:?}");
+    assert!(view.start > -30.0 && view.end < 125.0, "and not much more: {view:?}");
+}
+
+/// The sound clips' rows head the dope sheet's rows and scroll with them: a wheel over a
+/// sheet of many rows moves the clip's bar up with the rows.
+#[test]
+fn sound_rows_scroll_with_the_rows() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound");
+    std::fs::copy(fixtures.join("tone.wav"), dir.path().join("tone.wav")).expect("copy");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron");
+    let mut scene = keyrig_io::scene_file::load(&demo).expect("the demo scene");
+    // Forty more objects: more rows than the sheet shows.
+    for i in 0..40 {
+        let mut extra = scene.objects[0].clone();
+        extra.name = format!("Extra{i}");
+        scene.objects.push(extra);
+    }
+    scene.sounds.push(keyrig_core::SoundClip::new("tone.wav", 5.0));
+    let file = dir.path().join("scene.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+
+    let mut h = common::harness(dir.path(), Some(file));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    let bar = h.get_by_label("sound clip tone.wav frame 5").rect();
+    // The clip's own row ("♪ tone.wav") and the channel rows under it.
+    let top_of = |h: &egui_kittest::Harness<'_, keyrig_editor::EditorApp>, label: &str| {
+        h.query_by_label(label).map(|n| n.rect().top())
+    };
+    let cube = top_of(&h, "dope sheet row Cube").expect("the Cube's row");
+    let first_channel = top_of(&h, "dope sheet row Arm").expect("the first object's row");
+    let sound_row = h.get_by_label("dope sheet row ♪ tone.wav").rect();
+    assert!(
+        sound_row.bottom() <= first_channel + 0.5 && bar.bottom() <= first_channel,
+        "the clip's row heads the rows: {sound_row:?}, the bar {bar:?}, the rows from {first_channel}"
+    );
+    h.event(egui::Event::PointerMoved(bar.center()));
+    h.event(egui::Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Point,
+        delta: egui::vec2(0.0, -20.0),
+        modifiers: Modifiers::NONE,
+        phase: egui::TouchPhase::Move,
+    });
+    for _ in 0..10 {
+        h.run();
+    }
+    let scrolled = cube - top_of(&h, "dope sheet row Cube").expect("the Cube's row");
+    assert!(scrolled > 5.0, "the rows scrolled: {scrolled}");
+    let moved = bar.top() - h.get_by_label("sound clip tone.wav frame 5").rect().top();
+    assert!((moved - scrolled).abs() < 0.5, "the clip's bar moved {moved} with the rows' {scrolled}");
 }

@@ -1,6 +1,7 @@
 //! Sound clip decoding: one minute of 48 kHz stereo pink noise in each format keyrig reads,
 //! decoded and summarised by `decode_sound_file` (issue 28's target: a 10-minute track under a
-//! second, so a minute under 100 ms), and the summary alone from samples already in memory.
+//! second, so a minute under 100 ms) in one pass and in parts, one per core (as keyrig
+//! decodes), and the summary alone from samples already in memory.
 //!
 //! The files are made by FFmpeg (`ffmpeg`, which the playblast tests need too) in a temporary
 //! folder before the measurements: the bench stops, saying so, without it.
@@ -13,7 +14,7 @@ use std::process::Command;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use keyrig_core::SummaryBuilder;
-use keyrig_io::sound::decode_sound_file;
+use keyrig_io::sound::{decode_sound_file, decode_sound_file_on_threads};
 
 const SECONDS: u64 = 60;
 const RATE: u64 = 48_000;
@@ -45,10 +46,16 @@ fn decoding(c: &mut Criterion) {
         let name = format!("minute.{extension}");
         make(dir.path(), &name, args);
         let path = dir.path().join(&name);
-        let frames = decode_sound_file(&path).expect("decodes").summary.frames;
+        let decoded = decode_sound_file(&path).expect("decodes");
+        let frames = decoded.summary.frames;
         assert!(frames.abs_diff(SECONDS * RATE) < 4096, "{name}: {frames} frames");
-        group
-            .bench_function(*extension, |b| b.iter(|| decode_sound_file(black_box(&path)).expect("decodes")));
+        // One pass, as before parts; then the default: one part per core.
+        group.bench_function(format!("{extension}, one pass"), |b| {
+            b.iter(|| decode_sound_file_on_threads(black_box(&path), None, 1).expect("decodes"))
+        });
+        group.bench_function(format!("{extension}, {} parts", decoded.parts), |b| {
+            b.iter(|| decode_sound_file(black_box(&path)).expect("decodes"))
+        });
     }
     group.finish();
 

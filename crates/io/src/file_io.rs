@@ -232,6 +232,20 @@ impl io::Seek for AtomicFile {
     }
 }
 
+/// Reading back what is written (after flushing what is buffered) lets writers that finish a
+/// file by rewriting a part of it, such as the MP4 muxer's sound track, do so atomically too.
+impl io::Read for AtomicFile {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        match &mut self.file {
+            Some(f) => {
+                f.flush()?;
+                f.get_mut().read(buf)
+            }
+            None => Err(io::Error::other("already committed")),
+        }
+    }
+}
+
 impl Drop for AtomicFile {
     fn drop(&mut self) {
         if self.file.take().is_some() {
@@ -283,7 +297,7 @@ fn create_temp(dir: &Path, name: &str) -> io::Result<(PathBuf, fs::File)> {
     let pid = std::process::id();
     for n in 0..1000u32 {
         let candidate = dir.join(format!(".{name}.tmp-{pid}-{n}"));
-        match fs::OpenOptions::new().write(true).create_new(true).open(&candidate) {
+        match fs::OpenOptions::new().read(true).write(true).create_new(true).open(&candidate) {
             Ok(file) => return Ok((candidate, file)),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
             Err(e) => return Err(e),

@@ -164,3 +164,72 @@ fn samples_for_playback_are_the_files_own() {
     assert_eq!(sound.summary.frames, FRAMES);
     assert!(decode_sound_file(&fixture("tone.flac")).expect("decodes").pcm.is_none());
 }
+
+/// A long sound decoded in parts, each on a thread of its own from a seek, is the one-pass
+/// decode sample for sample, in every format (FFmpeg makes 45.3 s of 48 kHz stereo noise, a
+/// different noise in each channel: long enough for four parts of
+/// [`keyrig_io::sound::MIN_PART_FRAMES`], with the last summary bucket a partial one).
+#[test]
+fn a_long_sound_decoded_in_parts_is_the_one_pass_decode_sample_for_sample() {
+    use keyrig_io::sound::decode_sound_file_on_threads;
+    use std::process::Command;
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, args) in [
+        ("noise.wav", &["-c:a", "pcm_s16le"][..]),
+        ("noise.flac", &[][..]),
+        ("noise.mp3", &["-c:a", "libmp3lame", "-b:a", "128k"][..]),
+        ("noise.ogg", &["-c:a", "libvorbis", "-q:a", "3"][..]),
+    ] {
+        let path = dir.path().join(name);
+        let noise = |seed: u32| {
+            format!("anoisesrc=color=pink:sample_rate=48000:duration=45.3:amplitude=0.5:seed={seed}")
+        };
+        let out = Command::new("ffmpeg")
+            .args([
+                "-loglevel",
+                "error",
+                "-y",
+                "-f",
+                "lavfi",
+                "-i",
+                &noise(1),
+                "-f",
+                "lavfi",
+                "-i",
+                &noise(2),
+            ])
+            .args(["-filter_complex", "amerge=inputs=2"])
+            .args(args)
+            .arg(&path)
+            .output()
+            .unwrap_or_else(|e| panic!("this test makes its sounds with ffmpeg (Debian: ffmpeg): {e}"));
+        assert!(out.status.success(), "ffmpeg {name}: {}", String::from_utf8_lossy(&out.stderr));
+
+        let whole = decode_sound_file_on_threads(&path, Some(u64::MAX), 1).expect("decodes");
+        let parts = decode_sound_file_on_threads(&path, Some(u64::MAX), 4).expect("decodes");
+        assert_eq!((whole.parts, parts.parts), (1, 4), "{name}: decoded in four parts");
+        assert_eq!(parts.codec, whole.codec, "{name}");
+        let (a, b) = (whole.pcm.expect("kept"), parts.pcm.expect("kept"));
+        assert_eq!(
+            (b.sample_rate, b.channels, b.frames()),
+            (a.sample_rate, a.channels, a.frames()),
+            "{name}"
+        );
+        assert!(a.frames() > 45 * 48_000, "{name}: {} frames", a.frames());
+        // Not silence: both channels swing, each its own way.
+        assert!(a.samples.iter().step_by(2).zip(a.samples.iter().skip(1).step_by(2)).any(|(l, r)| l != r));
+        assert!(
+            a.samples == b.samples,
+            "{name}: the samples differ at {:?}",
+            a.samples.iter().zip(&b.samples).position(|(x, y)| x != y)
+        );
+        assert_eq!(parts.summary, whole.summary, "{name}");
+        // The summary alone, and a sound longer than the samples kept: as in one pass.
+        let summary = decode_sound_file_on_threads(&path, None, 4).expect("decodes");
+        assert_eq!((summary.parts, summary.pcm.is_none()), (4, true), "{name}");
+        assert_eq!(summary.summary, whole.summary, "{name}");
+        let short = decode_sound_file_on_threads(&path, Some(48_000), 3).expect("decodes");
+        assert_eq!((short.parts, short.pcm.is_none()), (3, true), "{name}");
+        assert_eq!(short.summary, whole.summary, "{name}");
+    }
+}

@@ -50,6 +50,7 @@ pub fn open() -> mpsc::Receiver<Opened> {
 
 /// Opens the default output and starts its stream (rendering silence until told to play).
 fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), String> {
+    quiet_alsa_on_this_thread();
     let host = cpal::default_host();
     let device = host.default_output_device().ok_or_else(|| "the system reports none".to_owned())?;
     let supported = device.default_output_config().map_err(|e| e.to_string())?;
@@ -95,3 +96,31 @@ fn build<T: cpal::SizedSample + cpal::FromSample<f32>>(
         )
         .map_err(|e| e.to_string())
 }
+
+/// ALSA prints every failure of the device's configuration to stderr itself, besides
+/// returning it: eight lines where there is no sound card (CI, Xvfb). The failure reaches the
+/// editor as cpal's error and the status bar says it once, so the thread that opens the device
+/// gives ALSA an error handler of its own that drops the messages (`snd_lib_error_set_local`,
+/// a handler for the calling thread only, alsa-lib 1.1.6 and later; other threads' ALSA
+/// messages, and everything else on stderr, are untouched).
+#[cfg(target_os = "linux")]
+fn quiet_alsa_on_this_thread() {
+    use std::os::raw::{c_char, c_int};
+    unsafe extern "C" fn drop_message(
+        _file: *const c_char,
+        _line: c_int,
+        _function: *const c_char,
+        _err: c_int,
+        _fmt: *const c_char,
+        _args: *mut alsa_sys::__va_list_tag,
+    ) {
+    }
+    // SAFETY: alsa-lib stores the pointer in a thread-local and calls it with the declared
+    // arguments, which `drop_message` never reads; the function lives as long as the program.
+    unsafe {
+        alsa_sys::snd_lib_error_set_local(Some(drop_message));
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn quiet_alsa_on_this_thread() {}

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use anyhow::{bail, Context};
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{Camera, DeformerKind, Material};
-use keyrig_editor::playblast::{self, FrameError, MotionBlur, MovieFormat, Playblast};
+use keyrig_editor::playblast::{self, FrameError, MotionBlur, MovieFormat, Playblast, SceneSound};
 use keyrig_render::{
     Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selected,
     ViewOptions,
@@ -66,7 +66,8 @@ pub struct RenderArgs {
     /// `light:NAME`.
     #[arg(long, value_name = "WHAT")]
     pub select: Option<String>,
-    /// Output. One frame: a PNG. A range: `shot.mp4` (H.264), `shot.gif` (animated GIF),
+    /// Output. One frame: a PNG. A range: `shot.mp4` (H.264, with the scene's sound clips
+    /// mixed as 16-bit PCM), `shot.gif` (animated GIF),
     /// `shot.png` (animated PNG), a pattern with `#`s replaced by the zero-padded frame number
     /// (`out/arm_####.png`) or an existing folder (→ `frame_0000.png` …) for numbered PNGs.
     #[arg(short, long, value_name = "OUT")]
@@ -408,6 +409,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let mut headless = HeadlessRenderer::new().context("opening a GPU device for offscreen rendering")?;
     let mut scene_size = None;
+    // A scene's sound clips, for an MP4's sound track.
+    let mut sound = SceneSound::default();
     let source: Box<dyn FrameSource> = if has_extension(&args.file, &["md2"]) {
         if args.camera.is_some() {
             bail!("--camera: {} is an MD2 model; it has no scene cameras", args.file.display());
@@ -434,6 +437,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             // Model files of the scene (glTF skins, MD2 morphs) resolve against its folder.
             let scene = keyrig_io::scene_file::load(&args.file)?;
             inputs.extend(keyrig_io::project::scene_inputs(&scene, args.file.parent()));
+            sound = SceneSound {
+                clips: scene.sounds.clone(),
+                base_dir: args.file.parent().map(Path::to_path_buf),
+            };
             let meshes = keyrig_editor::files::render_meshes(&scene, args.file.parent())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
             (scene, meshes.skinned, meshes.morphs, meshes.materials)
@@ -507,6 +514,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 format,
                 output: args.output.clone(),
                 motion_blur,
+                sound,
             };
             blast.validate()?;
             blast.check_outputs(&inputs)?;

@@ -12,7 +12,8 @@
 //! than a diamond's width are drawn as ticks of a band (motion-capture density).
 //!
 //! The time axis zooms with Ctrl+wheel (about the pointer) and pans with Shift+wheel, a
-//! horizontal wheel or a middle-button drag; *View all* fits the frame range and every key.
+//! horizontal wheel or a middle-button drag; *View all* fits the frame range, every key and every
+//! sound clip.
 //! Keys out of view are marked at the row's ends (◀ 12, 3 ▶); a click on a marker brings them
 //! into view. Frames outside the scene's range are shaded.
 
@@ -297,10 +298,15 @@ fn range_view(scene: &Scene) -> TimeView {
     TimeView { start: f64::from(range.start), end: f64::from(range.end.max(range.start + 1)) }
 }
 
-/// The view that shows the frame range and every key of the scene.
-fn view_all(scene: &Scene) -> TimeView {
+/// The view that shows the frame range, every key of the scene and every sound clip (`clips`:
+/// their first and last frames).
+fn view_all(scene: &Scene, clips: &[(f64, f64)]) -> TimeView {
     let fps = scene.fps.max(1e-9);
     let mut view = range_view(scene);
+    for &(first, last) in clips.iter().filter(|(a, b)| a.is_finite() && b.is_finite()) {
+        view.start = view.start.min(first.floor());
+        view.end = view.end.max(last.ceil());
+    }
     for id in ChannelId::all(scene) {
         let window = channels::keys_between(scene, id, f64::NEG_INFINITY, f64::INFINITY);
         if let (Some(first), Some(last)) = (window.times.first(), window.times.last()) {
@@ -442,7 +448,7 @@ impl DopeSheet {
         let scene = ctx.scene();
         // A range that grew (an import that extended it) shows all of it, as *View all*.
         if self.range_watch.grew(ctx.doc.cache_key().0, scene.frame_range) {
-            let all = view_all(scene);
+            let all = view_all(scene, &sound_rows::clip_spans(ctx));
             self.view = (all != range_view(scene)).then_some(all);
         }
         let rows = rows(scene, &ctx.session.selection, &self.collapsed);
@@ -461,11 +467,8 @@ impl DopeSheet {
 
         let (header, _) = ui.allocate_exact_size(Vec2::new(full.width(), RULER_HEIGHT), Sense::hover());
         self.header_ui(ui, ctx, actions, header, &geo);
-        if !scene.sounds.is_empty() {
-            let height = sound_rows::SOUND_ROW_HEIGHT * scene.sounds.len() as f32;
-            let (strip, _) = ui.allocate_exact_size(Vec2::new(full.width(), height), Sense::hover());
-            self.sound_rows_ui(ui, ctx, actions, strip, &geo);
-        }
+        // The sound clips' rows head the rows and scroll with them.
+        let strip_height = sound_rows::SOUND_ROW_HEIGHT * scene.sounds.len() as f32;
 
         let body_top = ui.cursor().top();
         egui::ScrollArea::vertical()
@@ -475,7 +478,14 @@ impl DopeSheet {
                 drag: false,
                 ..egui::scroll_area::ScrollSource::ALL
             })
-            .show_viewport(ui, |ui, viewport| self.body_ui(ui, ctx, actions, &rows, &geo, viewport));
+            .show_viewport(ui, |ui, viewport| {
+                let top_left = ui.max_rect().min;
+                self.body_ui(ui, ctx, actions, &rows, &geo, viewport, strip_height);
+                if strip_height > 0.0 {
+                    let strip = Rect::from_min_size(top_left, Vec2::new(ui.max_rect().width(), strip_height));
+                    self.sound_rows_ui(ui, ctx, actions, strip, &geo);
+                }
+            });
         let sheet =
             Rect::from_min_max(full.min, Pos2::new(full.right(), ui.min_rect().bottom().max(body_top)));
 
@@ -503,7 +513,7 @@ impl DopeSheet {
             .on_hover_text("Show the whole frame range and every key (Ctrl+wheel zooms, Shift+wheel pans)")
             .clicked()
         {
-            self.view = Some(view_all(ctx.scene()));
+            self.view = Some(view_all(ctx.scene(), &sound_rows::clip_spans(ctx)));
         }
         let ruler = Rect::from_min_max(
             Pos2::new(geo.keys.0 - PAD, header.top()),
@@ -622,8 +632,10 @@ fn current_frame_line(painter: &egui::Painter, ctx: &FrameCtx<'_>, geo: &Geometr
 }
 
 impl DopeSheet {
-    /// The rows: laid out as one area the height of every row, painted and hit-tested only
-    /// where `viewport` (the visible part, in content coordinates) shows them.
+    /// The rows: laid out as one area the height of every row, `top` points down the scrolled
+    /// content (under the sound clips' rows), painted and hit-tested only where `viewport` (the
+    /// visible part, in content coordinates) shows them.
+    #[allow(clippy::too_many_arguments)]
     fn body_ui(
         &mut self,
         ui: &mut Ui,
@@ -632,12 +644,17 @@ impl DopeSheet {
         rows: &[Row],
         geo: &Geometry,
         viewport: Rect,
+        top: f32,
     ) {
         let scene = ctx.scene();
-        let origin = ui.max_rect().min;
+        // The rows start `top` points into the scrolled content, under the sound clips' rows.
+        let origin = ui.max_rect().min + Vec2::new(0.0, top);
+        let viewport = viewport.translate(Vec2::new(0.0, -top));
         let height = ROW_HEIGHT * rows.len() as f32 + 4.0;
-        let content =
-            Rect::from_min_size(origin, Vec2::new(ui.max_rect().width(), height.max(viewport.height())));
+        let content = Rect::from_min_size(
+            origin,
+            Vec2::new(ui.max_rect().width(), height.max(viewport.height() - top)),
+        );
         let body = ui.allocate_rect(content, Sense::click_and_drag());
         let visible = Rect::from_min_max(origin + viewport.min.to_vec2(), origin + viewport.max.to_vec2());
         let first = ((viewport.min.y / ROW_HEIGHT).floor().max(0.0) as usize).min(rows.len());

@@ -8,7 +8,7 @@ use egui::Context;
 
 use crate::actions::{Action, Actions, ViewChange};
 use crate::context::FrameCtx;
-use crate::playblast::{MotionBlur, MovieFormat, Playblast, DEFAULT_SHUTTER};
+use crate::playblast::{MotionBlur, MovieFormat, Playblast, SceneSound, DEFAULT_SHUTTER};
 
 /// The dialog's fields, kept while the editor runs.
 pub struct RenderDialog {
@@ -176,6 +176,10 @@ impl RenderDialog {
                 MotionBlur { samples: self.samples, shutter: self.shutter }
             } else {
                 MotionBlur::OFF
+            },
+            sound: SceneSound {
+                clips: frame.scene().sounds.clone(),
+                base_dir: frame.base_dir().map(Path::to_path_buf),
             },
         };
         blast.validate().map_err(|e| format!("Render animation: {e}"))?;

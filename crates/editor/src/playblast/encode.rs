@@ -8,6 +8,8 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use keyrig_io::file_io::AtomicFile;
+
+use crate::audio::transport::MixClip;
 use keyrig_render::image::RgbaImage;
 
 use super::{MovieFormat, PlayblastError};
@@ -90,6 +92,14 @@ impl MovieWriter {
                 PlayblastError::Encode { path: w.path.clone(), message: format!("frame {number}: {e}") }
             }),
             MovieWriter::Mp4(w) => w.write_frame(image),
+        }
+    }
+
+    /// Gives the movie a sound track: MP4 only (GIF, APNG and PNGs have none; for them this
+    /// does nothing).
+    pub fn set_sound(&mut self, sound: MovieSound) {
+        if let MovieWriter::Mp4(w) = self {
+            w.sound = Some(sound);
         }
     }
 
@@ -285,6 +295,7 @@ pub struct Mp4Writer {
     written: u64,
     path: PathBuf,
     file: Option<AtomicFile>,
+    sound: Option<MovieSound>,
 }
 
 impl Mp4Writer {
@@ -335,6 +346,7 @@ impl Mp4Writer {
             written: 0,
             path: path.to_path_buf(),
             file: Some(create(path)?),
+            sound: None,
         })
     }
 
@@ -440,9 +452,266 @@ impl Mp4Writer {
         let mut muxer = self.muxer.take().ok_or_else(|| self.error("no frame was written"))?;
         muxer.write_end().map_err(|e| self.error(e))?;
         let mut file = muxer.into_writer();
+        if let Some(sound) = &self.sound {
+            add_sound_track(&mut file, sound)
+                .map_err(|e| self.error(format!("writing the sound track: {e}")))?;
+        }
         file.flush().map_err(|source| PlayblastError::Write { path: self.path.clone(), source })?;
         commit(file, &self.path)
     }
+}
+
+/// The sound an MP4 carries: the scene's unmuted clips placed on the timeline, mixed from the
+/// movie's first frame for its length.
+#[derive(Clone, Debug)]
+pub struct MovieSound {
+    pub clips: Vec<MixClip>,
+    /// The timeline second of the movie's first frame.
+    pub from: f64,
+    /// The movie's length in seconds.
+    pub seconds: f64,
+}
+
+/// The sound track's frames a second and channels: 16-bit little-endian PCM (`sowt`).
+pub const SOUND_RATE: u32 = 48_000;
+pub const SOUND_CHANNELS: u16 = 2;
+/// Frames a chunk of the sound track (one second).
+const SOUND_CHUNK: u64 = SOUND_RATE as u64;
+
+/// Adds `sound`, mixed, as a second track of the finished MP4 in `file`, whose `moov` box the
+/// muxer wrote last: its samples go into a second `mdat` box where that `moov` was, followed by
+/// the `moov` box with the sound's `trak` added (and `mvhd`'s next track ID moved on). The
+/// track is uncompressed 16-bit stereo PCM at 48 kHz in a QuickTime `sowt` sample entry,
+/// one-second chunks.
+///
+/// # Errors
+/// The file cannot be read back or written, or is not laid out as the muxer writes.
+fn add_sound_track<F: io::Read + Write + io::Seek>(file: &mut F, sound: &MovieSound) -> io::Result<()> {
+    use io::SeekFrom;
+    let bad = |what: &str| io::Error::new(io::ErrorKind::InvalidData, what.to_owned());
+    let end = file.seek(SeekFrom::End(0))?;
+    // The top-level boxes, to the `moov`.
+    let mut at = 0u64;
+    let moov_at = loop {
+        if at.saturating_add(8) > end {
+            return Err(bad("no moov box"));
+        }
+        file.seek(SeekFrom::Start(at))?;
+        let mut head = [0u8; 16];
+        file.read_exact(&mut head[..8])?;
+        let mut size = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
+        if size == 1 {
+            file.read_exact(&mut head[8..])?;
+            size = u64::from_be_bytes([
+                head[8], head[9], head[10], head[11], head[12], head[13], head[14], head[15],
+            ]);
+        } else if size == 0 {
+            size = end - at;
+        }
+        if &head[4..8] == b"moov" {
+            if at + size != end || size < 8 {
+                return Err(bad("the moov box is not the file's last"));
+            }
+            break at;
+        }
+        if size < 8 {
+            return Err(bad("a box shorter than its header"));
+        }
+        at += size;
+    };
+    let mut moov = vec![0u8; usize::try_from(end - moov_at).map_err(|_| bad("moov too large"))?];
+    file.seek(SeekFrom::Start(moov_at))?;
+    file.read_exact(&mut moov)?;
+    if u32::from_be_bytes([moov[0], moov[1], moov[2], moov[3]]) == 1 {
+        return Err(bad("a moov box with a 64-bit size"));
+    }
+    let mut children = moov[8..].to_vec();
+    // mvhd: the movie's timescale, and the next track ID (its last 4 bytes), which the sound
+    // track takes.
+    let (mut timescale, mut track_id) = (None, 0u32);
+    let mut c = 0;
+    while c + 8 <= children.len() {
+        let size =
+            u32::from_be_bytes([children[c], children[c + 1], children[c + 2], children[c + 3]]) as usize;
+        if size < 8 || c + size > children.len() {
+            return Err(bad("a malformed box in moov"));
+        }
+        if &children[c + 4..c + 8] == b"mvhd" && size >= 32 {
+            let body = c + 8;
+            let at = if children[body] == 1 { body + 20 } else { body + 12 };
+            let word = |i: usize| {
+                u32::from_be_bytes([children[i], children[i + 1], children[i + 2], children[i + 3]])
+            };
+            timescale = Some(word(at));
+            let next = c + size - 4;
+            track_id = word(next);
+            children[next..next + 4].copy_from_slice(&(track_id + 1).to_be_bytes());
+        }
+        c += size;
+    }
+    let timescale = timescale.ok_or_else(|| bad("no mvhd box"))?;
+
+    // The samples, mixed a chunk at a time, in an `mdat` where the `moov` was.
+    let frames = (sound.seconds * f64::from(SOUND_RATE)).round().max(0.0) as u64;
+    let bytes_per_frame = u64::from(SOUND_CHANNELS) * 2;
+    let data = frames * bytes_per_frame;
+    file.seek(SeekFrom::Start(moov_at))?;
+    let header = if data + 8 <= u64::from(u32::MAX) {
+        file.write_all(&((data + 8) as u32).to_be_bytes())?;
+        file.write_all(b"mdat")?;
+        8
+    } else {
+        file.write_all(&1u32.to_be_bytes())?;
+        file.write_all(b"mdat")?;
+        file.write_all(&(data + 16).to_be_bytes())?;
+        16
+    };
+    let first_chunk = moov_at + header;
+    let channels = usize::from(SOUND_CHANNELS);
+    let mut block = vec![0f32; SOUND_CHUNK as usize * channels];
+    let mut out = Vec::with_capacity(block.len() * 2);
+    let mut done = 0u64;
+    while done < frames {
+        let n = (frames - done).min(SOUND_CHUNK) as usize;
+        let block = &mut block[..n * channels];
+        block.fill(0.0);
+        let from = sound.from + done as f64 / f64::from(SOUND_RATE);
+        crate::audio::transport::mix_into(&sound.clips, block, channels, SOUND_RATE, from);
+        out.clear();
+        for &s in block.iter() {
+            out.extend_from_slice(&((s * 32767.0).round() as i16).to_le_bytes());
+        }
+        file.write_all(&out)?;
+        done += n as u64;
+    }
+
+    // The `trak`.
+    let chunks = frames.div_ceil(SOUND_CHUNK).max(1);
+    let duration = frames * u64::from(timescale) / u64::from(SOUND_RATE);
+    let trak = sound_trak(track_id, frames, duration, first_chunk, chunks, bytes_per_frame);
+    let moov_size = 8 + children.len() + trak.len();
+    let moov_size = u32::try_from(moov_size).map_err(|_| bad("moov too large"))?;
+    file.write_all(&moov_size.to_be_bytes())?;
+    file.write_all(b"moov")?;
+    file.write_all(&children)?;
+    file.write_all(&trak)?;
+    Ok(())
+}
+
+/// A box: its size, its type, `body`.
+fn mp4_box(kind: &[u8; 4], body: &[u8]) -> Vec<u8> {
+    let mut b = Vec::with_capacity(body.len() + 8);
+    b.extend_from_slice(&((body.len() + 8) as u32).to_be_bytes());
+    b.extend_from_slice(kind);
+    b.extend_from_slice(body);
+    b
+}
+
+/// A full box: a box whose body starts with a version and 24 bits of flags.
+fn mp4_full_box(kind: &[u8; 4], version: u8, flags: u32, body: &[u8]) -> Vec<u8> {
+    let mut full = Vec::with_capacity(body.len() + 4);
+    full.extend_from_slice(&((u32::from(version) << 24) | (flags & 0x00ff_ffff)).to_be_bytes());
+    full.extend_from_slice(body);
+    mp4_box(kind, &full)
+}
+
+/// The sound track's `trak` (ISO/IEC 14496-12): `frames` PCM frames of [`SOUND_CHANNELS`]
+/// 16-bit channels at [`SOUND_RATE`], one sample each, in `chunks` chunks of
+/// [`SOUND_CHUNK`] frames (the last one shorter) from `first_chunk` on; `duration` in the
+/// movie's timescale.
+fn sound_trak(
+    track_id: u32,
+    frames: u64,
+    duration: u64,
+    first_chunk: u64,
+    chunks: u64,
+    bytes_per_frame: u64,
+) -> Vec<u8> {
+    let be32 = |v: u32| v.to_be_bytes();
+    let long = duration > u64::from(u32::MAX) || frames > u64::from(u32::MAX);
+    // tkhd: enabled, in the movie and its preview; volume 1.0; the identity matrix.
+    let mut tkhd = Vec::new();
+    if long {
+        tkhd.extend_from_slice(&[0; 16]);
+        tkhd.extend_from_slice(&be32(track_id));
+        tkhd.extend_from_slice(&[0; 4]);
+        tkhd.extend_from_slice(&duration.to_be_bytes());
+    } else {
+        tkhd.extend_from_slice(&[0; 8]);
+        tkhd.extend_from_slice(&be32(track_id));
+        tkhd.extend_from_slice(&[0; 4]);
+        tkhd.extend_from_slice(&be32(duration as u32));
+    }
+    tkhd.extend_from_slice(&[0; 8]);
+    tkhd.extend_from_slice(&[0, 0, 0, 1, 0x01, 0x00, 0, 0]);
+    for m in [0x0001_0000u32, 0, 0, 0, 0x0001_0000, 0, 0, 0, 0x4000_0000] {
+        tkhd.extend_from_slice(&be32(m));
+    }
+    tkhd.extend_from_slice(&[0; 8]);
+    let tkhd = mp4_full_box(b"tkhd", u8::from(long), 7, &tkhd);
+    // mdhd: the track's clock is the sample rate; language "und".
+    let mut mdhd = Vec::new();
+    if long {
+        mdhd.extend_from_slice(&[0; 16]);
+        mdhd.extend_from_slice(&be32(SOUND_RATE));
+        mdhd.extend_from_slice(&frames.to_be_bytes());
+    } else {
+        mdhd.extend_from_slice(&[0; 8]);
+        mdhd.extend_from_slice(&be32(SOUND_RATE));
+        mdhd.extend_from_slice(&be32(frames as u32));
+    }
+    mdhd.extend_from_slice(&[0x55, 0xc4, 0, 0]);
+    let mdhd = mp4_full_box(b"mdhd", u8::from(long), 0, &mdhd);
+    let mut hdlr = vec![0; 4];
+    hdlr.extend_from_slice(b"soun");
+    hdlr.extend_from_slice(&[0; 12]);
+    hdlr.extend_from_slice(b"SoundHandler\0");
+    let hdlr = mp4_full_box(b"hdlr", 0, 0, &hdlr);
+    let smhd = mp4_full_box(b"smhd", 0, 0, &[0; 4]);
+    let url = mp4_full_box(b"url ", 0, 1, &[]);
+    let dref = mp4_full_box(b"dref", 0, 0, &[be32(1).as_slice(), &url].concat());
+    let dinf = mp4_box(b"dinf", &dref);
+    // stsd: one `sowt` entry (QuickTime's sound sample description, version 0) with its
+    // channel layout.
+    let mut sowt = vec![0; 6];
+    sowt.extend_from_slice(&1u16.to_be_bytes());
+    sowt.extend_from_slice(&[0; 8]);
+    sowt.extend_from_slice(&SOUND_CHANNELS.to_be_bytes());
+    sowt.extend_from_slice(&16u16.to_be_bytes());
+    sowt.extend_from_slice(&[0; 4]);
+    sowt.extend_from_slice(&be32(SOUND_RATE << 16));
+    // chan: the channels are left and right (kAudioChannelLayoutTag_Stereo), so that players
+    // need not guess.
+    sowt.extend_from_slice(&mp4_full_box(b"chan", 0, 0, &[be32(0x0065_0002), be32(0), be32(0)].concat()));
+    let stsd = mp4_full_box(b"stsd", 0, 0, &[be32(1).as_slice(), &mp4_box(b"sowt", &sowt)].concat());
+    // Every sample (frame) lasts one tick of the track's clock.
+    let frames32 = u32::try_from(frames).unwrap_or(u32::MAX);
+    let stts = mp4_full_box(b"stts", 0, 0, &[be32(1), be32(frames32), be32(1)].concat());
+    let last = frames - (chunks - 1) * SOUND_CHUNK;
+    let mut stsc = Vec::new();
+    if chunks > 1 && last != SOUND_CHUNK {
+        stsc.extend_from_slice(&[be32(2), be32(1), be32(SOUND_CHUNK as u32), be32(1)].concat());
+        stsc.extend_from_slice(&[be32(chunks as u32), be32(last as u32), be32(1)].concat());
+    } else {
+        let per = if chunks > 1 { SOUND_CHUNK } else { last };
+        stsc.extend_from_slice(&[be32(1), be32(1), be32(per as u32), be32(1)].concat());
+    }
+    let stsc = mp4_full_box(b"stsc", 0, 0, &stsc);
+    let stsz = mp4_full_box(b"stsz", 0, 0, &[be32(bytes_per_frame as u32), be32(frames32)].concat());
+    let offsets = (0..chunks).map(|k| first_chunk + k * SOUND_CHUNK * bytes_per_frame);
+    let stco = if first_chunk + frames * bytes_per_frame <= u64::from(u32::MAX) {
+        let mut b = be32(chunks as u32).to_vec();
+        offsets.for_each(|o| b.extend_from_slice(&be32(o as u32)));
+        mp4_full_box(b"stco", 0, 0, &b)
+    } else {
+        let mut b = be32(chunks as u32).to_vec();
+        offsets.for_each(|o| b.extend_from_slice(&o.to_be_bytes()));
+        mp4_full_box(b"co64", 0, 0, &b)
+    };
+    let stbl = mp4_box(b"stbl", &[stsd, stts, stsc, stsz, stco].concat());
+    let minf = mp4_box(b"minf", &[smhd, dinf, stbl].concat());
+    let mdia = mp4_box(b"mdia", &[mdhd, hdlr, minf].concat());
+    mp4_box(b"trak", &[tkhd, mdia].concat())
 }
 
 /// A NAL unit without its Annex B start code (`00 00 01` or `00 00 00 01`).

@@ -11,6 +11,9 @@
 
 pub mod encode;
 
+use crate::audio::transport::MixClip;
+use encode::MovieSound;
+
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -162,6 +165,8 @@ pub enum PlayblastError {
     Cancelled { done: u32, total: u32, path: PathBuf },
     #[error("the encoder thread stopped unexpectedly")]
     EncoderLost,
+    #[error("sound clip {path}: {message}")]
+    Sound { path: String, message: String },
 }
 
 /// Where a playblast is, reported after each frame.
@@ -221,6 +226,52 @@ pub struct Playblast {
     pub format: MovieFormat,
     pub output: PathBuf,
     pub motion_blur: MotionBlur,
+    /// The scene's sound clips, mixed into an MP4's sound track (other formats carry none).
+    pub sound: SceneSound,
+}
+
+/// A scene's sound clips and the folder their relative paths start from.
+#[derive(Clone, Debug, Default)]
+pub struct SceneSound {
+    pub clips: Vec<keyrig_core::SoundClip>,
+    pub base_dir: Option<PathBuf>,
+}
+
+impl SceneSound {
+    /// The unmuted clips, their files decoded, placed on the timeline in seconds at `fps` (as
+    /// the editor plays them, `audio::mix_of`).
+    ///
+    /// # Errors
+    /// A clip's file cannot be decoded, or is longer than the samples kept for playing
+    /// ([`keyrig_io::sound::MAX_PLAYBACK_FRAMES`]).
+    pub fn mix(&self, fps: f64) -> Result<Vec<MixClip>, PlayblastError> {
+        let fps = fps.max(1e-9);
+        let mut clips = Vec::new();
+        for clip in &self.clips {
+            if clip.mute || !clip.gain.is_finite() || !clip.start_frame.is_finite() {
+                continue;
+            }
+            let file = crate::sounds::full_path(self.base_dir.as_deref(), &clip.path);
+            let error = |message: String| PlayblastError::Sound { path: clip.path.clone(), message };
+            let decoded = keyrig_io::sound::decode_sound_file_for_playback(
+                &file,
+                keyrig_io::sound::MAX_PLAYBACK_FRAMES,
+            )
+            .map_err(|e| error(e.to_string()))?;
+            let pcm = decoded.pcm.ok_or_else(|| {
+                error(format!(
+                    "longer than keyrig mixes ({} minutes at 48 kHz)",
+                    keyrig_io::sound::MAX_PLAYBACK_FRAMES / 48_000 / 60
+                ))
+            })?;
+            clips.push(MixClip {
+                pcm: std::sync::Arc::new(pcm),
+                start: clip.start_frame / fps,
+                gain: clip.gain,
+            });
+        }
+        Ok(clips)
+    }
 }
 
 impl Playblast {
@@ -295,7 +346,14 @@ impl Playblast {
                     .map_err(|source| PlayblastError::Write { path: parent.to_path_buf(), source })?;
             }
         }
-        let writer = MovieWriter::create(self.format, &self.output, self.size, total, self.fps)?;
+        let mut writer = MovieWriter::create(self.format, &self.output, self.size, total, self.fps)?;
+        if self.format == MovieFormat::Mp4 && self.sound.clips.iter().any(|c| !c.mute) {
+            writer.set_sound(MovieSound {
+                clips: self.sound.mix(self.fps)?,
+                from: self.first as f64 / self.fps,
+                seconds: f64::from(total) / self.fps,
+            });
+        }
         let offsets = self.motion_blur.offsets();
         let started = Instant::now();
         let (sender, receiver) = mpsc::sync_channel::<(i64, RgbaImage)>(2);
@@ -402,6 +460,7 @@ mod tests {
             format: MovieFormat::Gif,
             output: PathBuf::from("a.gif"),
             motion_blur: MotionBlur::OFF,
+            sound: SceneSound::default(),
         };
         assert!(blast.validate().unwrap_err().to_string().contains("empty"));
         let blur = MotionBlur { samples: 0, shutter: 0.5 };

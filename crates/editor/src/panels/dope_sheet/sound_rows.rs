@@ -1,5 +1,5 @@
-//! The scene's sound clips in the dope sheet: one fixed row per clip under the frame ruler
-//! (its name, a mute switch, and its waveform as a bar on the time axis that a drag moves in
+//! The scene's sound clips in the dope sheet: one row per clip at the head of the rows,
+//! scrolling with them (its name, a mute switch, and its waveform as a bar on the time axis that a drag moves in
 //! whole frames, one undo step per drag), and the unmuted clips' waveforms faintly behind the
 //! ruler itself, as Maya's time slider shows them.
 //!
@@ -45,8 +45,16 @@ fn clip_frames(ctx: &FrameCtx<'_>, clip: &SoundClip, fps: f64) -> (f64, f64) {
     (clip.start_frame, clip.start_frame + seconds * fps)
 }
 
+/// Every clip's frames on the timeline ([`clip_frames`]): what *View all* shows besides the
+/// range and the keys.
+pub(super) fn clip_spans(ctx: &FrameCtx<'_>) -> Vec<(f64, f64)> {
+    let fps = ctx.scene().fps.max(1e-9);
+    ctx.scene().sounds.iter().map(|clip| clip_frames(ctx, clip, fps)).collect()
+}
+
 impl DopeSheet {
-    /// The clips' rows in `strip` (one [`SOUND_ROW_HEIGHT`] each, under the ruler).
+    /// The clips' rows in `strip` (one [`SOUND_ROW_HEIGHT`] each, at the top of the scrolled
+    /// rows).
     pub(super) fn sound_rows_ui(
         &mut self,
         ui: &mut Ui,
