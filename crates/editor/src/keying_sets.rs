@@ -73,7 +73,8 @@ fn owner(id: ChannelId) -> Option<Selected> {
         ChannelId::CameraTranslation(c)
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
-        | ChannelId::CameraRoll(c) => Selected::Camera(c),
+        | ChannelId::CameraRoll(c)
+        | ChannelId::CameraVisible(c) => Selected::Camera(c),
         ChannelId::Attribute(_) => return None,
     })
 }
