@@ -647,6 +647,15 @@ struct DrawPipelines {
     /// `solid` and `translucent` for items drawn without a texture: no texture sample.
     solid_untextured: wgpu::RenderPipeline,
     translucent_untextured: wgpu::RenderPipeline,
+    /// `solid` and `solid_untextured` split by facing: every opaque item's front faces are
+    /// drawn before any back face, so that a back face hidden behind its own surface (half of
+    /// a closed mesh's triangles) is rejected by the depth test before it is shaded. Together
+    /// they draw every triangle, as the unculled pipelines do (a surface the deformer folds
+    /// keeps its folded faces).
+    solid_fronts: wgpu::RenderPipeline,
+    solid_backs: wgpu::RenderPipeline,
+    solid_untextured_fronts: wgpu::RenderPipeline,
+    solid_untextured_backs: wgpu::RenderPipeline,
     /// The background over the whole viewport at the far plane (colour and depth), for a
     /// frame drawn into a pass that was not cleared for it ([`Renderer::prepare`]).
     fill: wgpu::RenderPipeline,
@@ -688,6 +697,7 @@ impl DrawPipelines {
                         vs: &str,
                         fs: &str,
                         topology: wgpu::PrimitiveTopology,
+                        cull_mode: Option<wgpu::Face>,
                         depth_compare: wgpu::CompareFunction,
                         depth_write: bool,
                         blend: Option<wgpu::BlendState>| {
@@ -704,7 +714,7 @@ impl DrawPipelines {
                         _ => std::slice::from_ref(&vertex_layout),
                     },
                 },
-                primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
+                primitive: wgpu::PrimitiveState { topology, cull_mode, ..Default::default() },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
                     depth_write_enabled: Some(depth_write),
@@ -737,6 +747,7 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_lit",
                 TriangleList,
+                None,
                 LessEqual,
                 true,
                 None,
@@ -747,6 +758,7 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_flat",
                 LineList,
+                None,
                 LessEqual,
                 true,
                 None,
@@ -757,6 +769,7 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_flat",
                 PointList,
+                None,
                 LessEqual,
                 true,
                 None,
@@ -767,6 +780,7 @@ impl DrawPipelines {
                 "vs_line",
                 "fs_line",
                 LineList,
+                None,
                 LessEqual,
                 false,
                 None,
@@ -777,6 +791,7 @@ impl DrawPipelines {
                 "vs_line",
                 "fs_line",
                 LineList,
+                None,
                 Always,
                 false,
                 None,
@@ -787,6 +802,7 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_ghost",
                 TriangleList,
+                None,
                 LessEqual,
                 false,
                 Some(wgpu::BlendState::ALPHA_BLENDING),
@@ -797,6 +813,7 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_lit",
                 TriangleList,
+                None,
                 LessEqual,
                 false,
                 Some(wgpu::BlendState::ALPHA_BLENDING),
@@ -807,6 +824,7 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_lit_untextured",
                 TriangleList,
+                None,
                 LessEqual,
                 true,
                 None,
@@ -817,9 +835,54 @@ impl DrawPipelines {
                 "vs_mesh",
                 "fs_lit_untextured",
                 TriangleList,
+                None,
                 LessEqual,
                 false,
                 Some(wgpu::BlendState::ALPHA_BLENDING),
+            ),
+            solid_fronts: pipeline(
+                "keyrig solid, front faces",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit",
+                TriangleList,
+                Some(wgpu::Face::Back),
+                LessEqual,
+                true,
+                None,
+            ),
+            solid_backs: pipeline(
+                "keyrig solid, back faces",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit",
+                TriangleList,
+                Some(wgpu::Face::Front),
+                LessEqual,
+                true,
+                None,
+            ),
+            solid_untextured_fronts: pipeline(
+                "keyrig solid untextured, front faces",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit_untextured",
+                TriangleList,
+                Some(wgpu::Face::Back),
+                LessEqual,
+                true,
+                None,
+            ),
+            solid_untextured_backs: pipeline(
+                "keyrig solid untextured, back faces",
+                mesh_layout,
+                "vs_mesh",
+                "fs_lit_untextured",
+                TriangleList,
+                Some(wgpu::Face::Front),
+                LessEqual,
+                true,
+                None,
             ),
             fill: pipeline(
                 "keyrig background",
@@ -827,6 +890,7 @@ impl DrawPipelines {
                 "vs_fill",
                 "fs_fill",
                 TriangleList,
+                None,
                 Always,
                 true,
                 None,
@@ -1638,9 +1702,14 @@ impl Renderer {
             .filter(|(_, item)| item.ghost.is_none() && !translucent(item))
             .chain(frame.items.iter().enumerate().filter(|(_, item)| translucent(item)))
             .chain(frame.items.iter().enumerate().filter(|(_, item)| item.ghost.is_some()));
+        // Opaque solid items' back faces, drawn after every opaque front face.
+        let mut back_faces = Vec::new();
         for (i, item) in order {
             // Checked in encode_deformations.
             let Some(mesh) = self.meshes.get(&item.mesh) else { continue };
+            if item.ghost.is_some() && !back_faces.is_empty() {
+                draws.draws.append(&mut back_faces);
+            }
             let mesh_draw = |pipeline: &wgpu::RenderPipeline, texture: &wgpu::BindGroup| Draw {
                 pipeline: pipeline.clone(),
                 mesh: Some(MeshDrawBindings {
@@ -1676,6 +1745,25 @@ impl Renderer {
                 _ => pipeline,
             };
             let draw = mesh_draw(pipeline, texture.unwrap_or(&self.white_texture));
+            if frame.style == RenderStyle::Solid && !translucent(item) && mesh.triangle_index_count > 0 {
+                let (fronts, backs) = if texture.is_some() {
+                    (&pipelines.solid_fronts, &pipelines.solid_backs)
+                } else {
+                    (&pipelines.solid_untextured_fronts, &pipelines.solid_untextured_backs)
+                };
+                let triangles = Draw {
+                    indices: Some(mesh.triangles.clone()),
+                    range: 0..mesh.triangle_index_count,
+                    ..draw
+                };
+                back_faces.push(Draw { pipeline: backs.clone(), ..triangles.clone() });
+                draws.draws.push(Draw { pipeline: fronts.clone(), ..triangles });
+                continue;
+            }
+            if !back_faces.is_empty() && translucent(item) {
+                // Every opaque item's back faces before the first translucent item.
+                draws.draws.append(&mut back_faces);
+            }
             draws.draws.push(match frame.style {
                 RenderStyle::Solid if mesh.triangle_index_count > 0 => Draw {
                     indices: Some(mesh.triangles.clone()),
@@ -1691,6 +1779,7 @@ impl Renderer {
                 RenderStyle::Points => draw,
             });
         }
+        draws.draws.append(&mut back_faces);
     }
 
     /// The draws of the overlay lines: the grid depth-tested, the rest on top of everything.
