@@ -9,6 +9,7 @@ pub mod ik;
 pub mod ik_constraint;
 pub mod key;
 pub mod material;
+pub mod pose_library;
 pub mod quat;
 pub mod rotation_mode;
 pub mod scene;
@@ -22,6 +23,7 @@ pub use channel_id::attribute_id;
 pub use channel_id::attribute_id::{AttributeId, AttributeProperty};
 pub use key::{Animated, Cycle, Cycles, Interpolation, Key, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS};
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
+pub use pose_library::{NamedPose, PoseValue, ReferenceImage};
 pub use rotation_mode::{EulerOrder, RotationMode};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, IkConstraint, Joint, Light, LightKind, MeshSource,

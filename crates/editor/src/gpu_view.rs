@@ -30,6 +30,9 @@ pub enum GpuViewError {
 /// (`shaders/viewport_blit.wgsl`), for the window's format.
 struct Blit {
     pipeline: wgpu::RenderPipeline,
+    /// The image blended over what lies beneath (premultiplied alpha), for a viewport that shows
+    /// the reference image behind the scene.
+    over: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     /// Pixel for pixel (the image has the rect's size in pixels) and scaled up.
     samplers: [wgpu::Sampler; 2],
@@ -63,6 +66,8 @@ impl Blit {
             ],
         });
         let pipeline = callback_pipeline(device, &module, target, "fs_blit", Some(&layout), None);
+        let premultiplied = Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
+        let over = callback_pipeline(device, &module, target, "fs_blit_over", Some(&layout), premultiplied);
         let sampler = |filter: wgpu::FilterMode| {
             device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("viewport blit"),
@@ -73,6 +78,7 @@ impl Blit {
         };
         Blit {
             pipeline,
+            over,
             layout,
             samplers: [sampler(wgpu::FilterMode::Nearest), sampler(wgpu::FilterMode::Linear)],
             srgb_target: target.is_srgb(),
@@ -234,6 +240,9 @@ pub struct GpuFrame<'a> {
     /// Onion-skin ghosts: an object's state at another frame and how to draw it (farthest
     /// first).
     pub ghosts: Vec<(usize, keyrig_eval::ObjectState, keyrig_render::Ghost)>,
+    /// The scene is drawn over a picture egui painted beneath (the reference image): the image
+    /// is cleared to transparent and blended over it.
+    pub see_through: bool,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -371,10 +380,12 @@ impl GpuView {
         one_to_one: bool,
     ) -> Result<ViewportImage, GpuViewError> {
         let started = std::time::Instant::now();
+        let see_through = frame.see_through;
         let result = self.render_inner(frame, size_px).and_then(|()| {
             let Some((_, bind_groups)) = &self.target else { return Err(GpuViewError::NoTarget) };
+            let pipeline = if see_through { &self.blit.over } else { &self.blit.pipeline };
             Ok(ViewportImage {
-                pipeline: self.blit.pipeline.clone(),
+                pipeline: pipeline.clone(),
                 bind_group: bind_groups[usize::from(!one_to_one)].clone(),
             })
         });
@@ -395,6 +406,7 @@ impl GpuView {
         }
         let Some((_, rig)) = &self.rig else { return Err(GpuViewError::NoScene) };
         let mut input = rig.frame_from_state(frame.state, &frame.view)?;
+        input.transparent_background = frame.see_through;
         if let Some(&(object, _, _)) = frame.ghosts.first() {
             // Each ghost needs mesh buffers of its own; uploaded once per rig and object.
             let count = frame.ghosts.len();

@@ -171,6 +171,10 @@ pub struct FrameInput {
     pub through: Option<keyrig_eval::CameraState>,
     /// Linear RGB background.
     pub background: Vec3,
+    /// Clear to transparent black instead of `background`: the image is premultiplied RGBA,
+    /// opaque where something was drawn, for a caller that composites it over a picture of its
+    /// own (the editor's reference image).
+    pub transparent_background: bool,
     /// Multiply each mesh's colour by its texture ([`Renderer::set_texture`]) in the solid
     /// style; `false` draws every mesh in its plain colour.
     pub textures: bool,
@@ -194,6 +198,7 @@ impl FrameInput {
             camera_gizmos: Vec::new(),
             through: None,
             background: Vec3::new(0.018, 0.02, 0.025),
+            transparent_background: false,
             textures: true,
         }
     }
@@ -1410,19 +1415,24 @@ impl Renderer {
         lines: OverlayLines,
         stats: &mut FrameStats,
     ) {
-        let mut pass = Self::begin_render_pass(encoder, viewport, frame.background);
+        let clear = if frame.transparent_background {
+            wgpu::Color::TRANSPARENT
+        } else {
+            let bg = frame.background;
+            wgpu::Color { r: f64::from(bg.x), g: f64::from(bg.y), b: f64::from(bg.z), a: 1.0 }
+        };
+        let mut pass = Self::begin_render_pass(encoder, viewport, clear);
         pass.set_bind_group(0, &self.globals_bind_group, &[]);
         self.draw_items(&mut pass, frame, stats);
         self.draw_lines(&mut pass, lines, stats);
     }
 
-    /// Begins the viewport's render pass, clearing colour to `background` and depth to 1.
+    /// Begins the viewport's render pass, clearing colour to `clear` and depth to 1.
     fn begin_render_pass<'e>(
         encoder: &'e mut wgpu::CommandEncoder,
         viewport: &Viewport,
-        background: Vec3,
+        clear: wgpu::Color,
     ) -> wgpu::RenderPass<'e> {
-        let bg = background;
         // With MSAA the multisampled image is resolved and then discarded; without, the
         // pass draws straight into the colour texture, which must be stored.
         let (view, resolve_target, store) = match &viewport.msaa_view {
@@ -1436,12 +1446,7 @@ impl Renderer {
                 depth_slice: None,
                 resolve_target,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: f64::from(bg.x),
-                        g: f64::from(bg.y),
-                        b: f64::from(bg.z),
-                        a: 1.0,
-                    }),
+                    load: wgpu::LoadOp::Clear(clear),
                     store,
                 },
             })],
