@@ -4,6 +4,7 @@
 //! them. Nothing of it goes into the scene file or its undo history.
 
 use crate::app::EditorApp;
+use crate::camera::OrbitCamera;
 use crate::files::sessions::{ItemName, PanelSizes, SavedSession};
 
 impl EditorApp {

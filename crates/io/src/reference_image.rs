@@ -40,7 +40,7 @@ pub fn load_reference_image(path: &Path) -> Result<TextureImage, ReferenceImageE
     reader.limits(limits);
     let rgba = reader.decode().map_err(|e| decode_error(e.to_string()))?.to_rgba8();
     let (width, height) = rgba.dimensions();
-    TextureImage::new(width, height, Arc::from(rgba.into_raw()), Sampler::default())
+    TextureImage::new(width, height, Arc::<[u8]>::from(rgba.into_raw()), Sampler::default())
         .map_err(|e| decode_error(e.to_string()))
 }
 
