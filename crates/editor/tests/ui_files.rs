@@ -178,7 +178,10 @@ fn reopening_a_scene_restores_frame_camera_selection_and_panel_sizes() {
         let start = rect.left_top() + egui::vec2(40.0, 60.0);
         common::drag(&mut h, start, start + egui::vec2(80.0, 20.0));
         let edge = outliner_width(&h);
-        let grip = egui::pos2(edge.right(), edge.center().y);
+        // Just inside the edge: the viewport, laid out after the outliner, takes the points
+        // from the edge on. The pointer rests there a frame before the press, as a hand's does.
+        let grip = egui::pos2(edge.right() - 3.0, edge.center().y);
+        common::pointer(&mut h, egui::Event::PointerMoved(grip));
         common::drag(&mut h, grip, grip + egui::vec2(70.0, 0.0));
         let width = outliner_width(&h).width();
         assert!(width > edge.width() + 40.0, "the outliner widened: {} → {width}", edge.width());

@@ -230,6 +230,7 @@ fn dragging_the_gizmo_translates_lights_and_objects_and_records_keys() {
     h.get_by_label("Cube").click();
     h.run();
     assert_eq!(h.state().session.selection.item, Some(Selected::Object(1)));
+    let cube = ChannelId::ObjectTranslation(1);
     let cube_keys_before = channels::key_count(h.state().doc.scene(), cube);
     let cube_position = |app: &EditorApp| -> Vec3 {
         app.object_pose_now(1).expect("the cube has a pose").world_from_object.translation.into()
@@ -671,7 +672,7 @@ fn dragging_a_key_of_the_motion_path_moves_that_keys_position() {
     let forward = (h.state().view.camera.target - h.state().view.camera.eye()).normalize();
     assert!((moved - before.keys[key].value).dot(forward).abs() < 1e-4, "in the view plane");
     assert_eq!(after.keys.len(), before.keys.len());
-    for (i, (a, b)) in before.keys.iter().zip(&after.keys).enumerate() {
+    for (i, (a, b)) in before.keys.iter().zip(after.keys.iter()).enumerate() {
         assert_eq!(a.time, b.time, "key {i} keeps its time");
         assert_eq!((a.interpolation, a.tcb), (b.interpolation, b.tcb), "key {i} keeps its shape");
         if i != key {
