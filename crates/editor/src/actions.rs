@@ -142,8 +142,14 @@ pub enum PoseLibraryAction {
     /// Saves the selection's pose at the current frame under this name ("Pose" when empty).
     Add(String),
     /// Applies pose `index` to the selection, mirrored or not.
-    Apply { index: usize, mirrored: bool },
-    Rename { index: usize, name: String },
+    Apply {
+        index: usize,
+        mirrored: bool,
+    },
+    Rename {
+        index: usize,
+        name: String,
+    },
     Delete(usize),
 }
 

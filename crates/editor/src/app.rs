@@ -462,7 +462,9 @@ impl EditorApp {
                 object.name = unique_name(&object.name, scene.objects.iter().map(|x| x.name.as_str()));
                 let name = object.name.clone();
                 let index = scene.objects.len();
-                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| scene.objects.push(object));
+                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
+                    scene.objects.push(object)
+                });
                 Some((Selected::Object(index), name))
             }
             Some(Selected::Light(l)) => {
@@ -470,7 +472,9 @@ impl EditorApp {
                 light.name = unique_name(&light.name, scene.lights.iter().map(|x| x.name.as_str()));
                 let name = light.name.clone();
                 let index = scene.lights.len();
-                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| scene.lights.push(light));
+                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
+                    scene.lights.push(light)
+                });
                 Some((Selected::Light(index), name))
             }
             Some(Selected::Camera(c)) => {
@@ -478,7 +482,9 @@ impl EditorApp {
                 camera.name = unique_name(&camera.name, scene.cameras.iter().map(|x| x.name.as_str()));
                 let name = camera.name.clone();
                 let index = scene.cameras.len();
-                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| scene.cameras.push(camera));
+                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
+                    scene.cameras.push(camera)
+                });
                 Some((Selected::Camera(index), name))
             }
             Some(Selected::Joint { .. }) => {
@@ -609,8 +615,7 @@ impl EditorApp {
     #[must_use]
     pub fn pose_channels(&self) -> Vec<(ChannelId, ChannelValue)> {
         let ids = self.session.selection.key_channels(self.doc.scene());
-        ids
-            .into_iter()
+        ids.into_iter()
             .filter(|id| {
                 !matches!(
                     id,

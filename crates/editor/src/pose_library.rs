@@ -44,7 +44,9 @@ impl EditorApp {
         let values: Vec<PoseValue> = self
             .pose_channels()
             .into_iter()
-            .filter_map(|(id, value)| Some(PoseValue { channel: ChannelPath::of(scene, id)?.to_string(), value }))
+            .filter_map(|(id, value)| {
+                Some(PoseValue { channel: ChannelPath::of(scene, id)?.to_string(), value })
+            })
             .collect();
         if values.is_empty() {
             self.info("Pose library: select joints or a character first");
@@ -82,9 +84,14 @@ impl EditorApp {
             self.info(format!("Apply pose \"{name}\": select joints or a character first"));
             return;
         }
-        let what = if mirrored { format!("apply pose {name} mirrored") } else { format!("apply pose {name}") };
+        let what =
+            if mirrored { format!("apply pose {name} mirrored") } else { format!("apply pose {name}") };
         let (count, report) = self.apply_pose_values(&values, mirrored, &what, Some(&selected));
-        let missing = if missing > 0 { format!(" ({missing} channel(s) of the pose are not in this scene)") } else { String::new() };
+        let missing = if missing > 0 {
+            format!(" ({missing} channel(s) of the pose are not in this scene)")
+        } else {
+            String::new()
+        };
         match report {
             Some(report) => {
                 self.info(format!("Applied \"{name}\" mirrored on {count} channel(s){missing}. {report}"));

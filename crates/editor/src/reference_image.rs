@@ -23,9 +23,14 @@ impl EditorApp {
         };
         // In memory the path is absolute, as model paths are: saving makes it relative.
         let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-        let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-        let opacity =
-            self.doc.scene().reference_image.as_ref().map_or_else(keyrig_core::pose_library::default_opacity, |r| r.opacity);
+        let name =
+            path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+        let opacity = self
+            .doc
+            .scene()
+            .reference_image
+            .as_ref()
+            .map_or_else(keyrig_core::pose_library::default_opacity, |r| r.opacity);
         let reference = ReferenceImage { path: absolute.to_string_lossy().into_owned(), opacity };
         self.doc.edit(&format!("reference image {name}"), |scene| scene.reference_image = Some(reference));
         self.info(format!(

@@ -99,7 +99,10 @@ fn drag_the_ik_target_in_the_viewport_keys_it_in_one_undo_step() {
     let after = target_world(&h);
     assert!(after.distance(before) > 0.05, "the target moved: {before} → {after}");
     let on_screen = common::on_screen(h.state(), after);
-    assert!(on_screen.distance(to) < 1.0, "it is under the pointer where it was let go: {on_screen:?} vs {to:?}");
+    assert!(
+        on_screen.distance(to) < 1.0,
+        "it is under the pointer where it was let go: {on_screen:?} vs {to:?}"
+    );
     let scene = h.state().doc.scene().clone();
     let frames: Vec<i64> =
         channels::key_times(&scene, target).iter().map(|t| (t * scene.fps).round() as i64).collect();
@@ -109,7 +112,11 @@ fn drag_the_ik_target_in_the_viewport_keys_it_in_one_undo_step() {
         joint_world(h.state(), 0, WRIST).distance(after) < joint_world(h.state(), 0, WRIST).distance(before),
         "the wrist follows the target"
     );
-    assert_eq!(h.state().session.selection.item, Some(Selected::Joint { object: 0, joint: WRIST }), "nothing else picked");
+    assert_eq!(
+        h.state().session.selection.item,
+        Some(Selected::Joint { object: 0, joint: WRIST }),
+        "nothing else picked"
+    );
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert!(target_world(&h).distance(before) < 1e-6, "undo puts the target back");
 }

@@ -264,7 +264,8 @@ fn shift_d_starts_a_move_that_a_click_places_and_escape_cancels() {
     }
     let moved = h.state().doc.scene().objects[2].translation.value;
     let camera = &h.state().view.camera;
-    let right = (camera.target - keyrig_editor::camera::OrbitCamera::eye(camera)).cross(glam::Vec3::Y).normalize();
+    let right =
+        (camera.target - keyrig_editor::camera::OrbitCamera::eye(camera)).cross(glam::Vec3::Y).normalize();
     let offset = moved - original;
     assert!(offset.dot(right) > 0.1, "the copy follows the pointer to the right: {offset:?}");
     assert!(offset.dot(right) > 0.9 * offset.length(), "in the view plane: {offset:?}");
@@ -274,7 +275,12 @@ fn shift_d_starts_a_move_that_a_click_places_and_escape_cancels() {
     for pressed in [true, false] {
         common::pointer(
             &mut h,
-            Event::PointerButton { pos: at, button: egui::PointerButton::Primary, pressed, modifiers: Modifiers::NONE },
+            Event::PointerButton {
+                pos: at,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: Modifiers::NONE,
+            },
         );
     }
     common::pointer(&mut h, Event::PointerMoved(at + egui::vec2(30.0, 30.0)));
@@ -297,6 +303,10 @@ fn shift_d_starts_a_move_that_a_click_places_and_escape_cancels() {
     press(&mut h, Modifiers::NONE, Key::Escape);
     common::pointer(&mut h, Event::PointerMoved(from + egui::vec2(60.0, 0.0)));
     assert_eq!(object_names(&h), ["Arm", "Cube", "Arm.001"]);
-    assert_eq!(h.state().doc.scene().objects[2].translation.value, original, "Escape leaves it on the original");
+    assert_eq!(
+        h.state().doc.scene().objects[2].translation.value,
+        original,
+        "Escape leaves it on the original"
+    );
     assert_eq!(h.state().doc.undo_len(), steps + 1);
 }

@@ -32,8 +32,9 @@ pub fn load_reference_image(path: &Path) -> Result<TextureImage, ReferenceImageE
     let bytes = crate::file_io::read_regular_file(path, MAX_REFERENCE_IMAGE_BYTES)
         .map_err(|source| ReferenceImageError::Read { path: path.to_path_buf(), source })?;
     let decode_error = |reason: String| ReferenceImageError::Decode { path: path.to_path_buf(), reason };
-    let mut reader =
-        image::ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| decode_error(e.to_string()))?;
+    let mut reader = image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| decode_error(e.to_string()))?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_SIDE);
     limits.max_image_height = Some(MAX_SIDE);

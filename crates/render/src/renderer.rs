@@ -1445,10 +1445,7 @@ impl Renderer {
                 view,
                 depth_slice: None,
                 resolve_target,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(clear),
-                    store,
-                },
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &viewport.depth_view,

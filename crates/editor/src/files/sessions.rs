@@ -89,7 +89,8 @@ impl PanelSizes {
     /// The sizes egui kept for the panels in the last frame (none before the first frame).
     #[must_use]
     pub fn read(ctx: &egui::Context) -> Option<Self> {
-        let size = |id: &str| egui::containers::panel::PanelState::load(ctx, egui::Id::new(id)).map(|s| s.size());
+        let size =
+            |id: &str| egui::containers::panel::PanelState::load(ctx, egui::Id::new(id)).map(|s| s.size());
         let [outliner, inspector, timeline] = Self::IDS.map(size);
         Some(PanelSizes { outliner: outliner?.x, inspector: inspector?.x, timeline: timeline?.y })
     }
@@ -97,14 +98,13 @@ impl PanelSizes {
     /// Gives the panels these sizes from the next frame on (egui reads a panel's size from its
     /// state; the window keeps each within what fits).
     pub fn apply(self, ctx: &egui::Context) {
-        let sizes = [
-            egui::vec2(self.outliner, 1.0),
-            egui::vec2(self.inspector, 1.0),
-            egui::vec2(1.0, self.timeline),
-        ];
+        let sizes =
+            [egui::vec2(self.outliner, 1.0), egui::vec2(self.inspector, 1.0), egui::vec2(1.0, self.timeline)];
         for (id, size) in Self::IDS.into_iter().zip(sizes) {
             let size = egui::vec2(size.x.clamp(1.0, 4000.0), size.y.clamp(1.0, 4000.0));
-            let state = egui::containers::panel::PanelState { rect: egui::Rect::from_min_size(egui::Pos2::ZERO, size) };
+            let state = egui::containers::panel::PanelState {
+                rect: egui::Rect::from_min_size(egui::Pos2::ZERO, size),
+            };
             ctx.data_mut(|d| d.insert_persisted(egui::Id::new(id), state));
         }
     }
@@ -190,7 +190,8 @@ impl Sessions {
         all.sessions.insert(0, session);
         all.sessions.truncate(SESSION_LIMIT);
         let text = serde_json::to_string_pretty(&all).unwrap_or_default();
-        std::fs::create_dir_all(dir).map_err(|e| FileError::Folder { path: dir.clone(), source: Arc::new(e) })?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| FileError::Folder { path: dir.clone(), source: Arc::new(e) })?;
         keyrig_io::file_io::write_atomic(&file, text.as_bytes())
             .map_err(|e| FileError::Write { path: file.clone(), source: Arc::new(e) })
     }

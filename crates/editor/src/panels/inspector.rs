@@ -982,10 +982,9 @@ fn blend_zone_channels(
 fn reference_image_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     let Some(image) = &ctx.scene().reference_image else { return };
     ui.strong("Reference image");
-    let name = std::path::Path::new(&image.path).file_name().map_or_else(
-        || image.path.clone(),
-        |n| n.to_string_lossy().into_owned(),
-    );
+    let name = std::path::Path::new(&image.path)
+        .file_name()
+        .map_or_else(|| image.path.clone(), |n| n.to_string_lossy().into_owned());
     ui.label(name).on_hover_text(&image.path);
     let mut opacity = image.opacity;
     let response = ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0).text("Reference opacity"));

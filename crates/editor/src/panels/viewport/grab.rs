@@ -133,7 +133,11 @@ impl Moving {
         for t in self.targets.iter().filter(|t| !t.carried) {
             if let Some((id, value, world_to_value)) = t.translation {
                 let value = value + world_to_value.mul_vec3(offset);
-                actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(value), group: GRAB_GROUP.to_owned() });
+                actions.edit(Edit::Pose {
+                    id,
+                    value: ChannelValue::Vec3(value),
+                    group: GRAB_GROUP.to_owned(),
+                });
             }
         }
     }

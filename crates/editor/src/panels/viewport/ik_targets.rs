@@ -62,7 +62,13 @@ fn shown(ctx: &FrameCtx<'_>, projection: &Projection) -> Vec<(Shown, Option<Pos2
                 .get(constraint.end)
                 .and_then(|f| projection.project((pose.world_from_object * *f).translation.into()));
             out.push((
-                Shown { id, name: constraint.name.clone(), world, at, world_from_object: pose.world_from_object },
+                Shown {
+                    id,
+                    name: constraint.name.clone(),
+                    world,
+                    at,
+                    world_from_object: pose.world_from_object,
+                },
                 end,
             ));
         }
@@ -92,7 +98,11 @@ pub(super) fn ui(
             let world = on_plane + d.grip;
             let value = d.object_from_world.transform_point3(world);
             if value.is_finite() && ctx.value_now(d.id) != Some(ChannelValue::Vec3(value)) {
-                actions.edit(Edit::Pose { id: d.id, value: ChannelValue::Vec3(value), group: GROUP.to_owned() });
+                actions.edit(Edit::Pose {
+                    id: d.id,
+                    value: ChannelValue::Vec3(value),
+                    group: GROUP.to_owned(),
+                });
                 d.moved = true;
             }
         }
@@ -111,15 +121,13 @@ pub(super) fn ui(
         return true;
     }
     let free = !any_down || pressed;
-    let hovered = hover
-        .filter(|&p| free && response.contains_pointer() && rect.contains(p))
-        .and_then(|p| {
-            targets
-                .iter()
-                .map(|(t, _)| t)
-                .filter(|t| t.at.distance(p) <= TARGET_RADIUS)
-                .min_by(|a, b| a.at.distance(p).total_cmp(&b.at.distance(p)))
-        });
+    let hovered = hover.filter(|&p| free && response.contains_pointer() && rect.contains(p)).and_then(|p| {
+        targets
+            .iter()
+            .map(|(t, _)| t)
+            .filter(|t| t.at.distance(p) <= TARGET_RADIUS)
+            .min_by(|a, b| a.at.distance(p).total_cmp(&b.at.distance(p)))
+    });
     for (t, end) in &targets {
         paint(&painter, t, *end, hovered.is_some_and(|h| h.id == t.id));
     }
@@ -149,7 +157,12 @@ fn paint(painter: &egui::Painter, t: &Shown, end: Option<Pos2>, active: bool) {
         painter.extend(egui::Shape::dashed_line(&[end, t.at], Stroke::new(1.0, COLOUR), 4.0, 4.0));
     }
     let r = TARGET_RADIUS - 2.0;
-    let corners = [t.at + egui::vec2(0.0, -r), t.at + egui::vec2(r, 0.0), t.at + egui::vec2(0.0, r), t.at + egui::vec2(-r, 0.0)];
+    let corners = [
+        t.at + egui::vec2(0.0, -r),
+        t.at + egui::vec2(r, 0.0),
+        t.at + egui::vec2(0.0, r),
+        t.at + egui::vec2(-r, 0.0),
+    ];
     let fill = if active { COLOUR.gamma_multiply(0.5) } else { Color32::TRANSPARENT };
     painter.add(egui::Shape::convex_polygon(corners.to_vec(), fill, stroke));
     painter.line_segment([corners[0], corners[2]], Stroke::new(1.0, COLOUR));

@@ -10,8 +10,8 @@ mod grab;
 pub mod ik_handle;
 pub mod ik_targets;
 pub mod motion_path;
-mod reference;
 mod painter;
+mod reference;
 mod targets;
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};

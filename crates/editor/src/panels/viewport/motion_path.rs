@@ -111,9 +111,13 @@ pub(super) fn ui(
             if value.is_finite() {
                 let (id, time) = (d.id, d.time);
                 let frame = (time * ctx.scene().fps).round();
-                actions.edit(Edit::continuous(GROUP, format!("move the key at frame {frame} on the motion path"), move |scene| {
-                    channels::set_key(scene, id, time, ChannelValue::Vec3(value));
-                }));
+                actions.edit(Edit::continuous(
+                    GROUP,
+                    format!("move the key at frame {frame} on the motion path"),
+                    move |scene| {
+                        channels::set_key(scene, id, time, ChannelValue::Vec3(value));
+                    },
+                ));
                 d.moved = true;
             }
         }
@@ -135,9 +139,9 @@ pub(super) fn ui(
         .item
         .and_then(|item| match item {
             Selected::Object(o) => ctx.pose(o).map(|p| Vec3::from(p.world_from_object.translation)),
-            Selected::Joint { object, joint } => ctx
-                .pose(object)
-                .and_then(|p| Some(Vec3::from((p.world_from_object * *p.object_from_joint.get(joint)?).translation))),
+            Selected::Joint { object, joint } => ctx.pose(object).and_then(|p| {
+                Some(Vec3::from((p.world_from_object * *p.object_from_joint.get(joint)?).translation))
+            }),
             _ => None,
         })
         .and_then(|w| projection.project(w));
