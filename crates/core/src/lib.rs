@@ -5,6 +5,7 @@ pub mod attributes;
 pub mod camera_object;
 pub mod channel;
 pub mod channel_id;
+pub mod channel_value;
 pub mod ik;
 pub mod ik_constraint;
 pub mod key;

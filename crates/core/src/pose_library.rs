@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::channel_id::ChannelValue;
+use crate::channel_value::ChannelValue;
 
 /// A named pose of the pose library: the values of some channels at the frame it was saved.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
