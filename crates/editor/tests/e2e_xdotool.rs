@@ -1099,3 +1099,88 @@ fn the_twist_ring_in_the_default_view_of_a_real_x_window() {
         );
     }
 }
+
+/// Issue 30 item 5 in the real window: a scene with a reference image behind it and a pose in
+/// its library ("Reach", the elbow bent); with the arm selected (outliner click) and record mode
+/// on, a click on the library's Apply keys the pose at frame 10; the saved file keeps the library,
+/// the image (relative) and the key.
+#[test]
+fn the_pose_library_and_a_reference_image_in_a_real_x_window() {
+    let session = Session::new();
+    let folder = session.home.path().join("shot");
+    std::fs::create_dir_all(&folder).expect("folder");
+    let mut reference = image::RgbaImage::new(320, 180);
+    for (x, y, p) in reference.enumerate_pixels_mut() {
+        // A sky-to-ground gradient with a bright horizon line, as a backdrop would be.
+        let sky = y < 100;
+        let shade = (y * 255 / 180) as u8;
+        *p = if y == 100 || x % 64 == 0 {
+            image::Rgba([230, 230, 200, 255])
+        } else if sky {
+            image::Rgba([40, 70, 120 + shade / 3, 255])
+        } else {
+            image::Rgba([70 + shade / 4, 60, 40, 255])
+        };
+    }
+    reference.save(folder.join("backdrop.png")).expect("png");
+    let mut scene = keyrig_io::demo::demo_scene();
+    scene.reference_image = Some(keyrig_core::ReferenceImage { path: "backdrop.png".into(), opacity: 0.6 });
+    let bent = glam::Quat::from_rotation_z(1.2);
+    scene.poses.push(keyrig_core::NamedPose {
+        name: "Reach".into(),
+        values: vec![keyrig_core::PoseValue {
+            channel: "object/Arm/joint/elbow/rotation".into(),
+            value: channels::ChannelValue::Rotation(bent),
+        }],
+    });
+    let file = folder.join("shot.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", file.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(file.clone()));
+    h.run();
+    assert_eq!(h.state().panels().viewport.reference_image_size(), Some([320, 180]));
+    session.wait_idle();
+
+    let arm = h.get_by_label("Arm").rect().center();
+    session.click(arm);
+    h.get_by_label("Arm").click();
+    h.run();
+    session.key("r");
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "10", "Right"]);
+    common::go_to_frame(&mut h, 10);
+    session.wait_idle();
+    // The inspector keeps its width against the window's right edge: its widgets are the
+    // model's moved right by the margin (and up by it, as every widget).
+    let apply = h.get_by_label("Apply").rect().center();
+    session.click(apply + egui::vec2(MODEL_MARGIN.x, -MODEL_MARGIN.y));
+    h.get_by_label("Apply").click();
+    h.run();
+    session.mouse_to(Pos2::new(640.0, 120.0));
+    session.wait_idle();
+    session.screenshot("guide_pose_library");
+
+    // Ctrl+S saves the opened file in place.
+    let written = std::fs::metadata(&file).and_then(|m| m.modified()).expect("the file");
+    session.key("ctrl+s");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(&file).and_then(|m| m.modified()).is_ok_and(|t| t == written)
+        && Instant::now() < deadline
+    {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    std::thread::sleep(Duration::from_millis(400));
+    let saved = keyrig_io::scene_file::load(&file).expect("the saved scene loads");
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let key = channels::key_at(&saved, elbow, 10.0 / 30.0)
+        .unwrap_or_else(|| panic!("the elbow keyed at frame 10: {:?}", frame_of(&saved, elbow)));
+    let Some(channels::ChannelValue::Rotation(q)) = channels::key_value(&saved, elbow, key) else {
+        panic!("a rotation key")
+    };
+    assert!(q.angle_between(bent).to_degrees() < 0.01, "the library's pose: {q}");
+    assert!(channels::key_at(h.state().doc.scene(), elbow, 10.0 / 30.0).is_some(), "the model keyed it too");
+    assert_eq!(saved.poses, scene.poses, "the library is saved with the scene");
+    let image = saved.reference_image.expect("the reference image is saved");
+    assert_eq!((image.path.as_str(), image.opacity), ("backdrop.png", 0.6), "relative to the scene");
+}

@@ -987,7 +987,9 @@ fn reference_image_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         .map_or_else(|| image.path.clone(), |n| n.to_string_lossy().into_owned());
     ui.label(name).on_hover_text(&image.path);
     let mut opacity = image.opacity;
-    let response = ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0).text("Reference opacity"));
+    // The label on its own line: beside the slider it would widen the inspector.
+    let label = ui.label("Reference opacity");
+    let response = ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0)).labelled_by(label.id);
     if response.changed() && opacity.is_finite() {
         actions.edit(Edit::continuous("reference opacity", "reference image opacity", move |scene| {
             if let Some(image) = &mut scene.reference_image {
