@@ -36,6 +36,9 @@ const PICTURES: &[Picture] = &[
     // switches from linear blend to bones blending between them.
     Picture { name: "guide-showcase-wrapper", file: SHOWCASE, keys: &[("Right", 74), ("0", 1)] },
     Picture { name: "guide-showcase-repaired", file: SHOWCASE, keys: &[("Right", 75), ("0", 1)] },
+    // The IK constraint's target drawn in the viewport (the pink diamond the wrist follows) at
+    // frame 20.
+    Picture { name: "guide-ik-target", file: "assets/ik.ron", keys: &[("Right", 20)] },
 ];
 
 /// A child process killed and reaped when dropped.

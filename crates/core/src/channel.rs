@@ -422,6 +422,56 @@ impl ChannelPath {
         }
     }
 
+    /// The path of channel `id` of `scene` (by the names of its object, joint, constraint,
+    /// light or camera): the inverse of [`ChannelPath::id`]. `None` when `id` names nothing
+    /// in `scene`.
+    #[must_use]
+    pub fn of(scene: &Scene, id: ChannelId) -> Option<ChannelPath> {
+        let object = |o: usize| scene.objects.get(o).map(|x| x.name.clone());
+        let joint = |o: usize, j: usize, property| {
+            let x = scene.objects.get(o)?;
+            let name = x.skeleton.as_ref()?.joints.get(j)?.name.clone();
+            Some(ChannelPath::Joint { object: x.name.clone(), joint: name, property })
+        };
+        let ik = |o: usize, c: usize, property| {
+            let x = scene.objects.get(o)?;
+            let name = x.skeleton.as_ref()?.ik_constraints.get(c)?.name.clone();
+            Some(ChannelPath::Ik { object: x.name.clone(), constraint: name, property })
+        };
+        let light = |l: usize, property| {
+            scene.lights.get(l).map(|x| ChannelPath::Light { light: x.name.clone(), property })
+        };
+        let camera = |c: usize, property| {
+            scene.cameras.get(c).map(|x| ChannelPath::Camera { camera: x.name.clone(), property })
+        };
+        let on_object = |o: usize, property| object(o).map(|object| ChannelPath::Object { object, property });
+        match id {
+            ChannelId::ObjectTranslation(o) => on_object(o, ObjectProperty::Translation),
+            ChannelId::ObjectRotation(o) => on_object(o, ObjectProperty::Rotation),
+            ChannelId::ObjectScale(o) => on_object(o, ObjectProperty::Scale),
+            ChannelId::RootTranslation(o) => on_object(o, ObjectProperty::RootTranslation),
+            ChannelId::JointTranslation { object, joint: j } => joint(object, j, JointProperty::Translation),
+            ChannelId::JointRotation { object, joint: j } => joint(object, j, JointProperty::Rotation),
+            ChannelId::JointScale { object, joint: j } => joint(object, j, JointProperty::Scale),
+            ChannelId::IkTarget { object, constraint } => ik(object, constraint, IkProperty::Target),
+            ChannelId::IkBlend { object, constraint } => ik(object, constraint, IkProperty::Blend),
+            ChannelId::LightPosition(l) => light(l, LightProperty::Position),
+            ChannelId::LightDirection(l) => light(l, LightProperty::Direction),
+            ChannelId::LightColour(l) => light(l, LightProperty::Colour),
+            ChannelId::LightIntensity(l) => light(l, LightProperty::Intensity),
+            ChannelId::Attribute(a) => Some(ChannelPath::Attribute {
+                light: a.owner().is_err(),
+                owner: a.owner_name(scene)?,
+                property: a.property(),
+            }),
+            ChannelId::CameraTranslation(c) => camera(c, CameraProperty::Translation),
+            ChannelId::CameraRotation(c) => camera(c, CameraProperty::Rotation),
+            ChannelId::CameraLens(c) => camera(c, CameraProperty::Lens),
+            ChannelId::CameraRoll(c) => camera(c, CameraProperty::Roll),
+            ChannelId::CameraVisible(c) => camera(c, CameraProperty::Visible),
+        }
+    }
+
     /// The channel's index-based id in `scene`.
     ///
     /// # Errors
@@ -794,6 +844,19 @@ mod tests {
     use super::*;
     use crate::key::{Key, RawTrack};
     use crate::scene::{Joint, Light, LightKind, Skeleton};
+
+    /// Every listed channel's id names it back by the same path.
+    #[test]
+    fn paths_of_ids_are_the_inverse_of_id() {
+        let scene = scene();
+        let paths = list_channels(&scene);
+        assert!(paths.len() > 8);
+        for path in paths {
+            let id = path.id(&scene).expect("listed channels resolve");
+            assert_eq!(ChannelPath::of(&scene, id), Some(path));
+        }
+        assert_eq!(ChannelPath::of(&scene, ChannelId::ObjectScale(9)), None);
+    }
 
     fn scene() -> Scene {
         let mut arm = Object::new("Arm");

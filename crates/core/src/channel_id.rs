@@ -307,13 +307,7 @@ pub enum ChannelMut<'a> {
     Scalar(&'a mut Animated<f32>),
 }
 
-/// A value of any channel type (a sample, the clipboard, pose overrides).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub enum ChannelValue {
-    Vec3(Vec3),
-    Rotation(Quat),
-    Scalar(f32),
-}
+pub use crate::channel_value::ChannelValue;
 
 impl ChannelValue {
     /// The value as numbers: x, y, z (or r, g, b); a rotation as the unit quaternion x, y, z, w

@@ -5,10 +5,12 @@ pub mod attributes;
 pub mod camera_object;
 pub mod channel;
 pub mod channel_id;
+pub mod channel_value;
 pub mod ik;
 pub mod ik_constraint;
 pub mod key;
 pub mod material;
+pub mod pose_library;
 pub mod quat;
 pub mod rotation_mode;
 pub mod scene;
@@ -24,6 +26,7 @@ pub use key::{
     Animated, Cycle, Cycles, Interpolation, Key, KeyType, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS,
 };
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
+pub use pose_library::{NamedPose, PoseValue, ReferenceImage};
 pub use rotation_mode::{EulerOrder, RotationMode};
 pub use scene::{
     Camera, DeformerKind, DeformerSettings, FrameRange, IkConstraint, Joint, Light, LightKind, MeshSource,

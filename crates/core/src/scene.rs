@@ -50,6 +50,14 @@ pub struct Scene {
     /// Left out of a scene file while unset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preview_range: Option<FrameRange>,
+    /// The pose library: named poses saved with the scene. Left out of a scene file while
+    /// empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub poses: Vec<crate::pose_library::NamedPose>,
+    /// An image shown behind the scene in the editor's viewport. Left out of a scene file
+    /// while unset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_image: Option<crate::pose_library::ReferenceImage>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -71,6 +79,8 @@ impl Default for Scene {
             render_size: None,
             sounds: Vec::new(),
             preview_range: None,
+            poses: Vec::new(),
+            reference_image: None,
         }
     }
 }

@@ -702,6 +702,32 @@ impl Scene {
                 c.push(format!("sounds[{i}].path"), "the path is empty".to_owned());
             }
         }
+        for (i, pose) in self.poses.iter().enumerate() {
+            for (v, value) in pose.values.iter().enumerate() {
+                let path = format!("poses[{i}].values[{v}].value");
+                match value.value {
+                    crate::channel_id::ChannelValue::Vec3(x) => {
+                        c.value(&path, &x);
+                    }
+                    crate::channel_id::ChannelValue::Rotation(q) => c.rotation(&path, &q),
+                    crate::channel_id::ChannelValue::Scalar(x) => {
+                        c.value(&path, &x);
+                    }
+                }
+            }
+        }
+        c.unique_names(
+            "pose",
+            self.poses.iter().enumerate().map(|(i, p)| (format!("poses[{i}].name"), p.name.as_str())),
+        );
+        if let Some(image) = &self.reference_image {
+            if image.path.is_empty() {
+                c.push("reference_image.path", "the path is empty".to_owned());
+            }
+            if !(0.0..=1.0).contains(&image.opacity) {
+                c.push("reference_image.opacity", format!("{} is outside 0..=1", image.opacity));
+            }
+        }
         c.problems
     }
 }

@@ -62,6 +62,8 @@ pub enum Action {
         item: Selected,
         name: String,
     },
+    /// Adds, applies, renames or deletes a pose of the pose library (inspector).
+    PoseLibrary(PoseLibraryAction),
     /// Keys the solved rotations of an IK constraint's chain at every frame (inspector).
     BakeIk {
         object: usize,
@@ -82,6 +84,8 @@ pub enum Action {
     Recover(bool),
     /// A file picked in the file dialog.
     FilePicked(DialogPurpose, PathBuf),
+    /// Opens the file dialog for the reference image (View ▸ Reference image).
+    ChooseReferenceImage,
     /// A file dropped on the window.
     Dropped(PathBuf),
     /// A model import that finished on its thread.
@@ -130,6 +134,23 @@ impl Edit {
     ) -> Self {
         Edit::Scene { label: label.into(), group: Some(group.into()), change: Box::new(change) }
     }
+}
+
+/// What the Pose library section asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PoseLibraryAction {
+    /// Saves the selection's pose at the current frame under this name ("Pose" when empty).
+    Add(String),
+    /// Applies pose `index` to the selection, mirrored or not.
+    Apply {
+        index: usize,
+        mirrored: bool,
+    },
+    Rename {
+        index: usize,
+        name: String,
+    },
+    Delete(usize),
 }
 
 /// A change of the session.

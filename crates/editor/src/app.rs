@@ -60,6 +60,12 @@ pub struct EditorApp {
     pub(crate) status: Option<Status>,
     pub(crate) pending: Option<PendingAction>,
     pub(crate) recent: Recent,
+    /// The sessions remembered per scene file ([`crate::reopen`]).
+    pub(crate) sessions: files::Sessions,
+    /// The panel sizes of the last frame, remembered with the session.
+    pub(crate) panel_sizes: Option<files::sessions::PanelSizes>,
+    /// Panel sizes a restored session gives the next frame.
+    pub(crate) restore_panels: Option<files::sessions::PanelSizes>,
     pub(crate) recovery: Recovery,
     /// The autosave timer (a thread of its own: it writes while the window is idle).
     pub(crate) autosave: crate::autosave::Autosave,
@@ -115,6 +121,9 @@ impl EditorApp {
             status: None,
             pending: None,
             recent: Recent::load(data_dir.as_deref()),
+            sessions: files::Sessions::new(data_dir.as_deref()),
+            panel_sizes: None,
+            restore_panels: None,
             autosave: crate::autosave::Autosave::new(
                 recovery.clone(),
                 std::time::Duration::from_secs_f64(
@@ -301,6 +310,8 @@ impl EditorApp {
 
     /// Replaces the document (new, open, recover).
     pub fn replace_document(&mut self, scene: Scene, path: Option<PathBuf>) {
+        // The session of the file being left is remembered for its next opening.
+        self.remember_session();
         self.view.camera = scene.camera.sanitized();
         // Record mode and the key clipboard carry over to the new document.
         let session = Session {
@@ -445,9 +456,16 @@ impl EditorApp {
         self.info(format!("Deleted {name}"));
     }
 
-    /// Copies the selected object or light (keys, mesh and skeleton included) under a new
-    /// unique name (`Arm` → `Arm.001`), adds it to the end of the scene and selects it.
+    /// Copies the selected object, light or camera (keys, mesh and skeleton included) under a
+    /// new unique name (`Arm` → `Arm.001`), adds it to the end of the scene, selects it and
+    /// starts moving it with the pointer, as Blender's Shift+D: a click or Enter places it,
+    /// Escape or a right-click leaves it on the original. The copy and its move are one undo
+    /// step.
     pub fn duplicate_selected_item(&mut self) {
+        let group = crate::panels::viewport::GRAB_GROUP;
+        // A grab under way (Shift+D pressed again) ends where it is: the new copy is a step of
+        // its own.
+        self.doc.close_group();
         let scene = self.doc.scene();
         let copy = match self.session.selection.item {
             Some(Selected::Object(o)) => {
@@ -455,7 +473,9 @@ impl EditorApp {
                 object.name = unique_name(&object.name, scene.objects.iter().map(|x| x.name.as_str()));
                 let name = object.name.clone();
                 let index = scene.objects.len();
-                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.objects.push(object));
+                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
+                    scene.objects.push(object)
+                });
                 Some((Selected::Object(index), name))
             }
             Some(Selected::Light(l)) => {
@@ -463,7 +483,9 @@ impl EditorApp {
                 light.name = unique_name(&light.name, scene.lights.iter().map(|x| x.name.as_str()));
                 let name = light.name.clone();
                 let index = scene.lights.len();
-                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.lights.push(light));
+                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
+                    scene.lights.push(light)
+                });
                 Some((Selected::Light(index), name))
             }
             Some(Selected::Camera(c)) => {
@@ -471,7 +493,9 @@ impl EditorApp {
                 camera.name = unique_name(&camera.name, scene.cameras.iter().map(|x| x.name.as_str()));
                 let name = camera.name.clone();
                 let index = scene.cameras.len();
-                self.doc.edit(&format!("duplicate as {name}"), |scene| scene.cameras.push(camera));
+                self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
+                    scene.cameras.push(camera)
+                });
                 Some((Selected::Camera(index), name))
             }
             Some(Selected::Joint { .. }) => {
@@ -486,7 +510,10 @@ impl EditorApp {
         if let Some((item, name)) = copy {
             self.session.selection.select_only(Some(item));
             self.session.selection.keys.clear();
-            self.info(format!("Duplicated as {name}"));
+            self.panels.viewport.start_grab();
+            self.info(format!(
+                "Duplicated as {name}: it follows the pointer; click or Enter places it, Escape or right-click leaves it on the original"
+            ));
         }
     }
 
@@ -585,9 +612,21 @@ impl EditorApp {
     /// Copies the values of the selected joints and objects (a character: every joint) at the
     /// current frame.
     pub fn copy_pose(&mut self) {
+        let pose = self.pose_channels();
+        if pose.is_empty() {
+            self.info("Copy pose: select joints or a character first");
+            return;
+        }
+        self.info(format!("Copied the pose of {} channel(s)", pose.len()));
+        self.session.pose_clipboard = pose;
+    }
+
+    /// The values now of the channels a pose holds: those of the selection (a character's whole
+    /// skeleton when its object is selected), lights left out.
+    #[must_use]
+    pub fn pose_channels(&self) -> Vec<(ChannelId, ChannelValue)> {
         let ids = self.session.selection.key_channels(self.doc.scene());
-        let pose: Vec<(ChannelId, ChannelValue)> = ids
-            .into_iter()
+        ids.into_iter()
             .filter(|id| {
                 !matches!(
                     id,
@@ -598,13 +637,7 @@ impl EditorApp {
                 )
             })
             .filter_map(|id| self.value_now(id).map(|v| (id, v)))
-            .collect();
-        if pose.is_empty() {
-            self.info("Copy pose: select joints or a character first");
-            return;
-        }
-        self.info(format!("Copied the pose of {} channel(s)", pose.len()));
-        self.session.pose_clipboard = pose;
+            .collect()
     }
 
     /// Applies the copied pose at the current frame: in record mode as keys, otherwise as
@@ -617,20 +650,44 @@ impl EditorApp {
             self.info("Paste pose: copy a pose first (Alt+C)");
             return;
         }
+        let pose = self.session.pose_clipboard.clone();
+        let what = if mirrored { "paste pose mirrored" } else { "paste pose" };
+        match self.apply_pose_values(&pose, mirrored, what, None) {
+            (count, Some(report)) => {
+                self.info(format!("Pasted the pose on {count} channel(s), mirrored. {report}"));
+            }
+            (count, None) => self.info(format!("Pasted the pose on {count} channel(s)")),
+        }
+    }
+
+    /// Applies `pose` (channel values) at the current frame, as Paste pose does: in record mode
+    /// as keys, otherwise as the pose shown (overrides on animated channels, values of static
+    /// ones); one undo step labelled `what`. Mirrored, the pose is reflected across each
+    /// character's symmetry plane first ([`crate::mirror::mirror_clipboard`]). With `only`, the
+    /// channels outside it are left alone (a pose applied to a selection). Returns how many
+    /// channels it set and, mirrored, the report of which joints paired.
+    pub fn apply_pose_values(
+        &mut self,
+        pose: &[(ChannelId, ChannelValue)],
+        mirrored: bool,
+        what: &str,
+        only: Option<&[ChannelId]>,
+    ) -> (usize, Option<String>) {
         let scene = self.doc.scene();
         let (pose, report) = if mirrored {
-            let paste = crate::mirror::mirror_clipboard(scene, &self.session.pose_clipboard, |o| {
-                self.object_pose_now(o).map(|p| p.pose)
-            });
+            let paste =
+                crate::mirror::mirror_clipboard(scene, pose, |o| self.object_pose_now(o).map(|p| p.pose));
             (paste.values, Some(paste.report))
         } else {
-            (self.session.pose_clipboard.clone(), None)
+            (pose.to_vec(), None)
         };
-        let pose: Vec<(ChannelId, ChannelValue)> =
-            pose.into_iter().filter(|&(id, _)| channels::channel(scene, id).is_some()).collect();
+        let pose: Vec<(ChannelId, ChannelValue)> = pose
+            .into_iter()
+            .filter(|&(id, _)| channels::channel(scene, id).is_some())
+            .filter(|(id, _)| only.is_none_or(|only| only.contains(id)))
+            .collect();
         let time = self.session.key_time(scene.fps);
         let frame = self.session.playback.whole_frame();
-        let what = if mirrored { "paste pose mirrored" } else { "paste pose" };
         let count = pose.len();
         if self.session.record {
             self.doc.edit(&format!("{what} at frame {frame}"), |scene| {
@@ -653,10 +710,7 @@ impl EditorApp {
                 self.session.overrides.insert(id, value);
             }
         }
-        match report {
-            Some(report) => self.info(format!("Pasted the pose on {count} channel(s), mirrored. {report}")),
-            None => self.info(format!("Pasted the pose on {count} channel(s)")),
-        }
+        (count, report)
     }
 
     /// Deletes the selected keys.
@@ -993,6 +1047,7 @@ impl EditorApp {
             Ok(scene) => {
                 self.replace_document(scene, files::is_scene_file(&path).then(|| path.clone()));
                 self.recent.add(&path);
+                self.restore_session();
                 self.info(format!("Opened {}", path.display()));
             }
             Err(e) => self.error(e.to_string()),
@@ -1015,6 +1070,7 @@ impl EditorApp {
                 self.doc.mark_saved(path.clone());
                 self.autosave.clear();
                 self.recent.add(&path);
+                self.remember_session();
                 self.info(format!("Saved {}", path.display()));
             }
             Err(e) => self.error(e.to_string()),
@@ -1032,7 +1088,9 @@ impl EditorApp {
         let storage = std::mem::take(self.file_dialog.storage_mut());
         self.file_dialog = files::file_dialog(purpose, &stem, folder, storage);
         match purpose {
-            DialogPurpose::Open | DialogPurpose::Import => self.file_dialog.pick_file(),
+            DialogPurpose::Open | DialogPurpose::Import | DialogPurpose::ReferenceImage => {
+                self.file_dialog.pick_file();
+            }
             DialogPurpose::SaveAs | DialogPurpose::Export => self.file_dialog.save_file(),
         }
     }
@@ -1352,6 +1410,7 @@ impl EditorApp {
                 self.rename_item(item, &name);
             }
             Action::BakeIk { object, constraint } => self.bake_ik_constraint(object, constraint),
+            Action::PoseLibrary(action) => self.pose_library(action),
             Action::KeepIk { object, joint } => self.keep_ik_constraint(object, joint),
             Action::FrameObjects(objects) => self.frame_objects(&objects),
             Action::Request(pending) => self.request(pending),
@@ -1385,9 +1444,13 @@ impl EditorApp {
                 DialogPurpose::SaveAs => self.save_to(files::with_extension_if_missing(path, "ron")),
                 DialogPurpose::Import => self.import_path(path),
                 DialogPurpose::Export => self.export_to(files::with_extension_if_missing(path, "glb")),
+                DialogPurpose::ReferenceImage => self.set_reference_image(&path),
             },
+            Action::ChooseReferenceImage => self.open_dialog(DialogPurpose::ReferenceImage),
             Action::Dropped(path) => {
-                if files::is_scene_file(&path) {
+                if files::is_image_file(&path) {
+                    self.set_reference_image(&path);
+                } else if files::is_scene_file(&path) {
                     self.request(PendingAction::Open(Some(path)));
                 } else {
                     self.import_path(path);

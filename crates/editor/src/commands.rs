@@ -205,7 +205,9 @@ impl Command {
                  of the selected joint's chain)"
             }
             Command::Delete => "Delete the selected keys; with no key selected, the selected object or light",
-            Command::DuplicateItem => "Copy the selected object or light, keys included, and select the copy",
+            Command::DuplicateItem => {
+                "Copy the selected object, light or camera, keys included, select the copy and move it with the pointer (click or Enter places it, Escape leaves it on the original)"
+            }
             Command::RenameItem => {
                 "Rename the selected object, joint or light (or double-click it in the outliner)"
             }

@@ -30,6 +30,9 @@ pub enum GpuViewError {
 /// (`shaders/viewport_blit.wgsl`), for the window's format.
 struct Blit {
     pipeline: wgpu::RenderPipeline,
+    /// The image blended over what lies beneath (premultiplied alpha), for a viewport that shows
+    /// the reference image behind the scene.
+    over: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     /// Pixel for pixel (the image has the rect's size in pixels) and scaled up.
     samplers: [wgpu::Sampler; 2],
@@ -63,6 +66,9 @@ impl Blit {
             ],
         });
         let pipeline = callback_pipeline(device, &module, (target, depth), "fs_blit", Some(&layout), None);
+        let premultiplied = Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
+        let over =
+            callback_pipeline(device, &module, (target, depth), "fs_blit_over", Some(&layout), premultiplied);
         let sampler = |filter: wgpu::FilterMode| {
             device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("viewport blit"),
@@ -73,6 +79,7 @@ impl Blit {
         };
         Blit {
             pipeline,
+            over,
             layout,
             samplers: [sampler(wgpu::FilterMode::Nearest), sampler(wgpu::FilterMode::Linear)],
             srgb_target: target.is_srgb(),
@@ -252,6 +259,9 @@ pub struct GpuFrame<'a> {
     /// Onion-skin ghosts: an object's state at another frame and how to draw it (farthest
     /// first).
     pub ghosts: Vec<(usize, keyrig_eval::ObjectState, keyrig_render::Ghost)>,
+    /// The scene is drawn over a picture egui painted beneath (the reference image): the image
+    /// is cleared to transparent and blended over it.
+    pub see_through: bool,
 }
 
 /// keyrig-render's renderer and offscreen viewport on the editor's device.
@@ -403,8 +413,12 @@ impl GpuView {
         one_to_one: bool,
     ) -> Result<ViewportImage, GpuViewError> {
         let started = std::time::Instant::now();
-        let direct =
-            self.window_depth == Some(keyrig_render::DEPTH_FORMAT) && self.samples == 1 && one_to_one;
+        // The reference image lies beneath: the scene is rendered over transparency and blended
+        // over it by the copy, not drawn straight into the pass.
+        let direct = self.window_depth == Some(keyrig_render::DEPTH_FORMAT)
+            && self.samples == 1
+            && one_to_one
+            && !frame.see_through;
         let result = self.render_inner(frame, [size_px[0].max(1), size_px[1].max(1)], direct, one_to_one);
         self.last_render_time = started.elapsed();
         if let Some(log) = &mut self.frame_log {
@@ -433,6 +447,7 @@ impl GpuView {
         }
         let Some((_, rig)) = &self.rig else { return Err(GpuViewError::NoScene) };
         let mut input = rig.frame_from_state(frame.state, &frame.view)?;
+        input.transparent_background = frame.see_through;
         if let Some(&(object, _, _)) = frame.ghosts.first() {
             // Each ghost needs mesh buffers of its own; uploaded once per rig and object.
             let count = frame.ghosts.len();
@@ -462,9 +477,11 @@ impl GpuView {
         self.ensure_target(size_px[0], size_px[1])?;
         let Some((viewport, bind_groups)) = &self.target else { return Err(GpuViewError::NoTarget) };
         self.last_stats = Some(self.renderer.render(&input, viewport)?);
-        // Pixel for pixel without filtering, else scaled up bilinearly.
+        // Pixel for pixel without filtering, else scaled up bilinearly; blended over the
+        // reference image when one lies beneath.
         let bind_group = bind_groups[usize::from(!one_to_one)].clone();
-        Ok(ViewportImage::Copy { pipeline: self.blit.pipeline.clone(), bind_group })
+        let pipeline = if frame.see_through { &self.blit.over } else { &self.blit.pipeline };
+        Ok(ViewportImage::Copy { pipeline: pipeline.clone(), bind_group })
     }
 }
 

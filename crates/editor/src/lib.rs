@@ -39,7 +39,10 @@ pub mod mirror;
 pub mod onion;
 pub mod panels;
 pub mod playblast;
+pub mod pose_library;
+pub mod reference_image;
 pub mod render_job;
+pub mod reopen;
 pub mod scene_add;
 pub mod scene_frame;
 pub mod session;
@@ -76,6 +79,7 @@ pub fn editor_for(file: Option<PathBuf>, options: EditorOptions) -> EditorApp {
                 let scene_path = files::is_scene_file(&path).then(|| path.clone());
                 let mut app = EditorApp::new(scene, scene_path, options);
                 app.recent.add(&path);
+                app.restore_session();
                 app
             }
             Err(e) => {

@@ -7,7 +7,8 @@ use keyrig_core::Camera;
 pub use keyrig_render::RenderStyle;
 
 /// How the editor looks at the document: the camera and the viewport's options. Not saved
-/// with the scene (the camera is copied to it on save) and not undone. The panels' own state
+/// with the scene and not undone: the camera starts from the scene's `camera` and is
+/// remembered per scene file with the session ([`crate::reopen`]). The panels' own state
 /// (views, gestures, rects) lives in the panels ([`crate::panels`]).
 #[derive(Clone, Debug)]
 pub struct ViewState {

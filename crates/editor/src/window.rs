@@ -51,6 +51,7 @@ impl EditorApp {
             let background = crate::theme::panel_background(&ctx.global_style().visuals);
             ui.painter().rect_filled(ctx.content_rect(), 0.0, background);
         }
+        self.panel_sizes_ui(&ctx, true);
         // Playback clock.
         let dt = ctx.input(|i| f64::from(i.stable_dt));
         let scene = self.doc.scene();
@@ -98,10 +99,12 @@ impl EditorApp {
         }
         self.follow_audio(&ctx);
         // A drag (slider, gizmo, key drag) ends when the pointer is released, after its edits.
-        if !ctx.input(|i| i.pointer.any_down()) {
+        // A grab (Shift+D's move) follows the pointer with no button held: its step stays open.
+        if !ctx.input(|i| i.pointer.any_down()) && !self.panels.viewport.holds_undo_group() {
             self.doc.close_group();
         }
         self.note_autosave();
+        self.panel_sizes_ui(&ctx, false);
 
         // Viewport commands request a repaint: send the title only when it changes.
         let title = self.doc.title();
@@ -191,6 +194,7 @@ impl eframe::App for EditorApp {
     }
 
     fn on_exit(&mut self) {
+        self.remember_session();
         // A clean exit leaves no recovery file; a dirty one keeps the last autosave.
         if !self.doc.is_dirty() {
             self.autosave.clear();

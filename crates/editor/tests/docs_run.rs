@@ -434,6 +434,19 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
                 None => Ok(()),
             }
         }
+        // The pose library and the reference image: parsed and validated as a scene's.
+        "poses" | "reference_image" => {
+            let mut scene = keyrig_core::Scene::default();
+            if field == "poses" {
+                scene.poses = ron.from_str(value).map_err(|e| e.to_string())?;
+            } else {
+                scene.reference_image = ron.from_str(value).map_err(|e| e.to_string())?;
+            }
+            match scene.problems().first() {
+                Some(p) => Err(p.to_string()),
+                None => Ok(()),
+            }
+        }
         // The keys of a rotation track (the format's examples of spins).
         "track" => check_fragment("rotation", &format!("(value: (0.0, 0.0, 0.0, 1.0), track: {value})")),
         "attributes" => {

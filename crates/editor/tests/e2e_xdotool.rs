@@ -1017,3 +1017,243 @@ fn the_stacked_curve_view_and_a_breakdown_key_in_a_real_x_window() {
         "saved with its type"
     );
 }
+
+/// The bone-axis (twist) ring of joint `joint` of the demo arm as transform-gizmo draws it in
+/// the model: its axis (world), the centre on screen, and points of the ring on screen with their
+/// angle about the axis (degrees; 0 is the point nearest the viewer, ±90 the ends of the drawn
+/// front half).
+fn twist_ring(app: &EditorApp, joint: usize) -> (glam::Vec3, Pos2, Vec<(f32, Pos2)>) {
+    let rect = app.viewport_rect().expect("laid out");
+    let projection = Projection::new(&app.view.camera, rect);
+    let pose = app.object_pose_now(0).expect("the arm");
+    let world = pose.world_from_object * pose.object_from_joint[joint];
+    let (_, rotation, centre) = world.to_scale_rotation_translation();
+    let axis = (rotation * glam::Vec3::X).normalize();
+    let to_eye = (keyrig_editor::camera::OrbitCamera::eye(&app.view.camera) - centre).normalize();
+    let centre_screen = projection.project(centre).expect("in view");
+    // Screen points per world unit at the joint's depth: the ring is 75 points across its
+    // radius when seen face-on (transform-gizmo's axis rings).
+    let side = to_eye.any_orthonormal_vector() * 0.01;
+    let per_unit = (projection.project(centre + side).expect("in view") - centre_screen).length() / 0.01;
+    let radius = 75.0 / per_unit;
+    let near = (to_eye - axis * axis.dot(to_eye)).normalize();
+    let across = axis.cross(near);
+    let points = (-90..=270)
+        .map(|a| a as f32)
+        .filter_map(|a| {
+            let r = a.to_radians();
+            let p = centre + (near * r.cos() + across * r.sin()) * radius;
+            projection.project(p).map(|s| (a, s))
+        })
+        .collect();
+    (axis, centre_screen, points)
+}
+
+/// Where a point the model shows in its viewport is in the real window. The model's window
+/// content is inset by [`MODEL_MARGIN`] on every side and its side panels, menu bar and timeline
+/// keep their sizes, so the real viewport is the model's grown by that margin on every side
+/// about the same centre; the perspective view scales with the viewport's height.
+fn real_viewport_point(app: &EditorApp, p: Pos2) -> Pos2 {
+    let rect = app.viewport_rect().expect("laid out");
+    let scale = (rect.height() + 2.0 * MODEL_MARGIN.y) / rect.height();
+    rect.center() + (p - rect.center()) * scale
+}
+
+/// The forearm's rotation now, world space.
+fn forearm_rotation(app: &EditorApp) -> glam::Quat {
+    let pose = app.object_pose_now(0).expect("the arm");
+    (pose.world_from_object * pose.object_from_joint[2]).to_scale_rotation_translation().1
+}
+
+/// The angle (degrees) of the world turn from `before` to `after` about `axis`.
+fn turn_about(before: glam::Quat, after: glam::Quat, axis: glam::Vec3) -> f32 {
+    let (turn_axis, angle) = (after * before.inverse()).normalize().to_axis_angle();
+    let angle = if angle > std::f32::consts::PI { angle - std::f32::consts::TAU } else { angle };
+    angle.to_degrees() * turn_axis.dot(axis)
+}
+
+/// Issue 30 item 4 in the real window: the forearm's twist ring in the default view takes a
+/// press 12 points off its drawn arc and turns the forearm about its bone; a 200-point drag
+/// along the ring turns it by about the angle the drag swept around the ring. Record mode keys
+/// each drag, and the saved keys are the model's.
+#[test]
+fn the_twist_ring_in_the_default_view_of_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+    let forearm = h.get_by_label("forearm").rect().center();
+    session.click(forearm);
+    h.get_by_label("forearm").click();
+    h.run();
+    session.key("r");
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "12", "Right"]);
+    common::go_to_frame(&mut h, 12);
+    session.wait_idle();
+    let plain = session.screenshot("probe-twist-before");
+
+    // A press 12 points off the drawn arc (across it, away from the centre), 45° from the
+    // ring's point nearest the viewer, dragged 60 points along the arc.
+    let (axis, centre, ring) = twist_ring(h.state(), 2);
+    let at = |angle: f32| ring.iter().find(|(a, _)| (*a - angle).abs() < 0.5).expect("on the ring").1;
+    let on_arc = at(45.0);
+    let along = (at(48.0) - at(42.0)).normalized();
+    let mut across = along.rot90();
+    if across.dot(on_arc - centre) < 0.0 {
+        across = -across;
+    }
+    let press = on_arc + across * 12.0;
+    let path: Vec<Pos2> = (0..=12).map(|i| press + along * (5.0 * i as f32)).collect();
+    let real: Vec<Pos2> = path.iter().map(|&p| real_viewport_point(h.state(), p)).collect();
+    // The pointer rests on the press point until the window has drawn it there.
+    session.mouse_to(real[0]);
+    session.wait_idle();
+    let before = forearm_rotation(h.state());
+    session.drag(&real);
+    model_drag(&mut h, &path);
+    let turned = turn_about(before, forearm_rotation(h.state()), axis);
+    assert!(turned.abs() > 5.0, "the press 12 points off the arc turned the forearm: {turned}°");
+
+    // 200 points along the ring at frame 24: from its point nearest the viewer, straight along
+    // the ring as drawn (seen nearly edge-on in the default view, the ring is a thin ellipse a
+    // hand drags along its length, past its end). The ring turns one degree per point of the
+    // drag there (twist::DEGREES_PER_POINT), the angle it sweeps under the pointer near its
+    // middle: about 200°.
+    common::go_to_frame(&mut h, 24);
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "12", "Right"]);
+    session.mouse_to(Pos2::new(640.0, 120.0));
+    h.event(Event::PointerMoved(Pos2::new(640.0, 120.0)));
+    h.run();
+    session.wait_idle();
+    let (axis, _, ring) = twist_ring(h.state(), 2);
+    let at = |angle: f32| ring.iter().find(|(a, _)| (*a - angle).abs() < 0.5).expect("on the ring").1;
+    let along = (at(3.0) - at(-3.0)).normalized();
+    let start = at(0.0);
+    // One event per 5 points, as a hand's motion arrives.
+    let path: Vec<Pos2> = (0..=40).map(|i| start + along * (5.0 * i as f32)).collect();
+    let before = forearm_rotation(h.state());
+    // The same 200 points in the real window, from the same point of the ring: the turn is
+    // the drag's length, which the real window's larger view must not scale.
+    let real_start = real_viewport_point(h.state(), start);
+    session.drag(&path.iter().map(|&p| real_start + (p - start)).collect::<Vec<_>>());
+    model_drag(&mut h, &path);
+    let turned = turn_about(before, forearm_rotation(h.state()), axis);
+    // The world turn read back from the rotation is within (−180°, 180°]: 200° reads −160°.
+    let turned_total = if turned < 0.0 { turned + 360.0 } else { turned };
+    assert!(
+        (turned_total - 200.0).abs() < 20.0 || (turned_total - 160.0).abs() < 20.0,
+        "a 200-point drag along the ring turns the forearm about 200° (reads {turned:.1}°)"
+    );
+    let away = Pos2::new(640.0, 120.0);
+    session.mouse_to(away);
+    h.event(Event::PointerMoved(away));
+    h.run();
+    session.wait_idle();
+    let shot = session.screenshot("guide_twist_ring");
+    let viewport = h.state().viewport_rect().expect("laid out");
+    assert!(changed_pixels(&plain, &shot, viewport) > 500, "the forearm turned in the real window");
+
+    let scene = save_as(&session, "e2e-twist-ring");
+    let id = ChannelId::JointRotation { object: 0, joint: 2 };
+    for frame in [12.0, 24.0] {
+        let key = |s: &keyrig_core::Scene| {
+            let i = channels::key_at(s, id, frame / 30.0)
+                .unwrap_or_else(|| panic!("keyed at frame {frame}: keys at {:?}", frame_of(s, id)));
+            match channels::key_value(s, id, i) {
+                Some(channels::ChannelValue::Rotation(q)) => q,
+                other => panic!("a rotation key, not {other:?}"),
+            }
+        };
+        let (saved, model) = (key(&scene), key(h.state().doc.scene()));
+        assert!(
+            saved.angle_between(model).to_degrees() < 5.0,
+            "frame {frame}: the real drag turned the forearm as the model's did ({saved} vs {model})"
+        );
+    }
+}
+
+/// Issue 30 item 5 in the real window: a scene with a reference image behind it and a pose in
+/// its library ("Reach", the elbow bent); with the arm selected (outliner click) and record mode
+/// on, a click on the library's Apply keys the pose at frame 10; the saved file keeps the library,
+/// the image (relative) and the key.
+#[test]
+fn the_pose_library_and_a_reference_image_in_a_real_x_window() {
+    let session = Session::new();
+    let folder = session.home.path().join("shot");
+    std::fs::create_dir_all(&folder).expect("folder");
+    let mut reference = image::RgbaImage::new(320, 180);
+    for (x, y, p) in reference.enumerate_pixels_mut() {
+        // A sky-to-ground gradient with a bright horizon line, as a backdrop would be.
+        let sky = y < 100;
+        let shade = (y * 255 / 180) as u8;
+        *p = if y == 100 || x % 64 == 0 {
+            image::Rgba([230, 230, 200, 255])
+        } else if sky {
+            image::Rgba([40, 70, 120 + shade / 3, 255])
+        } else {
+            image::Rgba([70 + shade / 4, 60, 40, 255])
+        };
+    }
+    reference.save(folder.join("backdrop.png")).expect("png");
+    let mut scene = keyrig_io::demo::demo_scene();
+    scene.reference_image = Some(keyrig_core::ReferenceImage { path: "backdrop.png".into(), opacity: 0.6 });
+    let bent = glam::Quat::from_rotation_z(1.2);
+    scene.poses.push(keyrig_core::NamedPose {
+        name: "Reach".into(),
+        values: vec![keyrig_core::PoseValue {
+            channel: "object/Arm/joint/elbow/rotation".into(),
+            value: channels::ChannelValue::Rotation(bent),
+        }],
+    });
+    let file = folder.join("shot.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", file.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(file.clone()));
+    h.run();
+    assert_eq!(h.state().panels().viewport.reference_image_size(), Some([320, 180]));
+    session.wait_idle();
+
+    let arm = h.get_by_label("Arm").rect().center();
+    session.click(arm);
+    h.get_by_label("Arm").click();
+    h.run();
+    session.key("r");
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    session.xdo(&["key", "--clearmodifiers", "--delay", "80", "--repeat", "10", "Right"]);
+    common::go_to_frame(&mut h, 10);
+    session.wait_idle();
+    // The inspector keeps its width against the window's right edge: its widgets are the
+    // model's moved right by the margin (and up by it, as every widget).
+    let apply = h.get_by_label("Apply").rect().center();
+    session.click(apply + egui::vec2(MODEL_MARGIN.x, -MODEL_MARGIN.y));
+    h.get_by_label("Apply").click();
+    h.run();
+    session.mouse_to(Pos2::new(640.0, 120.0));
+    session.wait_idle();
+    session.screenshot("guide_pose_library");
+
+    // Ctrl+S saves the opened file in place.
+    let written = std::fs::metadata(&file).and_then(|m| m.modified()).expect("the file");
+    session.key("ctrl+s");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(&file).and_then(|m| m.modified()).is_ok_and(|t| t == written)
+        && Instant::now() < deadline
+    {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    std::thread::sleep(Duration::from_millis(400));
+    let saved = keyrig_io::scene_file::load(&file).expect("the saved scene loads");
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let key = channels::key_at(&saved, elbow, 10.0 / 30.0)
+        .unwrap_or_else(|| panic!("the elbow keyed at frame 10: {:?}", frame_of(&saved, elbow)));
+    let Some(channels::ChannelValue::Rotation(q)) = channels::key_value(&saved, elbow, key) else {
+        panic!("a rotation key")
+    };
+    assert!(q.angle_between(bent).to_degrees() < 0.01, "the library's pose: {q}");
+    assert!(channels::key_at(h.state().doc.scene(), elbow, 10.0 / 30.0).is_some(), "the model keyed it too");
+    assert_eq!(saved.poses, scene.poses, "the library is saved with the scene");
+    let image = saved.reference_image.expect("the reference image is saved");
+    assert_eq!((image.path.as_str(), image.opacity), ("backdrop.png", 0.6), "relative to the scene");
+}

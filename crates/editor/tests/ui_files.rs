@@ -154,3 +154,114 @@ fn a_moved_project_folder_still_opens_its_models() {
     assert!(h.state().skin_cache().deformed_positions(first).is_some(), "the moved model loads and morphs");
     assert!(h.state().skin_cache().deformed_positions(first + 1).is_some(), "the outside model loads too");
 }
+
+/// Reopening a saved scene restores the session it was left with: the current frame, the
+/// viewport's camera, the selection and the panel sizes. They are kept in the data folder
+/// (`sessions.json`), not in the scene file, which stays as it was saved.
+#[test]
+fn reopening_a_scene_restores_frame_camera_selection_and_panel_sizes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("shot.ron");
+    let outliner_width = |h: &egui_kittest::Harness<'_, keyrig_editor::EditorApp>| {
+        egui::containers::panel::PanelState::load(&h.ctx, egui::Id::new("outliner")).expect("laid out").rect
+    };
+    let (frame, camera, width) = {
+        let mut h = common::harness(dir.path(), None);
+        h.state_mut().save_to(file.clone());
+        h.run();
+        let saved = std::fs::read(&file).expect("saved");
+        h.get_by_label("elbow").click();
+        h.run();
+        common::go_to_frame(&mut h, 25);
+        // Orbit from empty space at the viewport's top left, then widen the outliner by its edge.
+        let rect = h.state().viewport_rect().expect("a viewport");
+        let start = rect.left_top() + egui::vec2(40.0, 60.0);
+        common::drag(&mut h, start, start + egui::vec2(80.0, 20.0));
+        let edge = outliner_width(&h);
+        // Just inside the edge: the viewport, laid out after the outliner, takes the points
+        // from the edge on. The pointer rests there a frame before the press, as a hand's does.
+        let grip = egui::pos2(edge.right() - 3.0, edge.center().y);
+        common::pointer(&mut h, egui::Event::PointerMoved(grip));
+        common::drag(&mut h, grip, grip + egui::vec2(70.0, 0.0));
+        let width = outliner_width(&h).width();
+        assert!(width > edge.width() + 40.0, "the outliner widened: {} → {width}", edge.width());
+        let camera = h.state().view.camera;
+        assert_ne!(camera, h.state().doc.scene().camera, "the view was orbited");
+        // Leaving the file (File ▸ New) remembers its session; the file itself is unchanged.
+        h.state_mut().perform(keyrig_editor::app::PendingAction::New);
+        h.run();
+        assert_eq!(std::fs::read(&file).expect("still there"), saved, "the scene file is not touched");
+        (h.state().session.playback.whole_frame(), camera, width)
+    };
+    assert_eq!(frame, 0, "a new scene starts at its first frame");
+    assert!(dir.path().join("sessions.json").exists());
+
+    let mut h = common::harness(dir.path(), Some(file.clone()));
+    h.run();
+    assert_eq!(h.state().session.playback.whole_frame(), 25);
+    assert_eq!(h.state().view.camera, camera);
+    assert_eq!(
+        h.state().session.selection.item,
+        Some(keyrig_editor::session::Selected::Joint { object: 0, joint: 1 }),
+        "the elbow is selected again"
+    );
+    assert!((outliner_width(&h).width() - width).abs() < 2.0, "{} vs {width}", outliner_width(&h).width());
+    assert!(!h.state().doc.is_dirty(), "restoring the session is no edit");
+}
+
+/// A PNG dropped on the window becomes the reference image behind the scene (one undo step),
+/// drawn in the viewport; its opacity is the inspector's slider; the scene file names it
+/// relative to its folder, as models; an image that cannot be read is refused with its name in
+/// the status bar, and a scene whose image is missing opens with the error over the viewport.
+#[test]
+fn a_dropped_image_is_the_reference_image_saved_relative_to_the_scene() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("ref.png");
+    image::RgbaImage::from_pixel(4, 2, image::Rgba([200, 100, 50, 255])).save(&png).expect("png");
+    let file = dir.path().join("shot.ron");
+    keyrig_io::project::save_scene(&file, &keyrig_io::demo::demo_scene()).expect("save");
+    let mut h = common::harness(dir.path(), Some(file.clone()));
+    let steps = h.state().doc.undo_len();
+    h.input_mut().dropped_files.push(egui::DroppedFile { path: Some(png.clone()), ..Default::default() });
+    h.run();
+    let reference = h.state().doc.scene().reference_image.clone().expect("a reference image");
+    assert_eq!(std::path::PathBuf::from(&reference.path), std::path::absolute(&png).expect("absolute"));
+    assert_eq!(reference.opacity, 0.5);
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+    assert_eq!(h.state().doc.undo_label(), Some("reference image ref.png"));
+    h.run();
+    assert_eq!(h.state().panels().viewport.reference_image_size(), Some([4, 2]), "drawn behind the scene");
+    assert!(h.state().viewport_errors().is_empty(), "{:?}", h.state().viewport_errors());
+
+    common::set_value(&mut h, egui::accesskit::Role::Slider, "Reference opacity", 0.25);
+    assert_eq!(h.state().doc.scene().reference_image.as_ref().map(|r| r.opacity), Some(0.25));
+    h.state_mut().save_to(file.clone());
+    let text = std::fs::read_to_string(&file).expect("saved");
+    let at = text.find("reference_image: Some((").expect("the reference image is saved");
+    let saved = &text[at..];
+    assert!(saved.contains("path: \"ref.png\",") && saved.contains("opacity: 0.25,"), "{saved}");
+
+    // A file that is no image is refused; the scene keeps its image.
+    let junk = dir.path().join("junk.png");
+    std::fs::write(&junk, b"not a picture").expect("write");
+    h.input_mut().dropped_files.push(egui::DroppedFile { path: Some(junk), ..Default::default() });
+    h.run();
+    let status = h.state().status().cloned().expect("a message");
+    assert!(status.is_error && status.text.contains("junk.png"), "{status:?}");
+    assert!(h.state().doc.scene().reference_image.as_ref().is_some_and(|r| r.path.ends_with("ref.png")));
+
+    h.get_by_label("Remove reference image").click();
+    h.run();
+    assert!(h.state().doc.scene().reference_image.is_none());
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+    assert!(h.state().doc.scene().reference_image.is_some(), "undo brings it back");
+
+    // Reopened without its image: an error over the viewport, the scene drawn as without one.
+    std::fs::remove_file(&png).expect("remove");
+    let mut again = common::harness(dir.path(), Some(file));
+    again.run();
+    let errors = again.state().viewport_errors().to_vec();
+    assert!(errors.iter().any(|e| e.contains("ref.png") && e.contains("cannot read")), "{errors:?}");
+    assert_eq!(again.state().panels().viewport.reference_image_size(), None);
+}

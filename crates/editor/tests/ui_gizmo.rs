@@ -646,3 +646,42 @@ fn a_press_12_points_off_a_slanted_ring_still_turns_the_joint() {
     assert!(angle > 5.0, "the press 12 points off the ring turned the wrist: {angle}°");
     assert!(turned_about.dot(*axis).abs() > 0.99, "about the ring's axis {axis:?}: {turned_about:?}");
 }
+
+/// The editable motion path: with the Cube selected, each of its translation keys is a handle
+/// on the path; a drag on the key at frame 30 (not the current frame) moves that key's
+/// position in the view plane, leaves its time and the other keys alone, and is one undo step.
+#[test]
+fn dragging_a_key_of_the_motion_path_moves_that_keys_position() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    let before = h.state().doc.scene().objects[1].translation.track.clone();
+    let key = 1;
+    assert!((before.keys[key].time * 30.0 - 30.0).abs() < 1e-9, "the key at frame 30");
+    let from = on_screen(h.state(), before.keys[key].value);
+    let to = from + egui::vec2(40.0, -25.0);
+    let steps = h.state().doc.undo_len();
+    let path: Vec<Pos2> = (0..=8).map(|i| from + (to - from) * (i as f32 / 8.0)).collect();
+    drag_along(&mut h, &path);
+
+    let after = h.state().doc.scene().objects[1].translation.track.clone();
+    let moved = after.keys[key].value;
+    assert!(moved.distance(before.keys[key].value) > 0.05, "the key moved: {moved}");
+    assert!(on_screen(h.state(), moved).distance(to) < 1.0, "under the pointer where it was let go");
+    let forward = (h.state().view.camera.target - h.state().view.camera.eye()).normalize();
+    assert!((moved - before.keys[key].value).dot(forward).abs() < 1e-4, "in the view plane");
+    assert_eq!(after.keys.len(), before.keys.len());
+    for (i, (a, b)) in before.keys.iter().zip(after.keys.iter()).enumerate() {
+        assert_eq!(a.time, b.time, "key {i} keeps its time");
+        assert_eq!((a.interpolation, a.tcb), (b.interpolation, b.tcb), "key {i} keeps its shape");
+        if i != key {
+            assert_eq!(a.value, b.value, "key {i} stays");
+        }
+    }
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one drag, one undo step");
+    assert_eq!(h.state().doc.undo_label(), Some("move the key at frame 30 on the motion path"));
+    assert_eq!(h.state().session.selection.item, Some(Selected::Object(1)), "the Cube stays selected");
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene().objects[1].translation.track, before);
+}

@@ -67,3 +67,56 @@ fn keep_the_ik_chain_as_a_constraint_then_bake_it_in_one_undo_step_each() {
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert!(h.state().doc.scene() == &before, "and one more the constraint");
 }
+
+/// The constraint's target is drawn in the viewport and a drag on it moves it: in record mode a
+/// key of the target at the current frame, one undo step, and the chain follows it.
+#[test]
+fn drag_the_ik_target_in_the_viewport_keys_it_in_one_undo_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::SHIFT, Key::I);
+    go_to_frame(&mut h, FRAME);
+    h.get_by_label("Keep as IK constraint").click();
+    h.run();
+    // IK posing off: the gizmo would be shown; the target still comes first under the pointer.
+    press(&mut h, Modifiers::SHIFT, Key::I);
+    press(&mut h, Modifiers::NONE, Key::R);
+    go_to_frame(&mut h, 60);
+    let target = ChannelId::IkTarget { object: 0, constraint: 0 };
+    let target_world = |h: &egui_kittest::Harness<'_, keyrig_editor::EditorApp>| {
+        let Some(channels::ChannelValue::Vec3(v)) = h.state().value_now(target) else { panic!("a target") };
+        h.state().object_pose_now(0).expect("a pose").world_from_object.transform_point3(v)
+    };
+    let before = target_world(&h);
+    let steps = h.state().doc.undo_len();
+    let from = common::on_screen(h.state(), before);
+    let to = from + egui::vec2(-40.0, 30.0);
+    let path: Vec<egui::Pos2> = (0..=8).map(|i| from + (to - from) * (i as f32 / 8.0)).collect();
+    common::drag_along(&mut h, &path);
+
+    let after = target_world(&h);
+    assert!(after.distance(before) > 0.05, "the target moved: {before} → {after}");
+    let on_screen = common::on_screen(h.state(), after);
+    assert!(
+        on_screen.distance(to) < 1.0,
+        "it is under the pointer where it was let go: {on_screen:?} vs {to:?}"
+    );
+    let scene = h.state().doc.scene().clone();
+    let frames: Vec<i64> =
+        channels::key_times(&scene, target).iter().map(|t| (t * scene.fps).round() as i64).collect();
+    assert_eq!(frames, vec![i64::from(FRAME), 60], "keyed at the current frame in record mode");
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one drag, one undo step");
+    assert!(
+        joint_world(h.state(), 0, WRIST).distance(after) < joint_world(h.state(), 0, WRIST).distance(before),
+        "the wrist follows the target"
+    );
+    assert_eq!(
+        h.state().session.selection.item,
+        Some(Selected::Joint { object: 0, joint: WRIST }),
+        "nothing else picked"
+    );
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert!(target_world(&h).distance(before) < 1e-6, "undo puts the target back");
+}

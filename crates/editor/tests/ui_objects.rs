@@ -241,3 +241,72 @@ fn the_key_inspector_follows_the_selection_and_edits_every_selected_key() {
     }
     assert!(h.query_by_label("Tension (mixed)").is_none(), "now equal");
 }
+
+/// Shift+D as in Blender: the copy follows the pointer with no button held (in the plane
+/// facing the camera, so a move to the right moves it to the camera's right) until a click
+/// places it; the copy and its move are one undo step. Escape instead leaves it on the
+/// original.
+#[test]
+fn shift_d_starts_a_move_that_a_click_places_and_escape_cancels() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Arm").click();
+    h.run();
+    let rect = h.state().viewport_rect().expect("a viewport");
+    let from = rect.center();
+    common::pointer(&mut h, Event::PointerMoved(from));
+    let steps = h.state().doc.undo_len();
+    let original = h.state().doc.scene().objects[0].translation.value;
+    press(&mut h, Modifiers::SHIFT, Key::D);
+    assert_eq!(object_names(&h), ["Arm", "Cube", "Arm.001"]);
+    for i in 1..=5 {
+        common::pointer(&mut h, Event::PointerMoved(from + egui::vec2(20.0 * i as f32, 0.0)));
+    }
+    let moved = h.state().doc.scene().objects[2].translation.value;
+    let camera = &h.state().view.camera;
+    let right =
+        (camera.target - keyrig_editor::camera::OrbitCamera::eye(camera)).cross(glam::Vec3::Y).normalize();
+    let offset = moved - original;
+    assert!(offset.dot(right) > 0.1, "the copy follows the pointer to the right: {offset:?}");
+    assert!(offset.dot(right) > 0.9 * offset.length(), "in the view plane: {offset:?}");
+    assert_eq!(h.state().doc.scene().objects[0].translation.value, original, "the original stays");
+    // A click places it; the click selects nothing else.
+    let at = from + egui::vec2(100.0, 0.0);
+    for pressed in [true, false] {
+        common::pointer(
+            &mut h,
+            Event::PointerButton {
+                pos: at,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: Modifiers::NONE,
+            },
+        );
+    }
+    common::pointer(&mut h, Event::PointerMoved(at + egui::vec2(30.0, 30.0)));
+    assert_eq!(h.state().doc.scene().objects[2].translation.value, moved, "placed where it was clicked");
+    assert_eq!(h.state().session.selection.item, Some(Selected::Object(2)));
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "the copy and its move are one step");
+    assert_eq!(h.state().doc.undo_label(), Some("duplicate as Arm.001"));
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(object_names(&h), ["Arm", "Cube"], "one undo takes the copy and its move back");
+
+    // Escape: the copy stays, on the original.
+    h.get_by_label("Arm").click();
+    h.run();
+    common::pointer(&mut h, Event::PointerMoved(from));
+    press(&mut h, Modifiers::SHIFT, Key::D);
+    for i in 1..=5 {
+        common::pointer(&mut h, Event::PointerMoved(from + egui::vec2(0.0, -15.0 * i as f32)));
+    }
+    assert_ne!(h.state().doc.scene().objects[2].translation.value, original);
+    press(&mut h, Modifiers::NONE, Key::Escape);
+    common::pointer(&mut h, Event::PointerMoved(from + egui::vec2(60.0, 0.0)));
+    assert_eq!(object_names(&h), ["Arm", "Cube", "Arm.001"]);
+    assert_eq!(
+        h.state().doc.scene().objects[2].translation.value,
+        original,
+        "Escape leaves it on the original"
+    );
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+}

@@ -291,3 +291,76 @@ fn the_fox_pasted_mirrored_is_the_mirror_image_of_the_copied_pose() {
         40,
     );
 }
+
+/// Types `text` into the inspector's Pose name field.
+fn type_pose_name(h: &mut Harness<'_, EditorApp>, text: &str) {
+    h.get_by_label("Pose name").click();
+    h.run();
+    h.event(Event::Text(text.to_owned()));
+    h.run();
+}
+
+/// The pose library: a named pose saved from the left arm at frame 0 is kept in the scene file,
+/// applied to the selection at another frame, applied mirrored onto the right arm (the
+/// mirrored paste's path), renamed and deleted; each one undo step.
+#[test]
+fn the_pose_library_saves_applies_mirrors_renames_and_deletes_poses() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("rig.ron");
+    keyrig_io::scene_file::save(&file, &two_armed_scene()).expect("save");
+    let mut h = harness(dir.path(), Some(file.clone()));
+    h.get_by_label("arm.L").click();
+    h.run();
+    let left_id = ChannelId::JointRotation { object: 0, joint: 1 };
+    let Some(ChannelValue::Rotation(lift)) = h.state().value_now(left_id) else { panic!("a rotation") };
+    let steps = h.state().doc.undo_len();
+    type_pose_name(&mut h, "Lift");
+    h.get_by_label("Add pose").click();
+    h.run();
+    let poses = h.state().doc.scene().poses.clone();
+    assert_eq!(poses.len(), 1);
+    assert_eq!(poses[0].name, "Lift");
+    assert_eq!(poses[0].values[0].channel, "object/Rig/joint/arm.L/rotation");
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+    assert_eq!(h.state().doc.undo_label(), Some("add pose Lift to the library"));
+
+    // Saved with the scene, and read back.
+    h.state_mut().save_to(file.clone());
+    let text = std::fs::read_to_string(&file).expect("saved");
+    assert!(text.contains("poses:") && text.contains("\"Lift\""), "{text}");
+    assert_eq!(keyrig_io::scene_file::load(&file).expect("reads back").poses, poses);
+
+    // Applied at frame 30, where the arm has turned back: the arm takes the pose again.
+    go_to_frame(&mut h, 30);
+    let Some(ChannelValue::Rotation(at_30)) = h.state().value_now(left_id) else { panic!("a rotation") };
+    assert!(at_30.dot(lift).abs() < 0.99, "the arm moved since frame 0");
+    h.get_by_label("Apply").click();
+    h.run();
+    let Some(ChannelValue::Rotation(applied)) = h.state().value_now(left_id) else { panic!("a rotation") };
+    assert!(applied.dot(lift).abs() > 1.0 - 1e-6, "{applied:?} vs {lift:?}");
+    assert!(h.state().status().is_some_and(|s| s.text.starts_with("Applied \"Lift\" on 1 channel")));
+
+    // Mirrored onto the right arm, with the whole character selected.
+    h.get_by_label("Rig").click();
+    h.run();
+    let steps = h.state().doc.undo_len();
+    h.get_by_label("Apply mirrored").click();
+    h.run();
+    let right = h.state().doc.scene().objects[0].skeleton.as_ref().unwrap().joints[2].rotation.value;
+    let mirrored = Quat::from_xyzw(lift.x, -lift.y, -lift.z, lift.w);
+    assert!(right.dot(mirrored).abs() > 1.0 - 1e-6, "the right arm, mirrored: {right:?} vs {mirrored:?}");
+    assert_eq!(h.state().doc.undo_len(), steps + 1, "one step");
+    assert_eq!(h.state().doc.undo_label(), Some("apply pose Lift mirrored"));
+
+    // Renamed, deleted, and the delete undone.
+    type_pose_name(&mut h, "Reach");
+    h.get_by_label("Rename").click();
+    h.run();
+    assert_eq!(h.state().doc.scene().poses[0].name, "Reach");
+    assert_eq!(h.state().doc.undo_label(), Some("rename pose Lift to Reach"));
+    h.get_by_label("Delete pose").click();
+    h.run();
+    assert!(h.state().doc.scene().poses.is_empty());
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert_eq!(h.state().doc.scene().poses[0].name, "Reach");
+}

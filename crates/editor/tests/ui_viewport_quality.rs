@@ -66,3 +66,57 @@ fn the_viewport_shows_srgb_encoded_colour() {
         assert!(channel.abs_diff(expected) <= 3, "viewport background at ({x}, {y}) is {pixel:?}");
     }
 }
+
+/// The reference image lies behind the scene in the GPU viewport: the scene is rendered
+/// see-through (cleared to transparent) and blended over the image egui draws beneath, so the
+/// background shows the image and the arm's surface shows the arm as it does without one.
+#[test]
+fn the_reference_image_is_behind_the_gpu_scene() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("red.png");
+    image::RgbaImage::from_pixel(16, 9, image::Rgba([255, 0, 0, 255])).save(&png).expect("png");
+    let render = |with_image: bool| {
+        let mut scene = keyrig_io::demo::demo_scene();
+        if with_image {
+            scene.reference_image =
+                Some(keyrig_core::ReferenceImage { path: "red.png".into(), opacity: 1.0 });
+        }
+        let file = dir.path().join(format!("shot-{with_image}.ron"));
+        keyrig_io::project::save_scene(&file, &scene).expect("save");
+        let data = dir.path().to_path_buf();
+        let mut h = Harness::builder().wgpu().with_size(egui::Vec2::from(SIZE)).build_eframe(move |cc| {
+            let options = EditorOptions { data_dir: Some(data), autosave_seconds: Some(1e9) };
+            let mut app = editor_for(Some(file), options);
+            if let Some(rs) = &cc.wgpu_render_state {
+                app.attach_gpu(rs);
+            }
+            app
+        });
+        h.run();
+        assert!(h.state().viewport_errors().is_empty(), "{:?}", h.state().viewport_errors());
+        let rect = h.state().viewport_rect().expect("laid out");
+        let pose = h.state().object_pose_now(0).expect("the arm");
+        let elbow: glam::Vec3 = (pose.world_from_object * pose.object_from_joint[1]).translation.into();
+        let on_arm = keyrig_editor::camera::Projection::new(&h.state().view.camera, rect)
+            .project(elbow)
+            .expect("in view");
+        let image = h.render().expect("render the window");
+        let ppp = h.ctx.pixels_per_point();
+        let pixel = |p: egui::Pos2| image.get_pixel((p.x * ppp) as u32, (p.y * ppp) as u32).0;
+        // Above the horizon at the top middle, inside the image fitted to the viewport's height.
+        (pixel(egui::pos2(rect.center().x, rect.min.y + 4.0)), pixel(on_arm))
+    };
+    let (background, arm) = render(false);
+    let (background_behind, arm_behind) = render(true);
+    assert!(background[0] < 80, "no image: the dark background {background:?}");
+    assert!(
+        background_behind[0] > 200 && background_behind[1] < 60 && background_behind[2] < 60,
+        "the red image shows behind the scene: {background_behind:?}"
+    );
+    for (a, b) in arm.iter().zip(arm_behind) {
+        assert!(
+            a.abs_diff(b) <= 6,
+            "the arm is drawn over the image as without it: {arm:?} vs {arm_behind:?}"
+        );
+    }
+}

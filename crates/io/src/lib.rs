@@ -13,6 +13,7 @@ pub mod md2;
 pub mod message;
 pub mod model;
 pub mod project;
+pub mod reference_image;
 pub mod scene_file;
 mod scene_locate;
 mod scene_text;

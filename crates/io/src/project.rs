@@ -57,8 +57,8 @@ pub fn portable_scene(scene_file: &Path, scene: &Scene) -> Scene {
     out
 }
 
-/// Replaces each model and sound file path `p` of the scene by `change(p)` where that is
-/// `Some`.
+/// Replaces each model, sound and reference image file path `p` of the scene by `change(p)`
+/// where that is `Some`.
 fn map_model_paths(scene: &mut Scene, mut change: impl FnMut(&str) -> Option<String>) {
     for object in &mut scene.objects {
         if let Some(MeshSource::File { path, .. }) = &mut object.mesh {
@@ -70,6 +70,11 @@ fn map_model_paths(scene: &mut Scene, mut change: impl FnMut(&str) -> Option<Str
     for clip in &mut scene.sounds {
         if let Some(new) = change(&clip.path) {
             clip.path = new;
+        }
+    }
+    if let Some(image) = &mut scene.reference_image {
+        if let Some(new) = change(&image.path) {
+            image.path = new;
         }
     }
 }
@@ -100,6 +105,13 @@ pub fn scene_inputs(scene: &Scene, base_dir: Option<&Path>) -> Vec<(PathBuf, Str
             None => PathBuf::from(&clip.path),
         };
         out.push((file, format!("the sound file of sounds[{i}]")));
+    }
+    if let Some(image) = &scene.reference_image {
+        let file = match base_dir {
+            Some(dir) => dir.join(&image.path),
+            None => PathBuf::from(&image.path),
+        };
+        out.push((file, "the reference image".to_owned()));
     }
     out
 }

@@ -179,6 +179,10 @@ pub struct FrameInput {
     pub through: Option<keyrig_eval::CameraState>,
     /// Linear RGB background.
     pub background: Vec3,
+    /// Clear to transparent black instead of `background`: the image is premultiplied RGBA,
+    /// opaque where something was drawn, for a caller that composites it over a picture of its
+    /// own (the editor's reference image).
+    pub transparent_background: bool,
     /// Multiply each mesh's colour by its texture ([`Renderer::set_texture`]) in the solid
     /// style; `false` draws every mesh in its plain colour.
     pub textures: bool,
@@ -202,6 +206,7 @@ impl FrameInput {
             camera_gizmos: Vec::new(),
             through: None,
             background: Vec3::new(0.018, 0.02, 0.025),
+            transparent_background: false,
             textures: true,
         }
     }
@@ -1364,8 +1369,15 @@ impl Renderer {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("keyrig frame") });
         let (draws, stats) = self.prepare_in(&mut encoder, frame, viewport.size(), false)?;
-        // The render pass, cleared to the background.
-        let mut pass = Self::begin_render_pass(&mut encoder, viewport, frame.background);
+        // The render pass, cleared to the background (or to transparent, for a caller that
+        // composites the image over a picture of its own).
+        let clear = if frame.transparent_background {
+            wgpu::Color::TRANSPARENT
+        } else {
+            let bg = frame.background;
+            wgpu::Color { r: f64::from(bg.x), g: f64::from(bg.y), b: f64::from(bg.z), a: 1.0 }
+        };
+        let mut pass = Self::begin_render_pass(&mut encoder, viewport, clear);
         draws.record(&mut pass);
         drop(pass);
         Ok((encoder.finish(), stats))
@@ -1639,13 +1651,12 @@ impl Renderer {
         Ok(OverlayLines { grid_vertices, line_vertices })
     }
 
-    /// Begins the viewport's render pass, clearing colour to `background` and depth to 1.
+    /// Begins the viewport's render pass, clearing colour to `clear` and depth to 1.
     fn begin_render_pass<'e>(
         encoder: &'e mut wgpu::CommandEncoder,
         viewport: &Viewport,
-        background: Vec3,
+        clear: wgpu::Color,
     ) -> wgpu::RenderPass<'e> {
-        let bg = background;
         // With MSAA the multisampled image is resolved and then discarded; without, the
         // pass draws straight into the colour texture, which must be stored.
         let (view, resolve_target, store) = match &viewport.msaa_view {
@@ -1658,15 +1669,7 @@ impl Renderer {
                 view,
                 depth_slice: None,
                 resolve_target,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: f64::from(bg.x),
-                        g: f64::from(bg.y),
-                        b: f64::from(bg.z),
-                        a: 1.0,
-                    }),
-                    store,
-                },
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &viewport.depth_view,

@@ -9,11 +9,14 @@
 //! - [`placement`]: where an imported model goes — beside what the scene holds, not on top of
 //!   it at the origin.
 //! - [`recovery`]: the autosave recovery file and the recent-files list.
+//! - [`sessions`]: the session (frame, camera, selection, panel sizes) remembered per scene
+//!   file in the data folder, restored on reopen.
 
 pub mod import;
 pub mod meshes;
 pub mod placement;
 pub mod recovery;
+pub mod sessions;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -28,6 +31,7 @@ pub use import::{
 };
 pub use meshes::{morph_mesh_from_md2, render_meshes, FileMesh, LoadedMesh, MeshStore, RenderMeshes};
 pub use recovery::{Recent, Recovery};
+pub use sessions::{SavedSession, Sessions};
 
 /// Why a file could not be opened, imported, exported or kept. Clone: the [`MeshStore`]
 /// keeps a failed load's error to show it every frame without reading the file again.
@@ -113,6 +117,15 @@ pub fn default_data_dir() -> Option<PathBuf> {
     directories::ProjectDirs::from("", "", "keyrig").map(|d| d.data_dir().to_path_buf())
 }
 
+/// The extensions of the images a reference image can be (what keyrig-io's `image` reads).
+pub const IMAGE_EXTENSIONS: [&str; 4] = ["png", "jpg", "jpeg", "bmp"];
+
+/// Whether `path` names an image (a reference image when dropped on the window).
+#[must_use]
+pub fn is_image_file(path: &Path) -> bool {
+    extension(path).is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.as_str()))
+}
+
 /// Whether `path` names a scene file (`.ron`) rather than a model.
 #[must_use]
 pub fn is_scene_file(path: &Path) -> bool {
@@ -140,6 +153,8 @@ pub enum DialogPurpose {
     SaveAs,
     Import,
     Export,
+    /// The reference image behind the scene (View ▸ Reference image).
+    ReferenceImage,
 }
 
 /// What each file dialog lists: (filter name, extensions) in the order the drop-down shows
@@ -168,6 +183,7 @@ pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'
             vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"]), VRML]
         }
         DialogPurpose::SaveAs => vec![SCENES],
+        DialogPurpose::ReferenceImage => vec![("Images (.png, .jpg, .jpeg, .bmp)", &IMAGE_EXTENSIONS)],
         DialogPurpose::Export => vec![
             ("glTF binary (.glb)", &["glb"]),
             ("glTF (.gltf)", &["gltf"]),
@@ -197,6 +213,7 @@ pub fn file_dialog(
         DialogPurpose::SaveAs => "Save scene as",
         DialogPurpose::Import => "Import model",
         DialogPurpose::Export => "Export glTF, VRML, X3D or Open Inventor",
+        DialogPurpose::ReferenceImage => "Reference image",
     };
     let mut dialog = egui_file_dialog::FileDialog::new()
         .id(egui::Id::new(("keyrig_file_dialog", title)))
@@ -211,7 +228,7 @@ pub fn file_dialog(
     }
     let filters = dialog_filters(purpose);
     match purpose {
-        DialogPurpose::Open | DialogPurpose::Import => {
+        DialogPurpose::Open | DialogPurpose::Import | DialogPurpose::ReferenceImage => {
             for &(name, extensions) in &filters {
                 let filter = egui_file_dialog::Filter::new(move |path: &Path| {
                     extension(path).is_some_and(|e| extensions.contains(&e.as_str()))

@@ -114,7 +114,7 @@ impl Recent {
 
 /// The editor's own small text files (the recent list, the recovery file's origin): a regular
 /// file of at most 1 MiB in UTF-8, read through keyrig-io; `None` when missing or not that.
-fn read_small_text(path: &Path) -> Option<String> {
+pub(super) fn read_small_text(path: &Path) -> Option<String> {
     let bytes = keyrig_io::file_io::read_regular_file(path, 1 << 20).ok()?;
     String::from_utf8(bytes).ok()
 }

@@ -4,6 +4,7 @@
 //! parameters, plus the cross-section measure of the selected joint.
 
 mod camera;
+pub mod pose_library;
 
 use egui::Ui;
 use glam::Vec3;
@@ -28,10 +29,12 @@ fn begin(actions: &mut Actions, change: FieldChange) {
     }
 }
 
-/// The inspector. Its fields show the frame's values and push their changes; it keeps no
-/// state of its own beyond what egui keeps for its widgets.
+/// The inspector. Its fields show the frame's values and push their changes; its own state is
+/// the pose library's name field.
 #[derive(Debug, Default)]
-pub struct Inspector;
+pub struct Inspector {
+    pose_library: pose_library::PoseLibraryUi,
+}
 
 impl Inspector {
     pub fn ui(&mut self, ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
@@ -42,6 +45,9 @@ impl Inspector {
                 ui.separator();
                 key_inspector_ui(ui, ctx, actions);
                 ui.separator();
+                self.pose_library.ui(ui, ctx, actions);
+                ui.separator();
+                reference_image_ui(ui, ctx, actions);
                 // The selected object's or light's attributes, after the key inspector so that
                 // opening them moves nothing above.
                 match ctx.session.selection.item {
@@ -968,4 +974,35 @@ fn blend_zone_channels(
             }
         });
     }
+}
+
+/// The reference image's section, while the scene has one: its file, its opacity (one undo step
+/// per drag), another image, or none.
+fn reference_image_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
+    let Some(image) = &ctx.scene().reference_image else { return };
+    ui.strong("Reference image");
+    let name = std::path::Path::new(&image.path)
+        .file_name()
+        .map_or_else(|| image.path.clone(), |n| n.to_string_lossy().into_owned());
+    ui.label(name).on_hover_text(&image.path);
+    let mut opacity = image.opacity;
+    // The label on its own line: beside the slider it would widen the inspector.
+    let label = ui.label("Reference opacity");
+    let response = ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0)).labelled_by(label.id);
+    if response.changed() && opacity.is_finite() {
+        actions.edit(Edit::continuous("reference opacity", "reference image opacity", move |scene| {
+            if let Some(image) = &mut scene.reference_image {
+                image.opacity = opacity.clamp(0.0, 1.0);
+            }
+        }));
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Choose image…").clicked() {
+            actions.push(Action::ChooseReferenceImage);
+        }
+        if ui.button("Remove reference image").clicked() {
+            actions.edit(Edit::scene("remove the reference image", |scene| scene.reference_image = None));
+        }
+    });
+    ui.separator();
 }

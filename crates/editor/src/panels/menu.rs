@@ -114,6 +114,14 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 for c in [Command::HideSelected, Command::ShowHidden] {
                     command_button(ui, ctx, actions, c, None);
                 }
+                if ui
+                    .button("Reference image…")
+                    .on_hover_text("An image (PNG, JPEG, BMP) shown behind the scene, saved with it; its opacity is in the inspector")
+                    .clicked()
+                {
+                    actions.push(Action::ChooseReferenceImage);
+                    ui.close();
+                }
                 ui.menu_button("Onion skin settings", |ui| {
                     let mut onion = view.onion;
                     onion_settings_ui(ui, &mut onion);

@@ -29,6 +29,13 @@ fn fs_blit(in: VsOut) -> @location(0) vec4<f32> {
     return vec4<f32>(textureSample(image, image_sampler, in.uv).rgb, 1.0);
 }
 
+// The image as premultiplied RGBA (a viewport cleared to transparent black), for a pipeline
+// that blends it over what egui drew beneath (the reference image).
+@fragment
+fn fs_blit_over(in: VsOut) -> @location(0) vec4<f32> {
+    return textureSample(image, image_sampler, in.uv);
+}
+
 // An opaque fill: the pipeline's blend state multiplies this output by the blend constant
 // (source factor: the constant, destination factor: zero), so the pixel becomes the constant.
 @fragment

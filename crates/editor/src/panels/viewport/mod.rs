@@ -6,8 +6,12 @@
 //! (`painter.rs`) from the meshes the frame skinned on the CPU.
 
 mod gizmo;
+mod grab;
 pub mod ik_handle;
+pub mod ik_targets;
+pub mod motion_path;
 mod painter;
+mod reference;
 mod targets;
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, Ui};
@@ -23,6 +27,7 @@ use crate::session::Selected;
 use crate::widgets::measure::measure_text;
 
 pub use gizmo::joint_rotation_from_world;
+pub use grab::GRAB_GROUP;
 pub use targets::Pivot;
 
 /// Pick radius around joints and lights, points.
@@ -33,6 +38,14 @@ const PICK_RADIUS: f32 = 9.0;
 #[derive(Default)]
 pub struct Viewport {
     gizmo: gizmo::GizmoState,
+    /// A grab (Shift+D's move) under way.
+    grab: grab::Grab,
+    /// The reference image behind the scene, loaded.
+    reference: reference::ReferenceView,
+    /// A drag of a key on the motion path, until release.
+    path_key: Option<motion_path::KeyDrag>,
+    /// A drag of an IK constraint's target, until release.
+    ik_target: Option<ik_targets::TargetDrag>,
     /// A press on the IK handle (IK posing), until release.
     ik_grab: Option<IkGrab>,
     /// Where a Ctrl+drag box selection started (screen points).
@@ -85,6 +98,19 @@ impl Viewport {
         self.gizmo.ring.as_ref().map(|r| &r.drag)
     }
 
+    /// Starts a grab of the selection in the next frame (Shift+D: the duplicate follows the
+    /// pointer until a click or Enter places it).
+    pub fn start_grab(&mut self) {
+        self.grab = grab::Grab::Requested;
+    }
+
+    /// Whether a grab is under way: the window keeps its undo group open while no button is
+    /// held.
+    #[must_use]
+    pub fn holds_undo_group(&self) -> bool {
+        self.grab.active()
+    }
+
     /// Lets go of the IK handle (IK posing turned off, another document).
     pub fn release_ik_handle(&mut self) {
         self.ik_grab = None;
@@ -123,9 +149,19 @@ impl Viewport {
             };
             let mut errors = ctx.scene.errors().to_vec();
 
-            let gpu_drawn = self.gpu_ui(ui, ctx, rect, &mut errors);
-            if !gpu_drawn {
+            // The reference image goes under the scene: on the background the painter fills, or
+            // under a GPU image rendered see-through.
+            let behind = painter.add(egui::Shape::Noop);
+            let reference = self.reference.shape(ui, ctx, rect, &mut errors);
+            let see_through = reference.is_some();
+            let gpu_drawn = self.gpu_ui(ui, ctx, rect, &mut errors, see_through);
+            if !gpu_drawn || see_through {
                 painter.set(background, egui::Shape::rect_filled(rect, 0.0, Color32::from_rgb(38, 40, 46)));
+            }
+            if let Some(shape) = reference {
+                painter.set(behind, shape);
+            }
+            if !gpu_drawn {
                 painter::paint_scene(&painter, &projection, ctx);
             }
             painter::paint_axes(&painter, &projection, ctx);
@@ -145,7 +181,22 @@ impl Viewport {
             // its IK handle instead. Either owns the primary button only on one of its handles;
             // scroll, right/middle drags and drags that start elsewhere stay with the camera, as
             // in Blender's viewport.
-            let handle = if ik_handle::handle_joint(ctx).is_some() {
+            // A grab (Shift+D) owns the pointer and the gizmo waits until it ends.
+            let grabbing = self.grab.active();
+            let grab_owns = self.grab.ui(ui, ctx, actions, &projection, rect);
+            // An IK constraint's target under the pointer, or being dragged, comes before the
+            // gizmo.
+            let target_owns = !grabbing
+                && ik_targets::ui(ui, ctx, actions, &mut self.ik_target, &projection, rect, &response);
+            // So does a key handle of the motion path.
+            let target_owns = target_owns
+                || (!grabbing
+                    && motion_path::ui(ui, ctx, actions, &mut self.path_key, &projection, rect, &response));
+            let handle = if grabbing {
+                Some(grab_owns)
+            } else if target_owns {
+                Some(true)
+            } else if ik_handle::handle_joint(ctx).is_some() {
                 self.gizmo.drag = false;
                 self.gizmo.ring = None;
                 ik_handle::handle_ui(ui, ctx, actions, &mut self.ik_grab, &projection, rect, &response)
@@ -245,6 +296,12 @@ fn pick(targets: &[(Pos2, Selected)], pos: Pos2) -> Option<Selected> {
 }
 
 impl Viewport {
+    /// The size in pixels of the reference image shown behind the scene, when one is.
+    #[must_use]
+    pub fn reference_image_size(&self) -> Option<[usize; 2]> {
+        self.reference.size()
+    }
+
     /// The pivot setting in the viewport's top-right corner, as Blender's header: where the
     /// gizmo turns several selected items about ([`Pivot`]).
     fn pivot_ui(&mut self, ui: &mut Ui, rect: Rect) {
@@ -362,7 +419,14 @@ fn look_through_state(ctx: &FrameCtx<'_>) -> Option<keyrig_eval::CameraState> {
 impl Viewport {
     /// Renders the viewport with keyrig-render when the editor runs on eframe's wgpu backend.
     /// Returns false (and adds the reason to `errors` when there is one) to let the painter draw.
-    fn gpu_ui(&mut self, ui: &Ui, ctx: &FrameCtx<'_>, rect: Rect, errors: &mut Vec<String>) -> bool {
+    fn gpu_ui(
+        &mut self,
+        ui: &Ui,
+        ctx: &FrameCtx<'_>,
+        rect: Rect,
+        errors: &mut Vec<String>,
+        see_through: bool,
+    ) -> bool {
         let Some(gpu) = self.gpu.as_mut() else { return false };
         let Some(state) = ctx.scene.state() else { return false };
         let scene = ctx.scene();
@@ -424,6 +488,7 @@ impl Viewport {
             morph_meshes,
             materials,
             ghosts,
+            see_through,
         };
         if let Err(e) = gpu.set_antialiasing(ctx.view.antialiasing) {
             errors.push(format!("GPU viewport: {e}"));
