@@ -661,7 +661,7 @@ struct DrawPipelines {
     solid_backs: wgpu::RenderPipeline,
     solid_untextured_fronts: wgpu::RenderPipeline,
     solid_untextured_backs: wgpu::RenderPipeline,
-    /// The background over the whole viewport at the far plane (colour and depth), for a
+    /// The background over the whole viewport (colour only: the pass's depth is cleared), for a
     /// frame drawn into a pass that was not cleared for it ([`Renderer::prepare`]).
     fill: wgpu::RenderPipeline,
 }
@@ -897,7 +897,7 @@ impl DrawPipelines {
                 TriangleList,
                 None,
                 Always,
-                true,
+                false,
                 None,
             ),
         }
@@ -1385,10 +1385,11 @@ impl Renderer {
 
     /// Prepares a frame for a render pass the caller owns, `size` pixels wide and high, whose
     /// colour target has the renderer's format and sample count and whose depth attachment is
-    /// [`DEPTH_FORMAT`], with the pass's viewport (and scissor) set to the frame's rect:
-    /// submits the frame's uploads and compute passes, and returns the draws to record into
-    /// that pass, the first of which fills the rect with the background at the far plane
-    /// (colour and depth), so the rect needs no clearing. The editor draws its viewport
+    /// [`DEPTH_FORMAT`], cleared to 1 where the frame is drawn (egui-wgpu clears the whole
+    /// window's depth when its pass begins), with the pass's viewport (and scissor) set to the
+    /// frame's rect: submits the frame's uploads and compute passes, and returns the draws to
+    /// record into that pass, the first of which fills the rect's colour with the background,
+    /// so the rect needs no colour clear. The editor draws its viewport
     /// straight into egui's pass this way (docs/rendering.md, "Embedding in the editor").
     ///
     /// # Errors
@@ -1560,7 +1561,14 @@ impl Renderer {
             ambient: frame.ambient.extend(0.0).to_array(),
             counts: [light_count as u32, 0, 0, 0],
             lights,
-            background: frame.background.extend(1.0).to_array(),
+            // Already encoded for a target that does not encode on write, so that the fill's
+            // fragments only copy it (`fs_fill`).
+            background: if self.color_format.is_srgb() {
+                frame.background.extend(1.0).to_array()
+            } else {
+                let [r, g, b] = frame.background.to_array().map(|c| srgb_encode(c) as f32);
+                [r, g, b, 1.0]
+            },
         };
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
         stats.uniform_bytes += std::mem::size_of::<GpuGlobals>() as u64;
@@ -1917,5 +1925,16 @@ mod tests {
         h.renderer_mut().set_sample_count(4).expect("4 samples");
         let (again, _) = h.render_image(&frame, SIZE, SIZE).expect("4× again");
         assert_eq!(again, msaa);
+    }
+}
+
+/// Linear to sRGB-encoded (IEC 61966-2-1), for a value written to a target that does not
+/// encode on write.
+fn srgb_encode(linear: f32) -> f64 {
+    let x = f64::from(linear.clamp(0.0, 1.0));
+    if x <= 0.003_130_8 {
+        x * 12.92
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
     }
 }

@@ -87,11 +87,12 @@ fn a_frame_drawn_into_a_window_pass_matches_the_offscreen_render() {
                     store: wgpu::StoreOp::Store,
                 },
             })],
-            // Cleared to 0 (the nearest depth): the frame's own fill must set its rect's depth.
+            // Depth cleared to 1, as egui-wgpu clears the window's; the colour is not cleared
+            // for the frame (the frame's own fill paints its rect).
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &depth_view,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
+                    load: wgpu::LoadOp::Clear(1.0),
                     store: wgpu::StoreOp::Discard,
                 }),
                 stencil_ops: None,

@@ -228,8 +228,8 @@ fn fs_line(in: LineOut) -> @location(0) vec4<f32> {
     return target_colour(in.colour);
 }
 
-// The background over the whole viewport at the far plane: one triangle that covers it, for a
-// frame drawn into a render pass that was not cleared for it (the editor's window).
+// The background over the whole viewport: one triangle that covers it, for a frame drawn into
+// a render pass whose colour was not cleared for it (the editor's window); it writes no depth.
 @vertex
 fn vs_fill(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
     let x = f32(index & 1u) * 4.0 - 1.0;
@@ -237,7 +237,9 @@ fn vs_fill(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
     return vec4<f32>(x, y, 1.0, 1.0);
 }
 
+// The background is written as given: `Renderer::write_globals` encodes it beforehand for a
+// target that does not encode on write (one value, not a curve per pixel).
 @fragment
 fn fs_fill() -> @location(0) vec4<f32> {
-    return target_colour(vec4<f32>(globals.background.rgb, 1.0));
+    return vec4<f32>(globals.background.rgb, 1.0);
 }
