@@ -1832,6 +1832,17 @@ impl Renderer {
     }
 }
 
+/// Linear to sRGB-encoded (IEC 61966-2-1), for a value written to a target that does not
+/// encode on write.
+fn srgb_encode(linear: f32) -> f64 {
+    let x = f64::from(linear.clamp(0.0, 1.0));
+    if x <= 0.003_130_8 {
+        x * 12.92
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use glam::{Mat4, Vec3};
@@ -1925,16 +1936,5 @@ mod tests {
         h.renderer_mut().set_sample_count(4).expect("4 samples");
         let (again, _) = h.render_image(&frame, SIZE, SIZE).expect("4× again");
         assert_eq!(again, msaa);
-    }
-}
-
-/// Linear to sRGB-encoded (IEC 61966-2-1), for a value written to a target that does not
-/// encode on write.
-fn srgb_encode(linear: f32) -> f64 {
-    let x = f64::from(linear.clamp(0.0, 1.0));
-    if x <= 0.003_130_8 {
-        x * 12.92
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
     }
 }
