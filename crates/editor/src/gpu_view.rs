@@ -44,27 +44,7 @@ struct Blit {
 impl Blit {
     fn new(device: &wgpu::Device, target: wgpu::TextureFormat, depth: Option<wgpu::TextureFormat>) -> Self {
         let module = device.create_shader_module(wgpu::include_wgsl!("shaders/viewport_blit.wgsl"));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("viewport blit"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
+        let layout = keyrig_render::sampled_texture_layout(device, "viewport blit");
         let pipeline = callback_pipeline(device, &module, (target, depth), "fs_blit", Some(&layout), None);
         let premultiplied = Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING);
         let over =

@@ -42,6 +42,7 @@ pub use headless::{HeadlessRenderer, HEADLESS_FORMAT};
 /// The `image` crate this crate renders into (re-exported so callers save PNGs with the same version).
 pub use image;
 pub use overlay::{CameraGizmo, LightGizmo, MotionPath, SkeletonOverlay};
+pub use renderer::sampled_texture_layout;
 pub use renderer::{
     Deform, DrawItem, FrameDraws, FrameInput, FrameStats, Ghost, LightInput, MeshData, MeshId, RenderStyle,
     Renderer, Viewport, DEPTH_FORMAT, SAMPLE_COUNT, SUPPORTED_SAMPLE_COUNTS,

@@ -1070,27 +1070,7 @@ impl Renderer {
         };
         let globals_layout = uniform_layout("keyrig globals", false);
         let object_layout = uniform_layout("keyrig object", true);
-        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("keyrig base-colour texture"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
+        let texture_layout = sampled_texture_layout(device, "keyrig base-colour texture");
         let white = TextureImage::new(1, 1, vec![255u8; 4], keyrig_core::Sampler::default())
             .expect("a 1×1 image has 4 bytes");
         let white_texture = texture_bind_group(device, queue, &texture_layout, &white);
@@ -1841,6 +1821,34 @@ fn srgb_encode(linear: f32) -> f64 {
     } else {
         1.055 * x.powf(1.0 / 2.4) - 0.055
     }
+}
+
+/// The bind group layout of a filterable 2D colour texture (binding 0) and its filtering sampler
+/// (binding 1), read by a fragment shader: a mesh's base-colour texture, and the editor's copy
+/// of the offscreen viewport into its window.
+#[must_use]
+pub fn sampled_texture_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
 }
 
 #[cfg(test)]
