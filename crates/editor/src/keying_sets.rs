@@ -57,12 +57,17 @@ fn part(id: ChannelId) -> Option<Part> {
 /// The item a channel belongs to (for a root translation or an IK channel: its object); `None`
 /// for attributes.
 fn owner(id: ChannelId) -> Option<Selected> {
-    Some(match id {
+    (!matches!(id, ChannelId::Attribute(_))).then(|| owner_of(id))
+}
+
+/// The scene item a channel belongs to (an object's root translation: the object).
+#[must_use]
+pub fn owner_of(channel: ChannelId) -> Selected {
+    match channel {
         ChannelId::ObjectTranslation(o)
         | ChannelId::ObjectRotation(o)
         | ChannelId::ObjectScale(o)
         | ChannelId::RootTranslation(o) => Selected::Object(o),
-        ChannelId::IkTarget { object, .. } | ChannelId::IkBlend { object, .. } => Selected::Object(object),
         ChannelId::JointTranslation { object, joint }
         | ChannelId::JointRotation { object, joint }
         | ChannelId::JointScale { object, joint } => Selected::Joint { object, joint },
@@ -70,13 +75,17 @@ fn owner(id: ChannelId) -> Option<Selected> {
         | ChannelId::LightDirection(l)
         | ChannelId::LightColour(l)
         | ChannelId::LightIntensity(l) => Selected::Light(l),
+        ChannelId::IkTarget { object, .. } | ChannelId::IkBlend { object, .. } => Selected::Object(object),
+        ChannelId::Attribute(a) => match a.owner() {
+            Ok(o) => Selected::Object(o),
+            Err(l) => Selected::Light(l),
+        },
         ChannelId::CameraTranslation(c)
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
         | ChannelId::CameraRoll(c)
         | ChannelId::CameraVisible(c) => Selected::Camera(c),
-        ChannelId::Attribute(_) => return None,
-    })
+    }
 }
 
 /// Every pose channel of object `o`: its transform, its skeleton's root translation, every

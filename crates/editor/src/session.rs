@@ -10,6 +10,7 @@ use crate::channels::{ChannelId, ChannelValue, KeyCopy};
 
 use crate::eval::PoseOverrides;
 use crate::ik_posing::IkPosing;
+pub use crate::keying_sets::owner_of;
 use crate::keying_sets::{item_channels, item_exists, KeyingSet};
 /// What can be selected in the scene: keyrig-render's one type (object, joint, light).
 pub use keyrig_render::Selected;
@@ -266,34 +267,6 @@ impl Playback {
     /// Jumps to a whole frame, clamped to `[start, end]`.
     pub fn go_to(&mut self, frame: i32, start: i32, end: i32) {
         self.frame = f64::from(frame.clamp(start, end.max(start)));
-    }
-}
-
-/// The scene item a channel belongs to (an object's root translation: the object).
-#[must_use]
-pub fn owner_of(channel: ChannelId) -> Selected {
-    match channel {
-        ChannelId::ObjectTranslation(o)
-        | ChannelId::ObjectRotation(o)
-        | ChannelId::ObjectScale(o)
-        | ChannelId::RootTranslation(o) => Selected::Object(o),
-        ChannelId::JointTranslation { object, joint }
-        | ChannelId::JointRotation { object, joint }
-        | ChannelId::JointScale { object, joint } => Selected::Joint { object, joint },
-        ChannelId::LightPosition(l)
-        | ChannelId::LightDirection(l)
-        | ChannelId::LightColour(l)
-        | ChannelId::LightIntensity(l) => Selected::Light(l),
-        ChannelId::IkTarget { object, .. } | ChannelId::IkBlend { object, .. } => Selected::Object(object),
-        ChannelId::Attribute(a) => match a.owner() {
-            Ok(o) => Selected::Object(o),
-            Err(l) => Selected::Light(l),
-        },
-        ChannelId::CameraTranslation(c)
-        | ChannelId::CameraRotation(c)
-        | ChannelId::CameraLens(c)
-        | ChannelId::CameraRoll(c)
-        | ChannelId::CameraVisible(c) => Selected::Camera(c),
     }
 }
 
