@@ -4,9 +4,11 @@
 //! ```text
 //! object/<object>/translation        Vec3   the object's translation
 //! object/<object>/rotation           Quat   the object's rotation
+//! object/<object>/rotation_euler     Vec3   its Euler keys (x, y, z degrees), when it has them
 //! object/<object>/scale              Vec3   the object's scale
 //! object/<object>/root_translation   Vec3   translation of the skeleton's root joint
 //! object/<object>/joint/<joint>/rotation     Quat   the rotation of a joint's local transform T(j)
+//! object/<object>/joint/<joint>/rotation_euler  Vec3  its Euler keys, when it has them
 //! object/<object>/joint/<joint>/translation  Vec3   the translation of T(j) (imported characters)
 //! object/<object>/joint/<joint>/scale        Vec3   the scale of T(j)
 //! object/<object>/ik/<constraint>/target     Vec3   an IK constraint's target (object space)
@@ -37,9 +39,10 @@ use crate::track::{AnimatedTrack, TrackError};
 use crate::validate::track_error_path;
 
 /// Properties of an object.
-pub const OBJECT_PROPERTIES: [&str; 13] = [
+pub const OBJECT_PROPERTIES: [&str; 14] = [
     "translation",
     "rotation",
+    "rotation_euler",
     "scale",
     "root_translation",
     "joint",
@@ -53,7 +56,7 @@ pub const OBJECT_PROPERTIES: [&str; 13] = [
     "blend_child_fraction",
 ];
 /// Properties of a joint.
-pub const JOINT_PROPERTIES: [&str; 3] = ["translation", "rotation", "scale"];
+pub const JOINT_PROPERTIES: [&str; 4] = ["translation", "rotation", "rotation_euler", "scale"];
 /// Properties of an IK constraint.
 pub const IK_PROPERTIES: [&str; 2] = ["target", "blend"];
 /// Properties of a light.
@@ -91,6 +94,8 @@ impl CameraProperty {
 pub enum ObjectProperty {
     Translation,
     Rotation,
+    /// The Euler keys (x, y, z degrees) of an object that has them.
+    RotationEuler,
     Scale,
     RootTranslation,
 }
@@ -101,6 +106,7 @@ impl ObjectProperty {
         match self {
             ObjectProperty::Translation => "translation",
             ObjectProperty::Rotation => "rotation",
+            ObjectProperty::RotationEuler => "rotation_euler",
             ObjectProperty::Scale => "scale",
             ObjectProperty::RootTranslation => "root_translation",
         }
@@ -112,6 +118,8 @@ impl ObjectProperty {
 pub enum JointProperty {
     Translation,
     Rotation,
+    /// The Euler keys (x, y, z degrees) of a joint that has them.
+    RotationEuler,
     Scale,
 }
 
@@ -121,6 +129,7 @@ impl JointProperty {
         match self {
             JointProperty::Translation => "translation",
             JointProperty::Rotation => "rotation",
+            JointProperty::RotationEuler => "rotation_euler",
             JointProperty::Scale => "scale",
         }
     }
@@ -292,6 +301,7 @@ impl ChannelPath {
                 let property = match *property {
                     "translation" => JointProperty::Translation,
                     "rotation" => JointProperty::Rotation,
+                    "rotation_euler" => JointProperty::RotationEuler,
                     "scale" => JointProperty::Scale,
                     other => {
                         return Err(ChannelError::UnknownProperty {
@@ -348,6 +358,7 @@ impl ChannelPath {
                 let property = match *property {
                     "translation" => ObjectProperty::Translation,
                     "rotation" => ObjectProperty::Rotation,
+                    "rotation_euler" => ObjectProperty::RotationEuler,
                     "scale" => ObjectProperty::Scale,
                     "root_translation" => ObjectProperty::RootTranslation,
                     other if AttributeProperty::of_object(other).is_some() => {
@@ -469,6 +480,8 @@ impl ChannelPath {
             ChannelId::CameraLens(c) => camera(c, CameraProperty::Lens),
             ChannelId::CameraRoll(c) => camera(c, CameraProperty::Roll),
             ChannelId::CameraVisible(c) => camera(c, CameraProperty::Visible),
+            ChannelId::ObjectEuler(o) => on_object(o, ObjectProperty::RotationEuler),
+            ChannelId::JointEuler { object, joint: j } => joint(object, j, JointProperty::RotationEuler),
         }
     }
 
@@ -489,12 +502,25 @@ impl ChannelPath {
         };
         let no_skeleton =
             |object: &Object| ChannelError::NoSkeleton { path: path.clone(), object: object.name.clone() };
+        let no_euler = |owner: String| ChannelError::NotSet {
+            path: path.clone(),
+            owner,
+            what: "rotation_euler".to_owned(),
+            hint: " (its rotation has quaternion keys: sample rotation, or switch it to Euler keys in the editor)"
+                .to_owned(),
+        };
         Ok(match self {
             ChannelPath::Object { object, property } => {
                 let (i, o) = find_object(object)?;
                 match property {
                     ObjectProperty::Translation => ChannelId::ObjectTranslation(i),
                     ObjectProperty::Rotation => ChannelId::ObjectRotation(i),
+                    ObjectProperty::RotationEuler => {
+                        if o.rotation_euler.is_none() {
+                            return Err(no_euler(format!("object {:?}", o.name)));
+                        }
+                        ChannelId::ObjectEuler(i)
+                    }
                     ObjectProperty::Scale => ChannelId::ObjectScale(i),
                     ObjectProperty::RootTranslation => {
                         o.skeleton.as_ref().ok_or_else(|| no_skeleton(o))?;
@@ -516,6 +542,12 @@ impl ChannelPath {
                 match property {
                     JointProperty::Translation => ChannelId::JointTranslation { object: i, joint: j },
                     JointProperty::Rotation => ChannelId::JointRotation { object: i, joint: j },
+                    JointProperty::RotationEuler => {
+                        if skeleton.joints[j].rotation_euler.is_none() {
+                            return Err(no_euler(format!("joint {joint:?} of object {:?}", o.name)));
+                        }
+                        ChannelId::JointEuler { object: i, joint: j }
+                    }
                     JointProperty::Scale => ChannelId::JointScale { object: i, joint: j },
                 }
             }
@@ -617,12 +649,24 @@ impl ChannelPath {
             ChannelId::LightColour(_) | ChannelId::Attribute(AttributeId::ObjectColour(_)) => {
                 ValueKind::Colour
             }
+            ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => ValueKind::Angles,
             _ => match id.kind() {
                 ChannelKind::Vec3 => ValueKind::Position,
                 ChannelKind::Rotation => ValueKind::Rotation,
                 ChannelKind::Scalar => ValueKind::Scalar,
             },
         };
+        if let (ChannelKind::Rotation, Some((euler, order))) =
+            (id.kind(), crate::channel_id::euler_keys(scene, id))
+        {
+            // A rotation with Euler keys samples its angles and turns them in its order.
+            let field = crate::channel_id::euler_partner(id).map_or(field, ChannelId::field_path);
+            let mut channel = Channel::build(path, field, euler, kind)?;
+            if let Sampler::Vec3(track) = channel.sampler {
+                channel.sampler = Sampler::Euler(track, order);
+            }
+            return Ok(channel);
+        }
         match channel(scene, id).expect("the id was just looked up") {
             ChannelRef::Vec3(a) => Channel::build(path, field, a, kind),
             ChannelRef::Rotation(a) => Channel::build(path, field, a, kind),
@@ -639,6 +683,9 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
     for o in &scene.objects {
         for property in [ObjectProperty::Translation, ObjectProperty::Rotation, ObjectProperty::Scale] {
             out.push(ChannelPath::Object { object: o.name.clone(), property });
+            if property == ObjectProperty::Rotation && o.rotation_euler.is_some() {
+                out.push(ChannelPath::Object { object: o.name.clone(), property: ObjectProperty::RotationEuler });
+            }
         }
         if let Some(skeleton) = &o.skeleton {
             out.push(ChannelPath::Object {
@@ -652,6 +699,9 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
                     out.push(joint(JointProperty::Translation));
                 }
                 out.push(joint(JointProperty::Rotation));
+                if j.rotation_euler.is_some() {
+                    out.push(joint(JointProperty::RotationEuler));
+                }
                 if j.scale.is_animated() || j.scale.value != Vec3::ONE {
                     out.push(joint(JointProperty::Scale));
                 }
@@ -725,6 +775,8 @@ pub enum ValueKind {
     Colour,
     /// Unit quaternion.
     Rotation,
+    /// Euler angles in degrees (x, y, z), as Euler keys hold them.
+    Angles,
 }
 
 pub use crate::channel_id::{ChannelValue, RotationFormat};
@@ -734,6 +786,8 @@ enum Sampler {
     Scalar(AnimatedTrack<f32>),
     Vec3(AnimatedTrack<Vec3>),
     Quat(AnimatedTrack<Quat>),
+    /// A rotation with Euler keys: the angles (degrees) turned in the order.
+    Euler(AnimatedTrack<Vec3>, crate::EulerOrder),
 }
 
 /// A resolved channel: its validated track and what it is.
@@ -794,6 +848,7 @@ impl Channel {
             Sampler::Scalar(s) => ChannelValue::Scalar(s.sample(t)),
             Sampler::Vec3(s) => ChannelValue::Vec3(s.sample(t)),
             Sampler::Quat(s) => ChannelValue::Rotation(s.sample(t)),
+            Sampler::Euler(s, order) => ChannelValue::Rotation(order.to_quat(s.sample(t))),
         }
     }
 
@@ -804,6 +859,7 @@ impl Channel {
             Sampler::Scalar(s) => s.domain(),
             Sampler::Vec3(s) => s.domain(),
             Sampler::Quat(s) => s.domain(),
+            Sampler::Euler(s, _) => s.domain(),
         }
     }
 
@@ -834,7 +890,9 @@ impl Channel {
             (ValueKind::Position, _) => &["x", "y", "z"],
             (ValueKind::Colour, _) => &["r", "g", "b"],
             (ValueKind::Rotation, RotationFormat::Quat) => &["x", "y", "z", "w"],
-            (ValueKind::Rotation, RotationFormat::EulerDegrees) => &["x_deg", "y_deg", "z_deg"],
+            (ValueKind::Rotation, RotationFormat::EulerDegrees) | (ValueKind::Angles, _) => {
+                &["x_deg", "y_deg", "z_deg"]
+            }
         }
     }
 }

@@ -73,6 +73,14 @@ pub enum ChannelId {
     CameraRoll(usize),
     /// A scene camera's visibility: 1 shown, 0 hidden (Step keys).
     CameraVisible(usize),
+    /// An object's Euler keys (x, y, z in degrees), listed in place of its rotation while it
+    /// has them ([`crate::scene::Object::rotation_euler`]).
+    ObjectEuler(usize),
+    /// A joint's Euler keys, listed in place of its rotation while it has them.
+    JointEuler {
+        object: usize,
+        joint: usize,
+    },
 }
 
 /// What kind of value a channel holds.
@@ -120,6 +128,7 @@ impl ChannelId {
             ChannelId::CameraLens(_) => "lens",
             ChannelId::CameraRoll(_) => "roll",
             ChannelId::CameraVisible(_) => "visible",
+            ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => "rotation (Euler °)",
         }
     }
 
@@ -157,6 +166,10 @@ impl ChannelId {
             ChannelId::CameraLens(c) => format!("cameras[{c}].lens"),
             ChannelId::CameraRoll(c) => format!("cameras[{c}].aim.roll"),
             ChannelId::CameraVisible(c) => format!("cameras[{c}].visible"),
+            ChannelId::ObjectEuler(o) => format!("objects[{o}].rotation_euler"),
+            ChannelId::JointEuler { object, joint } => {
+                format!("objects[{object}].skeleton.joints[{joint}].rotation_euler")
+            }
         }
     }
 
@@ -174,7 +187,7 @@ impl ChannelId {
     pub fn of_object(scene: &Scene, object: usize) -> Vec<ChannelId> {
         let mut out = vec![
             ChannelId::ObjectTranslation(object),
-            ChannelId::ObjectRotation(object),
+            rotation_or_euler(scene, ChannelId::ObjectRotation(object)),
             ChannelId::ObjectScale(object),
         ];
         if let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) {
@@ -183,7 +196,11 @@ impl ChannelId {
                 if j.translation.is_animated() || j.translation.value != Vec3::ZERO {
                     out.push(ChannelId::JointTranslation { object, joint });
                 }
-                out.push(ChannelId::JointRotation { object, joint });
+                out.push(if j.rotation_euler.is_some() {
+                    ChannelId::JointEuler { object, joint }
+                } else {
+                    ChannelId::JointRotation { object, joint }
+                });
                 if j.scale.is_animated() || j.scale.value != Vec3::ONE {
                     out.push(ChannelId::JointScale { object, joint });
                 }
@@ -270,10 +287,12 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
     Some(match id {
         ChannelId::ObjectTranslation(o)
         | ChannelId::ObjectRotation(o)
+        | ChannelId::ObjectEuler(o)
         | ChannelId::ObjectScale(o)
         | ChannelId::RootTranslation(o) => scene.objects.get(o)?.name.clone(),
         ChannelId::JointTranslation { object, joint }
         | ChannelId::JointRotation { object, joint }
+        | ChannelId::JointEuler { object, joint }
         | ChannelId::JointScale { object, joint } => {
             scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.name.clone()
         }
@@ -363,6 +382,10 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::CameraLens(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.roll),
         ChannelId::CameraVisible(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.visible),
+        ChannelId::ObjectEuler(o) => ChannelRef::Vec3(scene.objects.get(o)?.rotation_euler.as_ref()?),
+        ChannelId::JointEuler { object, joint } => ChannelRef::Vec3(
+            scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation_euler.as_ref()?,
+        ),
     })
 }
 
@@ -401,15 +424,30 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::CameraLens(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.roll),
         ChannelId::CameraVisible(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.visible),
+        ChannelId::ObjectEuler(o) => ChannelMut::Vec3(scene.objects.get_mut(o)?.rotation_euler.as_mut()?),
+        ChannelId::JointEuler { object, joint } => ChannelMut::Vec3(
+            scene
+                .objects
+                .get_mut(object)?
+                .skeleton
+                .as_mut()?
+                .joints
+                .get_mut(joint)?
+                .rotation_euler
+                .as_mut()?,
+        ),
     })
 }
 
-/// The rotation mode of a rotation channel's object or joint (the default for other channels).
+/// The rotation mode of a rotation (or Euler-keys) channel's object or joint (the default for
+/// other channels).
 #[must_use]
 pub fn rotation_mode(scene: &Scene, id: ChannelId) -> RotationMode {
     match id {
-        ChannelId::ObjectRotation(o) => scene.objects.get(o).map(|o| o.rotation_mode),
-        ChannelId::JointRotation { object, joint } => scene
+        ChannelId::ObjectRotation(o) | ChannelId::ObjectEuler(o) => {
+            scene.objects.get(o).map(|o| o.rotation_mode)
+        }
+        ChannelId::JointRotation { object, joint } | ChannelId::JointEuler { object, joint } => scene
             .objects
             .get(object)
             .and_then(|o| o.skeleton.as_ref())
@@ -421,10 +459,14 @@ pub fn rotation_mode(scene: &Scene, id: ChannelId) -> RotationMode {
 }
 
 /// Sets the rotation mode of a rotation channel's object or joint; false when `id` is not one.
+/// This only changes how quaternion keys read: a channel with Euler keys changes order through
+/// [`crate::rotation_mode::set_rotation_keys`], which converts the keys.
 pub fn set_rotation_mode(scene: &mut Scene, id: ChannelId, mode: RotationMode) -> bool {
     let slot = match id {
-        ChannelId::ObjectRotation(o) => scene.objects.get_mut(o).map(|o| &mut o.rotation_mode),
-        ChannelId::JointRotation { object, joint } => scene
+        ChannelId::ObjectRotation(o) | ChannelId::ObjectEuler(o) => {
+            scene.objects.get_mut(o).map(|o| &mut o.rotation_mode)
+        }
+        ChannelId::JointRotation { object, joint } | ChannelId::JointEuler { object, joint } => scene
             .objects
             .get_mut(object)
             .and_then(|o| o.skeleton.as_mut())
@@ -439,4 +481,114 @@ pub fn set_rotation_mode(scene: &mut Scene, id: ChannelId, mode: RotationMode) -
         }
         None => false,
     }
+}
+
+/// The Euler-keys channel of a rotation channel's object or joint (and the other way round):
+/// `ObjectRotation(o)` ↔ `ObjectEuler(o)`, `JointRotation` ↔ `JointEuler`; `None` for other
+/// channels.
+#[must_use]
+pub fn euler_partner(id: ChannelId) -> Option<ChannelId> {
+    Some(match id {
+        ChannelId::ObjectRotation(o) => ChannelId::ObjectEuler(o),
+        ChannelId::ObjectEuler(o) => ChannelId::ObjectRotation(o),
+        ChannelId::JointRotation { object, joint } => ChannelId::JointEuler { object, joint },
+        ChannelId::JointEuler { object, joint } => ChannelId::JointRotation { object, joint },
+        _ => return None,
+    })
+}
+
+/// The channel that holds a rotation's keys: the Euler-keys channel when the object or joint
+/// has Euler keys, else `id` itself (every other channel too).
+#[must_use]
+pub fn rotation_or_euler(scene: &Scene, id: ChannelId) -> ChannelId {
+    match euler_partner(id) {
+        Some(euler @ (ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. }))
+            if channel(scene, euler).is_some() =>
+        {
+            euler
+        }
+        _ => id,
+    }
+}
+
+/// The Euler keys of a rotation or Euler-keys channel's object or joint and their order;
+/// `None` when it has none (quaternion keys) or `id` is another channel.
+#[must_use]
+pub fn euler_keys(scene: &Scene, id: ChannelId) -> Option<(&Animated<Vec3>, crate::EulerOrder)> {
+    let euler = match id {
+        ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => id,
+        _ => euler_partner(id)?,
+    };
+    let Some(ChannelRef::Vec3(keys)) = channel(scene, euler) else { return None };
+    Some((keys, rotation_mode(scene, euler).euler().unwrap_or_default()))
+}
+
+/// The rotation, Euler keys and rotation mode of a rotation (or Euler-keys) channel's object
+/// or joint.
+type RotationParts<'a> = (&'a mut Animated<Quat>, &'a mut Option<Animated<Vec3>>, &'a mut RotationMode);
+
+fn rotation_parts(scene: &mut Scene, id: ChannelId) -> Option<RotationParts<'_>> {
+    match id {
+        ChannelId::ObjectRotation(o) | ChannelId::ObjectEuler(o) => {
+            let o = scene.objects.get_mut(o)?;
+            Some((&mut o.rotation, &mut o.rotation_euler, &mut o.rotation_mode))
+        }
+        ChannelId::JointRotation { object, joint } | ChannelId::JointEuler { object, joint } => {
+            let j = scene.objects.get_mut(object)?.skeleton.as_mut()?.joints.get_mut(joint)?;
+            Some((&mut j.rotation, &mut j.rotation_euler, &mut j.rotation_mode))
+        }
+        _ => None,
+    }
+}
+
+/// Whether a rotation channel's object or joint has Euler keys.
+#[must_use]
+pub fn has_euler_keys(scene: &Scene, id: ChannelId) -> bool {
+    euler_keys(scene, id).is_some()
+}
+
+/// Sets the rotation mode of a rotation (or Euler-keys) channel's object or joint, with Euler
+/// keys when `euler` is true and `mode` is an Euler order, else with quaternion keys, and
+/// converts its keys (docs/channels.md, "Euler keys"):
+/// * quaternion → Euler keys: [`crate::rotation_mode::euler_keys_from_quaternions`];
+/// * Euler keys in another order: [`crate::rotation_mode::reorder_euler_keys`];
+/// * Euler → quaternion keys: [`crate::rotation_mode::quaternion_keys_from_euler`];
+/// * quaternion keys in another mode: only the mode changes (what the inspector shows).
+///
+/// Returns false (and changes nothing) when `id` is not a rotation of an object or joint or
+/// the rotation is locked.
+///
+/// # Errors
+/// The [`crate::TrackError`] of keys that are invalid (nothing changes).
+pub fn set_rotation_keys(
+    scene: &mut Scene,
+    id: ChannelId,
+    mode: RotationMode,
+    euler: bool,
+) -> Result<bool, crate::TrackError> {
+    use crate::rotation_mode::{euler_keys_from_quaternions, quaternion_keys_from_euler, reorder_euler_keys};
+    let Some((rotation, keys, current)) = rotation_parts(scene, id) else { return Ok(false) };
+    if rotation.locked || keys.as_ref().is_some_and(|k| k.locked) {
+        return Ok(false);
+    }
+    let from = current.euler().unwrap_or_default();
+    match (keys.as_ref(), mode.euler().filter(|_| euler)) {
+        (None, None) => {}
+        (None, Some(order)) => {
+            let new = euler_keys_from_quaternions(rotation, order)?;
+            *rotation = Animated::constant(order.to_quat(new.value));
+            *keys = Some(new);
+        }
+        (Some(old), Some(order)) => {
+            if order != from {
+                *keys = Some(reorder_euler_keys(old, from, order)?);
+            }
+        }
+        (Some(old), None) => {
+            *rotation = quaternion_keys_from_euler(old, from)?;
+            *keys = None;
+        }
+    }
+    *current = mode;
+    Ok(true)
 }

@@ -14,8 +14,11 @@
 //! Y passes 90°; at the gimbal lock (middle angle ±90°), where only the sum or difference of the
 //! other two is fixed, it keeps the first angle and solves the last.
 
-use glam::{EulerRot, Quat, Vec3};
+use glam::{DVec3, EulerRot, Quat, Vec3};
 use serde::{Deserialize, Serialize};
+
+use crate::key::{Animated, Interpolation, Key, RawTrack, Spin};
+use crate::track::{Track, TrackError};
 
 /// One of the six orders of Euler angles (module documentation).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -202,6 +205,333 @@ impl RotationMode {
             Some(order) => format!("{} Euler", order.name()),
             None => "Quaternion (WXYZ)".to_owned(),
         }
+    }
+}
+
+/// Substeps per key segment when a rotation curve is followed to convert its keys: small
+/// enough that consecutive readings of [`EulerOrder::angles_near`] stay on one branch, plus
+/// one per 5° of a spin's extra turns.
+const FOLLOW_STEPS: usize = 64;
+
+/// How far a segment of `keys` spins beyond the short way, degrees (0 without a spin).
+fn spin_extra_degrees(key: &Key<Quat>) -> f64 {
+    match key.spin {
+        Some(Spin::Turns(n)) => 360.0 * f64::from(n.unsigned_abs()),
+        Some(Spin::Angle { degrees, .. }) => degrees.abs(),
+        None => 0.0,
+    }
+}
+
+/// Euler keys (docs/channels.md, "Euler keys") in `order` at the times of `times`' keys, read
+/// from the rotation curve `curve`: each key's angles are the ones nearest the previous key's
+/// after following the curve through the segment between them ([`EulerOrder::angles_near`]
+/// at every substep), so a spin of two turns reads 0 → 720 and no angle flips by 180°. Each
+/// key keeps its time, interpolation, TCB and key type; a Hermite key becomes a TCB key (its
+/// tangents are quaternions or the other order's angles, not these angles' slopes).
+fn euler_keys_along<T>(
+    times: &[Key<T>],
+    extra_degrees: impl Fn(usize) -> f64,
+    curve: impl Fn(f64) -> Quat,
+    order: EulerOrder,
+    first: Vec3,
+) -> Vec<Key<Vec3>> {
+    let mut out: Vec<Key<Vec3>> = Vec::with_capacity(times.len());
+    let mut e = first;
+    for (i, key) in times.iter().enumerate() {
+        if i > 0 {
+            let t0 = times[i - 1].time;
+            let steps = FOLLOW_STEPS + (extra_degrees(i) / 5.0).min(1.0e5) as usize;
+            for s in 1..steps {
+                let t = t0 + (key.time - t0) * s as f64 / steps as f64;
+                e = order.angles_near(curve(t), e);
+            }
+        }
+        e = order.angles_near(curve(key.time), e);
+        let interpolation = match key.interpolation {
+            Interpolation::Hermite => Interpolation::Tcb,
+            other => other,
+        };
+        out.push(Key {
+            time: key.time,
+            value: e,
+            interpolation,
+            tcb: key.tcb,
+            in_tangent: None,
+            out_tangent: None,
+            spin: None,
+            key_type: key.key_type,
+        });
+    }
+    out
+}
+
+/// Euler keys in `order` of the quaternion keys `rotation` (switching a channel to Euler keys):
+/// a key at each of its key times, the angles continuous through spins (module docs of
+/// [`euler_keys_along`]). The curve between keys is the angles' own interpolation from then on,
+/// not Squad's, so in-between values can differ; the keys themselves are the same rotations.
+/// Cycles, mute and lock carry over.
+///
+/// # Errors
+/// The [`TrackError`] of `rotation`'s keys when they are invalid (nothing to follow).
+pub fn euler_keys_from_quaternions(rotation: &Animated<Quat>, order: EulerOrder) -> Result<Animated<Vec3>, TrackError> {
+    let keys = &rotation.track.keys;
+    let value = order.angles(rotation.value.normalize());
+    let euler = if keys.is_empty() {
+        Vec::new()
+    } else {
+        let track = Track::new(&rotation.track)?;
+        let first = order.angles(keys[0].value.normalize());
+        euler_keys_along(keys, |i| spin_extra_degrees(&keys[i]), |t| track.sample(t), order, first)
+    };
+    Ok(with_flags(value, euler, rotation))
+}
+
+/// The same Euler keys read in another order (changing the order of a channel with Euler
+/// keys): the rotation at each key is kept, the angles follow the old curve so they stay
+/// continuous.
+///
+/// # Errors
+/// The [`TrackError`] of `euler`'s keys when they are invalid.
+pub fn reorder_euler_keys(euler: &Animated<Vec3>, from: EulerOrder, to: EulerOrder) -> Result<Animated<Vec3>, TrackError> {
+    let keys = &euler.track.keys;
+    let value = to.angles_near(from.to_quat(euler.value), euler.value);
+    let out = if keys.is_empty() {
+        Vec::new()
+    } else {
+        let track = Track::new(&euler.track)?;
+        let first = to.angles_near(from.to_quat(keys[0].value), keys[0].value);
+        euler_keys_along(
+            keys,
+            |i| f64::from((keys[i].value - keys[i - 1].value).abs().max_element()),
+            |t| from.to_quat(track.sample(t)),
+            to,
+            first,
+        )
+    };
+    Ok(with_flags(value, out, euler))
+}
+
+/// Quaternion keys of Euler keys (switching a channel back): a key at each key time with the
+/// same rotation, interpolation, TCB and key type, and, where the angles turn more than half
+/// a turn between two keys, the [`Spin::Angle`] that turns as far (about the axis the angles'
+/// path turns about, in the previous key's frame), so a Y spin 0 → 720 stays two turns.
+///
+/// # Errors
+/// The [`TrackError`] of `euler`'s keys when they are invalid.
+pub fn quaternion_keys_from_euler(euler: &Animated<Vec3>, order: EulerOrder) -> Result<Animated<Quat>, TrackError> {
+    let keys = &euler.track.keys;
+    if !keys.is_empty() {
+        Track::new(&euler.track)?;
+    }
+    let mut out: Vec<Key<Quat>> = Vec::with_capacity(keys.len());
+    for (i, key) in keys.iter().enumerate() {
+        let q = order.to_quat(key.value);
+        let spin = if i == 0 { None } else { path_spin(keys[i - 1].value, key.value, order) };
+        let interpolation = match key.interpolation {
+            Interpolation::Hermite => Interpolation::Tcb,
+            other => other,
+        };
+        out.push(Key {
+            time: key.time,
+            value: q,
+            interpolation,
+            tcb: key.tcb,
+            in_tangent: None,
+            out_tangent: None,
+            spin,
+            key_type: key.key_type,
+        });
+    }
+    Ok(with_flags(order.to_quat(euler.value), out, euler))
+}
+
+/// The spin from angles `a` to `b` when the straight path between them turns more than half
+/// a turn (else `None`, the short way): [`Spin::Angle`] about the short way's axis (or the
+/// path's, when the keys are the same rotation) by the short angle plus the whole turns
+/// nearest the path's.
+fn path_spin(a: Vec3, b: Vec3, order: EulerOrder) -> Option<Spin> {
+    let q0 = order.to_quat(a).as_dquat();
+    let steps = 256;
+    // The path's turn in q0's frame: the sum of each small step's rotation vector.
+    let mut total = DVec3::ZERO;
+    let mut prev = glam::DQuat::IDENTITY;
+    for s in 1..=steps {
+        let e = a.lerp(b, s as f32 / steps as f32);
+        let r = q0.inverse() * order.to_quat(e).as_dquat();
+        let step = r * prev.inverse();
+        let step = if step.w < 0.0 { -step } else { step };
+        total += step.to_scaled_axis();
+        prev = r;
+    }
+    if total.length().to_degrees() < 180.0 {
+        return None;
+    }
+    let r = (q0.inverse() * order.to_quat(b).as_dquat()).normalize();
+    let r = if r.w < 0.0 { -r } else { r };
+    let (short_axis, short) = r.to_axis_angle();
+    let (mut axis, mut short) = if short.to_degrees() > 1.0 {
+        (short_axis, short.to_degrees())
+    } else {
+        (total.normalize(), 0.0)
+    };
+    if axis.dot(total) < 0.0 {
+        axis = -axis;
+        short = -short;
+    }
+    let along = axis.dot(total).to_degrees();
+    let degrees = short + 360.0 * ((along - short) / 360.0).round();
+    Some(Spin::Angle { axis: axis.as_vec3(), degrees })
+}
+
+/// Quaternion keys that follow Euler keys within `tolerance_deg` over `range` (seconds) and
+/// their own keys, for formats that have no Euler keys (glTF, VRML, X3D): LINEAR keys (slerp)
+/// at every Euler key time, with segments halved until the slerp between two keys is within
+/// the tolerance of the Euler curve at a quarter, half and three quarters of the way and turns
+/// less than 90°; STEP keys where the Euler keys step. Cycles are played out over `range` (the
+/// result holds outside it); a muted channel gives its static value.
+///
+/// # Errors
+/// The [`TrackError`] of `euler`'s keys when they are invalid.
+pub fn quaternion_keys_following(
+    euler: &Animated<Vec3>,
+    order: EulerOrder,
+    range: (f64, f64),
+    tolerance_deg: f64,
+) -> Result<Animated<Quat>, TrackError> {
+    let static_value = order.to_quat(euler.value);
+    if euler.track.is_empty() || euler.muted {
+        return Ok(Animated::constant(static_value));
+    }
+    let track = crate::track::AnimatedTrack::new(euler)?;
+    let keys = &euler.track.keys;
+    let (first, last) = (keys[0].time, keys[keys.len() - 1].time);
+    let cycles = euler.before != crate::key::Cycle::Hold || euler.after != crate::key::Cycle::Hold;
+    let (from, to) = if cycles { (first.min(range.0), last.max(range.1)) } else { (first, last) };
+    // Breakpoints: the key times (and their repeats under cycles) inside [from, to].
+    let mut times: Vec<(f64, bool)> = Vec::new();
+    let period = last - first;
+    let mut push_keys = |offset: f64| {
+        for k in keys.iter() {
+            let t = k.time + offset;
+            if t >= from - 1e-9 && t <= to + 1e-9 {
+                times.push((t, k.interpolation == Interpolation::Step));
+            }
+        }
+    };
+    if cycles && period > 0.0 {
+        let before = ((first - from) / period).ceil() as i64;
+        let after = ((to - last) / period).ceil() as i64;
+        for n in -before..=after.min(100_000) {
+            push_keys(n as f64 * period);
+        }
+    } else {
+        push_keys(0.0);
+    }
+    times.push((from, false));
+    times.push((to, false));
+    times.sort_by(|a, b| a.0.total_cmp(&b.0));
+    times.dedup_by(|b, a| (a.0 - b.0).abs() < 1e-9);
+    let q = |t: f64| order.to_quat(track.sample(t)).as_dquat();
+    let tolerance = tolerance_deg.to_radians();
+    let mut out: Vec<Key<Quat>> = Vec::new();
+    let push = |out: &mut Vec<Key<Quat>>, t: f64, value: glam::DQuat, step: bool| {
+        let mut value = value.normalize();
+        if let Some(prev) = out.last() {
+            if prev.value.as_dquat().dot(value) < 0.0 {
+                value = -value;
+            }
+        }
+        let interpolation = if step { Interpolation::Step } else { Interpolation::Linear };
+        out.push(Key::new(t, value.as_quat()).with_interpolation(interpolation));
+    };
+    for w in times.windows(2) {
+        let ((a, step), (b, _)) = (w[0], w[1]);
+        if out.last().is_none_or(|k| (k.time - a).abs() > 1e-12) {
+            push(&mut out, a, q(a), step);
+        }
+        if step {
+            continue;
+        }
+        // Halve [a, b] until each piece's slerp follows the curve.
+        let mut stack = vec![(a, b, 0u32)];
+        let mut pieces: Vec<f64> = Vec::new();
+        while let Some((lo, hi, depth)) = stack.pop() {
+            let (qa, qb) = (q(lo), q(hi));
+            let qb = if qa.dot(qb) < 0.0 { -qb } else { qb };
+            let fits = qa.angle_between(qb) < std::f64::consts::FRAC_PI_2
+                && [0.25, 0.5, 0.75].iter().all(|&u| {
+                    qa.slerp(qb, u).angle_between(q(lo + (hi - lo) * u)) <= tolerance
+                });
+            if fits || depth >= 20 {
+                pieces.push(hi);
+            } else {
+                let mid = 0.5 * (lo + hi);
+                // Right half first on the stack so the left half is handled first.
+                stack.push((mid, hi, depth + 1));
+                stack.push((lo, mid, depth + 1));
+            }
+        }
+        for t in pieces {
+            push(&mut out, t, q(t), false);
+        }
+    }
+    let mut animated = Animated::new(static_value, RawTrack::new(out));
+    animated.locked = euler.locked;
+    Ok(animated)
+}
+
+/// `scene` with every Euler-keyed rotation replaced by quaternion keys that follow it
+/// ([`quaternion_keys_following`] over `range`, seconds): what exporters write, since glTF,
+/// VRML and X3D rotations are quaternions or axis–angles. Borrowed as it is when nothing has
+/// Euler keys.
+///
+/// # Errors
+/// The field path of Euler keys that are invalid, with the problem.
+pub fn scene_with_quaternion_keys(
+    scene: &crate::scene::Scene,
+    range: (f64, f64),
+    tolerance_deg: f64,
+) -> Result<std::borrow::Cow<'_, crate::scene::Scene>, (String, TrackError)> {
+    let has_euler = scene.objects.iter().any(|o| {
+        o.rotation_euler.is_some()
+            || o.skeleton.as_ref().is_some_and(|s| s.joints.iter().any(|j| j.rotation_euler.is_some()))
+    });
+    if !has_euler {
+        return Ok(std::borrow::Cow::Borrowed(scene));
+    }
+    let mut out = scene.clone();
+    let convert = |path: String, rotation: &mut Animated<Quat>, euler: &mut Option<Animated<Vec3>>, mode: RotationMode| {
+        if let Some(keys) = euler.take() {
+            let order = mode.euler().unwrap_or_default();
+            *rotation = quaternion_keys_following(&keys, order, range, tolerance_deg).map_err(|e| (path, e))?;
+        }
+        Ok(())
+    };
+    for (o, object) in out.objects.iter_mut().enumerate() {
+        convert(format!("objects[{o}].rotation_euler"), &mut object.rotation, &mut object.rotation_euler, object.rotation_mode)?;
+        if let Some(skeleton) = &mut object.skeleton {
+            for (j, joint) in skeleton.joints.iter_mut().enumerate() {
+                convert(
+                    format!("objects[{o}].skeleton.joints[{j}].rotation_euler"),
+                    &mut joint.rotation,
+                    &mut joint.rotation_euler,
+                    joint.rotation_mode,
+                )?;
+            }
+        }
+    }
+    Ok(std::borrow::Cow::Owned(out))
+}
+
+/// `value` and `keys` with `from`'s cycles, mute and lock.
+fn with_flags<T, U>(value: U, keys: Vec<Key<U>>, from: &Animated<T>) -> Animated<U> {
+    Animated {
+        value,
+        track: RawTrack::new(keys),
+        before: from.before,
+        after: from.after,
+        muted: from.muted,
+        locked: from.locked,
     }
 }
 

@@ -115,10 +115,16 @@ pub struct Object {
     pub name: String,
     pub translation: Animated<Vec3>,
     pub rotation: Animated<Quat>,
-    /// How the rotation reads and is typed (Euler order or quaternion); the keys stay
-    /// quaternions. Left out of a scene file at its default, XYZ Euler.
+    /// How the rotation reads and is typed (Euler order or quaternion). Left out of a scene
+    /// file at its default, XYZ Euler.
     #[serde(default, skip_serializing_if = "RotationMode::is_default")]
     pub rotation_mode: RotationMode,
+    /// Euler keys (docs/channels.md, "Euler keys"): when set, the rotation is these three
+    /// angles (x, y, z in degrees, each interpolated on its own) turned in `rotation_mode`'s
+    /// order, and `rotation` holds no keys. `None` (left out of the file): the quaternion keys
+    /// of `rotation`, interpolated by Squad.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation_euler: Option<Animated<Vec3>>,
     pub scale: Animated<Vec3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mesh: Option<MeshSource>,
@@ -141,6 +147,7 @@ impl Object {
             translation: Animated::constant(Vec3::ZERO),
             rotation: Animated::constant(Quat::IDENTITY),
             rotation_mode: RotationMode::default(),
+            rotation_euler: None,
             scale: Animated::constant(Vec3::ONE),
             mesh: None,
             skeleton: None,
@@ -326,10 +333,14 @@ pub struct Joint {
     pub translation: Animated<Vec3>,
     /// Animated local rotation of T(j), applied after the rest transform; identity at rest.
     pub rotation: Animated<Quat>,
-    /// How the rotation reads and is typed (Euler order or quaternion); the keys stay
-    /// quaternions. Left out of a scene file at its default, XYZ Euler.
+    /// How the rotation reads and is typed (Euler order or quaternion). Left out of a scene
+    /// file at its default, XYZ Euler.
     #[serde(default, skip_serializing_if = "RotationMode::is_default")]
     pub rotation_mode: RotationMode,
+    /// Euler keys, as [`Object::rotation_euler`]: when set, the rotation of T(j) is these
+    /// angles in `rotation_mode`'s order and `rotation` holds no keys.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation_euler: Option<Animated<Vec3>>,
     /// Animated local scale of T(j) (applied first); one at rest.
     #[serde(default = "unit_scale", skip_serializing_if = "is_unit_scale")]
     pub scale: Animated<Vec3>,
@@ -352,6 +363,7 @@ impl Joint {
             translation: zero_translation(),
             rotation: Animated::constant(Quat::IDENTITY),
             rotation_mode: RotationMode::default(),
+            rotation_euler: None,
             scale: unit_scale(),
         }
     }

@@ -345,6 +345,7 @@ impl Checker {
     fn object(&mut self, path: &str, object: &Object) {
         self.animated(&join(path, "translation"), &object.translation);
         self.animated(&join(path, "rotation"), &object.rotation);
+        self.euler_keys(path, &object.rotation, object.rotation_mode, object.rotation_euler.as_ref());
         self.animated(&join(path, "scale"), &object.scale);
         if let Some(MeshSource::File { path: file, clip, fps, .. }) = &object.mesh {
             if file.is_empty() {
@@ -367,6 +368,35 @@ impl Checker {
             self.skeleton(&join(path, "skeleton"), skeleton);
         }
         self.deformer(&join(path, "deformer"), &object.deformer);
+    }
+
+    /// Euler keys (`rotation_euler`) need an Euler rotation mode (their order) and replace the
+    /// rotation's quaternion keys, which must then be absent.
+    fn euler_keys(
+        &mut self,
+        path: &str,
+        rotation: &Animated<glam::Quat>,
+        mode: crate::RotationMode,
+        euler: Option<&Animated<Vec3>>,
+    ) {
+        let Some(euler) = euler else { return };
+        let at = join(path, "rotation_euler");
+        self.animated(&at, euler);
+        if mode.euler().is_none() {
+            self.push(
+                join(path, "rotation_mode"),
+                "Euler keys (rotation_euler) need an Euler rotation mode, which gives their order;                  this one is Quaternion",
+            );
+        }
+        if rotation.is_animated() {
+            self.push(
+                join(path, "rotation.track"),
+                format!(
+                    "{} quaternion keys beside Euler keys (rotation_euler): the rotation is one or                      the other; remove the quaternion keys or rotation_euler",
+                    rotation.track.len()
+                ),
+            );
+        }
     }
 
     fn skeleton(&mut self, path: &str, skeleton: &Skeleton) {
@@ -397,6 +427,7 @@ impl Checker {
             self.rotation(&join(&jp(i), "rest_rotation"), &joint.rest_rotation);
             self.animated(&join(&jp(i), "translation"), &joint.translation);
             self.animated(&join(&jp(i), "rotation"), &joint.rotation);
+            self.euler_keys(&jp(i), &joint.rotation, joint.rotation_mode, joint.rotation_euler.as_ref());
             self.animated(&join(&jp(i), "scale"), &joint.scale);
         }
         self.unique_names(

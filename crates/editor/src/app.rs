@@ -636,6 +636,14 @@ impl EditorApp {
                         | ChannelId::LightIntensity(_)
                 )
             })
+            // Euler keys are copied as the rotation they give, so a pose pastes (and mirrors)
+            // onto quaternion and Euler keys alike.
+            .map(|id| match id {
+                ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => {
+                    keyrig_core::channel_id::euler_partner(id).unwrap_or(id)
+                }
+                _ => id,
+            })
             .filter_map(|id| self.value_now(id).map(|v| (id, v)))
             .collect()
     }
@@ -683,8 +691,15 @@ impl EditorApp {
         };
         let pose: Vec<(ChannelId, ChannelValue)> = pose
             .into_iter()
+            .filter(|(id, _)| {
+                only.is_none_or(|only| {
+                    only.contains(id)
+                        || keyrig_core::channel_id::euler_partner(*id).is_some_and(|e| only.contains(&e))
+                })
+            })
+            // A rotation of an object or joint with Euler keys goes to those keys.
+            .map(|(id, value)| self.keys_channel(id, value, None))
             .filter(|&(id, _)| channels::channel(scene, id).is_some())
-            .filter(|(id, _)| only.is_none_or(|only| only.contains(id)))
             .collect();
         let time = self.session.key_time(scene.fps);
         let frame = self.session.playback.whole_frame();

@@ -459,6 +459,9 @@ fn insert_sorted<T: Clone>(track: &mut RawTrack<T>, key: Key<T>) -> usize {
 /// Returns the key's index, or `None` when the channel does not exist or the value type does not
 /// match. Rotation keys go through [`set_rotation_key`] without a turn (spins stay valid).
 pub fn set_key(scene: &mut Scene, id: ChannelId, time: f64, value: ChannelValue) -> Option<usize> {
+    if let Some((euler, e)) = euler_target(scene, id, value, None, time, None) {
+        return set_key(scene, euler, time, ChannelValue::Vec3(e));
+    }
     match (channel_mut(scene, id)?, value) {
         (ChannelMut::Vec3(a), ChannelValue::Vec3(v)) => Some(insert_sorted(&mut a.track, Key::new(time, v))),
         (ChannelMut::Rotation(a), ChannelValue::Rotation(q)) => {
@@ -476,6 +479,40 @@ pub fn set_key(scene: &mut Scene, id: ChannelId, time: f64, value: ChannelValue)
         }
         _ => None,
     }
+}
+
+/// Where rotation `value` of channel `id` goes when its object or joint has Euler keys
+/// (docs/channels.md, "Euler keys"): the Euler-keys channel and the angles of `value` nearest
+/// `near` (by default the keys' angles at `time`, or their static value while unkeyed). With a
+/// `turn`, the angles follow the hand through the turn, so a two-turn ring drag adds 720° to
+/// one angle. `None` for every other channel and value (they are written as they are).
+#[must_use]
+pub fn euler_target(
+    scene: &Scene,
+    id: ChannelId,
+    value: ChannelValue,
+    near: Option<Vec3>,
+    time: f64,
+    turn: Option<Turn>,
+) -> Option<(ChannelId, Vec3)> {
+    let ChannelValue::Rotation(q) = value else { return None };
+    if id.kind() != ChannelKind::Rotation {
+        return None;
+    }
+    let (keys, order) = keyrig_core::channel_id::euler_keys(scene, id)?;
+    let euler = keyrig_core::channel_id::euler_partner(id)?;
+    let mut e = near.unwrap_or_else(|| {
+        keyrig_core::AnimatedTrack::new(keys).map_or(keys.value, |track| track.sample(time))
+    });
+    if let Some(turn) = turn {
+        e = order.angles_near(turn.from, e);
+        let steps = (turn.degrees.abs() / 10.0).ceil().clamp(1.0, 1.0e5) as usize;
+        for step in 1..=steps {
+            let part = Turn { degrees: turn.degrees * step as f64 / steps as f64, ..turn };
+            e = order.angles_near(part.value(), e);
+        }
+    }
+    Some((euler, order.angles_near(q.normalize(), e)))
 }
 
 /// How a rotation was reached when it was turned with a gizmo ring or the twist field: from
@@ -510,6 +547,9 @@ pub fn set_rotation_key(
     value: Quat,
     turn: Option<Turn>,
 ) -> Option<usize> {
+    if let Some((euler, e)) = euler_target(scene, id, ChannelValue::Rotation(value), None, time, turn) {
+        return set_key(scene, euler, time, ChannelValue::Vec3(e));
+    }
     match channel_mut(scene, id)? {
         ChannelMut::Rotation(a) => Some(set_rotation_key_in(&mut a.track, time, value.normalize(), turn)),
         _ => None,
@@ -639,6 +679,9 @@ fn set_rotation_key_in(track: &mut RawTrack<Quat>, time: f64, value: Quat, turn:
 
 /// Sets the static value (the pose used while the channel has no keys).
 pub fn set_static_value(scene: &mut Scene, id: ChannelId, value: ChannelValue) -> bool {
+    if let Some((euler, e)) = euler_target(scene, id, value, None, 0.0, None) {
+        return set_static_value(scene, euler, ChannelValue::Vec3(e));
+    }
     match (channel_mut(scene, id), value) {
         (Some(ChannelMut::Vec3(a)), ChannelValue::Vec3(v)) => a.value = v,
         (Some(ChannelMut::Rotation(a)), ChannelValue::Rotation(q)) => a.value = q.normalize(),

@@ -40,6 +40,7 @@ impl EditorApp {
     /// at the current frame; otherwise an animated channel gets a transient override (key it
     /// with I) and a static one changes its value. `group` merges a drag into one undo step.
     pub fn apply_pose(&mut self, id: ChannelId, value: ChannelValue, group: &str) {
+        let (id, value) = self.keys_channel(id, value, None);
         let animated = channels::key_count(self.doc.scene(), id) > 0;
         if self.session.record {
             let time = self.session.key_time(self.doc.scene().fps);
@@ -71,8 +72,10 @@ impl EditorApp {
     /// pose overrides and unkeyed ones change their value. Every call of one drag joins one undo
     /// step ([`IK_DRAG_GROUP`], closed when the pointer is released), labelled `label`.
     pub fn apply_ik_pose(&mut self, rotations: &[(ChannelId, Quat)], label: &str) {
-        let values: Vec<(ChannelId, ChannelValue)> =
-            rotations.iter().map(|&(id, q)| (id, ChannelValue::Rotation(q.normalize()))).collect();
+        let values: Vec<(ChannelId, ChannelValue)> = rotations
+            .iter()
+            .map(|&(id, q)| self.keys_channel(id, ChannelValue::Rotation(q.normalize()), None))
+            .collect();
         if self.session.record {
             let time = self.session.key_time(self.doc.scene().fps);
             let ids: Vec<ChannelId> = values.iter().map(|&(id, _)| id).collect();
@@ -107,6 +110,11 @@ impl EditorApp {
     /// included ([`channels::set_rotation_key`]).
     pub fn apply_turn(&mut self, id: ChannelId, turn: channels::Turn, group: &str) {
         let value = turn.value();
+        // Euler keys: the angles follow the hand through the turn (no spin to write).
+        if let (euler, e @ ChannelValue::Vec3(_)) = self.keys_channel(id, ChannelValue::Rotation(value), Some(turn)) {
+            self.apply_pose(euler, e, group);
+            return;
+        }
         if !self.session.record {
             self.apply_pose(id, ChannelValue::Rotation(value), group);
             return;
@@ -123,6 +131,30 @@ impl EditorApp {
         self.session.overrides.remove(&id);
         for (c, _) in &with {
             self.session.overrides.remove(c);
+        }
+    }
+
+    /// The channel that holds `id`'s keys and `value` as it takes it: a rotation of an object or
+    /// joint with Euler keys goes to its Euler-keys channel as the angles nearest the ones shown
+    /// now (through `turn` when given; [`channels::euler_target`]); anything else as it is.
+    pub(crate) fn keys_channel(
+        &self,
+        id: ChannelId,
+        value: ChannelValue,
+        turn: Option<channels::Turn>,
+    ) -> (ChannelId, ChannelValue) {
+        let scene = self.doc.scene();
+        let Some(euler) = keyrig_core::channel_id::euler_partner(id).filter(|_| id.kind() == channels::ChannelKind::Rotation)
+        else {
+            return (id, value);
+        };
+        let near = match self.value_now(euler) {
+            Some(ChannelValue::Vec3(e)) => Some(e),
+            _ => None,
+        };
+        match channels::euler_target(scene, id, value, near, self.time(), turn) {
+            Some((euler, e)) => (euler, ChannelValue::Vec3(e)),
+            None => (id, value),
         }
     }
 

@@ -46,7 +46,9 @@ fn part(id: ChannelId) -> Option<Part> {
         | ChannelId::LightPosition(_)
         | ChannelId::CameraTranslation(_) => Some(Part::Location),
         ChannelId::ObjectRotation(_)
+        | ChannelId::ObjectEuler(_)
         | ChannelId::JointRotation { .. }
+        | ChannelId::JointEuler { .. }
         | ChannelId::LightDirection(_)
         | ChannelId::CameraRotation(_) => Some(Part::Rotation),
         ChannelId::ObjectScale(_) | ChannelId::JointScale { .. } => Some(Part::Scale),
@@ -66,10 +68,12 @@ pub fn owner_of(channel: ChannelId) -> Selected {
     match channel {
         ChannelId::ObjectTranslation(o)
         | ChannelId::ObjectRotation(o)
+        | ChannelId::ObjectEuler(o)
         | ChannelId::ObjectScale(o)
         | ChannelId::RootTranslation(o) => Selected::Object(o),
         ChannelId::JointTranslation { object, joint }
         | ChannelId::JointRotation { object, joint }
+        | ChannelId::JointEuler { object, joint }
         | ChannelId::JointScale { object, joint } => Selected::Joint { object, joint },
         ChannelId::LightPosition(l)
         | ChannelId::LightDirection(l)

@@ -11,7 +11,7 @@ use std::collections::HashMap;
 
 use glam::Quat;
 use keyrig_core::ik_constraint::{ConstraintChain, ConstraintError};
-use keyrig_core::{Animated, Key, RawTrack, Scene};
+use keyrig_core::{Animated, AnimatedTrack, Key, RawTrack, Scene};
 
 use crate::evaluator::{Overrides, SceneEvaluator};
 
@@ -88,15 +88,32 @@ pub fn bake_ik_constraint(
     let slack = 0.5 / fps;
     let skeleton = scene.objects[object].skeleton.as_mut().expect("checked above");
     for (new_keys, &j) in solved.into_iter().zip(&joints) {
-        let rotation = &mut skeleton.joints[j].rotation;
-        let old = rotation.track.keys.iter();
-        let before = old.clone().filter(|k| k.time < t0 - slack).cloned();
-        let after = old.filter(|k| k.time > t1 + slack).cloned();
-        let keys: Vec<Key<Quat>> = before.chain(new_keys).chain(after).collect();
-        *rotation = Animated { track: RawTrack::new(keys), ..rotation.clone() };
+        let joint = &mut skeleton.joints[j];
+        match (&mut joint.rotation_euler, joint.rotation_mode.euler()) {
+            // Euler keys: each solved rotation as the angles nearest the previous frame's,
+            // starting from the curve's angles at the first frame (docs/channels.md).
+            (Some(euler), Some(order)) => {
+                let mut e = AnimatedTrack::new(euler).map_or(euler.value, |track| track.sample(t0));
+                let angles = new_keys.into_iter().map(|k| {
+                    e = order.angles_near(k.value, e);
+                    Key::new(k.time, e)
+                });
+                splice_keys(euler, angles.collect(), t0 - slack, t1 + slack);
+            }
+            _ => splice_keys(&mut joint.rotation, new_keys, t0 - slack, t1 + slack),
+        }
     }
     skeleton.ik_constraints[constraint].blend = Animated::constant(0.0);
     Ok(Baked { joints, frames: (end - start) as usize + 1 })
+}
+
+/// Replaces the keys of `animated` between `from` and `to` with `new_keys`.
+fn splice_keys<T: Clone>(animated: &mut Animated<T>, new_keys: Vec<Key<T>>, from: f64, to: f64) {
+    let old = animated.track.keys.iter();
+    let before = old.clone().filter(|k| k.time < from).cloned();
+    let after = old.filter(|k| k.time > to).cloned();
+    let keys: Vec<Key<T>> = before.chain(new_keys).chain(after).collect();
+    animated.track = RawTrack::new(keys);
 }
 
 /// Bakes every IK constraint of the scene whose blend is not constantly 0, in order, over

@@ -19,7 +19,7 @@ pub use attributes::ObjectLook;
 use attributes::{LightAttributeRig, ObjectAttributeRig};
 
 pub use crate::slot::{EvalProblem, Overrides};
-use crate::slot::{Slot, SlotEval};
+use crate::slot::{RotationSlot, Slot, SlotEval};
 
 /// What a model file gave for an object whose mesh is `MeshSource::File` (keyrig-io loads it;
 /// the evaluator reads no files).
@@ -51,7 +51,7 @@ pub struct MorphRig {
 #[derive(Clone, Debug)]
 struct JointSlots {
     translation: Slot<Vec3>,
-    rotation: Slot<Quat>,
+    rotation: RotationSlot,
     scale: Slot<Vec3>,
 }
 
@@ -122,7 +122,7 @@ struct SkeletonRig {
 #[derive(Clone, Debug)]
 struct ObjectRig {
     translation: Slot<Vec3>,
-    rotation: Slot<Quat>,
+    rotation: RotationSlot,
     scale: Slot<Vec3>,
     skeleton: Option<SkeletonRig>,
     skin: Option<SkinRig>,
@@ -439,14 +439,21 @@ impl SceneEvaluator {
             |object: usize, joint: usize| self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint);
         match id {
             ChannelId::ObjectTranslation(o) => vec3(&self.objects.get(o)?.translation),
-            ChannelId::ObjectRotation(o) => {
-                Some(ChannelValue::Rotation(self.objects.get(o)?.rotation.sample(time)))
-            }
+            ChannelId::ObjectRotation(o) => Some(ChannelValue::Rotation(rotation_value(
+                &self.objects.get(o)?.rotation,
+                id,
+                time,
+                overrides,
+            ))),
+            ChannelId::ObjectEuler(o) => euler_value(&self.objects.get(o)?.rotation, id, time, overrides),
             ChannelId::ObjectScale(o) => vec3(&self.objects.get(o)?.scale),
             ChannelId::RootTranslation(o) => vec3(&self.objects.get(o)?.skeleton.as_ref()?.root_translation),
             ChannelId::JointTranslation { object, joint: j } => vec3(&joint(object, j)?.translation),
             ChannelId::JointRotation { object, joint: j } => {
-                Some(ChannelValue::Rotation(joint(object, j)?.rotation.sample(time)))
+                Some(ChannelValue::Rotation(rotation_value(&joint(object, j)?.rotation, id, time, overrides)))
+            }
+            ChannelId::JointEuler { object, joint: j } => {
+                euler_value(&joint(object, j)?.rotation, id, time, overrides)
             }
             ChannelId::JointScale { object, joint: j } => vec3(&joint(object, j)?.scale),
             ChannelId::LightPosition(l) => vec3(&self.lights.get(l)?.position),
@@ -485,9 +492,9 @@ impl SceneEvaluator {
     #[must_use]
     pub fn spin_degrees(&self, id: ChannelId, time: f64) -> Option<f64> {
         let slot = match id {
-            ChannelId::ObjectRotation(o) => &self.objects.get(o)?.rotation,
+            ChannelId::ObjectRotation(o) => self.objects.get(o)?.rotation.quat()?,
             ChannelId::JointRotation { object, joint } => {
-                &self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation
+                self.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation.quat()?
             }
             ChannelId::CameraRotation(c) => &self.cameras.get(c)?.rotation,
             _ => return None,
@@ -609,11 +616,8 @@ impl SceneEvaluator {
             Some(ChannelValue::Vec3(v)) => *v,
             _ => slot.sample(time),
         };
-        let quat = |id: ChannelId, slot: &Slot<Quat>| {
-            let q = match overrides.get(&id) {
-                Some(ChannelValue::Rotation(q)) => *q,
-                _ => slot.sample(time),
-            };
+        let quat = |id: ChannelId, slot: &RotationSlot| {
+            let q = rotation_value(slot, id, time, overrides);
             if q.is_finite() && q.length_squared() > 1e-12 {
                 q.normalize()
             } else {
@@ -761,7 +765,12 @@ impl ObjectRig {
         let mut problems = Vec::new();
         let mut problem = |path: String, message: String| problems.push(EvalProblem { path, message });
         let translation = Slot::new(&object.translation, ChannelId::ObjectTranslation(o));
-        let rotation = Slot::new(&object.rotation, ChannelId::ObjectRotation(o));
+        let rotation = RotationSlot::new(
+            &object.rotation,
+            object.rotation_euler.as_ref(),
+            object.rotation_mode,
+            ChannelId::ObjectRotation(o),
+        );
         let scale = Slot::new(&object.scale, ChannelId::ObjectScale(o));
         let scene_rest = object.skeleton.as_ref().and_then(|s| match RestSkeleton::from_scene(s) {
             Ok(rest) => Some(rest),
@@ -779,7 +788,12 @@ impl ObjectRig {
                 .enumerate()
                 .map(|(joint, j)| JointSlots {
                     translation: Slot::new(&j.translation, ChannelId::JointTranslation { object: o, joint }),
-                    rotation: Slot::new(&j.rotation, ChannelId::JointRotation { object: o, joint }),
+                    rotation: RotationSlot::new(
+                        &j.rotation,
+                        j.rotation_euler.as_ref(),
+                        j.rotation_mode,
+                        ChannelId::JointRotation { object: o, joint },
+                    ),
                     scale: Slot::new(&j.scale, ChannelId::JointScale { object: o, joint }),
                 })
                 .collect(),
@@ -870,7 +884,12 @@ impl ObjectRig {
         let object = &scene.objects[o];
         let mut n =
             usize::from(self.translation.refresh(&object.translation, ChannelId::ObjectTranslation(o)))
-                + usize::from(self.rotation.refresh(&object.rotation, ChannelId::ObjectRotation(o)))
+                + usize::from(self.rotation.refresh(
+                    &object.rotation,
+                    object.rotation_euler.as_ref(),
+                    object.rotation_mode,
+                    ChannelId::ObjectRotation(o),
+                ))
                 + usize::from(self.scale.refresh(&object.scale, ChannelId::ObjectScale(o)))
                 + ObjectAttributeRig::refresh(&mut self.attributes, &object.attributes, o);
         if let (Some(rig), Some(skeleton)) = (&mut self.skeleton, &object.skeleton) {
@@ -882,9 +901,12 @@ impl ObjectRig {
                     slots
                         .translation
                         .refresh(&j.translation, ChannelId::JointTranslation { object: o, joint }),
-                ) + usize::from(
-                    slots.rotation.refresh(&j.rotation, ChannelId::JointRotation { object: o, joint }),
-                ) + usize::from(
+                ) + usize::from(slots.rotation.refresh(
+                    &j.rotation,
+                    j.rotation_euler.as_ref(),
+                    j.rotation_mode,
+                    ChannelId::JointRotation { object: o, joint },
+                )) + usize::from(
                     slots.scale.refresh(&j.scale, ChannelId::JointScale { object: o, joint }),
                 );
             }
@@ -914,13 +936,13 @@ impl ObjectRig {
             }
         };
         visit(&self.translation.problem);
-        visit(&self.rotation.problem);
+        visit(self.rotation.problem());
         visit(&self.scale.problem);
         if let Some(s) = &self.skeleton {
             visit(&s.root_translation.problem);
             for j in &s.joints {
                 visit(&j.translation.problem);
-                visit(&j.rotation.problem);
+                visit(j.rotation.problem());
                 visit(&j.scale.problem);
             }
             for c in &s.constraints {
@@ -933,4 +955,33 @@ impl ObjectRig {
             a.for_each_problem(f);
         }
     }
+}
+
+/// The rotation of rotation channel `id` (slot `slot`) at `time`: an override of the channel
+/// wins, then one of its Euler-keys channel (angles typed in the inspector), then the keys.
+fn rotation_value(slot: &RotationSlot, id: ChannelId, time: f64, overrides: &Overrides) -> Quat {
+    if let Some(ChannelValue::Rotation(q)) = overrides.get(&id) {
+        return *q;
+    }
+    if let (RotationSlot::Euler(_, order), Some(euler)) = (slot, keyrig_core::channel_id::euler_partner(id)) {
+        if let Some(ChannelValue::Vec3(e)) = overrides.get(&euler) {
+            return order.to_quat(*e);
+        }
+    }
+    slot.sample(time)
+}
+
+/// The angles of Euler-keys channel `id` at `time` (`None` when its rotation has quaternion
+/// keys): an override wins; a posed rotation (a gizmo drag overrides the rotation channel)
+/// reads as the angles nearest the keyed ones.
+fn euler_value(slot: &RotationSlot, id: ChannelId, time: f64, overrides: &Overrides) -> Option<ChannelValue> {
+    let (keyed, order) = slot.angles(time)?;
+    if let Some(v @ ChannelValue::Vec3(_)) = overrides.get(&id) {
+        return Some(*v);
+    }
+    let posed = keyrig_core::channel_id::euler_partner(id).and_then(|r| overrides.get(&r));
+    Some(ChannelValue::Vec3(match posed {
+        Some(ChannelValue::Rotation(q)) => order.angles_near(*q, keyed),
+        _ => keyed,
+    }))
 }

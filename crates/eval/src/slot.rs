@@ -92,3 +92,83 @@ impl<T: TrackValue> Slot<T> {
         }
     }
 }
+
+/// A rotation channel: its quaternion keys, or its Euler keys (x, y, z degrees, each
+/// interpolated on its own) turned in their order (docs/channels.md, "Euler keys").
+#[derive(Clone, Debug)]
+pub(crate) enum RotationSlot {
+    Quat(Slot<glam::Quat>),
+    Euler(Slot<glam::Vec3>, keyrig_core::EulerOrder),
+}
+
+impl RotationSlot {
+    /// The slot of rotation channel `id` (`ObjectRotation` or `JointRotation`) whose keys are
+    /// `rotation`, or `euler` in `mode`'s order when it has Euler keys.
+    pub(crate) fn new(
+        rotation: &Animated<glam::Quat>,
+        euler: Option<&Animated<glam::Vec3>>,
+        mode: keyrig_core::RotationMode,
+        id: ChannelId,
+    ) -> Self {
+        match (euler, keyrig_core::channel_id::euler_partner(id)) {
+            (Some(euler), Some(euler_id)) => {
+                RotationSlot::Euler(Slot::new(euler, euler_id), mode.euler().unwrap_or_default())
+            }
+            _ => RotationSlot::Quat(Slot::new(rotation, id)),
+        }
+    }
+
+    /// Rebuilds the slot when its channel changed (as [`Slot::refresh`], or it switched between
+    /// quaternion and Euler keys or changed order); true when it did.
+    pub(crate) fn refresh(
+        &mut self,
+        rotation: &Animated<glam::Quat>,
+        euler: Option<&Animated<glam::Vec3>>,
+        mode: keyrig_core::RotationMode,
+        id: ChannelId,
+    ) -> bool {
+        match (&mut *self, euler, keyrig_core::channel_id::euler_partner(id)) {
+            (RotationSlot::Quat(slot), None, _) => slot.refresh(rotation, id),
+            (RotationSlot::Euler(slot, order), Some(euler), Some(euler_id))
+                if Some(*order) == mode.euler() =>
+            {
+                slot.refresh(euler, euler_id)
+            }
+            _ => {
+                *self = RotationSlot::new(rotation, euler, mode, id);
+                true
+            }
+        }
+    }
+
+    #[inline]
+    pub(crate) fn sample(&self, t: f64) -> glam::Quat {
+        match self {
+            RotationSlot::Quat(slot) => slot.sample(t),
+            RotationSlot::Euler(slot, order) => order.to_quat(slot.sample(t)),
+        }
+    }
+
+    /// The Euler angles at `t` and their order; `None` for quaternion keys.
+    pub(crate) fn angles(&self, t: f64) -> Option<(glam::Vec3, keyrig_core::EulerOrder)> {
+        match self {
+            RotationSlot::Quat(_) => None,
+            RotationSlot::Euler(slot, order) => Some((slot.sample(t), *order)),
+        }
+    }
+
+    /// The quaternion slot (spin keys live there); `None` for Euler keys.
+    pub(crate) fn quat(&self) -> Option<&Slot<glam::Quat>> {
+        match self {
+            RotationSlot::Quat(slot) => Some(slot),
+            RotationSlot::Euler(..) => None,
+        }
+    }
+
+    pub(crate) fn problem(&self) -> &Option<EvalProblem> {
+        match self {
+            RotationSlot::Quat(slot) => &slot.problem,
+            RotationSlot::Euler(slot, _) => &slot.problem,
+        }
+    }
+}

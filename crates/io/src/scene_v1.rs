@@ -75,6 +75,7 @@ impl ObjectV1 {
             translation: self.translation,
             rotation: self.rotation,
             rotation_mode: keyrig_core::RotationMode::default(),
+            rotation_euler: None,
             scale: self.scale,
             mesh: self.mesh,
             skeleton: self.skeleton.map(|s| keyrig_core::Skeleton {

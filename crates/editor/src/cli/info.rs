@@ -497,7 +497,11 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
             let Some((_, o)) = object(name) else { return (0, None) };
             match property {
                 O::Translation => span(&o.translation.track.keys),
-                O::Rotation => span(&o.rotation.track.keys),
+                // A rotation with Euler keys has its keys there.
+                O::Rotation | O::RotationEuler => match &o.rotation_euler {
+                    Some(euler) => span(&euler.track.keys),
+                    None => span(&o.rotation.track.keys),
+                },
                 O::Scale => span(&o.scale.track.keys),
                 O::RootTranslation => {
                     o.skeleton.as_ref().map_or((0, None), |s| span(&s.root_translation.track.keys))
@@ -508,7 +512,11 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
             .map(|(s, j)| &s.joints[j])
             .map_or((0, None), |j| match property {
                 keyrig_core::channel::JointProperty::Translation => span(&j.translation.track.keys),
-                keyrig_core::channel::JointProperty::Rotation => span(&j.rotation.track.keys),
+                keyrig_core::channel::JointProperty::Rotation
+                | keyrig_core::channel::JointProperty::RotationEuler => match &j.rotation_euler {
+                    Some(euler) => span(&euler.track.keys),
+                    None => span(&j.rotation.track.keys),
+                },
                 keyrig_core::channel::JointProperty::Scale => span(&j.scale.track.keys),
             }),
         ChannelPath::Ik { object, constraint, property } => skeleton_part(object, constraint, true)

@@ -18,7 +18,7 @@ use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::measure::measure_ui;
 use crate::widgets::tcb_slider::tcb_slider_ui;
-use keyrig_core::channel_id::{rotation_mode, set_rotation_mode};
+use keyrig_core::channel_id::{rotation_mode, set_rotation_keys, set_rotation_mode};
 use keyrig_core::RotationMode;
 
 /// Starts applying a field's change: a committed (typed) value is its own undo step, so any
@@ -110,8 +110,10 @@ fn quat_editor(ui: &mut Ui, label: &str, marker: &str, v: &mut glam::Vec4) -> Fi
 }
 
 /// The rotation mode of a rotation channel (its object's or joint's): quaternion, or Euler
-/// angles in one of the six orders. Changing it changes what is shown and typed, not the keys;
-/// one undo step.
+/// angles in one of the six orders, and whether its keys are Euler keys (docs/channels.md,
+/// "Euler keys"). With quaternion keys the mode changes what is shown and typed, not the keys;
+/// the *Euler keys* box converts the keys to three angle curves and back, and with Euler keys a
+/// new order converts them to it. Each change is one undo step.
 fn rotation_mode_ui(
     ui: &mut Ui,
     ctx: &FrameCtx<'_>,
@@ -119,6 +121,7 @@ fn rotation_mode_ui(
     id: ChannelId,
     mode: RotationMode,
 ) {
+    let euler_keys = keyrig_core::channel_id::has_euler_keys(ctx.scene(), id);
     let help = match mode.euler() {
         Some(order) => order.formula(),
         None => "The unit quaternion w, x, y, z; typed values are normalised".to_owned(),
@@ -136,15 +139,42 @@ fn rotation_mode_ui(
             }
         })
         .response;
-    response.on_hover_text(format!(
-        "{help}. The keys stay quaternions, interpolated as before; the mode changes what the \
-         inspector and the curves show and type."
-    ));
-    if chosen != mode {
+    response.on_hover_text(if euler_keys {
+        format!(
+            "{help}. The keys are Euler keys: another order converts them (the rotation at each \
+             key is kept); Quaternion converts them back to quaternion keys."
+        )
+    } else {
+        format!(
+            "{help}. The keys stay quaternions, interpolated as before; the mode changes what the \
+             inspector and the curves show and type."
+        )
+    });
+    let mut wants_euler = euler_keys;
+    if mode.euler().is_some() {
+        ui.checkbox(&mut wants_euler, "Euler keys").on_hover_text(
+            "Key the rotation as three angle curves in this order, each interpolated on its own \
+             (as Blender's and Maya's Euler rotations), instead of quaternion keys with Squad. \
+             Switching converts the keys; the rotation at each key stays.",
+        );
+    }
+    if chosen != mode || wants_euler != euler_keys {
         let name = id.label(ctx.scene());
+        let euler = wants_euler && chosen.euler().is_some();
+        let label = match (euler_keys, euler) {
+            (false, true) => format!("Euler keys ({}) for {name}", chosen.label()),
+            (true, false) => format!("quaternion keys for {name}"),
+            (true, true) => format!("Euler keys of {name} to {}", chosen.label()),
+            (false, false) => format!("rotation mode {} of {name}", chosen.label()),
+        };
         actions.push(Action::CloseGroup);
-        actions.edit(Edit::scene(format!("rotation mode {} of {name}", chosen.label()), move |scene| {
-            set_rotation_mode(scene, id, chosen);
+        actions.edit(Edit::scene(label, move |scene| {
+            // Invalid keys cannot be converted; the scene then stays as it is.
+            if euler_keys || euler {
+                let _ = set_rotation_keys(scene, id, chosen, euler);
+            } else {
+                set_rotation_mode(scene, id, chosen);
+            }
         }));
     }
 }
@@ -193,6 +223,15 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
             if colour_editor(ui, label, marker, &mut v) && v.is_finite() {
                 actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(v), group });
             }
+        }
+        ChannelValue::Vec3(mut e) if matches!(id, ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. }) => {
+            // Euler keys: the angles themselves, typed as they are keyed (720 stays two turns).
+            let change = vec3_editor(ui, label, marker, &mut e, 0.5);
+            if change.any() && e.is_finite() {
+                begin(actions, change);
+                actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(e), group });
+            }
+            rotation_mode_ui(ui, ctx, actions, id, rotation_mode(ctx.scene(), id));
         }
         ChannelValue::Vec3(mut v) => {
             let change = vec3_editor(ui, label, marker, &mut v, 0.01);
@@ -359,7 +398,8 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             let name = scene.objects.get(o).map(|x| x.name.clone()).unwrap_or_default();
             ui.strong(format!("Object: {name}"));
             channel_editor(ui, ctx, actions, ChannelId::ObjectTranslation(o), "Translation");
-            channel_editor(ui, ctx, actions, ChannelId::ObjectRotation(o), "Rotation (°)");
+            let rotation = keyrig_core::channel_id::rotation_or_euler(scene, ChannelId::ObjectRotation(o));
+            channel_editor(ui, ctx, actions, rotation, "Rotation (°)");
             channel_editor(ui, ctx, actions, ChannelId::ObjectScale(o), "Scale");
             md2_ui(ui, ctx, actions, o);
         }
@@ -392,7 +432,9 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     "Translation",
                 );
             }
-            channel_editor(ui, ctx, actions, ChannelId::JointRotation { object, joint }, "Rotation (°)");
+            let rotation =
+                keyrig_core::channel_id::rotation_or_euler(scene, ChannelId::JointRotation { object, joint });
+            channel_editor(ui, ctx, actions, rotation, "Rotation (°)");
             if scales {
                 channel_editor(ui, ctx, actions, ChannelId::JointScale { object, joint }, "Scale");
             }

@@ -384,6 +384,15 @@ pub fn export_scene(
     format: ExportFormat,
     options: &VrmlExportOptions,
 ) -> Result<String, VrmlExportError> {
+    // The metadata keeps the scene as it is; the nodes and interpolators are written from
+    // quaternion keys that follow Euler keys within a tenth of the tolerance (VRML rotations
+    // are axis–angles; docs/channels.md, "Euler keys").
+    let original = scene;
+    let range = (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
+    let following =
+        keyrig_core::rotation_mode::scene_with_quaternion_keys(scene, range, options.rotation_tolerance_deg / 10.0)
+            .map_err(|(path, e)| VrmlExportError::Metadata(format!("{path}: {e}")))?;
+    let scene = following.as_ref();
     let meshes = load_meshes(scene, options)?;
     let loaded: HashMap<usize, LoadedMesh> = meshes
         .iter()
@@ -430,7 +439,7 @@ pub fn export_scene(
         exported_names(scene);
     let clock = def_name("KeyrigClock", &mut used);
     let mut roots: Vec<WNode> = Vec::new();
-    let ron = crate::scene_file::to_string(scene).map_err(|e| VrmlExportError::Metadata(e.to_string()))?;
+    let ron = crate::scene_file::to_string(original).map_err(|e| VrmlExportError::Metadata(e.to_string()))?;
     roots.push(WNode {
         kind: "WorldInfo",
         def: None,
