@@ -502,12 +502,14 @@ impl ChannelPath {
         };
         let no_skeleton =
             |object: &Object| ChannelError::NoSkeleton { path: path.clone(), object: object.name.clone() };
-        let no_euler = |owner: String| ChannelError::NotSet {
+        let no_euler = |owner: String| {
+            ChannelError::NotSet {
             path: path.clone(),
             owner,
             what: "rotation_euler".to_owned(),
             hint: " (its rotation has quaternion keys: sample rotation, or switch it to Euler keys in the editor)"
                 .to_owned(),
+        }
         };
         Ok(match self {
             ChannelPath::Object { object, property } => {
@@ -684,7 +686,10 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
         for property in [ObjectProperty::Translation, ObjectProperty::Rotation, ObjectProperty::Scale] {
             out.push(ChannelPath::Object { object: o.name.clone(), property });
             if property == ObjectProperty::Rotation && o.rotation_euler.is_some() {
-                out.push(ChannelPath::Object { object: o.name.clone(), property: ObjectProperty::RotationEuler });
+                out.push(ChannelPath::Object {
+                    object: o.name.clone(),
+                    property: ObjectProperty::RotationEuler,
+                });
             }
         }
         if let Some(skeleton) = &o.skeleton {

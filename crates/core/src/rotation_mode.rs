@@ -273,7 +273,10 @@ fn euler_keys_along<T>(
 ///
 /// # Errors
 /// The [`TrackError`] of `rotation`'s keys when they are invalid (nothing to follow).
-pub fn euler_keys_from_quaternions(rotation: &Animated<Quat>, order: EulerOrder) -> Result<Animated<Vec3>, TrackError> {
+pub fn euler_keys_from_quaternions(
+    rotation: &Animated<Quat>,
+    order: EulerOrder,
+) -> Result<Animated<Vec3>, TrackError> {
     let keys = &rotation.track.keys;
     let value = order.angles(rotation.value.normalize());
     let euler = if keys.is_empty() {
@@ -292,7 +295,11 @@ pub fn euler_keys_from_quaternions(rotation: &Animated<Quat>, order: EulerOrder)
 ///
 /// # Errors
 /// The [`TrackError`] of `euler`'s keys when they are invalid.
-pub fn reorder_euler_keys(euler: &Animated<Vec3>, from: EulerOrder, to: EulerOrder) -> Result<Animated<Vec3>, TrackError> {
+pub fn reorder_euler_keys(
+    euler: &Animated<Vec3>,
+    from: EulerOrder,
+    to: EulerOrder,
+) -> Result<Animated<Vec3>, TrackError> {
     let keys = &euler.track.keys;
     let value = to.angles_near(from.to_quat(euler.value), euler.value);
     let out = if keys.is_empty() {
@@ -318,7 +325,10 @@ pub fn reorder_euler_keys(euler: &Animated<Vec3>, from: EulerOrder, to: EulerOrd
 ///
 /// # Errors
 /// The [`TrackError`] of `euler`'s keys when they are invalid.
-pub fn quaternion_keys_from_euler(euler: &Animated<Vec3>, order: EulerOrder) -> Result<Animated<Quat>, TrackError> {
+pub fn quaternion_keys_from_euler(
+    euler: &Animated<Vec3>,
+    order: EulerOrder,
+) -> Result<Animated<Quat>, TrackError> {
     let keys = &euler.track.keys;
     if !keys.is_empty() {
         Track::new(&euler.track)?;
@@ -369,11 +379,8 @@ fn path_spin(a: Vec3, b: Vec3, order: EulerOrder) -> Option<Spin> {
     let r = (q0.inverse() * order.to_quat(b).as_dquat()).normalize();
     let r = if r.w < 0.0 { -r } else { r };
     let (short_axis, short) = r.to_axis_angle();
-    let (mut axis, mut short) = if short.to_degrees() > 1.0 {
-        (short_axis, short.to_degrees())
-    } else {
-        (total.normalize(), 0.0)
-    };
+    let (mut axis, mut short) =
+        if short.to_degrees() > 1.0 { (short_axis, short.to_degrees()) } else { (total.normalize(), 0.0) };
     if axis.dot(total) < 0.0 {
         axis = -axis;
         short = -short;
@@ -446,8 +453,14 @@ pub fn quaternion_keys_following(
     };
     for w in times.windows(2) {
         let ((a, step), (b, _)) = (w[0], w[1]);
-        if out.last().is_none_or(|k| (k.time - a).abs() > 1e-12) {
-            push(&mut out, a, q(a), step);
+        match out.last_mut() {
+            // The previous piece ended here: this key starts the next segment.
+            Some(k) if (k.time - a).abs() <= 1e-12 => {
+                if step {
+                    k.interpolation = Interpolation::Step;
+                }
+            }
+            _ => push(&mut out, a, q(a), step),
         }
         if step {
             continue;
@@ -458,10 +471,10 @@ pub fn quaternion_keys_following(
         while let Some((lo, hi, depth)) = stack.pop() {
             let (qa, qb) = (q(lo), q(hi));
             let qb = if qa.dot(qb) < 0.0 { -qb } else { qb };
-            let fits = qa.angle_between(qb) < std::f64::consts::FRAC_PI_2
-                && [0.25, 0.5, 0.75].iter().all(|&u| {
-                    qa.slerp(qb, u).angle_between(q(lo + (hi - lo) * u)) <= tolerance
-                });
+            let fits = angle(qa, qb) < std::f64::consts::FRAC_PI_2
+                && [0.25, 0.5, 0.75]
+                    .iter()
+                    .all(|&u| angle(qa.slerp(qb, u), q(lo + (hi - lo) * u)) <= tolerance);
             if fits || depth >= 20 {
                 pieces.push(hi);
             } else {
@@ -500,15 +513,24 @@ pub fn scene_with_quaternion_keys(
         return Ok(std::borrow::Cow::Borrowed(scene));
     }
     let mut out = scene.clone();
-    let convert = |path: String, rotation: &mut Animated<Quat>, euler: &mut Option<Animated<Vec3>>, mode: RotationMode| {
+    let convert = |path: String,
+                   rotation: &mut Animated<Quat>,
+                   euler: &mut Option<Animated<Vec3>>,
+                   mode: RotationMode| {
         if let Some(keys) = euler.take() {
             let order = mode.euler().unwrap_or_default();
-            *rotation = quaternion_keys_following(&keys, order, range, tolerance_deg).map_err(|e| (path, e))?;
+            *rotation =
+                quaternion_keys_following(&keys, order, range, tolerance_deg).map_err(|e| (path, e))?;
         }
         Ok(())
     };
     for (o, object) in out.objects.iter_mut().enumerate() {
-        convert(format!("objects[{o}].rotation_euler"), &mut object.rotation, &mut object.rotation_euler, object.rotation_mode)?;
+        convert(
+            format!("objects[{o}].rotation_euler"),
+            &mut object.rotation,
+            &mut object.rotation_euler,
+            object.rotation_mode,
+        )?;
         if let Some(skeleton) = &mut object.skeleton {
             for (j, joint) in skeleton.joints.iter_mut().enumerate() {
                 convert(
@@ -521,6 +543,14 @@ pub fn scene_with_quaternion_keys(
         }
     }
     Ok(std::borrow::Cow::Owned(out))
+}
+
+/// The angle between two rotations (radians), `2·atan2(|v|, |w|)` of `a⁻¹·b`: accurate for
+/// tiny angles, unlike glam's `angle_between` (an approximate `acos` of the dot product, good
+/// to about 0.02°).
+fn angle(a: glam::DQuat, b: glam::DQuat) -> f64 {
+    let d = a.conjugate() * b;
+    2.0 * d.xyz().length().atan2(d.w.abs())
 }
 
 /// `value` and `keys` with `from`'s cycles, mute and lock.
@@ -662,5 +692,130 @@ mod tests {
                 e = next;
             }
         }
+    }
+
+    fn deg(axis: Vec3, degrees: f32) -> Quat {
+        Quat::from_axis_angle(axis, degrees.to_radians())
+    }
+
+    /// Quaternion keys 0° → 460° about Y (a spin of one turn past the short way) → 460° again
+    /// with X turned 30° first.
+    fn spinning() -> Animated<Quat> {
+        let keys = vec![
+            Key::new(0.0, Quat::IDENTITY).with_interpolation(Interpolation::Linear),
+            Key::new(1.0, deg(Vec3::Y, 100.0))
+                .with_interpolation(Interpolation::Linear)
+                .with_spin(Spin::Angle { axis: Vec3::Y, degrees: 460.0 }),
+            Key::new(2.0, deg(Vec3::Y, 100.0) * deg(Vec3::X, 30.0))
+                .with_tcb(crate::key::Tcb::new(0.5, 0.0, 0.0)),
+        ];
+        Animated::new(Quat::IDENTITY, RawTrack::new(keys))
+    }
+
+    #[test]
+    fn quaternion_keys_become_euler_keys_that_follow_their_spins() {
+        let euler = euler_keys_from_quaternions(&spinning(), EulerOrder::XYZ).expect("valid keys");
+        let keys = &euler.track.keys;
+        assert_eq!(keys.len(), 3);
+        assert!((keys[0].value - Vec3::ZERO).abs().max_element() < 1e-3, "{}", keys[0].value);
+        // The spin turned 460° about Y: Y reads 460, not 100.
+        assert!((keys[1].value - Vec3::new(0.0, 460.0, 0.0)).abs().max_element() < 1e-2, "{}", keys[1].value);
+        // Each key is the same rotation as before, with its time, interpolation and TCB.
+        for (e, q) in keys.iter().zip(spinning().track.keys.iter()) {
+            assert!(same_rotation(EulerOrder::XYZ.to_quat(e.value), q.value), "{} vs {}", e.value, q.value);
+            assert_eq!((e.time, e.interpolation, e.tcb), (q.time, q.interpolation, q.tcb));
+            assert!(e.spin.is_none());
+        }
+        // The third key's angles are the ones nearest (0, 460, 0): X 30 (X turns first in XYZ).
+        let third = keys[2].value;
+        assert!(
+            (third.y - 460.0).abs() < 1e-2 && (third.x - 30.0).abs() < 1e-2 && third.z.abs() < 1e-2,
+            "{third}"
+        );
+    }
+
+    #[test]
+    fn euler_keys_go_back_to_quaternion_keys_with_the_turns_they_make() {
+        let euler = euler_keys_from_quaternions(&spinning(), EulerOrder::XYZ).expect("valid keys");
+        let back = quaternion_keys_from_euler(&euler, EulerOrder::XYZ).expect("valid keys");
+        let track = Track::new(&back.track).expect("the spins agree with the keys");
+        let keys = &back.track.keys;
+        assert!(keys[0].spin.is_none());
+        // 0 → 460 about Y: a spin of 460° about +Y (one turn past the short 100°).
+        match keys[1].spin {
+            Some(Spin::Angle { axis, degrees }) => {
+                assert!(
+                    axis.normalize().dot(Vec3::Y) > 0.9999 && (degrees - 460.0).abs() < 0.05,
+                    "{axis} {degrees}"
+                );
+            }
+            other => panic!("expected a 460° spin, got {other:?}"),
+        }
+        // 460 → 460 with X 0 → 30: the short way, no spin.
+        assert!(keys[2].spin.is_none(), "{:?}", keys[2].spin);
+        // Halfway through the spin segment the quaternion track has turned 230° about Y.
+        assert!(same_rotation(track.sample(0.5), deg(Vec3::Y, 230.0)), "{}", track.sample(0.5));
+    }
+
+    #[test]
+    fn a_new_order_keeps_each_key_rotation_and_stays_continuous() {
+        let euler = euler_keys_from_quaternions(&spinning(), EulerOrder::XYZ).expect("valid keys");
+        let zyx = reorder_euler_keys(&euler, EulerOrder::XYZ, EulerOrder::ZYX).expect("valid keys");
+        for (a, b) in euler.track.keys.iter().zip(zyx.track.keys.iter()) {
+            assert!(same_rotation(EulerOrder::XYZ.to_quat(a.value), EulerOrder::ZYX.to_quat(b.value)));
+        }
+        // The spin about Y reads 460 in ZYX too.
+        assert!((zyx.track.keys[1].value.y - 460.0).abs() < 1e-2, "{}", zyx.track.keys[1].value);
+    }
+
+    /// Linear Euler keys (0, 0, 0) → (40, 270, 0) in XYZ: halfway the rotation is the hand-written
+    /// Ry(135)·Rx(20), which slerp between the keys would not give (the short way is −90° about Y).
+    #[test]
+    fn quaternion_keys_for_exporters_follow_the_euler_curve_within_the_tolerance() {
+        let euler = Animated::new(
+            Vec3::ZERO,
+            RawTrack::new(vec![
+                Key::new(0.0, Vec3::ZERO).with_interpolation(Interpolation::Linear),
+                Key::new(1.0, Vec3::new(40.0, 270.0, 0.0)).with_interpolation(Interpolation::Step),
+                Key::new(1.5, Vec3::new(0.0, 0.0, 90.0)),
+                Key::new(2.5, Vec3::new(10.0, -20.0, 400.0)),
+            ]),
+        );
+        let order = EulerOrder::XYZ;
+        let tolerance = 0.01;
+        let quats = quaternion_keys_following(&euler, order, (0.0, 2.5), tolerance).expect("valid keys");
+        let track = Track::new(&quats.track).expect("valid quaternion keys");
+        let curve = crate::track::AnimatedTrack::new(&euler).expect("valid keys");
+        for t in [0.0, 0.01, 0.025, 0.03, 0.5, 0.99] {
+            let linear = Vec3::new(40.0, 270.0, 0.0) * t as f32;
+            assert!(
+                (curve.sample(t) - linear).abs().max_element() < 1e-3,
+                "t {t}: {} vs {linear}",
+                curve.sample(t)
+            );
+        }
+        for i in 0..=500 {
+            let t = 2.5 * f64::from(i) / 500.0;
+            let want = order.to_quat(curve.sample(t));
+            let got = track.sample(t);
+            // In f64: an f32 angle between nearly equal rotations is only good to about 0.04°.
+            let angle = angle(want.as_dquat(), got.as_dquat()).to_degrees();
+            if angle > tolerance * 1.01 + 1e-3 {
+                let near: Vec<_> = quats
+                    .track
+                    .keys
+                    .iter()
+                    .filter(|k| (k.time - t).abs() < 0.1)
+                    .map(|k| (k.time, k.interpolation))
+                    .collect();
+                panic!("t {t}: {angle}° off; keys near: {near:?}");
+            }
+        }
+        let half = hand_matrix(1, 135.0) * hand_matrix(0, 20.0);
+        let got = Mat3::from_quat(track.sample(0.5));
+        let diff = (half - got).to_cols_array().iter().fold(0.0f32, |m, d| m.max(d.abs()));
+        assert!(diff < 1e-3, "{half:?} vs {got:?}");
+        // The step holds its key's rotation until the next key.
+        assert!(same_rotation(track.sample(1.4), order.to_quat(Vec3::new(40.0, 270.0, 0.0))));
     }
 }

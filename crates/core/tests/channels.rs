@@ -134,3 +134,55 @@ fn joint_translations_and_scales_are_listed_where_keyed_or_not_identity() {
     assert!(!ids.contains(&ChannelId::JointScale { object, joint: 2 }), "{ids:?}");
     assert!(ids.contains(&ChannelId::JointRotation { object, joint: 2 }), "{ids:?}");
 }
+
+/// Euler keys (issue 30) through their paths: `rotation_euler` samples the angles in degrees,
+/// `rotation` the rotation they make in the channel's order; a joint without Euler keys says
+/// so; the scene's checks name a quaternion-mode channel with Euler keys and quaternion keys
+/// left beside them.
+#[test]
+fn euler_keys_sample_as_angles_and_as_the_rotation_they_make() {
+    let mut scene = twist();
+    {
+        let joint = &mut scene.objects[0].skeleton.as_mut().unwrap().joints[0];
+        joint.rotation = Animated::constant(Quat::IDENTITY);
+        joint.rotation_mode = keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::ZYX);
+        joint.rotation_euler = Some(Animated::new(
+            Vec3::ZERO,
+            RawTrack::new(vec![
+                Key::new(0.0, Vec3::ZERO).with_interpolation(keyrig_core::Interpolation::Linear),
+                Key::new(2.0, Vec3::new(60.0, 0.0, 720.0)),
+            ]),
+        ));
+    }
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    let angles =
+        ChannelPath::parse("object/Arm/joint/forearm/rotation_euler").unwrap().resolve(&scene).unwrap();
+    assert_eq!(angles.column_names(keyrig_core::channel::RotationFormat::Quat), ["x_deg", "y_deg", "z_deg"]);
+    assert_eq!(angles.sample(1.0), keyrig_core::channel::ChannelValue::Vec3(Vec3::new(30.0, 0.0, 360.0)));
+    let rotation = ChannelPath::parse("object/Arm/joint/forearm/rotation").unwrap().resolve(&scene).unwrap();
+    assert_eq!(rotation.domain(), Some((0.0, 2.0)));
+    // ZYX: Z turns first, X last: R = Rx(15)·Rz(180) at 0.5 s.
+    let keyrig_core::channel::ChannelValue::Rotation(q) = rotation.sample(0.5) else { panic!("a rotation") };
+    let want = Quat::from_rotation_x(15f32.to_radians()) * Quat::from_rotation_z(180f32.to_radians());
+    assert!(q.dot(want).abs() > 1.0 - 1e-6, "{q} vs {want}");
+    assert!(keyrig_core::channel::list_channels(&scene)
+        .iter()
+        .any(|p| p.to_string() == "object/Arm/joint/forearm/rotation_euler"));
+    // An object without Euler keys.
+    let err = ChannelPath::parse("object/Arm/rotation_euler").unwrap().resolve(&scene).unwrap_err();
+    assert!(err.to_string().contains("quaternion keys"), "{err}");
+    // Checks: Euler keys need an Euler order, and leave no quaternion keys beside them.
+    let joint = &mut scene.objects[0].skeleton.as_mut().unwrap().joints[0];
+    joint.rotation_mode = keyrig_core::RotationMode::Quaternion;
+    joint.rotation.track = RawTrack::new(vec![Key::new(0.0, Quat::IDENTITY)]);
+    let problems: Vec<String> = scene.problems().iter().map(ToString::to_string).collect();
+    assert!(
+        problems.iter().any(|p| p.starts_with("objects[0].skeleton.joints[0].rotation_mode") && p.contains("Quaternion")),
+        "{problems:?}"
+    );
+    assert!(
+        problems.iter().any(|p| p.starts_with("objects[0].skeleton.joints[0].rotation.track")
+            && p.contains("beside Euler keys")),
+        "{problems:?}"
+    );
+}

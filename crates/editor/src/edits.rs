@@ -111,7 +111,9 @@ impl EditorApp {
     pub fn apply_turn(&mut self, id: ChannelId, turn: channels::Turn, group: &str) {
         let value = turn.value();
         // Euler keys: the angles follow the hand through the turn (no spin to write).
-        if let (euler, e @ ChannelValue::Vec3(_)) = self.keys_channel(id, ChannelValue::Rotation(value), Some(turn)) {
+        if let (euler, e @ ChannelValue::Vec3(_)) =
+            self.keys_channel(id, ChannelValue::Rotation(value), Some(turn))
+        {
             self.apply_pose(euler, e, group);
             return;
         }
@@ -144,7 +146,8 @@ impl EditorApp {
         turn: Option<channels::Turn>,
     ) -> (ChannelId, ChannelValue) {
         let scene = self.doc.scene();
-        let Some(euler) = keyrig_core::channel_id::euler_partner(id).filter(|_| id.kind() == channels::ChannelKind::Rotation)
+        let Some(euler) = keyrig_core::channel_id::euler_partner(id)
+            .filter(|_| id.kind() == channels::ChannelKind::Rotation)
         else {
             return (id, value);
         };

@@ -234,13 +234,18 @@ pub(crate) fn item_channels(item: Selected, scene: &Scene) -> Vec<ChannelId> {
     }
     match item {
         Selected::Object(o) => {
-            vec![ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)]
+            vec![
+                ChannelId::ObjectTranslation(o),
+                keyrig_core::channel_id::rotation_or_euler(scene, ChannelId::ObjectRotation(o)),
+                ChannelId::ObjectScale(o),
+            ]
         }
         Selected::Joint { object, joint } => ChannelId::of_object(scene, object)
             .into_iter()
             .filter(|id| {
                 matches!(id, ChannelId::JointTranslation { joint: j, .. }
                     | ChannelId::JointRotation { joint: j, .. }
+                    | ChannelId::JointEuler { joint: j, .. }
                     | ChannelId::JointScale { joint: j, .. } if *j == joint)
             })
             .collect(),

@@ -283,6 +283,7 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
     Some(match (id, removed) {
         (C::ObjectTranslation(o), Selected::Object(r)) => C::ObjectTranslation(shift(o, r)?),
         (C::ObjectRotation(o), Selected::Object(r)) => C::ObjectRotation(shift(o, r)?),
+        (C::ObjectEuler(o), Selected::Object(r)) => C::ObjectEuler(shift(o, r)?),
         (C::ObjectScale(o), Selected::Object(r)) => C::ObjectScale(shift(o, r)?),
         (C::RootTranslation(o), Selected::Object(r)) => C::RootTranslation(shift(o, r)?),
         (C::JointTranslation { object, joint }, Selected::Object(r)) => {
@@ -290,6 +291,9 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         }
         (C::JointRotation { object, joint }, Selected::Object(r)) => {
             C::JointRotation { object: shift(object, r)?, joint }
+        }
+        (C::JointEuler { object, joint }, Selected::Object(r)) => {
+            C::JointEuler { object: shift(object, r)?, joint }
         }
         (C::JointScale { object, joint }, Selected::Object(r)) => {
             C::JointScale { object: shift(object, r)?, joint }

@@ -827,6 +827,7 @@ impl SceneRig {
             None => [
                 times(&scene_object.translation.track.keys),
                 scene_object.rotation.track.keys.iter().map(|k| k.time).collect(),
+                scene_object.rotation_euler.as_ref().map_or_else(Vec::new, |e| times(&e.track.keys)),
             ]
             .concat(),
             Some(j) => scene_object
@@ -837,6 +838,7 @@ impl SceneRig {
                     [
                         times(&joint.translation.track.keys),
                         joint.rotation.track.keys.iter().map(|k| k.time).collect(),
+                        joint.rotation_euler.as_ref().map_or_else(Vec::new, |e| times(&e.track.keys)),
                         times(&joint.scale.track.keys),
                     ]
                     .concat()

@@ -514,6 +514,8 @@ impl LaneKind {
             | ChannelId::CameraTranslation(_)
             | ChannelId::IkTarget { .. } => LaneKind::Translation,
             ChannelId::ObjectScale(_) | ChannelId::JointScale { .. } => LaneKind::Scale,
+            // Euler keys are angles in degrees.
+            ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => LaneKind::Rotation,
             _ if id.kind() == channels::ChannelKind::Rotation => {
                 if !twist && rotation_mode(scene, id).euler().is_none() {
                     LaneKind::Quaternion

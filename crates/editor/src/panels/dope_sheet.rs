@@ -143,7 +143,8 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
             continue;
         }
         let selected = selection.contains(item);
-        for id in [ChannelId::ObjectTranslation(o), ChannelId::ObjectRotation(o), ChannelId::ObjectScale(o)] {
+        let rotation = keyrig_core::channel_id::rotation_or_euler(scene, ChannelId::ObjectRotation(o));
+        for id in [ChannelId::ObjectTranslation(o), rotation, ChannelId::ObjectScale(o)] {
             if keyed(id) || selected {
                 out.push(channel_row(id, id.channel_name().to_owned(), 1, item));
             }
@@ -177,7 +178,11 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
             if joint.translation.is_animated() {
                 ids.push(ChannelId::JointTranslation { object: o, joint: j });
             }
-            ids.push(ChannelId::JointRotation { object: o, joint: j });
+            ids.push(if joint.rotation_euler.is_some() {
+                ChannelId::JointEuler { object: o, joint: j }
+            } else {
+                ChannelId::JointRotation { object: o, joint: j }
+            });
             if joint.scale.is_animated() {
                 ids.push(ChannelId::JointScale { object: o, joint: j });
             }

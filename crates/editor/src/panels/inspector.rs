@@ -224,7 +224,9 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
                 actions.edit(Edit::Pose { id, value: ChannelValue::Vec3(v), group });
             }
         }
-        ChannelValue::Vec3(mut e) if matches!(id, ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. }) => {
+        ChannelValue::Vec3(mut e)
+            if matches!(id, ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. }) =>
+        {
             // Euler keys: the angles themselves, typed as they are keyed (720 stays two turns).
             let change = vec3_editor(ui, label, marker, &mut e, 0.5);
             if change.any() && e.is_finite() {

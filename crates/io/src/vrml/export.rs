@@ -388,10 +388,14 @@ pub fn export_scene(
     // quaternion keys that follow Euler keys within a tenth of the tolerance (VRML rotations
     // are axis–angles; docs/channels.md, "Euler keys").
     let original = scene;
-    let range = (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
-    let following =
-        keyrig_core::rotation_mode::scene_with_quaternion_keys(scene, range, options.rotation_tolerance_deg / 10.0)
-            .map_err(|(path, e)| VrmlExportError::Metadata(format!("{path}: {e}")))?;
+    let range =
+        (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
+    let following = keyrig_core::rotation_mode::scene_with_quaternion_keys(
+        scene,
+        range,
+        options.rotation_tolerance_deg / 10.0,
+    )
+    .map_err(|(path, e)| VrmlExportError::Metadata(format!("{path}: {e}")))?;
     let scene = following.as_ref();
     let meshes = load_meshes(scene, options)?;
     let loaded: HashMap<usize, LoadedMesh> = meshes
