@@ -593,3 +593,125 @@ fn the_stacked_view_gives_each_kind_its_lane_and_a_drag_moves_a_key_by_its_lanes
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert_eq!(h.state().doc.scene(), &original, "the drag is one undo step");
 }
+
+/// Euler keys (issue 30): the Cube's quaternion spin switched to Euler keys in the inspector is
+/// one undo step; its keys become Y 0, 120, 240, 360 (X and Z 0) at the same frames and the
+/// same rotations; the curve editor draws the three angles; typing Y = 600 in record mode keys
+/// 600 (no flip back to 240); a new order converts the keys; the file keeps them; undo goes
+/// back to the quaternion keys as they were.
+#[test]
+fn a_rotation_switched_to_euler_keys_keys_and_draws_its_angles() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    common::go_to_frame(&mut h, 60);
+    let quaternion_keys = h.state().doc.scene().objects[1].rotation.clone();
+    let before: Vec<ChannelValue> = [0.0, 0.25, 0.5, 0.8, 1.0]
+        .iter()
+        .filter_map(|&t| h.state().evaluator().value(ChannelId::ObjectRotation(1), t, &Default::default()))
+        .collect();
+    let undo = h.state().doc.undo_len();
+    h.get_by_label("Euler keys").click();
+    h.run();
+    assert_eq!(h.state().doc.undo_len(), undo + 1, "one undo step");
+    let scene = h.state().doc.scene();
+    let euler = scene.objects[1].rotation_euler.as_ref().expect("Euler keys");
+    assert!(!scene.objects[1].rotation.is_animated(), "no quaternion keys left beside them");
+    let values: Vec<glam::Vec3> = euler.track.keys.iter().map(|k| k.value).collect();
+    for (v, y) in values.iter().zip([0.0, 120.0, 240.0, 360.0]) {
+        assert!((*v - glam::Vec3::new(0.0, y, 0.0)).abs().max_element() < 1e-3, "{values:?}");
+    }
+    // Linear keys about one axis: the same rotation at every time as the slerped quaternions.
+    for (t, b) in [0.0, 0.25, 0.5, 0.8, 1.0].iter().zip(&before) {
+        let (Some(ChannelValue::Rotation(a)), ChannelValue::Rotation(b)) =
+            (h.state().evaluator().value(ChannelId::ObjectRotation(1), *t, &Default::default()), b)
+        else {
+            panic!("rotations")
+        };
+        assert!(a.dot(*b).abs() > 1.0 - 1e-6, "t {t}: {a} vs {b}");
+    }
+    // The inspector types the angles; the curves draw X, Y, Z with Y climbing to 360.
+    assert!((field(&h, "Rotation (°) Y") - 240.0).abs() < 1e-3);
+    let curves = h.state().sample_curves(ChannelId::ObjectEuler(1), 0.0, 90.0, 91);
+    assert_eq!(curves.len(), 3, "X, Y, Z");
+    assert!((curves[1][90].1 - 360.0).abs() < 1e-3, "{:?}", curves[1][90]);
+    h.get_by_label("curve key Cube rotation (Euler °) Y frame 90");
+    // Record mode: 600 is keyed as 600.
+    press(&mut h, Modifiers::NONE, Key::R);
+    common::set_value(&mut h, egui::accesskit::Role::SpinButton, "Rotation (°) Y", 600.0);
+    let euler = h.state().doc.scene().objects[1].rotation_euler.clone().expect("Euler keys");
+    let at_60 = euler.track.keys.iter().find(|k| (k.time * 30.0 - 60.0).abs() < 1e-6).expect("a key at 60");
+    assert!((at_60.value.y - 600.0).abs() < 1e-3, "{}", at_60.value);
+    press(&mut h, Modifiers::NONE, Key::R);
+    // ZYX: the keys are converted (the same rotations), Y still climbs.
+    h.get_by_label("Rotation mode").click();
+    h.run();
+    h.get_by_label("ZYX Euler").click();
+    h.run();
+    let scene = h.state().doc.scene();
+    assert_eq!(
+        scene.objects[1].rotation_mode,
+        keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::ZYX)
+    );
+    let zyx = scene.objects[1].rotation_euler.as_ref().expect("still Euler keys");
+    for (a, b) in euler.track.keys.iter().zip(zyx.track.keys.iter()) {
+        let (qa, qb) =
+            (keyrig_core::EulerOrder::XYZ.to_quat(a.value), keyrig_core::EulerOrder::ZYX.to_quat(b.value));
+        assert!(
+            qa.dot(qb).abs() > 1.0 - 1e-6 && (a.value.y - b.value.y).abs() < 1e-2,
+            "{} vs {}",
+            a.value,
+            b.value
+        );
+    }
+    // The scene file keeps the Euler keys and their order.
+    let text = keyrig_io::scene_file::to_string(scene).expect("saves");
+    assert!(text.contains("rotation_euler"), "{text}");
+    let back = keyrig_io::scene_file::from_str(&text, dir.path()).expect("reads back");
+    assert_eq!(&back.objects[1], &scene.objects[1]);
+    // Undo three times (order, the key, the switch): the quaternion keys as they were.
+    for _ in 0..3 {
+        press(&mut h, Modifiers::COMMAND, Key::Z);
+    }
+    let scene = h.state().doc.scene();
+    assert!(scene.objects[1].rotation_euler.is_none());
+    assert_eq!(scene.objects[1].rotation, quaternion_keys);
+    assert_eq!(h.state().doc.undo_len(), undo);
+}
+
+/// With Euler keys, what turns a rotation keys angles: a two-turn ring turn in record mode adds
+/// 720° to Y (the angles follow the hand), a pasted pose keys the Euler channel as the angles
+/// nearest the curve's, and no quaternion key appears beside them.
+#[test]
+fn turns_and_pasted_poses_key_the_euler_angles() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    h.get_by_label("Euler keys").click();
+    h.run();
+    common::go_to_frame(&mut h, 60);
+    press(&mut h, Modifiers::NONE, Key::R);
+    let Some(ChannelValue::Rotation(from)) = h.state().value_now(ChannelId::ObjectRotation(1)) else {
+        panic!()
+    };
+    let turn = channels::Turn { from, axis: glam::Vec3::Y, degrees: 720.0 };
+    h.state_mut().apply_turn(ChannelId::ObjectRotation(1), turn, "ring");
+    let y_at = |h: &Harness<'_, EditorApp>, frame: f64| {
+        let euler = h.state().doc.scene().objects[1].rotation_euler.clone().expect("Euler keys");
+        euler.track.keys.iter().find(|k| (k.time * 30.0 - frame).abs() < 1e-6).map(|k| k.value)
+    };
+    let v = y_at(&h, 60.0).expect("a key at 60");
+    assert!((v.y - 960.0).abs() < 1e-2 && v.x.abs() < 1e-2 && v.z.abs() < 1e-2, "{v}");
+    // Copy the pose at 30 (Y 120) and paste it at 45, where the curve reads Y 540: the same
+    // rotation is keyed as the angles nearest the curve's there, Y 480 (not a turn back to 120).
+    common::go_to_frame(&mut h, 30);
+    h.state_mut().copy_pose();
+    common::go_to_frame(&mut h, 45);
+    h.state_mut().paste_pose(false);
+    let v = y_at(&h, 45.0).expect("the pasted pose keyed at 45");
+    assert!((v.y - 480.0).abs() < 1e-2 && v.x.abs() < 1e-2 && v.z.abs() < 1e-2, "{v}");
+    assert!(!h.state().doc.scene().objects[1].rotation.is_animated());
+    assert!(h.state().doc.scene().problems().is_empty());
+}
