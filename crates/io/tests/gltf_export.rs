@@ -1140,3 +1140,64 @@ fn a_repeat_just_before_the_range_end_keeps_the_end() {
     let want = AnimatedTrack::new(&scene.objects[0].translation).expect("track").sample(1.5);
     assert!((v - want).length() < 1e-4, "{v} against {want}");
 }
+
+/// Euler keys (issue 30) export as quaternion keys that follow them: the demo's Cube keyed on
+/// all three angles (Y past a turn) and the arm's elbow switched to Euler keys in ZXY order;
+/// the re-imported file turns like keyrig's channels (`object/Cube/rotation`, sampled through
+/// the Euler keys) within 1.1 × the tolerance (the quaternion keys follow within a tenth, the
+/// exporter's resampling within the tolerance), and it passes the validator.
+#[test]
+fn euler_keys_export_as_rotations_that_follow_them() {
+    use keyrig_core::channel::ChannelPath;
+    use keyrig_core::channel_id::{set_rotation_keys, ChannelId};
+    let mut scene = keyrig_io::demo::demo_scene();
+    let cube = scene.objects.iter().position(|o| o.name == "Cube").expect("the demo's cube");
+    assert!(set_rotation_keys(
+        &mut scene,
+        ChannelId::ObjectRotation(cube),
+        keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::XYZ),
+        true
+    )
+    .unwrap());
+    let euler = scene.objects[cube].rotation_euler.as_mut().expect("Euler keys");
+    euler.track.keys[1].value.x = 60.0;
+    euler.track.keys[2].value.z = -45.0;
+    euler.track.keys[3].value.y = 500.0;
+    assert!(set_rotation_keys(
+        &mut scene,
+        ChannelId::JointRotation { object: 0, joint: 1 },
+        keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::ZXY),
+        true
+    )
+    .unwrap());
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    let options = ExportOptions::default();
+    let exported = export_scene(&scene, &options).expect("export");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("euler.glb");
+    exported.write(&path).expect("write");
+    let (errors, warnings, report) = validate(&path);
+    assert_eq!((errors, warnings), (0, 0), "{report}");
+    let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
+    let tol = 1.1 * options.rotation_tolerance_deg.to_radians() + 1e-5;
+    let cube_rotation = ChannelPath::parse("object/Cube/rotation").unwrap().resolve(&scene).unwrap();
+    let elbow_name = scene.objects[0].skeleton.as_ref().unwrap().joints[1].name.clone();
+    let elbow_rest = scene.objects[0].skeleton.as_ref().unwrap().joints[1].rest_rotation;
+    let elbow = ChannelPath::parse(&format!("object/{}/joint/{elbow_name}/rotation", scene.objects[0].name))
+        .unwrap()
+        .resolve(&scene)
+        .unwrap();
+    let (cube_node, elbow_node) = (node_named(&model, "Cube"), node_named(&model, &elbow_name));
+    for t in sample_times(&scene) {
+        let pose = model.pose_at(Some(0), t);
+        let keyrig_core::channel::ChannelValue::Rotation(want) = cube_rotation.sample(t) else { panic!() };
+        let angle = rotation_angle(pose.rotation[cube_node], want);
+        assert!(angle <= tol, "Cube t {t}: {} deg", angle.to_degrees());
+        let keyrig_core::channel::ChannelValue::Rotation(want) = elbow.sample(t) else { panic!() };
+        let angle = rotation_angle(pose.rotation[elbow_node], elbow_rest * want);
+        assert!(angle <= tol, "elbow t {t}: {} deg", angle.to_degrees());
+    }
+    // The Cube really turns past a turn about Y between frames 60 and 90 (260° more).
+    let euler = scene.objects[cube].rotation_euler.as_ref().unwrap();
+    assert!((euler.track.keys[3].value.y - euler.track.keys[2].value.y - 260.0).abs() < 1e-3);
+}

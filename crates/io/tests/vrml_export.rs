@@ -75,7 +75,29 @@ fn scenes() -> Vec<(String, keyrig_core::Scene)> {
             .map(|a| ((*a).to_owned(), keyrig_io::project::load_scene(&assets().join(a)).unwrap()))
             .collect();
     out.push(("attributes.ron".to_owned(), attributes_scene()));
+    out.push(("euler.ron".to_owned(), euler_scene()));
     out
+}
+
+/// The demo with Euler keys (issue 30): the Cube keyed on all three angles, Y past a turn, and
+/// the elbow's keys in ZXY order. VRML has only axis–angle rotations: the export writes
+/// quaternion keys that follow the angles, and its metadata keeps the Euler keys.
+fn euler_scene() -> keyrig_core::Scene {
+    use keyrig_core::channel_id::{set_rotation_keys, ChannelId};
+    let mut scene = keyrig_io::project::load_scene(&assets().join("demo.ron")).unwrap();
+    let cube = scene.objects.iter().position(|o| o.name == "Cube").expect("the demo's cube");
+    let xyz = keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::XYZ);
+    assert!(set_rotation_keys(&mut scene, ChannelId::ObjectRotation(cube), xyz, true).unwrap());
+    let euler = scene.objects[cube].rotation_euler.as_mut().expect("Euler keys");
+    euler.track.keys[1].value.x = 60.0;
+    euler.track.keys[2].value.z = -45.0;
+    euler.track.keys[3].value.y = 500.0;
+    let zxy = keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::ZXY);
+    assert!(
+        set_rotation_keys(&mut scene, ChannelId::JointRotation { object: 0, joint: 1 }, zxy, true).unwrap()
+    );
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    scene
 }
 
 #[test]
