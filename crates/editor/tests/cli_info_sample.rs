@@ -625,3 +625,46 @@ fn info_lists_skipped_camera_pointers_and_sample_reads_camera_channels() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(stdout(&o), "frame,time,value\n0,0,1\n15,0.5,0\n30,1,0\n");
 }
+
+/// `keyrig sample` of Euler keys (issue 30): `rotation_euler` prints the angles in degrees
+/// (Y climbing 0 → 360 on the demo's Cube switched to Euler keys), `rotation` the rotation they
+/// make, and a channel without Euler keys says what to sample instead.
+#[test]
+fn sample_euler_keys_as_angles_and_as_rotations() {
+    use keyrig_core::channel_id::{set_rotation_keys, ChannelId};
+    let mut scene = keyrig_io::demo::demo_scene();
+    let cube = scene.objects.iter().position(|o| o.name == "Cube").expect("the demo's cube");
+    let xyz = keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::XYZ);
+    assert!(set_rotation_keys(&mut scene, ChannelId::ObjectRotation(cube), xyz, true).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_temp(&dir, "euler.ron", &keyrig_io::scene_file::to_string(&scene).unwrap());
+    let file = file.to_str().unwrap();
+    let o = keyrig(&[
+        "sample",
+        file,
+        "--channel",
+        "object/Cube/rotation_euler",
+        "--frames",
+        "0..90",
+        "--step",
+        "15",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "frame,time,x_deg,y_deg,z_deg");
+    let y: Vec<f64> = lines[1..].iter().map(|l| l.split(',').nth(3).unwrap().parse().unwrap()).collect();
+    for (got, want) in y.iter().zip([0.0, 60.0, 120.0, 180.0, 240.0, 300.0, 360.0]) {
+        assert!((got - want).abs() < 1e-3, "{out}");
+    }
+    let o = keyrig(&["sample", file, "--channel", "object/Cube/rotation", "--frames", "45..45"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let row: Vec<f64> = out.lines().nth(1).unwrap().split(',').map(|c| c.parse().unwrap()).collect();
+    // Y 180°: q = (0, ±1, 0, 0).
+    assert!((row[3].abs() - 1.0).abs() < 1e-5 && row[5].abs() < 1e-5, "{out}");
+    assert_fails_with(
+        &keyrig(&["sample", file, "--channel", "object/Arm/rotation_euler", "--frames", "0..1"]),
+        &["rotation_euler", "quaternion keys"],
+    );
+}
