@@ -404,6 +404,12 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
             let animated: Animated<glam::Quat> = ron.from_str(value).map_err(|e| e.to_string())?;
             AnimatedTrack::new(&animated).map(drop).map_err(|e| e.to_string())
         }
+        // Euler keys: the angles as an animated Vec3.
+        "rotation_euler" => {
+            let keys: Option<Animated<glam::Vec3>> = ron.from_str(value).map_err(|e| e.to_string())?;
+            let keys = keys.ok_or("`None` is the same as leaving the field out")?;
+            AnimatedTrack::new(&keys).map(drop).map_err(|e| e.to_string())
+        }
         "ik_constraints" => {
             let constraints: Vec<keyrig_core::IkConstraint> =
                 ron.from_str(value).map_err(|e| e.to_string())?;

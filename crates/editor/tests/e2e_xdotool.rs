@@ -1257,3 +1257,40 @@ fn the_pose_library_and_a_reference_image_in_a_real_x_window() {
     let image = saved.reference_image.expect("the reference image is saved");
     assert_eq!((image.path.as_str(), image.opacity), ("backdrop.png", 0.6), "relative to the scene");
 }
+
+/// Issue 30 in the real window: the demo's Cube switched to Euler keys with a click on the
+/// inspector's *Euler keys* box; the curve editor redraws its rotation as the three angles (Y a
+/// straight climb to 360), and the saved file holds them as Euler keys.
+#[test]
+fn euler_keys_switched_on_in_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+
+    let cube = h.get_by_label("Cube").rect().center();
+    session.click(cube);
+    h.get_by_label("Cube").click();
+    h.run();
+    session.wait_idle();
+    let before = session.screenshot("probe-euler-before");
+    let euler_box = h.get_by_label("Euler keys").rect().center();
+    session.click(euler_box);
+    h.get_by_label("Euler keys").click();
+    h.run();
+    assert!(h.state().doc.scene().objects[1].rotation_euler.is_some(), "the model switched too");
+    session.mouse_to(euler_box + egui::vec2(0.0, 200.0));
+    std::thread::sleep(Duration::from_millis(500));
+    session.wait_idle();
+    let after = session.screenshot("guide_euler_keys");
+    let curves = h.state().curves_rect().expect("the curve editor is laid out");
+    let redrawn = changed_pixels(&before, &after, curves);
+    assert!(redrawn > 500, "the curves are redrawn as angles in the real window: {redrawn} pixels changed");
+    let saved = save_as(&session, "e2e-euler");
+    let euler = saved.objects[1].rotation_euler.as_ref().expect("saved as Euler keys");
+    let y: Vec<f32> = euler.track.keys.iter().map(|k| k.value.y).collect();
+    for (got, want) in y.iter().zip([0.0, 120.0, 240.0, 360.0]) {
+        assert!((got - want).abs() < 1e-3, "{y:?}");
+    }
+    assert!(!saved.objects[1].rotation.is_animated());
+}
