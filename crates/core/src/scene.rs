@@ -108,6 +108,61 @@ pub struct FrameRange {
     pub end: i32,
 }
 
+impl Scene {
+    /// The scene with every Euler-keyed rotation replaced by quaternion keys that follow it
+    /// ([`crate::rotation_mode::quaternion_keys_following`] over `range`, seconds): what
+    /// exporters write, since glTF, VRML and X3D rotations are quaternions or axis–angles.
+    /// Borrowed as it is when nothing has Euler keys.
+    ///
+    /// # Errors
+    /// The field path of Euler keys that are invalid, with the problem.
+    pub fn with_quaternion_keys(
+        &self,
+        range: (f64, f64),
+        tolerance_deg: f64,
+    ) -> Result<std::borrow::Cow<'_, Scene>, (String, crate::TrackError)> {
+        let has_euler = self.objects.iter().any(|o| {
+            o.rotation_euler.is_some()
+                || o.skeleton.as_ref().is_some_and(|s| s.joints.iter().any(|j| j.rotation_euler.is_some()))
+        });
+        if !has_euler {
+            return Ok(std::borrow::Cow::Borrowed(self));
+        }
+        let mut out = self.clone();
+        let convert = |path: String,
+                       rotation: &mut Animated<Quat>,
+                       euler: &mut Option<Animated<Vec3>>,
+                       mode: RotationMode| {
+            if let Some(keys) = euler.take() {
+                let order = mode.euler().unwrap_or_default();
+                *rotation =
+                    crate::rotation_mode::quaternion_keys_following(&keys, order, range, tolerance_deg)
+                        .map_err(|e| (path, e))?;
+            }
+            Ok(())
+        };
+        for (o, object) in out.objects.iter_mut().enumerate() {
+            convert(
+                format!("objects[{o}].rotation_euler"),
+                &mut object.rotation,
+                &mut object.rotation_euler,
+                object.rotation_mode,
+            )?;
+            if let Some(skeleton) = &mut object.skeleton {
+                for (j, joint) in skeleton.joints.iter_mut().enumerate() {
+                    convert(
+                        format!("objects[{o}].skeleton.joints[{j}].rotation_euler"),
+                        &mut joint.rotation,
+                        &mut joint.rotation_euler,
+                        joint.rotation_mode,
+                    )?;
+                }
+            }
+        }
+        Ok(std::borrow::Cow::Owned(out))
+    }
+}
+
 /// An object in the scene: a keyed transform, optionally a mesh and a skeleton that deforms it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -339,3 +339,25 @@ fn a_right_click_on_a_key_makes_it_a_breakdown_drawn_smaller_and_saved() {
     assert_eq!(channels::key_type(h.state().doc.scene(), ELBOW, 2), Some(KeyType::Extreme));
     assert!(size(&h, 30) > 1.1 * keyframe, "an extreme is drawn larger");
 }
+
+/// The key inspector shows the selected key's type and changes it (issue 30): the elbow's key
+/// at frame 15 clicked in the dope sheet reads *Keyframe*; *Extreme* from the inspector's *Key
+/// type* makes it one, one undo step named by what changed.
+#[test]
+fn the_key_inspector_shows_and_sets_the_key_type() {
+    use keyrig_core::KeyType;
+    const ELBOW: ChannelId = ChannelId::JointRotation { object: 0, joint: 1 };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("key elbow rotation frame 15").click();
+    h.run();
+    let undo = h.state().doc.undo_len();
+    h.get_by_label("Key type").click();
+    h.run();
+    h.get_by_label("Extreme").click();
+    h.run();
+    assert_eq!(channels::key_type(h.state().doc.scene(), ELBOW, 1), Some(KeyType::Extreme));
+    assert_eq!(channels::key_type(h.state().doc.scene(), ELBOW, 2), Some(KeyType::Keyframe));
+    assert_eq!(h.state().doc.undo_len(), undo + 1);
+    assert_eq!(h.state().doc.undo_label(), Some("key type Extreme on elbow rotation key at frame 15"));
+}

@@ -549,13 +549,16 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
     // a tenth of the tolerance (docs/channels.md, "Euler keys"), resampled below like any.
     let range =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
-    let baked = keyrig_core::rotation_mode::scene_with_quaternion_keys(
-        &baked,
-        range,
-        options.rotation_tolerance_deg / 10.0,
-    )
-    .map_err(|(path, e)| scene_err(&path, e.to_string()))?
-    .into_owned();
+    let converted = match baked
+        .with_quaternion_keys(range, options.rotation_tolerance_deg / 10.0)
+        .map_err(|(path, e)| scene_err(&path, e.to_string()))?
+    {
+        std::borrow::Cow::Owned(converted) => Some(converted),
+        std::borrow::Cow::Borrowed(_) => None,
+    };
+    if let Some(converted) = converted {
+        baked = converted;
+    }
     let scene = &baked;
     let mut doc = Document::default();
     // Tracks with cycles are written as keys over the scene's frame range.

@@ -8,7 +8,7 @@ pub mod pose_library;
 
 use egui::Ui;
 use glam::Vec3;
-use keyrig_core::{AttributeId, Cycle, DeformerKind, Interpolation, Tcb};
+use keyrig_core::{AttributeId, Cycle, DeformerKind, Interpolation, KeyType, Tcb};
 
 use crate::actions::{Action, Actions, Edit, SessionChange};
 use crate::channels::{self, ChannelId, ChannelValue};
@@ -127,19 +127,32 @@ fn rotation_mode_ui(
         None => "The unit quaternion w, x, y, z; typed values are normalised".to_owned(),
     };
     let mut chosen = mode;
-    let response = egui::ComboBox::from_label("Rotation mode")
-        .selected_text(mode.label())
-        .show_ui(ui, |ui| {
-            for choice in RotationMode::ALL {
-                let tip = match choice.euler() {
-                    Some(order) => order.formula(),
-                    None => "Quaternion components w, x, y, z".to_owned(),
-                };
-                ui.selectable_value(&mut chosen, choice, choice.label()).on_hover_text(tip);
-            }
-        })
-        .response;
-    response.on_hover_text(if euler_keys {
+    let mut wants_euler = euler_keys;
+    // One row (the inspector keeps its height): the mode, and the Euler keys box beside it.
+    let row = ui.horizontal(|ui| {
+        let response = egui::ComboBox::from_id_salt(("rotation mode", id))
+            .selected_text(mode.label())
+            .show_ui(ui, |ui| {
+                for choice in RotationMode::ALL {
+                    let tip = match choice.euler() {
+                        Some(order) => order.formula(),
+                        None => "Quaternion components w, x, y, z".to_owned(),
+                    };
+                    ui.selectable_value(&mut chosen, choice, choice.label()).on_hover_text(tip);
+                }
+            })
+            .response;
+        ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Rotation mode"));
+        if mode.euler().is_some() {
+            ui.checkbox(&mut wants_euler, "Euler keys").on_hover_text(
+                "Key the rotation as three angle curves in this order, each interpolated on its own \
+                 (as Blender's and Maya's Euler rotations), instead of quaternion keys with Squad. \
+                 Switching converts the keys; the rotation at each key stays.",
+            );
+        }
+        response
+    });
+    row.inner.on_hover_text(if euler_keys {
         format!(
             "{help}. The keys are Euler keys: another order converts them (the rotation at each \
              key is kept); Quaternion converts them back to quaternion keys."
@@ -150,14 +163,6 @@ fn rotation_mode_ui(
              inspector and the curves show and type."
         )
     });
-    let mut wants_euler = euler_keys;
-    if mode.euler().is_some() {
-        ui.checkbox(&mut wants_euler, "Euler keys").on_hover_text(
-            "Key the rotation as three angle curves in this order, each interpolated on its own \
-             (as Blender's and Maya's Euler rotations), instead of quaternion keys with Squad. \
-             Switching converts the keys; the rotation at each key stays.",
-        );
-    }
     if chosen != mode || wants_euler != euler_keys {
         let name = id.label(ctx.scene());
         let euler = wants_euler && chosen.euler().is_some();
@@ -775,15 +780,28 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     let mixed_clamped = params.iter().any(|p| p.2.clamped != params[0].2.clamped);
     let before = (mode, tcb);
     let shown_mode = if mixed_mode { "— mixed —" } else { mode_label(mode) };
-    egui::ComboBox::from_label("Interpolation").selected_text(shown_mode).show_ui(ui, |ui| {
-        for m in [Interpolation::Step, Interpolation::Linear, Interpolation::Tcb] {
-            ui.selectable_value(&mut mode, m, mode_label(m));
-        }
-        // Hermite needs stored tangents (imported glTF CUBICSPLINE keys); it is only offered
-        // for keys that already have it.
-        if before.0 == Interpolation::Hermite {
-            ui.selectable_value(&mut mode, Interpolation::Hermite, mode_label(Interpolation::Hermite));
-        }
+    // One row: the interpolation and the key type (the section keeps its height).
+    ui.horizontal(|ui| {
+        let response = egui::ComboBox::from_id_salt("key interpolation")
+            .selected_text(shown_mode)
+            .show_ui(ui, |ui| {
+                for m in [Interpolation::Step, Interpolation::Linear, Interpolation::Tcb] {
+                    ui.selectable_value(&mut mode, m, mode_label(m));
+                }
+                // Hermite needs stored tangents (imported glTF CUBICSPLINE keys); it is only
+                // offered for keys that already have it.
+                if before.0 == Interpolation::Hermite {
+                    ui.selectable_value(
+                        &mut mode,
+                        Interpolation::Hermite,
+                        mode_label(Interpolation::Hermite),
+                    );
+                }
+            })
+            .response
+            .on_hover_text("Interpolation: how the curve leaves this key");
+        ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Interpolation"));
+        key_type_ui(ui, ctx, actions, &keys);
     });
     let tcb_enabled = mode == Interpolation::Tcb;
     ui.add_enabled_ui(tcb_enabled, |ui| {
@@ -843,6 +861,50 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         }));
     }
     cycles_ui(ui, ctx, actions, first.channel);
+}
+
+/// The selected keys' type (keyframe, breakdown, moving hold, extreme: what they mean to the
+/// animator, drawn in the dope sheet in their own shape; playback ignores it), shown as mixed
+/// when they differ; choosing one sets it on every selected key, one undo step.
+fn key_type_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, keys: &[crate::session::KeyRef]) {
+    let scene = ctx.scene();
+    let types: Vec<KeyType> =
+        keys.iter().filter_map(|k| channels::key_type(scene, k.channel, k.index)).collect();
+    let Some(&first) = types.first() else { return };
+    let mixed = types.iter().any(|&t| t != first);
+    let mut chosen = None;
+    let response = egui::ComboBox::from_id_salt("key type")
+        .selected_text(if mixed { "— mixed —" } else { first.label() })
+        .show_ui(ui, |ui| {
+            for t in KeyType::ALL {
+                if ui.selectable_label(!mixed && t == first, t.label()).clicked() {
+                    chosen = Some(t);
+                }
+            }
+        })
+        .response
+        .on_hover_text(
+            "Key type: what the key means to you (Blender's keyframe types); drawn in the dope \
+             sheet, ignored by playback",
+        );
+    ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Key type"));
+    if let Some(chosen) = chosen.filter(|&t| mixed || t != first) {
+        let on = match keys {
+            [k] => {
+                let frame = channels::key_params(scene, k.channel, k.index)
+                    .map_or(0, |p| (p.0 * scene.fps).round() as i64);
+                format!("{} key at frame {frame}", k.channel.label(scene))
+            }
+            many => format!("{} keys", many.len()),
+        };
+        let keys = keys.to_vec();
+        actions.push(Action::CloseGroup);
+        actions.edit(Edit::scene(format!("key type {} on {on}", chosen.label()), move |scene| {
+            for k in &keys {
+                channels::set_key_type(scene, k.channel, k.index, chosen);
+            }
+        }));
+    }
 }
 
 /// The undo step's name for a change in the key inspector: what changed, on which key(s) —

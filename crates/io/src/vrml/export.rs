@@ -390,12 +390,9 @@ pub fn export_scene(
     let original = scene;
     let range =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
-    let following = keyrig_core::rotation_mode::scene_with_quaternion_keys(
-        scene,
-        range,
-        options.rotation_tolerance_deg / 10.0,
-    )
-    .map_err(|(path, e)| VrmlExportError::Metadata(format!("{path}: {e}")))?;
+    let following = scene
+        .with_quaternion_keys(range, options.rotation_tolerance_deg / 10.0)
+        .map_err(|(path, e)| VrmlExportError::Metadata(format!("{path}: {e}")))?;
     let scene = following.as_ref();
     let meshes = load_meshes(scene, options)?;
     let loaded: HashMap<usize, LoadedMesh> = meshes
