@@ -1294,3 +1294,84 @@ fn euler_keys_switched_on_in_a_real_x_window() {
     }
     assert!(!saved.objects[1].rotation.is_animated());
 }
+
+/// Issue 30 in the real window: the Cube's motion path key at frame 30 dragged with the mouse
+/// moves that key in the view plane (its time and the other keys stay), and Shift+D duplicates
+/// the Arm and carries the copy with the pointer until a click places it; the saved file has
+/// the moved key and the placed copy.
+#[test]
+fn a_motion_path_key_drag_and_shift_d_in_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+
+    let cube = h.get_by_label("Cube").rect().center();
+    session.click(cube);
+    h.get_by_label("Cube").click();
+    h.run();
+    session.wait_idle();
+    let before = h.state().doc.scene().objects[1].translation.track.clone();
+    let key = before.keys[1].clone();
+    assert!((key.time * 30.0 - 30.0).abs() < 1e-9, "the key at frame 30");
+    let from = common::on_screen(h.state(), key.value);
+    let to = from + egui::vec2(40.0, -25.0);
+    let model_path: Vec<Pos2> = (0..=8).map(|i| from + (to - from) * (i as f32 / 8.0)).collect();
+    let real_path: Vec<Pos2> = model_path.iter().map(|&p| real_viewport_point(h.state(), p)).collect();
+    let plain = session.screenshot("probe-motion-path-before");
+    session.drag(&real_path);
+    model_drag(&mut h, &model_path);
+    let away = real_path[real_path.len() - 1] + egui::vec2(0.0, 150.0);
+    session.mouse_to(away);
+    session.wait_idle();
+    let dragged = session.screenshot("probe-motion-path-after");
+    let viewport = h.state().viewport_rect().expect("laid out");
+    assert!(changed_pixels(&plain, &dragged, viewport) > 200, "the path was redrawn in the real window");
+
+    // The Arm (its translation is not keyed, so the move changes its value): Shift+D with the
+    // pointer in the view, a move to the right, a click.
+    let arm = h.get_by_label("Arm").rect().center();
+    session.click(arm);
+    session.wait_idle();
+    let centre = real_viewport_point(h.state(), viewport.center());
+    session.mouse_to(centre);
+    session.key("shift+d");
+    for i in 1..=5 {
+        session.mouse_to(centre + egui::vec2(20.0 * i as f32, 0.0));
+    }
+    session.click(centre + egui::vec2(100.0, 0.0));
+    session.mouse_to(centre + egui::vec2(130.0, 40.0));
+    session.wait_idle();
+
+    let saved = save_as(&session, "e2e-path-and-copy");
+    let moved = &saved.objects[1].translation.track;
+    assert_eq!(moved.keys.len(), before.keys.len());
+    for (i, (a, b)) in before.keys.iter().zip(moved.keys.iter()).enumerate() {
+        assert_eq!(a.time, b.time, "key {i} keeps its time");
+        if i != 1 {
+            assert_eq!(a.value, b.value, "key {i} stays");
+        }
+    }
+    let model = h.state().doc.scene().objects[1].translation.track.keys[1].value;
+    let real = moved.keys[1].value;
+    assert!(real.distance(key.value) > 0.05, "the real drag moved the key: {real}");
+    let eye = keyrig_editor::camera::OrbitCamera::eye(&h.state().view.camera);
+    let forward = (h.state().view.camera.target - eye).normalize();
+    assert!((real - key.value).dot(forward).abs() < 1e-3, "in the view plane: {real}");
+    // The real viewport is larger than the model's: the same screen drag is a slightly shorter
+    // move in the world, in the same direction.
+    let (dr, dm) = (real - key.value, model - key.value);
+    assert!(dr.normalize().dot(dm.normalize()) > 0.98, "the same direction as the model's: {dr} vs {dm}");
+
+    let names: Vec<&str> = saved.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["Arm", "Cube", "Arm.001"], "Shift+D made a copy");
+    let right = (h.state().view.camera.target - eye).cross(glam::Vec3::Y).normalize();
+    let offset = saved.objects[2].translation.value - saved.objects[0].translation.value;
+    assert!(offset.dot(right) > 0.1, "the copy was carried to the right: {offset}");
+    assert!(offset.dot(right) > 0.9 * offset.length(), "in the view plane: {offset}");
+    assert_eq!(
+        saved.objects[0].translation,
+        h.state().doc.scene().objects[0].translation,
+        "the original stays"
+    );
+}
