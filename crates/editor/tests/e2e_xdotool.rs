@@ -1375,3 +1375,71 @@ fn a_motion_path_key_drag_and_shift_d_in_a_real_x_window() {
         "the original stays"
     );
 }
+
+/// Issue 30 in the real window: `assets/ik.ron`'s IK target (the constraint "Reach" on the
+/// wrist) drawn in the viewport and dragged with the mouse in record mode: the saved file has a
+/// new target key at frame 0 where the model's drag put it (up to the two viewports' scale).
+#[test]
+fn the_ik_target_dragged_in_a_real_x_window() {
+    let session = Session::new();
+    let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/ik.ron");
+    let copy = session.home.path().join("ik.ron");
+    std::fs::copy(&asset, &copy).expect("copy the asset");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", copy.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(copy.clone()));
+
+    let wrist = h.get_by_label("wrist").rect().center();
+    session.click(wrist);
+    h.get_by_label("wrist").click();
+    h.run();
+    session.key("r");
+    common::press(&mut h, Modifiers::NONE, egui::Key::R);
+    session.wait_idle();
+    let target = ChannelId::IkTarget { object: 0, constraint: 0 };
+    let target_world = |h: &Harness<'_, EditorApp>| {
+        let Some(channels::ChannelValue::Vec3(v)) = h.state().value_now(target) else { panic!("a target") };
+        h.state().object_pose_now(0).expect("a pose").world_from_object.transform_point3(v)
+    };
+    let before = target_world(&h);
+    let keys_before = channels::key_count(h.state().doc.scene(), target);
+    let from = common::on_screen(h.state(), before);
+    let to = from + egui::vec2(-40.0, 30.0);
+    let model_path: Vec<Pos2> = (0..=8).map(|i| from + (to - from) * (i as f32 / 8.0)).collect();
+    let real_path: Vec<Pos2> = model_path.iter().map(|&p| real_viewport_point(h.state(), p)).collect();
+    let plain = session.screenshot("probe-ik-target-before");
+    session.drag(&real_path);
+    model_drag(&mut h, &model_path);
+    session.mouse_to(real_path[real_path.len() - 1] + egui::vec2(0.0, 150.0));
+    session.wait_idle();
+    let dragged = session.screenshot("probe-ik-target-after");
+    let viewport = h.state().viewport_rect().expect("laid out");
+    assert!(
+        changed_pixels(&plain, &dragged, viewport) > 200,
+        "the arm reached for the target in the real window"
+    );
+    let model = target_world(&h);
+    assert!(model.distance(before) > 0.05, "the model's target moved");
+
+    // Ctrl+S saves the opened file in place.
+    let modified = || std::fs::metadata(&copy).and_then(|m| m.modified()).ok();
+    let was = modified();
+    session.key("ctrl+s");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while modified() == was && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    assert_ne!(modified(), was, "Ctrl+S saved {}", copy.display());
+    let saved = keyrig_io::scene_file::load(&copy).expect("the saved scene loads");
+    assert_eq!(channels::key_count(&saved, target), keys_before, "the key at frame 0 was replaced");
+    let index = channels::key_at(&saved, target, 0.0).expect("a target key at frame 0");
+    let Some(channels::ChannelValue::Vec3(real)) = channels::key_value(&saved, target, index) else {
+        panic!("a Vec3 key")
+    };
+    let world_from_object = h.state().object_pose_now(0).expect("a pose").world_from_object;
+    let real = world_from_object.transform_point3(real);
+    let (dr, dm) = (real - before, model - before);
+    assert!(dr.length() > 0.05, "the real drag moved the target: {before} → {real}");
+    assert!(dr.normalize().dot(dm.normalize()) > 0.98, "the same direction as the model's: {dr} vs {dm}");
+}
