@@ -144,7 +144,12 @@ fn rotation_mode_ui(
             .response;
         ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Rotation mode"));
         if mode.euler().is_some() {
-            ui.checkbox(&mut wants_euler, "Euler keys").on_hover_text(
+            // A locked rotation keeps its keys: the box shows their form and cannot switch it.
+            let (_, locked) = crate::channels::mute_and_lock(
+                ctx.scene(),
+                keyrig_core::channel_id::rotation_or_euler(ctx.scene(), id),
+            );
+            ui.add_enabled(!locked, egui::Checkbox::new(&mut wants_euler, "Euler keys")).on_hover_text(
                 "Key the rotation as three angle curves in this order, each interpolated on its own \
                  (as Blender's and Maya's Euler rotations), instead of quaternion keys with Squad. \
                  Switching converts the keys; the rotation at each key stays.",
