@@ -7,7 +7,8 @@
 //! Scenes: `assets/demo.ron`, `assets/characters.ron` (the demo with CesiumMan, the Fox
 //! and an MD2 model), `characters+attributes`: the characters scene with keyed attributes on
 //! every object and light (visibility, opacity, colour, a keyed deformer; light visibility,
-//! range and spot cone), and `assets/cameras.ron` (the twisting arm seen by two aimed scene
+//! range and spot cone), `characters+euler`: every rotation of the characters scene switched
+//! to Euler keys, and `assets/cameras.ron` (the twisting arm seen by two aimed scene
 //! cameras). docs/benchmarks.md records the figures.
 //!
 //! Run: `cargo bench -p keyrig-editor --bench frame_prep`
@@ -38,12 +39,15 @@ fn gpu_bytes(frame: &keyrig_render::FrameInput) -> usize {
 fn frame_prep(c: &mut Criterion) {
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
     let mut group = c.benchmark_group("frame_prep");
-    for name in ["demo", "characters", "characters+attributes", "cameras"] {
-        let file = name.trim_end_matches("+attributes");
+    for name in ["demo", "characters", "characters+attributes", "characters+euler", "cameras"] {
+        let file = name.trim_end_matches("+attributes").trim_end_matches("+euler");
         let path = assets.join(format!("{file}.ron"));
         let mut scene = keyrig_io::scene_file::load(&path).expect("scene");
         if name.ends_with("+attributes") {
             with_attributes(&mut scene);
+        }
+        if name.ends_with("+euler") {
+            with_euler_keys(&mut scene);
         }
         let meshes = keyrig_editor::files::render_meshes(&scene, Some(&assets)).expect("meshes");
         let rig = SceneRig::with_loaded(&scene, &meshes.skinned, &meshes.morphs).expect("rig");
@@ -94,6 +98,22 @@ fn frame_prep(c: &mut Criterion) {
         });
     }
     group.finish();
+}
+
+/// Every object's and joint's rotation switched to Euler keys (XYZ), as the inspector's box
+/// does: the evaluator turns three angle tracks into each rotation.
+fn with_euler_keys(scene: &mut keyrig_core::Scene) {
+    use keyrig_core::channel_id::{set_rotation_keys, ChannelId};
+    let xyz = keyrig_core::RotationMode::Euler(keyrig_core::EulerOrder::XYZ);
+    for o in 0..scene.objects.len() {
+        assert!(set_rotation_keys(scene, ChannelId::ObjectRotation(o), xyz, true).expect("valid keys"));
+        let joints = scene.objects[o].skeleton.as_ref().map_or(0, |s| s.joints.len());
+        for joint in 0..joints {
+            let id = ChannelId::JointRotation { object: o, joint };
+            assert!(set_rotation_keys(scene, id, xyz, true).expect("valid keys"));
+        }
+    }
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
 }
 
 /// Keys every attribute a frame evaluates on every object and light.
