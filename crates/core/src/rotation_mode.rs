@@ -368,9 +368,9 @@ fn path_spin(a: Vec3, b: Vec3, order: EulerOrder) -> Option<Spin> {
     for s in 1..=steps {
         let e = a.lerp(b, s as f32 / steps as f32);
         let r = q0.inverse() * order.to_quat(e).as_dquat();
-        let step = r * prev.inverse();
-        let step = if step.w < 0.0 { -step } else { step };
-        total += step.to_scaled_axis();
+        // `to_quat` is continuous in the angles, so consecutive steps stay near the identity
+        // (w > 0) and each is the small turn it looks.
+        total += (r * prev.inverse()).to_scaled_axis();
         prev = r;
     }
     if total.length().to_degrees() < 180.0 {
@@ -441,13 +441,9 @@ pub fn quaternion_keys_following(
     let q = |t: f64| order.to_quat(track.sample(t)).as_dquat();
     let tolerance = tolerance_deg.to_radians();
     let mut out: Vec<Key<Quat>> = Vec::new();
+    // Rotation keys interpolate the short way whatever their signs.
     let push = |out: &mut Vec<Key<Quat>>, t: f64, value: glam::DQuat, step: bool| {
-        let mut value = value.normalize();
-        if let Some(prev) = out.last() {
-            if prev.value.as_dquat().dot(value) < 0.0 {
-                value = -value;
-            }
-        }
+        let value = value.normalize();
         let interpolation = if step { Interpolation::Step } else { Interpolation::Linear };
         out.push(Key::new(t, value.as_quat()).with_interpolation(interpolation));
     };
@@ -469,8 +465,8 @@ pub fn quaternion_keys_following(
         let mut stack = vec![(a, b, 0u32)];
         let mut pieces: Vec<f64> = Vec::new();
         while let Some((lo, hi, depth)) = stack.pop() {
+            // `angle` and glam's slerp take the short way whatever the signs.
             let (qa, qb) = (q(lo), q(hi));
-            let qb = if qa.dot(qb) < 0.0 { -qb } else { qb };
             let fits = angle(qa, qb) < std::f64::consts::FRAC_PI_2
                 && [0.25, 0.5, 0.75]
                     .iter()
@@ -732,6 +728,9 @@ mod tests {
         let order = EulerOrder::XYZ;
         let tolerance = 0.01;
         let quats = quaternion_keys_following(&euler, order, (0.0, 2.5), tolerance).expect("valid keys");
+        // Halving stops as soon as a piece fits: 189 keys for 0.01° here. More would only make
+        // exported files bigger.
+        assert!(quats.track.len() <= 200, "{} keys", quats.track.len());
         let track = Track::new(&quats.track).expect("valid quaternion keys");
         let curve = crate::track::AnimatedTrack::new(&euler).expect("valid keys");
         for t in [0.0, 0.01, 0.025, 0.03, 0.5, 0.99] {
@@ -765,5 +764,138 @@ mod tests {
         assert!(diff < 1e-3, "{half:?} vs {got:?}");
         // The step holds its key's rotation until the next key.
         assert!(same_rotation(track.sample(1.4), order.to_quat(Vec3::new(40.0, 270.0, 0.0))));
+    }
+
+    /// A spin of a thousand turns late in the timeline (keys at 1000 s and 1001 s): the angles
+    /// follow every turn (Y 90 + 360 000), and so does a new order of those Euler keys.
+    #[test]
+    fn a_thousand_turns_late_in_the_timeline_are_followed() {
+        let keys = vec![
+            Key::new(1000.0, Quat::IDENTITY),
+            Key::new(1001.0, deg(Vec3::Y, 90.0)).with_spin(Spin::Turns(1000)),
+        ];
+        let euler =
+            euler_keys_from_quaternions(&Animated::new(Quat::IDENTITY, RawTrack::new(keys)), EulerOrder::XYZ)
+                .expect("valid keys");
+        let last = euler.track.keys[1].value;
+        assert!((last.y - 360_090.0).abs() < 0.5 && last.x.abs() < 0.01 && last.z.abs() < 0.01, "{last}");
+        let shifted = Animated::new(
+            Vec3::ZERO,
+            RawTrack::new(vec![
+                Key::new(1000.0, Vec3::new(0.0, 3600.0, 0.0)),
+                Key::new(1001.0, Vec3::new(0.0, 363_690.0, 0.0)),
+            ]),
+        );
+        let zyx = reorder_euler_keys(&shifted, EulerOrder::XYZ, EulerOrder::ZYX).expect("valid keys");
+        assert!((zyx.track.keys[0].value.y - 3600.0).abs() < 0.01, "{}", zyx.track.keys[0].value);
+        assert!((zyx.track.keys[1].value.y - 363_690.0).abs() < 0.5, "{}", zyx.track.keys[1].value);
+    }
+
+    /// Euler keys back to quaternion keys: a path of more than half a turn gets the spin that
+    /// turns as far about +Y, whether the short way goes the other way (270: short −90), the
+    /// keys are the same rotation (360, 720: q and −q, q and q) or two turns are added (820);
+    /// under half a turn there is none. Each track validates and turns halfway by half the
+    /// angle.
+    #[test]
+    fn paths_past_half_a_turn_become_spins_that_turn_as_far() {
+        for (y, spin) in [
+            (100.0, None),
+            (270.0, Some(270.0)),
+            (360.0, Some(360.0)),
+            (720.0, Some(720.0)),
+            (820.0, Some(820.0)),
+        ] {
+            let euler = Animated::new(
+                Vec3::ZERO,
+                RawTrack::new(vec![
+                    Key::new(0.0, Vec3::ZERO).with_interpolation(Interpolation::Linear),
+                    Key::new(1.0, Vec3::new(0.0, y, 0.0)),
+                ]),
+            );
+            let back = quaternion_keys_from_euler(&euler, EulerOrder::XYZ).expect("valid keys");
+            match (back.track.keys[1].spin, spin) {
+                (None, None) => {}
+                (Some(Spin::Angle { axis, degrees }), Some(want)) => {
+                    let along = f64::from(axis.normalize().dot(Vec3::Y));
+                    assert!(
+                        (degrees * along - want).abs() < 0.05 && along.abs() > 0.9999,
+                        "{y}: {axis} {degrees}"
+                    );
+                }
+                (got, want) => panic!("{y}: spin {got:?}, expected {want:?}"),
+            }
+            let track = Track::new(&back.track).expect("the spin agrees with the keys");
+            let half = (y / 2.0) as f32;
+            assert!(same_rotation(track.sample(0.5), deg(Vec3::Y, half)), "{y}: {}", track.sample(0.5));
+        }
+    }
+
+    #[test]
+    fn invalid_euler_keys_are_refused_and_muted_or_unkeyed_ones_hold_their_value() {
+        let bad = Animated::new(
+            Vec3::ZERO,
+            RawTrack::new(vec![Key::new(1.0, Vec3::ZERO), Key::new(f64::NAN, Vec3::X)]),
+        );
+        assert!(quaternion_keys_from_euler(&bad, EulerOrder::XYZ).is_err());
+        assert!(reorder_euler_keys(&bad, EulerOrder::XYZ, EulerOrder::YXZ).is_err());
+        assert!(quaternion_keys_following(&bad, EulerOrder::XYZ, (0.0, 1.0), 0.05).is_err());
+        let value = Vec3::new(10.0, 20.0, 30.0);
+        let keyed =
+            Animated::new(value, RawTrack::new(vec![Key::new(0.0, Vec3::ZERO), Key::new(1.0, Vec3::Y)]));
+        let muted = Animated { muted: true, ..keyed };
+        for a in [muted, Animated::constant(value)] {
+            let q = quaternion_keys_following(&a, EulerOrder::ZXY, (0.0, 1.0), 0.05).expect("valid");
+            assert!(!q.is_animated());
+            assert!(same_rotation(q.value, EulerOrder::ZXY.to_quat(value)));
+        }
+    }
+
+    /// Cycles are played out over the range: Repeat before the keys, RepeatOffset after them
+    /// (each cycle adds the last key's angles minus the first's), a Step key among them. Every
+    /// repeat of a key time inside the range is a key of the result (a Step one steps), nothing
+    /// lies outside the range, and the curve is followed within the tolerance everywhere.
+    #[test]
+    fn cycles_are_played_out_over_the_range() {
+        let euler = Animated::new(
+            Vec3::ZERO,
+            RawTrack::new(vec![
+                Key::new(0.5, Vec3::ZERO).with_interpolation(Interpolation::Linear),
+                Key::new(1.0, Vec3::new(30.0, 80.0, 0.0)).with_interpolation(Interpolation::Step),
+                Key::new(1.25, Vec3::new(0.0, 100.0, -20.0)),
+                Key::new(1.5, Vec3::new(0.0, 120.0, 0.0)),
+            ]),
+        )
+        .with_cycles(crate::key::Cycles {
+            before: crate::key::Cycle::Repeat,
+            after: crate::key::Cycle::RepeatOffset,
+        });
+        let range = (-1.3, 4.7);
+        let tolerance = 0.02;
+        let quats = quaternion_keys_following(&euler, EulerOrder::XYZ, range, tolerance).expect("valid keys");
+        let times: Vec<f64> = quats.track.keys.iter().map(|k| k.time).collect();
+        assert_eq!((times[0], times[times.len() - 1]), range, "the range, no more");
+        for n in -2..=3 {
+            for k in euler.track.keys.iter() {
+                let t = k.time + f64::from(n);
+                if t < range.0 || t > range.1 {
+                    continue;
+                }
+                let key = quats.track.keys.iter().find(|q| (q.time - t).abs() < 1e-9);
+                let key = key.unwrap_or_else(|| panic!("no key at the repeat {t}: {times:?}"));
+                assert_eq!(
+                    key.interpolation == Interpolation::Step,
+                    k.interpolation == Interpolation::Step,
+                    "at {t}"
+                );
+            }
+        }
+        let track = Track::new(&quats.track).expect("valid");
+        let curve = crate::track::AnimatedTrack::new(&euler).expect("valid");
+        for i in 0..=600 {
+            let t = range.0 + (range.1 - range.0) * f64::from(i) / 600.0;
+            let (want, got) = (EulerOrder::XYZ.to_quat(curve.sample(t)), track.sample(t));
+            let off = angle(want.as_dquat(), got.as_dquat()).to_degrees();
+            assert!(off <= tolerance * 1.01 + 1e-3, "t {t}: {off}°");
+        }
     }
 }
