@@ -825,7 +825,7 @@ mod tests {
                 (got, want) => panic!("{y}: spin {got:?}, expected {want:?}"),
             }
             let track = Track::new(&back.track).expect("the spin agrees with the keys");
-            let half = (y / 2.0) as f32;
+            let half = y / 2.0;
             assert!(same_rotation(track.sample(0.5), deg(Vec3::Y, half)), "{y}: {}", track.sample(0.5));
         }
     }
