@@ -414,30 +414,46 @@ pub fn quaternion_keys_following(
     let (first, last) = (keys[0].time, keys[keys.len() - 1].time);
     let cycles = euler.before != crate::key::Cycle::Hold || euler.after != crate::key::Cycle::Hold;
     let (from, to) = if cycles { (first.min(range.0), last.max(range.1)) } else { (first, last) };
-    // Breakpoints: the key times (and their repeats under cycles) inside [from, to].
-    let mut times: Vec<(f64, bool)> = Vec::new();
+    // Breakpoints: the key times inside [from, to], and where cycles play the keys again their
+    // times in each cycle (mirrored in a ping-pong's backward cycles, whose steps are left to the
+    // halving below: a backward Step holds the value before the key, not after it).
+    // The range's ends first: a key at the same time, pushed later, gives the step.
+    let mut times: Vec<(f64, bool)> = vec![(from, false), (to, false)];
     let period = last - first;
-    let mut push_keys = |offset: f64| {
-        for k in keys.iter() {
-            let t = k.time + offset;
-            if t >= from - 1e-9 && t <= to + 1e-9 {
-                times.push((t, k.interpolation == Interpolation::Step));
-            }
+    let mut push = |t: f64, step: bool| {
+        if t >= from - 1e-9 && t <= to + 1e-9 {
+            times.push((t, step));
         }
     };
-    if cycles && period > 0.0 {
-        let before = ((first - from) / period).ceil() as i64;
-        let after = ((to - last) / period).ceil() as i64;
-        for n in -before..=after.min(100_000) {
-            push_keys(n as f64 * period);
-        }
+    let (before, after) = if period > 0.0 {
+        (((first - from) / period).ceil() as i64, ((to - last) / period).ceil() as i64)
     } else {
-        push_keys(0.0);
+        (0, 0)
+    };
+    for n in -before.min(100_000)..=after.min(100_000) {
+        let cycle = if n < 0 { euler.before } else { euler.after };
+        if n != 0 && !cycle.is_cyclic() {
+            continue;
+        }
+        let start = first + n as f64 * period;
+        for k in keys.iter() {
+            if cycle == crate::key::Cycle::PingPong && n % 2 != 0 {
+                push(start + (last - k.time), false);
+            } else {
+                push(start + (k.time - first), k.interpolation == Interpolation::Step);
+            }
+        }
     }
-    times.push((from, false));
-    times.push((to, false));
+    // Of equal times the last pushed says whether a step starts there: a cycle's first key
+    // (the segment after a cycle's end is the next cycle's first).
     times.sort_by(|a, b| a.0.total_cmp(&b.0));
-    times.dedup_by(|b, a| (a.0 - b.0).abs() < 1e-9);
+    times.dedup_by(|b, a| {
+        let same = (a.0 - b.0).abs() < 1e-9;
+        if same {
+            a.1 = b.1;
+        }
+        same
+    });
     let q = |t: f64| order.to_quat(track.sample(t)).as_dquat();
     let tolerance = tolerance_deg.to_radians();
     let mut out: Vec<Key<Quat>> = Vec::new();
@@ -482,6 +498,12 @@ pub fn quaternion_keys_following(
         }
         for t in pieces {
             push(&mut out, t, q(t), false);
+        }
+    }
+    // A Step segment pushes nothing for its end: the last breakpoint needs its key then.
+    if let Some(&(end, _)) = times.last() {
+        if out.last().is_none_or(|k| (k.time - end).abs() > 1e-12) {
+            push(&mut out, end, q(end), false);
         }
     }
     let mut animated = Animated::new(static_value, RawTrack::new(out));
@@ -851,51 +873,78 @@ mod tests {
     }
 
     /// Cycles are played out over the range: Repeat before the keys, RepeatOffset after them
-    /// (each cycle adds the last key's angles minus the first's), a Step key among them. Every
-    /// repeat of a key time inside the range is a key of the result (a Step one steps), nothing
-    /// lies outside the range, and the curve is followed within the tolerance everywhere.
+    /// (each cycle adds the last key's angles minus the first's), a Step key among them, a
+    /// period of 0.75 s. Every repeat of a key time inside the range is a key of the result (a
+    /// Step one steps), nothing lies outside the range, and the curve is followed within the
+    /// tolerance everywhere but within a hundred-thousandth of a second of where a cycle starts
+    /// again and the curve jumps (there the keys close in on the jump to a millionth of a
+    /// second). A cycle on one side alone also plays out over the whole range (the other side
+    /// holds); without cycles the keys span only the Euler keys.
     #[test]
     fn cycles_are_played_out_over_the_range() {
-        let euler = Animated::new(
+        use crate::key::{Cycle, Cycles};
+        let keys = Animated::new(
             Vec3::ZERO,
             RawTrack::new(vec![
                 Key::new(0.5, Vec3::ZERO).with_interpolation(Interpolation::Linear),
-                Key::new(1.0, Vec3::new(30.0, 80.0, 0.0)).with_interpolation(Interpolation::Step),
-                Key::new(1.25, Vec3::new(0.0, 100.0, -20.0)),
-                Key::new(1.5, Vec3::new(0.0, 120.0, 0.0)),
+                Key::new(0.9, Vec3::new(30.0, 80.0, 0.0)).with_interpolation(Interpolation::Step),
+                Key::new(1.05, Vec3::new(0.0, 100.0, -20.0)),
+                Key::new(1.25, Vec3::new(0.0, 120.0, 0.0)),
             ]),
-        )
-        .with_cycles(crate::key::Cycles {
-            before: crate::key::Cycle::Repeat,
-            after: crate::key::Cycle::RepeatOffset,
-        });
+        );
         let range = (-1.3, 4.7);
         let tolerance = 0.02;
-        let quats = quaternion_keys_following(&euler, EulerOrder::XYZ, range, tolerance).expect("valid keys");
-        let times: Vec<f64> = quats.track.keys.iter().map(|k| k.time).collect();
-        assert_eq!((times[0], times[times.len() - 1]), range, "the range, no more");
-        for n in -2..=3 {
-            for k in euler.track.keys.iter() {
-                let t = k.time + f64::from(n);
-                if t < range.0 || t > range.1 {
+        let cases = [
+            (Cycles { before: Cycle::Repeat, after: Cycle::RepeatOffset }, (range.0, range.1)),
+            (Cycles { before: Cycle::Hold, after: Cycle::Repeat }, (range.0, range.1)),
+            (Cycles { before: Cycle::PingPong, after: Cycle::Hold }, (range.0, range.1)),
+            (Cycles::HOLD, (0.5, 1.25)),
+        ];
+        for (cycles, span) in cases {
+            let euler = keys.clone().with_cycles(cycles);
+            let quats =
+                quaternion_keys_following(&euler, EulerOrder::XYZ, range, tolerance).expect("valid keys");
+            let times: Vec<f64> = quats.track.keys.iter().map(|k| k.time).collect();
+            assert_eq!((times[0], times[times.len() - 1]), span, "{cycles:?}: the span, no more");
+            for n in -3..=5 {
+                let cycle = if n < 0 { cycles.before } else { cycles.after };
+                if n != 0 && !cycle.is_cyclic() {
                     continue;
                 }
-                let key = quats.track.keys.iter().find(|q| (q.time - t).abs() < 1e-9);
-                let key = key.unwrap_or_else(|| panic!("no key at the repeat {t}: {times:?}"));
-                assert_eq!(
-                    key.interpolation == Interpolation::Step,
-                    k.interpolation == Interpolation::Step,
-                    "at {t}"
-                );
+                // A ping-pong's backward cycles play the keys mirrored.
+                let backward = cycle == Cycle::PingPong && n % 2 != 0;
+                for k in euler.track.keys.iter() {
+                    let start = 0.5 + 0.75 * f64::from(n);
+                    let t = if backward { start + (1.25 - k.time) } else { start + (k.time - 0.5) };
+                    if t < range.0 || t > range.1 {
+                        continue;
+                    }
+                    let key = quats.track.keys.iter().find(|q| (q.time - t).abs() < 1e-9);
+                    let key =
+                        key.unwrap_or_else(|| panic!("{cycles:?}: no key at the repeat {t}: {times:?}"));
+                    if !backward && (t - 4.7).abs() > 1e-9 {
+                        let step = k.interpolation == Interpolation::Step;
+                        assert_eq!(key.interpolation == Interpolation::Step, step, "{cycles:?} at {t}");
+                    }
+                }
             }
-        }
-        let track = Track::new(&quats.track).expect("valid");
-        let curve = crate::track::AnimatedTrack::new(&euler).expect("valid");
-        for i in 0..=600 {
-            let t = range.0 + (range.1 - range.0) * f64::from(i) / 600.0;
-            let (want, got) = (EulerOrder::XYZ.to_quat(curve.sample(t)), track.sample(t));
-            let off = angle(want.as_dquat(), got.as_dquat()).to_degrees();
-            assert!(off <= tolerance * 1.01 + 1e-3, "t {t}: {off}°");
+            let track = Track::new(&quats.track).expect("valid");
+            let curve = crate::track::AnimatedTrack::new(&euler).expect("valid");
+            // Where a cycle starts again the curve jumps (its ends differ): the keys close in on
+            // the jump to a millionth of a second, so the samples keep clear of it.
+            let jump = |t: f64| {
+                let k = ((t - 0.5) / 0.75).round();
+                cycles != Cycles::HOLD && (t - (0.5 + 0.75 * k)).abs() < 1e-5
+            };
+            for i in 0..=600 {
+                let t = span.0 + (span.1 - span.0) * f64::from(i) / 600.0;
+                if jump(t) {
+                    continue;
+                }
+                let (want, got) = (EulerOrder::XYZ.to_quat(curve.sample(t)), track.sample(t));
+                let off = angle(want.as_dquat(), got.as_dquat()).to_degrees();
+                assert!(off <= tolerance * 1.01 + 1e-3, "{cycles:?} t {t}: {off}°");
+            }
         }
     }
 }
