@@ -379,8 +379,10 @@ fn path_spin(a: Vec3, b: Vec3, order: EulerOrder) -> Option<Spin> {
     let r = (q0.inverse() * order.to_quat(b).as_dquat()).normalize();
     let r = if r.w < 0.0 { -r } else { r };
     let (short_axis, short) = r.to_axis_angle();
+    // The short way's axis, unless the keys are the same rotation (glam gives no axis below
+    // about 1e-6°): then the path's.
     let (mut axis, mut short) =
-        if short.to_degrees() > 1.0 { (short_axis, short.to_degrees()) } else { (total.normalize(), 0.0) };
+        if short > 0.0 { (short_axis, short.to_degrees()) } else { (total.normalize(), 0.0) };
     if axis.dot(total) < 0.0 {
         axis = -axis;
         short = -short;
@@ -815,7 +817,8 @@ mod tests {
 
     /// Euler keys back to quaternion keys: a path of more than half a turn gets the spin that
     /// turns as far about +Y, whether the short way goes the other way (270: short −90), the
-    /// keys are the same rotation (360, 720: q and −q, q and q) or two turns are added (820);
+    /// keys are the same rotation (360, 720: q and −q, q and q), nearly so (360.5, 719.7: a
+    /// short way under a degree) or two turns are added (820);
     /// under half a turn there is none. Each track validates and turns halfway by half the
     /// angle.
     #[test]
@@ -824,6 +827,8 @@ mod tests {
             (100.0, None),
             (270.0, Some(270.0)),
             (360.0, Some(360.0)),
+            (360.5, Some(360.5)),
+            (-0.3 + 720.0, Some(719.7)),
             (720.0, Some(720.0)),
             (820.0, Some(820.0)),
         ] {
