@@ -897,12 +897,13 @@ mod tests {
                 Key::new(1.25, Vec3::new(0.0, 120.0, 0.0)),
             ]),
         );
-        let range = (-1.3, 4.7);
+        let range = (-2.6, 4.7);
         let tolerance = 0.02;
         let cases = [
             (Cycles { before: Cycle::Repeat, after: Cycle::RepeatOffset }, (range.0, range.1)),
             (Cycles { before: Cycle::Hold, after: Cycle::Repeat }, (range.0, range.1)),
             (Cycles { before: Cycle::PingPong, after: Cycle::Hold }, (range.0, range.1)),
+            (Cycles { before: Cycle::Linear, after: Cycle::PingPong }, (range.0, range.1)),
             (Cycles::HOLD, (0.5, 1.25)),
         ];
         for (cycles, span) in cases {
@@ -911,7 +912,7 @@ mod tests {
                 quaternion_keys_following(&euler, EulerOrder::XYZ, range, tolerance).expect("valid keys");
             let times: Vec<f64> = quats.track.keys.iter().map(|k| k.time).collect();
             assert_eq!((times[0], times[times.len() - 1]), span, "{cycles:?}: the span, no more");
-            for n in -3..=5 {
+            for n in -5..=5 {
                 let cycle = if n < 0 { cycles.before } else { cycles.after };
                 if n != 0 && !cycle.is_cyclic() {
                     continue;
