@@ -58,7 +58,9 @@ fn require(tool: &str, package: &str) {
 
 /// Starts Xvfb on a free display number with a fixed 1280×800 screen.
 fn start_xvfb() -> (Guard, String) {
-    for n in 0..40 {
+    // Every one of the 400 numbers may be tried: an Xvfb that was killed leaves its lock and
+    // socket behind, and a machine that ran many sessions has hundreds of them.
+    for n in 0..400 {
         let display = 140 + (std::process::id() as usize + n * 7) % 400;
         if Path::new(&format!("/tmp/.X11-unix/X{display}")).exists()
             || Path::new(&format!("/tmp/.X{display}-lock")).exists()
