@@ -513,12 +513,12 @@ pub fn quaternion_keys_following(
     Ok(animated)
 }
 
-/// The angle between two rotations (radians), `2·atan2(|v|, |w|)` of `a⁻¹·b`: accurate for
-/// tiny angles, unlike glam's `angle_between` (an approximate `acos` of the dot product, good
-/// to about 0.02°).
+/// The angle between two rotations (radians): twice the 4-D angle of `a` and `±b` on one
+/// hemisphere ([`crate::quat::angle_between`], accurate for tiny angles, unlike glam's
+/// `angle_between`, an approximate `acos` of the dot product good to about 0.02°).
 fn angle(a: glam::DQuat, b: glam::DQuat) -> f64 {
-    let d = a.conjugate() * b;
-    2.0 * d.xyz().length().atan2(d.w.abs())
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    2.0 * crate::quat::angle_between(a, b)
 }
 
 /// `value` and `keys` with `from`'s cycles, mute and lock.

@@ -894,14 +894,7 @@ fn key_type_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, keys: &[c
         );
     ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Key type"));
     if let Some(chosen) = chosen.filter(|&t| mixed || t != first) {
-        let on = match keys {
-            [k] => {
-                let frame = channels::key_params(scene, k.channel, k.index)
-                    .map_or(0, |p| (p.0 * scene.fps).round() as i64);
-                format!("{} key at frame {frame}", k.channel.label(scene))
-            }
-            many => format!("{} keys", many.len()),
-        };
+        let on = keys_named(scene, keys);
         let keys = keys.to_vec();
         actions.push(Action::CloseGroup);
         actions.edit(Edit::scene(format!("key type {} on {on}", chosen.label()), move |scene| {
@@ -933,16 +926,19 @@ fn key_edit_label(
     } else {
         "key".to_owned()
     };
-    let scene = ctx.scene();
-    let on = match keys {
+    format!("{what} on {}", keys_named(ctx.scene(), keys))
+}
+
+/// The selected keys as an undo step names them: "elbow rotation key at frame 30", "3 keys".
+fn keys_named(scene: &keyrig_core::Scene, keys: &[crate::session::KeyRef]) -> String {
+    match keys {
         [k] => {
             let frame = channels::key_params(scene, k.channel, k.index)
                 .map_or(0, |p| (p.0 * scene.fps).round() as i64);
             format!("{} key at frame {frame}", k.channel.label(scene))
         }
         many => format!("{} keys", many.len()),
-    };
-    format!("{what} on {on}")
+    }
 }
 
 /// The channel's behaviour before its first key and after its last (cycles, docs/design.md §9): two
