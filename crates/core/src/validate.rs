@@ -385,14 +385,14 @@ impl Checker {
         if mode.euler().is_none() {
             self.push(
                 join(path, "rotation_mode"),
-                "Euler keys (rotation_euler) need an Euler rotation mode, which gives their order;                  this one is Quaternion",
+                "Euler keys (rotation_euler) need an Euler rotation mode, which gives their order; this one is Quaternion",
             );
         }
         if rotation.is_animated() {
             self.push(
                 join(path, "rotation.track"),
                 format!(
-                    "{} quaternion keys beside Euler keys (rotation_euler): the rotation is one or                      the other; remove the quaternion keys or rotation_euler",
+                    "{} quaternion keys beside Euler keys (rotation_euler): the rotation is one or the other; remove the quaternion keys or rotation_euler",
                     rotation.track.len()
                 ),
             );

@@ -176,6 +176,7 @@ fn euler_keys_sample_as_angles_and_as_the_rotation_they_make() {
     joint.rotation_mode = keyrig_core::RotationMode::Quaternion;
     joint.rotation.track = RawTrack::new(vec![Key::new(0.0, Quat::IDENTITY)]);
     let problems: Vec<String> = scene.problems().iter().map(ToString::to_string).collect();
+    assert!(problems.iter().all(|p| !p.contains("  ")), "one space between words: {problems:?}");
     assert!(
         problems.iter().any(|p| p.starts_with("objects[0].skeleton.joints[0].rotation_mode") && p.contains("Quaternion")),
         "{problems:?}"
