@@ -57,6 +57,11 @@ fn ident_path(s: &str) -> Vec<String> {
     parts
 }
 
+/// The module `name` directly under `module`.
+fn child(module: &Module, name: &str) -> Module {
+    module.iter().cloned().chain([name.to_owned()]).collect()
+}
+
 /// The longest prefix of `path` that is a module.
 fn resolve(mods: &BTreeMap<Module, PathBuf>, path: &[String]) -> Option<Module> {
     (0..=path.len()).rev().map(|n| path[..n].to_vec()).find(|p| mods.contains_key(p))
@@ -98,6 +103,22 @@ fn edges(mods: &BTreeMap<Module, PathBuf>) -> BTreeMap<Module, BTreeSet<Module>>
             }
             let base = module.len().saturating_sub(ups);
             targets.push(module[..base].iter().cloned().chain(ident_path(rest)).collect());
+        }
+        // Paths relative to the module: `child::…` (a child module named without `crate::`, as
+        // `use inspector::Inspector;` in `panels/mod.rs`) and `self::child::…`.
+        for (at, _) in code.match_indices("::") {
+            let start = code[..at].rfind(|c: char| !(c.is_alphanumeric() || c == '_')).map_or(0, |i| i + 1);
+            if start == at || code[..start].ends_with("::") {
+                continue;
+            }
+            let mut rest = &code[start..];
+            if let Some(r) = rest.strip_prefix("self::") {
+                rest = r;
+            }
+            let path = ident_path(rest);
+            if path.first().is_some_and(|first| mods.contains_key(&child(module, first))) {
+                targets.push(module.iter().cloned().chain(path).collect());
+            }
         }
         let set = out.entry(module.clone()).or_default();
         for target in targets {
@@ -192,6 +213,15 @@ fn the_cycle_check_sees_a_cycle() {
     assert_eq!(find_cycle(&edges(&modules(src))), None, "a child using its parent is not a cycle");
     std::fs::write(src.join("cli/x.rs"), "use crate::a;\n").expect("write");
     assert!(find_cycle(&edges(&modules(src))).is_some(), "a grouped use is an edge: a → cli::x → a");
+    // A child named by a relative path is an edge: a → cli (crate::cli) → cli::x (`x::…`) → a.
+    std::fs::write(src.join("a.rs"), "use crate::cli::helper;\n").expect("write");
+    std::fs::write(src.join("cli/mod.rs"), "mod x;\npub use x::run;\npub fn helper() {}\n").expect("write");
+    std::fs::write(src.join("cli/x.rs"), "pub fn run() { crate::a::f() }\n").expect("write");
+    let cycle = find_cycle(&edges(&modules(src))).expect("a relative path to a child is an edge");
+    assert!(cycle.contains(&vec!["cli".to_owned(), "x".to_owned()]), "{cycle:?}");
+    std::fs::write(src.join("cli/mod.rs"), "mod x;\npub use self::x::run;\npub fn helper() {}\n")
+        .expect("write");
+    assert!(find_cycle(&edges(&modules(src))).is_some(), "`self::x` is an edge too");
 }
 
 /// The edges from one editor panel to another: `panels::a` (or a module under it) naming

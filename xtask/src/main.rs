@@ -3,7 +3,10 @@
 //!
 //! - `cargo xtask test [ARGS…]`: sets the machine up for the test suite (system packages, the
 //!   glTF validator) and runs `cargo test --workspace ARGS…` (docs/testing.md).
-//! - `cargo xtask setup`: only the set-up.
+//! - `cargo xtask run [ARGS…]`: the README's run command: installs what building and opening
+//!   the editor needs (ALSA's headers for the sound output, the window's X libraries, a Vulkan
+//!   driver) and runs `cargo run --release -- ARGS…`.
+//! - `cargo xtask setup`: only the test suite's set-up.
 //! - `cargo xtask fuzz [--seconds N] [TARGET…]`: every fuzz target (or those named) for N
 //!   seconds each (60 by default) from its seed corpus, on the stable toolchain
 //!   (docs/fuzzing.md).
@@ -26,6 +29,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("test") => setup::run(true).and_then(|()| test(&args[1..])),
         Some("setup") => setup::run(true),
+        Some("run") => setup::editor().and_then(|()| run_editor(&args[1..])),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("screenshots") => setup::run(false).and_then(|()| screenshots::run(&args[1..])),
         Some("help" | "--help" | "-h") | None => {
@@ -44,7 +48,7 @@ fn main() -> ExitCode {
 }
 
 const USAGE: &str =
-    "usage: cargo xtask test [CARGO TEST ARGS…] | setup | fuzz [--seconds N] [TARGET…] | screenshots [--dev] [NAME…]";
+    "usage: cargo xtask test [CARGO TEST ARGS…] | run [KEYRIG ARGS…] | setup | fuzz [--seconds N] [TARGET…] | screenshots [--dev] [NAME…]";
 
 /// The repository's root (the folder above `xtask/`).
 pub fn root() -> PathBuf {
@@ -56,6 +60,13 @@ fn test(args: &[String]) -> Result<(), String> {
     let mut command = cargo();
     command.current_dir(root()).arg("test").arg("--workspace").args(args);
     run_status(&mut command, "cargo test --workspace")
+}
+
+/// `cargo run --release -- ARGS…`: builds and opens the editor (or runs a subcommand).
+fn run_editor(args: &[String]) -> Result<(), String> {
+    let mut command = cargo();
+    command.current_dir(root()).args(["run", "--release", "--package", "keyrig-editor", "--"]).args(args);
+    run_status(&mut command, "cargo run --release")
 }
 
 /// The cargo that runs this task.

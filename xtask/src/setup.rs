@@ -80,6 +80,32 @@ const LAVAPIPE: &[Need] = &[
     Need { package: "libvulkan1", command: None, why: "the Vulkan loader" },
 ];
 
+/// The X libraries the editor's window opens (winit), without the test tools.
+const EDITOR_WINDOW: &[&str] = &[
+    "libxkbcommon-x11-0",
+    "libxkbcommon0",
+    "libx11-6",
+    "libx11-xcb1",
+    "libxcursor1",
+    "libxrandr2",
+    "libxi6",
+];
+
+/// Checks and installs what building and opening the editor needs: ALSA's headers and a C++
+/// compiler (the build), the window's X libraries and a Vulkan driver (lavapipe where the
+/// machine has none).
+///
+/// # Errors
+/// What is missing and cannot be installed here, with the command that installs it.
+pub fn editor() -> Result<(), String> {
+    let mut needs: Vec<&Need> = WINDOW.iter().filter(|n| EDITOR_WINDOW.contains(&n.package)).collect();
+    needs.extend(SOUND);
+    if !vulkan_driver_installed() {
+        needs.extend(LAVAPIPE);
+    }
+    install(&needs)
+}
+
 /// Checks and installs what the tests need.
 ///
 /// # Errors

@@ -87,7 +87,7 @@ fn frame_prep(c: &mut Criterion) {
                 turn = (turn + 0.01) % 1.0;
                 let q = glam::Quat::from_rotation_z(turn);
                 doc.edit("bench key", |s| {
-                    keyrig_editor::channels::set_key(s, elbow, 1.0, ChannelValue::Rotation(q));
+                    keyrig_edit::channels::set_key(s, elbow, 1.0, ChannelValue::Rotation(q));
                 });
                 Arc::make_mut(&mut eval).update(doc.scene(), &loaded);
                 let rig = SceneRig::with_evaluator(doc.scene(), Arc::clone(&eval), &morphs);

@@ -59,7 +59,7 @@ fn main() {
         let time = (e * 7 % KEYS_PER_TRACK) as f64 / doc.scene().fps;
         let t0 = Instant::now();
         doc.edit("move key", |s| {
-            keyrig_editor::channels::set_key(
+            keyrig_edit::channels::set_key(
                 s,
                 ChannelId::ObjectTranslation(cube),
                 time,

@@ -13,13 +13,14 @@ use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 
 use glam::Quat;
-use keyrig_core::{Camera, Scene};
+use keyrig_core::Camera;
+use keyrig_edit::SceneEdit;
 
-use crate::channels::{ChannelId, ChannelValue, Turn};
 use crate::commands::Command;
 use crate::files::{BackgroundImport, DialogPurpose};
 use crate::session::{KeyRef, Selected};
 use crate::view::RenderStyle;
+use keyrig_edit::channels::{ChannelId, ChannelValue, Turn};
 
 /// What to do once unsaved changes have been dealt with.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,11 +92,14 @@ pub enum Action {
     /// A model import that finished on its thread.
     ImportFinished(BackgroundImport),
     /// Starts rendering the scene as the Render animation dialog says.
-    StartRender(crate::playblast::Playblast),
+    StartRender {
+        blast: crate::playblast::Playblast,
+        through: Option<crate::view::LookThrough>,
+    },
     /// Stops the running render (its movie is not written).
     CancelRender,
     /// Adds an empty, a primitive, a light or a camera where the view looks (the Add menu).
-    Add(crate::scene_add::AddKind),
+    Add(keyrig_edit::scene_add::AddKind),
 }
 
 /// A change of the document: one undo step, or one step per gesture.
@@ -115,24 +119,22 @@ pub enum Edit {
     /// Adds `delta` to component `component` of every selected key's value (an Euler angle in
     /// degrees for rotations, or with `twist` the twist about the bone axis).
     ShiftSelectedValues { component: usize, delta: f32, twist: bool },
-    /// Any other change of the scene, labelled `label`: one undo step, or with `group` part of
-    /// the continuous edit of that name.
-    Scene { label: String, group: Option<String>, change: Box<dyn FnOnce(&mut Scene)> },
+    /// Any other change of the scene, as data ([`SceneEdit`], named by its own undo label): one
+    /// undo step, or with `group` part of the continuous edit of that name.
+    Scene { edit: SceneEdit, group: Option<String> },
 }
 
 impl Edit {
     /// A change of the scene that is one undo step.
-    pub fn scene(label: impl Into<String>, change: impl FnOnce(&mut Scene) + 'static) -> Self {
-        Edit::Scene { label: label.into(), group: None, change: Box::new(change) }
+    #[must_use]
+    pub fn scene(edit: SceneEdit) -> Self {
+        Edit::Scene { edit, group: None }
     }
 
     /// A change of the scene that joins the continuous edit `group` (one drag).
-    pub fn continuous(
-        group: impl Into<String>,
-        label: impl Into<String>,
-        change: impl FnOnce(&mut Scene) + 'static,
-    ) -> Self {
-        Edit::Scene { label: label.into(), group: Some(group.into()), change: Box::new(change) }
+    #[must_use]
+    pub fn continuous(group: impl Into<String>, edit: SceneEdit) -> Self {
+        Edit::Scene { edit, group: Some(group.into()) }
     }
 }
 
@@ -191,7 +193,7 @@ pub enum ViewChange {
     Onion(crate::onion::OnionSkin),
     ShowHelp(bool),
     /// Look through a scene camera, or (None) through the orbit camera again.
-    LookThrough(Option<usize>),
+    LookThrough(Option<crate::view::LookThrough>),
     ShowRender(bool),
 }
 

@@ -18,7 +18,6 @@ use keyrig_eval::SceneEvaluator;
 pub use crate::actions::PendingAction;
 use crate::actions::{Action, Actions, EditResults, SessionChange, Unsaved, ViewChange};
 use crate::camera::{Bounds, OrbitCamera};
-use crate::channels::{self, ChannelId, ChannelValue};
 use crate::commands::Command;
 pub use crate::context::Status;
 use crate::document::Document;
@@ -29,6 +28,7 @@ use crate::panels::Panels;
 use crate::scene_frame::SceneFrame;
 use crate::session::{KeyRef, Selected, Session};
 use crate::view::ViewState;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 
 /// Start-up options (tests use a temporary folder for recovery and recent files).
 #[derive(Clone, Debug, Default)]
@@ -431,7 +431,7 @@ impl EditorApp {
             Selected::Object(o) => {
                 self.doc.edit(&format!("delete object {name}"), |scene| {
                     let gone = scene.objects.remove(o);
-                    crate::camera_edits::forget_aim_targets(scene, &gone.name);
+                    keyrig_edit::camera_edits::forget_aim_targets(scene, &gone.name);
                 });
             }
             Selected::Light(l) => {
@@ -441,7 +441,7 @@ impl EditorApp {
             }
             Selected::Camera(c) => {
                 self.doc.edit(&format!("delete camera {name}"), |scene| {
-                    crate::camera_edits::remove_camera(scene, c);
+                    keyrig_edit::camera_edits::remove_camera(scene, c);
                 });
             }
             Selected::Joint { .. } => {
@@ -563,10 +563,10 @@ impl EditorApp {
         self.doc.edit(&format!("rename {old} to {name}"), |scene| match item {
             Selected::Object(o) => {
                 let old = std::mem::replace(&mut scene.objects[o].name, new.clone());
-                crate::camera_edits::rename_aim_targets(scene, &old, None, &new);
+                keyrig_edit::camera_edits::rename_aim_targets(scene, &old, None, &new);
             }
             Selected::Light(l) => scene.lights[l].name = new,
-            Selected::Camera(c) => crate::camera_edits::rename_camera(scene, c, new),
+            Selected::Camera(c) => keyrig_edit::camera_edits::rename_camera(scene, c, new),
             Selected::Joint { object, joint } => {
                 let old = scene.objects[object]
                     .skeleton
@@ -574,7 +574,7 @@ impl EditorApp {
                     .map(|s| std::mem::replace(&mut s.joints[joint].name, new.clone()));
                 if let Some(old) = old {
                     let owner = scene.objects[object].name.clone();
-                    crate::camera_edits::rename_aim_targets(scene, &owner, Some(&old), &new);
+                    keyrig_edit::camera_edits::rename_aim_targets(scene, &owner, Some(&old), &new);
                 }
             }
         });
@@ -651,7 +651,7 @@ impl EditorApp {
     /// Applies the copied pose at the current frame: in record mode as keys, otherwise as
     /// the pose shown (overrides on animated channels, values of static ones); one undo step.
     /// Mirrored, the pose is reflected across each character's symmetry plane onto the joints
-    /// of the other side, whatever their local axes ([`crate::mirror::mirror_clipboard`]), as
+    /// of the other side, whatever their local axes ([`keyrig_edit::mirror::mirror_clipboard`]), as
     /// Blender's Paste Flipped; the status bar says which joints paired.
     pub fn paste_pose(&mut self, mirrored: bool) {
         if self.session.pose_clipboard.is_empty() {
@@ -671,7 +671,7 @@ impl EditorApp {
     /// Applies `pose` (channel values) at the current frame, as Paste pose does: in record mode
     /// as keys, otherwise as the pose shown (overrides on animated channels, values of static
     /// ones); one undo step labelled `what`. Mirrored, the pose is reflected across each
-    /// character's symmetry plane first ([`crate::mirror::mirror_clipboard`]). With `only`, the
+    /// character's symmetry plane first ([`keyrig_edit::mirror::mirror_clipboard`]). With `only`, the
     /// channels outside it are left alone (a pose applied to a selection). Returns how many
     /// channels it set and, mirrored, the report of which joints paired.
     pub fn apply_pose_values(
@@ -683,8 +683,9 @@ impl EditorApp {
     ) -> (usize, Option<String>) {
         let scene = self.doc.scene();
         let (pose, report) = if mirrored {
-            let paste =
-                crate::mirror::mirror_clipboard(scene, pose, |o| self.object_pose_now(o).map(|p| p.pose));
+            let paste = keyrig_edit::mirror::mirror_clipboard(scene, pose, |o| {
+                self.object_pose_now(o).map(|p| p.pose)
+            });
             (paste.values, Some(paste.report))
         } else {
             (pose.to_vec(), None)
@@ -942,6 +943,7 @@ impl EditorApp {
             Command::Save => self.save(),
             Command::SaveAs => self.open_dialog(DialogPurpose::SaveAs),
             Command::Import => self.open_dialog(DialogPurpose::Import),
+            Command::ImportSound => self.open_dialog(DialogPurpose::ImportSound),
             Command::ExportGltf => self.open_dialog(DialogPurpose::Export),
             Command::RenderAnimation => self.view.show_render = true,
             Command::Quit => self.request(PendingAction::Quit),
@@ -1103,7 +1105,10 @@ impl EditorApp {
         let storage = std::mem::take(self.file_dialog.storage_mut());
         self.file_dialog = files::file_dialog(purpose, &stem, folder, storage);
         match purpose {
-            DialogPurpose::Open | DialogPurpose::Import | DialogPurpose::ReferenceImage => {
+            DialogPurpose::Open
+            | DialogPurpose::Import
+            | DialogPurpose::ImportSound
+            | DialogPurpose::ReferenceImage => {
                 self.file_dialog.pick_file();
             }
             DialogPurpose::SaveAs | DialogPurpose::Export => self.file_dialog.save_file(),
@@ -1133,7 +1138,24 @@ impl EditorApp {
     /// Imports a model into the current scene as new objects, read in the background and
     /// applied as one undoable edit ([`EditorApp::wait_for_background_work`]).
     pub fn import_path(&mut self, path: PathBuf) {
+        if files::is_sound_file(&path) {
+            self.add_sound(&path);
+            return;
+        }
         self.start_import(path, files::ImportPurpose::Import);
+    }
+
+    /// Adds the sound file at `path` as a clip starting at the current frame, one undo step
+    /// (File ▸ Import sound, Ctrl+I, or a sound file dropped on the window); the dope sheet's
+    /// sound rows show it as soon as it is decoded.
+    pub fn add_sound(&mut self, path: &std::path::Path) {
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        let start = f64::from(self.session.playback.whole_frame());
+        let clip = keyrig_core::SoundClip::new(path.to_string_lossy(), start);
+        let edit = keyrig_edit::SceneEdit::AddSound(clip);
+        let label = edit.label(self.doc.scene());
+        self.doc.edit(&label, |scene| edit.apply(scene));
+        self.info(label);
     }
 
     /// Exports the scene as glTF.
@@ -1255,14 +1277,24 @@ impl EditorApp {
 
     /// Starts File ▸ Render animation on its own thread, from a copy of the scene seen by the
     /// viewport's camera.
-    fn start_render(&mut self, blast: crate::playblast::Playblast) {
+    fn start_render(
+        &mut self,
+        blast: crate::playblast::Playblast,
+        through: Option<crate::view::LookThrough>,
+    ) {
         if self.render.is_some() {
             self.error("A render is already running".to_owned());
             return;
         }
         let scene = self.doc.scene().clone();
         let file = self.doc.path().map(std::path::Path::to_path_buf);
-        match crate::render_job::RenderJob::start(scene, file, blast, self.view.camera) {
+        // Drawn as keyrig render draws it, with the viewport's grid and bones toggles.
+        let view = keyrig_render::ViewOptions {
+            grid: self.view.grid,
+            skeletons: self.view.bones,
+            ..crate::playblast::playblast_view(Some(self.view.camera))
+        };
+        match crate::render_job::RenderJob::start(scene, file, blast, view, through) {
             Ok(job) => self.render = Some(job),
             Err(e) => self.error(format!("Render animation: {e}")),
         }
@@ -1344,7 +1376,7 @@ impl EditorApp {
                 self.actions.push(Action::FrameObjects((first..first + n).collect()));
                 // The model's animation (its keys, or the range its own scene gives it, as an
                 // MD2 loop) in seconds; the scene's range grows to cover it, in the same step.
-                let model_seconds = crate::channels::last_key_time(&scene)
+                let model_seconds = keyrig_edit::channels::last_key_time(&scene)
                     .unwrap_or(0.0)
                     .max(f64::from(scene.frame_range.end) / scene.fps.max(1e-9));
                 let range = self.doc.scene().frame_range;
@@ -1458,6 +1490,7 @@ impl EditorApp {
                 DialogPurpose::Open => self.open_path(path),
                 DialogPurpose::SaveAs => self.save_to(files::with_extension_if_missing(path, "ron")),
                 DialogPurpose::Import => self.import_path(path),
+                DialogPurpose::ImportSound => self.add_sound(&path),
                 DialogPurpose::Export => self.export_to(files::with_extension_if_missing(path, "glb")),
                 DialogPurpose::ReferenceImage => self.set_reference_image(&path),
             },
@@ -1473,7 +1506,7 @@ impl EditorApp {
             }
             Action::ImportFinished(import) => self.apply_import(import),
             Action::Add(kind) => self.add_item(kind),
-            Action::StartRender(blast) => self.start_render(blast),
+            Action::StartRender { blast, through } => self.start_render(blast, through),
             Action::CancelRender => {
                 if let Some(job) = &self.render {
                     job.cancel();

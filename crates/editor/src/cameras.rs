@@ -1,13 +1,15 @@
 //! The editor's camera and marker commands: look through a camera, set a camera to the view,
 //! add a camera, add or remove a marker, bind a camera to a marker
-//! ([`crate::camera_edits`] holds the scene edits they share with renaming and deleting).
+//! ([`keyrig_edit::camera_edits`] holds the scene edits they share with renaming and deleting).
 
-use keyrig_core::{Marker, SceneCamera};
+use glam::{Quat, Vec3};
+use keyrig_core::{Camera, Marker, SceneCamera};
 
 use crate::app::{unique_name, EditorApp};
-use crate::camera_edits::{add_marker, view_as_camera};
-use crate::channels::{ChannelId, ChannelValue};
 use crate::session::Selected;
+use crate::view::LookThrough;
+use keyrig_edit::camera_edits::add_marker;
+use keyrig_edit::channels::{ChannelId, ChannelValue};
 
 impl EditorApp {
     /// The camera the camera commands act on: the selected one, else the one looked through,
@@ -19,23 +21,35 @@ impl EditorApp {
             _ => self
                 .view
                 .look_through
-                .filter(|&c| c < scene.cameras.len())
+                .and_then(|l| l.camera_at(scene, self.session.playback.frame))
                 .or_else(|| scene.active_camera_at(self.session.playback.frame)),
         }
     }
 
-    /// Looks through the selected (else the active) scene camera, or back through the orbit
-    /// camera when already looking through one.
+    /// Looks through the selected scene camera, else through the active camera (which markers
+    /// switch as the playhead passes them, as in Blender), or back through the orbit camera
+    /// when already looking through one.
     pub fn toggle_look_through(&mut self) {
         if self.view.look_through.take().is_some() {
             self.info("Looking through the view again");
             return;
         }
-        match self.command_camera() {
-            Some(c) => {
-                self.view.look_through = Some(c);
-                let name = self.doc.scene().cameras[c].name.clone();
-                self.info(format!("Looking through {name} (0 or orbiting leaves it)"));
+        let scene = self.doc.scene();
+        let frame = self.session.playback.frame;
+        let choice = match self.session.selection.item {
+            Some(Selected::Camera(c)) if c < scene.cameras.len() => Some(LookThrough::Camera(c)),
+            _ => scene.active_camera_at(frame).map(|_| LookThrough::Active),
+        };
+        match choice {
+            Some(choice) => {
+                self.view.look_through = Some(choice);
+                let name =
+                    choice.camera_at(scene, frame).map(|c| scene.cameras[c].name.clone()).unwrap_or_default();
+                let how = match choice {
+                    LookThrough::Active => "the active camera; markers cut between cameras",
+                    LookThrough::Camera(_) => "0 or orbiting leaves it",
+                };
+                self.info(format!("Looking through {name} ({how})"));
             }
             None => self.info("Look through camera: the scene has no camera (Ctrl+Shift+C adds one)"),
         }
@@ -112,5 +126,45 @@ impl EditorApp {
             None => add_marker(scene, Marker { name: bound.clone(), frame, camera: Some(bound) }),
         });
         self.info(format!("{camera} is the active camera from frame {frame}"));
+    }
+}
+
+/// The world position and rotation of the orbit view `camera` as a scene camera (looking down
+/// its −Z, +Y up): what "set camera to current view" keys.
+#[must_use]
+pub fn view_as_camera(camera: &Camera) -> (Vec3, Quat) {
+    let eye = keyrig_render::camera::eye_position(camera);
+    let rotation = keyrig_core::camera_object::aim_rotation(eye, camera.target, Vec3::Y, 0.0)
+        .or_else(|| keyrig_core::camera_object::aim_rotation(eye, camera.target, Vec3::NEG_Z, 0.0))
+        .unwrap_or(Quat::IDENTITY);
+    (eye, rotation)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use keyrig_core::Camera;
+
+    #[test]
+    fn the_view_as_a_camera_sees_what_the_view_sees() {
+        let view = Camera {
+            target: Vec3::new(1.0, 0.5, 0.0),
+            yaw_deg: 30.0,
+            pitch_deg: 20.0,
+            distance: 6.0,
+            fov_y_deg: 45.0,
+        };
+        let (eye, rotation) = view_as_camera(&view);
+        let state = keyrig_eval::CameraState {
+            world_from_camera: glam::Affine3A::from_rotation_translation(rotation, eye),
+            lens: keyrig_core::Lens::Perspective { fov_y: 45f32.to_radians() },
+            near: 0.1,
+            far: Some(100.0),
+            visible: true,
+        };
+        // The same view matrix as the orbit camera's (keyrig-render's look-at).
+        let orbit = keyrig_render::camera::view_from_world(&view);
+        assert!(state.view_from_world().abs_diff_eq(orbit, 1e-4), "{} vs {orbit}", state.view_from_world());
     }
 }

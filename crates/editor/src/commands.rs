@@ -12,6 +12,7 @@ pub enum Command {
     Save,
     SaveAs,
     Import,
+    ImportSound,
     ExportGltf,
     RenderAnimation,
     Quit,
@@ -69,12 +70,13 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 51] = [
+    pub const ALL: [Command; 52] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
         Command::Save,
         Command::Import,
+        Command::ImportSound,
         Command::ExportGltf,
         Command::RenderAnimation,
         Command::Quit,
@@ -132,8 +134,9 @@ impl Command {
             Command::Open => "Open…",
             Command::Save => "Save",
             Command::SaveAs => "Save as…",
-            Command::Import => "Import model…",
-            Command::ExportGltf => "Export glTF…",
+            Command::Import => "Import…",
+            Command::ImportSound => "Import sound…",
+            Command::ExportGltf => "Export…",
             Command::RenderAnimation => "Render animation…",
             Command::Quit => "Quit",
             Command::Undo => "Undo",
@@ -187,7 +190,10 @@ impl Command {
             Command::Open => "Open a scene file (.ron)",
             Command::Save => "Save the scene to its file",
             Command::SaveAs => "Save the scene to a new file",
-            Command::Import => "Import a model (glTF, MD2) into the scene",
+            Command::Import => {
+                "Import a model (glTF, MD2, VRML, X3D, Inventor) or a sound (WAV, FLAC, MP3, Ogg) into the scene"
+            }
+            Command::ImportSound => "Add a sound clip (WAV, FLAC, MP3, Ogg) at the current frame",
             Command::ExportGltf => "Export the scene's meshes, skins and animation as glTF",
             Command::RenderAnimation => "Render frames as a movie (MP4, GIF, animated PNG) or PNG files",
             Command::Quit => "Close the editor (asks before losing changes)",
@@ -216,7 +222,7 @@ impl Command {
             Command::CopyPose => "Copy the values of the selected joints and objects at the current frame",
             Command::PastePose => "Apply the copied pose at the current frame (keys it in record mode)",
             Command::PastePoseMirrored => {
-                "Apply the copied pose to the other side (.L/.R, Left/Right), mirrored across X"
+                "Apply the copied pose to the other side (.L/.R, Left/Right), mirrored across the character's fitted symmetry plane"
             }
             Command::PlayPause => "Start or stop playback",
             Command::ToggleLoop => "Loop playback over the frame range",
@@ -278,6 +284,7 @@ impl Command {
             Command::Save => vec![sc(CMD, Key::S)],
             Command::SaveAs => vec![sc(CMD_SHIFT, Key::S)],
             Command::Import => vec![sc(CMD, Key::I)],
+            Command::ImportSound => vec![],
             Command::ExportGltf => vec![sc(CMD, Key::E)],
             Command::RenderAnimation => vec![sc(CMD_SHIFT, Key::R)],
             Command::Quit => vec![sc(CMD, Key::Q)],

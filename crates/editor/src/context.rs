@@ -9,7 +9,6 @@ use keyrig_core::Scene;
 use keyrig_eval::SceneEvaluator;
 
 use crate::actions::{EditResults, PendingAction};
-use crate::channels::{self, ChannelId, ChannelValue};
 use crate::document::Document;
 use crate::eval::ObjectPose;
 use crate::files::{BackgroundImport, MeshStore, Recovery};
@@ -17,6 +16,7 @@ use crate::ik_posing::{IkPoseError, PosedChain};
 use crate::scene_frame::SceneFrame;
 use crate::session::{Selected, Session};
 use crate::view::ViewState;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 
 /// A status-bar message.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,6 +78,25 @@ pub struct FrameCtx<'a> {
 }
 
 impl FrameCtx<'_> {
+    /// The deformer the toolbar and the Deformer menu show as chosen: the one in effect at this
+    /// frame (a keyed deformer's value, else the object's setting; as the viewport's overlay
+    /// names it) of the first object the deformer commands act on; `None` without a skinned
+    /// object.
+    #[must_use]
+    pub fn deformer_in_effect(&self) -> Option<keyrig_core::DeformerKind> {
+        let scene = self.scene();
+        let o = *crate::commands::deformer_targets(scene, self.selected_object()).first()?;
+        let set = scene.objects.get(o)?.deformer.kind;
+        Some(self.scene.state().and_then(|s| s.objects.get(o)).map_or(set, |s| s.look.deformer))
+    }
+
+    /// The scene camera the viewport looks through at the current frame, if any (markers cut
+    /// between cameras while looking through the active one).
+    #[must_use]
+    pub fn looking_through(&self) -> Option<usize> {
+        self.view.look_through?.camera_at(self.scene(), self.session.playback.frame)
+    }
+
     /// The document's scene.
     #[must_use]
     pub fn scene(&self) -> &Scene {

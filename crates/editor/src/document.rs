@@ -125,6 +125,11 @@ impl Document {
             return false;
         }
         if self.open_group.as_deref() == Some(group) {
+            // The step is named for where the gesture has got to ("bias -0.90", not the first
+            // frame's "bias -0.10").
+            if let Some(step) = self.undo.last_mut() {
+                label.clone_into(&mut step.label);
+            }
             self.redo.clear();
             self.dirty = true;
             self.revision += 1;

@@ -9,9 +9,9 @@ use glam::Quat;
 
 use crate::actions::Edit;
 use crate::app::{EditorApp, IK_DRAG_GROUP};
-use crate::channels::{self, ChannelId, ChannelValue};
 use crate::eval::continuous_euler;
 use crate::session::KeyRef;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 
 impl EditorApp {
     /// Applies one edit the panels pushed.
@@ -27,11 +27,12 @@ impl EditorApp {
             Edit::ShiftSelectedValues { component, delta, twist } => {
                 self.shift_selected_values(component, delta, twist);
             }
-            Edit::Scene { label, group: Some(group), change } => {
-                self.doc.edit_continuous(&group, &label, change);
-            }
-            Edit::Scene { label, group: None, change } => {
-                self.doc.edit(&label, change);
+            Edit::Scene { edit, group } => {
+                let label = edit.label(self.doc.scene());
+                match group {
+                    Some(group) => self.doc.edit_continuous(&group, &label, |scene| edit.apply(scene)),
+                    None => self.doc.edit(&label, |scene| edit.apply(scene)),
+                };
             }
         }
     }
@@ -244,7 +245,7 @@ impl EditorApp {
                     ChannelValue::Scalar(s) if component == 0 => ChannelValue::Scalar(s + delta),
                     ChannelValue::Rotation(q) if twist && component == 0 => {
                         // A twist about the bone axis, in the key's own frame.
-                        let turn = Quat::from_axis_angle(crate::twist::BONE_AXIS, delta.to_radians());
+                        let turn = Quat::from_axis_angle(keyrig_edit::spin::BONE_AXIS, delta.to_radians());
                         ChannelValue::Rotation((q * turn).normalize())
                     }
                     ChannelValue::Rotation(q) if !twist => match mode.euler() {

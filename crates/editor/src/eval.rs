@@ -9,7 +9,7 @@
 use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::Scene;
 
-use crate::channels::{ChannelId, ChannelValue};
+use keyrig_edit::channels::{ChannelId, ChannelValue};
 
 /// Values set by a gizmo or the inspector on a keyed channel without record mode: shown until
 /// the frame changes or the pose is keyed with I.
@@ -98,8 +98,8 @@ pub fn continuous_euler(
     overrides: &PoseOverrides,
 ) -> Option<Vec3> {
     let Some(ChannelValue::Rotation(now)) = eval.value(id, time, overrides) else { return None };
-    let keys = match crate::channels::channel(scene, id) {
-        Some(crate::channels::ChannelRef::Rotation(a)) => &a.track.keys,
+    let keys = match keyrig_edit::channels::channel(scene, id) {
+        Some(keyrig_edit::channels::ChannelRef::Rotation(a)) => &a.track.keys,
         _ => return Some(order.angles(now)),
     };
     let none = PoseOverrides::new();
@@ -163,16 +163,16 @@ fn walk(
     *q = next;
 }
 
-/// The twist about the bone axis ([`crate::twist::BONE_AXIS`]) of rotation `q` shown for
+/// The twist about the bone axis ([`keyrig_edit::spin::BONE_AXIS`]) of rotation `q` shown for
 /// channel `id` at `time`, degrees, unwrapped through the channel's spin keys (720 after two
 /// turns); a value off the track (a pose override) reads as its twist nearest the track's.
 #[must_use]
 pub fn twist_now(scene: &Scene, id: ChannelId, q: Quat, time: f64) -> f64 {
-    use crate::twist::{nearest_turn, twist_degrees, unwrapped_twist, BONE_AXIS};
+    use keyrig_edit::spin::{nearest_turn, twist_degrees, unwrapped_twist, BONE_AXIS};
     let axis = BONE_AXIS.as_dvec3();
     let wrapped = twist_degrees(q.as_dquat(), axis);
-    let track = match crate::channels::channel(scene, id) {
-        Some(crate::channels::ChannelRef::Rotation(a)) if !a.track.is_empty() => {
+    let track = match keyrig_edit::channels::channel(scene, id) {
+        Some(keyrig_edit::channels::ChannelRef::Rotation(a)) if !a.track.is_empty() => {
             keyrig_core::Track::new(&a.track).ok()
         }
         _ => None,

@@ -8,20 +8,11 @@ use keyrig_core::{Animated, IkConstraint, Key, RawTrack};
 
 use crate::app::EditorApp;
 
-/// Indices of object `object`'s IK constraints whose end joint is `joint`.
-#[must_use]
-pub fn ending_at(scene: &keyrig_core::Scene, object: usize, joint: usize) -> Vec<usize> {
-    let Some(skeleton) = scene.objects.get(object).and_then(|o| o.skeleton.as_ref()) else {
-        return Vec::new();
-    };
-    (0..skeleton.ik_constraints.len()).filter(|&c| skeleton.ik_constraints[c].end == joint).collect()
-}
-
 impl EditorApp {
     /// Indices of object `object`'s IK constraints whose end joint is `joint`.
     #[must_use]
     pub fn ik_constraints_ending_at(&self, object: usize, joint: usize) -> Vec<usize> {
-        ending_at(self.doc.scene(), object, joint)
+        keyrig_edit::ik::ending_at(self.doc.scene(), object, joint)
     }
 
     /// Adds an IK constraint on the IK posing chain that ends at `joint` (its length as chosen

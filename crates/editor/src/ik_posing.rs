@@ -32,8 +32,8 @@ use glam::{Affine3A, Quat, Vec3};
 use keyrig_core::ik::{self, FabrikSettings, IkChain, IkError, IkReport, Pole};
 use keyrig_core::Scene;
 
-use crate::channels::ChannelId;
 use crate::eval::ObjectPose;
+use keyrig_edit::channels::ChannelId;
 
 /// Bones of an IK chain unless the animator chooses another length: two, the analytic solver's
 /// shoulder–elbow–wrist.

@@ -12,7 +12,7 @@ use keyrig_core::Scene;
 
 use keyrig_render::Selected;
 
-use crate::channels::ChannelId;
+use keyrig_edit::channels::ChannelId;
 
 /// The active keying set (session state: not saved, not undone).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

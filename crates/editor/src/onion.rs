@@ -8,7 +8,7 @@ use glam::Vec3;
 use keyrig_core::{FrameRange, Scene};
 use keyrig_render::Ghost;
 
-use crate::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 
 /// The most ghosts on each side of the current frame.
 pub const MAX_PER_SIDE: u32 = 8;

@@ -2,7 +2,7 @@
 //! path), added from the selection at the current frame, applied to the selection (as keys in
 //! record mode, as the pose shown otherwise), optionally mirrored across each character's
 //! symmetry plane — the mirrored paste's one path ([`EditorApp::apply_pose_values`],
-//! [`crate::mirror`]) — renamed and deleted; each one undo step. The inspector's Pose library
+//! [`keyrig_edit::mirror`]) — renamed and deleted; each one undo step. The inspector's Pose library
 //! section drives it (`panels::inspector::pose_library`).
 
 use keyrig_core::channel::ChannelPath;
@@ -10,7 +10,7 @@ use keyrig_core::{NamedPose, PoseValue};
 
 use crate::actions::PoseLibraryAction;
 use crate::app::EditorApp;
-use crate::channels::{ChannelId, ChannelValue};
+use keyrig_edit::channels::{ChannelId, ChannelValue};
 
 /// The pose's values that find their channel in `scene` (by name), and how many did not.
 #[must_use]

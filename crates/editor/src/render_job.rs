@@ -13,10 +13,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use keyrig_core::{Camera, Scene};
+use keyrig_core::Scene;
 use keyrig_render::{HeadlessRenderer, SceneRig, ViewOptions};
 
 use crate::playblast::{FrameError, Playblast, PlayblastError, Progress, Summary};
+use crate::view::LookThrough;
 
 /// A playblast rendering on its own thread.
 pub struct RenderJob {
@@ -24,12 +25,32 @@ pub struct RenderJob {
     pub blast: Playblast,
     progress: Arc<Mutex<Option<Progress>>>,
     cancel: Arc<AtomicBool>,
-    handle: Option<JoinHandle<Result<Summary, String>>>,
+    handle: Option<JoinHandle<Result<Summary, RenderJobError>>>,
+}
+
+/// Why a render on its thread did not finish.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderJobError {
+    #[error("opening a GPU device for rendering: {0}")]
+    Device(keyrig_render::RenderError),
+    #[error(transparent)]
+    Meshes(#[from] crate::files::FileError),
+    #[error("preparing the scene: {0}")]
+    Prepare(keyrig_render::SceneFrameError),
+    #[error("uploading meshes: {0}")]
+    Upload(keyrig_render::SceneFrameError),
+    #[error(transparent)]
+    Playblast(#[from] PlayblastError),
+    #[error("the render thread stopped unexpectedly")]
+    ThreadStopped,
+    #[error("the render was already collected")]
+    Collected,
 }
 
 impl RenderJob {
     /// Starts rendering `scene` (whose model files resolve against `base_dir`) as `blast`
-    /// says, seen by `camera`; refuses before starting an output that is one of the scene's
+    /// says, drawn with `view` and seen through `through` (by `view.camera` when `None`), frame by frame as
+    /// `keyrig render` does ([`crate::playblast::scene_frame`]); refuses before starting an output that is one of the scene's
     /// inputs (its file, the model and sound files it uses).
     ///
     /// # Errors
@@ -38,7 +59,8 @@ impl RenderJob {
         scene: Scene,
         scene_file: Option<PathBuf>,
         blast: Playblast,
-        camera: Camera,
+        view: ViewOptions,
+        through: Option<LookThrough>,
     ) -> Result<RenderJob, PlayblastError> {
         blast.validate()?;
         let base_dir = scene_file.as_deref().and_then(|p| p.parent()).map(std::path::Path::to_path_buf);
@@ -53,7 +75,7 @@ impl RenderJob {
             let (blast, progress, cancel) = (blast.clone(), Arc::clone(&progress), Arc::clone(&cancel));
             std::thread::Builder::new()
                 .name("keyrig render".into())
-                .spawn(move || render(&scene, base_dir, &blast, camera, &progress, &cancel))
+                .spawn(move || render(&scene, base_dir, &blast, (view, through), &progress, &cancel))
                 .map_err(|e| PlayblastError::Settings(format!("cannot start the render thread: {e}")))?
         };
         Ok(RenderJob { blast, progress, cancel, handle: Some(handle) })
@@ -85,11 +107,11 @@ impl RenderJob {
     ///
     /// # Errors
     /// The render failed or was cancelled (the message says which).
-    pub fn finish(mut self) -> Result<Summary, String> {
+    pub fn finish(mut self) -> Result<Summary, RenderJobError> {
         match self.handle.take().map(JoinHandle::join) {
             Some(Ok(result)) => result,
-            Some(Err(_)) => Err("the render thread stopped unexpectedly".into()),
-            None => Err("the render was already collected".into()),
+            Some(Err(_)) => Err(RenderJobError::ThreadStopped),
+            None => Err(RenderJobError::Collected),
         }
     }
 }
@@ -98,20 +120,19 @@ fn render(
     scene: &Scene,
     base_dir: Option<PathBuf>,
     blast: &Playblast,
-    camera: Camera,
+    (view, through): (ViewOptions, Option<LookThrough>),
     progress: &Mutex<Option<Progress>>,
     cancel: &AtomicBool,
-) -> Result<Summary, String> {
-    let mut headless =
-        HeadlessRenderer::new().map_err(|e| format!("opening a GPU device for rendering: {e}"))?;
-    let meshes = crate::files::render_meshes(scene, base_dir.as_deref()).map_err(|e| e.to_string())?;
+) -> Result<Summary, RenderJobError> {
+    let mut headless = HeadlessRenderer::new().map_err(RenderJobError::Device)?;
+    let meshes = crate::files::render_meshes(scene, base_dir.as_deref())?;
     let rig = SceneRig::with_loaded(scene, &meshes.skinned, &meshes.morphs)
-        .map_err(|e| format!("preparing the scene: {e}"))?
+        .map_err(RenderJobError::Prepare)?
         .with_materials(&meshes.materials);
-    rig.upload(headless.renderer_mut()).map_err(|e| format!("uploading meshes: {e}"))?;
-    let view = ViewOptions { camera: Some(camera), skeletons: false, ..ViewOptions::default() };
-    let mut frame_input =
-        |frame: f64| -> Result<_, FrameError> { Ok(rig.frame(rig.time_of_frame(frame), &view)?) };
+    rig.upload(headless.renderer_mut()).map_err(RenderJobError::Upload)?;
+    let mut frame_input = |frame: f64| -> Result<_, FrameError> {
+        Ok(crate::playblast::scene_frame(&rig, &view, through, frame)?)
+    };
     blast
         .run(&mut headless, &mut frame_input, &mut |p| {
             if let Ok(mut slot) = progress.lock() {
@@ -123,5 +144,5 @@ fn render(
                 ControlFlow::Continue(())
             }
         })
-        .map_err(|e| e.to_string())
+        .map_err(RenderJobError::from)
 }

@@ -23,8 +23,14 @@ impl EditorApp {
     }
 
     /// Remembers the document's session for its file (nothing for a document without one). A
-    /// data folder that cannot be written loses only the convenience: the status bar says so.
+    /// document with unsaved changes keeps the session remembered when it was last saved: those
+    /// changes are being discarded, and a camera framing discarded imports would open the saved
+    /// file on an empty view. A data folder that cannot be written loses only the convenience:
+    /// the status bar says so.
     pub fn remember_session(&mut self) {
+        if self.doc.is_dirty() {
+            return;
+        }
         let Some(saved) = self.saved_session() else { return };
         if let Err(e) = self.sessions.store(saved) {
             self.error(format!("The session was not remembered: {e}"));

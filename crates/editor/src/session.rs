@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 
 use keyrig_core::Scene;
 
-use crate::channels::{ChannelId, ChannelValue, KeyCopy};
+use keyrig_edit::channels::{ChannelId, ChannelValue, KeyCopy};
 
 use crate::eval::PoseOverrides;
 use crate::ik_posing::IkPosing;
@@ -106,12 +106,7 @@ impl Session {
     }
 }
 
-/// One key of one channel (index into the channel's track).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct KeyRef {
-    pub channel: ChannelId,
-    pub index: usize,
-}
+pub use keyrig_edit::KeyRef;
 
 /// The selected scene items and the selected keys. `item` is the active item (the inspector,
 /// the gizmo and framing follow it); `others` are further items selected with Shift or Ctrl.
@@ -184,7 +179,7 @@ impl Selection {
     pub fn retain_valid(&mut self, scene: &Scene) {
         self.item = self.item.filter(|&item| item_exists(item, scene));
         self.others.retain(|&item| item_exists(item, scene));
-        self.keys.retain(|k| k.index < crate::channels::key_count(scene, k.channel));
+        self.keys.retain(|k| k.index < keyrig_edit::channels::key_count(scene, k.channel));
     }
 }
 

@@ -1,11 +1,11 @@
 //! Staple commands on the editor: hide the selected objects in the viewport and show every
 //! hidden one again (H, Alt+H; [`crate::hidden`] says what hiding means); turn the preview
 //! range on or off (Ctrl+Alt+P; [`crate::widgets::preview_range`]); add an item from the Add
-//! menu ([`crate::scene_add`]).
+//! menu ([`keyrig_edit::scene_add`]).
 
 use crate::app::{unique_name, EditorApp};
-use crate::scene_add::{AddKind, Added};
 use crate::session::Selected;
+use keyrig_edit::scene_add::{AddKind, Added};
 
 impl EditorApp {
     /// H: hides the selected objects (a joint, its object) in the viewport and deselects them.
@@ -60,10 +60,10 @@ impl EditorApp {
         let fps = scene.fps.max(1e-9);
         // The selected keys are ordered by channel: each channel's times are read once.
         let mut frames = Vec::new();
-        let mut times: Option<(crate::channels::ChannelId, Vec<f64>)> = None;
+        let mut times: Option<(keyrig_edit::channels::ChannelId, Vec<f64>)> = None;
         for k in &self.session.selection.keys {
             if times.as_ref().is_none_or(|(c, _)| *c != k.channel) {
-                times = Some((k.channel, crate::channels::key_times(scene, k.channel)));
+                times = Some((k.channel, keyrig_edit::channels::key_times(scene, k.channel)));
             }
             if let Some(t) = times.as_ref().and_then(|(_, t)| t.get(k.index)) {
                 frames.push((t * fps).round() as i32);
@@ -102,7 +102,7 @@ impl EditorApp {
             scene.objects.iter().map(|o| o.name.as_str()).collect()
         };
         let name = if taken.contains(&base) { unique_name(base, taken.into_iter()) } else { base.to_owned() };
-        let Some(added) = crate::scene_add::build(kind, name.clone(), self.view.camera.target) else {
+        let Some(added) = keyrig_edit::scene_add::build(kind, name.clone(), self.view.camera.target) else {
             return;
         };
         let label = format!("add {} {name}", kind.label().to_lowercase());

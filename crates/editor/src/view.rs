@@ -33,9 +33,30 @@ pub struct ViewState {
     pub show_render: bool,
     /// Ghosts of the selected object at other frames (View ▸ Onion skin).
     pub onion: crate::onion::OnionSkin,
-    /// The viewport looks through this scene camera (an index of `Scene::cameras`) instead of
-    /// the orbit camera (View ▸ Look through camera, 0).
-    pub look_through: Option<usize>,
+    /// The viewport looks through a scene camera instead of the orbit camera (View ▸ Look
+    /// through camera, 0): the active one, which markers switch, or one chosen camera.
+    pub look_through: Option<LookThrough>,
+}
+
+/// Which scene camera the viewport looks through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LookThrough {
+    /// The scene's active camera at each frame: a marker bound to a camera cuts to it, as the
+    /// render does ([`keyrig_core::Scene::active_camera_at`]).
+    Active,
+    /// This camera (an index of `Scene::cameras`) whatever the markers say.
+    Camera(usize),
+}
+
+impl LookThrough {
+    /// The camera looked through at `frame`.
+    #[must_use]
+    pub fn camera_at(self, scene: &keyrig_core::Scene, frame: f64) -> Option<usize> {
+        match self {
+            LookThrough::Active => scene.active_camera_at(frame),
+            LookThrough::Camera(c) => (c < scene.cameras.len()).then_some(c),
+        }
+    }
 }
 
 impl ViewState {

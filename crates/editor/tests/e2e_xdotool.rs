@@ -24,10 +24,10 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use egui::{Event, Modifiers, PointerButton, Pos2};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::camera::Projection;
-use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::EditorApp;
 
 const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };
@@ -1444,4 +1444,134 @@ fn the_ik_target_dragged_in_a_real_x_window() {
     let (dr, dm) = (real - before, model - before);
     assert!(dr.length() > 0.05, "the real drag moved the target: {before} → {real}");
     assert!(dr.normalize().dot(dm.normalize()) > 0.98, "the same direction as the model's: {dr} vs {dm}");
+}
+
+/// Issue 42, 1: looking through the active camera follows the marker cuts. `assets/cameras.ron`
+/// looks through Dolly from frame 0 and cuts to Track at the marker on frame 30: 0 at frame 0,
+/// then End (frame 90), shows in the real window what 0 pressed at frame 90 shows — Track —
+/// and not Dolly's view of frame 90.
+#[test]
+fn looking_through_the_active_camera_follows_marker_cuts_in_a_real_x_window() {
+    let session = Session::new();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cameras.ron");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", scene.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(scene.clone()));
+    let viewport = h.state().viewport_rect().expect("laid out");
+    let track = h.state().doc.scene().camera_index("Track").expect("Track");
+    let dolly = h.state().doc.scene().camera_index("Dolly").expect("Dolly");
+    let away = viewport.left_top() + egui::vec2(5.0, 5.0);
+
+    session.mouse_to(away);
+    session.key("Home");
+    session.key("0");
+    common::press(&mut h, Modifiers::NONE, egui::Key::Home);
+    common::press(&mut h, Modifiers::NONE, egui::Key::Num0);
+    session.wait_idle();
+    let at_start = session.screenshot("probe-cut-start");
+    session.key("End");
+    common::press(&mut h, Modifiers::NONE, egui::Key::End);
+    assert_eq!(h.state().view.look_through, Some(keyrig_editor::view::LookThrough::Active));
+    assert_eq!(h.state().doc.scene().active_camera_at(90.0), Some(track));
+    assert_ne!(track, dolly);
+    session.wait_idle();
+    let played_past = session.screenshot("probe-cut-end");
+    // Leaving and looking through again at frame 90: Track, as the marker says.
+    session.key("0");
+    session.key("0");
+    session.wait_idle();
+    let looked_at_end = session.screenshot("probe-cut-again");
+    let inside = viewport.shrink(4.0);
+    assert!(changed_pixels(&at_start, &played_past, inside) > 1000, "the view changed across the cut");
+    let differ = changed_pixels(&played_past, &looked_at_end, inside);
+    assert!(
+        differ < 50,
+        "after the cut the viewport shows Track, as 0 pressed there does: {differ} pixels differ"
+    );
+}
+
+/// Issue 42, 5: a document whose changes are discarded does not leave its session behind. The
+/// saved demo is opened, the view orbited and a marker added (an unsaved change); Ctrl+N and
+/// *Discard changes* leave it. The session remembered for the file (the data folder's
+/// `sessions.json`) is not the discarded one: reopening the file shows the view it was saved
+/// with, not a camera framing discarded work.
+#[test]
+fn discarded_changes_leave_no_session_in_a_real_x_window() {
+    let session = Session::new();
+    let scene = session.home.path().join("shot.ron");
+    keyrig_io::project::save_scene(&scene, &keyrig_io::demo::demo_scene()).expect("save");
+    let (_keyrig, _window) = session.start_keyrig(&["edit", scene.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(scene.clone()));
+    let viewport = h.state().viewport_rect().expect("laid out");
+
+    // Orbit from empty space, then add a marker (M): the document has unsaved changes.
+    let start = viewport.left_top() + egui::vec2(40.0, 60.0);
+    session.drag(&[start, start + egui::vec2(40.0, 10.0), start + egui::vec2(90.0, 20.0)]);
+    session.key("m");
+    common::press(&mut h, Modifiers::NONE, egui::Key::M);
+    assert!(h.state().doc.is_dirty(), "M adds a marker: an unsaved change");
+    session.key("ctrl+n");
+    common::press(&mut h, Modifiers::COMMAND, egui::Key::N);
+    let discard = h.get_by_label("Discard changes").rect().center();
+    session.wait_idle();
+    session.click(discard);
+    std::thread::sleep(Duration::from_millis(500));
+    session.wait_idle();
+    let shot = session.screenshot("probe-discarded");
+    let sessions = session.home.path().join("data/keyrig/sessions.json");
+    let remembered = std::fs::read_to_string(&sessions).unwrap_or_default();
+    assert!(
+        !remembered.contains("shot.ron"),
+        "the discarded document's session is not remembered (screenshot {}): {remembered}",
+        shot.display()
+    );
+}
+
+/// Issue 42, 10: clicking the Arm in the outliner of the real window inserts no dope-sheet rows
+/// for its unkeyed translation, rotation and scale, so the rows below it — the Cube's — stay
+/// where they were, pixel for pixel.
+#[test]
+fn selecting_an_object_keeps_the_dope_sheet_rows_in_a_real_x_window() {
+    let session = Session::new();
+    let (_keyrig, _window) = session.start_keyrig(&[]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), None);
+    assert_eq!(h.state().session.selection.item, None, "the demo opens with nothing selected");
+    session.mouse_to(h.state().viewport_rect().expect("laid out").left_top() + egui::vec2(5.0, 5.0));
+    session.wait_idle();
+    let cube_rows = |h: &Harness<'_, EditorApp>| {
+        h.get_all_by_role(egui::accesskit::Role::Row)
+            .filter(|n| {
+                n.accesskit_node().label().is_some_and(|l| {
+                    l.starts_with("dope sheet row Cube")
+                        || l == "dope sheet row translation"
+                        || l == "dope sheet row rotation"
+                })
+            })
+            .map(|n| n.rect())
+            .reduce(|a, b| a.union(b))
+            .expect("the Cube's rows")
+    };
+    let before_rect = cube_rows(&h);
+    let before = session.screenshot("probe-rows-before");
+    let arm = h
+        .get_all_by_label("Arm")
+        .min_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .expect("the outliner's Arm")
+        .rect()
+        .center();
+    session.click(arm);
+    h.get_all_by_label("Arm")
+        .min_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .expect("Arm")
+        .click();
+    h.run();
+    assert!(h.state().session.selection.contains(keyrig_editor::session::Selected::Object(0)));
+    assert_eq!(cube_rows(&h), before_rect, "the Cube's rows stay in the model");
+    session.mouse_to(h.state().viewport_rect().expect("laid out").left_top() + egui::vec2(5.0, 5.0));
+    session.wait_idle();
+    let after = session.screenshot("probe-rows-after");
+    let moved = changed_pixels(&before, &after, before_rect.shrink2(egui::vec2(0.0, 1.0)));
+    assert!(moved < 40, "the Cube's dope-sheet rows stay put in the real window: {moved} pixels changed");
 }

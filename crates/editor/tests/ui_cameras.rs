@@ -12,7 +12,7 @@ use egui::accesskit::Role;
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
-use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
@@ -74,7 +74,7 @@ fn a_camera_is_selected_keyed_and_looked_through() {
 
     // 0 looks through the selected camera; 0 again, or orbiting, returns to the view.
     press(&mut h, Modifiers::NONE, Key::Num0);
-    assert_eq!(h.state().view.look_through, Some(0));
+    assert_eq!(h.state().view.look_through, Some(keyrig_editor::view::LookThrough::Camera(0)));
     press(&mut h, Modifiers::NONE, Key::Num0);
     assert_eq!(h.state().view.look_through, None);
     press(&mut h, Modifiers::NONE, Key::Num0);

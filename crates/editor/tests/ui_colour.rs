@@ -10,7 +10,7 @@ use egui::{Event, Key, Modifiers};
 use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use glam::Vec3;
-use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::EditorApp;
 
 /// The demo's first light, `Key`.

@@ -9,7 +9,7 @@ use common::{drag, harness, press};
 use egui::{Event, Key, Modifiers, MouseWheelUnit, Pos2};
 use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
-use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::eval::euler_degrees;
 use keyrig_editor::EditorApp;
 

@@ -9,7 +9,7 @@ use common::{harness, press};
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use keyrig_core::{Cycle, Cycles};
-use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::EditorApp;
 
 const CUBE_ROTATION: ChannelId = ChannelId::ObjectRotation(1);

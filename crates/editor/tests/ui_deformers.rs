@@ -7,7 +7,7 @@ use common::{harness, press};
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers};
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use glam::Vec3;
 use keyrig_core::DeformerKind;
@@ -81,4 +81,31 @@ fn the_deformer_menu_switches_while_playing() {
     h.key_press(Key::Space);
     h.run();
     assert!(!h.state().session.playback.playing);
+}
+
+/// Issue 42, 7: with the deformer keyed (Linear blend, Step keys) while the Arm's setting is
+/// Bones blending, the toolbar and the Deformer menu highlight the deformer in effect — the one
+/// the viewport's overlay names and the frame is drawn with — not the setting.
+#[test]
+fn the_toolbar_highlights_the_deformer_in_effect() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut scene = keyrig_io::demo::demo_scene();
+    assert_eq!(scene.objects[0].deformer.kind, DeformerKind::BonesBlending);
+    let linear = keyrig_core::channel_id::attribute_id::deformer_value(DeformerKind::LinearBlend);
+    scene.objects[0].attributes.deformer = Some(keyrig_core::Animated::new(
+        linear,
+        keyrig_core::RawTrack::new(vec![
+            keyrig_core::Key::new(0.0, linear).with_interpolation(keyrig_core::Interpolation::Step),
+            keyrig_core::Key::new(3.0, linear).with_interpolation(keyrig_core::Interpolation::Step),
+        ]),
+    ));
+    let path = dir.path().join("keyed.ron");
+    keyrig_io::save(&path, &scene).expect("save");
+    let mut h = harness(dir.path(), Some(path));
+    h.run();
+    let selected = |h: &Harness<'_, EditorApp>, label: &str| {
+        h.get_by_label(label).accesskit_node().is_selected().unwrap_or(false)
+    };
+    assert!(selected(&h, "2 Linear blend"), "the keyed deformer in effect is highlighted");
+    assert!(!selected(&h, "3 Bones blending"), "the object's setting, not in effect, is not");
 }

@@ -12,7 +12,7 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use glam::{Quat, Vec3};
 use keyrig_core::{FrameRange, Joint, Key as SceneKey, Object, RawTrack, Scene, Skeleton};
-use keyrig_editor::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::session::KeyRef;
 use keyrig_editor::EditorApp;
 
@@ -360,4 +360,23 @@ fn the_key_inspector_shows_and_sets_the_key_type() {
     assert_eq!(channels::key_type(h.state().doc.scene(), ELBOW, 2), Some(KeyType::Keyframe));
     assert_eq!(h.state().doc.undo_len(), undo + 1);
     assert_eq!(h.state().doc.undo_label(), Some("key type Extreme on elbow rotation key at frame 15"));
+}
+
+/// Issue 42, 10: selecting an object (a click on its outliner entry) inserts no rows for its
+/// unkeyed translation, rotation and scale: the rows under the pointer stay where they were.
+#[test]
+fn selecting_an_object_does_not_shift_the_rows() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = open(dir.path(), &legs_scene());
+    let before = row_labels(&h);
+    let hip = h.get_by_label("dope sheet row hip rotation").rect();
+    h.state_mut().session.selection = keyrig_editor::session::Selection::default();
+    h.get_all_by_label("legs")
+        .min_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .expect("the outliner's entry")
+        .click();
+    h.run();
+    assert!(h.state().session.selection.contains(keyrig_editor::session::Selected::Object(0)));
+    assert_eq!(row_labels(&h), before, "no rows for the object's unkeyed channels");
+    assert_eq!(h.get_by_label("dope sheet row hip rotation").rect(), hip, "the rows stay put");
 }

@@ -10,7 +10,7 @@ use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::{Interpolation, Scene};
-use keyrig_editor::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
 use keyrig_editor::{Command, EditorApp};
 
@@ -104,7 +104,7 @@ fn moving_a_tcb_slider_changes_the_sampled_value() {
     let sample = |app: &EditorApp| {
         let scene = app.doc.scene();
         match keyrig_editor::eval::channel_value(scene, elbow, 36.0 / scene.fps, &Default::default()) {
-            Some(keyrig_editor::channels::ChannelValue::Rotation(q)) => q,
+            Some(keyrig_edit::channels::ChannelValue::Rotation(q)) => q,
             other => panic!("elbow rotation is a rotation, got {other:?}"),
         }
     };

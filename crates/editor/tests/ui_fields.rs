@@ -11,7 +11,7 @@ use egui::accesskit::Role;
 use egui::{Event, Key};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
-use keyrig_editor::channels::{ChannelId, ChannelValue};
+use keyrig_edit::channels::{ChannelId, ChannelValue};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 
@@ -149,10 +149,10 @@ fn a_drag_on_a_field_is_one_undo_step() {
 /// Every key of the demo as (channel, frame at the scene's fps).
 fn key_frames(h: &Harness<'_, EditorApp>) -> Vec<(ChannelId, f64)> {
     let scene = h.state().doc.scene();
-    keyrig_editor::channels::ChannelId::all(scene)
+    keyrig_edit::channels::ChannelId::all(scene)
         .into_iter()
         .flat_map(|id| {
-            keyrig_editor::channels::key_times(scene, id).into_iter().map(move |t| (id, t * scene.fps))
+            keyrig_edit::channels::key_times(scene, id).into_iter().map(move |t| (id, t * scene.fps))
         })
         .collect()
 }

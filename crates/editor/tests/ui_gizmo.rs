@@ -15,9 +15,9 @@ use egui::{Event, Key, Modifiers, PointerButton, Pos2};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use glam::{Affine3A, Quat, Vec3};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::camera::OrbitCamera as _;
 use keyrig_editor::camera::Projection;
-use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 

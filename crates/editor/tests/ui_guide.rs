@@ -14,7 +14,7 @@ use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use keyrig_core::DeformerKind;
-use keyrig_editor::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::EditorApp;
 
 const SIZE: [f32; 2] = [1280.0, 800.0];

@@ -28,8 +28,8 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use glam::{Quat, Vec3};
 use keyrig_core::{Joint, Object, Scene, Skeleton};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::camera::OrbitCamera as _;
-use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 

@@ -14,7 +14,7 @@ use common::{go_to_frame, harness, joint_world, press};
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use keyrig_core::Animated;
-use keyrig_editor::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
 
 const WRIST: usize = 3;

@@ -11,8 +11,8 @@ use common::{go_to_frame, harness};
 use egui::{Event, Key, Modifiers, MouseWheelUnit, PointerButton, Pos2, TouchPhase};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::app::DialogPurpose;
-use keyrig_editor::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 

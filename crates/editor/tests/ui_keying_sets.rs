@@ -10,7 +10,7 @@ use egui::accesskit::Role;
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
-use keyrig_editor::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 use keyrig_editor::keying_sets::KeyingSet;
 use keyrig_editor::EditorApp;
 

@@ -9,7 +9,7 @@ use common::{go_to_frame, harness, press};
 use egui::{Event, Key, Modifiers};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
-use keyrig_editor::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::session::Selected;
 use keyrig_editor::EditorApp;
 

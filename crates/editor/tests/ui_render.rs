@@ -84,3 +84,52 @@ fn cancelling_writes_no_movie() {
         .collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
 }
+
+/// Issue 42, 2: the dialog renders what `keyrig render --frames` renders — the scene's render
+/// size (960×540 in `assets/cameras.ron`), through the active camera with the marker's cut at
+/// frame 30 — pixel for pixel, frames 28 to 32 on both sides of the cut.
+#[test]
+fn the_dialog_renders_what_keyrig_render_renders() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asset = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cameras.ron");
+    let path = dir.path().join("shot.ron");
+    keyrig_io::project::save_scene(&path, &keyrig_io::project::load_scene(&asset).expect("load"))
+        .expect("save");
+    let mut h = harness(dir.path(), Some(path.clone()));
+    press(&mut h, Modifiers::COMMAND | Modifiers::SHIFT, Key::R);
+    set_value(&mut h, Role::SpinButton, "First frame", 28.0);
+    set_value(&mut h, Role::SpinButton, "Last frame", 32.0);
+    h.get_by_role_and_label(Role::ComboBox, "Format").click();
+    h.run();
+    h.get_by_label("Numbered PNG frames").click();
+    h.run();
+    h.get_by_label("Render").click();
+    step(&mut h);
+    h.state_mut().wait_for_render();
+    h.run();
+    let status = h.state().status().cloned().expect("a message");
+    assert!(!status.is_error && status.text.contains("Rendered 5 frames"), "{status:?}");
+
+    let cli = dir.path().join("cli");
+    std::fs::create_dir(&cli).expect("a folder");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_keyrig"))
+        .args(["render", path.to_str().expect("utf-8"), "--frames", "28..32", "-o"])
+        .arg(cli.join("frame_####.png"))
+        .output()
+        .expect("keyrig render");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for frame in 28..=32 {
+        let name = format!("frame_{frame:04}.png");
+        let editor =
+            image::open(dir.path().join("shot_frames").join(&name)).expect("the dialog's frame").to_rgba8();
+        let command = image::open(cli.join(&name)).expect("keyrig render's frame").to_rgba8();
+        assert_eq!(editor.dimensions(), (960, 540), "{name}: the scene's render size");
+        assert_eq!(editor.dimensions(), command.dimensions());
+        let differ = editor
+            .pixels()
+            .zip(command.pixels())
+            .filter(|(a, b)| a.0.iter().zip(b.0).any(|(x, y)| x.abs_diff(y) > 2))
+            .count();
+        assert!(differ == 0, "{name}: {differ} pixels differ from keyrig render's");
+    }
+}

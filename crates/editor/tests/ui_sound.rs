@@ -145,3 +145,51 @@ fn sound_rows_scroll_with_the_rows() {
     let moved = bar.top() - h.get_by_label("sound clip tone.wav frame 5").rect().top();
     assert!((moved - scrolled).abs() < 0.5, "the clip's bar moved {moved} with the rows' {scrolled}");
 }
+
+/// Issue 42, 13: a sound file dropped on the window, or picked with Ctrl+I (File ▸ Import…, whose
+/// dialog lists sounds) or File ▸ Import sound, becomes a sound clip at the current frame — one
+/// undo step each — and the dope sheet shows its row.
+#[test]
+fn a_sound_file_is_imported_at_the_current_frame() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../io/tests/fixtures/sound");
+    let wav = dir.path().join("tone.wav");
+    std::fs::copy(fixtures.join("tone.wav"), &wav).expect("copy");
+    let mut h = common::harness(dir.path(), None);
+    common::go_to_frame(&mut h, 12);
+    let steps = h.state().doc.undo_len();
+    h.input_mut().dropped_files.push(egui::DroppedFile { path: Some(wav.clone()), ..Default::default() });
+    h.run();
+    let sounds = &h.state().doc.scene().sounds;
+    assert_eq!(sounds.len(), 1, "the dropped sound is a clip");
+    assert_eq!(Path::new(&sounds[0].path), wav.as_path());
+    assert_eq!(sounds[0].start_frame, 12.0);
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+    assert_eq!(h.state().doc.undo_label(), Some("add sound clip tone.wav at frame 12"));
+    h.state_mut().wait_for_background_work();
+    h.run();
+    assert!(h.query_by_label("dope sheet row ♪ tone.wav").is_some(), "its row in the dope sheet");
+
+    // Ctrl+I's dialog lists sounds beside models; File ▸ Import sound lists only sounds.
+    let names = |purpose| {
+        keyrig_editor::files::dialog_filters(purpose)
+            .iter()
+            .flat_map(|f| f.1.iter().copied())
+            .collect::<Vec<_>>()
+    };
+    for ext in ["wav", "flac", "mp3", "ogg"] {
+        assert!(names(keyrig_editor::files::DialogPurpose::Import).contains(&ext), "{ext}");
+        assert!(names(keyrig_editor::files::DialogPurpose::ImportSound).contains(&ext), "{ext}");
+    }
+    common::go_to_frame(&mut h, 30);
+    h.state_mut().import_path(wav.clone());
+    h.run();
+    assert_eq!(h.state().doc.scene().sounds.iter().map(|c| c.start_frame).collect::<Vec<_>>(), [12.0, 30.0]);
+    press_undo(&mut h);
+    assert_eq!(h.state().doc.scene().sounds.len(), 1, "one undo step");
+}
+
+fn press_undo(h: &mut egui_kittest::Harness<'_, keyrig_editor::EditorApp>) {
+    h.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    h.run();
+}

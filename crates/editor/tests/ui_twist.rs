@@ -11,7 +11,7 @@ use egui::{Key, Modifiers};
 use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use keyrig_core::Spin;
-use keyrig_editor::channels::{self, ChannelId};
+use keyrig_edit::channels::{self, ChannelId};
 use keyrig_editor::EditorApp;
 
 const WRIST: ChannelId = ChannelId::JointRotation { object: 0, joint: 3 };

@@ -177,12 +177,13 @@ pub fn decode_sound_bytes(bytes: Vec<u8>, name: &Path) -> Result<DecodedSound, S
 /// one anywhere near the start) whose `fmt ` chunk gives a sample rate of 0, which Symphonia
 /// 0.5's WAV reader asserts against instead of returning an error; leaves the source at its
 /// start. Further in, the panic is caught ([`decode_sound`]).
-fn check_wav_rate(source: &mut Box<dyn MediaSource>) -> Result<(), String> {
+fn check_wav_rate(source: &mut Box<dyn MediaSource>, path: &Path) -> Result<(), SoundError> {
     use std::io::{Read, Seek, SeekFrom};
+    let format = |message: String| SoundError::Format { path: path.to_path_buf(), message };
     let mut head = Vec::with_capacity(4096);
     let read = source.by_ref().take(4096).read_to_end(&mut head);
-    source.seek(SeekFrom::Start(0)).map_err(|e| format!("cannot read it again: {e}"))?;
-    read.map_err(|e| e.to_string())?;
+    source.seek(SeekFrom::Start(0)).map_err(|e| format(format!("cannot read it again: {e}")))?;
+    read.map_err(|e| format(e.to_string()))?;
     let u32_at = |at: usize| head.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
     for riff in (0..head.len().saturating_sub(11)).filter(|&i| &head[i..i + 4] == b"RIFF") {
         if &head[riff + 8..riff + 12] != b"WAVE" {
@@ -192,7 +193,7 @@ fn check_wav_rate(source: &mut Box<dyn MediaSource>) -> Result<(), String> {
         while let (Some(id), Some(size)) = (head.get(at..at + 4), u32_at(at + 4)) {
             if id == b"fmt " {
                 if u32_at(at + 12) == Some(0) {
-                    return Err(format!("the fmt chunk gives a sample rate of 0 (byte {})", at + 12));
+                    return Err(format(format!("the fmt chunk gives a sample rate of 0 (byte {})", at + 12)));
                 }
                 break;
             }
@@ -248,8 +249,7 @@ fn channels_of(spec: SignalSpec) -> u16 {
 fn open_stream(mut source: Box<dyn MediaSource>, path: &Path) -> Result<OpenStream, SoundError> {
     let format_error =
         |e: SymphoniaError| SoundError::Format { path: path.to_path_buf(), message: e.to_string() };
-    check_wav_rate(&mut source)
-        .map_err(|message| SoundError::Format { path: path.to_path_buf(), message })?;
+    check_wav_rate(&mut source, path)?;
     let stream = MediaSourceStream::new(source, Default::default());
     let mut hint = Hint::new();
     if let Some(extension) = path.extension().and_then(|e| e.to_str()) {

@@ -122,6 +122,10 @@ fn keyrig_reads_its_own_export_back_to_the_same_keys() {
                     assert_eq!(a.rotation, b.rotation, "{here}: {}", a.name);
                     assert_eq!(a.scale, b.scale, "{here}: {}", a.name);
                     assert_eq!(a.attributes, b.attributes, "{here}: {}", a.name);
+                } else {
+                    // Its mesh is procedural or its model file is there: skeleton, deformer
+                    // and keys come back whole, not as the vertex animation.
+                    assert_eq!(*a, b, "{here}: {} comes back whole", a.name);
                 }
             }
             assert_eq!(back.lights, scene.lights, "{here}: lights");
@@ -401,4 +405,33 @@ fn coin3d_plays_the_export_as_keyrig_samples_the_scene() {
             assert!(checked >= least, "{asset} → .{ext}: {checked}");
         }
     }
+}
+
+#[test]
+fn a_skinned_object_whose_model_file_is_gone_comes_back_as_its_vertex_animation() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut scene = keyrig_io::project::load_scene(&assets().join("characters.ron")).unwrap();
+    let o = scene
+        .objects
+        .iter()
+        .position(|o| o.skeleton.is_some() && matches!(o.mesh, Some(keyrig_core::MeshSource::File { .. })))
+        .expect("a skinned model-file character");
+    let copy = dir.path().join("character.glb");
+    if let Some(keyrig_core::MeshSource::File { path, .. }) = &mut scene.objects[o].mesh {
+        std::fs::copy(&*path, &copy).unwrap();
+        *path = copy.to_string_lossy().into_owned();
+    }
+    let file = write(dir.path(), &scene, "characters.wrl");
+    let name = scene.objects[o].name.clone();
+    let whole = keyrig_io::vrml::import_vrml_file(&file).unwrap().to_scene(&file.to_string_lossy());
+    assert_eq!(whole.objects.iter().find(|x| x.name == name), Some(&scene.objects[o]), "with its model file");
+    std::fs::remove_file(&copy).unwrap();
+    let back = keyrig_io::vrml::import_vrml_file(&file).unwrap().to_scene(&file.to_string_lossy());
+    let morph = back.objects.iter().find(|x| x.name == name).expect("the character");
+    assert!(morph.skeleton.is_none(), "without its model file it is the export's vertex animation");
+    assert!(
+        matches!(&morph.mesh, Some(keyrig_core::MeshSource::File { path, .. }) if *path == file.to_string_lossy()),
+        "{:?}",
+        morph.mesh
+    );
 }

@@ -17,8 +17,25 @@ pub struct Output {
     _stop: mpsc::Sender<()>,
 }
 
+/// Why no sound output could be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot start the sound thread: {0}")]
+    Thread(std::io::Error),
+    #[error("the system reports none")]
+    NoDevice,
+    #[error("{0}")]
+    Config(#[from] cpal::DefaultStreamConfigError),
+    #[error("the output device takes {0:?} samples, which keyrig does not write")]
+    SampleFormat(cpal::SampleFormat),
+    #[error("{0}")]
+    Build(#[from] cpal::BuildStreamError),
+    #[error("the output device does not start: {0}")]
+    Play(#[from] cpal::PlayStreamError),
+}
+
 /// What opening the device gave: the stream, or why there is none.
-pub type Opened = Result<Output, String>;
+pub type Opened = Result<Output, OutputError>;
 
 /// Starts opening the default output device on a thread; the answer comes on the receiver.
 #[must_use]
@@ -43,17 +60,17 @@ pub fn open() -> mpsc::Receiver<Opened> {
         }
     });
     if let Err(e) = spawned {
-        let _ = answer.send(Err(format!("cannot start the sound thread: {e}")));
+        let _ = answer.send(Err(OutputError::Thread(e)));
     }
     receive
 }
 
 /// Opens the default output and starts its stream (rendering silence until told to play).
-fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), String> {
+fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), OutputError> {
     quiet_alsa_on_this_thread();
     let host = cpal::default_host();
-    let device = host.default_output_device().ok_or_else(|| "the system reports none".to_owned())?;
-    let supported = device.default_output_config().map_err(|e| e.to_string())?;
+    let device = host.default_output_device().ok_or(OutputError::NoDevice)?;
+    let supported = device.default_output_config()?;
     let format = supported.sample_format();
     let config: cpal::StreamConfig = supported.into();
     let transport = Arc::new(Mutex::new(Transport::new(config.sample_rate.0, config.channels)));
@@ -62,11 +79,9 @@ fn start_stream() -> Result<(cpal::Stream, Arc<Mutex<Transport>>), String> {
         cpal::SampleFormat::I16 => build::<i16>(&device, &config, &transport),
         cpal::SampleFormat::U16 => build::<u16>(&device, &config, &transport),
         cpal::SampleFormat::I32 => build::<i32>(&device, &config, &transport),
-        other => {
-            return Err(format!("the output device takes {other:?} samples, which keyrig does not write"))
-        }
+        other => return Err(OutputError::SampleFormat(other)),
     }?;
-    stream.play().map_err(|e| format!("the output device does not start: {e}"))?;
+    stream.play()?;
     Ok((stream, transport))
 }
 
@@ -74,7 +89,7 @@ fn build<T: cpal::SizedSample + cpal::FromSample<f32>>(
     device: &cpal::Device,
     config: &cpal::StreamConfig,
     transport: &Arc<Mutex<Transport>>,
-) -> Result<cpal::Stream, String> {
+) -> Result<cpal::Stream, OutputError> {
     let transport = Arc::clone(transport);
     let mut mixed: Vec<f32> = Vec::new();
     device
@@ -94,7 +109,7 @@ fn build<T: cpal::SizedSample + cpal::FromSample<f32>>(
             |_| {},
             None,
         )
-        .map_err(|e| e.to_string())
+        .map_err(OutputError::from)
 }
 
 /// ALSA prints every failure of the device's configuration to stderr itself, besides

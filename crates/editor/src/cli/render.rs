@@ -14,6 +14,7 @@ use anyhow::{bail, Context};
 use glam::{Mat4, Quat, Vec3};
 use keyrig_core::{Camera, DeformerKind, Material};
 use keyrig_editor::playblast::{self, FrameError, MotionBlur, MovieFormat, Playblast, SceneSound};
+use keyrig_editor::view::LookThrough;
 use keyrig_render::{
     Deform, DrawItem, FrameInput, HeadlessRenderer, LightInput, MeshData, RenderStyle, SceneRig, Selected,
     ViewOptions,
@@ -132,50 +133,29 @@ trait FrameSource {
 struct SceneSource {
     rig: SceneRig,
     view: ViewOptions,
-    /// Which scene camera each frame is seen through.
-    through: Through,
+    /// Which scene camera each frame is seen through (`None`: the saved view).
+    through: Option<LookThrough>,
 }
 
-/// The camera a scene is rendered through.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Through {
-    /// The scene's saved viewport view.
-    View,
-    /// The active camera at each frame ([`keyrig_core::Scene::active_camera_at`]).
-    Active,
-    /// One camera, by index.
-    Camera(usize),
-}
-
-impl Through {
-    fn of(scene: &keyrig_core::Scene, args: &RenderArgs) -> anyhow::Result<Self> {
-        match &args.camera {
-            Some(name) => scene.camera_index(name).map(Through::Camera).with_context(|| {
-                let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
-                if names.is_empty() {
-                    format!("--camera `{name}`: the scene has no cameras")
-                } else {
-                    format!("--camera `{name}`: no camera named `{name}` (cameras: {})", names.join(", "))
-                }
-            }),
-            None if args.view || scene.cameras.is_empty() => Ok(Through::View),
-            None => Ok(Through::Active),
-        }
-    }
-
-    fn camera_at(self, scene: &keyrig_core::Scene, frame: f64) -> Option<usize> {
-        match self {
-            Through::View => None,
-            Through::Active => scene.active_camera_at(frame),
-            Through::Camera(c) => Some(c),
-        }
+/// The camera a scene is rendered through: `None` is the scene's saved viewport view.
+fn through_of(scene: &keyrig_core::Scene, args: &RenderArgs) -> anyhow::Result<Option<LookThrough>> {
+    match &args.camera {
+        Some(name) => scene.camera_index(name).map(|c| Some(LookThrough::Camera(c))).with_context(|| {
+            let names: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
+            if names.is_empty() {
+                format!("--camera `{name}`: the scene has no cameras")
+            } else {
+                format!("--camera `{name}`: no camera named `{name}` (cameras: {})", names.join(", "))
+            }
+        }),
+        None if args.view || scene.cameras.is_empty() => Ok(None),
+        None => Ok(Some(LookThrough::Active)),
     }
 }
 
 impl FrameSource for SceneSource {
     fn frame(&self, frame: f64) -> anyhow::Result<FrameInput> {
-        let view = ViewOptions { look_through: self.through.camera_at(self.rig.scene(), frame), ..self.view };
-        Ok(self.rig.frame(self.rig.time_of_frame(frame), &view)?)
+        Ok(playblast::scene_frame(&self.rig, &self.view, self.through, frame)?)
     }
 
     fn default_frame(&self) -> f64 {
@@ -461,10 +441,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             skeletons: !args.no_skeleton,
             selection,
             textures: !args.no_textures,
-            cameras: false,
-            ..ViewOptions::default()
+            ..playblast::playblast_view(None)
         };
-        let through = Through::of(&scene, &args)?;
+        let through = through_of(&scene, &args)?;
         scene_size = scene.render_size.map(|s| (s.width, s.height));
         Box::new(SceneSource { rig, view, through })
     };

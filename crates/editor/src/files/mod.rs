@@ -126,6 +126,15 @@ pub fn is_image_file(path: &Path) -> bool {
     extension(path).is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.as_str()))
 }
 
+/// The sound files keyrig reads (keyrig-io's `sound`, through Symphonia).
+pub const SOUND_EXTENSIONS: [&str; 5] = ["wav", "flac", "mp3", "ogg", "oga"];
+
+/// Whether `path` names a sound file (a sound clip when imported or dropped on the window).
+#[must_use]
+pub fn is_sound_file(path: &Path) -> bool {
+    extension(path).is_some_and(|e| SOUND_EXTENSIONS.contains(&e.as_str()))
+}
+
 /// Whether `path` names a scene file (`.ron`) rather than a model.
 #[must_use]
 pub fn is_scene_file(path: &Path) -> bool {
@@ -152,6 +161,8 @@ pub enum DialogPurpose {
     Open,
     SaveAs,
     Import,
+    /// A sound clip (File ▸ Import sound).
+    ImportSound,
     Export,
     /// The reference image behind the scene (View ▸ Reference image).
     ReferenceImage,
@@ -170,6 +181,7 @@ pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'
         "VRML, X3D, Open Inventor (.wrl, .wrz, .x3d, .x3dv, .iv)",
         &["wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
     );
+    const SOUNDS: (&str, &[&str]) = ("Sounds (.wav, .flac, .mp3, .ogg)", &SOUND_EXTENSIONS);
     match purpose {
         DialogPurpose::Open => vec![
             SCENES,
@@ -180,8 +192,9 @@ pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'
             ),
         ],
         DialogPurpose::Import => {
-            vec![MODELS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"]), VRML]
+            vec![MODELS, SOUNDS, ("glTF (.glb, .gltf)", &["glb", "gltf"]), ("MD2 (.md2)", &["md2"]), VRML]
         }
+        DialogPurpose::ImportSound => vec![SOUNDS],
         DialogPurpose::SaveAs => vec![SCENES],
         DialogPurpose::ReferenceImage => vec![("Images (.png, .jpg, .jpeg, .bmp)", &IMAGE_EXTENSIONS)],
         DialogPurpose::Export => vec![
@@ -211,7 +224,8 @@ pub fn file_dialog(
     let title = match purpose {
         DialogPurpose::Open => "Open scene or model",
         DialogPurpose::SaveAs => "Save scene as",
-        DialogPurpose::Import => "Import model",
+        DialogPurpose::Import => "Import model or sound",
+        DialogPurpose::ImportSound => "Import sound",
         DialogPurpose::Export => "Export glTF, VRML, X3D or Open Inventor",
         DialogPurpose::ReferenceImage => "Reference image",
     };
@@ -225,10 +239,18 @@ pub fn file_dialog(
         .show_path_edit_button(true);
     if let Some(folder) = folder {
         dialog = dialog.initial_directory(folder);
+        if matches!(purpose, DialogPurpose::SaveAs | DialogPurpose::Export) {
+            // The scene's folder, not the one something was last picked in (egui-file-dialog's
+            // default): Save As and Export propose a name beside the scene.
+            dialog = dialog.opening_mode(egui_file_dialog::OpeningMode::AlwaysInitialDir);
+        }
     }
     let filters = dialog_filters(purpose);
     match purpose {
-        DialogPurpose::Open | DialogPurpose::Import | DialogPurpose::ReferenceImage => {
+        DialogPurpose::Open
+        | DialogPurpose::Import
+        | DialogPurpose::ImportSound
+        | DialogPurpose::ReferenceImage => {
             for &(name, extensions) in &filters {
                 let filter = egui_file_dialog::Filter::new(move |path: &Path| {
                     extension(path).is_some_and(|e| extensions.contains(&e.as_str()))

@@ -7,7 +7,7 @@
 //! middle-drag) with rulers of frames and values; the frame ruler scrubs; *Fit* shows
 //! everything, F over the curves frames the selected keys (Home stays the first frame).
 //! A rotation channel with spin keys also gets its unwrapped turn (white): the twist about the
-//! first spin's axis through spin segments ([`crate::twist::unwrapped_twist`], which counts
+//! first spin's axis through spin segments ([`keyrig_edit::spin::unwrapped_twist`], which counts
 //! their turns with `Track::spin_degrees`), so a 720° segment climbs to 720 instead of
 //! wrapping at ±180°. A channel with cycles (`before`/`after` other than Hold) is drawn over the
 //! whole range, its repeats included; the stretches beyond its keys are shaded and named.
@@ -24,7 +24,6 @@ use keyrig_core::Scene;
 use keyrig_eval::SceneEvaluator;
 
 use crate::actions::{Action, Actions, Edit, SessionChange, Ticket};
-use crate::channels::{self, ChannelId, ChannelValue};
 use crate::commands::Command;
 use crate::context::FrameCtx;
 use crate::eval::{continuous_euler, PoseOverrides};
@@ -35,6 +34,8 @@ use crate::widgets::range_watch::RangeWatch;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
 use keyrig_core::channel_id::rotation_mode;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::{KeyParamChange, SceneEdit};
 
 /// The unwrapped turn of a rotation channel with spin keys (the fourth curve).
 const TURN_COLOUR: Color32 = Color32::from_rgb(240, 240, 240);
@@ -198,7 +199,7 @@ pub fn sample_curves(
             (0..n)
                 .map(|i| {
                     let frame = start + (end - start) * i as f64 / (n - 1) as f64;
-                    (frame, crate::twist::unwrapped_twist(&track, axis, frame / fps) as f32)
+                    (frame, keyrig_edit::spin::unwrapped_twist(&track, axis, frame / fps) as f32)
                 })
                 .collect(),
         );
@@ -220,7 +221,8 @@ fn shown_components(
     match value {
         Some(ChannelValue::Vec3(v)) => v.to_array().to_vec(),
         Some(ChannelValue::Rotation(q)) if twist => {
-            vec![crate::twist::twist_degrees(q.as_dquat(), crate::twist::BONE_AXIS.as_dvec3()) as f32]
+            vec![keyrig_edit::spin::twist_degrees(q.as_dquat(), keyrig_edit::spin::BONE_AXIS.as_dvec3())
+                as f32]
         }
         Some(ChannelValue::Rotation(q)) => match mode.euler() {
             Some(order) => match near {
@@ -1167,22 +1169,10 @@ impl CurveEditor {
                     let rise =
                         grip.map.invert(value_at(pointer.y)) - grip.map.invert(value_at(grip.key_pos.y));
                     let tangent = rise / grip.seconds.max(1e-9) as f32 * if outgoing { 1.0 } else { -1.0 };
-                    let side = if outgoing { "out" } else { "in" };
-                    let label =
-                        format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index);
-                    actions.edit(Edit::continuous("curve handle", label, move |scene| {
-                        if convert && key.index > 0 {
-                            channels::convert_to_hermite(scene, key.channel, &[key.index - 1]);
-                        }
-                        channels::set_tangent_component(
-                            scene,
-                            key.channel,
-                            key.index,
-                            outgoing,
-                            component,
-                            tangent,
-                        );
-                    }));
+                    actions.edit(Edit::continuous(
+                        "curve handle",
+                        SceneEdit::Tangent { key, outgoing, component, value: tangent, convert },
+                    ));
                 }
             }
             Some(CurveGesture::MoveKeys { .. } | CurveGesture::Pan { .. } | CurveGesture::Handle { .. })
@@ -1260,11 +1250,8 @@ impl CurveEditor {
                 let name = format!("mute {label}");
                 ui.ctx().accesskit_node_builder(mute.id, |node| node.set_label(name));
                 if mute.clicked() {
-                    let what = if muted { "unmute" } else { "mute" };
                     actions.push(Action::CloseGroup);
-                    actions.edit(Edit::scene(format!("{what} {label}"), move |scene| {
-                        channels::set_muted(scene, id, !muted);
-                    }));
+                    actions.edit(Edit::scene(SceneEdit::Mute { channel: id, muted: !muted }));
                 }
                 let lock = ui
                     .selectable_label(locked, egui::RichText::new("🔒").small())
@@ -1272,11 +1259,8 @@ impl CurveEditor {
                 let name = format!("lock {label}");
                 ui.ctx().accesskit_node_builder(lock.id, |node| node.set_label(name));
                 if lock.clicked() {
-                    let what = if locked { "unlock" } else { "lock" };
                     actions.push(Action::CloseGroup);
-                    actions.edit(Edit::scene(format!("{what} {label}"), move |scene| {
-                        channels::set_locked(scene, id, !locked);
-                    }));
+                    actions.edit(Edit::scene(SceneEdit::Lock { channel: id, locked: !locked }));
                 }
                 for c in 0..curve_count(scene, id, twist) {
                     let colour = curve_colour(n, c, c >= values);
@@ -1347,15 +1331,10 @@ fn key_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Actions) {
     ];
     for (label, mode, clamped) in choices {
         if ui.button(label).clicked() {
-            let keys = keys.clone();
+            let change =
+                KeyParamChange { interpolation: Some(mode), clamped: Some(clamped), ..Default::default() };
             actions.push(Action::CloseGroup);
-            actions.edit(Edit::scene(format!("interpolation {label}"), move |scene| {
-                for k in &keys {
-                    if let Some((_, _, tcb)) = channels::key_params(scene, k.channel, k.index) {
-                        channels::set_key_params(scene, k.channel, k.index, mode, tcb.with_clamped(clamped));
-                    }
-                }
-            }));
+            actions.edit(Edit::scene(SceneEdit::KeyParams { keys: keys.clone(), change }));
             ui.close();
         }
     }
@@ -1365,17 +1344,8 @@ fn key_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Actions) {
         .on_hover_text("Explicit tangents to drag, equal to the curve's now (positions and scalars)")
         .clicked()
     {
-        let keys = keys.clone();
         actions.push(Action::CloseGroup);
-        actions.edit(Edit::scene("interpolation Hermite handles", move |scene| {
-            let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
-            for k in &keys {
-                by_channel.entry(k.channel).or_default().push(k.index);
-            }
-            for (id, indices) in by_channel {
-                channels::convert_to_hermite(scene, id, &indices);
-            }
-        }));
+        actions.edit(Edit::scene(SceneEdit::HermiteHandles { keys: keys.clone() }));
         ui.close();
     }
     ui.separator();

@@ -23,7 +23,6 @@ use egui::{Align2, Color32, CursorIcon, FontId, PointerButton, Pos2, Rect, Sense
 use keyrig_core::{KeyType, Scene};
 
 use crate::actions::{Action, Actions, Edit, SessionChange, Ticket};
-use crate::channels::{self, ChannelId};
 use crate::context::FrameCtx;
 use crate::session::{KeyRef, Selected, Selection};
 use crate::widgets::flat_fill;
@@ -33,6 +32,7 @@ use crate::widgets::publish_painted;
 use crate::widgets::range_watch::RangeWatch;
 use crate::widgets::time_axis::TimeAxis;
 use egui::accesskit::Role;
+use keyrig_edit::channels::{self, ChannelId};
 
 mod sound_rows;
 
@@ -118,8 +118,10 @@ impl Row {
     }
 }
 
-/// The rows in display order; collapsed groups hide what is beneath them.
-fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) -> Vec<Row> {
+/// The rows in display order; collapsed groups hide what is beneath them. Only keyed channels
+/// have rows, whatever is selected: selecting an item never inserts rows that would shift the
+/// ones under the pointer (as Blender's dope sheet lists only animated channels).
+fn rows(scene: &Scene, collapsed: &BTreeSet<Selected>) -> Vec<Row> {
     let keyed = |id: ChannelId| channels::key_count(scene, id) > 0;
     let mut out = Vec::new();
     let channel_row = |id: ChannelId, label: String, depth: usize, item: Selected| Row {
@@ -142,16 +144,15 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
         if folded {
             continue;
         }
-        let selected = selection.contains(item);
         let rotation = keyrig_core::channel_id::rotation_or_euler(scene, ChannelId::ObjectRotation(o));
         for id in [ChannelId::ObjectTranslation(o), rotation, ChannelId::ObjectScale(o)] {
-            if keyed(id) || selected {
+            if keyed(id) {
                 out.push(channel_row(id, id.channel_name().to_owned(), 1, item));
             }
         }
         // Visibility, colour, opacity, morph weights, deformer: where in use.
         for id in keyrig_core::AttributeId::of_object(scene, o) {
-            if keyed(id) || selected {
+            if keyed(id) {
                 out.push(channel_row(id, attribute_label(id), 1, item));
             }
         }
@@ -160,13 +161,13 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
         if keyed(root) {
             out.push(channel_row(root, root.channel_name().to_owned(), 1, item));
         }
-        // IK constraints: their target and IK/FK blend, where keyed (or the object selected).
+        // IK constraints: their target and IK/FK blend, where keyed.
         for (c, constraint) in skeleton.ik_constraints.iter().enumerate() {
             for id in [
                 ChannelId::IkTarget { object: o, constraint: c },
                 ChannelId::IkBlend { object: o, constraint: c },
             ] {
-                if keyed(id) || selected {
+                if keyed(id) {
                     out.push(channel_row(id, format!("{} {}", constraint.name, id.channel_name()), 1, item));
                 }
             }
@@ -220,9 +221,8 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
         if folded {
             continue;
         }
-        let selected = selection.contains(item);
         for id in all {
-            if keyed(id) || selected {
+            if keyed(id) {
                 out.push(channel_row(id, attribute_label(id), 1, item));
             }
         }
@@ -241,9 +241,8 @@ fn rows(scene: &Scene, selection: &Selection, collapsed: &BTreeSet<Selected>) ->
         if folded {
             continue;
         }
-        let selected = selection.contains(item);
         for id in all {
-            if keyed(id) || selected {
+            if keyed(id) {
                 out.push(channel_row(id, id.channel_name().to_owned(), 1, item));
             }
         }
@@ -456,7 +455,7 @@ impl DopeSheet {
             let all = view_all(scene, &sound_rows::clip_spans(ctx));
             self.view = (all != range_view(scene)).then_some(all);
         }
-        let rows = rows(scene, &ctx.session.selection, &self.collapsed);
+        let rows = rows(scene, &self.collapsed);
         let full = ui.available_rect_before_wrap();
         let max_name = (full.width() - 120.0).max(MIN_NAME_WIDTH);
         let name_width = self.name_width.unwrap_or(DEFAULT_NAME_WIDTH).clamp(MIN_NAME_WIDTH, max_name);

@@ -11,15 +11,17 @@ use glam::Vec3;
 use keyrig_core::{AttributeId, Cycle, DeformerKind, Interpolation, KeyType, Tcb};
 
 use crate::actions::{Action, Actions, Edit, SessionChange};
-use crate::channels::{self, ChannelId, ChannelValue};
 use crate::context::FrameCtx;
 use crate::eval::continuous_euler;
 use crate::session::Selected;
 use crate::widgets::field::{number_field, FieldChange};
 use crate::widgets::measure::measure_ui;
 use crate::widgets::tcb_slider::tcb_slider_ui;
-use keyrig_core::channel_id::{rotation_mode, set_rotation_keys, set_rotation_mode};
+use keyrig_core::channel_id::rotation_mode;
 use keyrig_core::RotationMode;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::edit::Animate;
+use keyrig_edit::{KeyParamChange, SceneEdit};
 
 /// Starts applying a field's change: a committed (typed) value is its own undo step, so any
 /// open continuous group is closed first; a drag continues its group until release.
@@ -145,7 +147,7 @@ fn rotation_mode_ui(
         ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Rotation mode"));
         if mode.euler().is_some() {
             // A locked rotation keeps its keys: the box shows their form and cannot switch it.
-            let (_, locked) = crate::channels::mute_and_lock(
+            let (_, locked) = keyrig_edit::channels::mute_and_lock(
                 ctx.scene(),
                 keyrig_core::channel_id::rotation_or_euler(ctx.scene(), id),
             );
@@ -169,22 +171,11 @@ fn rotation_mode_ui(
         )
     });
     if chosen != mode || wants_euler != euler_keys {
-        let name = id.label(ctx.scene());
-        let euler = wants_euler && chosen.euler().is_some();
-        let label = match (euler_keys, euler) {
-            (false, true) => format!("Euler keys ({}) for {name}", chosen.label()),
-            (true, false) => format!("quaternion keys for {name}"),
-            (true, true) => format!("Euler keys of {name} to {}", chosen.label()),
-            (false, false) => format!("rotation mode {} of {name}", chosen.label()),
-        };
         actions.push(Action::CloseGroup);
-        actions.edit(Edit::scene(label, move |scene| {
-            // Invalid keys cannot be converted; the scene then stays as it is.
-            if euler_keys || euler {
-                let _ = set_rotation_keys(scene, id, chosen, euler);
-            } else {
-                set_rotation_mode(scene, id, chosen);
-            }
+        actions.edit(Edit::scene(SceneEdit::RotationMode {
+            channel: id,
+            mode: chosen,
+            euler_keys: wants_euler,
         }));
     }
 }
@@ -393,8 +384,8 @@ fn twist_ui(
     let delta = value - twist;
     if change.any() && delta.is_finite() && delta != 0.0 {
         begin(actions, change);
-        let axis = q * crate::twist::BONE_AXIS;
-        let turn = crate::channels::Turn { from: q, axis, degrees: delta };
+        let axis = q * keyrig_edit::spin::BONE_AXIS;
+        let turn = keyrig_edit::channels::Turn { from: q, axis, degrees: delta };
         actions.edit(Edit::Turn { id, turn, group: group.to_owned() });
     }
 }
@@ -467,10 +458,10 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     }
 }
 
-/// Sets an optional attribute (`None` → its current setting as a constant), one undo step.
-fn set_attribute(actions: &mut Actions, what: &str, f: impl Fn(&mut keyrig_core::Scene) + 'static) {
+/// Starts animating an attribute (a constant channel at its current setting), one undo step.
+fn set_attribute(actions: &mut Actions, what: Animate) {
     actions.push(Action::CloseGroup);
-    actions.edit(Edit::continuous("attribute", what.to_owned(), f));
+    actions.edit(Edit::continuous("attribute", SceneEdit::Animate(what)));
     actions.push(Action::CloseGroup);
 }
 
@@ -498,11 +489,7 @@ fn object_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actio
             .on_hover_text("Give the object a colour channel that replaces its material's base colour")
             .clicked()
     {
-        set_attribute(actions, "animate colour", move |scene| {
-            if let Some(obj) = scene.objects.get_mut(o) {
-                obj.attributes.colour = Some(keyrig_core::Animated::constant(Vec3::splat(0.8)));
-            }
-        });
+        set_attribute(actions, Animate::Colour { object: o, from: Vec3::splat(0.8) });
     }
     for target in 0..a.morph_weights.len() {
         let label = format!("Morph {target}");
@@ -533,11 +520,7 @@ fn light_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Action
             .on_hover_text("Give the light a range beyond which it has no effect")
             .clicked()
     {
-        set_attribute(actions, "light range", move |scene| {
-            if let Some(light) = scene.lights.get_mut(l) {
-                light.attributes.range = Some(keyrig_core::Animated::constant(10.0));
-            }
-        });
+        set_attribute(actions, Animate::LightRange { light: l, from: 10.0 });
     }
     if let keyrig_core::LightKind::Spot { cutoff_deg, inner_angle_deg, .. } = light.kind {
         if a.cutoff_deg.is_some() || a.inner_angle_deg.is_some() {
@@ -545,12 +528,7 @@ fn light_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Action
             channel_editor(ui, ctx, actions, id(AttributeId::LightInnerAngle(l)), "Inner angle (°)");
         } else if ui.button("Animate cone").on_hover_text("Key the spot's cutoff and inner angles").clicked()
         {
-            set_attribute(actions, "animate cone", move |scene| {
-                if let Some(light) = scene.lights.get_mut(l) {
-                    light.attributes.cutoff_deg = Some(keyrig_core::Animated::constant(cutoff_deg));
-                    light.attributes.inner_angle_deg = Some(keyrig_core::Animated::constant(inner_angle_deg));
-                }
-            });
+            set_attribute(actions, Animate::Cone { light: l, cutoff_deg, inner_angle_deg });
         }
     }
 }
@@ -558,7 +536,7 @@ fn light_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Action
 /// The IK constraints that end at the selected joint: name and chain, their target and blend
 /// (keyable like any channel) and "Bake IK to keys".
 fn ik_constraints_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, object: usize, joint: usize) {
-    for c in crate::ik_constraints::ending_at(ctx.scene(), object, joint) {
+    for c in keyrig_edit::ik::ending_at(ctx.scene(), object, joint) {
         let Some(constraint) = ctx
             .scene()
             .objects
@@ -705,16 +683,8 @@ fn md2_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
     let seconds = frames as f64 / fps.unwrap_or(keyrig_core::MD2_DEFAULT_FPS);
     let timeline_frames = seconds * ctx.scene().fps;
     ui.weak(format!("One loop: {frames} model frames, {seconds:.2} s, {timeline_frames:.0} timeline frames"));
-    let name = ctx.scene().objects[o].name.clone();
     if chosen != clip {
-        let label = format!("{name} clip {}", chosen.as_deref().unwrap_or("all frames"));
-        actions.edit(Edit::scene(label, move |scene| {
-            if let Some(keyrig_core::MeshSource::File { clip, .. }) =
-                scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())
-            {
-                *clip = chosen;
-            }
-        }));
+        actions.edit(Edit::scene(SceneEdit::ModelClip { object: o, clip: chosen }));
     }
     if rate_change == FieldChange::Dragged {
         rate = rate.clamp(0.1, 1000.0);
@@ -723,13 +693,7 @@ fn md2_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
         actions.push(Action::Error(format!("Model fps must be between 0.1 and 1000 (typed {rate})")));
     } else if rate_change.any() && Some(rate) != fps {
         begin(actions, rate_change);
-        actions.edit(Edit::continuous("md2 fps", format!("{name} model fps"), move |scene| {
-            if let Some(keyrig_core::MeshSource::File { fps, .. }) =
-                scene.objects.get_mut(o).and_then(|x| x.mesh.as_mut())
-            {
-                *fps = Some(rate);
-            }
-        }));
+        actions.edit(Edit::continuous("md2 fps", SceneEdit::ModelFps { object: o, fps: rate }));
     }
 }
 
@@ -842,28 +806,8 @@ fn key_inspector_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         });
     });
     if (mode, tcb) != before {
-        let label = key_edit_label(ctx, &keys, (mode, tcb), before);
-        let keys = keys.clone();
-        actions.edit(Edit::continuous("key inspector", label, move |scene| {
-            for k in &keys {
-                let Some((_, old_mode, old_tcb)) = channels::key_params(scene, k.channel, k.index) else {
-                    continue;
-                };
-                // Only the field that moved is written to every selected key.
-                let m = if mode != before.0 { mode } else { old_mode };
-                let t = Tcb {
-                    tension: if tcb.tension != before.1.tension { tcb.tension } else { old_tcb.tension },
-                    continuity: if tcb.continuity != before.1.continuity {
-                        tcb.continuity
-                    } else {
-                        old_tcb.continuity
-                    },
-                    bias: if tcb.bias != before.1.bias { tcb.bias } else { old_tcb.bias },
-                    clamped: if tcb.clamped != before.1.clamped { tcb.clamped } else { old_tcb.clamped },
-                };
-                channels::set_key_params(scene, k.channel, k.index, m, t);
-            }
-        }));
+        let change = KeyParamChange::between(before, (mode, tcb));
+        actions.edit(Edit::continuous("key inspector", SceneEdit::KeyParams { keys: keys.clone(), change }));
     }
     cycles_ui(ui, ctx, actions, first.channel);
 }
@@ -894,50 +838,8 @@ fn key_type_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, keys: &[c
         );
     ui.ctx().accesskit_node_builder(response.id, |node| node.set_label("Key type"));
     if let Some(chosen) = chosen.filter(|&t| mixed || t != first) {
-        let on = keys_named(scene, keys);
-        let keys = keys.to_vec();
         actions.push(Action::CloseGroup);
-        actions.edit(Edit::scene(format!("key type {} on {on}", chosen.label()), move |scene| {
-            for k in &keys {
-                channels::set_key_type(scene, k.channel, k.index, chosen);
-            }
-        }));
-    }
-}
-
-/// The undo step's name for a change in the key inspector: what changed, on which key(s) —
-/// "tension 0.50 on elbow rotation key at frame 30", "interpolation Linear on 3 keys".
-fn key_edit_label(
-    ctx: &FrameCtx<'_>,
-    keys: &[crate::session::KeyRef],
-    (mode, tcb): (Interpolation, Tcb),
-    (old_mode, old): (Interpolation, Tcb),
-) -> String {
-    let what = if mode != old_mode {
-        format!("interpolation {mode:?}")
-    } else if tcb.tension != old.tension {
-        format!("tension {:.2}", tcb.tension)
-    } else if tcb.continuity != old.continuity {
-        format!("continuity {:.2}", tcb.continuity)
-    } else if tcb.bias != old.bias {
-        format!("bias {:.2}", tcb.bias)
-    } else if tcb.clamped != old.clamped {
-        (if tcb.clamped { "clamped" } else { "unclamped" }).to_owned()
-    } else {
-        "key".to_owned()
-    };
-    format!("{what} on {}", keys_named(ctx.scene(), keys))
-}
-
-/// The selected keys as an undo step names them: "elbow rotation key at frame 30", "3 keys".
-fn keys_named(scene: &keyrig_core::Scene, keys: &[crate::session::KeyRef]) -> String {
-    match keys {
-        [k] => {
-            let frame = channels::key_params(scene, k.channel, k.index)
-                .map_or(0, |p| (p.0 * scene.fps).round() as i64);
-            format!("{} key at frame {frame}", k.channel.label(scene))
-        }
-        many => format!("{} keys", many.len()),
+        actions.edit(Edit::scene(SceneEdit::KeyType { keys: keys.to_vec(), key_type: chosen }));
     }
 }
 
@@ -948,7 +850,6 @@ fn cycles_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Channel
     let scene = ctx.scene();
     let Some(old) = channels::cycles(scene, id) else { return };
     let keyed = channels::key_count(scene, id) >= 2;
-    let name = id.label(scene);
     ui.add_space(4.0);
     ui.strong("Channel cycles");
     let mut cycles = old;
@@ -970,12 +871,7 @@ fn cycles_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Channel
         }
     });
     if cycles != old {
-        let (end, cycle) =
-            if cycles.before != old.before { ("before", cycles.before) } else { ("after", cycles.after) };
-        let label = format!("{name}: {} {end} keys", cycle.label());
-        actions.edit(Edit::scene(label, move |scene| {
-            channels::set_cycles(scene, id, cycles);
-        }));
+        actions.edit(Edit::scene(SceneEdit::Cycles { channel: id, cycles }));
     }
 }
 
@@ -1030,20 +926,11 @@ fn deformer_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         .clicked()
     {
         let value = keyrig_core::attribute_id::deformer_value(settings.kind);
-        set_attribute(actions, "animate deformer", move |scene| {
-            if let Some(obj) = scene.objects.get_mut(o) {
-                obj.attributes.deformer = Some(keyrig_core::Animated::constant(value));
-            }
-        });
+        set_attribute(actions, Animate::Deformer { object: o, value });
     }
     measure_ui(ui, ctx);
     if settings != object.deformer {
-        let label = format!("deformer {}", settings.kind.label());
-        actions.edit(Edit::continuous("deformer settings", label, move |scene| {
-            if let Some(obj) = scene.objects.get_mut(o) {
-                obj.deformer = settings;
-            }
-        }));
+        actions.edit(Edit::continuous("deformer settings", SceneEdit::Deformer { object: o, settings }));
     }
 }
 
@@ -1074,12 +961,7 @@ fn blend_zone_channels(
         .clicked()
     {
         let (parent, child) = (settings.blend_parent_fraction, settings.blend_child_fraction);
-        set_attribute(actions, "animate blend zone", move |scene| {
-            if let Some(obj) = scene.objects.get_mut(o) {
-                obj.attributes.blend_parent_fraction = Some(keyrig_core::Animated::constant(parent));
-                obj.attributes.blend_child_fraction = Some(keyrig_core::Animated::constant(child));
-            }
-        });
+        set_attribute(actions, Animate::BlendZone { object: o, parent, child });
     }
 }
 
@@ -1097,18 +979,14 @@ fn reference_image_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     let label = ui.label("Reference opacity");
     let response = ui.add(egui::Slider::new(&mut opacity, 0.0..=1.0)).labelled_by(label.id);
     if response.changed() && opacity.is_finite() {
-        actions.edit(Edit::continuous("reference opacity", "reference image opacity", move |scene| {
-            if let Some(image) = &mut scene.reference_image {
-                image.opacity = opacity.clamp(0.0, 1.0);
-            }
-        }));
+        actions.edit(Edit::continuous("reference opacity", SceneEdit::ReferenceOpacity(opacity)));
     }
     ui.horizontal(|ui| {
         if ui.button("Choose image…").clicked() {
             actions.push(Action::ChooseReferenceImage);
         }
         if ui.button("Remove reference image").clicked() {
-            actions.edit(Edit::scene("remove the reference image", |scene| scene.reference_image = None));
+            actions.edit(Edit::scene(SceneEdit::RemoveReferenceImage));
         }
     });
     ui.separator();

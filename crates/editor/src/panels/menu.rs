@@ -5,7 +5,7 @@ use egui::{Button, Ui};
 use keyrig_core::DeformerKind;
 
 use crate::actions::{Action, Actions, PendingAction, SessionChange, ViewChange};
-use crate::commands::{current_deformer, Command};
+use crate::commands::Command;
 use crate::context::FrameCtx;
 use crate::view::RenderStyle;
 use crate::widgets::command_button::tool_button;
@@ -67,7 +67,7 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
-                for c in [Command::Import, Command::ExportGltf, Command::RenderAnimation] {
+                for c in [Command::Import, Command::ImportSound, Command::ExportGltf, Command::RenderAnimation] {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
@@ -93,10 +93,10 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 command_button(ui, ctx, actions, Command::ToggleIk, Some(ik));
             });
             ui.menu_button("Add", |ui| {
-                for kind in crate::scene_add::AddKind::ALL {
+                for kind in keyrig_edit::scene_add::AddKind::ALL {
                     if matches!(
                         kind,
-                        crate::scene_add::AddKind::PointLight | crate::scene_add::AddKind::Camera
+                        keyrig_edit::scene_add::AddKind::PointLight | keyrig_edit::scene_add::AddKind::Camera
                     ) {
                         ui.separator();
                     }
@@ -180,7 +180,7 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 }
             });
             ui.menu_button("Deformer", |ui| {
-                let current = current_deformer(ctx.scene(), ctx.selected_object());
+                let current = ctx.deformer_in_effect();
                 for kind in DeformerKind::ALL {
                     command_button(ui, ctx, actions, Command::SetDeformer(kind), Some(current == Some(kind)));
                 }
@@ -289,7 +289,7 @@ fn toolbar_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
         tool_button(ui, actions, Command::ToggleBones, "Bones", bones);
         ui.separator();
         ui.label("Deformer:");
-        let current = current_deformer(ctx.scene(), ctx.selected_object());
+        let current = ctx.deformer_in_effect();
         for (i, kind) in DeformerKind::ALL.into_iter().enumerate() {
             tool_button(
                 ui,

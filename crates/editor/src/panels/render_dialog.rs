@@ -9,6 +9,7 @@ use egui::Context;
 use crate::actions::{Action, Actions, ViewChange};
 use crate::context::FrameCtx;
 use crate::playblast::{MotionBlur, MovieFormat, Playblast, SceneSound, DEFAULT_SHUTTER};
+use crate::view::LookThrough;
 
 /// The dialog's fields, kept while the editor runs.
 pub struct RenderDialog {
@@ -21,6 +22,9 @@ pub struct RenderDialog {
     samples: u32,
     shutter: f64,
     output: String,
+    /// The camera each frame is seen through (`None`: the viewport's view), as
+    /// `keyrig render`'s `--camera`/`--view`.
+    through: Option<LookThrough>,
     /// The document (path) the range and the output were filled for.
     filled_for: Option<Option<PathBuf>>,
 }
@@ -37,6 +41,7 @@ impl Default for RenderDialog {
             samples: 8,
             shutter: DEFAULT_SHUTTER,
             output: String::new(),
+            through: None,
             filled_for: None,
         }
     }
@@ -72,7 +77,9 @@ impl RenderDialog {
                             .clicked()
                         {
                             match self.playblast(frame) {
-                                Ok(blast) => actions.push(Action::StartRender(blast)),
+                                Ok(blast) => {
+                                    actions.push(Action::StartRender { blast, through: self.through });
+                                }
                                 Err(e) => actions.push(Action::Error(e)),
                             }
                         }
@@ -84,10 +91,15 @@ impl RenderDialog {
         }
     }
 
-    /// The range of the scene, and an output beside the scene file named after it.
+    /// The range and render size of the scene, the camera `keyrig render` would use (the one
+    /// the viewport looks through, else the active camera, else the view), and an output beside
+    /// the scene file named after it.
     fn fill_for(&mut self, frame: &FrameCtx<'_>, scene_path: Option<&Path>) {
-        let range = frame.scene().frame_range;
+        let scene = frame.scene();
+        let range = scene.frame_range;
         (self.first, self.last) = (i64::from(range.start), i64::from(range.end));
+        (self.width, self.height) = scene.render_size.map_or((1280, 720), |s| (s.width, s.height));
+        self.through = frame.view.look_through.or((!scene.cameras.is_empty()).then_some(LookThrough::Active));
         let stem = scene_path
             .and_then(Path::file_stem)
             .map_or_else(|| "playblast".to_owned(), |s| s.to_string_lossy().into_owned());
@@ -111,6 +123,30 @@ impl RenderDialog {
             });
             labelled(ui, "Height", |ui| {
                 ui.add(egui::DragValue::new(&mut self.height).range(2..=8192).suffix(" px"))
+            });
+            labelled(ui, "Camera", |ui| {
+                let scene = frame.scene();
+                let name = |t: Option<LookThrough>| match t {
+                    None => "The viewport's view".to_owned(),
+                    Some(LookThrough::Active) => "Active camera (markers cut)".to_owned(),
+                    Some(LookThrough::Camera(c)) => {
+                        scene.cameras.get(c).map_or_else(String::new, |c| c.name.clone())
+                    }
+                };
+                egui::ComboBox::from_id_salt("render_camera")
+                    .selected_text(name(self.through))
+                    .show_ui(ui, |ui| {
+                        let mut choices = vec![None];
+                        if !scene.cameras.is_empty() {
+                            choices.push(Some(LookThrough::Active));
+                        }
+                        choices.extend((0..scene.cameras.len()).map(|c| Some(LookThrough::Camera(c))));
+                        for choice in choices {
+                            ui.selectable_value(&mut self.through, choice, name(choice));
+                        }
+                    })
+                    .response
+                    .on_hover_text("What each frame is seen through, as keyrig render's --camera and --view")
             });
             labelled(ui, "First frame", |ui| {
                 ui.add(egui::DragValue::new(&mut self.first).range(start..=end))
@@ -152,7 +188,7 @@ impl RenderDialog {
         });
         ui.label(
             egui::RichText::new(format!(
-                "{} frames at {} fps, seen by the viewport's camera",
+                "{} frames at {} fps, as keyrig render renders them",
                 (self.last - self.first + 1).max(0),
                 frame.scene().fps
             ))

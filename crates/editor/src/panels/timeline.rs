@@ -5,11 +5,11 @@
 use egui::Ui;
 
 use crate::actions::{Action, Actions, Edit, SessionChange};
-use crate::channels;
 use crate::commands::Command;
 use crate::context::FrameCtx;
 use crate::widgets::command_button::tool_button;
 use crate::widgets::field::{number_field, FieldChange};
+use keyrig_edit::SceneEdit;
 
 /// The playback controls and their own state.
 #[derive(Debug, Default)]
@@ -80,9 +80,7 @@ impl Timeline {
                     // drift by rounding as the drag goes on.
                     let origin = *self.fps_drag_origin.get_or_insert((old_fps, old_start, old_end));
                     let fps = if fps.is_finite() { fps.clamp(MIN_FPS, MAX_FPS) } else { old_fps };
-                    actions.edit(Edit::continuous("fps", fps_label(fps), move |s| {
-                        retime(s, origin, fps, keep_frames);
-                    }));
+                    actions.edit(Edit::continuous("fps", SceneEdit::Retime { origin, fps, keep_frames }));
                 }
                 FieldChange::Committed => {
                     if !(fps.is_finite() && (MIN_FPS..=MAX_FPS).contains(&fps)) {
@@ -92,8 +90,7 @@ impl Timeline {
                     } else {
                         let origin = (old_fps, old_start, old_end);
                         actions.push(Action::CloseGroup);
-                        actions
-                            .edit(Edit::scene(fps_label(fps), move |s| retime(s, origin, fps, keep_frames)));
+                        actions.edit(Edit::scene(SceneEdit::Retime { origin, fps, keep_frames }));
                     }
                 }
             }
@@ -137,30 +134,6 @@ pub const MAX_FPS: f64 = 240.0;
 /// The frame range limits of the Start and End fields.
 const FRAME_LIMIT: i32 = 100_000;
 
-fn fps_label(fps: f64) -> String {
-    format!("change fps to {fps}")
-}
-
-/// Sets the scene's fps to `fps` from `origin` = (fps, start, end) before the change: with
-/// `keep_frames` every key stays on its frame (its time in seconds scales) and the range stays;
-/// otherwise keys keep their seconds and the range scales with them.
-pub fn retime(scene: &mut keyrig_core::Scene, origin: (f64, i32, i32), fps: f64, keep_frames: bool) {
-    let (old_fps, start, end) = origin;
-    let current = scene.fps;
-    if keep_frames {
-        channels::scale_key_times(scene, current / fps);
-        scene.frame_range.start = start;
-        scene.frame_range.end = end;
-    } else {
-        let ratio = fps / old_fps;
-        let s = (f64::from(start) * ratio).round() as i32;
-        let e = ((f64::from(end) * ratio).round() as i32).max(s + 1);
-        scene.frame_range.start = s;
-        scene.frame_range.end = e;
-    }
-    scene.fps = fps;
-}
-
 /// Applies an edit of the Start or End field: a drag clamps to a valid range (one undo step per
 /// drag), a typed value is checked (Start before End) and refused with a status-bar error. The
 /// playhead (at `frame`) stays where it was unless the new range leaves it out.
@@ -177,10 +150,7 @@ fn apply_range(
     if dragged {
         start = start.clamp(-FRAME_LIMIT, old.1 - 1);
         end = end.clamp(old.0 + 1, FRAME_LIMIT);
-        actions.edit(Edit::continuous("frame range", "change frame range", move |s| {
-            s.frame_range.start = start;
-            s.frame_range.end = end;
-        }));
+        actions.edit(Edit::continuous("frame range", SceneEdit::FrameRange { start, end }));
     } else if start.abs() > FRAME_LIMIT || end.abs() > FRAME_LIMIT {
         actions.push(Action::Error(format!("Frames must lie between {} and {FRAME_LIMIT}", -FRAME_LIMIT)));
         return;
@@ -194,10 +164,7 @@ fn apply_range(
         return;
     } else {
         actions.push(Action::CloseGroup);
-        actions.edit(Edit::scene(format!("frame range {start}–{end}"), move |s| {
-            s.frame_range.start = start;
-            s.frame_range.end = end;
-        }));
+        actions.edit(Edit::scene(SceneEdit::FrameRange { start, end }));
     }
     if frame < start || frame > end {
         actions.session(SessionChange::SetFrame(frame));

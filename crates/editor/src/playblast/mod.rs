@@ -25,6 +25,30 @@ use keyrig_render::{FrameInput, HeadlessRenderer, RenderError};
 
 pub use encode::{numbered_output, write_png, MovieWriter};
 
+/// What a playblast draws beside the scene, as `keyrig render` draws it unless told otherwise:
+/// the grid and skeletons, no camera gizmos; seen by `camera` where no scene camera is looked
+/// through (`None`: the scene's saved view).
+#[must_use]
+pub fn playblast_view(camera: Option<keyrig_core::Camera>) -> keyrig_render::ViewOptions {
+    keyrig_render::ViewOptions { camera, cameras: false, ..keyrig_render::ViewOptions::default() }
+}
+
+/// The frame `frame` of a scene as `keyrig render` and File ▸ Render animation both render it:
+/// seen through `through` — the active camera at that frame (markers cut between cameras), one
+/// camera, or (`None`) the view in `view.camera` — with the rest of `view`'s options.
+///
+/// # Errors
+/// The scene cannot be turned into a frame at that time.
+pub fn scene_frame(
+    rig: &keyrig_render::SceneRig,
+    view: &keyrig_render::ViewOptions,
+    through: Option<crate::view::LookThrough>,
+    frame: f64,
+) -> Result<FrameInput, keyrig_render::SceneFrameError> {
+    let look_through = through.and_then(|t| t.camera_at(rig.scene(), frame));
+    rig.frame(rig.time_of_frame(frame), &keyrig_render::ViewOptions { look_through, ..*view })
+}
+
 /// Most frames one playblast renders.
 pub const MAX_FRAMES: u32 = 100_000;
 

@@ -6,8 +6,8 @@ use egui::Ui;
 use keyrig_core::KeyType;
 
 use crate::actions::{Action, Actions, Edit};
-use crate::channels;
 use crate::session::{KeyRef, Selection};
+use keyrig_edit::SceneEdit;
 
 /// One button per key type; a click sets it on every selected key (one undo step) and closes
 /// the menu. Disabled while no key is selected.
@@ -17,14 +17,8 @@ pub fn key_type_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Action
     for key_type in KeyType::ALL {
         let button = ui.add_enabled(!keys.is_empty(), egui::Button::new(key_type.label()));
         if button.clicked() {
-            let keys = keys.clone();
-            let what = key_type.label().to_lowercase();
             actions.push(Action::CloseGroup);
-            actions.edit(Edit::scene(format!("key type {what} on {} key(s)", keys.len()), move |scene| {
-                for k in &keys {
-                    channels::set_key_type(scene, k.channel, k.index, key_type);
-                }
-            }));
+            actions.edit(Edit::scene(SceneEdit::KeyType { keys: keys.clone(), key_type }));
             ui.close();
         }
     }

@@ -12,6 +12,7 @@ use crate::actions::{Actions, Edit};
 use crate::commands::Command;
 use crate::context::FrameCtx;
 use crate::widgets::field::{number_field, FieldChange};
+use keyrig_edit::SceneEdit;
 
 /// The colour the preview range is marked with (the dope sheet's ruler, the toggle).
 pub const PREVIEW_COLOUR: egui::Color32 = egui::Color32::from_rgb(230, 140, 40);
@@ -46,12 +47,11 @@ pub fn preview_range_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) 
     } else {
         FrameRange { start: start.min(end), end }
     };
-    let label = format!("preview range {}–{}", new.start, new.end);
     if changes.contains(&FieldChange::Dragged) {
-        actions.edit(Edit::continuous("preview range", label, move |s| s.preview_range = Some(new)));
+        actions.edit(Edit::continuous("preview range", SceneEdit::PreviewRange(new)));
     } else {
         actions.push(crate::actions::Action::CloseGroup);
-        actions.edit(Edit::scene(label, move |s| s.preview_range = Some(new)));
+        actions.edit(Edit::scene(SceneEdit::PreviewRange(new)));
     }
 }
 

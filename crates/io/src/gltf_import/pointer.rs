@@ -185,14 +185,29 @@ fn tokens(pointer: &str) -> Option<Vec<String>> {
     Some(rest.split('/').map(|t| t.replace("~1", "/").replace("~0", "~")).collect())
 }
 
-fn parse_pointer(pointer: &str, model: &ImportedModel, materials: usize) -> Result<Parsed, String> {
-    let Some(tokens) = tokens(pointer) else { return Err("not a JSON pointer (no leading '/')".into()) };
+/// Why a pointer channel is set aside: its pointer names nothing keyrig holds.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+enum Unheld {
+    #[error("not a JSON pointer (no leading '/')")]
+    NotAPointer,
+    #[error("{what} {index} does not exist (the file has {count})")]
+    NoSuch { what: &'static str, index: usize, count: usize },
+    #[error("{text:?} is not a {what} index")]
+    NotAnIndex { what: &'static str, text: String },
+    #[error("camera {camera} is not {projection}")]
+    OtherProjection { camera: usize, projection: String },
+    #[error("{0}")]
+    Property(&'static str),
+}
+
+fn parse_pointer(pointer: &str, model: &ImportedModel, materials: usize) -> Result<Parsed, Unheld> {
+    let Some(tokens) = tokens(pointer) else { return Err(Unheld::NotAPointer) };
     let t: Vec<&str> = tokens.iter().map(String::as_str).collect();
-    let index = |s: &str, what: &str, count: usize| -> Result<usize, String> {
+    let index = |s: &str, what: &'static str, count: usize| -> Result<usize, Unheld> {
         match s.parse::<usize>() {
             Ok(i) if i < count => Ok(i),
-            Ok(i) => Err(format!("{what} {i} does not exist (the file has {count})")),
-            Err(_) => Err(format!("{s:?} is not a {what} index")),
+            Ok(index) => Err(Unheld::NoSuch { what, index, count }),
+            Err(_) => Err(Unheld::NotAnIndex { what, text: s.to_owned() }),
         }
     };
     match t.as_slice() {
@@ -206,18 +221,17 @@ fn parse_pointer(pointer: &str, model: &ImportedModel, materials: usize) -> Resu
                 ["extensions", "KHR_node_visibility", "visible"] => {
                     Ok(Parsed::Target(PointerTarget::NodeVisible(n)))
                 }
-                _ => {
-                    Err("keyrig animates a node's translation, rotation, scale, weights and visibility"
-                        .into())
-                }
+                _ => Err(Unheld::Property(
+                    "keyrig animates a node's translation, rotation, scale, weights and visibility",
+                )),
             }
         }
         ["materials", m, "pbrMetallicRoughness", "baseColorFactor"] => {
             Ok(Parsed::Target(PointerTarget::MaterialBaseColour(index(m, "material", materials)?)))
         }
-        ["materials", ..] => {
-            Err("keyrig animates a material's base colour and opacity (baseColorFactor) only".into())
-        }
+        ["materials", ..] => Err(Unheld::Property(
+            "keyrig animates a material's base colour and opacity (baseColorFactor) only",
+        )),
         ["extensions", "KHR_lights_punctual", "lights", l, rest @ ..] => {
             let l = index(l, "light", model.lights.len())?;
             match rest {
@@ -226,7 +240,9 @@ fn parse_pointer(pointer: &str, model: &ImportedModel, materials: usize) -> Resu
                 ["range"] => Ok(Parsed::Target(PointerTarget::LightRange(l))),
                 ["spot", "innerConeAngle"] => Ok(Parsed::Target(PointerTarget::LightInnerCone(l))),
                 ["spot", "outerConeAngle"] => Ok(Parsed::Target(PointerTarget::LightOuterCone(l))),
-                _ => Err("keyrig animates a light's color, intensity, range and spot cone angles".into()),
+                _ => Err(Unheld::Property(
+                    "keyrig animates a light's color, intensity, range and spot cone angles",
+                )),
             }
         }
         ["cameras", c, rest @ ..] => {
@@ -235,23 +251,22 @@ fn parse_pointer(pointer: &str, model: &ImportedModel, materials: usize) -> Resu
             match (rest, orthographic) {
                 (["perspective", "yfov"], false) => Ok(Parsed::Target(PointerTarget::CameraYfov(c))),
                 (["orthographic", "ymag"], true) => Ok(Parsed::Target(PointerTarget::CameraYmag(c))),
-                (["orthographic", "xmag"], true) => Err(
-                    "keyrig's orthographic view width follows its height (ymag) and the scene's render aspect"
-                        .into(),
-                ),
+                (["orthographic", "xmag"], true) => Err(Unheld::Property(
+                    "keyrig's orthographic view width follows its height (ymag) and the scene's render aspect",
+                )),
                 (["perspective", "aspectRatio"], false) => {
-                    Err("keyrig's aspect ratio is the scene's render size, not keyed".into())
+                    Err(Unheld::Property("keyrig's aspect ratio is the scene's render size, not keyed"))
                 }
                 (["perspective" | "orthographic", "znear" | "zfar"], _) => {
-                    Err("keyrig's clip planes are not keyed: the camera keeps the file's".into())
+                    Err(Unheld::Property("keyrig's clip planes are not keyed: the camera keeps the file's"))
                 }
                 (["perspective", ..], true) | (["orthographic", ..], false) => {
-                    Err(format!("camera {c} is not {}", rest[0]))
+                    Err(Unheld::OtherProjection { camera: c, projection: rest[0].to_owned() })
                 }
-                _ => Err("keyrig animates a camera's yfov (perspective) or ymag (orthographic)".into()),
+                _ => Err(Unheld::Property("keyrig animates a camera's yfov (perspective) or ymag (orthographic)")),
             }
         }
-        _ => Err("keyrig holds no animated property there".into()),
+        _ => Err(Unheld::Property("keyrig holds no animated property there")),
     }
 }
 
@@ -282,7 +297,7 @@ pub(crate) fn read_pointer_channels(
         let parsed = match parse_pointer(pointer, model, materials) {
             Ok(p) => p,
             Err(reason) => {
-                model.skipped_channels.push(skip(reason));
+                model.skipped_channels.push(skip(reason.to_string()));
                 continue;
             }
         };

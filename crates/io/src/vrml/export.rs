@@ -1493,8 +1493,9 @@ pub fn restore_metadata(doc: &super::tree::Document, model: &mut super::VrmlMode
         let original = &scene.objects[o];
         object.name.clone_from(&original.name);
         object.deformer = original.deformer;
-        // A skinned object was written as the meshes its deformer made: it comes back as
-        // that morph (its skeleton stays in the metadata scene); others take their keys back.
+        // A skinned object was written as the meshes its deformer made: it comes back as that
+        // morph here, and whole from the metadata scene where its mesh can be had again
+        // (`VrmlModel::to_scene`); others take their keys back.
         if original.skeleton.is_none() {
             object.translation = original.translation.clone();
             object.rotation = original.rotation.clone();

@@ -145,6 +145,32 @@ pub struct VrmlModel {
     pub metadata_scene: Option<keyrig_core::Scene>,
 }
 
+/// The mesh source of a skinned object of keyrig's own scene (read from an export's metadata)
+/// as it can be used again: procedural meshes and none as they are, a model file when it is
+/// there (a relative path taken from `file`'s folder); `None` when the file is missing.
+fn mesh_again(mesh: Option<&keyrig_core::MeshSource>, file: &str) -> Option<Option<keyrig_core::MeshSource>> {
+    match mesh {
+        None => Some(None),
+        Some(keyrig_core::MeshSource::File { path, mesh, clip, fps }) => {
+            let found = std::path::Path::new(path);
+            let found = if found.is_absolute() {
+                found.to_path_buf()
+            } else {
+                std::path::Path::new(file).parent().unwrap_or(std::path::Path::new("")).join(found)
+            };
+            found.is_file().then(|| {
+                Some(keyrig_core::MeshSource::File {
+                    path: found.to_string_lossy().into_owned(),
+                    mesh: *mesh,
+                    clip: clip.clone(),
+                    fps: *fps,
+                })
+            })
+        }
+        Some(source) => Some(Some(source.clone())),
+    }
+}
+
 /// Why a mesh could not become a keyrig-skin mesh.
 #[derive(Debug, thiserror::Error)]
 pub enum VrmlMeshError {
@@ -183,6 +209,19 @@ impl VrmlModel {
             scene.cameras.clone_from(&original.cameras);
             scene.active_camera.clone_from(&original.active_camera);
             scene.markers.clone_from(&original.markers);
+            // A skinned object was written as the meshes its deformer made; it comes back
+            // whole — skeleton, deformer and keys — when its mesh can be had again (procedural,
+            // or its model file is there), else as that vertex animation.
+            for object in &mut scene.objects {
+                let Some(whole) =
+                    original.objects.iter().find(|x| x.name == object.name && x.skeleton.is_some())
+                else {
+                    continue;
+                };
+                if let Some(mesh) = mesh_again(whole.mesh.as_ref(), file) {
+                    *object = keyrig_core::Object { mesh, ..whole.clone() };
+                }
+            }
         }
         scene
     }

@@ -16,6 +16,7 @@ use crate::context::FrameCtx;
 use crate::sounds::SoundLoad;
 use crate::widgets::publish_painted;
 use crate::widgets::waveform::{paint_waveform, waveform_columns};
+use keyrig_edit::SceneEdit;
 
 /// The height of one clip's row, points.
 pub(super) const SOUND_ROW_HEIGHT: f32 = 28.0;
@@ -119,12 +120,7 @@ impl DopeSheet {
             .on_hover_text(if clip.mute { "Unmute this sound clip" } else { "Mute this sound clip" });
         if toggle.clicked() {
             let mute = !clip.mute;
-            let verb = if mute { "mute" } else { "unmute" };
-            actions.edit(Edit::scene(format!("{verb} sound clip {label}"), move |s| {
-                if let Some(c) = s.sounds.get_mut(i) {
-                    c.mute = mute;
-                }
-            }));
+            actions.edit(Edit::scene(SceneEdit::SoundMute { clip: i, muted: mute }));
         }
         let name = Rect::from_min_max(
             Pos2::new(speaker.right() + 2.0, row.top()),
@@ -245,12 +241,10 @@ impl DopeSheet {
             let frames = (f64::from(delta.x) * geo.frames_per_point()).round() as i64;
             if frames != drag.applied {
                 let start = drag.from + frames as f64;
-                let label = format!("move sound clip {} to frame {start}", clip.label());
-                actions.edit(Edit::continuous(format!("move sound clip {i}"), label, move |s| {
-                    if let Some(c) = s.sounds.get_mut(i) {
-                        c.start_frame = start;
-                    }
-                }));
+                actions.edit(Edit::continuous(
+                    format!("move sound clip {i}"),
+                    SceneEdit::SoundStart { clip: i, start_frame: start },
+                ));
                 self.sound_drag = Some(SoundDrag { applied: frames, ..drag });
             }
         }

@@ -6,10 +6,11 @@ use egui::Ui;
 use keyrig_core::{AimTarget, Projection};
 
 use crate::actions::{Actions, Edit};
-use crate::channels::ChannelId;
 use crate::commands::Command;
 use crate::context::FrameCtx;
 use crate::widgets::field::number_field;
+use keyrig_edit::channels::ChannelId;
+use keyrig_edit::SceneEdit;
 
 pub(super) fn camera_ui(
     ui: &mut Ui,
@@ -38,7 +39,6 @@ pub(super) fn camera_ui(
     channel_editor(ui, ctx, actions, ChannelId::CameraLens(c), lens_label);
     channel_editor(ui, ctx, actions, ChannelId::CameraVisible(c), "Visible");
 
-    let name = camera.name.clone();
     let mut chosen = projection;
     egui::ComboBox::from_label("Projection").selected_text(projection.label()).show_ui(ui, |ui| {
         for p in [
@@ -53,11 +53,7 @@ pub(super) fn camera_ui(
         }
     });
     if chosen != projection {
-        actions.edit(Edit::scene(format!("{name} projection"), move |scene| {
-            if let Some(camera) = scene.cameras.get_mut(c) {
-                convert_lens(camera, chosen);
-            }
-        }));
+        actions.edit(Edit::scene(SceneEdit::CameraProjection { camera: c, projection: chosen }));
     }
     let mut near = camera.near;
     let mut far = camera.far.unwrap_or(0.0);
@@ -67,11 +63,7 @@ pub(super) fn camera_ui(
         let (_, far_change) = number_field(ui, &mut far, "Far clip", |d| d.speed(1.0).max_decimals(2));
         if (near_change.any() || far_change.any()) && near.is_finite() && far.is_finite() {
             let far = (far > 0.0 || projection == Projection::Orthographic).then_some(far);
-            actions.edit(Edit::continuous("camera clip", format!("{name} clip planes"), move |scene| {
-                if let Some(camera) = scene.cameras.get_mut(c) {
-                    (camera.near, camera.far) = (near, far);
-                }
-            }));
+            actions.edit(Edit::continuous("camera clip", SceneEdit::CameraClip { camera: c, near, far }));
         }
     });
     if camera.far.is_none() {
@@ -117,68 +109,6 @@ fn aim_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, c: usize, aim:
         }
     });
     if let Some(target) = chosen {
-        actions.edit(Edit::scene("camera aim", move |scene| {
-            if let Some(camera) = scene.cameras.get_mut(c) {
-                camera.aim = match (target, camera.aim.take()) {
-                    (None, _) => None,
-                    (Some(target), Some(aim)) => Some(keyrig_core::Aim { target, ..aim }),
-                    (Some(target), None) => Some(keyrig_core::Aim::at(target)),
-                };
-            }
-        }));
-    }
-}
-
-/// Switches a camera to `projection`, converting its lens value and keys so that the view
-/// stays as it was where the two can express it (field of view ↔ focal length); an
-/// orthographic view height is set from the view's height at distance 5.
-fn convert_lens(camera: &mut keyrig_core::SceneCamera, projection: Projection) {
-    use keyrig_core::camera_object::{focal_length_from_fov_y, fov_y_from_focal_length};
-    let fov_of = |old: Projection, v: f32| match old {
-        Projection::Perspective => v.to_radians(),
-        Projection::FocalLength { sensor_height_mm } => fov_y_from_focal_length(v, sensor_height_mm),
-        Projection::Orthographic => 2.0 * (v / 10.0).atan(),
-    };
-    let old = camera.projection;
-    let convert = |v: f32| {
-        let fov = fov_of(old, v);
-        match projection {
-            Projection::Perspective => fov.to_degrees(),
-            Projection::FocalLength { sensor_height_mm } => focal_length_from_fov_y(fov, sensor_height_mm),
-            Projection::Orthographic => 10.0 * (fov * 0.5).tan(),
-        }
-    };
-    camera.lens.value = convert(camera.lens.value);
-    for key in camera.lens.track.keys.iter_mut() {
-        key.value = convert(key.value);
-        key.in_tangent = None;
-        key.out_tangent = None;
-        if key.interpolation == keyrig_core::Interpolation::Hermite {
-            key.interpolation = keyrig_core::Interpolation::Tcb;
-        }
-    }
-    if projection == Projection::Orthographic && camera.far.is_none() {
-        camera.far = Some(1000.0);
-    }
-    camera.projection = projection;
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn converting_the_lens_keeps_the_view() {
-        let mut camera = keyrig_core::SceneCamera::new("C", glam::Vec3::Z);
-        camera.lens.value = 2.0 * (12f32 / 50.0).atan().to_degrees();
-        convert_lens(&mut camera, Projection::FocalLength { sensor_height_mm: 24.0 });
-        assert!((camera.lens.value - 50.0).abs() < 1e-3, "{}", camera.lens.value);
-        convert_lens(&mut camera, Projection::Perspective);
-        assert!((camera.lens.value - 26.991_466).abs() < 1e-3);
-        camera.far = None;
-        convert_lens(&mut camera, Projection::Orthographic);
-        assert_eq!(camera.far, Some(1000.0));
-        let scene = keyrig_core::Scene { cameras: vec![camera], ..keyrig_core::Scene::default() };
-        assert_eq!(scene.problems(), Vec::new());
+        actions.edit(Edit::scene(SceneEdit::CameraAim { camera: c, target }));
     }
 }

@@ -10,10 +10,10 @@ use transform_gizmo_egui::{GizmoConfig, GizmoInteraction, GizmoMode, GizmoOrient
 
 use crate::actions::{Actions, Edit};
 use crate::camera::{OrbitCamera, Projection};
-use crate::channels::{ChannelId, ChannelValue};
 use crate::context::FrameCtx;
 use crate::session::Selected;
 use crate::twist::{RingDrag, RingDragState};
+use keyrig_edit::channels::{ChannelId, ChannelValue};
 
 use super::targets::{self, Pivot, Target};
 

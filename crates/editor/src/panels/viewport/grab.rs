@@ -11,8 +11,8 @@ use glam::Vec3;
 
 use crate::actions::{Action, Actions, Edit};
 use crate::camera::{OrbitCamera, Projection};
-use crate::channels::ChannelValue;
 use crate::context::FrameCtx;
+use keyrig_edit::channels::ChannelValue;
 
 use super::targets::{self, Target};
 

@@ -10,8 +10,8 @@ use glam::{Affine3A, Vec3};
 
 use crate::actions::{Action, Actions, Edit};
 use crate::camera::{OrbitCamera, Projection};
-use crate::channels::{ChannelId, ChannelValue};
 use crate::context::FrameCtx;
+use keyrig_edit::channels::{ChannelId, ChannelValue};
 
 /// A press within this many points of a target grabs it.
 pub const TARGET_RADIUS: f32 = 9.0;

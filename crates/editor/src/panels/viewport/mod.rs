@@ -276,7 +276,7 @@ fn pick_targets(projection: &Projection, ctx: &FrameCtx<'_>) -> Vec<(Pos2, Selec
     }
     let cameras = ctx.scene.state().map_or(&[][..], |s| s.cameras.as_slice());
     for (c, camera) in cameras.iter().enumerate().take(scene.cameras.len()) {
-        if ctx.view.look_through == Some(c) {
+        if ctx.looking_through() == Some(c) {
             continue;
         }
         if let Some(p) = projection.project(camera.eye()) {
@@ -412,7 +412,7 @@ fn navigate(
 /// The scene camera the viewport looks through this frame, when it does and it can be
 /// projected.
 fn look_through_state(ctx: &FrameCtx<'_>) -> Option<keyrig_eval::CameraState> {
-    let c = ctx.view.look_through?;
+    let c = ctx.looking_through()?;
     ctx.scene.state()?.cameras.get(c).copied().filter(keyrig_eval::CameraState::is_usable)
 }
 
@@ -445,7 +445,7 @@ impl Viewport {
             selection: ctx.session.selection.item,
             camera: Some(c),
             depth_range: Some(c.depth_range(ctx.scene.depth_bounds())),
-            look_through: look_through_state(ctx).and(ctx.view.look_through),
+            look_through: look_through_state(ctx).and(ctx.looking_through()),
             ..keyrig_render::ViewOptions::default()
         };
         let ppp = ui.ctx().pixels_per_point() * ctx.view.resolution_scale.clamp(0.25, 1.0);

@@ -10,9 +10,10 @@ use glam::{Mat3A, Vec3};
 
 use crate::actions::{Action, Actions, Edit};
 use crate::camera::{OrbitCamera, Projection};
-use crate::channels::{self, ChannelId, ChannelValue};
 use crate::context::FrameCtx;
 use crate::session::Selected;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue};
+use keyrig_edit::SceneEdit;
 
 /// A press within this many points of a key's handle grabs it.
 pub const KEY_RADIUS: f32 = 7.0;
@@ -110,14 +111,7 @@ pub(super) fn ui(
             let value = d.value + d.world_to_value.mul_vec3(on_plane - d.pressed_at);
             if value.is_finite() {
                 let (id, time) = (d.id, d.time);
-                let frame = (time * ctx.scene().fps).round();
-                actions.edit(Edit::continuous(
-                    GROUP,
-                    format!("move the key at frame {frame} on the motion path"),
-                    move |scene| {
-                        channels::set_key(scene, id, time, ChannelValue::Vec3(value));
-                    },
-                ));
+                actions.edit(Edit::continuous(GROUP, SceneEdit::MotionPathKey { channel: id, time, value }));
                 d.moved = true;
             }
         }

@@ -127,7 +127,7 @@ pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ct
         None => ctx.view.camera.distance * 0.008,
     };
     for (c, camera) in state.cameras.iter().enumerate() {
-        if ctx.view.look_through == Some(c) || !camera.is_usable() || !camera.visible {
+        if ctx.looking_through() == Some(c) || !camera.is_usable() || !camera.visible {
             continue;
         }
         let gizmo = keyrig_render::CameraGizmo {
@@ -152,7 +152,7 @@ pub(super) fn paint_cameras(painter: &egui::Painter, projection: &Projection, ct
 /// scene's render aspect about the vertical field of view), outlined, with the camera's name.
 pub(super) fn paint_render_frame(painter: &egui::Painter, rect: egui::Rect, ctx: &FrameCtx<'_>) {
     let scene = ctx.scene();
-    let Some(camera) = ctx.view.look_through.and_then(|c| scene.cameras.get(c)) else { return };
+    let Some(camera) = ctx.looking_through().and_then(|c| scene.cameras.get(c)) else { return };
     let aspect = scene.render_size.map_or(16.0 / 9.0, keyrig_core::RenderSize::aspect);
     let width = (rect.height() * aspect).min(rect.width());
     let frame = egui::Rect::from_center_size(rect.center(), egui::vec2(width, rect.height()));

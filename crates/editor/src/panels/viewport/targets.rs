@@ -17,9 +17,9 @@ use glam::{Affine3A, Mat3A, Quat, Vec3};
 use keyrig_core::LightKind;
 
 use crate::actions::{Actions, Edit};
-use crate::channels::{self, ChannelId, ChannelValue, Turn};
 use crate::context::FrameCtx;
 use crate::session::Selected;
+use keyrig_edit::channels::{self, ChannelId, ChannelValue, Turn};
 
 /// Where the selection turns about.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -19,7 +19,7 @@
 use glam::{DVec3, Quat, Vec3};
 use keyrig_core::{Cycles, Interpolation, Key, KeyType, RawTrack, Scene, Spin, Tcb, Track};
 
-use crate::twist::{nearest_turn, spin_toward, twist_degrees};
+use crate::spin::{nearest_turn, spin_toward, twist_degrees};
 
 pub use keyrig_core::channel_id::{
     channel, channel_mut as any_channel_mut, ChannelId, ChannelKind, ChannelMut, ChannelRef, ChannelValue,

@@ -1,9 +1,8 @@
 //! Scene edits for cameras that keep the scene valid: markers and the active camera follow a
 //! renamed or deleted camera, aims follow a renamed object or joint and are dropped with a
-//! deleted object; and the orbit view as a camera (set camera to view, add camera).
+//! deleted object; a camera's projection switched with its lens converted.
 
-use glam::{Quat, Vec3};
-use keyrig_core::{AimTarget, Camera, Marker, Scene};
+use keyrig_core::{AimTarget, Marker, Scene};
 
 /// Removes camera `c`; markers bound to it are unbound and the active camera forgotten when it
 /// was this one (a marker or `active_camera` naming a missing camera is a scene problem).
@@ -65,26 +64,51 @@ pub fn forget_aim_targets(scene: &mut Scene, object: &str) {
     }
 }
 
-/// The world position and rotation of the orbit view `camera` as a scene camera (looking down
-/// its −Z, +Y up): what "set camera to current view" keys.
-#[must_use]
-pub fn view_as_camera(camera: &Camera) -> (Vec3, Quat) {
-    let eye = keyrig_render::camera::eye_position(camera);
-    let rotation = keyrig_core::camera_object::aim_rotation(eye, camera.target, Vec3::Y, 0.0)
-        .or_else(|| keyrig_core::camera_object::aim_rotation(eye, camera.target, Vec3::NEG_Z, 0.0))
-        .unwrap_or(Quat::IDENTITY);
-    (eye, rotation)
-}
-
 /// Adds `marker`, keeping the markers in frame order.
 pub fn add_marker(scene: &mut Scene, marker: Marker) {
     let at = scene.markers.partition_point(|m| m.frame <= marker.frame);
     scene.markers.insert(at, marker);
 }
 
+/// Switches a camera to `projection`, converting its lens value and keys so that the view
+/// stays as it was where the two can express it (field of view ↔ focal length); an
+/// orthographic view height is set from the view's height at distance 5.
+pub fn convert_lens(camera: &mut keyrig_core::SceneCamera, projection: keyrig_core::Projection) {
+    use keyrig_core::camera_object::{focal_length_from_fov_y, fov_y_from_focal_length};
+    use keyrig_core::Projection;
+    let fov_of = |old: Projection, v: f32| match old {
+        Projection::Perspective => v.to_radians(),
+        Projection::FocalLength { sensor_height_mm } => fov_y_from_focal_length(v, sensor_height_mm),
+        Projection::Orthographic => 2.0 * (v / 10.0).atan(),
+    };
+    let old = camera.projection;
+    let convert = |v: f32| {
+        let fov = fov_of(old, v);
+        match projection {
+            Projection::Perspective => fov.to_degrees(),
+            Projection::FocalLength { sensor_height_mm } => focal_length_from_fov_y(fov, sensor_height_mm),
+            Projection::Orthographic => 10.0 * (fov * 0.5).tan(),
+        }
+    };
+    camera.lens.value = convert(camera.lens.value);
+    for key in camera.lens.track.keys.iter_mut() {
+        key.value = convert(key.value);
+        key.in_tangent = None;
+        key.out_tangent = None;
+        if key.interpolation == keyrig_core::Interpolation::Hermite {
+            key.interpolation = keyrig_core::Interpolation::Tcb;
+        }
+    }
+    if projection == Projection::Orthographic && camera.far.is_none() {
+        camera.far = Some(1000.0);
+    }
+    camera.projection = projection;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
     use keyrig_core::{Marker, SceneCamera};
 
     fn scene() -> Scene {
@@ -132,24 +156,17 @@ mod tests {
     }
 
     #[test]
-    fn the_view_as_a_camera_sees_what_the_view_sees() {
-        let view = Camera {
-            target: Vec3::new(1.0, 0.5, 0.0),
-            yaw_deg: 30.0,
-            pitch_deg: 20.0,
-            distance: 6.0,
-            fov_y_deg: 45.0,
-        };
-        let (eye, rotation) = view_as_camera(&view);
-        let state = keyrig_eval::CameraState {
-            world_from_camera: glam::Affine3A::from_rotation_translation(rotation, eye),
-            lens: keyrig_core::Lens::Perspective { fov_y: 45f32.to_radians() },
-            near: 0.1,
-            far: Some(100.0),
-            visible: true,
-        };
-        // The same view matrix as the orbit camera's (keyrig-render's look-at).
-        let orbit = keyrig_render::camera::view_from_world(&view);
-        assert!(state.view_from_world().abs_diff_eq(orbit, 1e-4), "{} vs {orbit}", state.view_from_world());
+    fn converting_the_lens_keeps_the_view() {
+        let mut camera = keyrig_core::SceneCamera::new("C", glam::Vec3::Z);
+        camera.lens.value = 2.0 * (12f32 / 50.0).atan().to_degrees();
+        convert_lens(&mut camera, keyrig_core::Projection::FocalLength { sensor_height_mm: 24.0 });
+        assert!((camera.lens.value - 50.0).abs() < 1e-3, "{}", camera.lens.value);
+        convert_lens(&mut camera, keyrig_core::Projection::Perspective);
+        assert!((camera.lens.value - 26.991_466).abs() < 1e-3);
+        camera.far = None;
+        convert_lens(&mut camera, keyrig_core::Projection::Orthographic);
+        assert_eq!(camera.far, Some(1000.0));
+        let scene = keyrig_core::Scene { cameras: vec![camera], ..keyrig_core::Scene::default() };
+        assert_eq!(scene.problems(), Vec::new());
     }
 }

@@ -1,0 +1,427 @@
+//! The document's edits as data: each change a panel, menu or command asks of the scene is a
+//! [`SceneEdit`] value, applied by [`SceneEdit::apply`] and named by [`SceneEdit::label`] (the
+//! undo step's name, read from the scene before the edit). An edit can be logged, compared,
+//! tested without a window and used by the command line; the editor queues it with its undo
+//! grouping (one step, or one step per drag) and applies it through its document.
+//!
+//! Edits address items by index (objects, lights, cameras, sound clips, keys) as the scene holds
+//! them when the edit is applied; an index that no longer exists leaves the scene unchanged.
+
+use glam::Vec3;
+use keyrig_core::channel_id::{set_rotation_keys, set_rotation_mode};
+use keyrig_core::{
+    AimTarget, Animated, Cycles, DeformerSettings, FrameRange, Interpolation, KeyType, MeshSource,
+    Projection, RotationMode, Scene, Tcb,
+};
+
+use crate::camera_edits::convert_lens;
+use crate::channels::{self, ChannelId, ChannelValue};
+
+/// One key of one channel (index into the channel's track).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct KeyRef {
+    pub channel: ChannelId,
+    pub index: usize,
+}
+
+/// Which of a key's interpolation parameters an edit writes: every field that is `Some` is
+/// written to each key, the others keep each key's own value (so a slider moved on a mixed
+/// selection changes only what it moved).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KeyParamChange {
+    pub interpolation: Option<Interpolation>,
+    pub tension: Option<f32>,
+    pub continuity: Option<f32>,
+    pub bias: Option<f32>,
+    pub clamped: Option<bool>,
+}
+
+impl KeyParamChange {
+    /// The fields that differ between `before` and `after` (what a key inspector's row moved).
+    #[must_use]
+    pub fn between(before: (Interpolation, Tcb), after: (Interpolation, Tcb)) -> Self {
+        let (b, a) = (before.1, after.1);
+        let differs = |x: f32, y: f32| (x != y).then_some(y);
+        KeyParamChange {
+            interpolation: (before.0 != after.0).then_some(after.0),
+            tension: differs(b.tension, a.tension),
+            continuity: differs(b.continuity, a.continuity),
+            bias: differs(b.bias, a.bias),
+            clamped: (b.clamped != a.clamped).then_some(a.clamped),
+        }
+    }
+
+    /// `old` with this change's fields written over it.
+    #[must_use]
+    pub fn over(&self, (mode, tcb): (Interpolation, Tcb)) -> (Interpolation, Tcb) {
+        (
+            self.interpolation.unwrap_or(mode),
+            Tcb {
+                tension: self.tension.unwrap_or(tcb.tension),
+                continuity: self.continuity.unwrap_or(tcb.continuity),
+                bias: self.bias.unwrap_or(tcb.bias),
+                clamped: self.clamped.unwrap_or(tcb.clamped),
+            },
+        )
+    }
+
+    /// What the change sets, as an undo step names it: "interpolation Linear", "tension 0.50".
+    #[must_use]
+    pub fn describe(&self) -> String {
+        if let Some(mode) = self.interpolation {
+            match self.clamped {
+                Some(true) if mode == Interpolation::Tcb => "interpolation Tcb, clamped".to_owned(),
+                _ => format!("interpolation {mode:?}"),
+            }
+        } else if let Some(t) = self.tension {
+            format!("tension {t:.2}")
+        } else if let Some(c) = self.continuity {
+            format!("continuity {c:.2}")
+        } else if let Some(b) = self.bias {
+            format!("bias {b:.2}")
+        } else if let Some(c) = self.clamped {
+            (if c { "clamped" } else { "unclamped" }).to_owned()
+        } else {
+            "key".to_owned()
+        }
+    }
+}
+
+/// An attribute that starts being animated (a constant channel the animator can then key).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Animate {
+    /// An object's material colour, starting from `from` (the colour it shows now).
+    Colour { object: usize, from: Vec3 },
+    /// A light's range, starting from `from`.
+    LightRange { light: usize, from: f32 },
+    /// A spot light's cone (cutoff and inner angle, degrees).
+    Cone { light: usize, cutoff_deg: f32, inner_angle_deg: f32 },
+    /// An object's deformer (Step keys), starting from `value` (`deformer_value` of the kind).
+    Deformer { object: usize, value: f32 },
+    /// An object's bones-blending zone (fractions of the parent and child bone).
+    BlendZone { object: usize, parent: f32, child: f32 },
+}
+
+/// One change of the document (docs/ARCHITECTURE.md, "Edits as data").
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneEdit {
+    /// Writes the changed interpolation parameters to every key of `keys` (the key inspector,
+    /// the curve view's interpolation menu).
+    KeyParams { keys: Vec<KeyRef>, change: KeyParamChange },
+    /// Sets the key type of every key of `keys`.
+    KeyType { keys: Vec<KeyRef>, key_type: KeyType },
+    /// Gives the segments of `keys` explicit Hermite tangents equal to the curve's now.
+    HermiteHandles { keys: Vec<KeyRef> },
+    /// Sets one component of a key's in- or out-tangent (a curve handle drag); with `convert`
+    /// the previous key's segment first becomes Hermite.
+    Tangent { key: KeyRef, outgoing: bool, component: usize, value: f32, convert: bool },
+    /// Moves the key of a position `channel` at `time` to `value` (a motion-path key drag).
+    MotionPathKey { channel: ChannelId, time: f64, value: Vec3 },
+    /// Mutes or unmutes a channel.
+    Mute { channel: ChannelId, muted: bool },
+    /// Locks or unlocks a channel.
+    Lock { channel: ChannelId, locked: bool },
+    /// Sets a channel's cycles before and after its keys.
+    Cycles { channel: ChannelId, cycles: Cycles },
+    /// Sets the rotation mode of a rotation channel; `euler_keys` keys it as Euler angles
+    /// (converting the keys), otherwise quaternion keys.
+    RotationMode { channel: ChannelId, mode: RotationMode, euler_keys: bool },
+    /// Starts animating an attribute.
+    Animate(Animate),
+    /// Sets an object's deformer settings.
+    Deformer { object: usize, settings: DeformerSettings },
+    /// The MD2 clip an object's model plays (`None`: every frame).
+    ModelClip { object: usize, clip: Option<String> },
+    /// The MD2 model's playback rate, frames per second.
+    ModelFps { object: usize, fps: f64 },
+    /// A camera's projection, converting its lens so the view stays.
+    CameraProjection { camera: usize, projection: Projection },
+    /// A camera's clip planes.
+    CameraClip { camera: usize, near: f32, far: Option<f32> },
+    /// What a camera aims at (`None`: its keyed rotation).
+    CameraAim { camera: usize, target: Option<AimTarget> },
+    /// Adds a sound clip.
+    AddSound(keyrig_core::SoundClip),
+    /// Mutes or unmutes a sound clip.
+    SoundMute { clip: usize, muted: bool },
+    /// Moves a sound clip to start at `start_frame`.
+    SoundStart { clip: usize, start_frame: f64 },
+    /// The scene's frame rate; from `origin` (fps, start, end when the change began) so a drag
+    /// does not drift; `keep_frames` keeps keys on their frames, else their seconds.
+    Retime { origin: (f64, i32, i32), fps: f64, keep_frames: bool },
+    /// The scene's frame range.
+    FrameRange { start: i32, end: i32 },
+    /// The preview range.
+    PreviewRange(FrameRange),
+    /// The reference image's opacity (clamped to 0..1).
+    ReferenceOpacity(f32),
+    /// Removes the reference image.
+    RemoveReferenceImage,
+}
+
+impl SceneEdit {
+    /// Applies the edit to `scene`.
+    pub fn apply(&self, scene: &mut Scene) {
+        match self {
+            SceneEdit::KeyParams { keys, change } => {
+                for k in keys {
+                    if let Some((_, mode, tcb)) = channels::key_params(scene, k.channel, k.index) {
+                        let (m, t) = change.over((mode, tcb));
+                        channels::set_key_params(scene, k.channel, k.index, m, t);
+                    }
+                }
+            }
+            SceneEdit::KeyType { keys, key_type } => {
+                for k in keys {
+                    channels::set_key_type(scene, k.channel, k.index, *key_type);
+                }
+            }
+            SceneEdit::HermiteHandles { keys } => {
+                let mut by_channel: std::collections::BTreeMap<ChannelId, Vec<usize>> = Default::default();
+                for k in keys {
+                    by_channel.entry(k.channel).or_default().push(k.index);
+                }
+                for (id, indices) in by_channel {
+                    channels::convert_to_hermite(scene, id, &indices);
+                }
+            }
+            &SceneEdit::Tangent { key, outgoing, component, value, convert } => {
+                if convert && key.index > 0 {
+                    channels::convert_to_hermite(scene, key.channel, &[key.index - 1]);
+                }
+                channels::set_tangent_component(scene, key.channel, key.index, outgoing, component, value);
+            }
+            &SceneEdit::MotionPathKey { channel, time, value } => {
+                channels::set_key(scene, channel, time, ChannelValue::Vec3(value));
+            }
+            &SceneEdit::Mute { channel, muted } => {
+                channels::set_muted(scene, channel, muted);
+            }
+            &SceneEdit::Lock { channel, locked } => {
+                channels::set_locked(scene, channel, locked);
+            }
+            &SceneEdit::Cycles { channel, cycles } => {
+                channels::set_cycles(scene, channel, cycles);
+            }
+            &SceneEdit::RotationMode { channel, mode, euler_keys } => {
+                let euler = euler_keys && mode.euler().is_some();
+                let has_euler = keyrig_core::channel_id::has_euler_keys(scene, channel);
+                // Invalid keys cannot be converted; the scene then stays as it is.
+                if has_euler || euler {
+                    let _ = set_rotation_keys(scene, channel, mode, euler);
+                } else {
+                    set_rotation_mode(scene, channel, mode);
+                }
+            }
+            SceneEdit::Animate(what) => animate(scene, *what),
+            &SceneEdit::Deformer { object, settings } => {
+                if let Some(obj) = scene.objects.get_mut(object) {
+                    obj.deformer = settings;
+                }
+            }
+            SceneEdit::ModelClip { object, clip: chosen } => {
+                if let Some(MeshSource::File { clip, .. }) =
+                    scene.objects.get_mut(*object).and_then(|x| x.mesh.as_mut())
+                {
+                    clip.clone_from(chosen);
+                }
+            }
+            &SceneEdit::ModelFps { object, fps: rate } => {
+                if let Some(MeshSource::File { fps, .. }) =
+                    scene.objects.get_mut(object).and_then(|x| x.mesh.as_mut())
+                {
+                    *fps = Some(rate);
+                }
+            }
+            &SceneEdit::CameraProjection { camera, projection } => {
+                if let Some(c) = scene.cameras.get_mut(camera) {
+                    convert_lens(c, projection);
+                }
+            }
+            &SceneEdit::CameraClip { camera, near, far } => {
+                if let Some(c) = scene.cameras.get_mut(camera) {
+                    (c.near, c.far) = (near, far);
+                }
+            }
+            SceneEdit::CameraAim { camera, target } => {
+                if let Some(c) = scene.cameras.get_mut(*camera) {
+                    c.aim = match (target.clone(), c.aim.take()) {
+                        (None, _) => None,
+                        (Some(target), Some(aim)) => Some(keyrig_core::Aim { target, ..aim }),
+                        (Some(target), None) => Some(keyrig_core::Aim::at(target)),
+                    };
+                }
+            }
+            SceneEdit::AddSound(clip) => scene.sounds.push(clip.clone()),
+            &SceneEdit::SoundMute { clip, muted } => {
+                if let Some(c) = scene.sounds.get_mut(clip) {
+                    c.mute = muted;
+                }
+            }
+            &SceneEdit::SoundStart { clip, start_frame } => {
+                if let Some(c) = scene.sounds.get_mut(clip) {
+                    c.start_frame = start_frame;
+                }
+            }
+            &SceneEdit::Retime { origin, fps, keep_frames } => retime(scene, origin, fps, keep_frames),
+            &SceneEdit::FrameRange { start, end } => {
+                scene.frame_range.start = start;
+                scene.frame_range.end = end;
+            }
+            &SceneEdit::PreviewRange(range) => scene.preview_range = Some(range),
+            &SceneEdit::ReferenceOpacity(opacity) => {
+                if let Some(image) = &mut scene.reference_image {
+                    image.opacity = opacity.clamp(0.0, 1.0);
+                }
+            }
+            SceneEdit::RemoveReferenceImage => scene.reference_image = None,
+        }
+    }
+
+    /// The undo step's name for this edit, read from `scene` as it is before the edit.
+    #[must_use]
+    pub fn label(&self, scene: &Scene) -> String {
+        let object =
+            |o: usize| scene.objects.get(o).map_or_else(|| format!("object {o}"), |x| x.name.clone());
+        let camera =
+            |c: usize| scene.cameras.get(c).map_or_else(|| format!("camera {c}"), |x| x.name.clone());
+        let sound = |c: usize| scene.sounds.get(c).map_or_else(|| format!("{c}"), |x| x.label().to_owned());
+        match self {
+            SceneEdit::KeyParams { keys, change } => {
+                format!("{} on {}", change.describe(), keys_named(scene, keys))
+            }
+            SceneEdit::KeyType { keys, key_type } => {
+                format!("key type {} on {}", key_type.label(), keys_named(scene, keys))
+            }
+            SceneEdit::HermiteHandles { keys } => format!("Hermite handles on {}", keys_named(scene, keys)),
+            SceneEdit::Tangent { key, outgoing, .. } => {
+                let side = if *outgoing { "out" } else { "in" };
+                format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index)
+            }
+            SceneEdit::MotionPathKey { time, .. } => {
+                format!("move the key at frame {} on the motion path", (time * scene.fps).round())
+            }
+            SceneEdit::Mute { channel, muted } => {
+                format!("{} {}", if *muted { "mute" } else { "unmute" }, channel.label(scene))
+            }
+            SceneEdit::Lock { channel, locked } => {
+                format!("{} {}", if *locked { "lock" } else { "unlock" }, channel.label(scene))
+            }
+            SceneEdit::Cycles { channel, cycles } => {
+                let old = channels::cycles(scene, *channel).unwrap_or_default();
+                let (end, cycle) = if cycles.before != old.before {
+                    ("before", cycles.before)
+                } else {
+                    ("after", cycles.after)
+                };
+                format!("{}: {} {end} keys", channel.label(scene), cycle.label())
+            }
+            SceneEdit::RotationMode { channel, mode, euler_keys } => {
+                let name = channel.label(scene);
+                let had_euler = keyrig_core::channel_id::has_euler_keys(scene, *channel);
+                let euler = *euler_keys && mode.euler().is_some();
+                match (had_euler, euler) {
+                    (false, true) => format!("Euler keys ({}) for {name}", mode.label()),
+                    (true, false) => format!("quaternion keys for {name}"),
+                    (true, true) => format!("Euler keys of {name} to {}", mode.label()),
+                    (false, false) => format!("rotation mode {} of {name}", mode.label()),
+                }
+            }
+            SceneEdit::Animate(what) => match what {
+                Animate::Colour { .. } => "animate colour",
+                Animate::LightRange { .. } => "light range",
+                Animate::Cone { .. } => "animate cone",
+                Animate::Deformer { .. } => "animate deformer",
+                Animate::BlendZone { .. } => "animate blend zone",
+            }
+            .to_owned(),
+            SceneEdit::Deformer { settings, .. } => format!("deformer {}", settings.kind.label()),
+            SceneEdit::ModelClip { object: o, clip } => {
+                format!("{} clip {}", object(*o), clip.as_deref().unwrap_or("all frames"))
+            }
+            SceneEdit::ModelFps { object: o, .. } => format!("{} model fps", object(*o)),
+            SceneEdit::CameraProjection { camera: c, .. } => format!("{} projection", camera(*c)),
+            SceneEdit::CameraClip { camera: c, .. } => format!("{} clip planes", camera(*c)),
+            SceneEdit::CameraAim { .. } => "camera aim".to_owned(),
+            SceneEdit::AddSound(clip) => {
+                format!("add sound clip {} at frame {}", clip.label(), clip.start_frame)
+            }
+            SceneEdit::SoundMute { clip, muted } => {
+                format!("{} sound clip {}", if *muted { "mute" } else { "unmute" }, sound(*clip))
+            }
+            SceneEdit::SoundStart { clip, start_frame } => {
+                format!("move sound clip {} to frame {start_frame}", sound(*clip))
+            }
+            SceneEdit::Retime { fps, .. } => format!("change fps to {fps}"),
+            SceneEdit::FrameRange { start, end } => format!("frame range {start}–{end}"),
+            SceneEdit::PreviewRange(r) => format!("preview range {}–{}", r.start, r.end),
+            SceneEdit::ReferenceOpacity(_) => "reference image opacity".to_owned(),
+            SceneEdit::RemoveReferenceImage => "remove the reference image".to_owned(),
+        }
+    }
+}
+
+/// Keys as an undo step names them: "elbow rotation key at frame 30", "3 keys".
+#[must_use]
+pub fn keys_named(scene: &Scene, keys: &[KeyRef]) -> String {
+    match keys {
+        [k] => {
+            let frame = channels::key_params(scene, k.channel, k.index)
+                .map_or(0, |p| (p.0 * scene.fps).round() as i64);
+            format!("{} key at frame {frame}", k.channel.label(scene))
+        }
+        many => format!("{} keys", many.len()),
+    }
+}
+
+fn animate(scene: &mut Scene, what: Animate) {
+    match what {
+        Animate::Colour { object, from } => {
+            if let Some(obj) = scene.objects.get_mut(object) {
+                obj.attributes.colour = Some(Animated::constant(from));
+            }
+        }
+        Animate::LightRange { light, from } => {
+            if let Some(l) = scene.lights.get_mut(light) {
+                l.attributes.range = Some(Animated::constant(from));
+            }
+        }
+        Animate::Cone { light, cutoff_deg, inner_angle_deg } => {
+            if let Some(l) = scene.lights.get_mut(light) {
+                l.attributes.cutoff_deg = Some(Animated::constant(cutoff_deg));
+                l.attributes.inner_angle_deg = Some(Animated::constant(inner_angle_deg));
+            }
+        }
+        Animate::Deformer { object, value } => {
+            if let Some(obj) = scene.objects.get_mut(object) {
+                obj.attributes.deformer = Some(Animated::constant(value));
+            }
+        }
+        Animate::BlendZone { object, parent, child } => {
+            if let Some(obj) = scene.objects.get_mut(object) {
+                obj.attributes.blend_parent_fraction = Some(Animated::constant(parent));
+                obj.attributes.blend_child_fraction = Some(Animated::constant(child));
+            }
+        }
+    }
+}
+
+/// Sets the scene's frame rate to `fps` from `origin` (the fps, start and end when the change
+/// began): with `keep_frames` keys stay on their frames (their times scale) and the range stays;
+/// otherwise keys keep their seconds and the range's frames scale with the rate.
+pub fn retime(scene: &mut Scene, origin: (f64, i32, i32), fps: f64, keep_frames: bool) {
+    let (old_fps, start, end) = origin;
+    let current = scene.fps;
+    if keep_frames {
+        channels::scale_key_times(scene, current / fps);
+        scene.frame_range.start = start;
+        scene.frame_range.end = end;
+    } else {
+        let ratio = fps / old_fps;
+        let s = (f64::from(start) * ratio).round() as i32;
+        let e = ((f64::from(end) * ratio).round() as i32).max(s + 1);
+        scene.frame_range.start = s;
+        scene.frame_range.end = e;
+    }
+    scene.fps = fps;
+}
