@@ -62,8 +62,6 @@ fn export_error(message: String) -> BvhError {
 
 /// How one joint is written.
 struct Written {
-    /// keyrig index.
-    joint: usize,
     end_site: bool,
     order: EulerOrder,
     position: bool,
@@ -148,7 +146,6 @@ pub fn write_bvh<'a>(
         .map(|j| {
             let joint = &joints[j];
             Written {
-                joint: j,
                 end_site: children[j].is_empty() && is_tip(joint),
                 order: joint.rotation_mode.euler().unwrap_or(QUATERNION_JOINT_ORDER),
                 position: joint.parent.is_none() || joint.translation.is_animated(),

@@ -92,7 +92,12 @@ fn frame_times_snap_to_whole_rates_only_when_the_digits_say_so() {
     let ntsc = fps_of_frame_time(0.0333667, "0.0333667");
     assert!((ntsc - 29.97).abs() < 0.01 && ntsc != 30.0, "{ntsc}");
     assert_eq!(fps_of_frame_time(0.008, "0.008"), 125.0);
-    assert!((fps_of_frame_time(0.0083, "0.0083") - 120.48).abs() < 0.01);
+    // Four decimals cannot tell 120 from 120.48: 1/120 written to four decimals is 0.0083.
+    assert_eq!(fps_of_frame_time(0.0083, "0.0083"), 120.0);
+    // Eight decimals can: 1/81 is 0.01234568.
+    let f = fps_of_frame_time(0.01234567, "0.01234567");
+    assert!(f != 81.0 && (f - 81.0).abs() < 1e-3, "{f}");
+    assert_eq!(fps_of_frame_time(1.0 / 90.0, "1.1111111e-2"), 90.0);
 }
 
 #[test]
