@@ -1,4 +1,4 @@
-//! BVH import time and memory: a generated take on the CMU 131_01 skeleton (31 joints, 5 End
+//! BVH import time and memory: a generated take on the CMU 131_01 skeleton (31 joints, 7 End
 //! Sites, 96 channels) of one hour at 120 fps (432,000 frames, about 340 MB of text), and the
 //! degenerate case of one frame. The file is written into a temporary folder once.
 //!

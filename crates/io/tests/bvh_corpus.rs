@@ -84,7 +84,12 @@ fn reference(text: &str) -> Reference {
             "HIERARCHY" | "{" => {}
             "ROOT" | "JOINT" => {
                 let name = tokens.next().expect("name").to_owned();
-                joints.push(RefJoint { name, parent: open.last().copied(), offset: [0.0; 3], channels: vec![] });
+                joints.push(RefJoint {
+                    name,
+                    parent: open.last().copied(),
+                    offset: [0.0; 3],
+                    channels: vec![],
+                });
                 open.push(joints.len() - 1);
             }
             "End" => {
@@ -224,6 +229,7 @@ fn check_file(path: &Path) -> [f64; 3] {
     let expected = reference(&text);
     let size = expected.size();
     assert!(size > 0.0);
+    println!("{}: skeleton size (rest-pose box diagonal) {size:.4}", path.display());
     let scene = keyrig_io::bvh::import_scene(path).expect("import");
     let imported = max_error(&expected, &scene) / size;
 
@@ -260,7 +266,7 @@ fn cmu_131_01_matches_the_reference_at_every_frame_and_round_trips() {
     assert_eq!(scene.fps, 120.0);
     assert_eq!(scene.frame_range, keyrig_core::FrameRange { start: 0, end: 993 });
     let skeleton = scene.objects[0].skeleton.as_ref().expect("skeleton");
-    assert_eq!(skeleton.joints.len(), 31 + 5, "31 joints and 5 End Sites as tips");
+    assert_eq!(skeleton.joints.len(), 31 + 7, "31 joints and 7 End Sites as tips");
     assert_eq!(scene.objects[0].name, "131_01");
     let errors = check_file(&path);
     println!(
@@ -364,9 +370,8 @@ fn other_orders_and_mixed_channels_match_the_reference_and_round_trip() {
     let scene = keyrig_io::bvh::import_scene(&path).expect("import");
     assert_eq!(scene.fps, 25.0);
     let skeleton = scene.objects[0].skeleton.as_ref().expect("skeleton");
-    let order = |name: &str| {
-        skeleton.joints.iter().find(|j| j.name == name).map(|j| j.rotation_mode).expect("joint")
-    };
+    let order =
+        |name: &str| skeleton.joints.iter().find(|j| j.name == name).map(|j| j.rotation_mode).expect("joint");
     use keyrig_core::{EulerOrder, RotationMode};
     // Listings X Y Z, Y X Z, Z Y X (neck: Z Y X among its interleaved channels): reversed.
     assert_eq!(order("root"), RotationMode::Euler(EulerOrder::ZYX));
@@ -396,7 +401,8 @@ fn export_refuses_what_it_cannot_write_and_writes_atomically() {
     assert!(e.to_string().contains("no skeleton"), "{e}");
     assert!(!out.exists());
     keyrig_io::bvh::export_scene(&scene, "131_01", &out).expect("export by name");
-    let entries: Vec<_> = std::fs::read_dir(dir.path()).expect("dir").map(|e| e.expect("entry").file_name()).collect();
+    let entries: Vec<_> =
+        std::fs::read_dir(dir.path()).expect("dir").map(|e| e.expect("entry").file_name()).collect();
     assert_eq!(entries, [std::ffi::OsString::from("out.bvh")], "no temporary file left");
 }
 
@@ -424,7 +430,8 @@ fn a_scene_made_in_keyrig_exports_and_reads_back_with_the_same_poses() {
         let a = eval.object_at(arm, t, &none).and_then(|s| s.palette).expect("palette");
         let b = back_eval.object_at(0, t, &none).and_then(|s| s.palette).expect("palette");
         for j in 0..n {
-            worst = worst.max((a.model_from_joint[j].translation - b.model_from_joint[j].translation).length());
+            worst =
+                worst.max((a.model_from_joint[j].translation - b.model_from_joint[j].translation).length());
         }
     }
     assert!(worst <= 1e-4 * size as f32, "{worst}");

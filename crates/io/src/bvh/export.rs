@@ -179,7 +179,12 @@ pub fn write_bvh<'a>(
         } else {
             joint.rest_translation + joint.rest_rotation * joint.translation.value
         };
-        let _ = writeln!(text, "{pad}{keyword} {}\n{pad}{{\n{pad}\tOFFSET {}", token_name(&joint.name), vec3(offset));
+        let _ = writeln!(
+            text,
+            "{pad}{keyword} {}\n{pad}{{\n{pad}\tOFFSET {}",
+            token_name(&joint.name),
+            vec3(offset)
+        );
         let mut names: Vec<&str> = Vec::new();
         if info.position {
             names.extend(["Xposition", "Yposition", "Zposition"]);
@@ -226,10 +231,12 @@ pub fn write_bvh<'a>(
                 let _ = write!(row, "{} {} {} ", p.x, p.y, p.z);
             }
             let rotation = (joint.rest_rotation.normalize() * q).normalize();
-            let angles = keyed_angles(&evaluator, o, j, joint, info.order, time, rotation)
-                .unwrap_or_else(|| match previous[j] {
-                    Some(near) => info.order.angles_near(rotation, near),
-                    None => info.order.angles(rotation),
+            let angles =
+                keyed_angles(&evaluator, o, j, joint, info.order, time, rotation).unwrap_or_else(|| {
+                    match previous[j] {
+                        Some(near) => info.order.angles_near(rotation, near),
+                        None => info.order.angles(rotation),
+                    }
                 });
             previous[j] = Some(angles);
             for &axis in info.order.axes().iter().rev() {
@@ -255,7 +262,10 @@ fn keyed_angles(
     time: f64,
     rotation: Quat,
 ) -> Option<Vec3> {
-    if j.rotation_euler.is_none() || j.rotation_mode.euler() != Some(order) || !quat_is_identity(j.rest_rotation) {
+    if j.rotation_euler.is_none()
+        || j.rotation_mode.euler() != Some(order)
+        || !quat_is_identity(j.rest_rotation)
+    {
         return None;
     }
     let Some(ChannelValue::Vec3(angles)) =
@@ -279,7 +289,11 @@ fn vec3(v: Vec3) -> String {
 ///
 /// # Errors
 /// As [`write_bvh`], the output would replace an input, or the file cannot be written.
-pub fn export_scene<'a>(scene: &Scene, object: impl Into<ExportTarget<'a>>, path: &Path) -> Result<(), BvhError> {
+pub fn export_scene<'a>(
+    scene: &Scene,
+    object: impl Into<ExportTarget<'a>>,
+    path: &Path,
+) -> Result<(), BvhError> {
     let located = |kind: BvhErrorKind| BvhError { file: Some(path.to_path_buf()), place: None, kind };
     crate::file_io::refuse_overwriting(path, &crate::project::scene_inputs(scene, None))
         .map_err(|e| located(BvhErrorKind::Overwrite(e)))?;

@@ -35,7 +35,9 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use glam::{Quat, Vec3};
-use keyrig_core::{Animated, EulerOrder, Interpolation, Joint, Key, Object, RawTrack, RotationMode, Scene, Skeleton};
+use keyrig_core::{
+    Animated, EulerOrder, Interpolation, Joint, Key, Object, RawTrack, RotationMode, Scene, Skeleton,
+};
 
 pub use export::{bvh_text, export_scene, write_bvh, ExportTarget};
 
@@ -143,8 +145,11 @@ impl BvhJoint {
     /// channels.
     #[must_use]
     pub fn euler_order(&self) -> Option<EulerOrder> {
-        let listed: Vec<usize> =
-            self.channels.iter().filter_map(|c| matches!(c.axis(), (_, true)).then_some(c.axis().0)).collect();
+        let listed: Vec<usize> = self
+            .channels
+            .iter()
+            .filter_map(|c| matches!(c.axis(), (_, true)).then_some(c.axis().0))
+            .collect();
         if listed.is_empty() {
             return None;
         }

@@ -8,7 +8,9 @@
 
 use glam::Vec3;
 
-use super::{BvhChannel, BvhError, BvhErrorKind, BvhFile, BvhJoint, MAX_ABS_VALUE, MAX_FRAME_TIME, MIN_FRAME_TIME};
+use super::{
+    BvhChannel, BvhError, BvhErrorKind, BvhFile, BvhJoint, MAX_ABS_VALUE, MAX_FRAME_TIME, MIN_FRAME_TIME,
+};
 use crate::message::clip_long_tokens;
 
 /// Tokens separated by ASCII white space, with line counting.
@@ -128,7 +130,10 @@ impl<'a> Reader<'a> {
     fn expect_token(&mut self, what: &str) -> Result<Token<'a>, BvhError> {
         match self.lex.next() {
             Some(t) => Ok(t),
-            None => Err(self.error(self.lex.here(), BvhErrorKind::Truncated(format!("the file ends where {what} was expected")))),
+            None => Err(self.error(
+                self.lex.here(),
+                BvhErrorKind::Truncated(format!("the file ends where {what} was expected")),
+            )),
         }
     }
 
@@ -215,7 +220,9 @@ pub(super) fn parse(text: &str, file: Option<&std::path::Path>) -> Result<BvhFil
         ));
     }
     if motion.text != "MOTION" {
-        return Err(r.syntax(motion, format!("expected `MOTION` after the hierarchy, found `{}`", motion.text)));
+        return Err(
+            r.syntax(motion, format!("expected `MOTION` after the hierarchy, found `{}`", motion.text))
+        );
     }
     // `Frames:` (or `Frames :`) and a whole number.
     let frames_word = r.expect_token("`Frames:`")?;
@@ -227,10 +234,12 @@ pub(super) fn parse(text: &str, file: Option<&std::path::Path>) -> Result<BvhFil
         }
         other => return Err(r.syntax(frames_word, format!("expected `Frames:`, found `{other}`"))),
     };
-    let frames: u64 = count_token
-        .text
-        .parse()
-        .map_err(|_| r.syntax(count_token, format!("expected the frame count (a whole number ≥ 0), found `{}`", count_token.text)))?;
+    let frames: u64 = count_token.text.parse().map_err(|_| {
+        r.syntax(
+            count_token,
+            format!("expected the frame count (a whole number ≥ 0), found `{}`", count_token.text),
+        )
+    })?;
     if frames > i32::MAX as u64 {
         return Err(r.error(
             count_token,
@@ -247,18 +256,19 @@ pub(super) fn parse(text: &str, file: Option<&std::path::Path>) -> Result<BvhFil
         }
         other => return Err(r.syntax(time_word, format!("expected `Frame Time:`, found `Frame {other}`"))),
     };
-    let frame_time: f64 = time_token
-        .text
-        .parse()
-        .map_err(|_| r.syntax(time_token, format!("expected the frame time in seconds, found `{}`", time_token.text)))?;
+    let frame_time: f64 = time_token.text.parse().map_err(|_| {
+        r.syntax(time_token, format!("expected the frame time in seconds, found `{}`", time_token.text))
+    })?;
     if !(frame_time.is_finite() && (MIN_FRAME_TIME..=MAX_FRAME_TIME).contains(&frame_time)) {
         return Err(r.error(
             time_token,
-            BvhErrorKind::Value(clip_long_tokens(&format!(
-                "frame time `{}` must be between {MIN_FRAME_TIME} and {MAX_FRAME_TIME} seconds",
-                time_token.text
-            ))
-            .into_owned()),
+            BvhErrorKind::Value(
+                clip_long_tokens(&format!(
+                    "frame time `{}` must be between {MIN_FRAME_TIME} and {MAX_FRAME_TIME} seconds",
+                    time_token.text
+                ))
+                .into_owned(),
+            ),
         ));
     }
     let fps = super::fps_of_frame_time(frame_time, time_token.text);
@@ -454,10 +464,7 @@ fn frame_values(
     if let Some(extra) = r.lex.next() {
         return Err(r.syntax(
             extra,
-            format!(
-                "`{}` after the last of the {frames} frames that `Frames:` declares",
-                extra.text
-            ),
+            format!("`{}` after the last of the {frames} frames that `Frames:` declares", extra.text),
         ));
     }
     Ok(values)

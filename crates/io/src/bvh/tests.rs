@@ -128,7 +128,8 @@ fn a_channel_count_that_disagrees_with_the_data_is_refused() {
     let s = placed(&long);
     assert!(s.contains("more than 9 values"), "{s}");
     // CHANNELS says 3 but names 2: the third name is the next keyword.
-    let s = placed(&SMALL.replace("CHANNELS 3 Xrotation Yrotation Zrotation", "CHANNELS 3 Xrotation Yrotation"));
+    let s =
+        placed(&SMALL.replace("CHANNELS 3 Xrotation Yrotation Zrotation", "CHANNELS 3 Xrotation Yrotation"));
     assert!(s.contains("expected a channel name") && s.contains("`End`"), "{s}");
     let s = placed(&SMALL.replace("CHANNELS 3 X", "CHANNELS 7 X"));
     assert!(s.contains("0 to 6 channels"), "{s}");
@@ -142,7 +143,9 @@ fn a_channel_count_that_disagrees_with_the_data_is_refused() {
 
 #[test]
 fn non_finite_and_absurd_values_are_refused() {
-    for bad in ["NaN", "nan", "inf", "-inf", "infinity", "1e300", "1e39", "2e6", "-1000001", "0x10", "1,5", "--1"] {
+    for bad in
+        ["NaN", "nan", "inf", "-inf", "infinity", "1e300", "1e39", "2e6", "-1000001", "0x10", "1,5", "--1"]
+    {
         let in_motion = SMALL.replace("1 2 3 10", &format!("1 2 {bad} 10"));
         let s = placed(&in_motion);
         assert!(s.contains(":19:"), "{bad}: {s}");
@@ -166,7 +169,8 @@ fn a_billion_declared_frames_allocate_nothing() {
     let s = placed(&SMALL.replace("Frames: 2", "Frames: 4000000000"));
     assert!(s.contains("frame numbers go up to"), "{s}");
     // Without channels nothing is read per frame, and nothing is allocated for them either.
-    let none = "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION\nFrames: 2000000000\nFrame Time: 1\n";
+    let none =
+        "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION\nFrames: 2000000000\nFrame Time: 1\n";
     let f = parse_bvh(none, None).expect("valid");
     assert!(f.values.is_empty());
     let scene = f.to_scene("x");
@@ -195,7 +199,11 @@ fn a_10000_deep_hierarchy_reads_without_recursion() {
         .spawn(move || {
             let f = parse_bvh(&text, None).expect("valid");
             let scene = f.to_scene("deep");
-            (f.joints.len(), scene.problems().len(), scene.objects[0].skeleton.as_ref().map(|s| s.joints.len()))
+            (
+                f.joints.len(),
+                scene.problems().len(),
+                scene.objects[0].skeleton.as_ref().map(|s| s.joints.len()),
+            )
         })
         .expect("thread");
     let (joints, problems, scene_joints) = handle.join().expect("no stack overflow");
