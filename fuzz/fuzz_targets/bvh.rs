@@ -18,9 +18,15 @@ fuzz_target!(|data: &[u8]| {
     assert!(problems.is_empty(), "an accepted file made an invalid scene: {problems:?}");
     // Export plays every frame: only for small takes.
     if file.frames <= 64 && file.joints.len() <= 256 {
-        let text = keyrig_io::bvh::bvh_text(&scene, 0).expect("a valid scene exports");
-        let again = keyrig_io::bvh::parse_bvh(&text, None).expect("the export reads back");
-        assert_eq!(again.frames, file.frames.max(1));
-        assert!(again.joints.len() >= file.joints.len() - file.joints.iter().filter(|j| j.end_site).count());
+        // Sums of values near the limit (an OFFSET plus a position) may not fit a BVH file.
+        match keyrig_io::bvh::bvh_text(&scene, 0) {
+            Ok(text) => {
+                let again = keyrig_io::bvh::parse_bvh(&text, None).expect("the export reads back");
+                assert_eq!(again.frames, file.frames.max(1));
+                let end_sites = file.joints.iter().filter(|j| j.end_site).count();
+                assert!(again.joints.len() >= file.joints.len() - end_sites);
+            }
+            Err(e) => assert!(matches!(e.kind, keyrig_io::bvh::BvhErrorKind::OutOfRange(_)), "{e}"),
+        }
     }
 });

@@ -400,6 +400,16 @@ fn export_refuses_what_it_cannot_write_and_writes_atomically() {
     let e = keyrig_io::bvh::export_scene(&no_skeleton, 0, &out).expect_err("no skeleton");
     assert!(e.to_string().contains("no skeleton"), "{e}");
     assert!(!out.exists());
+    // A root position beyond what BVH readers take (an OFFSET and a translation near the limit).
+    let mut far = scene.clone();
+    if let Some(s) = far.objects[0].skeleton.as_mut() {
+        s.joints[0].rest_translation = glam::Vec3::new(9e5, 0.0, 0.0);
+        s.root_translation = keyrig_core::Animated::constant(glam::Vec3::new(9e5, 0.0, 0.0));
+    }
+    let e = keyrig_io::bvh::export_scene(&far, 0, &out).expect_err("out of range");
+    assert!(matches!(e.kind, keyrig_io::bvh::BvhErrorKind::OutOfRange(_)), "{e}");
+    assert!(e.to_string().contains("joint `Hips` at frame 0: position"), "{e}");
+    assert!(!out.exists());
     keyrig_io::bvh::export_scene(&scene, "131_01", &out).expect("export by name");
     let entries: Vec<_> =
         std::fs::read_dir(dir.path()).expect("dir").map(|e| e.expect("entry").file_name()).collect();

@@ -154,6 +154,7 @@ pub fn write_bvh<'a>(
         .collect();
     let w = |e: std::io::Error| BvhError { file: None, place: None, kind: BvhErrorKind::Write(e) };
 
+    let range_start = scene.frame_range.start;
     // HIERARCHY, depth first without recursion: (joint, depth, closing?).
     let mut text = String::from("HIERARCHY\n");
     let mut stack: Vec<(usize, usize, bool)> = vec![(0, 0, false)];
@@ -168,6 +169,7 @@ pub fn write_bvh<'a>(
         let joint = &joints[j];
         if info.end_site {
             let offset = joint.rest_translation + joint.translation.value;
+            check_range(offset, &joint.name, range_start, "End Site OFFSET")?;
             let _ = writeln!(text, "{pad}End Site\n{pad}{{\n{pad}\tOFFSET {}\n{pad}}}", vec3(offset));
             continue;
         }
@@ -179,6 +181,7 @@ pub fn write_bvh<'a>(
         } else {
             joint.rest_translation + joint.rest_rotation * joint.translation.value
         };
+        check_range(offset, &joint.name, range_start, "OFFSET")?;
         let _ = writeln!(
             text,
             "{pad}{keyword} {}\n{pad}{{\n{pad}\tOFFSET {}",
@@ -228,6 +231,7 @@ pub fn write_bvh<'a>(
                 } else {
                     joint.rest_rotation * t
                 };
+                check_range(p, &joint.name, frame, "position")?;
                 let _ = write!(row, "{} {} {} ", p.x, p.y, p.z);
             }
             let rotation = (joint.rest_rotation.normalize() * q).normalize();
@@ -238,6 +242,7 @@ pub fn write_bvh<'a>(
                         None => info.order.angles(rotation),
                     }
                 });
+            check_range(angles, &joint.name, frame, "rotation")?;
             previous[j] = Some(angles);
             for &axis in info.order.axes().iter().rev() {
                 let _ = write!(row, "{} ", angles[axis]);
@@ -275,6 +280,22 @@ fn keyed_angles(
     };
     // Within about 0.002°.
     (order.to_quat(angles).dot(rotation).abs() >= 1.0 - 1e-9).then_some(angles)
+}
+
+/// Refuses a value BVH readers would refuse (beyond ±[`super::MAX_ABS_VALUE`] or not finite).
+fn check_range(v: Vec3, joint: &str, frame: i32, what: &str) -> Result<(), BvhError> {
+    if v.is_finite() && v.abs().max_element() <= super::MAX_ABS_VALUE {
+        return Ok(());
+    }
+    Err(BvhError {
+        file: None,
+        place: None,
+        kind: BvhErrorKind::OutOfRange(crate::message::clip_long_tokens(&format!(
+            "joint `{joint}` at frame {frame}: {what} {v} lies beyond ±{}, which BVH readers refuse",
+            super::MAX_ABS_VALUE
+        ))
+        .into_owned()),
+    })
 }
 
 fn vec3(v: Vec3) -> String {

@@ -219,6 +219,10 @@ pub enum BvhErrorKind {
     /// Export: the object cannot be written (no such object, no skeleton, a bad scene).
     #[error("{0}")]
     Export(String),
+    /// Export: a value to write lies beyond ±[`MAX_ABS_VALUE`], which BVH readers (keyrig's
+    /// among them) refuse.
+    #[error("{0}")]
+    OutOfRange(String),
     /// Export: the output would replace an input.
     #[error(transparent)]
     Overwrite(#[from] crate::file_io::OverwriteInputError),

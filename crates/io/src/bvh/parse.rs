@@ -259,7 +259,9 @@ pub(super) fn parse(text: &str, file: Option<&std::path::Path>) -> Result<BvhFil
     let frame_time: f64 = time_token.text.parse().map_err(|_| {
         r.syntax(time_token, format!("expected the frame time in seconds, found `{}`", time_token.text))
     })?;
-    if !(frame_time.is_finite() && (MIN_FRAME_TIME..=MAX_FRAME_TIME).contains(&frame_time)) {
+    // A hair of slack at both ends, so that `1 / fps` written back by the exporter reads again.
+    let allowed = MIN_FRAME_TIME * (1.0 - 1e-9)..=MAX_FRAME_TIME * (1.0 + 1e-9);
+    if !(frame_time.is_finite() && allowed.contains(&frame_time)) {
         return Err(r.error(
             time_token,
             BvhErrorKind::Value(
