@@ -290,11 +290,13 @@ fn check_range(v: Vec3, joint: &str, frame: i32, what: &str) -> Result<(), BvhEr
     Err(BvhError {
         file: None,
         place: None,
-        kind: BvhErrorKind::OutOfRange(crate::message::clip_long_tokens(&format!(
-            "joint `{joint}` at frame {frame}: {what} {v} lies beyond ±{}, which BVH readers refuse",
-            super::MAX_ABS_VALUE
-        ))
-        .into_owned()),
+        kind: BvhErrorKind::OutOfRange(
+            crate::message::clip_long_tokens(&format!(
+                "joint `{joint}` at frame {frame}: {what} {v} lies beyond ±{}, which BVH readers refuse",
+                super::MAX_ABS_VALUE
+            ))
+            .into_owned(),
+        ),
     })
 }
 
