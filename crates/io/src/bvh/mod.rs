@@ -385,6 +385,7 @@ impl BvhFile {
     /// repeated name gets `.2`, `.3`, …).
     #[must_use]
     pub fn to_scene(&self, name: &str) -> Scene {
+        let (mut rotations, mut positions) = self.tracks();
         let mut taken = std::collections::HashSet::new();
         let mut joints = Vec::with_capacity(self.joints.len());
         for (i, j) in self.joints.iter().enumerate() {
@@ -397,14 +398,13 @@ impl BvhFile {
             let mut joint = Joint::new(name, j.parent, j.offset, Quat::IDENTITY);
             if let Some(order) = j.euler_order() {
                 joint.rotation_mode = RotationMode::Euler(order);
-                if self.frames > 0 {
-                    let euler = self.track(i, true);
+                if let Some(euler) = rotations[i].take().map(animated) {
                     joint.rotation = Animated::constant(order.to_quat(euler.value));
                     joint.rotation_euler = Some(euler);
                 }
             }
-            if j.has_position() && self.frames > 0 {
-                joint.translation = self.track(i, false);
+            if let Some(translation) = positions[i].take().map(animated) {
+                joint.translation = translation;
             }
             joints.push(joint);
         }
@@ -419,17 +419,39 @@ impl BvhFile {
         }
     }
 
-    /// One Linear key per frame of a joint's rotation or position channels.
-    fn track(&self, joint: usize, rotation: bool) -> Animated<Vec3> {
-        let keys: Vec<Key<Vec3>> = (0..self.frames)
-            .map(|f| {
-                Key::new(f as f64 / self.fps, self.joint_values(joint, f, rotation))
-                    .with_interpolation(Interpolation::Linear)
-            })
-            .collect();
-        let first = keys.first().map_or(Vec3::ZERO, |k| k.value);
-        Animated::new(first, RawTrack::new(keys))
+    /// Per joint, one Linear key per frame of its rotation channels and of its position
+    /// channels (`None` for a joint without such channels, or without frames). One pass over
+    /// the frames, each row read once (reading a joint's columns frame after frame for each
+    /// joint in turn went over the whole data once per track).
+    #[allow(clippy::type_complexity)]
+    fn tracks(&self) -> (Vec<Option<Vec<Key<Vec3>>>>, Vec<Option<Vec<Key<Vec3>>>>) {
+        let with = |wanted: bool| (wanted && self.frames > 0).then(|| Vec::with_capacity(self.frames));
+        let mut rotations: Vec<Option<Vec<Key<Vec3>>>> =
+            self.joints.iter().map(|j| with(j.euler_order().is_some())).collect();
+        let mut positions: Vec<Option<Vec<Key<Vec3>>>> =
+            self.joints.iter().map(|j| with(j.has_position())).collect();
+        let key = |time: f64, value: Vec3| Key::new(time, value).with_interpolation(Interpolation::Linear);
+        // Without channels there is nothing to read per frame (and `Frames:` may say 2³¹ − 1).
+        let frames = if self.channel_count == 0 { 0 } else { self.frames };
+        for frame in 0..frames {
+            let time = frame as f64 / self.fps;
+            for (i, (r, p)) in rotations.iter_mut().zip(positions.iter_mut()).enumerate() {
+                if let Some(keys) = r {
+                    keys.push(key(time, self.joint_values(i, frame, true)));
+                }
+                if let Some(keys) = p {
+                    keys.push(key(time, self.joint_values(i, frame, false)));
+                }
+            }
+        }
+        (rotations, positions)
     }
+}
+
+/// Keys as an animated value whose static value is the first key's.
+fn animated(keys: Vec<Key<Vec3>>) -> Animated<Vec3> {
+    let first = keys.first().map_or(Vec3::ZERO, |k| k.value);
+    Animated::new(first, RawTrack::new(keys))
 }
 
 fn joints_name(joints: &[Joint], j: usize) -> &str {
