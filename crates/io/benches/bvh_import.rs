@@ -78,6 +78,18 @@ fn write_take(path: &Path, frames: usize) -> usize {
     channels
 }
 
+/// CPU seconds this thread has run (user + system): on a machine shared with other builds the
+/// wall time of one import overstates what it costs.
+fn thread_cpu_seconds() -> f64 {
+    // SAFETY: getrusage writes the struct it is given and nothing else.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_THREAD, &mut usage) } != 0 {
+        return f64::NAN;
+    }
+    let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    seconds(usage.ru_utime) + seconds(usage.ru_stime)
+}
+
 fn bvh_import(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("keyrig-bench-bvh-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -93,22 +105,27 @@ fn bvh_import(c: &mut Criterion) {
         let before = LIVE.load(Ordering::Relaxed);
         PEAK.store(before, Ordering::Relaxed);
         let start = Instant::now();
+        let cpu_start = thread_cpu_seconds();
         let file = keyrig_io::bvh::read_bvh_file(&path).expect("read");
         let parsed = start.elapsed();
+        let cpu_parsed = thread_cpu_seconds();
         let scene = file.to_scene(name);
         let total = start.elapsed();
+        let cpu_total = thread_cpu_seconds();
         drop(file);
         let held = LIVE.load(Ordering::Relaxed) - before;
         let peak = PEAK.load(Ordering::Relaxed) - before;
         let decoded = frames * channels * std::mem::size_of::<f32>();
         let key = std::mem::size_of::<keyrig_core::Key<glam::Vec3>>();
         eprintln!(
-            "bvh_import {name}: {frames} frames × {channels} channels, file {:.1} MB; one import: parse {:.2} s, \
-             to_scene {:.2} s; decoded channel data {:.1} MB; scene holds {:.1} MB ({:.2} × decoded; \
+            "bvh_import {name}: {frames} frames × {channels} channels, file {:.1} MB; one import: parse {:.2} s \
+             ({:.2} s CPU), to_scene {:.2} s ({:.2} s CPU); decoded channel data {:.1} MB; scene holds {:.1} MB ({:.2} × decoded; \
              Key<Vec3> is {key} bytes for 12 bytes of angles); peak during import {:.1} MB ({:.2} × decoded)",
             bytes as f64 / 1e6,
             parsed.as_secs_f64(),
+            cpu_parsed - cpu_start,
             (total - parsed).as_secs_f64(),
+            cpu_total - cpu_parsed,
             decoded as f64 / 1e6,
             held as f64 / 1e6,
             held as f64 / decoded.max(1) as f64,
