@@ -446,3 +446,29 @@ fn a_scene_made_in_keyrig_exports_and_reads_back_with_the_same_poses() {
     }
     assert!(worst <= 1e-4 * size as f32, "{worst}");
 }
+
+#[test]
+fn exported_euler_keys_keep_the_files_angles_unwrapped() {
+    // mixed.bvh has 370°, −720° and 90° angles and interleaved channels: the export writes
+    // the keyed angles themselves (not 10° or 0°), whatever order its channels come in.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bvh/mixed.bvh");
+    let original = keyrig_io::bvh::read_bvh_file(&path).expect("read");
+    let scene = keyrig_io::bvh::import_scene(&path).expect("import");
+    let text = keyrig_io::bvh::bvh_text(&scene, 0).expect("export");
+    let exported = keyrig_io::bvh::parse_bvh(&text, None).expect("reads back");
+    assert_eq!(exported.frames, original.frames);
+    let mut compared = 0;
+    for (j, joint) in original.joints.iter().enumerate() {
+        if joint.end_site || joint.euler_order().is_none() {
+            continue;
+        }
+        assert_eq!(exported.joints[j].euler_order(), joint.euler_order(), "{}", joint.name);
+        for f in 0..original.frames {
+            let (a, b) = (original.joint_values(j, f, true), exported.joint_values(j, f, true));
+            assert!((a - b).abs().max_element() < 1e-3, "{} frame {f}: {a} vs {b}", joint.name);
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 3 * 3, "root, neck and head over three frames");
+    assert!(text.contains("370") && text.contains("-720"), "{text}");
+}
