@@ -26,6 +26,10 @@ const TARGETS: &[Target] = &[
     Target { name: "x3d", seeds: &[("tests/corpus/x3d", &["x3d"])] },
     Target { name: "inventor", seeds: &[("tests/corpus/iv", &["iv"])] },
     Target { name: "sound", seeds: &[("crates/io/tests/fixtures/sound", &["wav", "flac", "ogg", "mp3"])] },
+    Target {
+        name: "bvh",
+        seeds: &[("tests/corpus/bvh", &["bvh"]), ("crates/io/tests/fixtures/bvh", &["bvh"])],
+    },
 ];
 
 /// Largest seed file copied: libFuzzer's default `-max_len` follows the largest seed, and inputs

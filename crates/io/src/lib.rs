@@ -1,8 +1,9 @@
 //! keyrig-io: everything that touches a file. RON scene files (versioned, checked, saved
 //! atomically), the built-in demo scene, glTF import/export, MD2 import, and VRML97 / X3D /
-//! Open Inventor import ([`vrml`]), and sound clips' files decoded into waveform summaries
+//! Open Inventor import ([`vrml`]), BVH motion capture import and export ([`bvh`]), and sound clips' files decoded into waveform summaries
 //! ([`sound`]).
 
+pub mod bvh;
 pub mod demo;
 pub mod file_io;
 pub mod gltf_camera;
