@@ -4,6 +4,7 @@
 //! ([`sound`]).
 
 pub mod demo;
+pub mod fbx;
 pub mod file_io;
 pub mod gltf_camera;
 pub mod gltf_export;
