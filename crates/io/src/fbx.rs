@@ -766,6 +766,16 @@ impl<'a> Mapper<'a> {
         Ok(Some(model.skins.len() - 1))
     }
 
+    /// The file's frame rate when it is a usable one (1 to 1000 per second), else 30.
+    fn resample_rate(&self) -> f64 {
+        let fps = self.scene.settings.frames_per_second;
+        if (1.0..=1000.0).contains(&fps) {
+            fps
+        } else {
+            30.0
+        }
+    }
+
     fn count_keys(&mut self, n: usize) -> Result<(), FbxError> {
         self.keys = self.keys.saturating_add(n);
         if self.keys > MAX_BAKED_KEYS {
@@ -821,9 +831,12 @@ impl<'a> Mapper<'a> {
         for (s, stack) in scene.anim_stacks.iter().enumerate() {
             let name = stack.element.name.to_string();
             let name = if name.is_empty() { format!("stack{s}") } else { name };
+            // Curves are sampled at the file's frame rate, so every frame the file's tool shows is
+            // a key (ufbx's default, 30 per second, falls between a 24 fps file's frames).
             let opts = ufbx::BakeOpts {
                 temp_allocator: allocator(self.limit),
                 result_allocator: allocator(self.limit),
+                resample_rate: self.resample_rate(),
                 ..Default::default()
             };
             let baked = ufbx::bake_anim(scene, &stack.anim, opts).map_err(|e| {
