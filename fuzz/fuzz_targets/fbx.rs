@@ -20,7 +20,10 @@ fuzz_target!(|data: &[u8]| {
         if let (Ok(mesh), Some(skin)) = (model.skinned_mesh(node), skin) {
             let pose = model.scene_skeleton(skin, animation).ok().and_then(|skeleton| {
                 let scene = keyrig_core::Scene {
-                    objects: vec![keyrig_core::Object { skeleton: Some(skeleton), ..keyrig_core::Object::new("fuzz") }],
+                    objects: vec![keyrig_core::Object {
+                        skeleton: Some(skeleton),
+                        ..keyrig_core::Object::new("fuzz")
+                    }],
                     ..keyrig_core::Scene::default()
                 };
                 let eval = keyrig_eval::SceneEvaluator::new(&scene, &Default::default());

@@ -380,7 +380,8 @@ impl<'a> Mapper<'a> {
                     model.nodes[n].camera = Some(model.cameras.len());
                     model.cameras.push(ModelCamera { name: camera.element.name.to_string(), projection });
                 } else {
-                    self.warnings.push(format!("camera {:?}: non-finite lens, left out", model.nodes[n].name));
+                    self.warnings
+                        .push(format!("camera {:?}: non-finite lens, left out", model.nodes[n].name));
                 }
             }
             if let Some(light) = &node.light {
@@ -458,7 +459,11 @@ impl<'a> Mapper<'a> {
 
     /// A mesh's faces triangulated (ufbx's triangulation), split by material into primitives,
     /// face corners with the same control point, normal and UV shared.
-    fn read_mesh(&mut self, mesh: &ufbx::Mesh, model: &mut ImportedModel) -> Result<Option<MeshOut>, FbxError> {
+    fn read_mesh(
+        &mut self,
+        mesh: &ufbx::Mesh,
+        model: &mut ImportedModel,
+    ) -> Result<Option<MeshOut>, FbxError> {
         let name = mesh.element.name.to_string();
         // Morph targets: per blend channel, its target shape's offsets per control point.
         let channels: Vec<&ufbx::BlendChannel> = mesh
@@ -515,7 +520,8 @@ impl<'a> Mapper<'a> {
                 for &ix in tri.iter().take(count * 3) {
                     let ix = ix as usize;
                     let p = positions_in.indices.get(ix).copied().unwrap_or(0);
-                    let nrm = if normals_in.exists { normals_in.indices.get(ix).copied().unwrap_or(0) } else { 0 };
+                    let nrm =
+                        if normals_in.exists { normals_in.indices.get(ix).copied().unwrap_or(0) } else { 0 };
                     let uv = if uvs_in.exists { uvs_in.indices.get(ix).copied().unwrap_or(0) } else { 0 };
                     let next = positions.len() as u32;
                     let v = *corner.entry((p, nrm, uv)).or_insert_with(|| {
@@ -537,13 +543,19 @@ impl<'a> Mapper<'a> {
             if indices.is_empty() {
                 continue;
             }
-            finite_or(|| format!("a vertex position of mesh {name:?}"), positions.iter().all(|p| p.is_finite()))?;
+            finite_or(
+                || format!("a vertex position of mesh {name:?}"),
+                positions.iter().all(|p| p.is_finite()),
+            )?;
             let morph_targets = shape_offsets
                 .iter()
                 .map(|(dp, dn, has_normals)| MorphTarget {
-                    positions: Some(points.iter().map(|&c| dp.get(c as usize).copied().unwrap_or_default()).collect()),
-                    normals: has_normals
-                        .then(|| points.iter().map(|&c| dn.get(c as usize).copied().unwrap_or_default()).collect()),
+                    positions: Some(
+                        points.iter().map(|&c| dp.get(c as usize).copied().unwrap_or_default()).collect(),
+                    ),
+                    normals: has_normals.then(|| {
+                        points.iter().map(|&c| dn.get(c as usize).copied().unwrap_or_default()).collect()
+                    }),
                 })
                 .collect();
             let material = material.and_then(|m| mesh.materials.get(m as usize));
@@ -570,7 +582,8 @@ impl<'a> Mapper<'a> {
             self.warnings.push(format!("mesh {name:?} has no triangles (lines or points only), left out"));
             return Ok(None);
         }
-        let weights = channels.iter().map(|c| c.weight as f32).map(|w| if w.is_finite() { w } else { 0.0 }).collect();
+        let weights =
+            channels.iter().map(|c| c.weight as f32).map(|w| if w.is_finite() { w } else { 0.0 }).collect();
         Ok(Some(MeshOut {
             mesh: ModelMesh { name, primitives: Arc::new(primitives), weights },
             control_points,
@@ -579,7 +592,11 @@ impl<'a> Mapper<'a> {
 
     /// The base colour (factor and texture) of a material: ufbx's PBR view of it (which maps
     /// Lambert/Phong diffuse colour × factor too).
-    fn read_material(&mut self, material: &ufbx::Material, model: &mut ImportedModel) -> ([f32; 4], Option<TextureRef>) {
+    fn read_material(
+        &mut self,
+        material: &ufbx::Material,
+        model: &mut ImportedModel,
+    ) -> ([f32; 4], Option<TextureRef>) {
         let colour = &material.pbr.base_color;
         let mut c = if colour.has_value {
             [colour.value_vec4.x as f32, colour.value_vec4.y as f32, colour.value_vec4.z as f32, 1.0]
@@ -636,7 +653,11 @@ impl<'a> Mapper<'a> {
             ufbx::WrapMode::Repeat => keyrig_core::WrapMode::Repeat,
             ufbx::WrapMode::Clamp => keyrig_core::WrapMode::ClampToEdge,
         };
-        let sampler = keyrig_core::Sampler { wrap_u: wrap(texture.wrap_u), wrap_v: wrap(texture.wrap_v), ..Default::default() };
+        let sampler = keyrig_core::Sampler {
+            wrap_u: wrap(texture.wrap_u),
+            wrap_v: wrap(texture.wrap_v),
+            ..Default::default()
+        };
         Some(TextureRef { texture: image, image, texcoord_set: 0, sampler })
     }
 
@@ -747,7 +768,11 @@ impl<'a> Mapper<'a> {
             .primitives
             .iter()
             .zip(joint_sets.into_iter().zip(weight_sets))
-            .map(|(p, (j, w))| ModelPrimitive { joint_sets: vec![j.into()], weight_sets: vec![w.into()], ..p.clone() })
+            .map(|(p, (j, w))| ModelPrimitive {
+                joint_sets: vec![j.into()],
+                weight_sets: vec![w.into()],
+                ..p.clone()
+            })
             .collect();
         out.mesh.primitives = Arc::new(prims);
         let deformer = match skin.skinning_method {
@@ -916,7 +941,11 @@ impl<'a> Mapper<'a> {
                             .map(|(i, c)| match percent.get(c) {
                                 Some(keys) => {
                                     let w = (ufbx::evaluate_baked_vec3(keys, t).x * 0.01) as f32;
-                                    if w.is_finite() { w } else { 0.0 }
+                                    if w.is_finite() {
+                                        w
+                                    } else {
+                                        0.0
+                                    }
                                 }
                                 None => rest.get(i).copied().unwrap_or(0.0),
                             })
@@ -931,7 +960,10 @@ impl<'a> Mapper<'a> {
                     if node.mesh == Some(m) {
                         channels.push(ModelChannel {
                             node: n,
-                            target: ChannelTarget::Weights(WeightsTrack { targets: blend.len(), keys: keys.clone() }),
+                            target: ChannelTarget::Weights(WeightsTrack {
+                                targets: blend.len(),
+                                keys: keys.clone(),
+                            }),
                         });
                     }
                 }

@@ -153,7 +153,10 @@ fn corpus_frames_match_the_authoring_tools_obj() {
         for (name, positions) in &objects {
             let error = positions.iter().map(|p| nearest(*p, &expected)).fold(0.0, f32::max) / size;
             let known = layered && UFBX_LAYER_DIFFERENCES.contains(&name.as_str());
-            report.push(format!("  {name}: {error:.2e}{}", if known { " (ufbx's layer blending)" } else { "" }));
+            report.push(format!(
+                "  {name}: {error:.2e}{}",
+                if known { " (ufbx's layer blending)" } else { "" }
+            ));
             if known {
                 assert!(error < 0.1, "{fbx} {name}: {error}");
             } else {
@@ -169,7 +172,8 @@ fn corpus_frames_match_the_authoring_tools_obj() {
         // own figures.
         let pooled = if layered { worst } else { distance(&all, &expected) / size };
         let plain = if transform_skin {
-            let plain: Vec<Vec3> = keyrig_positions(&import, time, false).into_iter().flat_map(|x| x.1).collect();
+            let plain: Vec<Vec3> =
+                keyrig_positions(&import, time, false).into_iter().flat_map(|x| x.1).collect();
             format!(", without Maya's bind-relative move {:.2e}", distance(&plain, &expected) / size)
         } else {
             String::new()
@@ -183,7 +187,9 @@ fn corpus_frames_match_the_authoring_tools_obj() {
             ),
         );
         if !layered && !(covered <= 1e-3) {
-            failures.push(format!("{fbx} frame {frame}: an OBJ vertex is {covered:.2e} of the size from keyrig's"));
+            failures.push(format!(
+                "{fbx} frame {frame}: an OBJ vertex is {covered:.2e} of the size from keyrig's"
+            ));
         }
     }
     for line in &report {
@@ -219,7 +225,12 @@ fn layered_file_follows_ufbx_evaluation() {
             let t = ufbx::evaluate_transform(&scene.anim, node, time);
             let name: &str = &node.element.name;
             let i = model.nodes.iter().position(|n| n.name == name).expect("node");
-            let q = glam::Quat::from_xyzw(t.rotation.x as f32, t.rotation.y as f32, t.rotation.z as f32, t.rotation.w as f32);
+            let q = glam::Quat::from_xyzw(
+                t.rotation.x as f32,
+                t.rotation.y as f32,
+                t.rotation.z as f32,
+                t.rotation.w as f32,
+            );
             assert!(q.dot(pose.rotation[i]).abs() > 1.0 - 1e-6, "{name} frame {frame}");
             let v = Vec3::new(t.translation.x as f32, t.translation.y as f32, t.translation.z as f32);
             assert!(v.distance(pose.translation[i]) < 1e-6, "{name} frame {frame}");
