@@ -44,6 +44,10 @@ use crate::model::{
 /// rotation, scale and morph-weight keys): a file asking for more is refused, not allocated.
 pub const MAX_BAKED_KEYS: usize = 20_000_000;
 
+/// The most morph-target displacements one mesh may expand to (blend channels × face corners):
+/// FBX stores only the vertices a shape moves, keyrig a displacement for every vertex.
+pub const MAX_MORPH_VALUES: usize = 16_000_000;
+
 /// The most bytes a texture file next to the model is read (larger ones are left out).
 const MAX_TEXTURE_BYTES: u64 = 256 << 20;
 
@@ -286,6 +290,7 @@ impl<'a> Mapper<'a> {
         let nodes = &self.scene.nodes;
         self.node_of = vec![None; nodes.len()];
         let mut taken: HashSet<String> = HashSet::new();
+        let mut suffix: HashMap<String, usize> = HashMap::new();
         for node in nodes.iter() {
             if node.is_root {
                 continue;
@@ -300,11 +305,13 @@ impl<'a> Mapper<'a> {
             )?;
             let base = if base.is_empty() { format!("node{i}") } else { base };
             let mut name = base.clone();
-            let mut n = 1;
+            // The next suffix to try per name, so that many nodes of one name cost linear time.
+            let mut n = suffix.get(&base).copied().unwrap_or(1);
             while !taken.insert(name.clone()) {
                 name = format!("{base}.{n:03}");
                 n += 1;
             }
+            suffix.insert(base, n);
             let parent = node.parent.as_ref().and_then(|p| self.model_node(p));
             if let Some(p) = parent {
                 model.nodes[p].children.push(i);
@@ -473,6 +480,17 @@ impl<'a> Mapper<'a> {
             .filter(|c| c.target_shape.is_some())
             .map(|c| &**c)
             .collect();
+        // Morph targets are dense (a displacement per vertex, as glTF stores them), while an FBX
+        // shape lists only the vertices it moves: bound what the expansion allocates.
+        let morph_values = channels.len().saturating_mul(mesh.num_indices);
+        if morph_values > MAX_MORPH_VALUES {
+            return Err(FbxErrorKind::TooLarge {
+                what: format!("mesh {name:?}: blend channels × face corners"),
+                count: morph_values,
+                limit: MAX_MORPH_VALUES,
+            }
+            .into());
+        }
         let mut shape_offsets: Vec<(Vec<Vec3>, Vec<Vec3>, bool)> = Vec::with_capacity(channels.len());
         for channel in &channels {
             let Some(shape) = &channel.target_shape else { continue };
@@ -958,6 +976,7 @@ impl<'a> Mapper<'a> {
                 }
                 for (n, node) in model.nodes.iter().enumerate() {
                     if node.mesh == Some(m) {
+                        self.count_keys(keys.len().saturating_mul(blend.len()))?;
                         channels.push(ModelChannel {
                             node: n,
                             target: ChannelTarget::Weights(WeightsTrack {

@@ -331,3 +331,34 @@ fn every_corpus_file_imports_from_memory_as_from_its_file() {
         assert!(!from_file.meshes.is_empty(), "{}", path.display());
     }
 }
+
+/// glTF export reads an object's `.fbx` model file through the FBX importer (its model loader
+/// dispatches on the extension), and the written glTF holds the skin and the animation; the
+/// export, imported again, deforms as the FBX does.
+#[test]
+fn a_scene_of_an_fbx_model_exports_to_gltf() {
+    let path = corpus("max7_skin_5000_binary.fbx");
+    let import = import_fbx(&path).expect("import");
+    let model = &import.model;
+    let scene = model.to_scene(path.to_str().expect("path"), Some(0)).expect("scene");
+    let options = keyrig_io::gltf_export::ExportOptions::default();
+    let exported = keyrig_io::gltf_export::export_scene(&scene, &options).unwrap_or_else(|e| panic!("{e}"));
+    let back = keyrig_io::gltf_import::import_gltf_slice(&exported.to_glb()).expect("re-import");
+    assert_eq!(back.skins.len(), 1);
+    assert!(!back.animations.is_empty());
+    let node = back.nodes.iter().position(|n| n.skin.is_some()).expect("skinned node");
+    let original = model.nodes.iter().position(|n| n.skin.is_some()).expect("skinned node");
+    let (lo, hi) = model.meshes[0].primitives[0]
+        .positions
+        .iter()
+        .fold((Vec3::MAX, Vec3::MIN), |(l, h), p| (l.min(*p), h.max(*p)));
+    let size = (hi - lo).length();
+    for frame in [0.0, 5.0, 15.0] {
+        let t = frame / import.frames_per_second;
+        let a: Vec<Vec3> =
+            model.deformed_positions(original, Some(0), t).expect("fbx").into_iter().flatten().collect();
+        let b: Vec<Vec3> =
+            back.deformed_positions(node, Some(0), t).expect("glTF").into_iter().flatten().collect();
+        assert!(distance(&a, &b) / size < 1e-3, "t {t}: {}", distance(&a, &b) / size);
+    }
+}
