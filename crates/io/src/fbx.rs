@@ -62,8 +62,8 @@ pub fn is_fbx_path(path: &Path) -> bool {
 pub enum FbxErrorKind {
     #[error("cannot read: {0}")]
     Io(#[from] std::io::Error),
-    /// ufbx refused the file: its error type, description and details (ufbx's own report,
-    /// which names the element or the byte offset where it knows one).
+    /// ufbx refused the file: its error type, description and the extra information some of
+    /// its errors carry (ufbx reports no byte offset or line).
     #[error("ufbx: {description} ({error_type}){}", if detail.is_empty() { String::new() } else { format!(": {detail}") })]
     Ufbx { error_type: String, description: String, detail: String },
     /// ufbx could not bake an animation stack.
@@ -156,14 +156,36 @@ fn y_up() -> ufbx::CoordinateAxes {
     }
 }
 
+/// ufbx's error as keyrig reports it: its type and description, and as detail the extra
+/// information ufbx gives (an element's name, a byte offset or a count, where it has one), else
+/// the innermost step of its parse that failed (a function of ufbx.c and its check).
 fn ufbx_error(error: &ufbx::Error) -> FbxErrorKind {
-    let mut buf = vec![0u8; 2048];
+    let mut buf = vec![0u8; 4096];
     let len = ufbx::format_error(&mut buf, error).min(buf.len());
-    let detail = String::from_utf8_lossy(&buf[..len]).trim().replace('\n', "; ");
+    let text = String::from_utf8_lossy(&buf[..len]);
+    // `ufbx_format_error` writes a first line with the description, then the information line
+    // (when there is one), then the stack, one `LINE:FUNCTION: CHECK` line per step.
+    let is_frame = |l: &str| {
+        let t = l.trim_start();
+        t.split(':').next().is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    };
+    let mut detail: Vec<String> = text
+        .lines()
+        .skip(1)
+        .filter(|l| !l.trim().is_empty() && !is_frame(l))
+        .map(|l| l.trim().to_owned())
+        .collect();
+    if detail.is_empty() {
+        if let Some(frame) = error.stack.iter().take(error.stack_size as usize).next() {
+            let function: &str = &frame.function;
+            let check: &str = &frame.description;
+            detail.push(format!("in {function} (ufbx.c line {}): {check}", frame.source_line));
+        }
+    }
     FbxErrorKind::Ufbx {
         error_type: format!("{:?}", error.type_),
         description: error.description.to_string(),
-        detail,
+        detail: detail.join("; "),
     }
 }
 

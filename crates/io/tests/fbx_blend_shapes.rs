@@ -53,3 +53,52 @@ fn blend_channels_become_morph_targets_with_animated_weights() {
     let top = positions.iter().find(|p| (p.y - 1.0).abs() < 1e-6).expect("vertex 2");
     assert!((top.z - 0.5).abs() < 0.02, "{top}");
 }
+
+/// Hostile variants of the same file: absurd counts, key times and values get a typed error or
+/// a bounded model, never a panic or an allocation the file does not justify.
+#[test]
+fn hostile_variants_give_errors_or_bounded_models() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/fbx/blend_shape_triangle.fbx");
+    let text = std::fs::read_to_string(&path).expect("fixture");
+    let variants = [
+        // An array that says it holds a billion values.
+        text.replace("Vertices: *9 {", "Vertices: *1000000000 {"),
+        // A key a million years away (FBX ticks: 46186158000 a second).
+        text.replace("a: 0,46186158000", "a: 0,9000000000000000000"),
+        // Non-finite and huge values.
+        text.replace("a: 0,0,0,1,0,0,0,1,0", "a: 0,0,0,1e308,0,0,0,inf,0"),
+        text.replace("a: 0,100\n", "a: 0,1e300\n"),
+        // An index far outside the vertices.
+        text.replace("a: 0,1,-3", "a: 0,1,-4000000000"),
+        text.replace("Indexes: *1 {\n\t\t\ta: 2", "Indexes: *1 {\n\t\t\ta: 4000000000"),
+        // A connection loop: the model its own parent.
+        text.replace("C: \"OO\",2000,0", "C: \"OO\",2000,2000"),
+    ];
+    for (i, variant) in variants.iter().enumerate() {
+        assert_ne!(variant, &text, "variant {i} changes the file");
+        match keyrig_io::fbx::import_fbx_slice(variant.as_bytes()) {
+            Ok(import) => {
+                let model = import.model;
+                let keys: usize = model
+                    .animations
+                    .iter()
+                    .flat_map(|a| &a.channels)
+                    .map(|c| match &c.target {
+                        ChannelTarget::Translation(t) | ChannelTarget::Scale(t) => t.keys.len(),
+                        ChannelTarget::Rotation(t) => t.keys.len(),
+                        ChannelTarget::Weights(w) => w.keys.len(),
+                    })
+                    .sum();
+                assert!(keys <= keyrig_io::fbx::MAX_BAKED_KEYS, "variant {i}");
+                for mesh in &model.meshes {
+                    for p in mesh.primitives.iter() {
+                        assert!(p.indices.iter().all(|&x| (x as usize) < p.positions.len()), "variant {i}");
+                    }
+                }
+                let _ = model.to_scene("hostile.fbx", (!model.animations.is_empty()).then_some(0));
+                eprintln!("variant {i}: imported ({} meshes, {keys} keys)", model.meshes.len());
+            }
+            Err(e) => eprintln!("variant {i}: {e}"),
+        }
+    }
+}
