@@ -108,6 +108,29 @@ pub struct FbxImport {
     pub warnings: Vec<String>,
 }
 
+/// A glTF or FBX model file that could not be imported ([`import_model_file`]).
+#[derive(Debug, thiserror::Error)]
+pub enum ModelImportError {
+    #[error(transparent)]
+    Gltf(#[from] crate::gltf_import::GltfError),
+    #[error(transparent)]
+    Fbx(#[from] FbxError),
+}
+
+/// The model file at `path` as an [`ImportedModel`]: FBX by its extension
+/// ([`is_fbx_path`], [`import_fbx_file`]), else glTF ([`crate::gltf_import::import_gltf_file`]).
+/// The one call for code that reads a model wherever it read a glTF one.
+///
+/// # Errors
+/// The importer's error.
+pub fn import_model_file(path: &Path) -> Result<ImportedModel, ModelImportError> {
+    if is_fbx_path(path) {
+        Ok(import_fbx_file(path)?)
+    } else {
+        Ok(crate::gltf_import::import_gltf_file(path)?)
+    }
+}
+
 /// Reads and imports the FBX file at `path` (a regular file of at most
 /// [`crate::file_io::MAX_MODEL_BYTES`] bytes). Texture files are looked up next to it.
 ///

@@ -362,3 +362,17 @@ fn a_scene_of_an_fbx_model_exports_to_gltf() {
         assert!(distance(&a, &b) / size < 1e-3, "t {t}: {}", distance(&a, &b) / size);
     }
 }
+
+#[test]
+fn model_files_dispatch_on_their_extension() {
+    let fbx = keyrig_io::fbx::import_model_file(&corpus("max2009_cube_anim_6100_binary.fbx")).expect("fbx");
+    assert_eq!(fbx, import_fbx_file(&corpus("max2009_cube_anim_6100_binary.fbx")).expect("fbx"));
+    let gltf =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/SimpleSkin/glTF/SimpleSkin.gltf");
+    let model = keyrig_io::fbx::import_model_file(&gltf).expect("glTF");
+    assert_eq!(model.skins.len(), 1);
+    let e = keyrig_io::fbx::import_model_file(&corpus("missing.fbx")).expect_err("missing");
+    assert!(matches!(e, keyrig_io::fbx::ModelImportError::Fbx(_)), "{e}");
+    let e = keyrig_io::fbx::import_model_file(&corpus("missing.glb")).expect_err("missing");
+    assert!(matches!(e, keyrig_io::fbx::ModelImportError::Gltf(_)), "{e}");
+}
