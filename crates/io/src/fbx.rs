@@ -164,7 +164,8 @@ pub fn import_fbx_slice(data: &[u8]) -> Result<FbxImport, FbxError> {
 fn memory_limit(file_len: usize) -> usize {
     // ufbx's own structures are a few times the file; compressed arrays may expand up to the
     // limit and no further.
-    file_len.saturating_mul(64).saturating_add(256 << 20).min(4 << 30)
+    let cap = usize::try_from(4u64 << 30).unwrap_or(usize::MAX);
+    file_len.saturating_mul(64).saturating_add(256 << 20).min(cap)
 }
 
 fn allocator(limit: usize) -> ufbx::AllocatorOpts {
