@@ -22,6 +22,7 @@ const TARGETS: &[Target] = &[
     Target { name: "scene_ron", seeds: &[("assets", &["ron"]), ("crates/io/tests", &["ron"])] },
     Target { name: "gltf", seeds: &[("tests/corpus/gltf", &["glb", "gltf"])] },
     Target { name: "md2", seeds: &[("tests/corpus/md2", &["md2"])] },
+    Target { name: "fbx", seeds: &[("tests/corpus/fbx", &["fbx"])] },
     Target { name: "vrml", seeds: &[("tests/corpus/vrml", &["wrl"]), ("tests/corpus/x3d", &["x3dv"])] },
     Target { name: "x3d", seeds: &[("tests/corpus/x3d", &["x3d"])] },
     Target { name: "inventor", seeds: &[("tests/corpus/iv", &["iv"])] },

@@ -130,6 +130,8 @@ pub enum MeshFileError {
     #[error(transparent)]
     Md2(#[from] crate::md2::Md2LoadError),
     #[error(transparent)]
+    Fbx(#[from] crate::fbx::FbxError),
+    #[error(transparent)]
     Vrml(#[from] crate::vrml::VrmlError),
     #[error(transparent)]
     VrmlMesh(#[from] crate::vrml::map::VrmlMeshError),
@@ -392,6 +394,9 @@ fn load_file(path: &Path) -> Result<LoadedFile, MeshFileError> {
     let is_md2 = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("md2"));
     if crate::vrml::is_vrml_path(path) {
         return Ok(LoadedFile::Vrml(Box::new(crate::vrml::import_vrml_file(path)?)));
+    }
+    if crate::fbx::is_fbx_path(path) {
+        return Ok(LoadedFile::Gltf(Box::new(crate::fbx::import_fbx_file(path)?)));
     }
     Ok(if is_md2 {
         LoadedFile::Md2(Box::new(crate::md2::load_md2_file(path)?))

@@ -1076,6 +1076,7 @@ fn read_skin(cx: &Reader<'_, '_>, skin: &gltf::Skin<'_>) -> Result<ModelSkin, Gl
         joints,
         inverse_bind_matrices,
         skeleton: skin.skeleton().map(|n| n.index()),
+        deformer: None,
     })
 }
 

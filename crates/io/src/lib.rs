@@ -5,6 +5,7 @@
 
 pub mod bvh;
 pub mod demo;
+pub mod fbx;
 pub mod file_io;
 pub mod gltf_camera;
 pub mod gltf_export;

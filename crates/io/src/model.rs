@@ -122,6 +122,9 @@ pub struct ModelSkin {
     pub joints: Vec<usize>,
     pub inverse_bind_matrices: Vec<Mat4>,
     pub skeleton: Option<usize>,
+    /// The deformer the file asks for (FBX's skinning method); `None`: the scene's default
+    /// (glTF skins are linear blend).
+    pub deformer: Option<keyrig_core::DeformerKind>,
 }
 
 /// A KHR_lights_punctual light.
@@ -1038,6 +1041,9 @@ impl ImportedModel {
                         }
                     };
                     object.skeleton = Some(skeleton);
+                    if let Some(kind) = self.skins.get(skin).and_then(|s| s.deformer) {
+                        object.deformer.kind = kind;
+                    }
                     Mat4::IDENTITY
                 }
                 None => world[i],
