@@ -810,11 +810,11 @@ impl EditorApp {
         crate::commands::deformer_targets(self.doc.scene(), self.selected_object())
     }
 
-    /// The deformer the menu and toolbar show as chosen: that of the first of
-    /// [`EditorApp::deformer_targets`]; `None` without a skinned object.
+    /// The deformer the menu and toolbar show as chosen ([`crate::commands::current_deformer`]:
+    /// the one in effect at this frame); `None` without a skinned object.
     #[must_use]
     pub fn current_deformer(&self) -> Option<DeformerKind> {
-        crate::commands::current_deformer(self.doc.scene(), self.selected_object())
+        crate::commands::current_deformer(self.doc.scene(), self.scene.state(), self.selected_object())
     }
 
     /// Brings the deformed bounds of every object in step with the document and the clock,

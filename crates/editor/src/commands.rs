@@ -428,12 +428,18 @@ pub fn deformer_targets(scene: &keyrig_core::Scene, selected: Option<usize>) -> 
     }
 }
 
-/// The deformer the menu and toolbar show as chosen: that of the first of [`deformer_targets`];
-/// `None` without a skinned object.
+/// The deformer the menu and toolbar show as chosen: the one in effect at this frame (a keyed
+/// deformer's value in the evaluated `state`, else the object's setting; as the viewport's
+/// overlay names it) of the first of [`deformer_targets`]; `None` without a skinned object.
 #[must_use]
-pub fn current_deformer(scene: &keyrig_core::Scene, selected: Option<usize>) -> Option<DeformerKind> {
+pub fn current_deformer(
+    scene: &keyrig_core::Scene,
+    state: Option<&keyrig_eval::SceneState>,
+    selected: Option<usize>,
+) -> Option<DeformerKind> {
     let first = *deformer_targets(scene, selected).first()?;
-    Some(scene.objects.get(first)?.deformer.kind)
+    let set = scene.objects.get(first)?.deformer.kind;
+    Some(state.and_then(|s| s.objects.get(first)).map_or(set, |s| s.look.deformer))
 }
 
 #[cfg(test)]

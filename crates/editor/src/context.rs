@@ -84,10 +84,7 @@ impl FrameCtx<'_> {
     /// object.
     #[must_use]
     pub fn deformer_in_effect(&self) -> Option<keyrig_core::DeformerKind> {
-        let scene = self.scene();
-        let o = *crate::commands::deformer_targets(scene, self.selected_object()).first()?;
-        let set = scene.objects.get(o)?.deformer.kind;
-        Some(self.scene.state().and_then(|s| s.objects.get(o)).map_or(set, |s| s.look.deformer))
+        crate::commands::current_deformer(self.scene(), self.scene.state(), self.selected_object())
     }
 
     /// The scene camera the viewport looks through at the current frame, if any (markers cut

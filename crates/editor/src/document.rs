@@ -125,11 +125,6 @@ impl Document {
             return false;
         }
         if self.open_group.as_deref() == Some(group) {
-            // The step is named for where the gesture has got to ("bias -0.90", not the first
-            // frame's "bias -0.10").
-            if let Some(step) = self.undo.last_mut() {
-                label.clone_into(&mut step.label);
-            }
             self.redo.clear();
             self.dirty = true;
             self.revision += 1;
@@ -138,6 +133,25 @@ impl Document {
             self.open_group = Some(group.to_owned());
         }
         true
+    }
+
+    /// [`Document::edit_continuous`] whose undo step is named for where the gesture has got to:
+    /// each call of the group renames it (a slider dragged to −0.90 is "bias -0.90", not the
+    /// first frame's "bias -0.10"). For the edits of one kind a drag repeats (`SceneEdit`s).
+    pub fn edit_continuous_renamed(
+        &mut self,
+        group: &str,
+        label: &str,
+        change: impl FnOnce(&mut Scene),
+    ) -> bool {
+        let continuing = self.open_group.as_deref() == Some(group);
+        let changed = self.edit_continuous(group, label, change);
+        if changed && continuing {
+            if let Some(step) = self.undo.last_mut() {
+                label.clone_into(&mut step.label);
+            }
+        }
+        changed
     }
 
     /// Ends the current continuous edit; the next one starts a new undo step.
@@ -284,6 +298,25 @@ mod undo_memory_tests {
             scene.objects.push(o);
         }
         scene
+    }
+
+    /// Issue 42, 6: a drag of a slider is one undo step named for where it ended.
+    #[test]
+    fn a_renamed_continuous_edit_is_named_for_its_last_step() {
+        let mut doc = Document::new(scene(3), None);
+        for (i, bias) in [-0.1_f32, -0.5, -0.9].into_iter().enumerate() {
+            let label = format!("bias {bias:.2} on A translation key at frame 1");
+            doc.edit_continuous_renamed("key inspector", &label, |s| {
+                s.objects[0].translation.track.keys[1].tcb.bias = bias
+            });
+            assert_eq!(doc.undo_len(), 1, "step {i}: one undo step");
+        }
+        assert_eq!(doc.undo_label(), Some("bias -0.90 on A translation key at frame 1"));
+        doc.close_group();
+        // A plain continuous edit keeps the name its gesture started with.
+        doc.edit_continuous("grab", "duplicate as A.001", |s| s.objects[0].name = "A.001".into());
+        doc.edit_continuous("grab", "pose A.001 translation", |s| s.objects[0].translation.value = Vec3::Y);
+        assert_eq!(doc.undo_label(), Some("duplicate as A.001"));
     }
 
     #[test]

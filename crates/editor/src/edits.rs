@@ -30,7 +30,9 @@ impl EditorApp {
             Edit::Scene { edit, group } => {
                 let label = edit.label(self.doc.scene());
                 match group {
-                    Some(group) => self.doc.edit_continuous(&group, &label, |scene| edit.apply(scene)),
+                    Some(group) => {
+                        self.doc.edit_continuous_renamed(&group, &label, |scene| edit.apply(scene))
+                    }
                     None => self.doc.edit(&label, |scene| edit.apply(scene)),
                 };
             }

@@ -307,3 +307,86 @@ fn an_export_killed_during_the_write_leaves_the_old_or_the_new_file() {
     }
     eprintln!("killed exports: {} left the old file, {} the new one", outcomes[0], outcomes[1]);
 }
+
+fn corpus(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus").join(rel)
+}
+
+/// Issue 40: the commands read BVH takes and FBX models. `info` describes them, `import` writes
+/// a scene that loads with the same joints, `export -o take.bvh` writes a take that reads back
+/// to the same poses (sampled with `keyrig sample` at three frames), and `deform` of an FBX
+/// skin at a frame writes its mesh. A file that is neither is refused with its name.
+#[test]
+fn bvh_takes_and_fbx_models_through_the_commands() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let take = corpus("bvh/cmu-bvh11/131_01.bvh");
+    let info = keyrig(&[os("info"), take.as_os_str()]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(text.contains("BVH motion capture take") && text.contains("120 fps"), "{text}");
+    assert!(text.contains("38 joints"), "31 joints and 7 End Sites: {text}");
+
+    let scene = dir.path().join("take.ron");
+    let out = keyrig(&[os("import"), take.as_os_str(), os("-o"), scene.as_os_str()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let imported = keyrig_io::scene_file::load(&scene).expect("the imported scene loads");
+    let skeleton = imported.objects[0].skeleton.as_ref().expect("a skeleton");
+    assert_eq!(skeleton.joints.len(), 38);
+    assert!(skeleton.joints.iter().any(|j| j.rotation_euler.is_some()), "Euler keys as in the file");
+
+    // Named as the take: a take's object is named after its file.
+    std::fs::create_dir(dir.path().join("out")).expect("a folder");
+    let again = dir.path().join("out/131_01.bvh");
+    let out = keyrig(&[os("export"), scene.as_os_str(), os("-o"), again.as_os_str()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let sample = |file: &Path| {
+        let out = keyrig(&[
+            os("sample"),
+            file.as_os_str(),
+            os("--channel"),
+            os("object/131_01/joint/LeftKnee/rotation"),
+            os("--frames"),
+            os("0..600"),
+            os("--step"),
+            os("300"),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8_lossy(&out.stdout).lines().skip(1).map(str::to_owned).collect::<Vec<_>>()
+    };
+    let (a, b) = (sample(&take), sample(&again));
+    assert_eq!(a.len(), 3, "{a:?}");
+    for (x, y) in a.iter().zip(&b) {
+        let nums =
+            |l: &str| l.split(',').skip(2).map(|v| v.parse::<f64>().expect("a number")).collect::<Vec<_>>();
+        for (p, q) in nums(x).iter().zip(nums(y)) {
+            assert!((p - q).abs() < 1e-4 || (p + q).abs() < 1e-4, "{x} vs {y}");
+        }
+    }
+
+    let fbx = corpus("fbx/ufbx/max7_skin_5000_binary.fbx");
+    let info = keyrig(&[os("info"), fbx.as_os_str()]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    assert!(String::from_utf8_lossy(&info.stdout).contains("FBX model"));
+    let obj = dir.path().join("max7.obj");
+    let out = keyrig(&[
+        os("deform"),
+        fbx.as_os_str(),
+        os("--frame"),
+        os("5"),
+        os("--deformer"),
+        os("linear"),
+        os("-o"),
+        obj.as_os_str(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let vertices =
+        std::fs::read_to_string(&obj).expect("the OBJ").lines().filter(|l| l.starts_with("v ")).count();
+    assert!(vertices > 100, "{vertices} vertices");
+
+    let junk = dir.path().join("junk.fbx");
+    std::fs::write(&junk, b"not an fbx file at all").expect("write");
+    assert_fails_with(&keyrig(&[os("info"), junk.as_os_str()]), &["junk.fbx"]);
+    let junk = dir.path().join("junk.bvh");
+    std::fs::write(&junk, b"HIERARCHY\nROOT Hips\n{\n").expect("write");
+    assert_fails_with(&keyrig(&[os("info"), junk.as_os_str()]), &["junk.bvh"]);
+}

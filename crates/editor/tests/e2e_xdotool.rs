@@ -766,6 +766,8 @@ fn a_sound_clips_waveform_moves_with_a_drag_in_a_real_x_window() {
     session.drag(&path);
     model_drag(&mut h, &path);
     assert_eq!(h.state().doc.scene().sounds[0].start_frame, 22.0, "the model's drag");
+    // Issue 42, 6: the drag's undo step is named for where the clip was dropped.
+    assert_eq!(h.state().doc.undo_label(), Some("move sound clip line.wav to frame 22"));
     session.wait_idle();
     let moved = session.screenshot("probe-sound-moved");
     assert!(changed_pixels(&shot, &moved, bar.expand2(egui::vec2(13.0 * per_frame, 0.0))) > 100);

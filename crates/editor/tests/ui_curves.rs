@@ -176,7 +176,7 @@ fn the_context_menu_clamps_the_selected_keys() {
         assert!(tcb.clamped, "key {index} clamped");
     }
     assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step");
-    assert_eq!(h.state().doc.undo_label(), Some("interpolation TCB spline, clamped"));
+    assert_eq!(h.state().doc.undo_label(), Some("interpolation Tcb, clamped on 2 keys"));
 }
 
 /// The curve view's context menu sets the selected keys' type too (the dope sheet's menu):
@@ -200,7 +200,7 @@ fn the_context_menu_sets_the_selected_keys_type() {
     }
     assert_eq!(channels::key_type(scene, ELBOW, 1), Some(keyrig_core::KeyType::Keyframe), "not selected");
     assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step");
-    assert_eq!(h.state().doc.undo_label(), Some("key type extreme on 2 key(s)"));
+    assert_eq!(h.state().doc.undo_label(), Some("key type Extreme on 2 keys"));
 }
 
 /// "Hermite handles" turns a TCB key into explicit tangents without changing the curve; its

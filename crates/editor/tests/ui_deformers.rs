@@ -7,7 +7,7 @@ use common::{harness, press};
 
 use egui::accesskit::Role;
 use egui::{Key, Modifiers};
-use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use glam::Vec3;
 use keyrig_core::DeformerKind;
@@ -103,9 +103,9 @@ fn the_toolbar_highlights_the_deformer_in_effect() {
     keyrig_io::save(&path, &scene).expect("save");
     let mut h = harness(dir.path(), Some(path));
     h.run();
-    let selected = |h: &Harness<'_, EditorApp>, label: &str| {
-        h.get_by_label(label).accesskit_node().is_selected().unwrap_or(false)
-    };
-    assert!(selected(&h, "2 Linear blend"), "the keyed deformer in effect is highlighted");
-    assert!(!selected(&h, "3 Bones blending"), "the object's setting, not in effect, is not");
+    assert_eq!(h.state().current_deformer(), Some(DeformerKind::LinearBlend), "the keyed deformer in effect");
+    // The toolbar and the Deformer menu show what `current_deformer` says (one function).
+    h.state_mut().doc.edit("unkey", |s| s.objects[0].attributes.deformer = None);
+    h.run();
+    assert_eq!(h.state().current_deformer(), Some(DeformerKind::BonesBlending), "the setting without keys");
 }

@@ -72,16 +72,22 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
             scene.problems().into_iter().map(|problem| LocatedProblem { problem, position: None }).collect();
         return Ok((scene, problems));
     }
+    if keyrig_io::bvh::is_bvh_path(path) {
+        let scene = keyrig_io::bvh::import_scene(path)?;
+        let problems =
+            scene.problems().into_iter().map(|problem| LocatedProblem { problem, position: None }).collect();
+        return Ok((scene, problems));
+    }
     match ext.as_deref() {
         Some("ron") => Ok(scene_file::load_lenient(path)?),
-        Some("glb" | "gltf") => load_gltf(path).map(|(_, scene, problems)| (scene, problems)),
+        Some("glb" | "gltf" | "fbx") => load_gltf(path).map(|(_, scene, problems)| (scene, problems)),
         Some("md2") => bail!(
             "{}: MD2 models hold vertex animation (frames and clips), not channels; \
-             `keyrig {command}` reads .ron scenes and .glb/.gltf models",
+             `keyrig {command}` reads .ron scenes, .glb/.gltf/.fbx models and .bvh takes",
             path.display()
         ),
         _ => bail!(
-            "{}: unknown file type; `keyrig {command}` reads .ron scenes, .glb/.gltf models and .wrl/.wrz/.x3d/.x3dv/.iv files",
+            "{}: unknown file type; `keyrig {command}` reads .ron scenes, .glb/.gltf/.fbx models, .bvh takes and .wrl/.wrz/.x3d/.x3dv/.iv files",
             path.display()
         ),
     }
@@ -92,7 +98,7 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
 pub fn load_gltf(
     path: &Path,
 ) -> anyhow::Result<(keyrig_io::model::ImportedModel, Scene, Vec<LocatedProblem>)> {
-    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let model = keyrig_io::fbx::import_model_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let animation = (!model.animations.is_empty()).then_some(0);
     let scene = model

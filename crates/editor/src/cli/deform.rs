@@ -102,7 +102,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
             let scene = keyrig_io::scene_file::load(file)?;
             let loaded = scene_meshes(file, &scene)?;
             (scene, loaded, None)
-        } else if has_extension(file, &["glb", "gltf"]) {
+        } else if has_extension(file, &["glb", "gltf", "fbx"]) {
             let (scene, loaded, gltf) = gltf_scene(file)?;
             (scene, loaded, Some(gltf))
         } else {
@@ -361,11 +361,11 @@ fn scene_morph_mesh(
     index: usize,
 ) -> anyhow::Result<Option<(keyrig_io::model::ImportedModel, usize, Vec<f32>)>> {
     let Some(MeshSource::File { path, mesh, .. }) = &scene.objects[index].mesh else { return Ok(None) };
-    if !has_extension(Path::new(path), &["glb", "gltf"]) {
+    if !has_extension(Path::new(path), &["glb", "gltf", "fbx"]) {
         return Ok(None);
     }
     let full = keyrig_io::file_io::parent_or_dot(file).join(path);
-    let model = keyrig_io::gltf_import::import_gltf_file(&full)
+    let model = keyrig_io::fbx::import_model_file(&full)
         .with_context(|| format!("{}: objects[{index}].mesh: {}", file.display(), full.display()))?;
     let m = mesh.unwrap_or(0);
     let Some(found) = model.meshes.get(m) else { return Ok(None) };
@@ -383,7 +383,7 @@ fn scene_morph_mesh(
 /// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
 /// its skinned mesh nodes by object index.
 fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, GltfSource)> {
-    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let model = keyrig_io::fbx::import_model_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let animation = (!model.animations.is_empty()).then_some(0);
     let scene = model

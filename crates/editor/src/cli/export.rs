@@ -54,6 +54,9 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
     if let Some(format) = keyrig_io::vrml::export::ExportFormat::of_path(&args.output) {
         return export_vrml(&args, &scene, base_dir, format);
     }
+    if keyrig_io::bvh::is_bvh_path(&args.output) {
+        return export_bvh(&args, &scene);
+    }
     let options = ExportOptions {
         rotation_tolerance_deg: args.rotation_tolerance,
         base_dir,
@@ -73,6 +76,24 @@ pub fn run(args: ExportArgs) -> anyhow::Result<()> {
         scene.lights.len(),
         if args.bake { ", baked" } else { "" }
     );
+    Ok(())
+}
+
+/// `keyrig export … -o OUT.bvh`: the first object with a skeleton as a BVH take
+/// (`keyrig_io::bvh::export_scene`), sampled at every frame of the range; read back as a check.
+fn export_bvh(args: &ExportArgs, scene: &keyrig_core::Scene) -> anyhow::Result<()> {
+    if args.bake {
+        bail!("--bake is for glTF; a BVH take is written as one key per frame");
+    }
+    let object = scene
+        .objects
+        .iter()
+        .position(|o| o.skeleton.is_some())
+        .with_context(|| format!("{}: no object has a skeleton to write as BVH", args.scene.display()))?;
+    keyrig_io::bvh::export_scene(scene, object, &args.output)?;
+    keyrig_io::bvh::import_scene(&args.output)
+        .with_context(|| format!("{}: the written file does not import again", args.output.display()))?;
+    eprintln!("keyrig: wrote {} ({})", args.output.display(), scene.objects[object].name);
     Ok(())
 }
 
@@ -114,7 +135,9 @@ fn export_vrml(
 pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, Option<PathBuf>)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("glb" | "gltf" | "md2" | "wrl" | "wrz" | "x3d" | "x3dv" | "x3dz" | "x3dvz" | "iv") => {
+        Some(
+            "glb" | "gltf" | "fbx" | "bvh" | "md2" | "wrl" | "wrz" | "x3d" | "x3dv" | "x3dz" | "x3dvz" | "iv",
+        ) => {
             let scene = keyrig_editor::files::import_model(path).map_err(anyhow::Error::msg)?;
             Ok((scene, None))
         }
@@ -125,13 +148,13 @@ pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, O
     }
 }
 
-/// `.glb`, `.gltf`, `.wrl`, `.x3dv`, `.x3d` or `.iv`, case-insensitive.
+/// `.glb`, `.gltf`, `.wrl`, `.x3dv`, `.x3d`, `.iv` or `.bvh`, case-insensitive.
 pub fn check_output_extension(path: &std::path::Path) -> anyhow::Result<()> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("glb" | "gltf"))
+    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "bvh"))
         && keyrig_io::vrml::export::ExportFormat::of_path(path).is_none()
     {
-        bail!("{}: the output must end in .glb, .gltf, .wrl, .x3dv, .x3d or .iv", path.display());
+        bail!("{}: the output must end in .glb, .gltf, .wrl, .x3dv, .x3d, .iv or .bvh", path.display());
     }
     Ok(())
 }

@@ -25,10 +25,11 @@ pub struct ImportArgs {
 
 pub fn run(args: ImportArgs) -> anyhow::Result<()> {
     let ext = args.model.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "md2")) && !keyrig_io::vrml::is_vrml_path(&args.model)
+    if !matches!(ext.as_deref(), Some("glb" | "gltf" | "fbx" | "bvh" | "md2"))
+        && !keyrig_io::vrml::is_vrml_path(&args.model)
     {
         bail!(
-            "{}: the model must be a .glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv or .iv file",
+            "{}: the model must be a .glb, .gltf, .fbx, .bvh, .md2, .wrl, .wrz, .x3d, .x3dv or .iv file",
             args.model.display()
         );
     }
@@ -49,7 +50,10 @@ pub fn run(args: ImportArgs) -> anyhow::Result<()> {
         if keyrig_io::vrml::is_vrml_path(&args.model) {
             bail!("--animation is for glTF models; a VRML/X3D/Inventor file plays all its TimeSensors");
         }
-        let model = keyrig_io::gltf_import::import_gltf_file(&args.model)?;
+        if keyrig_io::bvh::is_bvh_path(&args.model) {
+            bail!("--animation is for glTF and FBX models; a BVH take is one animation");
+        }
+        let model = keyrig_io::fbx::import_model_file(&args.model)?;
         if animation >= model.animations.len() {
             bail!(
                 "{}: --animation {animation}: the model has {} animation(s)",

@@ -175,6 +175,8 @@ fn format_line(path: &Path) -> String {
     }
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("glb" | "gltf") => "glTF model, mapped to a scene (first animation)".to_string(),
+        Some("fbx") => "FBX model (ufbx), mapped to a scene (first animation stack)".to_string(),
+        Some("bvh") => "BVH motion capture take, mapped to a skeleton with Euler keys".to_string(),
         _ => format!("keyrig scene, version {}", scene_file::CURRENT_VERSION),
     }
 }
@@ -192,7 +194,7 @@ pub fn run(args: InfoArgs) -> anyhow::Result<()> {
         .file
         .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"));
+        .is_some_and(|e| ["glb", "gltf", "fbx"].iter().any(|x| e.eq_ignore_ascii_case(x)));
     let (scene, mut problems, skipped) = if is_gltf {
         let (model, scene, problems) = super::common::load_gltf(&args.file)?;
         (scene, problems, Some(model.skipped_channels))

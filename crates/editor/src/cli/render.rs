@@ -283,7 +283,7 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
 type GltfScene = (keyrig_core::Scene, HashMap<usize, SkinnedMesh>, HashMap<usize, Arc<Material>>);
 
 fn gltf_scene(path: &Path) -> anyhow::Result<GltfScene> {
-    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let model = keyrig_io::fbx::import_model_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let animation = (!model.animations.is_empty()).then_some(0);
     let mut scene = model
@@ -403,10 +403,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
         Box::new(md2_source(&args.file, &mut headless, &args)?)
     } else {
-        let (scene, loaded, morphs, materials) = if has_extension(&args.file, &["glb", "gltf"]) {
+        let (scene, loaded, morphs, materials) = if has_extension(&args.file, &["glb", "gltf", "fbx"]) {
             let (scene, loaded, materials) = gltf_scene(&args.file)?;
             (scene, loaded, HashMap::new(), materials)
-        } else if keyrig_io::vrml::is_vrml_path(&args.file) {
+        } else if keyrig_io::vrml::is_vrml_path(&args.file) || keyrig_io::bvh::is_bvh_path(&args.file) {
             // The editor's opening of the model (its first view as the camera, or framed), and
             // its meshes through the editor's mesh store.
             let scene = keyrig_editor::files::open_any(&args.file).map_err(anyhow::Error::msg)?;

@@ -51,10 +51,14 @@ pub(super) fn read_model(
         progress("building meshes", None);
         return Ok((scene, vrml_meshes(&file, &model), !model.views.is_empty(), model.skipped_lines()));
     }
+    if keyrig_io::bvh::is_bvh_path(path) {
+        progress("reading and parsing", None);
+        return Ok((keyrig_io::bvh::import_scene(path)?, Vec::new(), false, Vec::new()));
+    }
     match extension(path).as_deref() {
-        Some("glb" | "gltf") => {
+        Some("glb" | "gltf" | "fbx") => {
             progress("reading and parsing", None);
-            let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+            let model = keyrig_io::fbx::import_model_file(path)?;
             let animation = (!model.animations.is_empty()).then_some(0);
             let scene = model
                 .to_scene(&absolute().to_string_lossy(), animation)

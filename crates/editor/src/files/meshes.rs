@@ -52,7 +52,7 @@ pub type LoadedMesh =
 pub(super) type MeshLoad = Result<(FileMesh, Option<keyrig_core::Material>), FileError>;
 
 pub(super) fn is_gltf(path: &Path) -> bool {
-    matches!(extension(path).as_deref(), Some("glb" | "gltf"))
+    matches!(extension(path).as_deref(), Some("glb" | "gltf" | "fbx"))
 }
 
 /// Every mesh of a VRML/X3D/Inventor model, keyed as [`MeshStore`] keys them (`path`, mesh
@@ -302,7 +302,7 @@ pub(super) fn load_file_mesh(
     mesh: Option<usize>,
 ) -> Result<(FileMesh, Option<keyrig_core::Material>), FileError> {
     match extension(path).as_deref() {
-        Some("glb" | "gltf") => {}
+        Some("glb" | "gltf" | "fbx") => {}
         Some("md2") => {
             let data = keyrig_io::file_io::read_regular_file(path, keyrig_io::file_io::MAX_MD2_BYTES)
                 .map_err(|e| FileError::Read { path: path.to_path_buf(), source: Arc::new(e) })?;
@@ -310,7 +310,7 @@ pub(super) fn load_file_mesh(
         }
         _ => return Err(FileError::NotAMeshFile { path: path.to_path_buf() }),
     }
-    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let model = keyrig_io::fbx::import_model_file(path)?;
     let index = mesh.unwrap_or(0);
     let node = model.nodes.iter().position(|n| n.mesh == Some(index));
     gltf_mesh(&model, path, index, node)
@@ -319,7 +319,7 @@ pub(super) fn load_file_mesh(
 /// Every mesh of the glTF file at `path` by mesh index, from one import: a file of many meshes
 /// is read once, not once per mesh.
 pub(super) fn load_gltf_meshes(path: &Path) -> Result<Vec<MeshLoad>, FileError> {
-    let model = keyrig_io::gltf_import::import_gltf_file(path)?;
+    let model = keyrig_io::fbx::import_model_file(path)?;
     let mut node_of_mesh = vec![None; model.meshes.len()];
     for (n, node) in model.nodes.iter().enumerate() {
         if let Some(slot) = node.mesh.and_then(|m| node_of_mesh.get_mut(m)) {

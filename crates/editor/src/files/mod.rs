@@ -41,6 +41,10 @@ pub enum FileError {
     Scene(Arc<keyrig_io::scene_file::SceneFileError>),
     #[error(transparent)]
     Gltf(Arc<keyrig_io::gltf_import::GltfError>),
+    #[error(transparent)]
+    Fbx(Arc<keyrig_io::fbx::FbxError>),
+    #[error(transparent)]
+    Bvh(Arc<keyrig_io::bvh::BvhError>),
     #[error("{}: {source}", path.display())]
     Md2 { path: PathBuf, source: Arc<keyrig_io::md2::Md2Error> },
     #[error("{}: {source}", path.display())]
@@ -89,6 +93,21 @@ impl From<keyrig_io::scene_file::SceneFileError> for FileError {
 impl From<keyrig_io::vrml::VrmlError> for FileError {
     fn from(e: keyrig_io::vrml::VrmlError) -> Self {
         FileError::Vrml(Arc::new(e))
+    }
+}
+
+impl From<keyrig_io::fbx::ModelImportError> for FileError {
+    fn from(e: keyrig_io::fbx::ModelImportError) -> Self {
+        match e {
+            keyrig_io::fbx::ModelImportError::Gltf(e) => FileError::Gltf(Arc::new(e)),
+            keyrig_io::fbx::ModelImportError::Fbx(e) => FileError::Fbx(Arc::new(e)),
+        }
+    }
+}
+
+impl From<keyrig_io::bvh::BvhError> for FileError {
+    fn from(e: keyrig_io::bvh::BvhError) -> Self {
+        FileError::Bvh(Arc::new(e))
     }
 }
 
@@ -174,8 +193,8 @@ pub enum DialogPurpose {
 pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'static str])> {
     const SCENES: (&str, &[&str]) = ("keyrig scenes (.ron)", &["ron"]);
     const MODELS: (&str, &[&str]) = (
-        "Models (.glb, .gltf, .md2, .wrl, .wrz, .x3d, .x3dv, .iv)",
-        &["glb", "gltf", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+        "Models (.glb, .gltf, .fbx, .bvh, .md2, .wrl, .wrz, .x3d, .x3dv, .iv)",
+        &["glb", "gltf", "fbx", "bvh", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
     );
     const VRML: (&str, &[&str]) = (
         "VRML, X3D, Open Inventor (.wrl, .wrz, .x3d, .x3dv, .iv)",
@@ -188,7 +207,10 @@ pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'
             MODELS,
             (
                 "Scenes and models",
-                &["ron", "glb", "gltf", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz", "iv"],
+                &[
+                    "ron", "glb", "gltf", "fbx", "bvh", "md2", "wrl", "wrz", "x3d", "x3dv", "x3dz", "x3dvz",
+                    "iv",
+                ],
             ),
         ],
         DialogPurpose::Import => {
@@ -204,6 +226,7 @@ pub fn dialog_filters(purpose: DialogPurpose) -> Vec<(&'static str, &'static [&'
             ("X3D (.x3d)", &["x3d"]),
             ("X3D classic (.x3dv)", &["x3dv"]),
             ("Open Inventor (.iv)", &["iv"]),
+            ("BVH motion capture (.bvh)", &["bvh"]),
         ],
     }
 }
@@ -292,6 +315,11 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
 /// extension, as VRML97 (.wrl), X3D (.x3d, .x3dv) or Open Inventor (.iv) through
 /// `keyrig_io::vrml::export` — resolving mesh files against `base_dir` (the scene's folder).
 pub fn export_gltf(path: &Path, scene: &Scene, base_dir: Option<&Path>) -> Result<(), FileError> {
+    if keyrig_io::bvh::is_bvh_path(path) {
+        // A BVH take: the selected character is not known here; the first with a skeleton.
+        let object = scene.objects.iter().position(|o| o.skeleton.is_some()).unwrap_or(0);
+        return Ok(keyrig_io::bvh::export_scene(scene, object, path)?);
+    }
     if let Some(format) = keyrig_io::vrml::export::ExportFormat::of_path(path) {
         let options = keyrig_io::vrml::export::VrmlExportOptions {
             base_dir: base_dir.map(Path::to_path_buf),
