@@ -81,3 +81,26 @@ fn a_light_colour_is_a_colour_picker_with_pose_record_and_undo() {
     assert_eq!(channels::key_count(h.state().doc.scene(), KEY_COLOUR), 0, "undo removes the key");
     assert!((colour_now(&h) - before).length() < 1e-4, "undo restores the colour");
 }
+
+/// Issue 42, 4: *Animate colour* starts the channel at the colour the object shows — the
+/// demo's Cube stays the renderer's blue, not a white-grey — one undo step.
+#[test]
+fn animate_colour_keeps_the_colour_the_object_shows() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    let shown = keyrig_render::scene_frame::object_palette_colour(&h.state().evaluator(), 1);
+    assert_eq!(shown, Vec3::new(0.35, 0.55, 0.8), "the Cube is drawn the palette's blue");
+    let steps = h.state().doc.undo_len();
+    if h.query_by_label("Visibility and look").is_some() && h.query_by_label("Animate colour").is_none() {
+        h.get_by_label("Visibility and look").click();
+        h.run();
+    }
+    h.get_by_label("Animate colour").click();
+    h.run();
+    let colour = h.state().doc.scene().objects[1].attributes.colour.as_ref().map(|c| c.value);
+    assert_eq!(colour, Some(shown), "the channel starts at the colour shown");
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+    assert_eq!(h.state().doc.undo_label(), Some("animate colour"));
+}

@@ -49,6 +49,22 @@ const OBJECT_COLOURS: [Vec3; 4] = [
     Vec3::new(0.8, 0.7, 0.3),
 ];
 
+/// The colour the renderer gives the `drawn`-th drawn object (counting from 1) that has no
+/// material: the palette, cycling.
+#[must_use]
+pub fn palette_colour(drawn: usize) -> Vec3 {
+    OBJECT_COLOURS[(drawn.max(1) - 1) % OBJECT_COLOURS.len()]
+}
+
+/// The colour object `o` is drawn with when it has no material and no keyed colour
+/// ([`palette_colour`] of its place among the objects the evaluator skins or morphs): what
+/// *Animate colour* starts from, so the object keeps the colour it shows.
+#[must_use]
+pub fn object_palette_colour(eval: &SceneEvaluator, o: usize) -> Vec3 {
+    let drawn = (0..=o).filter(|&i| eval.morph(i).is_some() || eval.skin(i).is_some()).count();
+    palette_colour(drawn)
+}
+
 /// What went wrong turning a scene into frames; every variant names the place in the scene.
 #[derive(Debug, Error)]
 pub enum SceneFrameError {
@@ -391,11 +407,7 @@ impl SceneRig {
                     drawn += 1;
                 }
                 let material = morph.as_ref().and_then(|m| m.material().cloned());
-                ObjectDraw {
-                    colour: OBJECT_COLOURS[(drawn.max(1) - 1) % OBJECT_COLOURS.len()],
-                    material,
-                    morph,
-                }
+                ObjectDraw { colour: palette_colour(drawn), material, morph }
             })
             .collect();
         SceneRig { scene: scene.clone(), eval, objects }

@@ -465,6 +465,21 @@ fn set_attribute(actions: &mut Actions, what: Animate) {
     actions.push(Action::CloseGroup);
 }
 
+/// The colour object `o` shows now without a colour channel: its material's base colour (a
+/// model file's, with textures shown), else the renderer's palette colour for it.
+fn shown_colour(ctx: &FrameCtx<'_>, o: usize) -> Vec3 {
+    let material = match ctx.scene().objects.get(o).and_then(|x| x.mesh.as_ref()) {
+        Some(keyrig_core::MeshSource::File { path, mesh, .. }) if ctx.view.textures => {
+            ctx.meshes.material(ctx.base_dir(), path, *mesh)
+        }
+        _ => None,
+    };
+    match material {
+        Some(m) => Vec3::new(m.base_colour[0], m.base_colour[1], m.base_colour[2]),
+        None => keyrig_render::scene_frame::object_palette_colour(&ctx.evaluator(), o),
+    }
+}
+
 /// An object's keyable attributes — visible, opacity, colour (once set), morph weights — under
 /// a header that is open while any is set.
 fn object_attributes_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, o: usize) {
@@ -489,7 +504,7 @@ fn object_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actio
             .on_hover_text("Give the object a colour channel that replaces its material's base colour")
             .clicked()
     {
-        set_attribute(actions, Animate::Colour { object: o, from: Vec3::splat(0.8) });
+        set_attribute(actions, Animate::Colour { object: o, from: shown_colour(ctx, o) });
     }
     for target in 0..a.morph_weights.len() {
         let label = format!("Morph {target}");
