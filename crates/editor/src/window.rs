@@ -69,7 +69,10 @@ impl EditorApp {
             self.frame_time = None;
         }
 
-        for input in pressed(&ctx) {
+        // A file dialog owns the keyboard while it is open: what is typed into it (or pressed
+        // while its list has the focus) never reaches the editor's shortcuts.
+        let shortcuts = if self.dialog_purpose.is_some() { Vec::new() } else { pressed(&ctx) };
+        for input in shortcuts {
             self.actions.push(match input {
                 Pressed::Command(command) => Action::Command(command),
                 Pressed::Copy => Action::Copy,

@@ -217,3 +217,32 @@ fn open_and_import_dialogs_list_only_their_files() {
     assert!(h.query_by_label_contains("notes.txt").is_none(), "not other files");
     assert!(h.query_by_label_contains("shot.ron").is_none(), "not scenes");
 }
+
+/// Issue 42, 11: a file dialog owns the keyboard. With the Open dialog up and its list (not its
+/// text field) holding the focus, B, O and the arrow keys change nothing in the editor: the
+/// bones stay shown, the onion skin off, the frame where it was.
+#[test]
+fn a_file_dialog_owns_the_keyboard() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let (bones, onion, frame) =
+        (h.state().view.bones, h.state().view.onion.enabled, h.state().session.playback.whole_frame());
+    h.key_press_modifiers(Modifiers::COMMAND, Key::O);
+    h.run();
+    assert_eq!(h.state().dialog_purpose(), Some(DialogPurpose::Open));
+    // Nothing has the keyboard: keys are not text for a field.
+    h.ctx.memory_mut(|m| {
+        if let Some(id) = m.focused() {
+            m.surrender_focus(id);
+        }
+    });
+    h.run();
+    for key in [Key::B, Key::O, Key::ArrowRight, Key::G] {
+        h.key_press(key);
+        h.run();
+    }
+    assert_eq!(h.state().dialog_purpose(), Some(DialogPurpose::Open), "the dialog is still open");
+    assert_eq!(h.state().view.bones, bones, "B did not reach the editor");
+    assert_eq!(h.state().view.onion.enabled, onion, "O did not reach the editor");
+    assert_eq!(h.state().session.playback.whole_frame(), frame, "→ did not step the clock");
+}
