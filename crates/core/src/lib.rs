@@ -1,6 +1,7 @@
 //! keyrig-core: keys, tracks, Kochanek–Bartels (TCB) and Squad interpolation, and the scene
 //! document. Pure: no file I/O, no GPU, no UI.
 
+pub mod action;
 pub mod attributes;
 pub mod camera_object;
 pub mod channel;
@@ -18,6 +19,7 @@ pub mod sound;
 pub mod track;
 pub mod validate;
 
+pub use action::{Action, ActionChannel, ActionError, ActionKeys, ActionSummary, DEFAULT_ACTION};
 pub use attributes::{LightAttributes, ObjectAttributes};
 pub use camera_object::{Aim, AimTarget, Lens, Marker, Projection, RenderSize, SceneCamera};
 pub use channel_id::attribute_id;

@@ -58,6 +58,10 @@ pub struct Scene {
     /// while unset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_image: Option<crate::pose_library::ReferenceImage>,
+    /// The actions (docs/actions.md): every named set of keys, with the channels that are not
+    /// playing. Left out of a scene file while empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub actions: Vec<crate::action::Action>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -81,6 +85,7 @@ impl Default for Scene {
             preview_range: None,
             poses: Vec::new(),
             reference_image: None,
+            actions: Vec::new(),
         }
     }
 }
@@ -191,6 +196,10 @@ pub struct Object {
     /// (`crate::attributes`); left out of the file while nothing is set.
     #[serde(default, skip_serializing_if = "ObjectAttributes::is_default")]
     pub attributes: ObjectAttributes,
+    /// The object's active action (docs/actions.md): its keyed channels are that action's
+    /// keys. `None` (left out of the file): keys that belong to no named action.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub action: Option<String>,
 }
 
 impl Object {
@@ -208,6 +217,7 @@ impl Object {
             skeleton: None,
             deformer: DeformerSettings::default(),
             attributes: ObjectAttributes::default(),
+            action: None,
         }
     }
 }

@@ -676,7 +676,86 @@ impl Checker {
     }
 }
 
+/// The value type of a stored channel: Euler keys are three angles.
+fn stored_kind(id: crate::channel_id::ChannelId) -> crate::channel_id::ChannelKind {
+    match id {
+        crate::channel_id::ChannelId::ObjectEuler(_) | crate::channel_id::ChannelId::JointEuler { .. } => {
+            crate::channel_id::ChannelKind::Vec3
+        }
+        _ => id.kind(),
+    }
+}
+
 impl Scene {
+    /// The problems of the actions (docs/actions.md): names unique, not empty, without '/';
+    /// each object's action listed; each stored channel's path naming an object's channel of
+    /// the same value type, once per action, with valid keys.
+    fn action_problems(&self, c: &mut Checker) {
+        c.unique_names(
+            "action",
+            self.actions.iter().enumerate().map(|(i, a)| (format!("actions[{i}].name"), a.name.as_str())),
+        );
+        for (i, object) in self.objects.iter().enumerate() {
+            if let Some(name) = &object.action {
+                if self.action_index(name).is_none() {
+                    c.push(format!("objects[{i}].action"), format!("there is no action {name:?} in actions"));
+                }
+            }
+        }
+        for (a, action) in self.actions.iter().enumerate() {
+            let mut seen = std::collections::HashSet::new();
+            for (k, channel) in action.channels.iter().enumerate() {
+                let here = format!("actions[{a}].channels[{k}]");
+                if !seen.insert(channel.path.as_str()) {
+                    c.push(format!("{here}.path"), format!("channel {:?} is stored twice", channel.path));
+                }
+                let id = crate::action::stored_channel_id(self, &channel.path);
+                let kind = match &channel.keys {
+                    crate::action::ActionKeys::Vec3(k) => {
+                        c.animated(&format!("{here}.keys"), k);
+                        crate::channel_id::ChannelKind::Vec3
+                    }
+                    crate::action::ActionKeys::Rotation(k) => {
+                        c.animated(&format!("{here}.keys"), k);
+                        crate::channel_id::ChannelKind::Rotation
+                    }
+                    crate::action::ActionKeys::Scalar(k) => {
+                        c.animated(&format!("{here}.keys"), k);
+                        crate::channel_id::ChannelKind::Scalar
+                    }
+                };
+                match id {
+                    Err(e) => c.push(format!("{here}.path"), e.to_string()),
+                    Ok(id) if crate::action::channel_object(id).is_none() => c.push(
+                        format!("{here}.path"),
+                        format!("{:?} is not an object's channel; actions hold objects' keys", channel.path),
+                    ),
+                    Ok(id) if stored_kind(id) != kind => c.push(
+                        format!("{here}.keys"),
+                        format!(
+                            "channel {:?} holds {:?} values, not {kind:?}",
+                            channel.path,
+                            stored_kind(id)
+                        ),
+                    ),
+                    Ok(id) => {
+                        let o = crate::action::channel_object(id).unwrap_or_default();
+                        if self.objects[o].action.as_deref() == Some(action.name.as_str()) {
+                            c.push(
+                                format!("{here}.path"),
+                                format!(
+                                    "object {:?} plays action {:?}: its keys are the object's own channels, \
+                                     not stored in the action",
+                                    self.objects[o].name, action.name
+                                ),
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Everything wrong with this scene, each with the path of the field it concerns; empty
     /// when the scene is valid. See the module documentation for the rules.
     #[must_use]
@@ -751,6 +830,7 @@ impl Scene {
             "pose",
             self.poses.iter().enumerate().map(|(i, p)| (format!("poses[{i}].name"), p.name.as_str())),
         );
+        self.action_problems(&mut c);
         if let Some(image) = &self.reference_image {
             if image.path.is_empty() {
                 c.push("reference_image.path", "the path is empty".to_owned());

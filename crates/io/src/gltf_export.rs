@@ -546,6 +546,63 @@ impl Document {
 /// A track that does not validate, a skeleton that does not fit its mesh, a mesh file that
 /// cannot be loaded: each with the path of the scene field.
 pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGltf, ExportError> {
+    let mut files: HashMap<PathBuf, LoadedFile> = HashMap::new();
+    let (mut doc, lights) = write_document(scene, options, &mut files)?;
+    if scene.actions.is_empty() {
+        let channels = std::mem::take(&mut doc.channels);
+        let pointers = std::mem::take(&mut doc.pointers);
+        return Ok(doc.into_gltf(lights, vec![("keyrig".to_owned(), channels, pointers)]));
+    }
+    // Each action is an animation of its name (docs/actions.md, "Export"), written from the
+    // scene playing that action alone; the node tree, meshes and rest values are the scene's.
+    // Keys that belong to no action, if any, are the animation "keyrig".
+    doc.channels.clear();
+    doc.pointers.clear();
+    let mut animations = Vec::new();
+    for action in &scene.actions {
+        let mut playing = scene
+            .playing_action(&action.name, true)
+            .map_err(|e| scene_err(format!("actions[{}]", action.name), e.to_string()))?;
+        // Lights' and cameras' keys are in no action: they go to "keyrig" below.
+        for id in keyrig_core::channel_id::ChannelId::all(&playing) {
+            if keyrig_core::action::channel_object(id).is_none() {
+                match keyrig_core::channel_id::channel_mut(&mut playing, id) {
+                    Some(keyrig_core::channel_id::ChannelMut::Vec3(a)) => *a = Animated::constant(a.value),
+                    Some(keyrig_core::channel_id::ChannelMut::Rotation(a)) => {
+                        *a = Animated::constant(a.value)
+                    }
+                    Some(keyrig_core::channel_id::ChannelMut::Scalar(a)) => *a = Animated::constant(a.value),
+                    None => {}
+                }
+            }
+        }
+        let (mut one, _) = write_document(&playing, options, &mut files)?;
+        let (channels, pointers) = (std::mem::take(&mut one.channels), std::mem::take(&mut one.pointers));
+        doc.node_visibility |= one.node_visibility;
+        animations.push((action.name.clone(), channels, pointers));
+    }
+    let mut unnamed = scene.clone();
+    for o in 0..unnamed.objects.len() {
+        if unnamed.objects[o].action.is_some() {
+            drop(unnamed.take_keyed_channels(o));
+        }
+    }
+    let (mut rest, _) = write_document(&unnamed, options, &mut files)?;
+    animations.push((
+        "keyrig".to_owned(),
+        std::mem::take(&mut rest.channels),
+        std::mem::take(&mut rest.pointers),
+    ));
+    Ok(doc.into_gltf(lights, animations))
+}
+
+/// The glTF document of `scene` playing the keys it plays, and its KHR_lights_punctual
+/// lights (the body of [`export_scene`]); mesh files are loaded once into `files`.
+fn write_document(
+    scene: &Scene,
+    options: &ExportOptions,
+    files: &mut HashMap<PathBuf, LoadedFile>,
+) -> Result<(Document, Vec<Value>), ExportError> {
     // Constraints without effect are left alone, so a scene without IK is written as it is.
     let mut baked = scene.clone();
     keyrig_eval::bake_all_ik(&mut baked, scene.frame_range.start, scene.frame_range.end)
@@ -569,9 +626,8 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
     // Tracks with cycles are written as keys over the scene's frame range.
     let range =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
-    let mut files: HashMap<PathBuf, LoadedFile> = HashMap::new();
     for (oi, object) in scene.objects.iter().enumerate() {
-        export_object(&mut doc, &mut files, scene, object, options, range, &format!("objects[{oi}]"))?;
+        export_object(&mut doc, files, scene, object, options, range, &format!("objects[{oi}]"))?;
     }
     let t0 = f64::from(scene.frame_range.start) / scene.fps;
     let mut lights: Vec<Value> = Vec::new();
@@ -597,7 +653,7 @@ pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGl
             export_camera(&mut doc, scene, &eval, c, options, range)?;
         }
     }
-    Ok(doc.into_gltf(lights))
+    Ok((doc, lights))
 }
 
 /// Writes `object` (at the scene path `here`): its node with its transform and channels
@@ -903,17 +959,24 @@ fn light_direction(
 
 impl Document {
     /// The glTF JSON and binary buffer of everything written, with the KHR_lights_punctual
-    /// `lights`: the node tree, meshes, skins, materials and textures, one animation of every
-    /// channel ([`Document::animation`], its accessors after the meshes'), and the buffer
-    /// padded to a multiple of 4 bytes.
-    fn into_gltf(mut self, lights: Vec<Value>) -> ExportedGltf {
+    /// `lights`: the node tree, meshes, skins, materials and textures, the `animations`
+    /// (each a name, its node channels and its pointer channels; those without channels are
+    /// left out, their accessors after the meshes'), and the buffer padded to a multiple of 4
+    /// bytes.
+    fn into_gltf(
+        mut self,
+        lights: Vec<Value>,
+        animations: Vec<(String, Vec<Channel>, Vec<attributes::PointerChannel>)>,
+    ) -> ExportedGltf {
         // Camera lenses and the attributes animate through KHR_animation_pointer channels,
-        // written by the one writer (`write_pointers`) after the node channels of the one
+        // written by the one writer (`write_pointers`) after the node channels of each
         // animation.
-        let animated = !self.channels.is_empty() || !self.pointers.is_empty();
-        let animation = animated.then(|| {
-            let channels = std::mem::take(&mut self.channels);
-            let mut animation = Self::animation(&mut self.b, &channels);
+        let mut written = Vec::new();
+        for (name, channels, pointers) in animations {
+            if channels.is_empty() && pointers.is_empty() {
+                continue;
+            }
+            let mut animation = Self::animation(&mut self.b, &name, &channels);
             let (mut samplers, mut chans) = (Vec::new(), Vec::new());
             if let (Some(Value::Array(s)), Some(Value::Array(c))) = (
                 animation.get_mut("samplers").map(std::mem::take),
@@ -921,11 +984,12 @@ impl Document {
             ) {
                 (samplers, chans) = (s, c);
             }
+            self.pointers = pointers;
             self.write_pointers(&mut samplers, &mut chans);
             animation["samplers"] = json!(samplers);
             animation["channels"] = json!(chans);
-            animation
-        });
+            written.push(animation);
+        }
         let mut used: Vec<&str> = Vec::new();
         if !lights.is_empty() {
             used.push("KHR_lights_punctual");
@@ -968,8 +1032,8 @@ impl Document {
         if !cameras.is_empty() {
             root["cameras"] = json!(cameras);
         }
-        if let Some(animation) = animation {
-            root["animations"] = json!([animation]);
+        if !written.is_empty() {
+            root["animations"] = json!(written);
         }
         while !b.bin.len().is_multiple_of(4) {
             b.bin.push(0);
@@ -982,9 +1046,9 @@ impl Document {
         ExportedGltf { json: root, bin: b.bin }
     }
 
-    /// The animation "keyrig" of `channels`: a sampler of each channel, its times and values
+    /// The animation `name` of `channels`: a sampler of each channel, its times and values
     /// written to `b`, and the channel targeting its node and path.
-    fn animation(b: &mut Builder, channels: &[Channel]) -> Value {
+    fn animation(b: &mut Builder, name: &str, channels: &[Channel]) -> Value {
         let mut samplers = Vec::new();
         let mut chans = Vec::new();
         for (i, c) in channels.iter().enumerate() {
@@ -999,7 +1063,7 @@ impl Document {
             samplers.push(json!({"input": input, "output": output, "interpolation": c.interpolation}));
             chans.push(json!({"sampler": i, "target": {"node": c.node, "path": c.path}}));
         }
-        json!({"name": "keyrig", "channels": chans, "samplers": samplers})
+        json!({"name": name, "channels": chans, "samplers": samplers})
     }
 }
 

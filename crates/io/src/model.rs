@@ -991,6 +991,62 @@ impl ImportedModel {
         Ok(Some(keyrig_core::Material { base_colour, base_colour_texture: Some(Arc::new(image)) }))
     }
 
+    /// The model as a keyrig scene with every animation as an action of its name
+    /// (docs/actions.md, "Imported animations"): the scene of [`ImportedModel::to_scene`] with
+    /// the first animation, whose keys become the first action; each other animation's keys
+    /// are stored in an action of its own. Each object plays the first animation that moves it
+    /// (as Blender's glTF importer assigns them), so a file with an animation per object plays
+    /// them all together; the frame range covers the longest action that plays.
+    ///
+    /// # Errors
+    /// A skin that cannot be mapped.
+    pub fn to_scene_all(&self, file_name: &str) -> Result<keyrig_core::Scene, MappingError> {
+        if self.animations.is_empty() {
+            return self.to_scene(file_name, None);
+        }
+        let mut names: Vec<String> = Vec::with_capacity(self.animations.len());
+        for a in &self.animations {
+            let base = if a.name.is_empty() {
+                keyrig_core::DEFAULT_ACTION.to_owned()
+            } else {
+                a.name.replace('/', "_")
+            };
+            let mut name = base.clone();
+            let mut n = 0;
+            while names.contains(&name) {
+                n += 1;
+                name = format!("{base}.{n:03}");
+            }
+            names.push(name);
+        }
+        let mut scene = self.to_scene(file_name, Some(0))?;
+        scene.name_unnamed_keys(&names[0]);
+        for (i, name) in names.iter().enumerate().skip(1) {
+            let mut other = self.to_scene(file_name, Some(i))?;
+            let mut channels = Vec::new();
+            for o in 0..other.objects.len() {
+                channels.extend(other.take_keyed_channels(o));
+            }
+            channels.sort_by(|a, b| a.path.cmp(&b.path));
+            scene.actions.push(keyrig_core::Action { name: name.clone(), channels });
+            // An object the earlier animations leave still plays this one.
+            for o in 0..scene.objects.len() {
+                if scene.objects[o].action.is_none() {
+                    let _ = scene.assign_action(o, Some(name));
+                    if scene.keyed_channels_of(o).is_empty() {
+                        let _ = scene.assign_action(o, None);
+                    } else {
+                        let end = (self.animations[i].duration() * scene.fps).ceil();
+                        if end.is_finite() {
+                            scene.frame_range.end = scene.frame_range.end.max(end.clamp(1.0, 1e6) as i32);
+                        }
+                    }
+                }
+            }
+        }
+        Ok(scene)
+    }
+
     /// The model as a keyrig scene, with the tracks of `animation`:
     /// - each skinned mesh node → an object at the origin (glTF ignores a skinned mesh node's
     ///   own transform) with the skeleton of [`ImportedModel::scene_skeleton`], which holds

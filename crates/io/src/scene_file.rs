@@ -4,7 +4,7 @@
 //!
 //! ```ron
 //! (
-//!     version: 3,
+//!     version: 4,
 //!     scene: (
 //!         fps: 30.0,
 //!         frame_range: (start: 0, end: 60),
@@ -41,7 +41,7 @@ use crate::scene_locate::{locate, TextPosition};
 use crate::scene_text::to_ron;
 
 /// The scene format version this keyrig writes and reads without migration.
-pub const CURRENT_VERSION: u32 = 3;
+pub const CURRENT_VERSION: u32 = 4;
 
 /// Oldest version [`migrate`] can bring up to [`CURRENT_VERSION`].
 pub const OLDEST_SUPPORTED_VERSION: u32 = 1;
@@ -372,11 +372,23 @@ pub fn migrate(version: u32, text: &str, origin: &Path) -> Result<Scene, Migrati
             let doc: crate::scene_v1::SceneFileV1 = ron::Options::default()
                 .from_str(text)
                 .map_err(|e| MigrationError::File(syntax_error(origin, &e)))?;
-            Ok(doc.into_current())
+            let mut scene = doc.into_current();
+            scene.name_unnamed_keys(keyrig_core::DEFAULT_ACTION);
+            Ok(scene)
         }
-        // Version 3 only added fields that default to "absent" (cameras, markers, new channels),
-        // so a version-2 document reads as the current one.
-        2 | CURRENT_VERSION => {
+        // Versions 3 and 4 only added fields that default to "absent" (cameras, markers, new
+        // channels; actions), so a version-2 or -3 document reads as the current one. Its one
+        // animation becomes the action "Action", active on every object with keys
+        // (docs/scene-format.md, "Version 4").
+        2 | 3 => {
+            let doc: SceneFileCurrent = ron::Options::default()
+                .from_str(text)
+                .map_err(|e| MigrationError::File(syntax_error(origin, &e)))?;
+            let mut scene = doc.scene;
+            scene.name_unnamed_keys(keyrig_core::DEFAULT_ACTION);
+            Ok(scene)
+        }
+        CURRENT_VERSION => {
             let doc: SceneFileCurrent = ron::Options::default()
                 .from_str(text)
                 .map_err(|e| MigrationError::File(syntax_error(origin, &e)))?;
@@ -600,27 +612,27 @@ mod tests {
     fn fast_path_never_disagrees_with_ron() {
         let base = "fps: 30.0, frame_range: (start: 0, end: 1)";
         let texts = [
-            format!("(version: 3, scene: ({base}))"),
-            format!("(version: 3, scene: ({base},),)"),
-            format!("(version: 3, scene: ({base}, ambient: (1, 2e3, -0.0)))"),
-            format!("(version: 3, scene: ({base}, ambient: (3.4028235e+38, 1e-45, -2.5E-3)))"),
-            format!("// c\n(/* a /* nested */ */ version: 3, scene: ({base}))\n// end"),
-            format!("SceneFile(version: 3, scene: Scene({base}))"),
-            format!("(version: 3, scene: ({base}, ambient: (1.0f32, 2.0, 3.0)))"),
-            format!("(version: 3, scene: ({base}, ambient: (1_0.0, 2.0, 3.0)))"),
-            format!("(version: 3, scene: ({base}, ambient: (-NaN, +inf, NaN)))"),
-            format!("(version: 3, scene: ({base}, objects: [(name: \"\\u{{41}}\", translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
-            format!("(version: 3, scene: ({base}, objects: [(name: r#\"raw\"#, translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
-            format!("(version: 3, scene: ({base}, ambient: (1.0, 2.0)))"),
-            format!("(version: 3, scene: ({base}, ambient: (1.0, 2.0, 3.0, 4.0)))"),
-            format!("(version: 3, scene: ({base}) extra)"),
-            format!("(version: 3, scene: ({base}))) "),
-            format!("(version: 3 scene: ({base}))"),
-            "(version: 3, scene: (fps: 30, frame_range: (start: 0.0, end: 1)))".to_string(),
-            format!("(version: 3, scene: ({base}, lights: [(name: \"L\", kind: Spot(cutoff_deg: 1.0, inner_angle_deg: 1.0, dropoff: 1.0), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
-            format!("(version: 3, scene: ({base}, lights: [(name: \"L\", kind: Point(), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
-            "(version: 3, scene: (fps: 30.0, frame_range: (start: 0, end: 1), unknown: 3))".to_string(),
-            "(version: 3, scene: (fps: 1e400, frame_range: (start: 0, end: 4294967296)))".to_string(),
+            format!("(version: 4, scene: ({base}))"),
+            format!("(version: 4, scene: ({base},),)"),
+            format!("(version: 4, scene: ({base}, ambient: (1, 2e3, -0.0)))"),
+            format!("(version: 4, scene: ({base}, ambient: (3.4028235e+38, 1e-45, -2.5E-3)))"),
+            format!("// c\n(/* a /* nested */ */ version: 4, scene: ({base}))\n// end"),
+            format!("SceneFile(version: 4, scene: Scene({base}))"),
+            format!("(version: 4, scene: ({base}, ambient: (1.0f32, 2.0, 3.0)))"),
+            format!("(version: 4, scene: ({base}, ambient: (1_0.0, 2.0, 3.0)))"),
+            format!("(version: 4, scene: ({base}, ambient: (-NaN, +inf, NaN)))"),
+            format!("(version: 4, scene: ({base}, objects: [(name: \"\\u{{41}}\", translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
+            format!("(version: 4, scene: ({base}, objects: [(name: r#\"raw\"#, translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)))]))"),
+            format!("(version: 4, scene: ({base}, ambient: (1.0, 2.0)))"),
+            format!("(version: 4, scene: ({base}, ambient: (1.0, 2.0, 3.0, 4.0)))"),
+            format!("(version: 4, scene: ({base}) extra)"),
+            format!("(version: 4, scene: ({base}))) "),
+            format!("(version: 4 scene: ({base}))"),
+            "(version: 4, scene: (fps: 30, frame_range: (start: 0.0, end: 1)))".to_string(),
+            format!("(version: 4, scene: ({base}, lights: [(name: \"L\", kind: Spot(cutoff_deg: 1.0, inner_angle_deg: 1.0, dropoff: 1.0), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
+            format!("(version: 4, scene: ({base}, lights: [(name: \"L\", kind: Point(), position: (value: (0.0, 0.0, 0.0)), direction: (value: (0.0, -1.0, 0.0)), colour: (value: (1.0, 1.0, 1.0)), intensity: (value: 1.0))]))"),
+            "(version: 4, scene: (fps: 30.0, frame_range: (start: 0, end: 1), unknown: 3))".to_string(),
+            "(version: 4, scene: (fps: 1e400, frame_range: (start: 0, end: 4294967296)))".to_string(),
             // Model file meshes with and without the MD2 clip and rate (texts[21..]).
             md2_object_text(base, "path: \"a.md2\""),
             md2_object_text(base, "path: \"a.md2\", clip: Some(\"run\"), fps: Some(10.0)"),
@@ -662,7 +674,7 @@ mod tests {
     /// A scene (`base` fields) with one object whose mesh is `File(<fields>)`.
     fn md2_object_text(base: &str, fields: &str) -> String {
         format!(
-            "(version: 3, scene: ({base}, objects: [(name: \"M\", translation: (value: (0.0, 0.0, 0.0)), \
+            "(version: 4, scene: ({base}, objects: [(name: \"M\", translation: (value: (0.0, 0.0, 0.0)), \
              rotation: (value: (0.0, 0.0, 0.0, 1.0)), scale: (value: (1.0, 1.0, 1.0)), mesh: Some(File({fields})))]))"
         )
     }

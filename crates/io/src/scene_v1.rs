@@ -85,6 +85,7 @@ impl ObjectV1 {
             }),
             deformer: self.deformer,
             attributes: keyrig_core::ObjectAttributes::default(),
+            action: None,
         }
     }
 }

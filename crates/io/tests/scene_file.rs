@@ -31,7 +31,7 @@ fn parse_err(text: &str) -> (SceneFileError, String) {
 
 /// A minimal valid document around `scene_fields`.
 fn doc(scene_fields: &str) -> String {
-    format!("(\n    version: 3,\n    scene: (\n{scene_fields}\n    ),\n)\n")
+    format!("(\n    version: 4,\n    scene: (\n{scene_fields}\n    ),\n)\n")
 }
 
 const TIMING: &str = "        fps: 30.0,\n        frame_range: (start: 0, end: 10),";
@@ -48,34 +48,34 @@ fn minimal_document_loads_with_defaults() {
 #[test]
 fn newer_version_is_refused_with_its_place() {
     // Fields this keyrig does not know: "too new" must win over "unknown field".
-    let (err, shown) = parse_err("(\n  version: 4,\n  scene: (fps: 30.0, hologram: true),\n)");
+    let (err, shown) = parse_err("(\n  version: 5,\n  scene: (fps: 30.0, hologram: true),\n)");
     assert!(matches!(
         err,
-        SceneFileError::TooNew { found: 4, supported: CURRENT_VERSION, line: 2, column: 12, .. }
+        SceneFileError::TooNew { found: 5, supported: CURRENT_VERSION, line: 2, column: 12, .. }
     ));
-    assert!(shown.starts_with("test.ron:2:12: scene format version 4 is newer"), "{shown}");
+    assert!(shown.starts_with("test.ron:2:12: scene format version 5 is newer"), "{shown}");
 }
 
 #[test]
 fn version_after_the_scene_is_read_too() {
     // Hand-edited files may put `version` last: the slower two-pass path reads them.
-    let text = format!("(\n    scene: (\n{TIMING}\n    ),\n    version: 3,\n)\n");
+    let text = format!("(\n    scene: (\n{TIMING}\n    ),\n    version: 4,\n)\n");
     assert_eq!(scene_file::from_str(&text, origin()).unwrap().frame_range.end, 10);
     // A version-1 file with its version last is migrated the same way.
     assert_eq!(
-        scene_file::from_str(&text.replace("version: 3", "version: 1"), origin()).unwrap().frame_range.end,
+        scene_file::from_str(&text.replace("version: 4", "version: 1"), origin()).unwrap().frame_range.end,
         10
     );
-    let (err, _) = parse_err(&text.replace("version: 3", "version: 4"));
-    assert!(matches!(err, SceneFileError::TooNew { found: 4, line: 6, column: 14, .. }), "{err:?}");
-    let (err, shown) = parse_err(&text.replace("version: 3,", "version: 3,\n    version: 3,"));
+    let (err, _) = parse_err(&text.replace("version: 4", "version: 5"));
+    assert!(matches!(err, SceneFileError::TooNew { found: 5, line: 6, column: 14, .. }), "{err:?}");
+    let (err, shown) = parse_err(&text.replace("version: 4,", "version: 4,\n    version: 4,"));
     assert!(matches!(err, SceneFileError::Syntax { .. }), "{err:?}");
     assert!(shown.contains("version"), "{shown}");
 }
 
 #[test]
 fn older_versions_without_migration_are_refused() {
-    let (err, shown) = parse_err(&doc(TIMING).replace("version: 3", "version: 0"));
+    let (err, shown) = parse_err(&doc(TIMING).replace("version: 4", "version: 0"));
     assert!(matches!(err, SceneFileError::TooOld { found: 0, line: 2, column: 14, .. }), "{err:?}");
     assert!(shown.contains("version 0 is not supported"), "{shown}");
 }
@@ -281,11 +281,11 @@ fn save_refuses_to_overwrite_newer_files() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("future.ron");
     for text in [
-        "(version: 4, scene: (fps: 30.0))\n",
+        "(version: 5, scene: (fps: 30.0))\n",
         // A newer file in syntax this keyrig cannot parse at all is still recognized.
-        "(version: 5, scene: <<binary-ish future syntax>>)\n",
+        "(version: 6, scene: <<binary-ish future syntax>>)\n",
         // Even when the syntax it cannot parse comes before the version.
-        "#![enable(teleportation)]\n(version: 6, scene: ())\n",
+        "#![enable(teleportation)]\n(version: 7, scene: ())\n",
     ] {
         fs::write(&path, text).unwrap();
         let err = scene_file::save(&path, &demo_scene()).expect_err("newer file");
@@ -526,18 +526,18 @@ fn generated_files_round_trip_through_disk() {
 }
 
 /// Version 1 (joints with rotations only) is migrated: the demo as version 1 wrote it opens as
-/// today's demo, and saving it writes the current version.
+/// today's demo with its keys as the action "Action", and saving it writes the current version.
 #[test]
 fn version_1_files_are_migrated() {
     let v1 = include_str!("fixtures/demo-v1.ron");
     assert!(v1.contains("version: 1,"));
     let scene = scene_file::from_str(v1, Path::new("demo-v1.ron")).expect("a version-1 file opens");
-    assert_eq!(scene, demo_scene());
+    assert_eq!(scene, demo_as_one_action());
     let joint = &scene.objects[0].skeleton.as_ref().expect("arm").joints[1];
     assert_eq!((joint.translation.value, joint.scale.value), (glam::Vec3::ZERO, glam::Vec3::ONE));
     assert!(!joint.translation.is_animated() && !joint.scale.is_animated());
-    assert_eq!(scene_file::to_string(&scene).unwrap(), DEMO_RON);
-    assert!(DEMO_RON.contains("version: 3,"));
+    assert_eq!(scene_file::to_string(&scene).unwrap(), scene_file::to_string(&demo_as_one_action()).unwrap());
+    assert!(DEMO_RON.contains("version: 4,"));
     // A version-1 file may not use the version-2 joint fields.
     let bad = v1.replacen("rest_rotation:", "translation: (value: (1.0, 0.0, 0.0)),\n rest_rotation:", 1);
     let (err, shown) = parse_err(&bad);
@@ -545,18 +545,47 @@ fn version_1_files_are_migrated() {
     assert!(shown.contains("translation"), "{shown}");
 }
 
+/// The demo as a file of version 1–3 opens: its keys become the action "Action", active on
+/// the objects with keys (docs/scene-format.md, "Versions and migration").
+fn demo_as_one_action() -> keyrig_core::Scene {
+    let mut scene = demo_scene();
+    scene.name_unnamed_keys(keyrig_core::DEFAULT_ACTION);
+    scene
+}
+
 /// Version 2 files (everything keyrig wrote before cameras, markers and the new channels) open
-/// unchanged: version 3 only added fields whose absence means "none", so the demo as version 2
-/// wrote it is today's demo, and saving it writes version 3 and nothing else new.
+/// unchanged but for the action: versions 3 and 4 only added fields whose absence means "none",
+/// so the demo as version 2 wrote it is today's demo with its keys as one action.
 #[test]
 fn version_2_files_open_unchanged() {
     let v2 = include_str!("fixtures/demo-v2.ron");
     assert!(v2.contains("version: 2,"));
     let scene = scene_file::from_str(v2, Path::new("demo-v2.ron")).expect("a version-2 file opens");
-    assert_eq!(scene, demo_scene());
+    assert_eq!(scene, demo_as_one_action());
+}
+
+/// A version-3 file holds one animation: it opens with its keys as the action "Action" on every
+/// object with keys, nothing moved or lost, and saves as version 4 with that action, which
+/// opens again to the same scene (docs/actions.md).
+#[test]
+fn version_3_files_become_one_action() {
+    let v3 = include_str!("fixtures/demo-v3.ron");
+    assert!(v3.contains("version: 3,"));
+    let scene = scene_file::from_str(v3, Path::new("demo-v3.ron")).expect("a version-3 file opens");
+    assert_eq!(scene, demo_as_one_action());
+    assert_eq!(scene.objects.iter().filter(|o| o.action.as_deref() == Some("Action")).count(), 2);
+    assert_eq!(scene.actions.len(), 1);
+    // Every key is where it was: the same channels as the demo's, playing.
+    let demo = demo_scene();
+    for (a, b) in scene.objects.iter().zip(&demo.objects) {
+        assert_eq!(a.translation, b.translation);
+        assert_eq!(a.skeleton, b.skeleton);
+    }
     let saved = scene_file::to_string(&scene).unwrap();
-    assert_eq!(saved, DEMO_RON);
-    assert_eq!(saved, v2.replacen("version: 2,", "version: 3,", 1));
+    assert!(saved.contains("version: 4,") && saved.contains("\"Action\""), "{saved}");
+    let again = scene_file::from_str(&saved, Path::new("demo-v4.ron")).expect("the saved file opens");
+    assert_eq!(again, scene);
+    assert_eq!(scene_file::to_string(&again).unwrap(), saved);
 }
 
 /// Every scene file that ships (assets/) and every complete scene document in the docs

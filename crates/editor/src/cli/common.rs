@@ -59,7 +59,7 @@ pub fn time_in_range(scene: &Scene, frame: Option<f64>, time: Option<f64>) -> an
 
 /// Loads the scene at `path` for a headless command. `.ron` scenes are read leniently (problems
 /// are returned beside the scene, located in the file); `.glb`/`.gltf` models are imported and
-/// mapped to a scene with keyrig-io's mapping (first animation), whose problems have no file
+/// mapped to a scene with keyrig-io's mapping (every animation an action), whose problems have no file
 /// position; VRML97, X3D and Open Inventor files likewise through `keyrig_io::vrml`. MD2 models
 /// hold vertex animation, not channels, and are refused.
 pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, Vec<LocatedProblem>)> {
@@ -93,16 +93,15 @@ pub fn load_scene_lenient(path: &Path, command: &str) -> anyhow::Result<(Scene, 
     }
 }
 
-/// Imports the glTF model at `path` and maps it to a scene (first animation), as
+/// Imports the glTF model at `path` and maps it to a scene (every animation an action), as
 /// [`load_scene_lenient`] does; the model comes back too (`keyrig info` lists what it skipped).
 pub fn load_gltf(
     path: &Path,
 ) -> anyhow::Result<(keyrig_io::model::ImportedModel, Scene, Vec<LocatedProblem>)> {
     let model = keyrig_io::fbx::import_model_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let animation = (!model.animations.is_empty()).then_some(0);
     let scene = model
-        .to_scene(&name, animation)
+        .to_scene_all(&name)
         .with_context(|| format!("{}: mapping the model to a scene", path.display()))?;
     let problems =
         scene.problems().into_iter().map(|problem| LocatedProblem { problem, position: None }).collect();
@@ -117,4 +116,31 @@ pub fn write_stdout(bytes: &[u8]) -> anyhow::Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         Err(e) => Err(e).context("writing to standard output"),
     }
+}
+
+/// `scene` playing `action` (`--action NAME` of `sample` and `deform`): the action is made
+/// active on every object it has keys for (docs/actions.md), and the frame range widened to
+/// its keys; `None` leaves the scene as it is.
+///
+/// # Errors
+/// An action the scene does not have, naming those it has.
+pub fn with_action(scene: Scene, action: Option<&str>, file: &Path) -> anyhow::Result<Scene> {
+    let Some(name) = action else { return Ok(scene) };
+    let mut out = scene.playing_action(name, false).map_err(|_| {
+        let names: Vec<String> = scene.actions.iter().map(|a| format!("{:?}", a.name)).collect();
+        anyhow::anyhow!(
+            "{}: --action {name:?}: the scene has no such action; its actions: {}",
+            file.display(),
+            if names.is_empty() { "none".to_owned() } else { names.join(", ") }
+        )
+    })?;
+    let summary = out.action_summaries().into_iter().find(|a| a.name == name);
+    if let Some((t0, t1)) = summary.and_then(|a| a.time_range) {
+        let (a, b) = ((t0 * out.fps).floor(), (t1 * out.fps).ceil());
+        if a.is_finite() && b.is_finite() {
+            out.frame_range.start = out.frame_range.start.min(a.clamp(-1e6, 1e6) as i32);
+            out.frame_range.end = out.frame_range.end.max(b.clamp(-1e6, 1e6) as i32);
+        }
+    }
+    Ok(out)
 }

@@ -1,7 +1,7 @@
 //! `keyrig convert IN.md2|IN.glb|IN.gltf -o OUT.glb|OUT.gltf`: an MD2 model's frames as glTF
 //! morph targets, one animation per clip (stand, run, …) at `--fps` frames per second, the
 //! skin image found next to the model as the base-colour texture; a glTF model through
-//! keyrig's scene mapping and export (its first animation, as `keyrig export MODEL` does; with
+//! keyrig's scene mapping and export (every animation an action, as `keyrig export MODEL` does; with
 //! `--bake`, Blender mode). See docs/interchange.md. The file is written atomically, never
 //! over the model or its skin, and imported again as a check.
 

@@ -3,7 +3,7 @@
 //! the object's model (skeleton) space and the mesh's own vertex order, computed on the CPU by
 //! keyrig-skin's reference implementation of the chosen deformer.
 //!
-//! FILE is a scene (.ron), a glTF model (.glb/.gltf, its first animation, through
+//! FILE is a scene (.ron), a glTF model (.glb/.gltf, every animation an action, through
 //! keyrig-io's scene mapping) or an MD2 model. A skinned glTF node is posed exactly as the glTF specification
 //! defines it (every channel, M(j) = world(j)·IBM(j), weights as stored) and written in the
 //! file's world axes and accessor order, so linear blend reproduces glTF's skinning; the other
@@ -51,6 +51,9 @@ pub struct DeformArgs {
     /// Output file: .obj or .json.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+    /// Play this action (docs/actions.md) instead of the ones active in the file.
+    #[arg(long, value_name = "NAME")]
+    pub action: Option<String>,
 }
 
 fn parse_deformer(name: &str) -> Result<DeformerKind, String> {
@@ -111,6 +114,7 @@ pub fn run(args: DeformArgs) -> anyhow::Result<()> {
                 file.display()
             );
         };
+        let scene = super::common::with_action(scene, args.action.as_deref(), file)?;
         let time = super::common::time_in_range(&scene, args.frame, args.time)?;
         let base_dir = if gltf.is_some() { None } else { Some(keyrig_io::file_io::parent_or_dot(file)) };
         if gltf.is_none() {
@@ -380,15 +384,13 @@ fn scene_morph_mesh(
 
 /// The object to deform and its mesh. Scene objects with a procedural mesh get it generated
 /// (bound to the object's own skeleton and scaled to its length, as the renderer does); glTF
-/// A glTF model as a scene (keyrig-io's mapping, first animation), with the skinned meshes of
+/// A glTF model as a scene (keyrig-io's mapping, every animation an action), with the skinned meshes of
 /// its skinned mesh nodes by object index.
 fn gltf_scene(path: &Path) -> anyhow::Result<(Scene, Vec<Option<SkinnedMesh>>, GltfSource)> {
     let model = keyrig_io::fbx::import_model_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let animation = (!model.animations.is_empty()).then_some(0);
-    let scene = model
-        .to_scene(&name, animation)
-        .with_context(|| format!("{}: mapping to a scene", path.display()))?;
+    let scene =
+        model.to_scene_all(&name).with_context(|| format!("{}: mapping to a scene", path.display()))?;
     // keyrig-io's to_scene makes one object per node with a mesh, in node order.
     let mut loaded = Vec::new();
     let mut nodes = Vec::new();

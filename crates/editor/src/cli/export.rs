@@ -130,7 +130,7 @@ fn export_vrml(
 }
 
 /// A scene file with the folder its model paths resolve against, or a model (.glb, .gltf,
-/// .md2, .wrl, .wrz, .x3d, .x3dv, .iv) mapped onto a scene as the editor opens it (its first animation; an MD2 plays every
+/// .md2, .wrl, .wrz, .x3d, .x3dv, .iv) mapped onto a scene as the editor opens it (every animation an action; an MD2 plays every
 /// frame), with absolute model paths.
 pub fn load_scene_or_model(path: &Path) -> anyhow::Result<(keyrig_core::Scene, Option<PathBuf>)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);

@@ -174,8 +174,8 @@ fn format_line(path: &Path) -> String {
         return "VRML97 / X3D / Open Inventor file, mapped to a scene".to_string();
     }
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("glb" | "gltf") => "glTF model, mapped to a scene (first animation)".to_string(),
-        Some("fbx") => "FBX model (ufbx), mapped to a scene (first animation stack)".to_string(),
+        Some("glb" | "gltf") => "glTF model, mapped to a scene (every animation an action)".to_string(),
+        Some("fbx") => "FBX model (ufbx), mapped to a scene (every animation stack an action)".to_string(),
         Some("bvh") => "BVH motion capture take, mapped to a skeleton with Euler keys".to_string(),
         _ => format!("keyrig scene, version {}", scene_file::CURRENT_VERSION),
     }
@@ -595,6 +595,33 @@ fn duration_s(scene: &Scene) -> f64 {
 /// Channel names up to this many characters are padded into a column.
 const MAX_PAD: usize = 120;
 
+/// One action's line: name, where it plays, channels, keys and the frames its keys span.
+fn action_text(scene: &Scene, a: &keyrig_core::ActionSummary) -> String {
+    let span = a.time_range.map_or_else(
+        || "no keys".to_owned(),
+        |(t0, t1)| {
+            format!(
+                "{} key{}, frames {}..={} ({t0:.3}..{t1:.3} s)",
+                a.keys,
+                if a.keys == 1 { "" } else { "s" },
+                (t0 * scene.fps).round(),
+                (t1 * scene.fps).round()
+            )
+        },
+    );
+    let active = if a.active_on.is_empty() {
+        "not playing".to_owned()
+    } else {
+        format!("active on {}", a.active_on.iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", "))
+    };
+    format!(
+        "{:?}: {active}, {} channel{}, {span}",
+        a.name,
+        a.channels,
+        if a.channels == 1 { "" } else { "s" }
+    )
+}
+
 fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> String {
     use std::fmt::Write as _;
     let mut out = String::new();
@@ -675,6 +702,12 @@ fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> Stri
     }
     if let Some(size) = scene.render_size {
         let _ = writeln!(w, "render:   {}x{}", size.width, size.height);
+    }
+    if !scene.actions.is_empty() {
+        let _ = writeln!(w, "actions:  {}", scene.actions.len());
+        for a in scene.action_summaries() {
+            let _ = writeln!(w, "  {}", action_text(scene, &a));
+        }
     }
     let channels = list_channels(scene);
     let names = ByName::new(scene);
@@ -773,6 +806,22 @@ fn summary_json(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> serd
             .cameras
             .iter()
             .map(|c| json!({"name": c.name, "description": scene_camera_text(c)}))
+            .collect();
+    }
+    if !scene.actions.is_empty() {
+        out["actions"] = scene
+            .action_summaries()
+            .iter()
+            .map(|a| {
+                json!({
+                    "name": a.name,
+                    "active_on": a.active_on,
+                    "channels": a.channels,
+                    "keys": a.keys,
+                    "first_time": a.time_range.map(|r| r.0),
+                    "last_time": a.time_range.map(|r| r.1),
+                })
+            })
             .collect();
     }
     if !scene.markers.is_empty() {

@@ -285,10 +285,8 @@ type GltfScene = (keyrig_core::Scene, HashMap<usize, SkinnedMesh>, HashMap<usize
 fn gltf_scene(path: &Path) -> anyhow::Result<GltfScene> {
     let model = keyrig_io::fbx::import_model_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let animation = (!model.animations.is_empty()).then_some(0);
-    let mut scene = model
-        .to_scene(&name, animation)
-        .with_context(|| format!("{}: mapping to a scene", path.display()))?;
+    let mut scene =
+        model.to_scene_all(&name).with_context(|| format!("{}: mapping to a scene", path.display()))?;
     // keyrig-io's to_scene makes one object per node with a mesh, in node order.
     let mesh_nodes: Vec<usize> =
         model.nodes.iter().enumerate().filter(|(_, n)| n.mesh.is_some()).map(|(i, _)| i).collect();

@@ -34,7 +34,7 @@ pub enum RotationFormatArg {
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("when").required(true).args(["frames", "times", "frame", "time"])))]
 pub struct SampleArgs {
-    /// Scene file (.ron) or glTF model (.glb, .gltf; its first animation).
+    /// Scene file (.ron) or glTF model (.glb, .gltf; every animation an action).
     pub file: PathBuf,
     /// The value to sample, e.g. object/Arm/joint/elbow/rotation (see docs/channels.md).
     #[arg(long)]
@@ -63,6 +63,9 @@ pub struct SampleArgs {
     /// Write to this file (atomically) instead of standard output.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
+    /// Play this action (docs/actions.md) instead of the ones active in the file.
+    #[arg(long, value_name = "NAME")]
+    pub action: Option<String>,
 }
 
 /// Parses `A..B` (also `A..=B`; both inclusive) into two finite numbers with A ≤ B.
@@ -164,6 +167,7 @@ fn tidy_degrees(degrees: f64) -> f64 {
 
 pub fn run(args: SampleArgs) -> anyhow::Result<()> {
     let (scene, problems) = super::common::load_scene_lenient(&args.file, "sample")?;
+    let scene = super::common::with_action(scene, args.action.as_deref(), &args.file)?;
     if !(scene.fps.is_finite() && scene.fps > 0.0) {
         bail!(
             "{}: fps {} is not a positive number; cannot convert frames to time",

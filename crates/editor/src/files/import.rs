@@ -17,7 +17,7 @@ use super::meshes::{
 use super::{extension, md2_rotation, FileError, MD2_SCALE};
 
 /// Reads a model as a scene of its own. glTF (.glb, .gltf) maps onto keyrig through keyrig-io:
-/// skinned meshes with their skeleton and the first animation's joint rotation tracks, other
+/// skinned meshes with their skeleton and every animation as an action, other
 /// meshes as objects, KHR lights as lights. An MD2 model becomes one object named after the
 /// file, playing every frame at [`keyrig_core::MD2_DEFAULT_FPS`], turned Y-up and scaled to
 /// metres ([`md2_rotation`], [`MD2_SCALE`]) and raised so that its first frame stands on the
@@ -59,9 +59,8 @@ pub(super) fn read_model(
         Some("glb" | "gltf" | "fbx") => {
             progress("reading and parsing", None);
             let model = keyrig_io::fbx::import_model_file(path)?;
-            let animation = (!model.animations.is_empty()).then_some(0);
             let scene = model
-                .to_scene(&absolute().to_string_lossy(), animation)
+                .to_scene_all(&absolute().to_string_lossy())
                 .map_err(|e| FileError::Mapping { path: path.to_path_buf(), source: Arc::new(e) })?;
             Ok((scene, Vec::new(), false, Vec::new()))
         }
