@@ -395,6 +395,14 @@ impl Scene {
         }
     }
 
+    /// Drops the stored keys of object `object` from every action (the object was deleted).
+    pub fn forget_in_actions(&mut self, object: &str) {
+        let prefix = format!("object/{object}/");
+        for action in &mut self.actions {
+            action.channels.retain(|c| !c.path.starts_with(&prefix));
+        }
+    }
+
     /// Gives every object with keys but no action the action `name` (made when missing): how
     /// the one animation of an older scene file becomes an action.
     pub fn name_unnamed_keys(&mut self, name: &str) {

@@ -157,6 +157,39 @@ pub enum SceneEdit {
     ReferenceOpacity(f32),
     /// Removes the reference image.
     RemoveReferenceImage,
+    /// Makes, copies, renames, deletes or assigns an action (docs/actions.md).
+    Action(ActionEdit),
+}
+
+/// The action edits: each one undo step (docs/actions.md).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ActionEdit {
+    /// Makes `name` (`None`: no action) the active action of `object`.
+    Assign { object: usize, name: Option<String> },
+    /// A new empty action, made active on `object`.
+    New { object: usize, name: String },
+    /// A copy of the keys `object` plays, made active under `name`.
+    Duplicate { object: usize, name: String },
+    /// Renames an action.
+    Rename { old: String, new: String },
+    /// Deletes an action and its keys.
+    Delete { name: String },
+}
+
+impl ActionEdit {
+    /// Applies the edit; a refused one (an unknown or taken name) leaves the scene as it was.
+    ///
+    /// # Errors
+    /// Why the edit was refused.
+    pub fn apply(&self, scene: &mut Scene) -> Result<(), keyrig_core::ActionError> {
+        match self {
+            ActionEdit::Assign { object, name } => scene.assign_action(*object, name.as_deref()),
+            ActionEdit::New { object, name } => scene.new_action(*object, name),
+            ActionEdit::Duplicate { object, name } => scene.duplicate_action(*object, name),
+            ActionEdit::Rename { old, new } => scene.rename_action(old, new),
+            ActionEdit::Delete { name } => scene.delete_action(name),
+        }
+    }
 }
 
 impl SceneEdit {
@@ -264,6 +297,11 @@ impl SceneEdit {
                 }
             }
             &SceneEdit::Retime { origin, fps, keep_frames } => retime(scene, origin, fps, keep_frames),
+            SceneEdit::Action(edit) => {
+                // Checked before it is queued (the inspector refuses taken and unknown names);
+                // a refused edit changes nothing.
+                let _ = edit.apply(scene);
+            }
             &SceneEdit::FrameRange { start, end } => {
                 scene.frame_range.start = start;
                 scene.frame_range.end = end;
@@ -353,6 +391,18 @@ impl SceneEdit {
                 format!("move sound clip {} to frame {start_frame}", sound(*clip))
             }
             SceneEdit::Retime { fps, .. } => format!("change fps to {fps}"),
+            SceneEdit::Action(edit) => match edit {
+                ActionEdit::Assign { object: o, name: Some(name) } => {
+                    format!("play action {name} on {}", object(*o))
+                }
+                ActionEdit::Assign { object: o, name: None } => format!("no action on {}", object(*o)),
+                ActionEdit::New { object: o, name } => format!("new action {name} on {}", object(*o)),
+                ActionEdit::Duplicate { object: o, name } => {
+                    format!("duplicate action as {name} on {}", object(*o))
+                }
+                ActionEdit::Rename { old, new } => format!("rename action {old} to {new}"),
+                ActionEdit::Delete { name } => format!("delete action {name}"),
+            },
             SceneEdit::FrameRange { start, end } => format!("frame range {start}–{end}"),
             SceneEdit::PreviewRange(r) => format!("preview range {}–{}", r.start, r.end),
             SceneEdit::ReferenceOpacity(_) => "reference image opacity".to_owned(),

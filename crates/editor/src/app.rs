@@ -432,6 +432,7 @@ impl EditorApp {
                 self.doc.edit(&format!("delete object {name}"), |scene| {
                     let gone = scene.objects.remove(o);
                     keyrig_edit::camera_edits::forget_aim_targets(scene, &gone.name);
+                    scene.forget_in_actions(&gone.name);
                 });
             }
             Selected::Light(l) => {
@@ -564,6 +565,7 @@ impl EditorApp {
             Selected::Object(o) => {
                 let old = std::mem::replace(&mut scene.objects[o].name, new.clone());
                 keyrig_edit::camera_edits::rename_aim_targets(scene, &old, None, &new);
+                scene.rename_in_actions(&old, None, &new);
             }
             Selected::Light(l) => scene.lights[l].name = new,
             Selected::Camera(c) => keyrig_edit::camera_edits::rename_camera(scene, c, new),
@@ -575,6 +577,7 @@ impl EditorApp {
                 if let Some(old) = old {
                     let owner = scene.objects[object].name.clone();
                     keyrig_edit::camera_edits::rename_aim_targets(scene, &owner, Some(&old), &new);
+                    scene.rename_in_actions(&owner, Some(&old), &new);
                 }
             }
         });

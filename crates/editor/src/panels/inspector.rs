@@ -3,6 +3,7 @@
 //! channel before and after its keys), and the deformer with its
 //! parameters, plus the cross-section measure of the selected joint.
 
+pub mod action;
 mod camera;
 pub mod pose_library;
 
@@ -36,6 +37,7 @@ fn begin(actions: &mut Actions, change: FieldChange) {
 #[derive(Debug, Default)]
 pub struct Inspector {
     pose_library: pose_library::PoseLibraryUi,
+    action: action::ActionUi,
 }
 
 impl Inspector {
@@ -45,6 +47,14 @@ impl Inspector {
                 ui.heading("Inspector");
                 selection_ui(ui, ctx, actions);
                 ui.separator();
+                // The active action of the selected object (or of the joint's object).
+                match ctx.session.selection.item {
+                    Some(Selected::Object(o) | Selected::Joint { object: o, .. }) => {
+                        self.action.ui(ui, ctx, actions, o);
+                        ui.separator();
+                    }
+                    _ => {}
+                }
                 key_inspector_ui(ui, ctx, actions);
                 ui.separator();
                 self.pose_library.ui(ui, ctx, actions);
