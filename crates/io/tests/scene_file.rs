@@ -756,3 +756,28 @@ fn a_document_that_is_not_a_scene_file_is_refused_at_its_start() {
     let missing = scene_file::load(Path::new("/no/such/folder/scene.ron")).expect_err("no file");
     assert_eq!(missing.position(), None, "{missing}");
 }
+
+/// A scene with actions whose channels are stored (the Fox's Walk and Run, docs/actions.md)
+/// saves and loads as it is, byte for byte on the second save, and plays each action again.
+#[test]
+fn scenes_with_stored_actions_save_and_load_as_they_are() {
+    let fox = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/gltf/Fox/Fox.glb");
+    let model = keyrig_io::gltf_import::import_gltf_file(&fox).expect("Fox");
+    let scene = model.to_scene_all(&fox.to_string_lossy()).expect("scene");
+    assert!(scene.actions.iter().filter(|a| !a.channels.is_empty()).count() == 2, "Walk and Run stored");
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.ron"), dir.path().join("b.ron"));
+    scene_file::save(&a, &scene).unwrap();
+    let text = fs::read_to_string(&a).unwrap();
+    assert!(
+        text.contains("version: 4,") && text.contains("(name: \"Walk\", channels: [")
+            || text.contains("name: \"Walk\"")
+    );
+    let back = scene_file::load(&a).expect("reads back");
+    assert_eq!(back, scene);
+    scene_file::save(&b, &back).unwrap();
+    assert_eq!(fs::read(&a).unwrap(), fs::read(&b).unwrap());
+    let mut walking = back.clone();
+    walking.assign_action(0, Some("Walk")).expect("Walk");
+    assert_eq!(walking.action_summaries()[1].keys, 378, "{:?}", walking.action_summaries());
+}
