@@ -471,6 +471,12 @@ impl EditorApp {
             Some(Selected::Object(o)) => {
                 let mut object = scene.objects[o].clone();
                 object.name = unique_name(&object.name, scene.objects.iter().map(|x| x.name.as_str()));
+                // The copy keeps the original's look: drawn with the renderer's palette (no
+                // material, no colour channel), its colour would follow its new place among the
+                // objects, so it gets the original's as its colour attribute.
+                if let Some(colour) = self.palette_colour_shown(o) {
+                    object.attributes.colour = Some(keyrig_core::Animated::constant(colour));
+                }
                 let name = object.name.clone();
                 let index = scene.objects.len();
                 self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
@@ -515,6 +521,26 @@ impl EditorApp {
                 "Duplicated as {name}: it follows the pointer; click or Enter places it, Escape or right-click leaves it on the original"
             ));
         }
+    }
+
+    /// The palette colour object `o` is drawn with
+    /// ([`keyrig_render::scene_frame::object_palette_colour`]), when that is the colour it
+    /// shows: it has a drawn mesh, no colour channel and no material of its own. `None`
+    /// otherwise (its colour goes with it when it is copied).
+    fn palette_colour_shown(&self, o: usize) -> Option<glam::Vec3> {
+        let object = self.doc.scene().objects.get(o)?;
+        if object.attributes.colour.is_some() {
+            return None;
+        }
+        if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+            let base_dir = self.doc.path().and_then(std::path::Path::parent);
+            if self.meshes.material(base_dir, path, *mesh).is_some() {
+                return None;
+            }
+        }
+        let eval = self.evaluator();
+        (eval.skin(o).is_some() || eval.morph(o).is_some())
+            .then(|| keyrig_render::scene_frame::object_palette_colour(&eval, o))
     }
 
     /// Opens the outliner's name field on the selected item.

@@ -352,10 +352,9 @@ fn paint_ring_drag(
             painter.arrow(at - t * 0.5, t, stroke);
         }
     }
-    let turns = (degrees.abs() / 360.0).floor();
     let mut text = format!("{degrees:+.1}°");
-    if turns >= 1.0 {
-        text.push_str(&format!("  ({turns:.0} turn{})", if turns >= 2.0 { "s" } else { "" }));
+    if let Some(turns) = crate::twist::turns_readout(degrees) {
+        text.push_str(&format!("  ({turns})"));
     }
     if snap {
         text.push_str("  snap 15°");
