@@ -55,6 +55,9 @@ pub enum Action {
     Session(SessionChange),
     /// A change of the view (camera, viewport options, onion skin, help window).
     View(ViewChange),
+    /// Goes back (undo) or forward (redo) to the state after this many undo steps (a click in
+    /// the undo history).
+    UndoTo(usize),
     /// A status-bar message, or an error.
     Info(String),
     Error(String),
@@ -196,6 +199,7 @@ pub enum ViewChange {
     Antialiasing(bool),
     Onion(crate::onion::OnionSkin),
     ShowHelp(bool),
+    ShowUndoHistory(bool),
     /// Look through a scene camera, or (None) through the orbit camera again.
     LookThrough(Option<crate::view::LookThrough>),
     ShowRender(bool),

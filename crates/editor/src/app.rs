@@ -1041,6 +1041,17 @@ impl EditorApp {
                 }
             }
             Command::ShowHelp => self.view.show_help = !self.view.show_help,
+            Command::UndoHistory => self.view.show_undo_history = !self.view.show_undo_history,
+            Command::GizmoMove | Command::GizmoTurn | Command::GizmoScale => {
+                use crate::panels::viewport::GizmoTool;
+                let tool = match command {
+                    Command::GizmoMove => GizmoTool::Move,
+                    Command::GizmoTurn => GizmoTool::Turn,
+                    _ => GizmoTool::Scale,
+                };
+                let now = self.panels.viewport.toggle_gizmo_tool(tool);
+                self.info(format!("Gizmo: {}", now.label().to_lowercase()));
+            }
             Command::LookThroughCamera => self.toggle_look_through(),
             Command::CameraToView => self.camera_to_view(),
             Command::AddCamera => self.add_camera(),
@@ -1051,6 +1062,26 @@ impl EditorApp {
             Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }
         ctx.request_repaint();
+    }
+
+    /// Goes back or forward to the state after `steps` undo steps (the undo history's rows):
+    /// undoes or redoes one step at a time, as Ctrl+Z and Ctrl+Shift+Z would, and says where it
+    /// got to.
+    pub fn undo_to(&mut self, steps: usize) {
+        let mut moved = false;
+        while self.doc.undo_len() > steps && self.doc.undo() {
+            moved = true;
+        }
+        while self.doc.undo_len() < steps && self.doc.redo() {
+            moved = true;
+        }
+        self.session.selection.retain_valid(self.doc.scene());
+        if moved {
+            match self.doc.undo_label().map(str::to_owned) {
+                Some(label) => self.info(format!("Back to {label}")),
+                None => self.info("Back to the start of the history"),
+            }
+        }
     }
 
     /// Asks to run an action that would lose unsaved changes; it runs at once when the
@@ -1475,6 +1506,7 @@ impl EditorApp {
             Action::Paste(text) => self.paste_text(&text),
             Action::Edit(edit) => self.apply_edit(edit),
             Action::CloseGroup => self.doc.close_group(),
+            Action::UndoTo(steps) => self.undo_to(steps),
             Action::Session(change) => self.apply_session(change),
             Action::View(change) => self.apply_view(change),
             Action::Info(text) => self.info(text),
@@ -1578,6 +1610,7 @@ impl EditorApp {
             ViewChange::Antialiasing(on) => view.antialiasing = on,
             ViewChange::Onion(onion) => view.onion = onion,
             ViewChange::ShowHelp(on) => view.show_help = on,
+            ViewChange::ShowUndoHistory(on) => view.show_undo_history = on,
             ViewChange::LookThrough(camera) => view.look_through = camera,
             ViewChange::ShowRender(on) => view.show_render = on,
         }

@@ -35,9 +35,39 @@ pub(super) struct GizmoState {
     ring_centre: Vec3,
     /// Where the selection turns about (the viewport's pivot setting).
     pub(super) pivot: Pivot,
-    /// Scale mode (S over the viewport toggles it): with objects selected the gizmo shows
-    /// scale handles instead of its move arrows and rotation rings.
-    pub(super) scale: bool,
+    /// Which handles the gizmo shows (W, E, S: [`GizmoTool`]).
+    pub(super) tool: GizmoTool,
+}
+
+/// Which handles the gizmo shows, chosen by key as in Maya (W move, E rotate; S scale, as
+/// Blender's S, since R is record mode here). Pressing a tool's key again goes back to
+/// [`GizmoTool::MoveAndTurn`]. A tool whose handles do not apply to the selection (Move on a
+/// joint that can only turn, Scale on anything but objects) shows what does apply, move and
+/// turn, so the selection can always be posed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GizmoTool {
+    /// Move arrows and planes with the rotation rings, as the item allows (the default).
+    #[default]
+    MoveAndTurn,
+    /// Move arrows and planes only (W).
+    Move,
+    /// Rotation rings only (E).
+    Turn,
+    /// Scale handles for the selected objects (S).
+    Scale,
+}
+
+impl GizmoTool {
+    /// The tool's name in the viewport and the status bar.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            GizmoTool::MoveAndTurn => "Move and turn",
+            GizmoTool::Move => "Move",
+            GizmoTool::Turn => "Turn",
+            GizmoTool::Scale => "Scale",
+        }
+    }
 }
 
 impl GizmoState {
@@ -75,7 +105,7 @@ impl GizmoState {
         let mut world = active.world;
         world.translation = targets::pivot_point(&items, self.pivot).into();
         // Scale mode scales the selected objects (each about its own origin).
-        let scaled: Vec<usize> = if self.scale {
+        let scaled: Vec<usize> = if self.tool == GizmoTool::Scale {
             ctx.session
                 .selection
                 .items()
@@ -90,8 +120,14 @@ impl GizmoState {
         // Point lights have only a place, directional lights only a direction (their icon's
         // place is not used for lighting), spot lights both; joints move where the rig allows
         // (a root, or a joint with translation keys).
-        let turns = items.iter().any(|t| t.rotation.is_some() || t.direction.is_some());
-        let moves = items.iter().any(|t| t.translation.is_some() && !t.carried);
+        let can_turn = items.iter().any(|t| t.rotation.is_some() || t.direction.is_some());
+        let can_move = items.iter().any(|t| t.translation.is_some() && !t.carried);
+        // The tool's handles where they apply to the selection, else both.
+        let (turns, moves) = match self.tool {
+            GizmoTool::Move if can_move => (false, true),
+            GizmoTool::Turn if can_turn => (true, false),
+            _ => (can_turn, can_move),
+        };
         let mut modes = GizmoMode::all_rotate() & GizmoMode::all_translate();
         if !scaled.is_empty() {
             modes = GizmoMode::all_scale();
