@@ -1,5 +1,5 @@
-//! Modal dialogs: keyboard-shortcut help (built from the command list), the confirmation
-//! before losing changes, and the offer to recover an autosaved scene.
+//! Dialogs: keyboard-shortcut help (built from the command list), the undo history, the
+//! confirmation before losing changes, and the offer to recover an autosaved scene.
 
 use egui::{Context, Id, Modal};
 

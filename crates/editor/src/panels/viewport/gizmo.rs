@@ -84,8 +84,8 @@ impl GizmoState {
     /// maps the pointer to the angle around the ring's centre on screen with no way to change it,
     /// which turns a ring seen edge-on by 0° and a thin ring by large jumps. A press on a ring
     /// asks transform-gizmo which ring it picked; from then on [`RingDrag`] follows the pointer
-    /// (around the centre, accumulated over several turns, or 1° per point along an edge-on
-    /// ring; 15° steps with Ctrl) and the turn is keyed with its spin ([`Edit::Turn`]).
+    /// (around the centre, accumulated over several turns, or a straight drag's length as an arc
+    /// of the ring, whichever is larger; 1° per point along an edge-on ring; 15° steps with Ctrl) and the turn is keyed with its spin ([`Edit::Turn`]).
     pub(super) fn ui(
         &mut self,
         ui: &mut Ui,
