@@ -368,6 +368,8 @@ fn shift_d_on_an_animated_object_places_its_motion_and_keeps_its_colour() {
         channels::key_count(scene, ChannelId::ObjectTranslation(1)),
         "the copy keeps its keys, moved"
     );
+    let rest = scene.objects[2].translation.value - scene.objects[1].translation.value;
+    assert!((rest - offset).length() < 1e-4, "its static value (played muted) moved too: {rest:?}");
     assert_eq!(h.state().doc.undo_label(), Some("duplicate as Cube.001"), "one step");
     // Its look: the Cube's palette colour, not the one of the third object.
     let copy_colour = scene.objects[2].attributes.colour.as_ref().map(|c| c.value);

@@ -39,9 +39,8 @@ pub(super) enum Grab {
 pub(super) struct Moving {
     /// The items moved, as they stood when the grab started.
     targets: Vec<Target>,
-    /// For each target, its translation keys (time, value) when the grab started: empty for an
-    /// unkeyed translation.
-    keys: Vec<Vec<(f64, Vec3)>>,
+    /// For each target, its keyed translation when the grab started (`None`: unkeyed).
+    keys: Vec<Option<Keyed>>,
     /// The plane they move in (through the pivot, facing the camera).
     plane_point: Vec3,
     plane_normal: Vec3,
@@ -78,19 +77,7 @@ impl Grab {
                 let camera = &ctx.view.camera;
                 let plane_normal = (camera.target - camera.eye()).normalize_or(Vec3::NEG_Z);
                 let plane_point = targets::pivot_point(&items, targets::Pivot::MedianPoint);
-                let scene = ctx.scene();
-                let keys = items
-                    .iter()
-                    .map(|t| match t.translation {
-                        Some((id, ..)) => (0..channels::key_count(scene, id))
-                            .filter_map(|i| match channels::key_value(scene, id, i)? {
-                                ChannelValue::Vec3(v) => Some((channels::key_times(scene, id)[i], v)),
-                                _ => None,
-                            })
-                            .collect(),
-                        None => Vec::new(),
-                    })
-                    .collect();
+                let keys = items.iter().map(|t| t.translation.and_then(|(id, ..)| keyed(ctx, id))).collect();
                 *self = Grab::Moving(Box::new(Moving {
                     targets: items,
                     keys,
@@ -150,13 +137,14 @@ impl Grab {
 impl Moving {
     /// Sets every moved item's translation to where it stood plus the world `offset`.
     fn push(&self, actions: &mut Actions, offset: Vec3) {
-        for (t, keys) in self.targets.iter().zip(&self.keys).filter(|(t, _)| !t.carried) {
+        for (t, keyed) in self.targets.iter().zip(&self.keys).filter(|(t, _)| !t.carried) {
             if let Some((id, value, world_to_value)) = t.translation {
                 let offset = world_to_value.mul_vec3(offset);
-                if !keys.is_empty() {
+                if let Some(keyed) = keyed {
                     actions.edit(Edit::PlaceKeys {
                         id,
-                        keys: keys.iter().map(|&(time, v)| (time, v + offset)).collect(),
+                        keys: keyed.keys.iter().map(|&(time, v)| (time, v + offset)).collect(),
+                        rest: keyed.rest + offset,
                         group: GRAB_GROUP.to_owned(),
                     });
                     continue;
@@ -170,4 +158,18 @@ impl Moving {
             }
         }
     }
+}
+
+/// A keyed translation as a grab found it: its keys (time, value) and its static value (what a
+/// muted channel plays), both moved by the placement.
+struct Keyed {
+    keys: Vec<(f64, Vec3)>,
+    rest: Vec3,
+}
+
+/// Channel `id`'s keys and static value when it is a keyed Vec3 channel.
+fn keyed(ctx: &FrameCtx<'_>, id: keyrig_edit::channels::ChannelId) -> Option<Keyed> {
+    let Some(channels::ChannelRef::Vec3(a)) = channels::channel(ctx.scene(), id) else { return None };
+    (!a.track.keys.is_empty())
+        .then(|| Keyed { keys: a.track.keys.iter().map(|k| (k.time, k.value)).collect(), rest: a.value })
 }
