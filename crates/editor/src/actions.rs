@@ -55,6 +55,9 @@ pub enum Action {
     Session(SessionChange),
     /// A change of the view (camera, viewport options, onion skin, help window).
     View(ViewChange),
+    /// Goes back (undo) or forward (redo) to the state after this many undo steps (a click in
+    /// the undo history).
+    UndoTo(usize),
     /// A status-bar message, or an error.
     Info(String),
     Error(String),
@@ -108,6 +111,11 @@ pub enum Edit {
     /// override of an animated channel or the value of a static one
     /// ([`crate::app::EditorApp::apply_pose`]); `group` merges a drag into one undo step.
     Pose { id: ChannelId, value: ChannelValue, group: String },
+    /// Sets the keys of translation channel `id` to `keys` (time, value) and its static value to
+    /// `rest` (what it plays muted): a copy placed by
+    /// Shift+D's grab moves with its whole motion ([`crate::app::EditorApp::apply_place_keys`]);
+    /// `group` merges the grab into one undo step.
+    PlaceKeys { id: ChannelId, keys: Vec<(f64, glam::Vec3)>, rest: glam::Vec3, group: String },
     /// A rotation turned with a gizmo ring or the twist field, with the spin of its key in
     /// record mode ([`crate::app::EditorApp::apply_turn`]).
     Turn { id: ChannelId, turn: Turn, group: String },
@@ -192,6 +200,7 @@ pub enum ViewChange {
     Antialiasing(bool),
     Onion(crate::onion::OnionSkin),
     ShowHelp(bool),
+    ShowUndoHistory(bool),
     /// Look through a scene camera, or (None) through the orbit camera again.
     LookThrough(Option<crate::view::LookThrough>),
     ShowRender(bool),

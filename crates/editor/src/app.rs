@@ -472,6 +472,12 @@ impl EditorApp {
             Some(Selected::Object(o)) => {
                 let mut object = scene.objects[o].clone();
                 object.name = unique_name(&object.name, scene.objects.iter().map(|x| x.name.as_str()));
+                // The copy keeps the original's look: drawn with the renderer's palette (no
+                // material, no colour channel), its colour would follow its new place among the
+                // objects, so it gets the original's as its colour attribute.
+                if let Some(colour) = self.palette_colour_shown(o) {
+                    object.attributes.colour = Some(keyrig_core::Animated::constant(colour));
+                }
                 let name = object.name.clone();
                 let index = scene.objects.len();
                 self.doc.edit_continuous(group, &format!("duplicate as {name}"), |scene| {
@@ -516,6 +522,26 @@ impl EditorApp {
                 "Duplicated as {name}: it follows the pointer; click or Enter places it, Escape or right-click leaves it on the original"
             ));
         }
+    }
+
+    /// The palette colour object `o` is drawn with
+    /// ([`keyrig_render::scene_frame::object_palette_colour`]), when that is the colour it
+    /// shows: it has a drawn mesh, no colour channel and no material of its own. `None`
+    /// otherwise (its colour goes with it when it is copied).
+    fn palette_colour_shown(&self, o: usize) -> Option<glam::Vec3> {
+        let object = self.doc.scene().objects.get(o)?;
+        if object.attributes.colour.is_some() {
+            return None;
+        }
+        if let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh {
+            let base_dir = self.doc.path().and_then(std::path::Path::parent);
+            if self.meshes.material(base_dir, path, *mesh).is_some() {
+                return None;
+            }
+        }
+        let eval = self.evaluator();
+        (eval.skin(o).is_some() || eval.morph(o).is_some())
+            .then(|| keyrig_render::scene_frame::object_palette_colour(&eval, o))
     }
 
     /// Opens the outliner's name field on the selected item.
@@ -1018,6 +1044,17 @@ impl EditorApp {
                 }
             }
             Command::ShowHelp => self.view.show_help = !self.view.show_help,
+            Command::UndoHistory => self.view.show_undo_history = !self.view.show_undo_history,
+            Command::GizmoMove | Command::GizmoTurn | Command::GizmoScale => {
+                use crate::panels::viewport::GizmoTool;
+                let tool = match command {
+                    Command::GizmoMove => GizmoTool::Move,
+                    Command::GizmoTurn => GizmoTool::Turn,
+                    _ => GizmoTool::Scale,
+                };
+                let now = self.panels.viewport.toggle_gizmo_tool(tool);
+                self.info(format!("Gizmo: {}", now.label().to_lowercase()));
+            }
             Command::LookThroughCamera => self.toggle_look_through(),
             Command::CameraToView => self.camera_to_view(),
             Command::AddCamera => self.add_camera(),
@@ -1028,6 +1065,26 @@ impl EditorApp {
             Command::BindCameraToMarker => self.bind_camera_to_marker(),
         }
         ctx.request_repaint();
+    }
+
+    /// Goes back or forward to the state after `steps` undo steps (the undo history's rows):
+    /// undoes or redoes one step at a time, as Ctrl+Z and Ctrl+Shift+Z would, and says where it
+    /// got to.
+    pub fn undo_to(&mut self, steps: usize) {
+        let mut moved = false;
+        while self.doc.undo_len() > steps && self.doc.undo() {
+            moved = true;
+        }
+        while self.doc.undo_len() < steps && self.doc.redo() {
+            moved = true;
+        }
+        self.session.selection.retain_valid(self.doc.scene());
+        if moved {
+            match self.doc.undo_label().map(str::to_owned) {
+                Some(label) => self.info(format!("Back to {label}")),
+                None => self.info("Back to the start of the history"),
+            }
+        }
     }
 
     /// Asks to run an action that would lose unsaved changes; it runs at once when the
@@ -1452,6 +1509,7 @@ impl EditorApp {
             Action::Paste(text) => self.paste_text(&text),
             Action::Edit(edit) => self.apply_edit(edit),
             Action::CloseGroup => self.doc.close_group(),
+            Action::UndoTo(steps) => self.undo_to(steps),
             Action::Session(change) => self.apply_session(change),
             Action::View(change) => self.apply_view(change),
             Action::Info(text) => self.info(text),
@@ -1555,6 +1613,7 @@ impl EditorApp {
             ViewChange::Antialiasing(on) => view.antialiasing = on,
             ViewChange::Onion(onion) => view.onion = onion,
             ViewChange::ShowHelp(on) => view.show_help = on,
+            ViewChange::ShowUndoHistory(on) => view.show_undo_history = on,
             ViewChange::LookThrough(camera) => view.look_through = camera,
             ViewChange::ShowRender(on) => view.show_render = on,
         }

@@ -55,6 +55,10 @@ pub enum Command {
     HideSelected,
     ShowHidden,
     TogglePreviewRange,
+    GizmoMove,
+    GizmoTurn,
+    GizmoScale,
+    UndoHistory,
     ShowHelp,
 }
 
@@ -70,7 +74,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 52] = [
+    pub const ALL: [Command; 56] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -80,6 +84,8 @@ impl Command {
         Command::ExportGltf,
         Command::RenderAnimation,
         Command::Quit,
+        // Ctrl+Alt+Z before Ctrl+Z (Undo), which would take it too.
+        Command::UndoHistory,
         Command::Redo,
         Command::Undo,
         Command::ToggleRecord,
@@ -106,6 +112,9 @@ impl Command {
         Command::ToggleGrid,
         Command::ToggleBones,
         Command::ToggleOnionSkin,
+        Command::GizmoMove,
+        Command::GizmoTurn,
+        Command::GizmoScale,
         Command::SetDeformer(DeformerKind::Rigid),
         Command::SetDeformer(DeformerKind::LinearBlend),
         Command::SetDeformer(DeformerKind::BonesBlending),
@@ -178,6 +187,10 @@ impl Command {
             Command::HideSelected => "Hide selected",
             Command::ShowHidden => "Show hidden",
             Command::TogglePreviewRange => "Preview range",
+            Command::GizmoMove => "Move gizmo",
+            Command::GizmoTurn => "Turn gizmo",
+            Command::GizmoScale => "Scale gizmo",
+            Command::UndoHistory => "Undo history",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -271,6 +284,12 @@ impl Command {
             Command::TogglePreviewRange => {
                 "Loop playback over part of the range (the selected keys' frames, else from here to the end), or the whole range again"
             }
+            Command::GizmoMove => "The gizmo shows only its move arrows and planes; again: move and turn",
+            Command::GizmoTurn => "The gizmo shows only its rotation rings; again: move and turn",
+            Command::GizmoScale => {
+                "Scale handles for the selected objects instead of move and turn; again: move and turn"
+            }
+            Command::UndoHistory => "List the undo steps; a click on one goes back (or forward) to it",
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -330,6 +349,10 @@ impl Command {
             Command::HideSelected => vec![sc(NONE, Key::H)],
             Command::ShowHidden => vec![sc(Modifiers::ALT, Key::H)],
             Command::TogglePreviewRange => vec![sc(CMD.plus(Modifiers::ALT), Key::P)],
+            Command::GizmoMove => vec![sc(NONE, Key::W)],
+            Command::GizmoTurn => vec![sc(NONE, Key::E)],
+            Command::GizmoScale => vec![sc(NONE, Key::S)],
+            Command::UndoHistory => vec![sc(CMD.plus(Modifiers::ALT), Key::Z)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

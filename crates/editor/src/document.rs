@@ -183,6 +183,16 @@ impl Document {
         self.undo.len()
     }
 
+    /// Labels of the undo steps kept, oldest first (the last is [`Document::undo_label`]).
+    pub fn undo_labels(&self) -> impl Iterator<Item = &str> {
+        self.undo.iter().map(|s| s.label.as_str())
+    }
+
+    /// Labels of the steps that can be redone, in the order [`Document::redo`] repeats them.
+    pub fn redo_labels(&self) -> impl Iterator<Item = &str> {
+        self.redo.iter().rev().map(|s| s.label.as_str())
+    }
+
     /// Label of the step [`Document::undo`] would revert.
     #[must_use]
     pub fn undo_label(&self) -> Option<&str> {

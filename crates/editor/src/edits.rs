@@ -18,6 +18,7 @@ impl EditorApp {
     pub(crate) fn apply_edit(&mut self, edit: Edit) {
         match edit {
             Edit::Pose { id, value, group } => self.apply_pose(id, value, &group),
+            Edit::PlaceKeys { id, keys, rest, group } => self.apply_place_keys(id, &keys, rest, &group),
             Edit::Turn { id, turn, group } => self.apply_turn(id, turn, &group),
             Edit::IkPose { rotations, label } => self.apply_ik_pose(&rotations, &label),
             Edit::MoveSelectedKeys { seconds, ticket } => {
@@ -67,6 +68,27 @@ impl EditorApp {
                 channels::set_static_value(scene, id, value);
             });
         }
+    }
+
+    /// Moves the keys of translation channel `id` to the values of `keys` (a key at each of
+    /// their times keeps its interpolation) and its static value to `rest`: a copy placed by
+    /// Shift+D's grab takes its whole motion along, in record mode or not, and no pose override
+    /// is left on the channel.
+    pub fn apply_place_keys(
+        &mut self,
+        id: ChannelId,
+        keys: &[(f64, glam::Vec3)],
+        rest: glam::Vec3,
+        group: &str,
+    ) {
+        let label = format!("place {}", id.label(self.doc.scene()));
+        self.doc.edit_continuous(group, &label, |scene| {
+            for &(time, value) in keys {
+                channels::set_key(scene, id, time, ChannelValue::Vec3(value));
+            }
+            channels::set_static_value(scene, id, ChannelValue::Vec3(rest));
+        });
+        self.session.overrides.remove(&id);
     }
 
     /// Applies the rotations an IK drag solved for the joints of a chain, as

@@ -26,8 +26,12 @@ pub const MIN_AROUND_RADIUS: f32 = 0.35;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RingMapping {
     /// The angle swept by the pointer around the ring's centre on screen, accumulated over
-    /// the drag (several turns follow the hand). `sign` is +1 when the axis points towards
-    /// the viewer (a counter-clockwise sweep is a positive turn), −1 when away.
+    /// the drag (several turns follow the hand), or the pointer's travel along the ring's
+    /// tangent at the press as an arc of the circle through the press, whichever is larger:
+    /// a circular drag follows the hand through several turns, and a straight drag along the
+    /// ring keeps turning (a drag as long as the circle's circumference is one turn) where the
+    /// angle around the centre would stop short of half a turn. `sign` is +1 when the axis
+    /// points towards the viewer (a counter-clockwise sweep is a positive turn), −1 when away.
     Around { sign: f64 },
     /// [`DEGREES_PER_POINT`] times the pointer's travel along `tangent` (unit, screen points),
     /// the direction in which the ring's near side moves for a positive turn (the far side's
@@ -48,6 +52,8 @@ pub struct RingDrag {
     last_angle: Option<f32>,
     /// Accumulated turn, degrees, before snapping.
     raw_degrees: f64,
+    /// [`RingMapping::Around`]: the angle swept around the centre so far, degrees (signed).
+    swept_degrees: f64,
 }
 
 /// Counter-clockwise angle of `p` around `centre` on a y-down screen; `None` on the centre.
@@ -96,7 +102,15 @@ impl RingDrag {
             }
             RingMapping::Along { tangent }
         };
-        RingDrag { axis, centre, mapping, press, last_angle: screen_angle(centre, press), raw_degrees: 0.0 }
+        RingDrag {
+            axis,
+            centre,
+            mapping,
+            press,
+            last_angle: screen_angle(centre, press),
+            raw_degrees: 0.0,
+            swept_degrees: 0.0,
+        }
     }
 
     /// Follows the pointer to `p`.
@@ -111,9 +125,17 @@ impl RingDrag {
                     } else if d < -std::f32::consts::PI {
                         d += std::f32::consts::TAU;
                     }
-                    self.raw_degrees += sign * f64::from(d.to_degrees());
+                    self.swept_degrees += sign * f64::from(d.to_degrees());
                 }
                 self.last_angle = Some(angle);
+                // The travel along the tangent at the press (counter-clockwise on screen, y
+                // down), as an arc of the circle through the press.
+                let radial = self.press - self.centre;
+                let arc =
+                    f64::from((p - self.press).dot(Vec2::new(radial.y, -radial.x)) / radial.length_sq());
+                let along = sign * arc.to_degrees();
+                self.raw_degrees =
+                    if along.abs() > self.swept_degrees.abs() { along } else { self.swept_degrees };
             }
             RingMapping::Along { tangent } => {
                 self.raw_degrees = f64::from((p - self.press).dot(tangent)) * DEGREES_PER_POINT;
@@ -131,6 +153,35 @@ impl RingDrag {
             self.raw_degrees
         }
     }
+}
+
+/// What the Twist field shows beside `degrees`: the whole turns and the rest, so the two always
+/// agree (719° is "1 turn + 359°", 720° "2 turns", −400° "−1 turn − 40°"); `None` under a turn.
+/// The degrees are read to the field's two decimals, so 719.999 is two turns, as the field
+/// shows 720.
+#[must_use]
+pub fn turns_readout(degrees: f64) -> Option<String> {
+    if !degrees.is_finite() {
+        return None;
+    }
+    let hundredths = (degrees.abs() * 100.0).round();
+    let turns = (hundredths / 36_000.0).floor();
+    if turns < 1.0 {
+        return None;
+    }
+    let rest = (hundredths - turns * 36_000.0) / 100.0;
+    let negative = degrees < 0.0;
+    let mut text = format!(
+        "{}{turns:.0} turn{}",
+        if negative { "\u{2212}" } else { "" },
+        if turns >= 2.0 { "s" } else { "" }
+    );
+    if rest > 0.0 {
+        let rest = format!("{rest:.2}");
+        let rest = rest.trim_end_matches('0').trim_end_matches('.');
+        text.push_str(&format!(" {} {rest}°", if negative { '\u{2212}' } else { '+' }));
+    }
+    Some(text)
 }
 
 /// A drag on a rotation ring that the editor turns itself (see [`RingDrag`]).
@@ -182,6 +233,55 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Issue 42, item 8: a straight drag along an open ring (from a point of the ring, along
+    /// its tangent there) swept at most half a turn around the centre (+165° for 380 points on
+    /// a ring 80 points across); it now turns by its length as an arc of the ring, past a turn,
+    /// either way and whichever way the axis points.
+    #[test]
+    fn a_straight_drag_along_an_open_ring_passes_a_turn() {
+        let centre = Pos2::new(400.0, 300.0);
+        let radius = 80.0;
+        for (axis, sign) in [(Vec3::Z, 1.0), (Vec3::NEG_Z, -1.0)] {
+            for direction in [1.0_f32, -1.0] {
+                let press = circle(centre, radius, 30.0);
+                let mut drag = RingDrag::new(axis, Vec3::NEG_Z, centre, press, radius, ortho);
+                assert!(matches!(drag.mapping, RingMapping::Around { .. }));
+                // Counter-clockwise tangent at 30° on a y-down screen.
+                let tangent = circle(centre, radius, 31.0) - circle(centre, radius, 29.0);
+                let tangent = tangent.normalized() * direction;
+                for step in 1..=76 {
+                    drag.drag_to(press + tangent * (5.0 * step as f32));
+                }
+                // 380 points on a circle of radius 80: 272°.
+                let expected = sign * f64::from(direction) * (380.0_f64 / 80.0).to_degrees();
+                assert!(
+                    (drag.degrees(false) - expected).abs() < 0.5,
+                    "{} vs {expected}",
+                    drag.degrees(false)
+                );
+                for step in 77..=140 {
+                    drag.drag_to(press + tangent * (5.0 * step as f32));
+                }
+                assert!(drag.degrees(false).abs() > 360.0, "past a turn: {}", drag.degrees(false));
+                assert_eq!(drag.degrees(false).signum(), sign * f64::from(direction));
+            }
+        }
+    }
+
+    /// Issue 42, item 8: the field showed "1 turn" beside 719°; the readout names the rest.
+    #[test]
+    fn the_turns_readout_agrees_with_the_degrees() {
+        assert_eq!(turns_readout(359.0), None);
+        assert_eq!(turns_readout(-359.99), None);
+        assert_eq!(turns_readout(360.0).as_deref(), Some("1 turn"));
+        assert_eq!(turns_readout(719.0).as_deref(), Some("1 turn + 359°"));
+        assert_eq!(turns_readout(720.0).as_deref(), Some("2 turns"));
+        assert_eq!(turns_readout(719.999).as_deref(), Some("2 turns"));
+        assert_eq!(turns_readout(765.5).as_deref(), Some("2 turns + 45.5°"));
+        assert_eq!(turns_readout(-400.0).as_deref(), Some("\u{2212}1 turn \u{2212} 40°"));
+        assert_eq!(turns_readout(f64::NAN), None);
     }
 
     #[test]

@@ -29,6 +29,8 @@ pub struct ViewState {
     pub textures: bool,
     /// The shortcut list (F12) is open.
     pub show_help: bool,
+    /// The undo history window (Ctrl+Alt+Z) is open.
+    pub show_undo_history: bool,
     /// The Render animation dialog is open.
     pub show_render: bool,
     /// Ghosts of the selected object at other frames (View ▸ Onion skin).
@@ -73,6 +75,7 @@ impl ViewState {
             style: RenderStyle::Solid,
             textures: true,
             show_help: false,
+            show_undo_history: false,
             show_render: false,
             onion: crate::onion::OnionSkin::default(),
             look_through: None,

@@ -180,6 +180,7 @@ impl EditorApp {
         panels.viewport.ui(ui, &ctx, actions);
 
         panels::dialogs::help_ui(egui_ctx, &ctx, actions);
+        panels::dialogs::undo_history_ui(egui_ctx, &ctx, actions);
         panels::dialogs::confirm_ui(egui_ctx, &ctx, actions);
         panels::dialogs::recovery_ui(egui_ctx, &ctx, actions);
         panels.render.ui(egui_ctx, &ctx, actions);

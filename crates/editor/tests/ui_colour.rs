@@ -104,3 +104,35 @@ fn animate_colour_keeps_the_colour_the_object_shows() {
     assert_eq!(h.state().doc.undo_len(), steps + 1);
     assert_eq!(h.state().doc.undo_label(), Some("animate colour"));
 }
+
+/// Issue 42, 12: a spot cone whose cutoff goes below its inner angle was accepted silently.
+/// The values stay as typed (the other angle may be about to follow), and the inspector says
+/// under the cone's fields what the light does then: lit fully out to the cutoff, a hard edge.
+#[test]
+fn a_spot_cutoff_below_its_inner_angle_is_warned_in_the_inspector() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    // The outliner's row (the dope sheet has a `Key` row too).
+    h.get_all_by_label("Key").next().expect("the Key light in the outliner").click();
+    h.run();
+    if h.query_by_label("Animate cone").is_none() {
+        h.get_by_label("Visibility, range and cone").click();
+        h.run();
+    }
+    h.get_by_label("Animate cone").click();
+    h.run();
+    let warning = "is below the inner angle";
+    assert!(h.query_by_label_contains(warning).is_none(), "the demo's cone is sound");
+    let inner = match h.state().value_now(ChannelId::Attribute(keyrig_core::AttributeId::LightInnerAngle(0)))
+    {
+        Some(ChannelValue::Scalar(s)) => s,
+        other => panic!("an inner angle: {other:?}"),
+    };
+    common::set_value(&mut h, Role::SpinButton, "Cutoff (°)", f64::from(inner) - 5.0);
+    let cutoff = h.state().value_now(ChannelId::Attribute(keyrig_core::AttributeId::LightCutoff(0)));
+    assert_eq!(cutoff, Some(ChannelValue::Scalar(inner - 5.0)), "the typed cutoff is kept");
+    assert!(h.query_by_label_contains(warning).is_some(), "the inspector warns");
+    assert!(h.query_by_label_contains("with a hard edge").is_some(), "and says what the light does");
+    common::set_value(&mut h, Role::SpinButton, "Cutoff (°)", f64::from(inner) + 5.0);
+    assert!(h.query_by_label_contains(warning).is_none(), "gone once the cone is sound again");
+}

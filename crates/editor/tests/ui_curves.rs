@@ -715,3 +715,78 @@ fn turns_and_pasted_poses_key_the_euler_angles() {
     assert!(!h.state().doc.scene().objects[1].rotation.is_animated());
     assert!(h.state().doc.scene().problems().is_empty());
 }
+
+/// Issue 42, 12: with the rotation read as Euler angles (the default XYZ mode, quaternion
+/// keys), typing X 360 at a key in record mode keyed the same rotation as 0 with no spin, so
+/// the X curve and the field read 0 at the "360° key". The typed angle is a turn about X now:
+/// the key gets the spin, and the field and the curve read 360 there, climbing from 0.
+#[test]
+fn an_euler_angle_typed_a_turn_away_keys_the_turn_and_the_curve_reads_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let wrist = ChannelId::JointRotation { object: 0, joint: 3 };
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::R);
+    common::go_to_frame(&mut h, 0);
+    press(&mut h, Modifiers::NONE, Key::I);
+    common::go_to_frame(&mut h, 30);
+    common::set_value(&mut h, egui::accesskit::Role::SpinButton, "Rotation (°) X", 360.0);
+    press(&mut h, Modifiers::NONE, Key::R);
+    let scene = h.state().doc.scene();
+    let frames: Vec<i64> =
+        channels::key_times(scene, wrist).iter().map(|t| (t * 30.0).round() as i64).collect();
+    assert_eq!(frames, [0, 30]);
+    common::go_to_frame(&mut h, 20);
+    common::go_to_frame(&mut h, 30);
+    assert!(
+        (field(&h, "Rotation (°) X") - 360.0).abs() < 0.01,
+        "the field reads {}",
+        field(&h, "Rotation (°) X")
+    );
+    let curves = h.state().sample_curves(wrist, 0.0, 30.0, 31);
+    let x: Vec<f32> = curves[0].iter().map(|p| p.1).collect();
+    assert!((x[30] - 360.0).abs() < 0.01, "the X curve reads 360 at the key: {x:?}");
+    assert!((x[15] - 180.0).abs() < 1.0 && x.windows(2).all(|w| w[1] >= w[0] - 1e-3), "climbing: {x:?}");
+    for c in [1, 2] {
+        assert!(curves[c].iter().all(|p| p.1.abs() < 0.01), "Y and Z stay 0: {:?}", curves[c]);
+    }
+    h.get_by_label("curve key wrist rotation X frame 30");
+}
+
+/// Issue 42, 9: the curve view's state leaked between items and documents. A view framed on
+/// the elbow's key (F) was kept when the Cube was selected, leaving its 0 → 360 spin off the
+/// plot until Fit; now another item is shown fitted. Normalize and hidden curves were kept
+/// into the next document; another document starts with every curve shown, not normalised.
+#[test]
+fn the_curve_view_refits_for_another_item_and_starts_plain_in_another_document() {
+    let (dir, mut h) = with_elbow_key();
+    let plot = h.state().curves_rect().expect("laid out");
+    h.event(Event::PointerMoved(plot.center()));
+    press(&mut h, Modifiers::NONE, Key::F);
+    let framed = h.state().panels().curves.view.expect("framed on the elbow's key");
+    assert!(framed.high < 300.0, "the elbow's values: {framed:?}");
+    h.get_by_label("Cube").click();
+    h.run();
+    let plot = h.state().curves_rect().expect("laid out");
+    for frame in [0, 30, 60, 90] {
+        let key = h.get_by_label(&format!("curve key Cube rotation Y frame {frame}")).rect().center();
+        assert!(plot.contains(key), "frame {frame}: the spin's key at {key:?} is on the plot {plot:?}");
+    }
+
+    click_with(&mut h, "Cube translation X", Modifiers::NONE);
+    click_with(&mut h, "Normalize", Modifiers::NONE);
+    assert!(h.state().panels().curves.normalized);
+    assert!(!h.state().panels().curves.hidden.is_empty());
+    // Another document: the demo saved and opened again.
+    let path = dir.path().join("again.ron");
+    let text = keyrig_io::scene_file::to_string(h.state().doc.scene()).expect("saves");
+    std::fs::write(&path, text).expect("write the scene");
+    h.state_mut().open_path(path);
+    h.run();
+    h.get_by_label("Cube").click();
+    h.run();
+    assert!(!h.state().panels().curves.normalized, "Normalize is off in another document");
+    assert!(h.state().panels().curves.hidden.is_empty(), "every curve shows");
+    assert!(h.query_by_label("curve key Cube translation X frame 30").is_some());
+}

@@ -388,3 +388,58 @@ fn double_click_resets_a_tcb_slider_and_its_number_box_commits_once() {
     assert!((tension - 0.3).abs() < 1e-6, "Enter applies 0.3, got {tension}");
     assert_eq!(h.state().doc.undo_len(), steps + 1, "one undo step for the typed value");
 }
+
+/// Issue 42, 15: the undo history (Ctrl+Alt+Z) lists the start, every step and the steps
+/// undone; a click on a row goes back to the state after it, a click on an undone (greyed) row
+/// forward again, and the list follows.
+#[test]
+fn the_undo_history_lists_the_steps_and_a_click_goes_back_or_forward_to_one() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    // Two steps: a key on the wrist, then one on the elbow, at frame 10 in record mode.
+    let elbow = ChannelId::JointRotation { object: 0, joint: 1 };
+    let elbow_keys = channels::key_count(h.state().doc.scene(), elbow);
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::R);
+    go_to_frame(&mut h, 10);
+    set_value(&mut h, Role::SpinButton, "Rotation (°) X", 45.0);
+    h.get_by_label("elbow").click();
+    h.run();
+    set_value(&mut h, Role::SpinButton, "Rotation (°) X", 30.0);
+    assert_eq!(h.state().doc.undo_len(), 2);
+    let labels: Vec<String> = h.state().doc.undo_labels().map(str::to_owned).collect();
+    assert_eq!(labels, ["key wrist rotation", "key elbow rotation"]);
+    let keys = |h: &Harness<'_, EditorApp>| {
+        let scene = h.state().doc.scene();
+        (channels::key_count(scene, WRIST), channels::key_count(scene, elbow) - elbow_keys)
+    };
+    assert_eq!(keys(&h), (1, 1));
+    assert!(h.query_by_label("Start of the history").is_none(), "closed at first");
+    press(&mut h, Modifiers::COMMAND | Modifiers::ALT, Key::Z);
+    assert!(h.state().view.show_undo_history, "Ctrl+Alt+Z opens it (and undoes nothing)");
+    assert_eq!(h.state().doc.undo_len(), 2);
+    assert!(h.query_by_label("Start of the history").is_some());
+    for label in &labels {
+        assert!(h.query_by_label(label).is_some(), "the step \"{label}\" is listed");
+    }
+    // Back to the start: both keys go.
+    h.get_by_label("Start of the history").click();
+    h.run();
+    assert_eq!(h.state().doc.undo_len(), 0);
+    assert_eq!(keys(&h), (0, 0), "back to no new key");
+    // Forward to the first step: one key, and the second step is still there to redo.
+    h.get_by_label(&labels[0]).click();
+    h.run();
+    assert_eq!(h.state().doc.undo_len(), 1);
+    assert_eq!(keys(&h), (1, 0), "the wrist's key only");
+    assert_eq!(h.state().doc.redo_labels().collect::<Vec<_>>(), [labels[1].as_str()]);
+    h.get_by_label(&labels[1]).click();
+    h.run();
+    assert_eq!(h.state().doc.undo_len(), 2);
+    assert_eq!(keys(&h), (1, 1), "both again");
+    // The window closes with the same key.
+    press(&mut h, Modifiers::COMMAND | Modifiers::ALT, Key::Z);
+    assert!(!h.state().view.show_undo_history);
+    assert!(h.query_by_label("Start of the history").is_none());
+}

@@ -685,3 +685,78 @@ fn dragging_a_key_of_the_motion_path_moves_that_keys_position() {
     press(&mut h, Modifiers::COMMAND, Key::Z);
     assert_eq!(h.state().doc.scene().objects[1].translation.track, before);
 }
+
+/// Issue 42, 15: the gizmo's tools by key, as in Maya. With the Cube selected, W leaves only
+/// the move handles (a drag around the view ring no longer turns it; a drag of the centre moves
+/// it), E only the rings (the same drags: it turns and does not move), S its scale handles; the
+/// same key again goes back to move and turn. On a joint that can only turn, W still shows the
+/// rings.
+#[test]
+fn w_e_and_s_choose_the_gizmo_tool() {
+    use keyrig_editor::panels::viewport::GizmoTool;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("Cube").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::F);
+    let tool = |h: &Harness<'_, EditorApp>| h.state().panels().viewport.gizmo_tool();
+    assert_eq!(tool(&h), GizmoTool::MoveAndTurn);
+    let place = |h: &Harness<'_, EditorApp>| -> Vec3 {
+        h.state().object_pose_now(1).expect("the cube").world_from_object.translation.into()
+    };
+    let turn = |h: &Harness<'_, EditorApp>| -> Quat {
+        rotation_of(h.state().object_pose_now(1).expect("the cube").world_from_object)
+    };
+    // A quarter turn around the Cube's view ring, and a drag of its centre 60 points right.
+    let around = |h: &mut Harness<'_, EditorApp>| {
+        let centre = on_screen(h.state(), place(h));
+        let on_ring =
+            |a: f32| centre + egui::vec2(a.to_radians().cos(), -a.to_radians().sin()) * VIEW_RING_RADIUS;
+        let path: Vec<Pos2> = (0..=18).map(|i| on_ring(5.0 * i as f32)).collect();
+        drag_along(h, &path);
+    };
+    let across = |h: &mut Harness<'_, EditorApp>| {
+        let centre = on_screen(h.state(), place(h));
+        drag_centre(h, centre, egui::vec2(60.0, 0.0));
+    };
+
+    press(&mut h, Modifiers::NONE, Key::W);
+    assert_eq!(tool(&h), GizmoTool::Move);
+    assert!(h.query_by_label("Gizmo: move").is_some(), "the status bar says so");
+    let (p, q) = (place(&h), turn(&h));
+    around(&mut h);
+    assert!(turn(&h).angle_between(q) < 1e-4, "W: the view ring does not turn the Cube");
+    h.get_by_label("Cube").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::F);
+    let p0 = place(&h);
+    across(&mut h);
+    assert!((place(&h) - p0).length() > 0.05, "W: the centre moves it ({p:?} → {:?})", place(&h));
+
+    press(&mut h, Modifiers::NONE, Key::E);
+    assert_eq!(tool(&h), GizmoTool::Turn);
+    press(&mut h, Modifiers::NONE, Key::F);
+    let (p, q) = (place(&h), turn(&h));
+    across(&mut h);
+    assert!((place(&h) - p).length() < 1e-5, "E: the centre does not move the Cube");
+    h.get_by_label("Cube").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::F);
+    around(&mut h);
+    assert!(turn(&h).angle_between(q).to_degrees() > 45.0, "E: the view ring turns it");
+
+    press(&mut h, Modifiers::NONE, Key::S);
+    assert_eq!(tool(&h), GizmoTool::Scale);
+    assert!(h.query_by_role_and_label(Role::Button, "Scale").is_some(), "the tool buttons show it");
+    press(&mut h, Modifiers::NONE, Key::S);
+    assert_eq!(tool(&h), GizmoTool::MoveAndTurn, "S again: move and turn");
+
+    // The wrist can only turn: with W its rings still show and turn it.
+    press(&mut h, Modifiers::NONE, Key::W);
+    select_wrist(&mut h);
+    press(&mut h, Modifiers::NONE, Key::F);
+    let before = rotation_of(wrist_world(h.state()));
+    drag_quarter_turn(&mut h);
+    let (angle, _) = world_turn(before, rotation_of(wrist_world(h.state())));
+    assert!((angle - 90.0).abs() < 3.0, "W on a joint that cannot move: the rings turn it {angle}°");
+}

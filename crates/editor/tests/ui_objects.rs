@@ -310,3 +310,70 @@ fn shift_d_starts_a_move_that_a_click_places_and_escape_cancels() {
     );
     assert_eq!(h.state().doc.undo_len(), steps + 1);
 }
+
+/// Issue 42, item 3: Shift+D on an animated object (the demo's Cube, its translation keyed)
+/// then a move places the copy with its whole motion: every translation key moves by the
+/// offset, so at any other frame the copy plays the original's motion where it was put (the
+/// move is not a pose that snaps back). The copy keeps the original's colour: the Cube draws
+/// with the renderer's palette colour of its place among the objects, which the copy gets as
+/// its colour attribute.
+#[test]
+fn shift_d_on_an_animated_object_places_its_motion_and_keeps_its_colour() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    assert!(channels::key_count(h.state().doc.scene(), ChannelId::ObjectTranslation(1)) > 2);
+    assert!(h.state().doc.scene().objects[1].attributes.colour.is_none());
+    let blue = keyrig_render::scene_frame::object_palette_colour(&h.state().evaluator(), 1);
+    go_to_frame(&mut h, 10);
+    outliner_row(&h, "Cube").click();
+    h.run();
+    let rect = h.state().viewport_rect().expect("a viewport");
+    let from = rect.center();
+    common::pointer(&mut h, Event::PointerMoved(from));
+    press(&mut h, Modifiers::SHIFT, Key::D);
+    assert_eq!(object_names(&h), ["Arm", "Cube", "Cube.001"]);
+    for i in 1..=5 {
+        common::pointer(&mut h, Event::PointerMoved(from + egui::vec2(24.0 * i as f32, 0.0)));
+    }
+    let at = from + egui::vec2(120.0, 0.0);
+    for pressed in [true, false] {
+        common::pointer(
+            &mut h,
+            Event::PointerButton {
+                pos: at,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: Modifiers::NONE,
+            },
+        );
+    }
+    common::pointer(&mut h, Event::PointerMoved(at + egui::vec2(30.0, 30.0)));
+    let value =
+        |h: &Harness<'_, EditorApp>, o: usize| match h.state().value_now(ChannelId::ObjectTranslation(o)) {
+            Some(keyrig_edit::channels::ChannelValue::Vec3(v)) => v,
+            other => panic!("a translation: {other:?}"),
+        };
+    let offset = value(&h, 2) - value(&h, 1);
+    assert!(offset.length() > 0.1, "the copy moved at frame 10: {offset:?}");
+    // The next frames: the copy stays where it was put, playing the Cube's motion there.
+    for frame in [11, 40, 75] {
+        go_to_frame(&mut h, frame);
+        let now = value(&h, 2) - value(&h, 1);
+        assert!((now - offset).length() < 1e-4, "frame {frame}: offset {now:?}, placed {offset:?}");
+    }
+    assert!(h.state().session.overrides.is_empty(), "the move is in the keys, not a pose");
+    let scene = h.state().doc.scene();
+    assert_eq!(
+        channels::key_count(scene, ChannelId::ObjectTranslation(2)),
+        channels::key_count(scene, ChannelId::ObjectTranslation(1)),
+        "the copy keeps its keys, moved"
+    );
+    let rest = scene.objects[2].translation.value - scene.objects[1].translation.value;
+    assert!((rest - offset).length() < 1e-4, "its static value (played muted) moved too: {rest:?}");
+    assert_eq!(h.state().doc.undo_label(), Some("duplicate as Cube.001"), "one step");
+    // Its look: the Cube's palette colour, not the one of the third object.
+    let copy_colour = scene.objects[2].attributes.colour.as_ref().map(|c| c.value);
+    assert_eq!(copy_colour, Some(blue), "the copy is drawn in the Cube's colour");
+    assert_ne!(keyrig_render::scene_frame::object_palette_colour(&h.state().evaluator(), 2), blue);
+    assert!(scene.objects[1].attributes.colour.is_none(), "the original is unchanged");
+}

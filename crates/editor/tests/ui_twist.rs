@@ -95,3 +95,24 @@ fn typing_720_in_record_mode_keys_two_turns() {
     let joint = &h.state().doc.scene().objects[0].skeleton.as_ref().expect("a skeleton").joints[3];
     assert_eq!(joint.rotation_mode.euler(), Some(keyrig_core::EulerOrder::XYZ));
 }
+
+/// Issue 42, item 8: the field showed "1 turn" beside 719°. The readout beside it names the
+/// whole turns and the rest, so both say the same angle.
+#[test]
+fn the_turns_beside_the_twist_field_agree_with_its_degrees() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_by_label("wrist").click();
+    h.run();
+    press(&mut h, Modifiers::NONE, Key::R);
+    go_to_frame(&mut h, 0);
+    press(&mut h, Modifiers::NONE, Key::I);
+    go_to_frame(&mut h, 40);
+    for (degrees, readout) in [(719.0, "1 turn + 359°"), (720.0, "2 turns"), (400.0, "1 turn + 40°")] {
+        set_value(&mut h, Role::SpinButton, "Twist (°)", degrees);
+        assert!((twist_field(&h) - degrees).abs() < 0.05, "the field reads {}", twist_field(&h));
+        assert!(h.query_by_label(readout).is_some(), "{degrees}°: \"{readout}\" beside the field");
+    }
+    set_value(&mut h, Role::SpinButton, "Twist (°)", 719.0);
+    assert!(h.query_by_label("1 turn").is_none(), "no bare \"1 turn\" beside 719°");
+}

@@ -108,6 +108,9 @@ pub struct CurveEditor {
     points: Option<(PointsKey, Rc<Vec<KeyPoint>>)>,
     /// The frame range last laid out: a range that grew refits the view ([`RangeWatch`]).
     range_watch: RangeWatch,
+    /// The document and the selected items last laid out: other items are shown fitted, and
+    /// another document also starts without Normalize and hidden curves.
+    shown: Option<(u64, Vec<crate::session::Selected>)>,
 }
 
 /// The axis whose unwrapped turn the curve view draws for a rotation channel: the first spin
@@ -926,6 +929,27 @@ impl CurveEditor {
         self.view = Some(self.with_lanes(ctx, ids, framed));
     }
 
+    /// Notes the document `doc` (its id) and the `items` selected now. Other items than last
+    /// time (another object, joint or light selected, or none) are shown fitted (*Fit*: the
+    /// frame range and every value), so a zoom or value framing made for one item never leaves
+    /// the next one's curves off the plot; another document (opened, new, recovered) also
+    /// starts with every curve shown and not normalised. The first look changes nothing.
+    fn follow_shown(&mut self, doc: u64, items: Vec<crate::session::Selected>) {
+        match &self.shown {
+            Some((seen_doc, _)) if *seen_doc != doc => {
+                self.view = None;
+                self.normalized = false;
+                self.hidden.clear();
+                self.gesture = None;
+            }
+            Some((_, seen)) if *seen != items => self.view = None,
+            _ => {}
+        }
+        if self.shown.as_ref().is_none_or(|(d, seen)| *d != doc || *seen != items) {
+            self.shown = Some((doc, items));
+        }
+    }
+
     /// The curve view: its header (title, legend, Fit), the plot and its rulers. The pointer
     /// clicks or box-selects keys, drags them in time (whole frames) and value, drags Hermite
     /// handles, scrubs on the frame ruler; the wheel zooms (Ctrl: time only; Shift: pan), a
@@ -948,6 +972,9 @@ impl CurveEditor {
             self.view = None;
         }
         let ids = shown_channels(scene, &ctx.session.selection);
+        let selection = &ctx.session.selection;
+        let items: Vec<_> = selection.item.into_iter().chain(selection.others.iter().copied()).collect();
+        self.follow_shown(ctx.doc.cache_key().0, items);
         ui.horizontal(|ui| {
             let title = match ids.as_slice() {
                 [] => "Curves: select an animated object, joint or light".to_owned(),

@@ -1,5 +1,5 @@
-//! Modal dialogs: keyboard-shortcut help (built from the command list), the confirmation
-//! before losing changes, and the offer to recover an autosaved scene.
+//! Dialogs: keyboard-shortcut help (built from the command list), the undo history, the
+//! confirmation before losing changes, and the offer to recover an autosaved scene.
 
 use egui::{Context, Id, Modal};
 
@@ -53,6 +53,47 @@ pub fn help_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
         });
     if shown && !open {
         actions.view(ViewChange::ShowHelp(false));
+    }
+}
+
+/// The undo history (Ctrl+Alt+Z, *Edit ▸ Undo history*): the start of the history, every undo
+/// step kept (oldest first) and the steps that can be redone (greyed), the current state
+/// highlighted. A click on a row goes back, or forward, to the state after that step.
+pub fn undo_history_ui(ctx: &Context, frame: &FrameCtx<'_>, actions: &mut Actions) {
+    let shown = frame.view.show_undo_history;
+    if !shown {
+        return;
+    }
+    let mut open = shown;
+    let doc = frame.doc;
+    let current = doc.undo_len();
+    egui::Window::new("Undo history")
+        .open(&mut open)
+        .resizable(true)
+        .default_pos(ctx.content_rect().right_top() + egui::vec2(-320.0, 60.0))
+        .default_size(egui::vec2(300.0, 360.0))
+        .show(ctx, |ui| {
+            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                let done = std::iter::once("Start of the history").chain(doc.undo_labels());
+                for (steps, label) in done.enumerate() {
+                    if ui.selectable_label(steps == current, label).clicked() && steps != current {
+                        actions.push(Action::UndoTo(steps));
+                    }
+                }
+                for (n, label) in doc.redo_labels().enumerate() {
+                    let text = egui::RichText::new(label).weak();
+                    if ui
+                        .selectable_label(false, text)
+                        .on_hover_text("Undone: a click redoes up to it")
+                        .clicked()
+                    {
+                        actions.push(Action::UndoTo(current + n + 1));
+                    }
+                }
+            });
+        });
+    if !open {
+        actions.view(ViewChange::ShowUndoHistory(false));
     }
 }
 

@@ -267,11 +267,23 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
                         &ctx.session.overrides,
                     )
                     .unwrap_or_else(|| order.angles(q));
+                    let before = e;
                     let change = vec3_editor(ui, label, marker, &mut e, 0.5);
                     if change.any() && e.is_finite() {
                         begin(actions, change);
-                        let value = ChannelValue::Rotation(order.to_quat(e));
-                        actions.edit(Edit::Pose { id, value, group: group.clone() });
+                        match euler_turn(order, before, e) {
+                            // One angle changed: a turn about that angle's axis, so an angle
+                            // typed a turn or more away (X 0 → 360) keys the spin that makes
+                            // the curve read it, as the twist field does.
+                            Some((axis, degrees)) => {
+                                let turn = keyrig_edit::channels::Turn { from: q, axis, degrees };
+                                actions.edit(Edit::Turn { id, turn, group: group.clone() });
+                            }
+                            None => {
+                                let value = ChannelValue::Rotation(order.to_quat(e));
+                                actions.edit(Edit::Pose { id, value, group: group.clone() });
+                            }
+                        }
                     }
                 }
                 None => {
@@ -362,6 +374,27 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
     }
 }
 
+/// When the Euler angles `before` → `after` (degrees, `order`) differ in one angle only: the
+/// axis (in the channel's parent frame) about which that change turns the rotation, and by how
+/// many degrees. Changing one Euler angle by Δ turns the rotation by Δ about one fixed axis
+/// (the angle's own axis carried by the rotations applied after it), so the change is a
+/// [`keyrig_edit::channels::Turn`] from the rotation before.
+fn euler_turn(
+    order: keyrig_core::EulerOrder,
+    before: glam::Vec3,
+    after: glam::Vec3,
+) -> Option<(glam::Vec3, f64)> {
+    let changed: Vec<usize> = (0..3).filter(|&c| before[c] != after[c]).collect();
+    let &[c] = changed.as_slice() else { return None };
+    let degrees = f64::from(after[c]) - f64::from(before[c]);
+    let mut step = before;
+    step[c] += 10.0;
+    let (axis, angle) = (order.to_quat(step) * order.to_quat(before).inverse()).normalize().to_axis_angle();
+    // A 10° step: the angle is 10° about `axis` (or 350° about it, the other way round).
+    let axis = if angle > std::f32::consts::PI { -axis } else { axis };
+    (degrees.is_finite() && axis.is_finite() && axis.length() > 0.5).then_some((axis.normalize(), degrees))
+}
+
 /// The joint's twist about its bone axis (local +X) in degrees, unwrapped through spin keys
 /// (it reads 720 after two turns). Typing a value turns the joint about the bone by the
 /// difference; in record mode the key gets the spin that makes its segment turn that far.
@@ -380,9 +413,8 @@ fn twist_ui(
             ui.label("Twist (°)");
             let (response, change) =
                 number_field(ui, &mut value, "Twist (°)", |d| d.speed(1.0).max_decimals(2));
-            let turns = (twist.abs() / 360.0).floor();
-            if turns >= 1.0 {
-                ui.weak(format!("{turns:.0} turn{}", if turns >= 2.0 { "s" } else { "" }));
+            if let Some(turns) = crate::twist::turns_readout(twist) {
+                ui.weak(turns);
             }
             (response, change)
         })
@@ -551,11 +583,34 @@ fn light_attributes_fields(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Action
         if a.cutoff_deg.is_some() || a.inner_angle_deg.is_some() {
             channel_editor(ui, ctx, actions, id(AttributeId::LightCutoff(l)), "Cutoff (°)");
             channel_editor(ui, ctx, actions, id(AttributeId::LightInnerAngle(l)), "Inner angle (°)");
+            if let Some(warning) = cone_warning(ctx, l) {
+                ui.colored_label(ui.visuals().warn_fg_color, warning);
+            }
         } else if ui.button("Animate cone").on_hover_text("Key the spot's cutoff and inner angles").clicked()
         {
             set_attribute(actions, Animate::Cone { light: l, cutoff_deg, inner_angle_deg });
         }
     }
+}
+
+/// The warning under a spot's cone fields when its cutoff is below its inner angle at this
+/// frame (a key or a typed value can put it there): the light is then lit fully out to the
+/// cutoff with a hard edge, the inner angle held to the cutoff (as the evaluator and the
+/// renderer do), which is seldom what was meant. The values are kept as typed: the other
+/// angle may be about to change.
+fn cone_warning(ctx: &FrameCtx<'_>, l: usize) -> Option<String> {
+    let scalar = |a| match ctx.value_now(ChannelId::Attribute(a)) {
+        Some(ChannelValue::Scalar(s)) => Some(s),
+        _ => None,
+    };
+    let cutoff = scalar(AttributeId::LightCutoff(l))?;
+    let inner = scalar(AttributeId::LightInnerAngle(l))?;
+    (cutoff < inner).then(|| {
+        format!(
+            "Warning: the cutoff ({cutoff:.1}°) is below the inner angle ({inner:.1}°): the cone is lit \
+             fully out to the cutoff, with a hard edge (the inner angle is held to the cutoff)"
+        )
+    })
 }
 
 /// The IK constraints that end at the selected joint: name and chain, their target and blend

@@ -76,6 +76,7 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             ui.menu_button("Edit", |ui| {
                 command_button(ui, ctx, actions, Command::Undo, None);
                 command_button(ui, ctx, actions, Command::Redo, None);
+                command_button(ui, ctx, actions, Command::UndoHistory, Some(ctx.view.show_undo_history));
                 ui.separator();
                 for c in [
                     Command::InsertKey,
@@ -111,6 +112,9 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                 command_button(ui, ctx, actions, Command::ToggleGrid, Some(view.grid));
                 command_button(ui, ctx, actions, Command::ToggleBones, Some(view.bones));
                 command_button(ui, ctx, actions, Command::ToggleOnionSkin, Some(view.onion.enabled));
+                for c in [Command::GizmoMove, Command::GizmoTurn, Command::GizmoScale] {
+                    command_button(ui, ctx, actions, c, None);
+                }
                 for c in [Command::HideSelected, Command::ShowHidden] {
                     command_button(ui, ctx, actions, c, None);
                 }

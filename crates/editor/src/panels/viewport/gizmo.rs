@@ -35,9 +35,39 @@ pub(super) struct GizmoState {
     ring_centre: Vec3,
     /// Where the selection turns about (the viewport's pivot setting).
     pub(super) pivot: Pivot,
-    /// Scale mode (S over the viewport toggles it): with objects selected the gizmo shows
-    /// scale handles instead of its move arrows and rotation rings.
-    pub(super) scale: bool,
+    /// Which handles the gizmo shows (W, E, S: [`GizmoTool`]).
+    pub(super) tool: GizmoTool,
+}
+
+/// Which handles the gizmo shows, chosen by key as in Maya (W move, E rotate; S scale, as
+/// Blender's S, since R is record mode here). Pressing a tool's key again goes back to
+/// [`GizmoTool::MoveAndTurn`]. A tool whose handles do not apply to the selection (Move on a
+/// joint that can only turn, Scale on anything but objects) shows what does apply, move and
+/// turn, so the selection can always be posed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GizmoTool {
+    /// Move arrows and planes with the rotation rings, as the item allows (the default).
+    #[default]
+    MoveAndTurn,
+    /// Move arrows and planes only (W).
+    Move,
+    /// Rotation rings only (E).
+    Turn,
+    /// Scale handles for the selected objects (S).
+    Scale,
+}
+
+impl GizmoTool {
+    /// The tool's name in the viewport and the status bar.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            GizmoTool::MoveAndTurn => "Move and turn",
+            GizmoTool::Move => "Move",
+            GizmoTool::Turn => "Turn",
+            GizmoTool::Scale => "Scale",
+        }
+    }
 }
 
 impl GizmoState {
@@ -54,8 +84,8 @@ impl GizmoState {
     /// maps the pointer to the angle around the ring's centre on screen with no way to change it,
     /// which turns a ring seen edge-on by 0° and a thin ring by large jumps. A press on a ring
     /// asks transform-gizmo which ring it picked; from then on [`RingDrag`] follows the pointer
-    /// (around the centre, accumulated over several turns, or 1° per point along an edge-on
-    /// ring; 15° steps with Ctrl) and the turn is keyed with its spin ([`Edit::Turn`]).
+    /// (around the centre, accumulated over several turns, or a straight drag's length as an arc
+    /// of the ring, whichever is larger; 1° per point along an edge-on ring; 15° steps with Ctrl) and the turn is keyed with its spin ([`Edit::Turn`]).
     pub(super) fn ui(
         &mut self,
         ui: &mut Ui,
@@ -75,7 +105,7 @@ impl GizmoState {
         let mut world = active.world;
         world.translation = targets::pivot_point(&items, self.pivot).into();
         // Scale mode scales the selected objects (each about its own origin).
-        let scaled: Vec<usize> = if self.scale {
+        let scaled: Vec<usize> = if self.tool == GizmoTool::Scale {
             ctx.session
                 .selection
                 .items()
@@ -90,8 +120,14 @@ impl GizmoState {
         // Point lights have only a place, directional lights only a direction (their icon's
         // place is not used for lighting), spot lights both; joints move where the rig allows
         // (a root, or a joint with translation keys).
-        let turns = items.iter().any(|t| t.rotation.is_some() || t.direction.is_some());
-        let moves = items.iter().any(|t| t.translation.is_some() && !t.carried);
+        let can_turn = items.iter().any(|t| t.rotation.is_some() || t.direction.is_some());
+        let can_move = items.iter().any(|t| t.translation.is_some() && !t.carried);
+        // The tool's handles where they apply to the selection, else both.
+        let (turns, moves) = match self.tool {
+            GizmoTool::Move if can_move => (false, true),
+            GizmoTool::Turn if can_turn => (true, false),
+            _ => (can_turn, can_move),
+        };
         let mut modes = GizmoMode::all_rotate() & GizmoMode::all_translate();
         if !scaled.is_empty() {
             modes = GizmoMode::all_scale();
@@ -352,10 +388,9 @@ fn paint_ring_drag(
             painter.arrow(at - t * 0.5, t, stroke);
         }
     }
-    let turns = (degrees.abs() / 360.0).floor();
     let mut text = format!("{degrees:+.1}°");
-    if turns >= 1.0 {
-        text.push_str(&format!("  ({turns:.0} turn{})", if turns >= 2.0 { "s" } else { "" }));
+    if let Some(turns) = crate::twist::turns_readout(degrees) {
+        text.push_str(&format!("  ({turns})"));
     }
     if snap {
         text.push_str("  snap 15°");

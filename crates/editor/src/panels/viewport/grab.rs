@@ -3,8 +3,11 @@
 //! it; Escape or a right-click puts it back where it was (a duplicate stays, on the original).
 //! Its edits join the undo step that started it ([`GRAB_GROUP`]: Shift+D's duplicate and its
 //! move are one step), which the window keeps open while the grab lasts
-//! ([`super::Viewport::holds_undo_group`]). The moves are the gizmo's ([`Edit::Pose`] on each
-//! item's translation channel): keys in record mode, a pose otherwise.
+//! ([`super::Viewport::holds_undo_group`]). A grab places what Shift+D copied: an item whose
+//! translation is keyed moves with its whole motion (every translation key moves by the offset,
+//! [`Edit::PlaceKeys`], in record mode or not), so the copy plays the original's motion where it
+//! was put instead of snapping back at the next frame; an unkeyed item's move is the gizmo's
+//! ([`Edit::Pose`]: its value, or a key in record mode).
 
 use egui::{Key, Modifiers, Pos2, Rect};
 use glam::Vec3;
@@ -12,7 +15,7 @@ use glam::Vec3;
 use crate::actions::{Action, Actions, Edit};
 use crate::camera::{OrbitCamera, Projection};
 use crate::context::FrameCtx;
-use keyrig_edit::channels::ChannelValue;
+use keyrig_edit::channels::{self, ChannelValue};
 
 use super::targets::{self, Target};
 
@@ -36,6 +39,8 @@ pub(super) enum Grab {
 pub(super) struct Moving {
     /// The items moved, as they stood when the grab started.
     targets: Vec<Target>,
+    /// For each target, its keyed translation when the grab started (`None`: unkeyed).
+    keys: Vec<Option<Keyed>>,
     /// The plane they move in (through the pivot, facing the camera).
     plane_point: Vec3,
     plane_normal: Vec3,
@@ -72,8 +77,10 @@ impl Grab {
                 let camera = &ctx.view.camera;
                 let plane_normal = (camera.target - camera.eye()).normalize_or(Vec3::NEG_Z);
                 let plane_point = targets::pivot_point(&items, targets::Pivot::MedianPoint);
+                let keys = items.iter().map(|t| t.translation.and_then(|(id, ..)| keyed(ctx, id))).collect();
                 *self = Grab::Moving(Box::new(Moving {
                     targets: items,
+                    keys,
                     plane_point,
                     plane_normal,
                     start: None,
@@ -130,9 +137,19 @@ impl Grab {
 impl Moving {
     /// Sets every moved item's translation to where it stood plus the world `offset`.
     fn push(&self, actions: &mut Actions, offset: Vec3) {
-        for t in self.targets.iter().filter(|t| !t.carried) {
+        for (t, keyed) in self.targets.iter().zip(&self.keys).filter(|(t, _)| !t.carried) {
             if let Some((id, value, world_to_value)) = t.translation {
-                let value = value + world_to_value.mul_vec3(offset);
+                let offset = world_to_value.mul_vec3(offset);
+                if let Some(keyed) = keyed {
+                    actions.edit(Edit::PlaceKeys {
+                        id,
+                        keys: keyed.keys.iter().map(|&(time, v)| (time, v + offset)).collect(),
+                        rest: keyed.rest + offset,
+                        group: GRAB_GROUP.to_owned(),
+                    });
+                    continue;
+                }
+                let value = value + offset;
                 actions.edit(Edit::Pose {
                     id,
                     value: ChannelValue::Vec3(value),
@@ -141,4 +158,18 @@ impl Moving {
             }
         }
     }
+}
+
+/// A keyed translation as a grab found it: its keys (time, value) and its static value (what a
+/// muted channel plays), both moved by the placement.
+struct Keyed {
+    keys: Vec<(f64, Vec3)>,
+    rest: Vec3,
+}
+
+/// Channel `id`'s keys and static value when it is a keyed Vec3 channel.
+fn keyed(ctx: &FrameCtx<'_>, id: keyrig_edit::channels::ChannelId) -> Option<Keyed> {
+    let Some(channels::ChannelRef::Vec3(a)) = channels::channel(ctx.scene(), id) else { return None };
+    (!a.track.keys.is_empty())
+        .then(|| Keyed { keys: a.track.keys.iter().map(|k| (k.time, k.value)).collect(), rest: a.value })
 }

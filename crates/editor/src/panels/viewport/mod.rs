@@ -26,7 +26,7 @@ use crate::scene_frame::Wanted;
 use crate::session::Selected;
 use crate::widgets::measure::measure_text;
 
-pub use gizmo::joint_rotation_from_world;
+pub use gizmo::{joint_rotation_from_world, GizmoTool};
 pub use grab::GRAB_GROUP;
 pub use targets::Pivot;
 
@@ -92,7 +92,20 @@ impl Viewport {
         &self.errors
     }
 
-    /// The rotation ring being dragged, if any.
+    /// The gizmo's tool: which handles it shows.
+    #[must_use]
+    pub fn gizmo_tool(&self) -> GizmoTool {
+        self.gizmo.tool
+    }
+
+    /// Chooses the gizmo's tool (W, E, S); choosing the one in use goes back to move and turn.
+    /// Returns the tool now in use.
+    pub fn toggle_gizmo_tool(&mut self, tool: GizmoTool) -> GizmoTool {
+        self.gizmo.tool = if self.gizmo.tool == tool { GizmoTool::MoveAndTurn } else { tool };
+        self.gizmo.tool
+    }
+
+    /// The ring drag under way, if any.
     #[must_use]
     pub fn ring_drag(&self) -> Option<&crate::twist::RingDrag> {
         self.gizmo.ring.as_ref().map(|r| &r.drag)
@@ -204,24 +217,34 @@ impl Viewport {
                 self.ik_grab = None;
                 None
             };
-            // S over the viewport: the object gizmo's scale mode on and off (Blender's S).
-            let typing = ui.ctx().egui_wants_keyboard_input();
-            if response.hovered()
-                && !typing
-                && ui.input(|i| i.modifiers.is_none() && i.key_pressed(egui::Key::S))
-            {
-                self.gizmo.scale = !self.gizmo.scale;
-            }
-            if matches!(ctx.session.selection.item, Some(crate::session::Selected::Object(_))) {
-                let at = egui::Rect::from_min_size(
-                    rect.left_bottom() + egui::vec2(8.0, -30.0),
-                    egui::vec2(96.0, 22.0),
-                );
-                let toggle = ui
-                    .put(at, egui::Button::selectable(self.gizmo.scale, "Scale gizmo"))
-                    .on_hover_text("Scale handles for the selected object instead of move and turn (S)");
-                if toggle.clicked() {
-                    self.gizmo.scale = !self.gizmo.scale;
+            // The gizmo's tools (W, E, S are commands), as buttons while something is selected.
+            if ctx.session.selection.item.is_some() {
+                let object = matches!(ctx.session.selection.item, Some(crate::session::Selected::Object(_)));
+                let tools = [
+                    (GizmoTool::Move, crate::commands::Command::GizmoMove),
+                    (GizmoTool::Turn, crate::commands::Command::GizmoTurn),
+                    (GizmoTool::Scale, crate::commands::Command::GizmoScale),
+                ];
+                let mut x = 8.0;
+                for (tool, command) in tools {
+                    if tool == GizmoTool::Scale && !object {
+                        continue;
+                    }
+                    let at = egui::Rect::from_min_size(
+                        rect.left_bottom() + egui::vec2(x, -30.0),
+                        egui::vec2(52.0, 22.0),
+                    );
+                    x += 56.0;
+                    let button = ui
+                        .put(at, egui::Button::selectable(self.gizmo.tool == tool, tool.label()))
+                        .on_hover_text(format!(
+                            "{} ({}; again: move and turn)",
+                            command.tooltip(),
+                            command.shortcut_text(ui.ctx())
+                        ));
+                    if button.clicked() {
+                        actions.command(command);
+                    }
                 }
             }
             let gizmo_owns_primary = match handle {
