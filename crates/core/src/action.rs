@@ -14,9 +14,6 @@
 //! removed or reordered; renaming an object or a joint renames the paths
 //! ([`Scene::rename_in_actions`]).
 
-use glam::{Quat, Vec3};
-use serde::{Deserialize, Serialize};
-
 use crate::channel::ChannelPath;
 use crate::channel_id::{channel, channel_mut, ChannelId, ChannelMut, ChannelRef};
 use crate::key::Animated;
@@ -26,65 +23,7 @@ use crate::scene::Scene;
 /// format version 1–3, a model whose animation has no name): Blender's default.
 pub const DEFAULT_ACTION: &str = "Action";
 
-/// A named set of keyed channels.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Action {
-    pub name: String,
-    /// The action's channels that are not playing (those of objects it is not active on),
-    /// sorted by path. Left out of a scene file while empty.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub channels: Vec<ActionChannel>,
-}
-
-/// One stored channel of an action.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ActionChannel {
-    /// The channel path, as `keyrig sample --channel` names it.
-    pub path: String,
-    pub keys: ActionKeys,
-}
-
-/// The keys of a stored channel, by value type: the whole animated value (keys, cycles,
-/// mute) as it was when the channel stopped playing.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum ActionKeys {
-    Vec3(Animated<Vec3>),
-    Rotation(Animated<Quat>),
-    Scalar(Animated<f32>),
-}
-
-impl ActionKeys {
-    /// The number of keys.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        match self {
-            ActionKeys::Vec3(a) => a.track.len(),
-            ActionKeys::Rotation(a) => a.track.len(),
-            ActionKeys::Scalar(a) => a.track.len(),
-        }
-    }
-
-    /// True without keys.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// First and last key times (seconds).
-    #[must_use]
-    pub fn time_range(&self) -> Option<(f64, f64)> {
-        fn ends<T>(a: &Animated<T>) -> Option<(f64, f64)> {
-            Some((a.track.keys.first()?.time, a.track.keys.last()?.time))
-        }
-        match self {
-            ActionKeys::Vec3(a) => ends(a),
-            ActionKeys::Rotation(a) => ends(a),
-            ActionKeys::Scalar(a) => ends(a),
-        }
-    }
-}
+pub use crate::action_keys::{Action, ActionChannel, ActionKeys};
 
 /// Why an action edit was refused.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -446,6 +385,61 @@ impl Scene {
             }
         }
         Ok(out)
+    }
+
+    /// The problems of the stored channels' paths: each must name an object's channel of the
+    /// scene holding the same value type (Euler keys: three angles), and not one of an object
+    /// that plays the action (its keys are the object's own). Part of [`Scene::problems`].
+    #[must_use]
+    pub fn stored_path_problems(&self) -> Vec<crate::scene::Problem> {
+        use crate::channel_id::ChannelKind;
+        let mut out = Vec::new();
+        let mut push = |path: String, message: String| out.push(crate::scene::Problem { path, message });
+        for (a, action) in self.actions.iter().enumerate() {
+            for (k, c) in action.channels.iter().enumerate() {
+                let here = format!("actions[{a}].channels[{k}]");
+                let kind = match &c.keys {
+                    ActionKeys::Vec3(_) => ChannelKind::Vec3,
+                    ActionKeys::Rotation(_) => ChannelKind::Rotation,
+                    ActionKeys::Scalar(_) => ChannelKind::Scalar,
+                };
+                match stored_channel_id(self, &c.path) {
+                    Err(e) => push(format!("{here}.path"), e.to_string()),
+                    Ok(id) => {
+                        let Some(o) = channel_object(id) else {
+                            push(
+                                format!("{here}.path"),
+                                format!(
+                                    "{:?} is not an object's channel; actions hold objects' keys",
+                                    c.path
+                                ),
+                            );
+                            continue;
+                        };
+                        let want = match id {
+                            ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => ChannelKind::Vec3,
+                            _ => id.kind(),
+                        };
+                        if want != kind {
+                            push(
+                                format!("{here}.keys"),
+                                format!("channel {:?} holds {want:?} values, not {kind:?}", c.path),
+                            );
+                        } else if self.objects[o].action.as_deref() == Some(action.name.as_str()) {
+                            push(
+                                format!("{here}.path"),
+                                format!(
+                                    "object {:?} plays action {:?}: its keys are the object's own channels, \
+                                     not stored in the action",
+                                    self.objects[o].name, action.name
+                                ),
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// What each action holds, in the scene's order.

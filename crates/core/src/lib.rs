@@ -2,6 +2,7 @@
 //! document. Pure: no file I/O, no GPU, no UI.
 
 pub mod action;
+pub mod action_keys;
 pub mod attributes;
 pub mod camera_object;
 pub mod channel;

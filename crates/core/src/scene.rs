@@ -61,7 +61,7 @@ pub struct Scene {
     /// The actions (docs/actions.md): every named set of keys, with the channels that are not
     /// playing. Left out of a scene file while empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub actions: Vec<crate::action::Action>,
+    pub actions: Vec<crate::action_keys::Action>,
 }
 
 fn default_ambient() -> Vec3 {

@@ -676,16 +676,6 @@ impl Checker {
     }
 }
 
-/// The value type of a stored channel: Euler keys are three angles.
-fn stored_kind(id: crate::channel_id::ChannelId) -> crate::channel_id::ChannelKind {
-    match id {
-        crate::channel_id::ChannelId::ObjectEuler(_) | crate::channel_id::ChannelId::JointEuler { .. } => {
-            crate::channel_id::ChannelKind::Vec3
-        }
-        _ => id.kind(),
-    }
-}
-
 impl Scene {
     /// The problems of the actions (docs/actions.md): names unique, not empty, without '/';
     /// each object's action listed; each stored channel's path naming an object's channel of
@@ -709,55 +699,18 @@ impl Scene {
                 if !seen.insert(channel.path.as_str()) {
                     c.push(format!("{here}.path"), format!("channel {:?} is stored twice", channel.path));
                 }
-                let id = crate::action::stored_channel_id(self, &channel.path);
-                let kind = match &channel.keys {
-                    crate::action::ActionKeys::Vec3(k) => {
-                        c.animated(&format!("{here}.keys"), k);
-                        crate::channel_id::ChannelKind::Vec3
-                    }
-                    crate::action::ActionKeys::Rotation(k) => {
-                        c.animated(&format!("{here}.keys"), k);
-                        crate::channel_id::ChannelKind::Rotation
-                    }
-                    crate::action::ActionKeys::Scalar(k) => {
-                        c.animated(&format!("{here}.keys"), k);
-                        crate::channel_id::ChannelKind::Scalar
-                    }
-                };
-                match id {
-                    Err(e) => c.push(format!("{here}.path"), e.to_string()),
-                    Ok(id) if crate::action::channel_object(id).is_none() => c.push(
-                        format!("{here}.path"),
-                        format!("{:?} is not an object's channel; actions hold objects' keys", channel.path),
-                    ),
-                    Ok(id) if stored_kind(id) != kind => c.push(
-                        format!("{here}.keys"),
-                        format!(
-                            "channel {:?} holds {:?} values, not {kind:?}",
-                            channel.path,
-                            stored_kind(id)
-                        ),
-                    ),
-                    Ok(id) => {
-                        let o = crate::action::channel_object(id).unwrap_or_default();
-                        if self.objects[o].action.as_deref() == Some(action.name.as_str()) {
-                            c.push(
-                                format!("{here}.path"),
-                                format!(
-                                    "object {:?} plays action {:?}: its keys are the object's own channels, \
-                                     not stored in the action",
-                                    self.objects[o].name, action.name
-                                ),
-                            );
-                        }
-                    }
+                match &channel.keys {
+                    crate::action_keys::ActionKeys::Vec3(k) => c.animated(&format!("{here}.keys"), k),
+                    crate::action_keys::ActionKeys::Rotation(k) => c.animated(&format!("{here}.keys"), k),
+                    crate::action_keys::ActionKeys::Scalar(k) => c.animated(&format!("{here}.keys"), k),
                 }
             }
         }
+        for p in self.stored_path_problems() {
+            c.push(p.path, p.message);
+        }
     }
 
-    /// Everything wrong with this scene, each with the path of the field it concerns; empty
-    /// when the scene is valid. See the module documentation for the rules.
     #[must_use]
     pub fn problems(&self) -> Vec<Problem> {
         let mut c = Checker { problems: Vec::new() };

@@ -24,7 +24,17 @@ fn cube<'a>(h: &'a Harness<'_, EditorApp>) -> &'a keyrig_core::Object {
     h.state().doc.scene().objects.iter().find(|o| o.name == "Cube").expect("Cube")
 }
 
+/// Scrolls the inspector to the widget labelled `label` (the Action section is its last) and
+/// clicks it.
+fn click(h: &mut Harness<'_, EditorApp>, label: &str) {
+    h.get_by_label(label).scroll_to_me();
+    h.run();
+    h.get_by_label(label).click();
+    h.run();
+}
+
 fn type_action_name(h: &mut Harness<'_, EditorApp>, text: &str) {
+    click(h, "Action name");
     h.get_by_label("Action name").click();
     h.run();
     h.event(Event::Text(text.to_owned()));
@@ -44,6 +54,8 @@ fn the_inspector_assigns_makes_renames_and_deletes_actions() {
     let steps = h.state().doc.undo_len();
 
     // Assign Wave from the combo box: the Cube's keys come back, one undo step.
+    h.get_by_role_and_label(Role::ComboBox, "Action").scroll_to_me();
+    h.run();
     h.get_by_role_and_label(Role::ComboBox, "Action").click();
     h.run();
     h.get_by_label("Wave").click();
@@ -60,8 +72,7 @@ fn the_inspector_assigns_makes_renames_and_deletes_actions() {
 
     // Duplicate under a new name: the copy plays, Wave keeps its keys.
     type_action_name(&mut h, "Bounce");
-    h.get_by_label("Duplicate action").click();
-    h.run();
+    click(&mut h, "Duplicate action");
     assert_eq!(cube(&h).action.as_deref(), Some("Bounce"));
     assert_eq!(cube(&h).translation.track.len(), 5);
     let scene = h.state().doc.scene();
@@ -71,8 +82,7 @@ fn the_inspector_assigns_makes_renames_and_deletes_actions() {
     // A taken name is refused: nothing changes, the status says why.
     let steps = h.state().doc.undo_len();
     type_action_name(&mut h, "Wave");
-    h.get_by_label("New action").click();
-    h.run();
+    click(&mut h, "New action");
     assert_eq!(h.state().doc.undo_len(), steps, "refused");
     assert!(
         h.state().status().is_some_and(|s| s.text.contains("already an action")),
@@ -81,17 +91,14 @@ fn the_inspector_assigns_makes_renames_and_deletes_actions() {
     );
 
     // Rename the active action (the refused name replaced in the field); then delete it.
-    h.get_by_label("Action name").click();
-    h.run();
+    click(&mut h, "Action name");
     press(&mut h, Modifiers::COMMAND, Key::A);
     h.event(Event::Text("Hop".to_owned()));
     h.run();
-    h.get_by_label("Rename action").click();
-    h.run();
+    click(&mut h, "Rename action");
     assert_eq!(cube(&h).action.as_deref(), Some("Hop"), "{:?}", h.state().doc.scene().actions);
     assert_eq!(h.state().doc.undo_label(), Some("rename action Bounce to Hop"));
-    h.get_by_label("Delete action").click();
-    h.run();
+    click(&mut h, "Delete action");
     assert_eq!(cube(&h).action, None);
     assert!(!cube(&h).translation.is_animated());
     assert!(h.state().doc.scene().action_index("Hop").is_none());

@@ -781,3 +781,22 @@ fn scenes_with_stored_actions_save_and_load_as_they_are() {
     walking.assign_action(0, Some("Walk")).expect("Walk");
     assert_eq!(walking.action_summaries()[1].keys, 378, "{:?}", walking.action_summaries());
 }
+
+/// A hand-written version-4 file with actions (also a seed of the `scene_ron` fuzz target):
+/// it loads, and the stored action plays its translation and Euler keys when assigned.
+#[test]
+fn a_hand_written_file_with_actions_loads_and_plays_them() {
+    let text = include_str!("fixtures/actions.ron");
+    let mut scene = scene_file::from_str(text, Path::new("actions.ron")).expect("loads");
+    assert_eq!(scene.actions.len(), 2);
+    assert_eq!(scene.objects[0].action.as_deref(), Some("Slide"));
+    scene.assign_action(0, Some("Hop")).expect("Hop");
+    assert_eq!(scene.objects[0].translation.track.keys[1].value, glam::Vec3::Y);
+    assert_eq!(scene.objects[0].rotation_euler.as_ref().map(|e| e.track.len()), Some(2));
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    // A stored path naming nothing is a problem at its place in the file.
+    let bad = text.replace("object/Cube/translation", "object/Ghost/translation");
+    let (err, shown) = parse_err(&bad);
+    assert!(matches!(err, SceneFileError::Invalid { .. }), "{err:?}");
+    assert!(shown.contains("actions[1].channels[0].path") && shown.contains("Ghost"), "{shown}");
+}

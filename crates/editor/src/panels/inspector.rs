@@ -47,14 +47,6 @@ impl Inspector {
                 ui.heading("Inspector");
                 selection_ui(ui, ctx, actions);
                 ui.separator();
-                // The active action of the selected object (or of the joint's object).
-                match ctx.session.selection.item {
-                    Some(Selected::Object(o) | Selected::Joint { object: o, .. }) => {
-                        self.action.ui(ui, ctx, actions, o);
-                        ui.separator();
-                    }
-                    _ => {}
-                }
                 key_inspector_ui(ui, ctx, actions);
                 ui.separator();
                 self.pose_library.ui(ui, ctx, actions);
@@ -68,6 +60,14 @@ impl Inspector {
                     _ => {}
                 }
                 deformer_ui(ui, ctx, actions);
+                // The active action of the selected object (or of the joint's object), last so
+                // that opening it moves nothing above.
+                if let Some(Selected::Object(o) | Selected::Joint { object: o, .. }) =
+                    ctx.session.selection.item
+                {
+                    ui.separator();
+                    self.action.ui(ui, ctx, actions, o);
+                }
             });
         });
     }
