@@ -241,8 +241,6 @@ impl Owned {
                 Some(Skipped::Cycles)
             } else if a.track.keys.iter().any(|k| k.spin.is_some()) {
                 Some(Skipped::Spin)
-            } else if Track::new(&a.track).is_err() {
-                Some(Skipped::InvalidKeys)
             } else {
                 None
             }
@@ -279,6 +277,7 @@ trait Comp: TrackValue {
     const DIM: usize;
     fn to_v4(wide: Self::Wide) -> V4;
     fn from_v4(v: V4) -> Self;
+    fn from_v4_wide(v: V4) -> Self::Wide;
 }
 
 impl Comp for f32 {
@@ -288,6 +287,9 @@ impl Comp for f32 {
     }
     fn from_v4(v: V4) -> Self {
         v[0] as f32
+    }
+    fn from_v4_wide(v: V4) -> f64 {
+        v[0]
     }
 }
 
@@ -299,6 +301,9 @@ impl Comp for Vec3 {
     fn from_v4(v: V4) -> Self {
         Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
     }
+    fn from_v4_wide(v: V4) -> DVec3 {
+        DVec3::new(v[0], v[1], v[2])
+    }
 }
 
 impl Comp for Quat {
@@ -308,6 +313,9 @@ impl Comp for Quat {
     }
     fn from_v4(v: V4) -> Self {
         Quat::from_xyzw(v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32)
+    }
+    fn from_v4_wide(v: V4) -> DQuat {
+        DQuat::from_xyzw(v[0], v[1], v[2], v[3])
     }
 }
 
@@ -406,8 +414,6 @@ fn basis(u: f64) -> (f64, f64, f64, f64) {
 struct Fitter<'a> {
     times: &'a [f64],
     values: &'a [V4],
-    /// For Euler keys, the rotation of each sample.
-    quats: Vec<DQuat>,
     /// For Euler keys, the axis (in the parent's frame) that a change of each angle (x, y, z)
     /// turns about at each sample: `ω ≈ Σ Δ_c·axis_c`.
     axes: Vec<[DVec3; 3]>,
@@ -504,7 +510,7 @@ impl Fitter<'_> {
                 if linear - margin > self.tol {
                     return false;
                 }
-                return error(self.metric, want, got, Some(self.quats[s])) <= self.tol;
+                return error(self.metric, want, got, None) <= self.tol;
             }
             error(self.metric, want, got, None) <= self.tol
         })
@@ -533,6 +539,7 @@ impl Fitter<'_> {
         let mut kept: Vec<(usize, V4, V4)> = Vec::new();
         let mut i = 0;
         let mut in_rate: Option<V4> = None;
+        let mut previous_span = 2;
         while i + 1 < n {
             let dur = |j: usize| self.times[keys[j]] - self.times[keys[i]];
             // Prefer the same tangent on both sides (C¹) unless the very next key says no.
@@ -543,11 +550,15 @@ impl Fitter<'_> {
             }
             let fixed_at = |j: usize| in_rate.filter(|_| fixed.is_some()).map(|m| scale(m, dur(j)));
             let mut best = (i + 1, first.unwrap_or_else(|| self.fit(keys[i], keys[i + 1], None)));
-            // Gallop: i+2, i+4, i+8, … until a segment does not fit, then bisect.
-            let mut step = 2;
+            // Gallop from the previous span's length (spans of one curve are alike), doubling
+            // (capped at the last key) until a segment does not fit, then bisect.
+            let mut step = previous_span.max(2);
             let mut bad = None;
-            while i + step < n {
-                let j = i + step;
+            loop {
+                let j = (i + step).min(n - 1);
+                if j <= best.0 {
+                    break;
+                }
                 match self.try_segment(keys[i], keys[j], fixed_at(j), true) {
                     Some(ab) => best = (j, ab),
                     None => {
@@ -556,15 +567,6 @@ impl Fitter<'_> {
                     }
                 }
                 step *= 2;
-            }
-            if bad.is_none() && best.0 + 1 < n {
-                bad = Some(n - 1).filter(|&last| last > best.0);
-                if let Some(last) = bad {
-                    if let Some(ab) = self.try_segment(keys[i], keys[last], fixed_at(last), true) {
-                        best = (last, ab);
-                        bad = None;
-                    }
-                }
             }
             if let Some(mut hi) = bad {
                 let mut lo = best.0;
@@ -580,6 +582,7 @@ impl Fitter<'_> {
                 }
             }
             let (j, (a, b)) = best;
+            previous_span = j - i;
             let d = dur(j);
             let out_rate = scale(a, 1.0 / d);
             let arrive = scale(b, 1.0 / d);
@@ -605,13 +608,11 @@ fn reduce_track<T: Comp>(
     let original = Track::new(&animated.track).map_err(|_| Skipped::InvalidKeys)?;
     let (times, key_samples) = sample_times(original.key_times(), fps);
     let values: Vec<V4> = times.iter().map(|&t| T::to_v4(original.sample_wide(t))).collect();
-    let (quats, axes) = match metric {
-        Metric::Euler(order) => {
-            (values.iter().map(|&v| euler_quat(order, v)).collect(), values.iter().map(|&v| euler_axes(order, v)).collect())
-        }
-        _ => (Vec::new(), Vec::new()),
+    let axes = match metric {
+        Metric::Euler(order) => values.iter().map(|&v| euler_axes(order, v)).collect(),
+        _ => Vec::new(),
     };
-    let mut fitter = Fitter { times: &times, values: &values, quats, axes, dim: T::DIM, metric, tol };
+    let mut fitter = Fitter { times: &times, values: &values, axes, dim: T::DIM, metric, tol };
     // The fit aims a little under the tolerance (room for rounding to f32); where the check
     // through the evaluator still finds a sample outside, it aims lower.
     for aim in [0.98, 0.9, 0.75, 0.5] {
@@ -651,8 +652,9 @@ fn reduced_within<T: Comp>(
     let raw = RawTrack::new(keys);
     let reduced = Track::new(&raw).ok()?;
     let mut worst: f64 = 0.0;
-    for &t in times {
-        let want = T::to_v4(original.sample(t).widen());
+    for (&t, &wide) in times.iter().zip(fitter.values) {
+        // The original as the evaluator gives it: its f64 sample rounded to the value type.
+        let want = T::to_v4(T::narrow(T::from_v4_wide(wide)).widen());
         let got = T::to_v4(reduced.sample(t).widen());
         let e = match metric {
             // As the evaluator turns Euler keys into a rotation.
