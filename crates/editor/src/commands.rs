@@ -55,6 +55,8 @@ pub enum Command {
     HideSelected,
     ShowHidden,
     TogglePreviewRange,
+    ReduceKeys,
+    SmoothKeys,
     ShowHelp,
 }
 
@@ -70,7 +72,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 52] = [
+    pub const ALL: [Command; 54] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -123,6 +125,8 @@ impl Command {
         Command::BindCameraToMarker,
         Command::ShowHidden,
         Command::HideSelected,
+        Command::ReduceKeys,
+        Command::SmoothKeys,
         Command::ShowHelp,
     ];
 
@@ -178,6 +182,8 @@ impl Command {
             Command::HideSelected => "Hide selected",
             Command::ShowHidden => "Show hidden",
             Command::TogglePreviewRange => "Preview range",
+            Command::ReduceKeys => "Reduce keys…",
+            Command::SmoothKeys => "Smooth keys…",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -271,6 +277,12 @@ impl Command {
             Command::TogglePreviewRange => {
                 "Loop playback over part of the range (the selected keys' frames, else from here to the end), or the whole range again"
             }
+            Command::ReduceKeys => {
+                "Keep as few keys as hold the curves within an angle and a distance of what they are (the selected keys' channels, else the selected object's, else the scene's)"
+            }
+            Command::SmoothKeys => {
+                "Filter out motion faster than a cutoff in Hz (Butterworth, no lag) from the selected keys' channels, else the selected object's, else the scene's"
+            }
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -330,6 +342,8 @@ impl Command {
             Command::HideSelected => vec![sc(NONE, Key::H)],
             Command::ShowHidden => vec![sc(Modifiers::ALT, Key::H)],
             Command::TogglePreviewRange => vec![sc(CMD.plus(Modifiers::ALT), Key::P)],
+            Command::ReduceKeys => vec![sc(CMD.plus(Modifiers::ALT), Key::K)],
+            Command::SmoothKeys => vec![sc(CMD_SHIFT, Key::K)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

@@ -15,6 +15,7 @@ pub mod dope_sheet;
 pub mod inspector;
 pub mod menu;
 pub mod outliner;
+pub mod cleanup_dialog;
 pub mod render_dialog;
 pub mod status;
 pub mod timeline;
@@ -30,4 +31,5 @@ pub struct Panels {
     pub inspector: inspector::Inspector,
     pub viewport: viewport::Viewport,
     pub render: render_dialog::RenderDialog,
+    pub cleanup: cleanup_dialog::CleanupDialog,
 }
