@@ -11,11 +11,14 @@
 //! Rows: `reduce/one_hour_31_joints` (the whole take), `reduce/one_minute_31_joints` (the
 //! same motion, one minute, to see the scaling).
 
+use std::f64::consts::TAU;
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use glam::{Quat, Vec3};
-use keyrig_core::{Animated, EulerOrder, Interpolation, Joint, Key, Object, RawTrack, RotationMode, Scene, Skeleton};
+use keyrig_core::{
+    Animated, EulerOrder, Interpolation, Joint, Key, Object, RawTrack, RotationMode, Scene, Skeleton,
+};
 use keyrig_edit::cleanup::{keyed_channels, reduce_keys, ReduceTolerance};
 
 const FPS: f64 = 120.0;
@@ -40,17 +43,19 @@ fn take(seconds: usize) -> Scene {
     let key = |t: f64, v: Vec3| Key::new(t, v).with_interpolation(Interpolation::Linear);
     let joints: Vec<Joint> = (0..JOINTS)
         .map(|j| {
-            let amplitude = [5.0 + 40.0 * rng.next_f64(), 2.0 + 10.0 * rng.next_f64(), 2.0 + 15.0 * rng.next_f64()];
-            let phase = [rng.next_f64() * 6.28, rng.next_f64() * 6.28, rng.next_f64() * 6.28];
+            let amplitude =
+                [5.0 + 40.0 * rng.next_f64(), 2.0 + 10.0 * rng.next_f64(), 2.0 + 15.0 * rng.next_f64()];
+            let phase = [rng.next_f64() * TAU, rng.next_f64() * TAU, rng.next_f64() * TAU];
             let keys: Vec<Key<Vec3>> = (0..frames)
                 .map(|f| {
                     let t = f as f64 / FPS;
                     // The stride's phase, its frequency drifting between 0.8 and 1.2 Hz.
-                    let stride = 2.0 * std::f64::consts::PI * (t + 0.2 / 0.05 * (0.05 * t).sin() / 6.28);
+                    let stride = 2.0 * std::f64::consts::PI * (t + 0.2 / 0.05 * (0.05 * t).sin() / TAU);
                     let mut v = [0.0f32; 3];
                     for axis in 0..3 {
                         let s = stride + phase[axis];
-                        let angle = amplitude[axis] * (s.sin() + 0.3 * (2.0 * s).sin() + 0.1 * (3.0 * s).cos());
+                        let angle =
+                            amplitude[axis] * (s.sin() + 0.3 * (2.0 * s).sin() + 0.1 * (3.0 * s).cos());
                         v[axis] = (angle + 0.04 * (rng.next_f64() - 0.5)) as f32;
                     }
                     key(t, Vec3::from(v))
@@ -66,7 +71,11 @@ fn take(seconds: usize) -> Scene {
         .map(|f| {
             let t = f as f64 / FPS;
             let mut jitter = || 0.0002 * (rng.next_f64() - 0.5);
-            let p = [1.2 * t + jitter(), 0.95 + 0.03 * (4.0 * std::f64::consts::PI * t).sin() + jitter(), jitter()];
+            let p = [
+                1.2 * t + jitter(),
+                0.95 + 0.03 * (4.0 * std::f64::consts::PI * t).sin() + jitter(),
+                jitter(),
+            ];
             key(t, Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32))
         })
         .collect();

@@ -27,7 +27,9 @@
 use std::fmt;
 
 use glam::{DQuat, DVec3, EulerRot, Quat, Vec3};
-use keyrig_core::channel_id::{channel, channel_mut, rotation_mode, ChannelId, ChannelKind, ChannelMut, ChannelRef};
+use keyrig_core::channel_id::{
+    channel, channel_mut, rotation_mode, ChannelId, ChannelKind, ChannelMut, ChannelRef,
+};
 use keyrig_core::{Animated, EulerOrder, Interpolation, Key, RawTrack, Scene, Track, TrackValue};
 
 /// How far a reduced curve may be from the original at any sample.
@@ -475,7 +477,10 @@ impl Fitter<'_> {
     /// The segment's value at `u` (normalized for quaternions, as the evaluator does).
     fn eval(&self, s0: usize, s1: usize, a: V4, b: V4, u: f64) -> V4 {
         let (h00, h10, h01, h11) = basis(u);
-        let v = add(add(scale(self.values[s0], h00), scale(a, h10)), add(scale(self.values[s1], h01), scale(b, h11)));
+        let v = add(
+            add(scale(self.values[s0], h00), scale(a, h10)),
+            add(scale(self.values[s1], h01), scale(b, h11)),
+        );
         if self.metric == Metric::Angle {
             let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]).sqrt();
             if n > 1e-12 {
@@ -665,7 +670,7 @@ fn reduced_within<T: Comp>(
             _ => error(metric, want, got, None),
         };
         worst = worst.max(e);
-        if !(e <= tol) {
+        if e.is_nan() || e > tol {
             return None;
         }
     }
@@ -676,7 +681,12 @@ fn reduced_within<T: Comp>(
 type Outcome = Result<(Owned, usize, f64), Skipped>;
 
 fn reduce_owned(owned: &Owned, fps: f64, metric: Metric, tol: f64) -> Outcome {
-    fn with<T: Comp>(a: &Animated<T>, fps: f64, metric: Metric, tol: f64) -> Result<(Animated<T>, usize, f64), Skipped> {
+    fn with<T: Comp>(
+        a: &Animated<T>,
+        fps: f64,
+        metric: Metric,
+        tol: f64,
+    ) -> Result<(Animated<T>, usize, f64), Skipped> {
         let (track, worst) = reduce_track(a, fps, metric, tol)?;
         let n = track.len();
         Ok((Animated { track, ..a.clone() }, n, worst))
@@ -714,7 +724,8 @@ fn run_on_channels(
         }
         work.push((id, owned, metric));
     }
-    let threads = std::thread::available_parallelism().map_or(1, usize::from).clamp(1, 16).min(work.len().max(1));
+    let threads =
+        std::thread::available_parallelism().map_or(1, usize::from).clamp(1, 16).min(work.len().max(1));
     let chunk = work.len().div_ceil(threads).max(1);
     let results: Vec<Outcome> = std::thread::scope(|scope| {
         let handles: Vec<_> = work
@@ -761,7 +772,8 @@ pub fn reduce_keys(
     if !(fps.is_finite() && fps > 0.0) {
         return Err(CleanupError::FrameRate(fps));
     }
-    let job = move |owned: &Owned, metric: Metric| reduce_owned(owned, fps, metric, metric.tolerance(&tolerance));
+    let job =
+        move |owned: &Owned, metric: Metric| reduce_owned(owned, fps, metric, metric.tolerance(&tolerance));
     Ok(run_on_channels(scene, channels, &job))
 }
 
@@ -845,7 +857,12 @@ pub fn filtfilt(filter: &Biquad, x: &[f64]) -> Vec<f64> {
 
 /// Smooths one channel: the curve at every frame of its key range, filtered; each key moved
 /// to the filtered curve at its time (linear between the frames around it).
-fn smooth_track<T: Comp>(animated: &Animated<T>, fps: f64, filter: &Biquad, metric: Metric) -> Result<RawTrack<T>, Skipped> {
+fn smooth_track<T: Comp>(
+    animated: &Animated<T>,
+    fps: f64,
+    filter: &Biquad,
+    metric: Metric,
+) -> Result<RawTrack<T>, Skipped> {
     let track = Track::new(&animated.track).map_err(|_| Skipped::InvalidKeys)?;
     let (first, last) = track.domain();
     let f0 = (first * fps - 1e-6).ceil();
@@ -854,7 +871,8 @@ fn smooth_track<T: Comp>(animated: &Animated<T>, fps: f64, filter: &Biquad, metr
         return Ok(animated.track.clone());
     }
     let frames = (f1 - f0) as usize + 1;
-    let mut samples: Vec<V4> = (0..frames).map(|f| T::to_v4(track.sample_wide((f0 + f as f64) / fps))).collect();
+    let mut samples: Vec<V4> =
+        (0..frames).map(|f| T::to_v4(track.sample_wide((f0 + f as f64) / fps))).collect();
     if metric == Metric::Angle {
         for f in 1..frames {
             let (p, q) = (samples[f - 1], samples[f]);
@@ -913,7 +931,11 @@ fn smooth_owned(owned: &Owned, fps: f64, filter: &Biquad, metric: Metric) -> Out
 /// # Errors
 /// [`CleanupError`] unless `0 < cutoff_hz < fps/2` and the frame rate is positive; the scene is
 /// then unchanged.
-pub fn smooth_keys(scene: &mut Scene, channels: &[ChannelId], cutoff_hz: f64) -> Result<CleanupReport, CleanupError> {
+pub fn smooth_keys(
+    scene: &mut Scene,
+    channels: &[ChannelId],
+    cutoff_hz: f64,
+) -> Result<CleanupReport, CleanupError> {
     let fps = scene.fps;
     let filter = butterworth_lowpass(cutoff_hz, fps)?;
     let job = move |owned: &Owned, metric: Metric| smooth_owned(owned, fps, &filter, metric);

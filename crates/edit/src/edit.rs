@@ -15,8 +15,8 @@ use keyrig_core::{
 };
 
 use crate::camera_edits::convert_lens;
-use crate::cleanup::ReduceTolerance;
 use crate::channels::{self, ChannelId, ChannelValue};
+use crate::cleanup::ReduceTolerance;
 
 /// One key of one channel (index into the channel's track).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

@@ -2,13 +2,16 @@
 //! checked independently through the scene evaluator at every frame; the Butterworth filter
 //! against its analytic magnitude and against scipy's numbers; and the edge cases.
 
+// scipy's numbers are kept as it printed them (17 significant digits).
+#![allow(clippy::excessive_precision)]
+
 use std::path::Path;
 
 use glam::{DQuat, Quat, Vec3};
 use keyrig_core::{Animated, Interpolation, Key, Object, RawTrack, Scene};
 use keyrig_edit::channels::{self, ChannelId, ChannelValue};
 use keyrig_edit::cleanup::{
-    butterworth_lowpass, filtfilt, keyed_channels, key_total, reduce_keys, smooth_keys, CleanupError,
+    butterworth_lowpass, filtfilt, key_total, keyed_channels, reduce_keys, smooth_keys, CleanupError,
     ReduceTolerance, Skipped,
 };
 use keyrig_edit::SceneEdit;
@@ -80,12 +83,18 @@ fn cmu_walk_reduced_within_half_a_degree_and_a_millimetre_keeps_a_tenth_of_its_k
     let mut reduced = original.clone();
     let report = reduce_keys(&mut reduced, &channels, tolerance).unwrap();
     let after = key_total(&reduced, &channels);
-    eprintln!("CMU 131_01: {before} keys → {after} ({:.1} %), report {report:?}", 100.0 * after as f64 / before as f64);
+    eprintln!(
+        "CMU 131_01: {before} keys → {after} ({:.1} %), report {report:?}",
+        100.0 * after as f64 / before as f64
+    );
     assert!(report.skipped.is_empty(), "{:?}", report.skipped);
     assert_eq!((report.keys_before, report.keys_after), (before, after));
     assert!(after * 10 <= before, "{after} of {before} keys kept");
     let (angle, distance) = max_deviation(&original, &reduced);
-    eprintln!("through the evaluator: {angle:.4}° and {:.4} mm at most", distance * CMU_METRES_PER_UNIT * 1000.0);
+    eprintln!(
+        "through the evaluator: {angle:.4}° and {:.4} mm at most",
+        distance * CMU_METRES_PER_UNIT * 1000.0
+    );
     assert!(angle <= 0.5, "{angle}°");
     assert!(distance <= millimetre, "{distance} units");
     assert!(report.max_angle_deg <= 0.5 && report.max_distance <= millimetre);
@@ -124,7 +133,8 @@ fn butterworth_coefficients_are_scipys() {
 fn filtfilt_matches_scipy_on_a_short_signal() {
     // scipy: x = [sin(0.3 i) + 0.5 sin(2.9 i) + 0.01 i² for i in range(25)];
     // signal.filtfilt(*signal.butter(2, 6 / 60), x).
-    let x: Vec<f64> = (0..25).map(|i| f64::from(i)).map(|i| (0.3 * i).sin() + 0.5 * (2.9 * i).sin() + 0.01 * i * i).collect();
+    let x: Vec<f64> =
+        (0..25).map(f64::from).map(|i| (0.3 * i).sin() + 0.5 * (2.9 * i).sin() + 0.01 * i * i).collect();
     let scipy = [
         0.0053959270070289313,
         0.22254691344879513,
@@ -185,7 +195,9 @@ fn smoothing_a_channel_attenuates_as_the_analytic_butterworth_magnitude_squared(
     // (well above a 6 Hz cutoff).
     let fs = 120.0;
     let (low, high, fc) = (1.0, 20.0, 6.0);
-    let value = |t: f64| (2.0 * std::f64::consts::PI * low * t).sin() + 0.5 * (2.0 * std::f64::consts::PI * high * t).sin();
+    let value = |t: f64| {
+        (2.0 * std::f64::consts::PI * low * t).sin() + 0.5 * (2.0 * std::f64::consts::PI * high * t).sin()
+    };
     let keys: Vec<Key<Vec3>> = (0..1200)
         .map(|f| {
             let t = f64::from(f) / fs;
@@ -251,9 +263,15 @@ fn refused_tolerances_and_cutoffs_change_nothing() {
     let mut scene = original.clone();
     for bad in [f64::NAN, -1.0, f64::INFINITY] {
         let tolerance = ReduceTolerance { angle_deg: bad, ..ReduceTolerance::DEFAULT };
-        assert!(matches!(reduce_keys(&mut scene, &channels, tolerance), Err(CleanupError::Tolerance { name: "angle", .. })));
+        assert!(matches!(
+            reduce_keys(&mut scene, &channels, tolerance),
+            Err(CleanupError::Tolerance { name: "angle", .. })
+        ));
         let tolerance = ReduceTolerance { distance: bad, ..ReduceTolerance::DEFAULT };
-        assert!(matches!(reduce_keys(&mut scene, &channels, tolerance), Err(CleanupError::Tolerance { name: "distance", .. })));
+        assert!(matches!(
+            reduce_keys(&mut scene, &channels, tolerance),
+            Err(CleanupError::Tolerance { name: "distance", .. })
+        ));
         assert!(matches!(smooth_keys(&mut scene, &channels, bad), Err(CleanupError::Cutoff { .. })));
     }
     // At or above the Nyquist frequency (60 Hz at 120 fps), or zero.
@@ -289,14 +307,18 @@ fn channels_with_no_one_or_two_keys_are_left_alone() {
     smooth_keys(&mut scene, &ids, 5.0).unwrap();
     assert!(scene == before);
     // Channels that do not exist are reported, not a panic.
-    let report = reduce_keys(&mut scene, &[ChannelId::ObjectTranslation(7)], ReduceTolerance::DEFAULT).unwrap();
+    let report =
+        reduce_keys(&mut scene, &[ChannelId::ObjectTranslation(7)], ReduceTolerance::DEFAULT).unwrap();
     assert_eq!(report.skipped, vec![(ChannelId::ObjectTranslation(7), Skipped::NotCleanable)]);
 }
 
 #[test]
 fn a_straight_line_reduces_to_its_ends_and_a_locked_channel_is_kept() {
     let keys: Vec<Key<Vec3>> = (0..=48)
-        .map(|f| Key::new(f64::from(f) / 24.0, Vec3::new(f as f32 * 0.1, 1.0, -2.0)).with_interpolation(Interpolation::Linear))
+        .map(|f| {
+            Key::new(f64::from(f) / 24.0, Vec3::new(f as f32 * 0.1, 1.0, -2.0))
+                .with_interpolation(Interpolation::Linear)
+        })
         .collect();
     let mut scene = Scene { fps: 24.0, ..Scene::default() };
     let mut a = Object::new("Line".to_owned());

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use keyrig_edit::cleanup::{keyed_channels, key_total};
+use keyrig_edit::cleanup::{key_total, keyed_channels};
 
 const KEYRIG: &str = env!("CARGO_BIN_EXE_keyrig");
 
@@ -48,7 +48,8 @@ fn the_cmu_take_reduced_and_smoothed_to_a_scene_file() {
 
     // Smoothing alone keeps every key; the values move.
     let smooth_path = dir.path().join("smooth.ron");
-    let out = keyrig(&["clean", take.to_str().unwrap(), "-o", smooth_path.to_str().unwrap(), "--smooth-hz", "6"]);
+    let out =
+        keyrig(&["clean", take.to_str().unwrap(), "-o", smooth_path.to_str().unwrap(), "--smooth-hz", "6"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let smoothed = keyrig_io::scene_file::load(&smooth_path).unwrap();
     assert_eq!(key_total(&smoothed, &keyed_channels(&smoothed, None)), before);

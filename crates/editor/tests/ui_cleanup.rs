@@ -8,7 +8,7 @@ use common::{corpus, harness, press};
 
 use egui::{Key, Modifiers};
 use egui_kittest::kittest::Queryable;
-use keyrig_edit::cleanup::{keyed_channels, key_total};
+use keyrig_edit::cleanup::{key_total, keyed_channels};
 use keyrig_editor::EditorApp;
 
 fn keys(app: &EditorApp) -> usize {

@@ -57,7 +57,10 @@ pub fn run(args: CleanArgs) -> anyhow::Result<()> {
     };
     tolerance.check().map_err(|e| anyhow::anyhow!("--reduce-*: {e}"))?;
     if !keyrig_editor::files::is_scene_file(&args.output) {
-        bail!("{}: the output must end in .ron (`keyrig export` writes other formats)", args.output.display());
+        bail!(
+            "{}: the output must end in .ron (`keyrig export` writes other formats)",
+            args.output.display()
+        );
     }
     let mut scene = if keyrig_editor::files::is_scene_file(&args.scene) {
         keyrig_io::project::load_scene(&args.scene).with_context(|| format!("{}", args.scene.display()))?
@@ -79,12 +82,14 @@ pub fn run(args: CleanArgs) -> anyhow::Result<()> {
     let channels = keyed_channels(&scene, objects.as_deref());
     let mut said = Vec::new();
     if let Some(hz) = args.smooth_hz {
-        let report = smooth_keys(&mut scene, &channels, hz).map_err(|e| anyhow::anyhow!("--smooth-hz: {e}"))?;
+        let report =
+            smooth_keys(&mut scene, &channels, hz).map_err(|e| anyhow::anyhow!("--smooth-hz: {e}"))?;
         said.push(format!("smoothed {} channels below {hz} Hz", report.channels));
         warn_skipped(&scene, &report);
     }
     if reduce {
-        let report = reduce_keys(&mut scene, &channels, tolerance).map_err(|e| anyhow::anyhow!("--reduce-*: {e}"))?;
+        let report =
+            reduce_keys(&mut scene, &channels, tolerance).map_err(|e| anyhow::anyhow!("--reduce-*: {e}"))?;
         said.push(format!(
             "reduced {} channels from {} to {} keys, at most {:.3}°, {:.3e} (distance), {:.3e} (value) from the original",
             report.channels,

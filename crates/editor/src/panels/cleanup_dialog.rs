@@ -6,7 +6,7 @@
 use egui::Context;
 use keyrig_core::Scene;
 use keyrig_edit::channels::ChannelId;
-use keyrig_edit::cleanup::{butterworth_lowpass, keyed_channels, key_total, ReduceTolerance};
+use keyrig_edit::cleanup::{butterworth_lowpass, key_total, keyed_channels, ReduceTolerance};
 use keyrig_edit::SceneEdit;
 
 use crate::actions::{Actions, Edit};

@@ -9,13 +9,13 @@
 //! edits in [`crate::edits`], a skeleton's walk on [`keyrig_core::Skeleton`]). The menu bar,
 //! the status bar and the dialogs keep no state and are functions of the same shape.
 
+pub mod cleanup_dialog;
 pub mod curves;
 pub mod dialogs;
 pub mod dope_sheet;
 pub mod inspector;
 pub mod menu;
 pub mod outliner;
-pub mod cleanup_dialog;
 pub mod render_dialog;
 pub mod status;
 pub mod timeline;
