@@ -9,7 +9,9 @@
 //! walks forward (metres) with ±0.1 mm of jitter. Reduced within 0.5° and 1 mm, as the CMU test.
 //!
 //! Rows: `reduce/one_hour_31_joints` (the whole take), `reduce/one_minute_31_joints` (the
-//! same motion, one minute, to see the scaling).
+//! same motion, one minute, to see the scaling), and the yardstick
+//! `reduce/reference_sample_every_frame_one_hour`: every channel's track built and sampled at
+//! every frame through `Track::sample`, one pass of keyrig's evaluator over the take.
 
 use std::f64::consts::TAU;
 use std::hint::black_box;
@@ -86,6 +88,25 @@ fn take(seconds: usize) -> Scene {
     Scene { fps: FPS, objects: vec![object], ..Scene::default() }
 }
 
+/// Every channel's track built and sampled at every frame of its keys: the sum of the x
+/// components (so nothing is optimised away).
+fn sample_every_frame(scene: &Scene, channels: &[keyrig_core::channel_id::ChannelId]) -> f64 {
+    let mut sum = 0.0;
+    for &id in channels {
+        if let Some(keyrig_core::channel_id::ChannelRef::Vec3(a)) =
+            keyrig_core::channel_id::channel(scene, id)
+        {
+            let track = keyrig_core::Track::new(&a.track).expect("valid keys");
+            let (first, last) = track.domain();
+            let frames = ((last - first) * FPS).round() as usize;
+            for f in 0..=frames {
+                sum += f64::from(track.sample(first + f as f64 / FPS).x);
+            }
+        }
+    }
+    sum
+}
+
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("reduce");
     group.sample_size(10);
@@ -106,6 +127,13 @@ fn bench(c: &mut Criterion) {
                 report.max_distance * 1000.0,
                 report.skipped.len()
             );
+        }
+        if seconds == 3600 {
+            // The yardstick: one pass over the take through keyrig's evaluator (every channel's
+            // track built and sampled at every frame), what any use of the take costs.
+            group.bench_function("reference_sample_every_frame_one_hour", |b| {
+                b.iter(|| black_box(sample_every_frame(&scene, &channels)));
+            });
         }
         group.bench_function(name, |b| {
             b.iter_batched(

@@ -157,6 +157,31 @@ pub enum Skipped {
     Cycles,
     /// Reduction: the reduced curve did not stay within the tolerance through the evaluator.
     OutOfTolerance,
+    /// Its key range holds more frames than clean-up samples ([`max_frames`]).
+    TooManyFrames,
+}
+
+/// Most frames clean-up samples a channel at: four per key plus four million (an hour at
+/// 120 fps with sparse keys; a dense take has a key per frame). Beyond that (a scene at a
+/// million fps, keys hours apart) the channel is left alone rather than filling memory.
+#[must_use]
+pub fn max_frames(keys: usize) -> usize {
+    keys.saturating_mul(4).saturating_add(4_000_000)
+}
+
+/// The frames (whole frame numbers) from `first` to `last` seconds at `fps`: the first and
+/// how many; `None` beyond [`max_frames`].
+fn frame_span(first: f64, last: f64, fps: f64, keys: usize) -> Option<(f64, usize)> {
+    let f0 = (first * fps - 1e-6).ceil();
+    let f1 = (last * fps + 1e-6).floor();
+    if f0.is_nan() || f1.is_nan() {
+        return None;
+    }
+    if f1 < f0 {
+        return Some((f0, 0));
+    }
+    let count = f1 - f0 + 1.0;
+    (count.is_finite() && count <= max_frames(keys) as f64).then_some((f0, count as usize))
 }
 
 impl Skipped {
@@ -170,6 +195,7 @@ impl Skipped {
             Skipped::Spin => "it has spin keys",
             Skipped::Cycles => "it cycles before or after its keys",
             Skipped::OutOfTolerance => "no reduction stayed within the tolerance",
+            Skipped::TooManyFrames => "its keys span more frames than clean-up samples",
         }
     }
 }
@@ -379,11 +405,9 @@ fn error(metric: Metric, want: V4, got: V4, want_quat: Option<DQuat>) -> f64 {
 
 /// The times a channel is checked at: every key and every frame (`fps`) from the first key to
 /// the last, sorted; with the sample index of each key.
-fn sample_times(keys: &[f64], fps: f64) -> (Vec<f64>, Vec<usize>) {
+fn sample_times(keys: &[f64], fps: f64) -> Option<(Vec<f64>, Vec<usize>)> {
     let (first, last) = (keys[0], keys[keys.len() - 1]);
-    let f0 = (first * fps - 1e-6).ceil();
-    let f1 = (last * fps + 1e-6).floor();
-    let frames = if f1 >= f0 { ((f1 - f0) as usize).saturating_add(1) } else { 0 };
+    let (f0, frames) = frame_span(first, last, fps, keys.len())?;
     let mut times = Vec::with_capacity(keys.len() + frames);
     let mut key_samples = Vec::with_capacity(keys.len());
     let mut k = 0;
@@ -403,7 +427,7 @@ fn sample_times(keys: &[f64], fps: f64) -> (Vec<f64>, Vec<usize>) {
             f += 1;
         }
     }
-    (times, key_samples)
+    Some((times, key_samples))
 }
 
 /// Hermite basis at `u`: `(h00, h10, h01, h11)`.
@@ -603,6 +627,35 @@ impl Fitter<'_> {
     }
 }
 
+/// The samples of a channel of scalars or vectors (not quaternions, whose keys the track
+/// normalizes and makes sign-consistent) with a valid key on every frame of its range and
+/// nothing else: its times, the sample index of each key, the values, the keys' values.
+/// `None` when the channel is not such (then the track is built and sampled).
+#[allow(clippy::type_complexity)]
+fn dense_keys<T: Comp>(animated: &Animated<T>, fps: f64) -> Option<(Vec<f64>, Vec<usize>, Vec<V4>, Vec<T>)> {
+    let keys = &animated.track.keys;
+    if T::DIM == 4 || keys.is_empty() {
+        return None;
+    }
+    let (first, last) = (keys[0].time, keys[keys.len() - 1].time);
+    let (f0, frames) = frame_span(first, last, fps, keys.len())?;
+    if frames != keys.len() {
+        return None;
+    }
+    let mut values = Vec::with_capacity(keys.len());
+    for (i, key) in keys.iter().enumerate() {
+        let frame_time = (f0 + i as f64) / fps;
+        let v = T::to_v4(key.value.widen());
+        let on_frame = (key.time - frame_time).abs() <= 1e-6 / fps.max(1.0);
+        if !on_frame || !v.iter().all(|c| c.is_finite()) || (i > 0 && key.time <= keys[i - 1].time) {
+            return None;
+        }
+        values.push(v);
+    }
+    let times = keys.iter().map(|k| k.time).collect();
+    Some((times, (0..keys.len()).collect(), values, keys.iter().map(|k| k.value).collect()))
+}
+
 /// Reduces one channel's keys; `None` when it is left as it was.
 fn reduce_track<T: Comp>(
     animated: &Animated<T>,
@@ -610,9 +663,18 @@ fn reduce_track<T: Comp>(
     metric: Metric,
     tol: f64,
 ) -> Result<(RawTrack<T>, f64), Skipped> {
-    let original = Track::new(&animated.track).map_err(|_| Skipped::InvalidKeys)?;
-    let (times, key_samples) = sample_times(original.key_times(), fps);
-    let values: Vec<V4> = times.iter().map(|&t| T::to_v4(original.sample_wide(t))).collect();
+    let (times, key_samples, values, key_values) = match dense_keys(animated, fps) {
+        // A key on every frame (motion capture): at its keys a track is its keys' values
+        // (crate keyrig_core::track, "Sampling rule"), so the track need not be built.
+        Some(dense) => dense,
+        None => {
+            let original = Track::new(&animated.track).map_err(|_| Skipped::InvalidKeys)?;
+            let (times, key_samples) =
+                sample_times(original.key_times(), fps).ok_or(Skipped::TooManyFrames)?;
+            let values: Vec<V4> = times.iter().map(|&t| T::to_v4(original.sample_wide(t))).collect();
+            (times, key_samples, values, original.key_values().to_vec())
+        }
+    };
     let axes = match metric {
         Metric::Euler(order) => values.iter().map(|&v| euler_axes(order, v)).collect(),
         _ => Vec::new(),
@@ -622,7 +684,7 @@ fn reduce_track<T: Comp>(
     // through the evaluator still finds a sample outside, it aims lower.
     for aim in [0.98, 0.9, 0.75, 0.5] {
         fitter.tol = tol * aim;
-        if let Some(done) = reduced_within(animated, &original, &fitter, &key_samples, metric, tol) {
+        if let Some(done) = reduced_within(animated, &key_values, &fitter, &key_samples, metric, tol) {
             return Ok(done);
         }
     }
@@ -633,7 +695,7 @@ fn reduce_track<T: Comp>(
 /// against the original: `None` if a sample is outside `tol`.
 fn reduced_within<T: Comp>(
     animated: &Animated<T>,
-    original: &Track<T>,
+    sign_consistent: &[T],
     fitter: &Fitter<'_>,
     key_samples: &[usize],
     metric: Metric,
@@ -642,7 +704,6 @@ fn reduced_within<T: Comp>(
     let times = fitter.times;
     let kept = fitter.reduce(key_samples);
     let raw_keys = &animated.track.keys;
-    let sign_consistent = original.key_values();
     let keys: Vec<Key<T>> = kept
         .iter()
         .map(|&(k, in_rate, out_rate)| {
@@ -865,12 +926,10 @@ fn smooth_track<T: Comp>(
 ) -> Result<RawTrack<T>, Skipped> {
     let track = Track::new(&animated.track).map_err(|_| Skipped::InvalidKeys)?;
     let (first, last) = track.domain();
-    let f0 = (first * fps - 1e-6).ceil();
-    let f1 = (last * fps + 1e-6).floor();
-    if f1 < f0 + 1.0 {
+    let (f0, frames) = frame_span(first, last, fps, track.key_count()).ok_or(Skipped::TooManyFrames)?;
+    if frames < 2 {
         return Ok(animated.track.clone());
     }
-    let frames = (f1 - f0) as usize + 1;
     let mut samples: Vec<V4> =
         (0..frames).map(|f| T::to_v4(track.sample_wide((f0 + f as f64) / fps))).collect();
     if metric == Metric::Angle {

@@ -341,3 +341,21 @@ fn a_straight_line_reduces_to_its_ends_and_a_locked_channel_is_kept() {
     assert!((angle_deg(Quat::IDENTITY, q) - 1f64.to_degrees()).abs() < 1e-4);
     let _ = DQuat::IDENTITY;
 }
+
+#[test]
+fn keys_hours_apart_at_a_million_fps_are_left_alone_not_sampled() {
+    // 3 keys over 2000 s at 10⁶ fps would be 2·10⁹ frames: refused, not allocated.
+    let keys: Vec<Key<Vec3>> =
+        [0.0, 1000.0, 2000.0].iter().map(|&t| Key::new(t, Vec3::splat(t as f32))).collect();
+    let mut scene = Scene { fps: 1.0e6, ..Scene::default() };
+    let mut object = Object::new("Far".to_owned());
+    object.translation = Animated::new(Vec3::ZERO, RawTrack::new(keys));
+    scene.objects.push(object);
+    let id = ChannelId::ObjectTranslation(0);
+    let before = scene.clone();
+    let report = reduce_keys(&mut scene, &[id], ReduceTolerance::DEFAULT).unwrap();
+    assert_eq!(report.skipped, vec![(id, Skipped::TooManyFrames)]);
+    let report = smooth_keys(&mut scene, &[id], 10.0).unwrap();
+    assert_eq!(report.skipped, vec![(id, Skipped::TooManyFrames)]);
+    assert!(scene == before);
+}
