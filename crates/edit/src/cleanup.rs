@@ -159,6 +159,8 @@ pub enum Skipped {
     OutOfTolerance,
     /// Its key range holds more frames than clean-up samples ([`max_frames`]).
     TooManyFrames,
+    /// The clean-up of this channel stopped unexpectedly (a bug); it is left as it was.
+    Failed,
 }
 
 /// Most frames clean-up samples a channel at: four per key plus four million (an hour at
@@ -196,6 +198,7 @@ impl Skipped {
             Skipped::Cycles => "it cycles before or after its keys",
             Skipped::OutOfTolerance => "no reduction stayed within the tolerance",
             Skipped::TooManyFrames => "its keys span more frames than clean-up samples",
+            Skipped::Failed => "its clean-up stopped unexpectedly",
         }
     }
 }
@@ -365,7 +368,7 @@ fn euler_quat(order: EulerOrder, degrees: V4) -> DQuat {
 /// The axes that changes of the angles x, y, z (in that order) turn about, in the parent's
 /// frame, at the angles `degrees`: for the order's axes `i, j, k` (`R = R_k·R_j·R_i`), `e_k`,
 /// `R_k·e_j` and `R_k·R_j·e_i`.
-fn euler_axes(order: EulerOrder, degrees: V4) -> [DVec3; 3] {
+fn euler_axes(order: EulerOrder, degrees: V4) -> [Vec3; 3] {
     let [i, j, k] = order.axes();
     let e = |axis: usize| DVec3::AXES[axis];
     let rk = DQuat::from_axis_angle(e(k), degrees[k].to_radians());
@@ -374,7 +377,9 @@ fn euler_axes(order: EulerOrder, degrees: V4) -> [DVec3; 3] {
     out[k] = e(k);
     out[j] = rk * e(j);
     out[i] = rk * (rj * e(i));
-    out
+    // Stored in f32 (half the memory of an hour's samples): a relative error of 1e-7 is far
+    // inside the margin the first-order test keeps.
+    out.map(|a| a.as_vec3())
 }
 
 /// The angle (degrees) between two unit quaternions' rotations, accurate for small angles:
@@ -442,7 +447,7 @@ struct Fitter<'a> {
     values: &'a [V4],
     /// For Euler keys, the axis (in the parent's frame) that a change of each angle (x, y, z)
     /// turns about at each sample: `ω ≈ Σ Δ_c·axis_c`.
-    axes: Vec<[DVec3; 3]>,
+    axes: Vec<[Vec3; 3]>,
     dim: usize,
     metric: Metric,
     /// The tolerance the fit aims at (a little under the user's, for the rounding to f32).
@@ -530,7 +535,7 @@ impl Fitter<'_> {
                 }
                 // To first order the angle is |Σ Δ_c·axis_c|; the second-order terms are below
                 // (Σ|Δ|)² in radians (docs/cleanup.md): decide on it where that settles it.
-                let [ax, ay, az] = self.axes[s];
+                let [ax, ay, az] = self.axes[s].map(Vec3::as_dvec3);
                 let linear = (ax * d[0] + ay * d[1] + az * d[2]).length();
                 let margin = bound * bound * (std::f64::consts::PI / 180.0);
                 if linear + margin <= self.tol {
@@ -787,14 +792,30 @@ fn run_on_channels(
     }
     let threads =
         std::thread::available_parallelism().map_or(1, usize::from).clamp(1, 16).min(work.len().max(1));
-    let chunk = work.len().div_ceil(threads).max(1);
-    let results: Vec<Outcome> = std::thread::scope(|scope| {
-        let handles: Vec<_> = work
-            .chunks(chunk)
-            .map(|part| scope.spawn(move || part.iter().map(|(_, o, m)| job(o, *m)).collect::<Vec<_>>()))
+    // Each thread takes the next channel when it is done with one (channels differ in cost,
+    // and a thread of a loaded machine may fall behind).
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let done: Vec<(usize, Outcome)> = std::thread::scope(|scope| {
+        let (next, work) = (&next, &work);
+        let handles: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(move || {
+                    let mut done = Vec::new();
+                    loop {
+                        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some((_, owned, metric)) = work.get(k) else { break };
+                        done.push((k, job(owned, *metric)));
+                    }
+                    done
+                })
+            })
             .collect();
         handles.into_iter().flat_map(|h| h.join().unwrap_or_default()).collect()
     });
+    let mut results: Vec<Outcome> = work.iter().map(|_| Err(Skipped::Failed)).collect();
+    for (k, outcome) in done {
+        results[k] = outcome;
+    }
     for ((id, owned, metric), result) in work.into_iter().zip(results) {
         match result {
             Ok((new, after, worst)) => {
