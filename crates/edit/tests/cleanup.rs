@@ -359,3 +359,69 @@ fn keys_hours_apart_at_a_million_fps_are_left_alone_not_sampled() {
     assert_eq!(report.skipped, vec![(id, Skipped::TooManyFrames)]);
     assert!(scene == before);
 }
+
+#[test]
+fn quaternion_and_scalar_keys_reduce_within_their_tolerances() {
+    // A key per frame for 4 s at 60 fps: a rotation wobbling about a turning axis (quaternion
+    // keys, Linear, every other key in the other hemisphere) and a scalar light intensity.
+    let fps = 60.0;
+    let rotation = |t: f64| {
+        Quat::from_rotation_y((90.0 * t) as f32 * std::f32::consts::PI / 180.0)
+            * Quat::from_rotation_x((20.0 * (3.0 * t).sin()) as f32 * std::f32::consts::PI / 180.0)
+    };
+    let intensity = |t: f64| (2.0 + (1.5 * t).sin()) as f32;
+    let rot_keys: Vec<Key<Quat>> = (0..=240)
+        .map(|f| {
+            let t = f64::from(f) / fps;
+            let q = if f % 2 == 0 { rotation(t) } else { -rotation(t) };
+            Key::new(t, q).with_interpolation(Interpolation::Linear)
+        })
+        .collect();
+    let scalar_keys: Vec<Key<f32>> = (0..=240)
+        .map(|f| {
+            Key::new(f64::from(f) / fps, intensity(f64::from(f) / fps))
+                .with_interpolation(Interpolation::Linear)
+        })
+        .collect();
+    let mut scene = Scene { fps, ..Scene::default() };
+    let mut object = Object::new("Wobble".to_owned());
+    object.rotation = Animated::new(Quat::IDENTITY, RawTrack::new(rot_keys));
+    scene.objects.push(object);
+    let Some(keyrig_edit::scene_add::Added::Light(light)) = keyrig_edit::scene_add::build(
+        keyrig_edit::scene_add::AddKind::PointLight,
+        "Lamp".to_owned(),
+        Vec3::ZERO,
+    ) else {
+        panic!("a point light")
+    };
+    scene.lights.push(light);
+    scene.lights[0].intensity = Animated::new(1.0, RawTrack::new(scalar_keys));
+    let original = scene.clone();
+    let ids = [ChannelId::ObjectRotation(0), ChannelId::LightIntensity(0)];
+    let tolerance = ReduceTolerance { angle_deg: 0.5, distance: 0.001, value: 0.01 };
+    let report = reduce_keys(&mut scene, &ids, tolerance).unwrap();
+    assert!(report.skipped.is_empty(), "{:?}", report.skipped);
+    assert!(channels::key_count(&scene, ids[0]) * 4 < 241, "{}", channels::key_count(&scene, ids[0]));
+    assert!(channels::key_count(&scene, ids[1]) * 4 < 241, "{}", channels::key_count(&scene, ids[1]));
+    // Every frame, through the evaluator.
+    let none = Overrides::default();
+    let (a, b) = (
+        SceneEvaluator::new(&original, &Default::default()),
+        SceneEvaluator::new(&scene, &Default::default()),
+    );
+    for f in 0..=240 {
+        let t = f64::from(f) / fps;
+        let (Some(ChannelValue::Rotation(qa)), Some(ChannelValue::Rotation(qb))) =
+            (a.value(ids[0], t, &none), b.value(ids[0], t, &none))
+        else {
+            panic!()
+        };
+        assert!(angle_deg(qa, qb) <= 0.5, "frame {f}: {}°", angle_deg(qa, qb));
+        let (Some(ChannelValue::Scalar(x)), Some(ChannelValue::Scalar(y))) =
+            (a.value(ids[1], t, &none), b.value(ids[1], t, &none))
+        else {
+            panic!()
+        };
+        assert!((x - y).abs() <= 0.01, "frame {f}: {x} vs {y}");
+    }
+}
