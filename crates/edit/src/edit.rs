@@ -16,6 +16,7 @@ use keyrig_core::{
 
 use crate::camera_edits::convert_lens;
 use crate::channels::{self, ChannelId, ChannelValue};
+use crate::cleanup::ReduceTolerance;
 
 /// One key of one channel (index into the channel's track).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -159,6 +160,12 @@ pub enum SceneEdit {
     RemoveReferenceImage,
     /// Makes, copies, renames, deletes or assigns an action (docs/actions.md).
     Action(ActionEdit),
+    /// Reduces the keys of `channels` to within `tolerance` of their curves
+    /// ([`crate::cleanup::reduce_keys`], docs/cleanup.md).
+    ReduceKeys { channels: Vec<ChannelId>, tolerance: ReduceTolerance },
+    /// Smooths `channels` with a Butterworth low-pass at `cutoff_hz`
+    /// ([`crate::cleanup::smooth_keys`], docs/cleanup.md).
+    SmoothKeys { channels: Vec<ChannelId>, cutoff_hz: f64 },
 }
 
 /// The action edits: each one undo step (docs/actions.md).
@@ -313,6 +320,13 @@ impl SceneEdit {
                 }
             }
             SceneEdit::RemoveReferenceImage => scene.reference_image = None,
+            // A tolerance or cutoff that is refused changes nothing (the commands check first).
+            SceneEdit::ReduceKeys { channels, tolerance } => {
+                let _ = crate::cleanup::reduce_keys(scene, channels, *tolerance);
+            }
+            SceneEdit::SmoothKeys { channels, cutoff_hz } => {
+                let _ = crate::cleanup::smooth_keys(scene, channels, *cutoff_hz);
+            }
         }
     }
 
@@ -407,7 +421,26 @@ impl SceneEdit {
             SceneEdit::PreviewRange(r) => format!("preview range {}–{}", r.start, r.end),
             SceneEdit::ReferenceOpacity(_) => "reference image opacity".to_owned(),
             SceneEdit::RemoveReferenceImage => "remove the reference image".to_owned(),
+            SceneEdit::ReduceKeys { channels, tolerance } => format!(
+                "reduce keys of {} within {}°, {} (distance), {} (value)",
+                channels_named(scene, channels),
+                tolerance.angle_deg,
+                tolerance.distance,
+                tolerance.value
+            ),
+            SceneEdit::SmoothKeys { channels, cutoff_hz } => {
+                format!("smooth {} below {cutoff_hz} Hz", channels_named(scene, channels))
+            }
         }
+    }
+}
+
+/// Channels as an undo step names them: "Hips rotation (Euler °)", "32 channels".
+#[must_use]
+pub fn channels_named(scene: &Scene, channels: &[ChannelId]) -> String {
+    match channels {
+        [one] => one.label(scene),
+        _ => format!("{} channels", channels.len()),
     }
 }
 

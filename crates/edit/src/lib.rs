@@ -4,6 +4,7 @@
 //! - [`edit`]: every queued change of the document as a value ([`SceneEdit`]), applied by one
 //!   function and named by its undo label (docs/ARCHITECTURE.md, "Edits as data").
 //! - [`channels`]: addressing animated values and the key operations on them.
+//! - [`cleanup`]: key reduction to an error bound and Butterworth smoothing of dense keys.
 //! - [`spin`]: the spins of turned keys and the unwrapped twist about a bone.
 //! - [`mirror`]: left/right names, a skeleton's symmetry plane, mirrored poses.
 //! - [`camera_edits`]: scene edits of cameras and markers shared by renaming and deleting.
@@ -12,6 +13,7 @@
 
 pub mod camera_edits;
 pub mod channels;
+pub mod cleanup;
 pub mod edit;
 pub mod ik;
 pub mod mirror;

@@ -1063,6 +1063,12 @@ impl EditorApp {
             Command::TogglePreviewRange => self.toggle_preview_range(),
             Command::ToggleMarker => self.toggle_marker(),
             Command::BindCameraToMarker => self.bind_camera_to_marker(),
+            Command::ReduceKeys => {
+                self.panels.cleanup.open = Some(crate::panels::cleanup_dialog::CleanupMode::Reduce);
+            }
+            Command::SmoothKeys => {
+                self.panels.cleanup.open = Some(crate::panels::cleanup_dialog::CleanupMode::Smooth);
+            }
         }
         ctx.request_repaint();
     }

@@ -59,6 +59,8 @@ pub enum Command {
     GizmoTurn,
     GizmoScale,
     UndoHistory,
+    ReduceKeys,
+    SmoothKeys,
     ShowHelp,
 }
 
@@ -74,7 +76,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 56] = [
+    pub const ALL: [Command; 58] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -132,6 +134,8 @@ impl Command {
         Command::BindCameraToMarker,
         Command::ShowHidden,
         Command::HideSelected,
+        Command::ReduceKeys,
+        Command::SmoothKeys,
         Command::ShowHelp,
     ];
 
@@ -191,6 +195,8 @@ impl Command {
             Command::GizmoTurn => "Turn gizmo",
             Command::GizmoScale => "Scale gizmo",
             Command::UndoHistory => "Undo history",
+            Command::ReduceKeys => "Reduce keys…",
+            Command::SmoothKeys => "Smooth keys…",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -290,6 +296,12 @@ impl Command {
                 "Scale handles for the selected objects instead of move and turn; again: move and turn"
             }
             Command::UndoHistory => "List the undo steps; a click on one goes back (or forward) to it",
+            Command::ReduceKeys => {
+                "Keep as few keys as hold the curves within an angle and a distance of what they are (the selected keys' channels, else the selected object's, else the scene's)"
+            }
+            Command::SmoothKeys => {
+                "Filter out motion faster than a cutoff in Hz (Butterworth, no lag) from the selected keys' channels, else the selected object's, else the scene's"
+            }
             Command::ShowHelp => "List every command and its shortcut",
         }
     }
@@ -353,6 +365,8 @@ impl Command {
             Command::GizmoTurn => vec![sc(NONE, Key::E)],
             Command::GizmoScale => vec![sc(NONE, Key::S)],
             Command::UndoHistory => vec![sc(CMD.plus(Modifiers::ALT), Key::Z)],
+            Command::ReduceKeys => vec![sc(CMD.plus(Modifiers::ALT), Key::K)],
+            Command::SmoothKeys => vec![sc(CMD_SHIFT, Key::K)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

@@ -34,6 +34,9 @@ enum Command {
     Sample(cli::sample::SampleArgs),
     /// Deformed vertex positions and normals of an object at a frame or time (OBJ or JSON).
     Deform(cli::deform::DeformArgs),
+    /// Clean up dense keys: Butterworth smoothing (--smooth-hz) and key reduction within an
+    /// angle and a distance (--reduce, --reduce-angle, --reduce-distance), to a scene file.
+    Clean(cli::clean::CleanArgs),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +51,7 @@ fn main() -> ExitCode {
         Some(Command::Info(args)) => cli::info::run(args),
         Some(Command::Sample(args)) => cli::sample::run(args),
         Some(Command::Deform(args)) => cli::deform::run(args),
+        Some(Command::Clean(args)) => cli::clean::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -184,6 +184,7 @@ impl EditorApp {
         panels::dialogs::confirm_ui(egui_ctx, &ctx, actions);
         panels::dialogs::recovery_ui(egui_ctx, &ctx, actions);
         panels.render.ui(egui_ctx, &ctx, actions);
+        panels.cleanup.ui(egui_ctx, &ctx, actions);
     }
 }
 

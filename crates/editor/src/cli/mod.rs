@@ -1,6 +1,7 @@
 //! Headless subcommands of the `keyrig` binary. Each module has an `…Args` (clap) and a
 //! `run(args) -> anyhow::Result<()>`; what several share is in [`common`].
 
+pub mod clean;
 pub mod common;
 pub mod convert;
 pub mod deform;

@@ -89,6 +89,10 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
+                for c in [Command::ReduceKeys, Command::SmoothKeys] {
+                    command_button(ui, ctx, actions, c, None);
+                }
+                ui.separator();
                 let (record, ik) = (ctx.session.record, ctx.session.ik.enabled);
                 command_button(ui, ctx, actions, Command::ToggleRecord, Some(record));
                 command_button(ui, ctx, actions, Command::ToggleIk, Some(ik));

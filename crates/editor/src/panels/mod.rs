@@ -9,6 +9,7 @@
 //! edits in [`crate::edits`], a skeleton's walk on [`keyrig_core::Skeleton`]). The menu bar,
 //! the status bar and the dialogs keep no state and are functions of the same shape.
 
+pub mod cleanup_dialog;
 pub mod curves;
 pub mod dialogs;
 pub mod dope_sheet;
@@ -30,4 +31,5 @@ pub struct Panels {
     pub inspector: inspector::Inspector,
     pub viewport: viewport::Viewport,
     pub render: render_dialog::RenderDialog,
+    pub cleanup: cleanup_dialog::CleanupDialog,
 }
