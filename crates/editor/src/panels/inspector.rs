@@ -48,12 +48,11 @@ impl Inspector {
                 selection_ui(ui, ctx, actions);
                 ui.separator();
                 // The active action of the selected object (or of the joint's object).
-                match ctx.session.selection.item {
-                    Some(Selected::Object(o) | Selected::Joint { object: o, .. }) => {
-                        self.action.ui(ui, ctx, actions, o);
-                        ui.separator();
-                    }
-                    _ => {}
+                if let Some(Selected::Object(o) | Selected::Joint { object: o, .. }) =
+                    ctx.session.selection.item
+                {
+                    self.action.ui(ui, ctx, actions, o);
+                    ui.separator();
                 }
                 key_inspector_ui(ui, ctx, actions);
                 ui.separator();
