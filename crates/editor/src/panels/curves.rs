@@ -1196,9 +1196,16 @@ impl CurveEditor {
                     let rise =
                         grip.map.invert(value_at(pointer.y)) - grip.map.invert(value_at(grip.key_pos.y));
                     let tangent = rise / grip.seconds.max(1e-9) as f32 * if outgoing { 1.0 } else { -1.0 };
+                    // Alt moves the handle alone (breaks the pair); else an aligned pair turns
+                    // together.
+                    let drag = if ui.input(|i| i.modifiers.alt) {
+                        keyrig_edit::channels::HandleDrag::Free
+                    } else {
+                        keyrig_edit::channels::HandleDrag::Aligned
+                    };
                     actions.edit(Edit::continuous(
                         "curve handle",
-                        SceneEdit::Tangent { key, outgoing, component, value: tangent, convert },
+                        SceneEdit::Tangent { key, outgoing, component, value: tangent, convert, drag },
                     ));
                 }
             }
