@@ -327,6 +327,39 @@ pub fn tangents_aligned(inn: f32, out: f32) -> bool {
     (inn - out).abs() <= 1e-6 * inn.abs().max(out.abs()).max(1.0)
 }
 
+/// Makes the in- and out-tangent of key `index` (a Hermite position or scalar key) one tangent,
+/// their mean per component, so that its handles are aligned again. Returns false when the key
+/// has not both tangents.
+pub fn align_tangents(scene: &mut Scene, id: ChannelId, index: usize) -> bool {
+    match channel_mut(scene, id) {
+        Some(ChannelMut::Vec3(a)) => match a.track.keys.get_mut(index) {
+            Some(key) => match (key.in_tangent, key.out_tangent) {
+                (Some(inn), Some(out)) => {
+                    let mean = (inn + out) * 0.5;
+                    key.in_tangent = Some(mean);
+                    key.out_tangent = Some(mean);
+                    true
+                }
+                _ => false,
+            },
+            None => false,
+        },
+        Some(ChannelMut::Scalar(a)) => match a.track.keys.get_mut(index) {
+            Some(key) => match (key.in_tangent, key.out_tangent) {
+                (Some(inn), Some(out)) => {
+                    let mean = (inn + out) * 0.5;
+                    key.in_tangent = Some(mean);
+                    key.out_tangent = Some(mean);
+                    true
+                }
+                _ => false,
+            },
+            None => false,
+        },
+        _ => false,
+    }
+}
+
 /// How a handle drag treats the key's other handle (docs/channels.md, "Hermite handles").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HandleDrag {

@@ -112,6 +112,9 @@ pub enum SceneEdit {
     KeyType { keys: Vec<KeyRef>, key_type: KeyType },
     /// Gives the segments of `keys` explicit Hermite tangents equal to the curve's now.
     HermiteHandles { keys: Vec<KeyRef> },
+    /// Aligns the broken handles of the Hermite keys of `keys`: each component's in- and
+    /// out-tangent become their mean, so the next handle drag turns both again.
+    AlignHandles { keys: Vec<KeyRef> },
     /// Sets one component of a key's in- or out-tangent (a curve handle drag); with `convert`
     /// the previous key's segment first becomes Hermite. The other handle follows while the two
     /// are aligned, unless `drag` is [`channels::HandleDrag::Free`] (Alt+drag), which breaks them.
@@ -224,6 +227,11 @@ impl SceneEdit {
                 }
                 for (id, indices) in by_channel {
                     channels::convert_to_hermite(scene, id, &indices);
+                }
+            }
+            SceneEdit::AlignHandles { keys } => {
+                for k in keys {
+                    channels::align_tangents(scene, k.channel, k.index);
                 }
             }
             &SceneEdit::Tangent { key, outgoing, component, value, convert, drag } => {
@@ -348,6 +356,7 @@ impl SceneEdit {
                 format!("key type {} on {}", key_type.label(), keys_named(scene, keys))
             }
             SceneEdit::HermiteHandles { keys } => format!("Hermite handles on {}", keys_named(scene, keys)),
+            SceneEdit::AlignHandles { keys } => format!("align handles on {}", keys_named(scene, keys)),
             SceneEdit::Tangent { key, outgoing, .. } => {
                 let side = if *outgoing { "out" } else { "in" };
                 format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index)

@@ -137,11 +137,14 @@ fn hermite_handles_stay_aligned_unless_broken() {
     let (after, _) = applied(&after, &drag(false, 4.0, channels::HandleDrag::Aligned));
     let (i3, o3) = tangents(&after);
     assert_eq!((i3[1], o3[1]), (4.0, -1.0));
-    // Made equal again (dragged back onto the other), they are aligned again.
-    let (after, _) = applied(&after, &drag(false, -1.0, channels::HandleDrag::Free));
-    let (after, _) = applied(&after, &drag(true, 3.0, channels::HandleDrag::Aligned));
+    // Align handles makes the pair one tangent again (their mean); drags turn both again.
+    let (after, label) = applied(&after, &SceneEdit::AlignHandles { keys: vec![key] });
+    assert_eq!(label, "align handles on Cube translation key at frame 30");
     let (i4, o4) = tangents(&after);
-    assert_eq!((i4[1], o4[1]), (3.0, 3.0));
+    assert_eq!((i4[1], o4[1]), (1.5, 1.5));
+    let (after, _) = applied(&after, &drag(true, 3.0, channels::HandleDrag::Aligned));
+    let (i5, o5) = tangents(&after);
+    assert_eq!((i5[1], o5[1]), (3.0, 3.0));
 }
 
 #[test]

@@ -538,6 +538,16 @@ fn hermite_handles_turn_together_unless_broken_with_alt() {
     let (i3, o3) = y_tangents(&h);
     assert!((i3 - i2).abs() > 1e-3, "the in-handle moved: {i2} → {i3}");
     assert_eq!(o3, o2, "a broken pair's handles move alone");
+
+    // Align handles: one tangent again, their mean, one undo step.
+    let steps = h.state().doc.undo_len();
+    open_context_menu(&mut h);
+    h.get_by_label("Align handles").click();
+    h.run();
+    let (i4, o4) = y_tangents(&h);
+    assert_eq!(i4, o4, "aligned");
+    assert!((i4 - (i3 + o3) * 0.5).abs() < 1e-4, "their mean: {i3} {o3} → {i4}");
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
 }
 
 /// Mute plays the static value (keys kept); lock refuses a key drag.

@@ -1382,6 +1382,17 @@ fn key_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Actions) {
         actions.edit(Edit::scene(SceneEdit::HermiteHandles { keys: keys.clone() }));
         ui.close();
     }
+    if ui
+        .add_enabled(shapeable, egui::Button::new("Align handles"))
+        .on_hover_text(
+            "Broken handles (Alt+drag) become one tangent again, their mean: a handle drag then turns both",
+        )
+        .clicked()
+    {
+        actions.push(Action::CloseGroup);
+        actions.edit(Edit::scene(SceneEdit::AlignHandles { keys: keys.clone() }));
+        ui.close();
+    }
     ui.separator();
     crate::widgets::key_type_menu::key_type_menu_ui(ui, selection, actions);
     ui.separator();
