@@ -320,8 +320,61 @@ pub fn convert_to_hermite(scene: &mut Scene, id: ChannelId, indices: &[usize]) -
     }
 }
 
+/// Whether a key's in- and out-tangent components are one tangent: its handles are aligned
+/// (equal per second: the curve has no kink at the key), to a millionth of the larger.
+#[must_use]
+pub fn tangents_aligned(inn: f32, out: f32) -> bool {
+    (inn - out).abs() <= 1e-6 * inn.abs().max(out.abs()).max(1.0)
+}
+
+/// Makes the in- and out-tangent of key `index` (a Hermite position or scalar key) one tangent,
+/// their mean per component, so that its handles are aligned again. Returns false when the key
+/// has not both tangents.
+pub fn align_tangents(scene: &mut Scene, id: ChannelId, index: usize) -> bool {
+    match channel_mut(scene, id) {
+        Some(ChannelMut::Vec3(a)) => match a.track.keys.get_mut(index) {
+            Some(key) => match (key.in_tangent, key.out_tangent) {
+                (Some(inn), Some(out)) => {
+                    let mean = (inn + out) * 0.5;
+                    key.in_tangent = Some(mean);
+                    key.out_tangent = Some(mean);
+                    true
+                }
+                _ => false,
+            },
+            None => false,
+        },
+        Some(ChannelMut::Scalar(a)) => match a.track.keys.get_mut(index) {
+            Some(key) => match (key.in_tangent, key.out_tangent) {
+                (Some(inn), Some(out)) => {
+                    let mean = (inn + out) * 0.5;
+                    key.in_tangent = Some(mean);
+                    key.out_tangent = Some(mean);
+                    true
+                }
+                _ => false,
+            },
+            None => false,
+        },
+        _ => false,
+    }
+}
+
+/// How a handle drag treats the key's other handle (docs/channels.md, "Hermite handles").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HandleDrag {
+    /// The other handle turns with it while the two are aligned (Blender's Aligned, Maya's
+    /// unified tangents): the curve keeps no kink. A key whose handles are broken (they
+    /// differ) moves the dragged handle alone.
+    Aligned,
+    /// The dragged handle moves alone, breaking the pair (Alt+drag; Blender's Free).
+    Free,
+}
+
 /// Sets component `component` of key `index`'s in- or out-tangent (value units per second) of
-/// a Hermite position or scalar key. Returns false when there is no such tangent.
+/// a Hermite position or scalar key; with [`HandleDrag::Aligned`] the other tangent's
+/// component follows when the two were aligned ([`tangents_aligned`]). Returns false when
+/// there is no such tangent.
 pub fn set_tangent_component(
     scene: &mut Scene,
     id: ChannelId,
@@ -329,17 +382,31 @@ pub fn set_tangent_component(
     outgoing: bool,
     component: usize,
     value: f32,
+    drag: HandleDrag,
 ) -> bool {
     if !value.is_finite() {
         return false;
     }
+    // The dragged tangent's component and the other's, as mutable references.
+    fn set(mine: &mut f32, other: Option<&mut f32>, value: f32, drag: HandleDrag) {
+        if let Some(other) = other {
+            if drag == HandleDrag::Aligned && tangents_aligned(*mine, *other) {
+                *other = value;
+            }
+        }
+        *mine = value;
+    }
     match channel_mut(scene, id) {
         Some(ChannelMut::Vec3(a)) => {
             let Some(key) = a.track.keys.get_mut(index) else { return false };
-            let tangent = if outgoing { &mut key.out_tangent } else { &mut key.in_tangent };
-            match tangent {
+            let (mine, other) = if outgoing {
+                (&mut key.out_tangent, &mut key.in_tangent)
+            } else {
+                (&mut key.in_tangent, &mut key.out_tangent)
+            };
+            match mine {
                 Some(t) if component < 3 => {
-                    t[component] = value;
+                    set(&mut t[component], other.as_mut().map(|o| &mut o[component]), value, drag);
                     true
                 }
                 _ => false,
@@ -347,10 +414,14 @@ pub fn set_tangent_component(
         }
         Some(ChannelMut::Scalar(a)) => {
             let Some(key) = a.track.keys.get_mut(index) else { return false };
-            let tangent = if outgoing { &mut key.out_tangent } else { &mut key.in_tangent };
-            match tangent {
+            let (mine, other) = if outgoing {
+                (&mut key.out_tangent, &mut key.in_tangent)
+            } else {
+                (&mut key.in_tangent, &mut key.out_tangent)
+            };
+            match mine {
                 Some(t) if component == 0 => {
-                    *t = value;
+                    set(t, other.as_mut(), value, drag);
                     true
                 }
                 _ => false,

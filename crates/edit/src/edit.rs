@@ -113,9 +113,20 @@ pub enum SceneEdit {
     KeyType { keys: Vec<KeyRef>, key_type: KeyType },
     /// Gives the segments of `keys` explicit Hermite tangents equal to the curve's now.
     HermiteHandles { keys: Vec<KeyRef> },
+    /// Aligns the broken handles of the Hermite keys of `keys`: each component's in- and
+    /// out-tangent become their mean, so the next handle drag turns both again.
+    AlignHandles { keys: Vec<KeyRef> },
     /// Sets one component of a key's in- or out-tangent (a curve handle drag); with `convert`
-    /// the previous key's segment first becomes Hermite.
-    Tangent { key: KeyRef, outgoing: bool, component: usize, value: f32, convert: bool },
+    /// the previous key's segment first becomes Hermite. The other handle follows while the two
+    /// are aligned, unless `drag` is [`channels::HandleDrag::Free`] (Alt+drag), which breaks them.
+    Tangent {
+        key: KeyRef,
+        outgoing: bool,
+        component: usize,
+        value: f32,
+        convert: bool,
+        drag: channels::HandleDrag,
+    },
     /// Moves the key of a position `channel` at `time` to `value` (a motion-path key drag).
     MotionPathKey { channel: ChannelId, time: f64, value: Vec3 },
     /// Mutes or unmutes a channel.
@@ -225,11 +236,24 @@ impl SceneEdit {
                     channels::convert_to_hermite(scene, id, &indices);
                 }
             }
-            &SceneEdit::Tangent { key, outgoing, component, value, convert } => {
+            SceneEdit::AlignHandles { keys } => {
+                for k in keys {
+                    channels::align_tangents(scene, k.channel, k.index);
+                }
+            }
+            &SceneEdit::Tangent { key, outgoing, component, value, convert, drag } => {
                 if convert && key.index > 0 {
                     channels::convert_to_hermite(scene, key.channel, &[key.index - 1]);
                 }
-                channels::set_tangent_component(scene, key.channel, key.index, outgoing, component, value);
+                channels::set_tangent_component(
+                    scene,
+                    key.channel,
+                    key.index,
+                    outgoing,
+                    component,
+                    value,
+                    drag,
+                );
             }
             &SceneEdit::MotionPathKey { channel, time, value } => {
                 channels::set_key(scene, channel, time, ChannelValue::Vec3(value));
@@ -346,6 +370,7 @@ impl SceneEdit {
                 format!("key type {} on {}", key_type.label(), keys_named(scene, keys))
             }
             SceneEdit::HermiteHandles { keys } => format!("Hermite handles on {}", keys_named(scene, keys)),
+            SceneEdit::AlignHandles { keys } => format!("align handles on {}", keys_named(scene, keys)),
             SceneEdit::Tangent { key, outgoing, .. } => {
                 let side = if *outgoing { "out" } else { "in" };
                 format!("drag {side} handle of {} key {}", key.channel.label(scene), key.index)

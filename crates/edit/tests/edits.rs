@@ -92,10 +92,59 @@ fn key_type_hermite_handles_and_a_tangent() {
         component: 1,
         value: 2.5,
         convert: false,
+        drag: channels::HandleDrag::Aligned,
     };
     let (after, label) = applied(&after, &edit);
     assert_eq!(label, "drag out handle of Cube translation key 1");
     assert_eq!(channels::key_tangents(&after, cube, 1).1.unwrap()[1], 2.5);
+}
+
+/// Issue 42, 9: a Hermite key's handles are aligned: dragging one turns the other with it, so
+/// the curve keeps no kink; an Alt drag (Free) moves one alone and breaks the pair, whose
+/// handles then move alone until they are equal again; each component is its own pair.
+#[test]
+fn hermite_handles_stay_aligned_unless_broken() {
+    let scene = demo();
+    let cube = ChannelId::ObjectTranslation(1);
+    let key = KeyRef { channel: cube, index: 1 };
+    let (after, _) = applied(&scene, &SceneEdit::HermiteHandles { keys: vec![key] });
+    let tangents = |scene: &keyrig_core::Scene| {
+        let (inn, out) = channels::key_tangents(scene, cube, 1);
+        (inn.expect("in-tangent"), out.expect("out-tangent"))
+    };
+    let (inn, out) = tangents(&after);
+    for c in 0..3 {
+        assert!(channels::tangents_aligned(inn[c], out[c]), "converted without a kink: {inn:?} {out:?}");
+    }
+    let drag = |outgoing: bool, value: f32, drag: channels::HandleDrag| SceneEdit::Tangent {
+        key,
+        outgoing,
+        component: 1,
+        value,
+        convert: false,
+        drag,
+    };
+    // An aligned drag of the out-handle turns the in-handle with it; X and Z stay.
+    let (after, _) = applied(&after, &drag(true, 2.5, channels::HandleDrag::Aligned));
+    let (i1, o1) = tangents(&after);
+    assert_eq!((i1[1], o1[1]), (2.5, 2.5));
+    assert_eq!((i1[0], i1[2]), (inn[0], inn[2]));
+    // Alt: the out-handle alone; the pair is broken.
+    let (after, _) = applied(&after, &drag(true, -1.0, channels::HandleDrag::Free));
+    let (i2, o2) = tangents(&after);
+    assert_eq!((i2[1], o2[1]), (2.5, -1.0));
+    // A broken pair's handles move alone, even without Alt.
+    let (after, _) = applied(&after, &drag(false, 4.0, channels::HandleDrag::Aligned));
+    let (i3, o3) = tangents(&after);
+    assert_eq!((i3[1], o3[1]), (4.0, -1.0));
+    // Align handles makes the pair one tangent again (their mean); drags turn both again.
+    let (after, label) = applied(&after, &SceneEdit::AlignHandles { keys: vec![key] });
+    assert_eq!(label, "align handles on Cube translation key at frame 30");
+    let (i4, o4) = tangents(&after);
+    assert_eq!((i4[1], o4[1]), (1.5, 1.5));
+    let (after, _) = applied(&after, &drag(true, 3.0, channels::HandleDrag::Aligned));
+    let (i5, o5) = tangents(&after);
+    assert_eq!((i5[1], o5[1]), (3.0, 3.0));
 }
 
 #[test]

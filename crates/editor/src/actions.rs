@@ -90,6 +90,9 @@ pub enum Action {
     FilePicked(DialogPurpose, PathBuf),
     /// Opens the file dialog for the reference image (View ▸ Reference image).
     ChooseReferenceImage,
+    /// Sets the import scale from what the user typed or chose (File ▸ Import scale); a bad
+    /// number is refused with a message.
+    ImportScale(String),
     /// A file dropped on the window.
     Dropped(PathBuf),
     /// A model import that finished on its thread.

@@ -91,6 +91,9 @@ pub struct EditorApp {
     pub(crate) selection_checked: (u64, u64),
     /// Model imports running on background threads (the status bar shows them).
     pub(crate) imports: Vec<files::BackgroundImport>,
+    /// File ▸ Import scale: the factor models imported into the scene are scaled by (1 keeps
+    /// the file's own unit), kept while the editor runs.
+    pub(crate) import_scale: f32,
     /// Smoothed time between frames while playing, seconds (shown in the status bar).
     pub(crate) frame_time: Option<f32>,
     /// File ▸ Render animation running on its thread.
@@ -143,6 +146,7 @@ impl EditorApp {
             results: EditResults::default(),
             selection_checked: (0, 0),
             imports: Vec::new(),
+            import_scale: 1.0,
             frame_time: None,
             render: None,
             frame_benchmark: None,
@@ -1293,9 +1297,41 @@ impl EditorApp {
 }
 
 impl EditorApp {
-    /// Starts reading a model in the background for `purpose`.
+    /// Starts reading a model in the background for `purpose`: an import into the scene is
+    /// scaled by the import scale ([`EditorApp::set_import_scale`]), a model opened on its
+    /// own keeps the file's unit.
     pub fn start_import(&mut self, path: PathBuf, purpose: ImportPurpose) {
-        self.imports.push(BackgroundImport::start(path, purpose));
+        let scale = match purpose {
+            ImportPurpose::Import => self.import_scale,
+            ImportPurpose::Open => 1.0,
+        };
+        self.imports.push(BackgroundImport::start(path, purpose, scale));
+    }
+
+    /// The factor models imported into the scene are scaled by (File ▸ Import scale).
+    #[must_use]
+    pub fn import_scale(&self) -> f32 {
+        self.import_scale
+    }
+
+    /// Sets the import scale from what the user typed or chose (File ▸ Import scale): a
+    /// number from 1e-6 to 1e6; anything else (0, negative, NaN, text) is refused with a
+    /// message in the status bar and the scale stays as it was. Returns whether it was taken.
+    pub fn set_import_scale(&mut self, text: &str) -> bool {
+        match files::placement::parse_import_scale(text) {
+            Ok(scale) => {
+                self.import_scale = scale;
+                self.info(format!(
+                    "Import scale {}: models imported from now on (Ctrl+I) are scaled by it",
+                    files::placement::format_scale(scale)
+                ));
+                true
+            }
+            Err(message) => {
+                self.error(message);
+                false
+            }
+        }
     }
 
     /// Queues the imports that have finished (applied with the frame's other actions); while
@@ -1391,7 +1427,8 @@ impl EditorApp {
     }
 
     fn apply_import(&mut self, import: BackgroundImport) {
-        let (path, purpose, elapsed) = (import.path.clone(), import.purpose, import.elapsed());
+        let (path, purpose, elapsed, scale) =
+            (import.path.clone(), import.purpose, import.elapsed(), import.scale);
         let imported = match import.finish() {
             Ok(imported) => imported,
             Err(e) => {
@@ -1469,10 +1506,30 @@ impl EditorApp {
                 } else {
                     format!("; placed beside the scene ({:+.2} along X)", offset.x)
                 };
-                self.info(format!(
-                    "Imported {n} object(s) from {} ({seconds:.2} s){placed}{extended}{skipped}",
+                let scaled = if scale == 1.0 {
+                    String::new()
+                } else {
+                    format!(", scaled ×{}", files::placement::format_scale(scale))
+                };
+                let unit = format!(" ({}{scaled})", imported.unit);
+                let message = format!(
+                    "Imported {n} object(s) from {}{unit} ({seconds:.2} s){placed}{extended}{skipped}",
                     path.display()
-                ));
+                );
+                // A model far larger or smaller than what the scene holds (one modelled in
+                // centimetres) is said, with the scale that fits, for as long as an error.
+                self.bounds_now();
+                let boxes = self.scene.object_bounds();
+                let (before, added) = boxes.split_at(first.min(boxes.len()));
+                let name = path
+                    .file_stem()
+                    .map_or_else(|| "The model".to_owned(), |s| s.to_string_lossy().into_owned());
+                let warning = files::placement::size_ratio(before, &added[..n.min(added.len())])
+                    .and_then(|ratio| files::placement::size_warning(&name, ratio, scale));
+                match warning {
+                    Some(warning) => self.error(format!("{warning}. {message}")),
+                    None => self.info(message),
+                }
             }
         }
     }
@@ -1562,6 +1619,9 @@ impl EditorApp {
                 DialogPurpose::ReferenceImage => self.set_reference_image(&path),
             },
             Action::ChooseReferenceImage => self.open_dialog(DialogPurpose::ReferenceImage),
+            Action::ImportScale(text) => {
+                self.set_import_scale(&text);
+            }
             Action::Dropped(path) => {
                 if files::is_image_file(&path) {
                     self.set_reference_image(&path);

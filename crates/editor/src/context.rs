@@ -75,6 +75,8 @@ pub struct FrameCtx<'a> {
     pub gpu_fills: bool,
     /// File ▸ Render animation, while it runs.
     pub render: Option<&'a crate::render_job::RenderJob>,
+    /// File ▸ Import scale: the factor imported models are scaled by.
+    pub import_scale: f32,
 }
 
 impl FrameCtx<'_> {

@@ -156,6 +156,7 @@ impl EditorApp {
             recovery: self.recovery_offer.as_ref().map(|_| &self.recovery),
             gpu_fills: self.panels.viewport.gpu().is_some(),
             render: self.render.as_ref(),
+            import_scale: self.import_scale,
         };
         let actions = &mut self.actions;
         let panels = &mut self.panels;

@@ -390,3 +390,69 @@ fn bvh_takes_and_fbx_models_through_the_commands() {
     std::fs::write(&junk, b"HIERARCHY\nROOT Hips\n{\n").expect("write");
     assert_fails_with(&keyrig(&[os("info"), junk.as_os_str()]), &["junk.bvh"]);
 }
+
+/// Issue 42, 14: `keyrig import --scale` scales the model about the origin on top of its file's
+/// unit: the Fox, modelled in centimetres, at 0.01 is the same scene a hundredth the size (its
+/// object's scale and place, its framed view), which renders the same picture; 0, a negative
+/// scale, NaN and text are refused with the option's name.
+#[test]
+fn import_scale_scales_the_model_and_refuses_bad_factors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fox = gltf("Fox/Fox.glb");
+    let import = |name: &str, scale: Option<&str>| {
+        let scene = dir.path().join(name);
+        let mut args = vec![os("import"), fox.as_os_str(), os("-o"), scene.as_os_str()];
+        if let Some(scale) = scale {
+            args.extend([os("--scale"), os(scale)]);
+        }
+        let o = keyrig(&args);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        (scene.clone(), keyrig_io::scene_file::load(&scene).expect("scene loads"))
+    };
+    let (large_file, large) = import("large.ron", None);
+    let (small_file, small) = import("small.ron", Some("0.01"));
+    assert_eq!(large.objects.len(), small.objects.len());
+    for (l, s) in large.objects.iter().zip(&small.objects) {
+        assert!((s.scale.value - l.scale.value * 0.01).length() < 1e-6, "{}", s.name);
+        assert!((s.translation.value - l.translation.value * 0.01).length() < 1e-4, "{}", s.name);
+        // Inside the object nothing changes: its scale carries the skeleton and its keys.
+        assert_eq!(s.skeleton, l.skeleton, "{}", s.name);
+    }
+    assert!((small.camera.distance - large.camera.distance * 0.01).abs() < 1e-3 * large.camera.distance);
+    assert!((small.camera.target - large.camera.target * 0.01).length() < 1e-3 * large.camera.distance);
+
+    // The same picture, a hundredth the size: the skinned mesh is scaled with its object.
+    let render = |scene: &Path, name: &str| {
+        let out = dir.path().join(name);
+        let o = keyrig(&[
+            os("render"),
+            scene.as_os_str(),
+            os("--frame"),
+            os("10"),
+            os("--size"),
+            os("160x120"),
+            os("-o"),
+            out.as_os_str(),
+        ]);
+        assert!(o.status.success(), "render {name}: {}", stderr(&o));
+        keyrig_render::image::open(&out).expect("a PNG").to_rgba8()
+    };
+    let (a, b) = (render(&large_file, "large.png"), render(&small_file, "small.png"));
+    let differing = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 24))
+        .count();
+    let fox_pixels = a.pixels().zip(a.pixels().skip(1)).filter(|(p, q)| p != q).count();
+    assert!(fox_pixels > 100, "the Fox is drawn");
+    assert!(differing * 50 < a.pixels().len(), "{differing} of {} pixels differ", a.pixels().len());
+
+    for bad in ["0", "-1", "NaN", "inf", "cm"] {
+        let out = dir.path().join("bad.ron");
+        assert_fails_with(
+            &keyrig(&[os("import"), fox.as_os_str(), os("-o"), out.as_os_str(), os("--scale"), os(bad)]),
+            &["--scale", "import scale"],
+        );
+        assert!(!out.exists(), "{bad}: nothing written");
+    }
+}

@@ -481,6 +481,75 @@ fn a_hermite_key_shows_and_drags_both_handles() {
     assert!(before.iter().zip(&after).any(|(a, b)| (a - b).abs() > 1e-3), "the curve before the key bends");
 }
 
+/// Issue 42, 9: a Hermite key's handles are aligned (Blender's Aligned): dragging the out-handle
+/// turns the in-handle with it, so the curve keeps no kink at the key; Alt+drag moves one
+/// handle alone and breaks the pair (Free), after which each handle moves alone.
+#[test]
+fn hermite_handles_turn_together_unless_broken_with_alt() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    let cube = ChannelId::ObjectTranslation(1);
+    h.get_by_label("key Cube translation frame 30").click();
+    h.run();
+    open_context_menu(&mut h);
+    h.get_by_label("Hermite handles (keeps the shape)").click();
+    h.run();
+    let y_tangents = |h: &Harness<'_, EditorApp>| {
+        let (inn, out) = channels::key_tangents(h.state().doc.scene(), cube, 1);
+        (inn.expect("in-tangent")[1], out.expect("out-tangent")[1])
+    };
+    let (inn, out) = y_tangents(&h);
+    assert!(channels::tangents_aligned(inn, out), "converted without a kink: {inn} {out}");
+
+    let handle = h.get_by_label("out handle Cube translation Y key 1").rect().center();
+    drag(&mut h, handle, handle + egui::vec2(0.0, -8.0));
+    let (i1, o1) = y_tangents(&h);
+    assert!(o1 > out + 1e-3, "the out-handle rose: {out} → {o1}");
+    assert_eq!(i1, o1, "the in-handle turned with it: no kink at the key");
+
+    let handle = h.get_by_label("out handle Cube translation Y key 1").rect().center();
+    // Alt held from the press to the release, one frame per event.
+    let button = |pos: Pos2, pressed: bool| Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: Modifiers::ALT,
+    };
+    h.input_mut().modifiers = Modifiers::ALT;
+    for event in [
+        Event::PointerMoved(handle),
+        button(handle, true),
+        Event::PointerMoved(handle + egui::vec2(0.0, 4.0)),
+        Event::PointerMoved(handle + egui::vec2(0.0, 12.0)),
+        button(handle + egui::vec2(0.0, 12.0), false),
+    ] {
+        h.event(event);
+        h.step();
+    }
+    h.input_mut().modifiers = Modifiers::NONE;
+    h.event(Event::PointerMoved(handle + egui::vec2(0.0, -200.0)));
+    h.run();
+    let (i2, o2) = y_tangents(&h);
+    assert!(o2 < o1 - 1e-3, "Alt+drag lowered the out-handle: {o1} → {o2}");
+    assert_eq!(i2, i1, "…alone: the pair is broken");
+
+    let handle = h.get_by_label("in handle Cube translation Y key 1").rect().center();
+    drag(&mut h, handle, handle + egui::vec2(0.0, 8.0));
+    let (i3, o3) = y_tangents(&h);
+    assert!((i3 - i2).abs() > 1e-3, "the in-handle moved: {i2} → {i3}");
+    assert_eq!(o3, o2, "a broken pair's handles move alone");
+
+    // Align handles: one tangent again, their mean, one undo step.
+    let steps = h.state().doc.undo_len();
+    open_context_menu(&mut h);
+    h.get_by_label("Align handles").click();
+    h.run();
+    let (i4, o4) = y_tangents(&h);
+    assert_eq!(i4, o4, "aligned");
+    assert!((i4 - (i3 + o3) * 0.5).abs() < 1e-4, "their mean: {i3} {o3} → {i4}");
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+}
+
 /// Mute plays the static value (keys kept); lock refuses a key drag.
 #[test]
 fn mute_and_lock_per_channel() {

@@ -39,7 +39,9 @@ fn import(h: &mut Harness<'_, EditorApp>, path: std::path::PathBuf) -> usize {
     h.state_mut().wait_for_background_work();
     h.run();
     let status = h.state().status().cloned().expect("a message");
-    assert!(!status.is_error, "{status:?}");
+    // The Fox, in centimetre-sized units, is said to be far larger than the demo arm (issue 42,
+    // 14); that is the only red message an import here may give.
+    assert!(!status.is_error || status.text.contains("× larger than the scene's objects"), "{status:?}");
     first
 }
 

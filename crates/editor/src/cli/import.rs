@@ -1,11 +1,12 @@
-//! `keyrig import MODEL.glb|MODEL.gltf|MODEL.md2 -o SCENE.ron [--animation N]`: a scene file
+//! `keyrig import MODEL.glb|MODEL.gltf|MODEL.md2 -o SCENE.ron [--animation N] [--scale S]`: a scene file
 //! made from a model, as the editor opens it (File ▸ Open): glTF through keyrig-io's mapping
 //! (skinned meshes with their skeleton and every channel of animation N, by default the
 //! first; other meshes as objects; KHR lights), an MD2 model as one object playing every frame
 //! at 10 fps, turned Y-up and scaled to metres; the camera framed on the model and a sun added
 //! when the model has no light. The model stays in its file: the scene refers to it by a path
 //! relative to the scene's folder when the model lies in that folder or below it, else by its
-//! absolute path. The scene is written atomically and never over the model.
+//! absolute path. `--scale` scales the model about the origin on top of its file's unit
+//! (`files::placement::scale_by`); 0, a negative number or NaN is refused. The scene is written atomically and never over the model.
 
 use std::path::PathBuf;
 
@@ -21,6 +22,14 @@ pub struct ImportArgs {
     /// glTF: the animation whose channels the scene takes (0 = the first).
     #[arg(long)]
     pub animation: Option<usize>,
+    /// Scale the model by this factor on top of its file's unit (glTF, VRML metres; FBX its
+    /// own unit converted to metres): 0.01 for a model made in centimetres (the glTF Fox).
+    #[arg(long, value_parser = parse_scale, allow_negative_numbers = true)]
+    pub scale: Option<f32>,
+}
+
+fn parse_scale(text: &str) -> Result<f32, String> {
+    keyrig_editor::files::placement::parse_import_scale(text)
 }
 
 pub fn run(args: ImportArgs) -> anyhow::Result<()> {
@@ -66,6 +75,11 @@ pub fn run(args: ImportArgs) -> anyhow::Result<()> {
             .with_context(|| format!("{}: mapping to a scene", args.model.display()))?;
         scene.objects = mapped.objects;
         scene.frame_range = mapped.frame_range;
+    }
+    // The import scale, as File ▸ Import scale applies it: objects, lights, cameras and the
+    // framed view, about the origin.
+    if let Some(scale) = args.scale {
+        keyrig_editor::files::placement::scale_by(&mut scene, scale);
     }
     // Model paths relative to the scene's folder where the model lies below it, as the
     // editor saves them.

@@ -25,7 +25,20 @@ use super::{extension, md2_rotation, FileError, MD2_SCALE};
 /// meshes stay in the file (`MeshSource::File`, with the model's absolute path) and are
 /// loaded by [`MeshStore`].
 pub fn import_model(path: &Path) -> Result<Scene, FileError> {
-    read_model(path, &mut |_, _| {}).map(|(scene, _, _, _)| scene)
+    read_model(path, &mut |_, _| {}).map(|read| read.scene)
+}
+
+/// A model file as [`read_model`] read it.
+pub(super) struct ModelRead {
+    pub scene: Scene,
+    /// The meshes read on the way (an MD2 file's morph mesh, VRML meshes).
+    pub meshes: Vec<LoadedMesh>,
+    /// Whether the model brings its own view (a VRML `Viewpoint`).
+    pub own_camera: bool,
+    /// What the file holds that was not imported, one line per kind.
+    pub not_imported: Vec<String>,
+    /// The file's own length unit and how it became metres ("glTF lengths are metres").
+    pub unit: String,
 }
 
 /// Progress of a model read: the stage and, where known, the done fraction.
@@ -37,11 +50,10 @@ type ProgressFn<'a> = &'a mut dyn FnMut(&str, Option<f32>);
 /// bytes), then parsed (no fraction); a VRML, X3D or Open Inventor file is read, parsed and
 /// mapped by keyrig-io in one step, and its meshes built at once. The flag says whether the
 /// model brings its own view (a VRML `Viewpoint`), which framing then keeps; the lines say
-/// what the file holds that was not imported (VRML, X3D, Inventor).
-pub(super) fn read_model(
-    path: &Path,
-    progress: ProgressFn<'_>,
-) -> Result<(Scene, Vec<LoadedMesh>, bool, Vec<String>), FileError> {
+/// what the file holds that was not imported (VRML, X3D, Inventor); the unit says what the
+/// file's lengths are in (glTF: metres; FBX: its own unit, which ufbx converts to metres;
+/// VRML, X3D, Inventor: metres by convention; MD2: Quake units scaled to metres).
+pub(super) fn read_model(path: &Path, progress: ProgressFn<'_>) -> Result<ModelRead, FileError> {
     let absolute = || fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     if keyrig_io::vrml::is_vrml_path(path) {
         progress("reading and parsing", None);
@@ -49,20 +61,44 @@ pub(super) fn read_model(
         let file = absolute();
         let scene = model.to_scene(&file.to_string_lossy());
         progress("building meshes", None);
-        return Ok((scene, vrml_meshes(&file, &model), !model.views.is_empty(), model.skipped_lines()));
+        return Ok(ModelRead {
+            scene,
+            meshes: vrml_meshes(&file, &model),
+            own_camera: !model.views.is_empty(),
+            not_imported: model.skipped_lines(),
+            unit: "VRML, X3D and Inventor lengths are metres".to_owned(),
+        });
     }
     if keyrig_io::bvh::is_bvh_path(path) {
         progress("reading and parsing", None);
-        return Ok((keyrig_io::bvh::import_scene(path)?, Vec::new(), false, Vec::new()));
+        return Ok(ModelRead {
+            scene: keyrig_io::bvh::import_scene(path)?,
+            meshes: Vec::new(),
+            own_camera: false,
+            not_imported: Vec::new(),
+            unit: "BVH has no unit: its lengths are taken as metres".to_owned(),
+        });
     }
     match extension(path).as_deref() {
-        Some("glb" | "gltf" | "fbx") => {
+        Some(ext @ ("glb" | "gltf" | "fbx")) => {
             progress("reading and parsing", None);
-            let model = keyrig_io::fbx::import_model_file(path)?;
+            let (model, unit) = if ext == "fbx" {
+                let fbx = keyrig_io::fbx::import_fbx(path).map_err(keyrig_io::fbx::ModelImportError::from)?;
+                // ufbx scales the file's unit to metres (keyrig_from_file holds the factor).
+                let metres = fbx.keyrig_from_file.x_axis.truncate().length();
+                let unit = if (metres - 1.0).abs() < 1e-4 {
+                    "FBX unit: metres".to_owned()
+                } else {
+                    format!("FBX unit: {}, converted to metres", super::placement::unit_name(metres))
+                };
+                (fbx.model, unit)
+            } else {
+                (keyrig_io::fbx::import_model_file(path)?, "glTF lengths are metres".to_owned())
+            };
             let scene = model
                 .to_scene_all(&absolute().to_string_lossy())
                 .map_err(|e| FileError::Mapping { path: path.to_path_buf(), source: Arc::new(e) })?;
-            Ok((scene, Vec::new(), false, Vec::new()))
+            Ok(ModelRead { scene, meshes: Vec::new(), own_camera: false, not_imported: Vec::new(), unit })
         }
         Some("md2") => {
             let data = read_with_progress(path, &mut |f| progress("reading", Some(f)))?;
@@ -92,12 +128,16 @@ pub(super) fn read_model(
                 .clip_duration(None, keyrig_core::MD2_DEFAULT_FPS)
                 .map_err(|source| FileError::Morph { path: path.to_path_buf(), source })?;
             scene.frame_range.end = frame_range_end(seconds, scene.fps);
-            Ok((
+            Ok(ModelRead {
                 scene,
-                vec![((PathBuf::from(file), None), Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)))],
-                false,
-                Vec::new(),
-            ))
+                meshes: vec![(
+                    (PathBuf::from(file), None),
+                    Ok((FileMesh::Morph(std::sync::Arc::new(mesh)), None)),
+                )],
+                own_camera: false,
+                not_imported: Vec::new(),
+                unit: format!("MD2 Quake units, scaled to metres (×{MD2_SCALE})"),
+            })
         }
         Some(other) => Err(FileError::UnknownType { path: path.to_path_buf(), extension: other.to_owned() }),
         None => Err(FileError::NoExtension { path: path.to_path_buf() }),
@@ -304,21 +344,27 @@ pub struct LoadedModel {
     pub meshes: Vec<LoadedMesh>,
     /// What the file holds that was not imported, one line per kind (VRML, X3D, Inventor).
     pub not_imported: Vec<String>,
+    /// The file's own length unit and how it became metres ("glTF lengths are metres").
+    pub unit: String,
 }
 
 /// A model import running on its own thread.
 pub struct BackgroundImport {
     pub path: PathBuf,
     pub purpose: ImportPurpose,
+    /// The import scale applied to the model ([`super::placement::scale_by`]); 1 keeps the
+    /// file's unit.
+    pub scale: f32,
     started: Instant,
     progress: Arc<Mutex<ImportProgress>>,
     handle: std::thread::JoinHandle<Result<LoadedModel, FileError>>,
 }
 
 impl BackgroundImport {
-    /// Starts reading the model at `path` on a new thread.
+    /// Starts reading the model at `path` on a new thread, scaled by `scale` (a checked import
+    /// scale, [`super::placement::check_import_scale`]; 1 keeps the file's unit).
     #[must_use]
-    pub fn start(path: PathBuf, purpose: ImportPurpose) -> Self {
+    pub fn start(path: PathBuf, purpose: ImportPurpose, scale: f32) -> Self {
         let progress = Arc::new(Mutex::new(ImportProgress { stage: "reading".to_owned(), fraction: None }));
         let shared = Arc::clone(&progress);
         let file = path.clone();
@@ -328,17 +374,18 @@ impl BackgroundImport {
                     *p = ImportProgress { stage: stage.to_owned(), fraction };
                 }
             };
-            let (mut scene, read, own_camera, not_imported) =
+            let ModelRead { mut scene, meshes, own_camera, not_imported, unit } =
                 read_model(&file, &mut |stage, fraction| set(stage, fraction))?;
-            let meshes = load_meshes_of(&scene, read, &mut |(done, total)| {
+            let meshes = load_meshes_of(&scene, meshes, &mut |(done, total)| {
                 set("loading meshes", Some(done as f32 / total.max(1) as f32));
             });
             if purpose == ImportPurpose::Open {
                 frame_new_scene(&mut scene, &meshes, own_camera);
             }
-            Ok(LoadedModel { scene, meshes, not_imported })
+            super::placement::scale_by(&mut scene, scale);
+            Ok(LoadedModel { scene, meshes, not_imported, unit })
         });
-        BackgroundImport { path, purpose, started: Instant::now(), progress, handle }
+        BackgroundImport { path, purpose, scale, started: Instant::now(), progress, handle }
     }
 
     /// The stage and fraction now.

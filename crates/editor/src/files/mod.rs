@@ -304,9 +304,10 @@ pub fn open_any(path: &Path) -> Result<Scene, FileError> {
     if is_scene_file(path) {
         Ok(load_scene(path)?)
     } else {
-        let (mut scene, read, own_camera, _) = import::read_model(path, &mut |_, _| {})?;
-        let meshes = import::load_meshes_of(&scene, read, &mut |_| {});
-        import::frame_new_scene(&mut scene, &meshes, own_camera);
+        let read = import::read_model(path, &mut |_, _| {})?;
+        let mut scene = read.scene;
+        let meshes = import::load_meshes_of(&scene, read.meshes, &mut |_| {});
+        import::frame_new_scene(&mut scene, &meshes, read.own_camera);
         Ok(scene)
     }
 }

@@ -1196,9 +1196,16 @@ impl CurveEditor {
                     let rise =
                         grip.map.invert(value_at(pointer.y)) - grip.map.invert(value_at(grip.key_pos.y));
                     let tangent = rise / grip.seconds.max(1e-9) as f32 * if outgoing { 1.0 } else { -1.0 };
+                    // Alt moves the handle alone (breaks the pair); else an aligned pair turns
+                    // together.
+                    let drag = if ui.input(|i| i.modifiers.alt) {
+                        keyrig_edit::channels::HandleDrag::Free
+                    } else {
+                        keyrig_edit::channels::HandleDrag::Aligned
+                    };
                     actions.edit(Edit::continuous(
                         "curve handle",
-                        SceneEdit::Tangent { key, outgoing, component, value: tangent, convert },
+                        SceneEdit::Tangent { key, outgoing, component, value: tangent, convert, drag },
                     ));
                 }
             }
@@ -1373,6 +1380,17 @@ fn key_menu_ui(ui: &mut Ui, selection: &Selection, actions: &mut Actions) {
     {
         actions.push(Action::CloseGroup);
         actions.edit(Edit::scene(SceneEdit::HermiteHandles { keys: keys.clone() }));
+        ui.close();
+    }
+    if ui
+        .add_enabled(shapeable, egui::Button::new("Align handles"))
+        .on_hover_text(
+            "Broken handles (Alt+drag) become one tangent again, their mean: a handle drag then turns both",
+        )
+        .clicked()
+    {
+        actions.push(Action::CloseGroup);
+        actions.edit(Edit::scene(SceneEdit::AlignHandles { keys: keys.clone() }));
         ui.close();
     }
     ui.separator();

@@ -43,6 +43,50 @@ fn command_button(
     }
 }
 
+/// The import scales offered by name: the unit a model was made in, and the factor that
+/// turns it into metres.
+pub const IMPORT_SCALES: [(&str, f32); 6] = [
+    ("×1: the file's own unit (glTF, VRML metres; FBX converted)", 1.0),
+    ("×0.01: made in centimetres", 0.01),
+    ("×0.001: made in millimetres", 0.001),
+    ("×0.0254: made in inches", 0.0254),
+    ("×0.3048: made in feet", 0.3048),
+    ("×100: made in metres, for a scene in centimetres", 100.0),
+];
+
+/// File ▸ Import scale: the scale now, a field to type another (taken with Enter, refused with a
+/// message when it is not a number above 0) and the usual ones by unit.
+fn import_scale_ui(ui: &mut Ui, scale: f32, actions: &mut Actions) {
+    ui.label(format!(
+        "Models are imported in their file's unit (glTF, VRML, X3D, Inventor: metres; FBX: its own unit, converted to metres), times {}",
+        crate::files::placement::format_scale(scale)
+    ));
+    let id = ui.make_persistent_id("import_scale_text");
+    let mut text: String = ui.data_mut(|d| d.get_temp(id)).unwrap_or_default();
+    ui.horizontal(|ui| {
+        let label = ui.label("Scale ×");
+        let hint = crate::files::placement::format_scale(scale);
+        let response = ui
+            .add(egui::TextEdit::singleline(&mut text).hint_text(hint).desired_width(80.0))
+            .labelled_by(label.id);
+        let entered = response.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        if ui.button("Set").clicked() || entered {
+            actions.push(Action::ImportScale(text.clone()));
+            ui.data_mut(|d| d.remove::<String>(id));
+        } else if response.changed() {
+            ui.data_mut(|d| d.insert_temp(id, text.clone()));
+        }
+    });
+    ui.separator();
+    for (label, value) in IMPORT_SCALES {
+        if ui.add(Button::selectable(scale == value, label)).clicked() {
+            actions.push(Action::ImportScale(crate::files::placement::format_scale(value)));
+            ui.data_mut(|d| d.remove::<String>(id));
+            ui.close();
+        }
+    }
+}
+
 /// Draws the menu bar and toolbar as a top panel.
 pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
     egui::Panel::top("menu_bar").show_inside(ui, |ui| {
@@ -67,7 +111,18 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
-                for c in [Command::Import, Command::ImportSound, Command::ExportGltf, Command::RenderAnimation] {
+                for c in [Command::Import, Command::ImportSound] {
+                    command_button(ui, ctx, actions, c, None);
+                }
+                // Typing into its field must not close it: only a click outside does.
+                let stay_open = egui::containers::menu::MenuConfig::new()
+                    .close_behavior(egui::PopupCloseBehavior::CloseOnClickOutside);
+                egui::containers::menu::SubMenuButton::new("Import scale")
+                    .config(stay_open)
+                    .ui(ui, |ui| import_scale_ui(ui, ctx.import_scale, actions))
+                    .0
+                    .on_hover_text("The factor models imported into the scene are scaled by (1 keeps the file's unit)");
+                for c in [Command::ExportGltf, Command::RenderAnimation] {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
