@@ -1486,6 +1486,37 @@ impl EditorApp {
                 let needed = (model_seconds * self.doc.scene().fps - 1e-6).ceil() as i32;
                 let extend = needed > range.end && needed <= 100_000;
                 self.doc.edit(&format!("import {}", path.display()), |doc| {
+                    // Object names stay unique (channel paths and stored actions name them):
+                    // an imported object whose name is taken becomes `name.001`, ….
+                    for i in 0..scene.objects.len() {
+                        let old = scene.objects[i].name.clone();
+                        let taken = |n: &str| {
+                            doc.objects.iter().any(|o| o.name == n)
+                                || scene.objects.iter().enumerate().any(|(j, o)| j != i && o.name == n)
+                        };
+                        if taken(&old) {
+                            let new = (1..)
+                                .map(|k| format!("{old}.{k:03}"))
+                                .find(|n| !taken(n))
+                                .unwrap_or_else(|| old.clone());
+                            scene.rename_in_actions(&old, None, &new);
+                            scene.objects[i].name = new;
+                        }
+                    }
+                    // The model's actions come too (docs/actions.md), renamed where the scene
+                    // already has one of that name.
+                    for mut action in std::mem::take(&mut scene.actions) {
+                        let name = doc.unused_action_name(&action.name);
+                        if name != action.name {
+                            for o in &mut scene.objects {
+                                if o.action.as_deref() == Some(action.name.as_str()) {
+                                    o.action = Some(name.clone());
+                                }
+                            }
+                            action.name = name;
+                        }
+                        doc.actions.push(action);
+                    }
                     doc.objects.extend(scene.objects);
                     doc.lights.extend(scene.lights);
                     if extend {

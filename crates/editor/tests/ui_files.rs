@@ -65,6 +65,35 @@ fn import_a_skinned_gltf_into_the_scene_and_undo_it() {
     assert_eq!(h.state().doc.scene().objects.len(), before);
 }
 
+/// A model imported into a scene brings its actions (docs/actions.md); imported twice, the
+/// second copy's object and actions get names of their own, and the scene stays valid.
+#[test]
+fn an_imported_model_brings_its_actions_and_twice_stays_valid() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness_autosaving(dir.path(), None, 1e9);
+    for _ in 0..2 {
+        h.state_mut().import_path(corpus("gltf/Fox/Fox.glb"));
+        h.state_mut().wait_for_background_work();
+        h.run();
+    }
+    let scene = h.state().doc.scene();
+    let names: Vec<&str> = scene.actions.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["Survey", "Walk", "Run", "Survey.001", "Walk.001", "Run.001"]);
+    let foxes: Vec<(&str, Option<&str>)> = scene
+        .objects
+        .iter()
+        .filter(|o| o.name.starts_with("fox"))
+        .map(|o| (o.name.as_str(), o.action.as_deref()))
+        .collect();
+    assert_eq!(foxes, [("fox", Some("Survey")), ("fox.001", Some("Survey.001"))]);
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    // The second fox walks with its own Walk.
+    let mut walking = scene.clone();
+    let second = walking.objects.iter().position(|o| o.name == "fox.001").expect("fox.001");
+    walking.assign_action(second, Some("Walk.001")).expect("Walk.001");
+    assert_eq!(walking.keyed_channels_of(second).len(), 21);
+}
+
 #[test]
 fn export_gltf_writes_a_file_and_a_bad_file_reports_an_error() {
     let dir = tempfile::tempdir().expect("temp dir");
