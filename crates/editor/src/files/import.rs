@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use keyrig_core::Scene;
 
 use super::meshes::{
@@ -193,35 +193,8 @@ pub(super) fn frame_new_scene(scene: &mut Scene, meshes: &[LoadedMesh], own_came
     frame_model_scene(scene, points);
 }
 
-/// The world positions at rest (un-animated transforms, [`FileMesh::rest_positions`]) of every
-/// vertex of the meshes of `scene`'s model-file objects found in `meshes`.
-pub(super) fn rest_points(scene: &Scene, meshes: &[LoadedMesh]) -> Vec<Vec3> {
-    let mut points = Vec::new();
-    // Found by key, not by a search per object (quadratic for 100,000 objects).
-    let by_key: HashMap<(&Path, Option<usize>), &FileMesh> = meshes
-        .iter()
-        .filter_map(|((path, mesh), loaded)| Some(((path.as_path(), *mesh), &loaded.as_ref().ok()?.0)))
-        .collect();
-    for object in &scene.objects {
-        let Some(keyrig_core::MeshSource::File { path, mesh, .. }) = &object.mesh else { continue };
-        let Some(data) = by_key.get(&(Path::new(path), *mesh)) else {
-            continue;
-        };
-        let world = rest_world_from_object(object);
-        points.extend(data.rest_positions().into_iter().map(|p| world.transform_point3(p)));
-    }
-    points
-}
-
-/// An object's world transform from its un-animated translation, rotation and scale.
-#[must_use]
-pub fn rest_world_from_object(object: &keyrig_core::Object) -> Mat4 {
-    Mat4::from_scale_rotation_translation(
-        object.scale.value,
-        object.rotation.value.normalize(),
-        object.translation.value,
-    )
-}
+use super::placement::rest_points;
+pub use super::placement::rest_world_from_object;
 
 /// What a model opened on its own needs (model files carry no keyrig camera, often no light):
 /// the camera looks at the bounds of `points` (world space) from above and to the side, and a
