@@ -380,8 +380,8 @@ impl Scene {
             if owners.contains(&o) {
                 out.assign_action(o, Some(name))?;
             } else if only {
+                // Its keys go back into its action (or one named after it): it plays none.
                 out.assign_action(o, None)?;
-                drop(out.take_keyed_channels(o));
             }
         }
         Ok(out)
@@ -468,9 +468,9 @@ impl Scene {
                     for id in self.keyed_channels_of(o) {
                         channels += 1;
                         let (n, r) = match channel(self, id) {
-                            Some(ChannelRef::Vec3(a)) => (a.track.len(), ends(a)),
-                            Some(ChannelRef::Rotation(a)) => (a.track.len(), ends(a)),
-                            Some(ChannelRef::Scalar(a)) => (a.track.len(), ends(a)),
+                            Some(ChannelRef::Vec3(a)) => (a.track.len(), a.key_time_range()),
+                            Some(ChannelRef::Rotation(a)) => (a.track.len(), a.key_time_range()),
+                            Some(ChannelRef::Scalar(a)) => (a.track.len(), a.key_time_range()),
                             None => (0, None),
                         };
                         keys += n;
@@ -481,10 +481,6 @@ impl Scene {
             })
             .collect()
     }
-}
-
-fn ends<T>(a: &Animated<T>) -> Option<(f64, f64)> {
-    Some((a.track.keys.first()?.time, a.track.keys.last()?.time))
 }
 
 fn set_keys<T: Clone>(a: &mut Animated<T>, stored: &Animated<T>) {

@@ -55,13 +55,18 @@ impl ActionKeys {
     /// First and last key times (seconds).
     #[must_use]
     pub fn time_range(&self) -> Option<(f64, f64)> {
-        fn ends<T>(a: &Animated<T>) -> Option<(f64, f64)> {
-            Some((a.track.keys.first()?.time, a.track.keys.last()?.time))
-        }
         match self {
-            ActionKeys::Vec3(a) => ends(a),
-            ActionKeys::Rotation(a) => ends(a),
-            ActionKeys::Scalar(a) => ends(a),
+            ActionKeys::Vec3(a) => a.key_time_range(),
+            ActionKeys::Rotation(a) => a.key_time_range(),
+            ActionKeys::Scalar(a) => a.key_time_range(),
         }
+    }
+}
+
+impl<T> Animated<T> {
+    /// First and last key times (seconds); `None` without keys.
+    #[must_use]
+    pub fn key_time_range(&self) -> Option<(f64, f64)> {
+        Some((self.track.keys.first()?.time, self.track.keys.last()?.time))
     }
 }

@@ -331,31 +331,19 @@ pub fn tangents_aligned(inn: f32, out: f32) -> bool {
 /// their mean per component, so that its handles are aligned again. Returns false when the key
 /// has not both tangents.
 pub fn align_tangents(scene: &mut Scene, id: ChannelId, index: usize) -> bool {
+    fn align<T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f32, Output = T>>(
+        key: Option<&mut keyrig_core::Key<T>>,
+    ) -> bool {
+        let Some(key) = key else { return false };
+        let (Some(inn), Some(out)) = (key.in_tangent, key.out_tangent) else { return false };
+        let mean = (inn + out) * 0.5;
+        key.in_tangent = Some(mean);
+        key.out_tangent = Some(mean);
+        true
+    }
     match channel_mut(scene, id) {
-        Some(ChannelMut::Vec3(a)) => match a.track.keys.get_mut(index) {
-            Some(key) => match (key.in_tangent, key.out_tangent) {
-                (Some(inn), Some(out)) => {
-                    let mean = (inn + out) * 0.5;
-                    key.in_tangent = Some(mean);
-                    key.out_tangent = Some(mean);
-                    true
-                }
-                _ => false,
-            },
-            None => false,
-        },
-        Some(ChannelMut::Scalar(a)) => match a.track.keys.get_mut(index) {
-            Some(key) => match (key.in_tangent, key.out_tangent) {
-                (Some(inn), Some(out)) => {
-                    let mean = (inn + out) * 0.5;
-                    key.in_tangent = Some(mean);
-                    key.out_tangent = Some(mean);
-                    true
-                }
-                _ => false,
-            },
-            None => false,
-        },
+        Some(ChannelMut::Vec3(a)) => align(a.track.keys.get_mut(index)),
+        Some(ChannelMut::Scalar(a)) => align(a.track.keys.get_mut(index)),
         _ => false,
     }
 }
