@@ -82,7 +82,8 @@ impl EulerOrder {
     }
 
     /// glam's extrinsic rotation of the same order.
-    fn glam(self) -> EulerRot {
+    #[must_use]
+    pub fn glam(self) -> EulerRot {
         match self {
             EulerOrder::XYZ => EulerRot::XYZEx,
             EulerOrder::XZY => EulerRot::XZYEx,

@@ -26,7 +26,7 @@
 
 use std::fmt;
 
-use glam::{DQuat, DVec3, EulerRot, Quat, Vec3};
+use glam::{DQuat, DVec3, Quat, Vec3};
 use keyrig_core::channel_id::{
     channel, channel_mut, rotation_mode, ChannelId, ChannelKind, ChannelMut, ChannelRef,
 };
@@ -353,14 +353,7 @@ impl Comp for Quat {
 /// glam's extrinsic rotation of an Euler order and the order's axes
 /// ([`EulerOrder::to_quat`], in f64).
 fn euler_quat(order: EulerOrder, degrees: V4) -> DQuat {
-    let rot = match order {
-        EulerOrder::XYZ => EulerRot::XYZEx,
-        EulerOrder::XZY => EulerRot::XZYEx,
-        EulerOrder::YXZ => EulerRot::YXZEx,
-        EulerOrder::YZX => EulerRot::YZXEx,
-        EulerOrder::ZXY => EulerRot::ZXYEx,
-        EulerOrder::ZYX => EulerRot::ZYXEx,
-    };
+    let rot = order.glam();
     let [a, b, c] = order.axes().map(|i| degrees[i].to_radians());
     DQuat::from_euler(rot, a, b, c)
 }
