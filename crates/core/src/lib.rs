@@ -8,6 +8,7 @@ pub mod camera_object;
 pub mod channel;
 pub mod channel_id;
 pub mod channel_value;
+pub mod clip;
 pub mod ik;
 pub mod ik_constraint;
 pub mod key;
@@ -25,6 +26,7 @@ pub use attributes::{LightAttributes, ObjectAttributes};
 pub use camera_object::{Aim, AimTarget, Lens, Marker, Projection, RenderSize, SceneCamera};
 pub use channel_id::attribute_id;
 pub use channel_id::attribute_id::{AttributeId, AttributeProperty};
+pub use clip::{ClipTrack, Extrapolation, Layer, LayerMode, Strip, StripAt, StripBlend};
 pub use key::{
     Animated, Cycle, Cycles, Interpolation, Key, KeyType, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS,
 };

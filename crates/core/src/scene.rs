@@ -62,6 +62,10 @@ pub struct Scene {
     /// playing. Left out of a scene file while empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub actions: Vec<crate::action_keys::Action>,
+    /// Animation layers (docs/clips.md), bottom-up, above every object's clip tracks and
+    /// active action. Left out of a scene file while empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<crate::clip::Layer>,
 }
 
 fn default_ambient() -> Vec3 {
@@ -86,6 +90,7 @@ impl Default for Scene {
             poses: Vec::new(),
             reference_image: None,
             actions: Vec::new(),
+            layers: Vec::new(),
         }
     }
 }
@@ -200,6 +205,10 @@ pub struct Object {
     /// keys. `None` (left out of the file): keys that belong to no named action.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub action: Option<String>,
+    /// Clip tracks (docs/clips.md), bottom-up: strips of actions that play below the active
+    /// action. Left out of the file while empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip_tracks: Vec<crate::clip::ClipTrack>,
 }
 
 impl Object {
@@ -218,6 +227,7 @@ impl Object {
             deformer: DeformerSettings::default(),
             attributes: ObjectAttributes::default(),
             action: None,
+            clip_tracks: Vec::new(),
         }
     }
 }

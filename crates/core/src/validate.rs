@@ -151,7 +151,7 @@ impl KeyValue for Quat {
 }
 
 /// Collects problems under a path prefix.
-struct Checker {
+pub(crate) struct Checker {
     problems: Vec<Problem>,
 }
 
@@ -176,7 +176,7 @@ fn describe(v: f64) -> &'static str {
 }
 
 impl Checker {
-    fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
+    pub(crate) fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
         self.problems.push(Problem { path: path.into(), message: message.into() });
     }
 
@@ -184,7 +184,7 @@ impl Checker {
         self.f64(path, f64::from(v))
     }
 
-    fn f64(&mut self, path: &str, v: f64) -> bool {
+    pub(crate) fn f64(&mut self, path: &str, v: f64) -> bool {
         if v.is_finite() {
             true
         } else {
@@ -212,7 +212,7 @@ impl Checker {
     /// [`AnimatedTrack::new`] does). The rules are the track validator's; a property test keeps
     /// the two in agreement: no problem here ⇔ `AnimatedTrack::new` succeeds and the static
     /// value is valid (checked here even when keys override it).
-    fn animated<T: KeyValue>(&mut self, path: &str, a: &Animated<T>) {
+    pub(crate) fn animated<T: KeyValue>(&mut self, path: &str, a: &Animated<T>) {
         if self.value(&join(path, "value"), &a.value) && a.value.is_degenerate() {
             self.push(join(path, "value"), "zero quaternion: not a rotation");
         }
@@ -324,7 +324,7 @@ impl Checker {
     }
 
     /// Reports every name used more than once (and empty names) in `names`.
-    fn unique_names<'a>(&mut self, what: &str, names: impl Iterator<Item = (String, &'a str)>) {
+    pub(crate) fn unique_names<'a>(&mut self, what: &str, names: impl Iterator<Item = (String, &'a str)>) {
         let mut seen: HashMap<&str, usize> = HashMap::new();
         for (i, (path, name)) in names.enumerate() {
             if name.is_empty() {
@@ -784,6 +784,7 @@ impl Scene {
             self.poses.iter().enumerate().map(|(i, p)| (format!("poses[{i}].name"), p.name.as_str())),
         );
         self.action_problems(&mut c);
+        crate::clip::clip_problems(self, &mut c);
         if let Some(image) = &self.reference_image {
             if image.path.is_empty() {
                 c.push("reference_image.path", "the path is empty".to_owned());

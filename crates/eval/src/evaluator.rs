@@ -12,6 +12,7 @@ use keyrig_skin::{
 };
 
 use crate::camera::{CameraRig, CameraState, Target};
+use crate::clips::{ObjectMix, PoseValues};
 use crate::morph::{MorphBlend, MorphClips, MorphError};
 
 mod attributes;
@@ -137,6 +138,9 @@ struct ObjectRig {
     built_from: RestSource,
     /// Problems of the skeleton, the mesh or the clip (channel problems live in the slots).
     problems: Vec<EvalProblem>,
+    /// Clip tracks and layers (docs/clips.md); `None` while the object has no tracks and the
+    /// scene no layers.
+    mix: Option<Box<ObjectMix>>,
 }
 
 /// The parts of an object that its rest data, mesh and bindings depend on.
@@ -616,25 +620,35 @@ impl SceneEvaluator {
             Some(ChannelValue::Vec3(v)) => *v,
             _ => slot.sample(time),
         };
-        let quat = |id: ChannelId, slot: &RotationSlot| {
-            let q = rotation_value(slot, id, time, overrides);
-            if q.is_finite() && q.length_squared() > 1e-12 {
-                q.normalize()
-            } else {
-                Quat::IDENTITY
-            }
-        };
+        let quat =
+            |id: ChannelId, slot: &RotationSlot| unit_or_identity(rotation_value(slot, id, time, overrides));
+        let old_pose = state.pose.take();
+        let old_palette = state.palette.take();
+        if let Some(mix) = &rig.mix {
+            let mut pose = old_pose.unwrap_or_else(|| Pose::rest(0));
+            let mut values = PoseValues {
+                joint_translations: std::mem::take(&mut pose.local_translations),
+                joint_rotations: std::mem::take(&mut pose.local_rotations),
+                joint_scales: std::mem::take(&mut pose.local_scales),
+                ..PoseValues::default()
+            };
+            Self::mix_pose(rig, mix, o, time, overrides, &mut values);
+            state.world_from_object =
+                Affine3A::from_scale_rotation_translation(values.scale, values.rotation, values.translation);
+            pose.local_translations = values.joint_translations;
+            pose.local_rotations = values.joint_rotations;
+            pose.local_scales = values.joint_scales;
+            pose.root_translation = values.root;
+            Self::finish_object(rig, o, time, overrides, constraints, state, Some(pose), old_palette);
+            return;
+        }
         let world_from_object = Affine3A::from_scale_rotation_translation(
             vec3(ChannelId::ObjectScale(o), &rig.scale),
             quat(ChannelId::ObjectRotation(o), &rig.rotation),
             vec3(ChannelId::ObjectTranslation(o), &rig.translation),
         );
         state.world_from_object = world_from_object;
-        state.palette_error = None;
-        state.morph = None;
-        let old_pose = state.pose.take();
-        let old_palette = state.palette.take();
-        if let Some(skeleton) = &rig.skeleton {
+        let pose = rig.skeleton.as_ref().map(|skeleton| {
             let n = skeleton.joints.len();
             let mut pose = old_pose.unwrap_or_else(|| Pose::rest(0));
             pose.local_translations.clear();
@@ -651,6 +665,113 @@ impl SceneEvaluator {
                 pose.local_rotations.push(quat(ChannelId::JointRotation { object, joint }, &slots.rotation));
                 pose.local_scales.push(vec3(ChannelId::JointScale { object, joint }, &slots.scale));
             }
+            pose
+        });
+        Self::finish_object(rig, o, time, overrides, constraints, state, pose, old_palette);
+    }
+
+    /// The pose of an object with clip tracks or layers at `time` (docs/clips.md, "The
+    /// stack"): its static values, the strips bottom-up, its active action's keyed channels,
+    /// the layers, then the overrides.
+    fn mix_pose(
+        rig: &ObjectRig,
+        mix: &ObjectMix,
+        o: usize,
+        time: f64,
+        overrides: &Overrides,
+        values: &mut PoseValues,
+    ) {
+        let quat_static = |slot: &RotationSlot| unit_or_identity(slot.static_value());
+        values.translation = rig.translation.static_value();
+        values.rotation = quat_static(&rig.rotation);
+        values.scale = rig.scale.static_value();
+        values.joint_translations.clear();
+        values.joint_rotations.clear();
+        values.joint_scales.clear();
+        values.root = Vec3::ZERO;
+        if let Some(skeleton) = &rig.skeleton {
+            values.root = skeleton.root_translation.static_value();
+            for slots in &skeleton.joints {
+                values.joint_translations.push(slots.translation.static_value());
+                values.joint_rotations.push(quat_static(&slots.rotation));
+                values.joint_scales.push(slots.scale.static_value());
+            }
+        }
+        mix.strips_into(values, time);
+        // The active action plays above the strips on the channels it keys.
+        let keyed_vec3 = |slot: &Slot<Vec3>, v: &mut Vec3| {
+            if slot.is_keyed() {
+                *v = slot.sample(time);
+            }
+        };
+        let keyed_quat = |slot: &RotationSlot, q: &mut Quat| {
+            if slot.is_keyed() {
+                *q = unit_or_identity(slot.sample(time));
+            }
+        };
+        keyed_vec3(&rig.translation, &mut values.translation);
+        keyed_quat(&rig.rotation, &mut values.rotation);
+        keyed_vec3(&rig.scale, &mut values.scale);
+        if let Some(skeleton) = &rig.skeleton {
+            keyed_vec3(&skeleton.root_translation, &mut values.root);
+            for (j, slots) in skeleton.joints.iter().enumerate() {
+                keyed_vec3(&slots.translation, &mut values.joint_translations[j]);
+                keyed_quat(&slots.rotation, &mut values.joint_rotations[j]);
+                keyed_vec3(&slots.scale, &mut values.joint_scales[j]);
+            }
+        }
+        mix.layers_into(values, time);
+        if overrides.is_empty() {
+            return;
+        }
+        let vec3 = |id: ChannelId, v: &mut Vec3| {
+            if let Some(ChannelValue::Vec3(x)) = overrides.get(&id) {
+                *v = *x;
+            }
+        };
+        let quat = |id: ChannelId, slot: &RotationSlot, q: &mut Quat| {
+            if let Some(x) = rotation_override(slot, id, overrides) {
+                *q = unit_or_identity(x);
+            }
+        };
+        vec3(ChannelId::ObjectTranslation(o), &mut values.translation);
+        quat(ChannelId::ObjectRotation(o), &rig.rotation, &mut values.rotation);
+        vec3(ChannelId::ObjectScale(o), &mut values.scale);
+        if let Some(skeleton) = &rig.skeleton {
+            vec3(ChannelId::RootTranslation(o), &mut values.root);
+            for (j, slots) in skeleton.joints.iter().enumerate() {
+                let (object, joint) = (o, j);
+                vec3(ChannelId::JointTranslation { object, joint }, &mut values.joint_translations[j]);
+                quat(
+                    ChannelId::JointRotation { object, joint },
+                    &slots.rotation,
+                    &mut values.joint_rotations[j],
+                );
+                vec3(ChannelId::JointScale { object, joint }, &mut values.joint_scales[j]);
+            }
+        }
+    }
+
+    /// The rest of object `o` once its transform and pose are known: IK constraints, the
+    /// palette, morph frames and attributes.
+    #[allow(clippy::too_many_arguments)]
+    fn finish_object(
+        rig: &ObjectRig,
+        o: usize,
+        time: f64,
+        overrides: &Overrides,
+        constraints: usize,
+        state: &mut ObjectState,
+        pose: Option<Pose>,
+        old_palette: Option<JointPalette>,
+    ) {
+        let vec3 = |id: ChannelId, slot: &Slot<Vec3>| match overrides.get(&id) {
+            Some(ChannelValue::Vec3(v)) => *v,
+            _ => slot.sample(time),
+        };
+        state.palette_error = None;
+        state.morph = None;
+        if let (Some(skeleton), Some(mut pose)) = (&rig.skeleton, pose) {
             for (c, constraint) in skeleton.constraints.iter().enumerate().take(constraints) {
                 let Some(chain) = &constraint.chain else { continue };
                 let blend = match overrides.get(&ChannelId::IkBlend { object: o, constraint: c }) {
@@ -876,11 +997,24 @@ impl ObjectRig {
             attributes: ObjectAttributeRig::new(&object.attributes, o),
             built_from: RestSource::of(object, loaded),
             problems,
+            mix: ObjectMix::new(scene, o).map(Box::new),
         }
     }
 
-    /// Rebuilds the channels that changed (the rest data is known to be the same).
+    /// Rebuilds the channels that changed (the rest data is known to be the same), and the
+    /// mix when what it plays changed.
     fn refresh(&mut self, scene: &Scene, o: usize) -> usize {
+        let n = self.refresh_channels(scene, o);
+        if (n > 0 && self.mix.as_ref().is_some_and(|m| m.plays_active()))
+            || !ObjectMix::is_current(self.mix.as_deref(), scene, o)
+        {
+            self.mix = ObjectMix::new(scene, o).map(Box::new);
+            return n + self.mix.as_ref().map_or(0, |m| m.channel_count());
+        }
+        n
+    }
+
+    fn refresh_channels(&mut self, scene: &Scene, o: usize) -> usize {
         let object = &scene.objects[o];
         let mut n =
             usize::from(self.translation.refresh(&object.translation, ChannelId::ObjectTranslation(o)))
@@ -960,15 +1094,29 @@ impl ObjectRig {
 /// The rotation of rotation channel `id` (slot `slot`) at `time`: an override of the channel
 /// wins, then one of its Euler-keys channel (angles typed in the inspector), then the keys.
 fn rotation_value(slot: &RotationSlot, id: ChannelId, time: f64, overrides: &Overrides) -> Quat {
+    rotation_override(slot, id, overrides).unwrap_or_else(|| slot.sample(time))
+}
+
+/// The override of rotation channel `id` or of its Euler-keys channel, if any.
+fn rotation_override(slot: &RotationSlot, id: ChannelId, overrides: &Overrides) -> Option<Quat> {
     if let Some(ChannelValue::Rotation(q)) = overrides.get(&id) {
-        return *q;
+        return Some(*q);
     }
     if let (RotationSlot::Euler(_, order), Some(euler)) = (slot, keyrig_core::channel_id::euler_partner(id)) {
         if let Some(ChannelValue::Vec3(e)) = overrides.get(&euler) {
-            return order.to_quat(*e);
+            return Some(order.to_quat(*e));
         }
     }
-    slot.sample(time)
+    None
+}
+
+/// `q` normalized; the identity for a zero or non-finite quaternion.
+fn unit_or_identity(q: Quat) -> Quat {
+    if q.is_finite() && q.length_squared() > 1e-12 {
+        q.normalize()
+    } else {
+        Quat::IDENTITY
+    }
 }
 
 /// The angles of Euler-keys channel `id` at `time` (`None` when its rotation has quaternion

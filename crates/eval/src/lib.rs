@@ -17,6 +17,7 @@
 
 pub mod bake;
 pub mod camera;
+mod clips;
 mod evaluator;
 pub mod morph;
 mod slot;

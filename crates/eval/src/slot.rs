@@ -84,6 +84,16 @@ impl<T: TrackValue> Slot<T> {
         true
     }
 
+    /// The channel's static value (what it holds without keys).
+    pub(crate) fn static_value(&self) -> T {
+        self.value
+    }
+
+    /// True when the channel has keys.
+    pub(crate) fn is_keyed(&self) -> bool {
+        !self.keys.is_empty()
+    }
+
     #[inline]
     pub(crate) fn sample(&self, t: f64) -> T {
         match &*self.eval {
@@ -146,6 +156,22 @@ impl RotationSlot {
         match self {
             RotationSlot::Quat(slot) => slot.sample(t),
             RotationSlot::Euler(slot, order) => order.to_quat(slot.sample(t)),
+        }
+    }
+
+    /// The rotation without keys.
+    pub(crate) fn static_value(&self) -> glam::Quat {
+        match self {
+            RotationSlot::Quat(slot) => slot.static_value(),
+            RotationSlot::Euler(slot, order) => order.to_quat(slot.static_value()),
+        }
+    }
+
+    /// True when the rotation has keys (quaternion or Euler).
+    pub(crate) fn is_keyed(&self) -> bool {
+        match self {
+            RotationSlot::Quat(slot) => slot.is_keyed(),
+            RotationSlot::Euler(slot, _) => slot.is_keyed(),
         }
     }
 

@@ -86,6 +86,7 @@ impl ObjectV1 {
             deformer: self.deformer,
             attributes: keyrig_core::ObjectAttributes::default(),
             action: None,
+            clip_tracks: Vec::new(),
         }
     }
 }
