@@ -686,3 +686,38 @@ fn actions_used_by_the_tests_exist() {
     }
     let _: &Action = &scene.actions[0];
 }
+
+#[test]
+fn merge_down_keys_what_the_stack_played() {
+    let mut scene = walker();
+    let mut idle = Strip::new("Idle", 0.0, 0.0, 40.0);
+    idle.extrapolation = Extrapolation::Hold;
+    let mut stride = Strip::new("Stride", 30.0, 0.0, 24.0);
+    stride.blend_in = 10.0;
+    stride.repeat = 2.0;
+    stride.continue_root = true;
+    scene.objects[0].clip_tracks = vec![
+        ClipTrack { name: "Idle".into(), strips: vec![idle], ..ClipTrack::default() },
+        ClipTrack { name: "Walk".into(), strips: vec![stride], ..ClipTrack::default() },
+    ];
+    scene.layers = vec![Layer::new("Head", "Lift")];
+    scene.frame_range = keyrig_core::FrameRange { start: 0, end: 90 };
+    let before = SceneEvaluator::new(&scene, &HashMap::new());
+    let mut merged = scene.clone();
+    let report = keyrig_eval::merge_down(&mut merged, 0, 90).expect("merge");
+    assert_eq!(report.objects, vec![0]);
+    assert_eq!(report.frames, 91);
+    assert!(merged.layers.is_empty() && merged.objects[0].clip_tracks.is_empty());
+    assert!(merged.problems().is_empty(), "{:?}", merged.problems());
+    let after = SceneEvaluator::new(&merged, &HashMap::new());
+    for f in 0..=90 {
+        let t = f64::from(f) / 24.0;
+        let a = before.object_at(0, t, &Overrides::new()).expect("before");
+        let b = after.object_at(0, t, &Overrides::new()).expect("after");
+        let (pa, pb) = (a.palette.expect("palette"), b.palette.expect("palette"));
+        for (j, (x, y)) in pa.model_from_joint.iter().zip(&pb.model_from_joint).enumerate() {
+            assert!(x.abs_diff_eq(*y, 1e-5), "frame {f} joint {j}: {x:?} vs {y:?}");
+        }
+        assert!(a.world_from_object.abs_diff_eq(b.world_from_object, 1e-5), "frame {f}");
+    }
+}

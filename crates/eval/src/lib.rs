@@ -19,6 +19,7 @@ pub mod bake;
 pub mod camera;
 mod clips;
 mod evaluator;
+pub mod merge;
 pub mod morph;
 mod slot;
 
@@ -28,3 +29,4 @@ pub use evaluator::{
     EvalProblem, LightState, LoadedMesh, MorphRig, ObjectLook, ObjectState, Overrides, Rebuilt,
     SceneEvaluator, SceneState, SkinRig,
 };
+pub use merge::{merge_down, Merged};

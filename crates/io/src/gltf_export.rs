@@ -546,6 +546,20 @@ impl Document {
 /// A track that does not validate, a skeleton that does not fit its mesh, a mesh file that
 /// cannot be loaded: each with the path of the scene field.
 pub fn export_scene(scene: &Scene, options: &ExportOptions) -> Result<ExportedGltf, ExportError> {
+    // glTF has no clip tracks or layers: baked, their mix becomes each moved object's active
+    // action (docs/clips.md, "Merge down"); otherwise each action is written as it is.
+    let merged;
+    let scene = if options.bake.is_some()
+        && (!scene.layers.is_empty() || scene.objects.iter().any(|o| !o.clip_tracks.is_empty()))
+    {
+        let mut copy = scene.clone();
+        keyrig_eval::merge_down(&mut copy, scene.frame_range.start, scene.frame_range.end)
+            .map_err(|e| scene_err("clip_tracks", e.to_string()))?;
+        merged = copy;
+        &merged
+    } else {
+        scene
+    };
     let mut files: HashMap<PathBuf, LoadedFile> = HashMap::new();
     let (mut doc, lights) = write_document(scene, options, &mut files)?;
     if scene.actions.is_empty() {
