@@ -245,9 +245,15 @@ impl<'a> Reference<'a> {
         }
     }
 
+    /// Joint 0's rest transform when it is the root: it is a root joint and no action the
+    /// object's strips play keys the object's translation (then the object is the root).
     fn rest0(&self, o: usize) -> Option<(Vec3, Quat)> {
+        let moves_object =
+            self.scene.objects[o].clip_tracks.iter().flat_map(|t| &t.strips).any(|s| {
+                self.samplers[&(o, s.action.clone())].keyed.contains(&ChannelId::ObjectTranslation(o))
+            });
         let j = self.scene.objects[o].skeleton.as_ref()?.joints.first()?;
-        j.parent.is_none().then_some((j.rest_translation, j.rest_rotation))
+        (j.parent.is_none() && !moves_object).then_some((j.rest_translation, j.rest_rotation))
     }
 
     /// The root in model space in action `action` at time `t`, from `pose` where not keyed.
@@ -288,8 +294,40 @@ impl<'a> Reference<'a> {
         }
     }
 
-    /// The root offsets of each track's strips, computed in strip order.
-    fn root_offsets(&self, o: usize, track: &ClipTrack) -> Vec<Option<(Quat, Vec3)>> {
+    /// The root offsets of every track's strips, bottom-up and in strip order.
+    fn root_offsets(&self, o: usize) -> Vec<Vec<Option<(Quat, Vec3)>>> {
+        let tracks = &self.scene.objects[o].clip_tracks;
+        let any_solo = tracks.iter().any(|t| t.solo);
+        let mut all: Vec<Vec<Option<(Quat, Vec3)>>> = Vec::new();
+        for (k, track) in tracks.iter().enumerate() {
+            let mut out = Vec::new();
+            for (i, s) in track.strips.iter().enumerate() {
+                // The strip before: on this track, else playing at the start below.
+                let before = if i > 0 {
+                    Some((&track.strips[i - 1], out[i - 1]))
+                } else {
+                    (0..k).rev().filter(|&b| !tracks[b].mute && (!any_solo || tracks[b].solo)).find_map(|b| {
+                        let (j, _, _) = Self::strip_at(&tracks[b], s.start)?;
+                        Some((&tracks[b].strips[j], all[b][j]))
+                    })
+                };
+                out.push(match before {
+                    Some((before, offset)) if s.continue_root => Some(self.root_offset(o, before, offset, s)),
+                    _ => None,
+                });
+            }
+            all.push(out);
+        }
+        all
+    }
+
+    fn root_offset(
+        &self,
+        o: usize,
+        before: &Strip,
+        before_offset: Option<(Quat, Vec3)>,
+        s: &Strip,
+    ) -> (Quat, Vec3) {
         let fps = self.scene.fps;
         let base = self.base(o);
         let heading = |q: Quat| {
@@ -301,26 +339,16 @@ impl<'a> Reference<'a> {
                 v.x.atan2(v.z)
             }
         };
-        let mut out: Vec<Option<(Quat, Vec3)>> = Vec::new();
-        for (i, s) in track.strips.iter().enumerate() {
-            if !s.continue_root || i == 0 {
-                out.push(None);
-                continue;
-            }
-            let before = &track.strips[i - 1];
-            let tb = before.action_frame(s.start) / fps;
-            let (mut p0, mut q0) = self.root_model(o, &before.action, tb, &base);
-            if let Some((yaw, d)) = out[i - 1] {
-                (p0, q0) = (yaw * p0 + d, yaw * q0);
-            }
-            let (p1, q1) = self.root_model(o, &s.action, s.action_in.max(0.0) / fps, &base);
-            let (p1, q1) =
-                if s.reverse { self.root_model(o, &s.action, s.action_out / fps, &base) } else { (p1, q1) };
-            let yaw = Quat::from_rotation_y(heading(q0) - heading(q1));
-            let m = yaw * p1;
-            out.push(Some((yaw, Vec3::new(p0.x - m.x, 0.0, p0.z - m.z))));
+        let tb = before.action_frame(s.start) / fps;
+        let (mut p0, mut q0) = self.root_model(o, &before.action, tb, &base);
+        if let Some((yaw, d)) = before_offset {
+            (p0, q0) = (yaw * p0 + d, yaw * q0);
         }
-        out
+        let first = if s.reverse { s.action_out } else { s.action_in };
+        let (p1, q1) = self.root_model(o, &s.action, first / fps, &base);
+        let yaw = Quat::from_rotation_y(heading(q0) - heading(q1));
+        let m = yaw * p1;
+        (yaw, Vec3::new(p0.x - m.x, 0.0, p0.z - m.z))
     }
 
     /// Object `o`'s pose channels at time `t` (docs/clips.md, "The stack").
@@ -330,11 +358,12 @@ impl<'a> Reference<'a> {
         let f = t * fps;
         let mut pose = self.base(o);
         let any_solo = object.clip_tracks.iter().any(|t| t.solo);
-        for track in &object.clip_tracks {
+        let all_offsets = self.root_offsets(o);
+        for (k, track) in object.clip_tracks.iter().enumerate() {
             if track.mute || (any_solo && !track.solo) {
                 continue;
             }
-            let offsets = self.root_offsets(o, track);
+            let offsets = &all_offsets[k];
             let Some((i, frame, ramp)) = Self::strip_at(track, f) else { continue };
             let s = &track.strips[i];
             let influence = s.influence.sample_reference(t).clamp(0.0, 1.0);
@@ -555,31 +584,24 @@ fn tracks_layers_and_root_motion_match_the_reference() {
     let (v, deg, at) = compare(&scene, -10..=160);
     assert!(v < 1e-4 && deg < 0.01, "{v} units, {deg}° ({at})");
 
-    // Root motion: where Turn takes over at full weight, the hips continue horizontally from
-    // where Stride left them.
+    // Root motion: where Turn takes over at full weight, the walker (Stride keys the object's
+    // translation, so the object is the root) continues horizontally from where Stride left
+    // it, turned to its heading.
     let mut alone = scene.clone();
     alone.layers.clear();
     alone.objects[0].clip_tracks.truncate(1);
     alone.objects[0].clip_tracks[0].strips[2].influence = Animated::constant(1.0);
-    let eval = SceneEvaluator::new(&alone, &HashMap::new());
-    let hips_at = |f: f64| {
-        let s = eval.object_at(0, f / 24.0, &Overrides::new()).expect("object");
-        s.palette.expect("palette").model_from_joint[0].translation
+    let at = |scene: &Scene, f: f64| {
+        let eval = SceneEvaluator::new(scene, &HashMap::new());
+        eval.object_at(0, f / 24.0, &Overrides::new()).expect("object").world_from_object.translation
     };
-    let (before, after) = (hips_at(99.999), hips_at(100.0));
+    let (before, after) = (at(&alone, 99.999), at(&alone, 100.0));
     assert!(Vec3::from(before - after).with_y(0.0).length() < 1e-3, "{before} → {after}");
     alone.objects[0].clip_tracks[0].strips[2].continue_root = false;
-    let eval = SceneEvaluator::new(&alone, &HashMap::new());
-    let after = eval
-        .object_at(0, 100.0 / 24.0, &Overrides::new())
-        .expect("object")
-        .palette
-        .expect("palette")
-        .model_from_joint[0]
-        .translation;
+    let after = at(&alone, 100.0);
     assert!(
         Vec3::from(before - after).with_y(0.0).length() > 0.5,
-        "without root motion the hips jump: {before} → {after}"
+        "without root motion the walker jumps back: {before} → {after}"
     );
 
     // Override layers, mute and solo.

@@ -30,6 +30,11 @@ const BY_HAND: &[(&str, &str, &str)] = &[
         "a fragment of a scene's fields with elided keys; crates/io/tests/scene_file.rs saves and reads a scene with actions",
     ),
     (
+        "docs/scene-format.md",
+        "clip_tracks: [",
+        "a fragment of an object's fields; tests/tests/clips_file.rs saves and reads assets/clips.ron, which has clip tracks and a layer",
+    ),
+    (
         "README.md",
         "cargo xtask run",
         "installs the build's system packages, builds and opens the editor's window",

@@ -356,25 +356,45 @@ impl ObjectMix {
         let built_from = MixSource::of(scene, o)?;
         let object = &scene.objects[o];
         let fps = scene.fps;
-        let tracks: Vec<TrackRig> = object
+        let mut all_slots: Vec<Vec<ActionSlots>> = object
             .clip_tracks
             .iter()
             .map(|track| {
-                let mut strips: Vec<StripRig> = Vec::with_capacity(track.strips.len());
-                for strip in &track.strips {
-                    let mut slots = ActionSlots::new(scene, o, &strip.action);
-                    slots.set_reference(strip.action_in / fps);
-                    let influence = Slot::new(&strip.influence, ChannelId::ObjectTranslation(o));
-                    let root_offset = if strip.continue_root {
-                        strips.last().and_then(|before| root_offset(scene, o, before, strip, &slots, fps))
-                    } else {
-                        None
-                    };
-                    strips.push(StripRig { strip: strip.clone(), slots, influence, root_offset });
-                }
-                TrackRig { track: track.clone(), strips }
+                track
+                    .strips
+                    .iter()
+                    .map(|strip| {
+                        let mut slots = ActionSlots::new(scene, o, &strip.action);
+                        slots.set_reference(strip.action_in / fps);
+                        slots
+                    })
+                    .collect()
             })
             .collect();
+        let frame = RootFrame::of(scene, o, &all_slots.iter().flatten().collect::<Vec<_>>());
+        let any_solo = object.clip_tracks.iter().any(|t| t.solo);
+        let mut tracks: Vec<TrackRig> = Vec::with_capacity(object.clip_tracks.len());
+        for (track, track_slots) in object.clip_tracks.iter().zip(&mut all_slots) {
+            let mut strips: Vec<StripRig> = Vec::with_capacity(track.strips.len());
+            for (strip, slots) in track.strips.iter().zip(track_slots.drain(..)) {
+                let influence = Slot::new(&strip.influence, ChannelId::ObjectTranslation(o));
+                // The strip before: the one before it on its track, else the one playing at its
+                // start on the nearest playing track below.
+                let before = strips.last().or_else(|| {
+                    tracks.iter().rev().filter(|t| t.track.plays(any_solo)).find_map(|t| {
+                        let at = t.track.strip_at(strip.start)?;
+                        t.strips.get(at.strip)
+                    })
+                });
+                let root_offset = if strip.continue_root {
+                    before.and_then(|before| root_offset(scene, o, frame, before, strip, &slots, fps))
+                } else {
+                    None
+                };
+                strips.push(StripRig { strip: strip.clone(), slots, influence, root_offset });
+            }
+            tracks.push(TrackRig { track: track.clone(), strips });
+        }
         let any_layer_solo = scene.layers.iter().any(|l| l.solo);
         let layers = scene
             .layers
@@ -391,13 +411,7 @@ impl ObjectMix {
             object.clip_tracks.iter().flat_map(|t| &t.strips).any(|s| &s.action == active)
                 || scene.layers.iter().any(|l| &l.action == active)
         });
-        Some(ObjectMix {
-            plays_active,
-            any_solo: object.clip_tracks.iter().any(|t| t.solo),
-            tracks,
-            layers,
-            built_from,
-        })
+        Some(ObjectMix { plays_active, any_solo, tracks, layers, built_from })
     }
 
     /// True when the mix was built from what `scene` holds for object `o` now.
@@ -498,9 +512,13 @@ pub(crate) struct RootOffset {
 }
 
 impl RootFrame {
-    fn of(scene: &Scene, o: usize) -> Self {
+    /// The object itself when an action its strips play keys its translation, else joint 0
+    /// of its skeleton (when it is a root), else the object.
+    fn of(scene: &Scene, o: usize, strips: &[&ActionSlots]) -> Self {
+        let moves_object =
+            strips.iter().any(|slots| slots.vec3.iter().any(|(t, _, _)| *t == PoseTarget::Translation));
         match scene.objects[o].skeleton.as_ref().and_then(|s| s.joints.first()) {
-            Some(j) if j.parent.is_none() => {
+            Some(j) if j.parent.is_none() && !moves_object => {
                 RootFrame::Joint { rest_translation: j.rest_translation, rest_rotation: j.rest_rotation }
             }
             _ => RootFrame::Object,
@@ -588,12 +606,12 @@ pub(crate) fn base_pose(scene: &Scene, o: usize, pose: &mut PoseValues) {
 fn root_offset(
     scene: &Scene,
     o: usize,
+    frame: RootFrame,
     before: &StripRig,
     strip: &keyrig_core::Strip,
     slots: &ActionSlots,
     fps: f64,
 ) -> Option<RootOffset> {
-    let frame = RootFrame::of(scene, o);
     let joint = frame.joint();
     let mut base = PoseValues::default();
     base_pose(scene, o, &mut base);
