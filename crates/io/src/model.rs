@@ -575,6 +575,9 @@ pub enum MappingError {
     Skin { skin: usize, source: keyrig_skin::SkinError },
     #[error("mesh {mesh}: {message}")]
     Mesh { mesh: usize, message: String },
+    /// Something a scene built from the model needs is not in it (an animation by name).
+    #[error("{0}")]
+    Missing(String),
 }
 
 /// Triangle primitives merged into one vertex list, as a keyrig-skin mesh takes them: positions,

@@ -709,6 +709,22 @@ fn summary_text(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> Stri
             let _ = writeln!(w, "  {}", action_text(scene, &a));
         }
     }
+    for object in scene.objects.iter().filter(|o| !o.clip_tracks.is_empty()) {
+        let _ =
+            writeln!(w, "clips:    {:?}, {} track(s), bottom first", object.name, object.clip_tracks.len());
+        for track in &object.clip_tracks {
+            let _ = writeln!(w, "  {}", track_text(track));
+            for strip in &track.strips {
+                let _ = writeln!(w, "    {}", strip_text(strip));
+            }
+        }
+    }
+    if !scene.layers.is_empty() {
+        let _ = writeln!(w, "layers:   {}", scene.layers.len());
+        for layer in &scene.layers {
+            let _ = writeln!(w, "  {}", layer_text(layer));
+        }
+    }
     let channels = list_channels(scene);
     let names = ByName::new(scene);
     let animated: Vec<AnimatedChannel> = channels
@@ -824,6 +840,36 @@ fn summary_json(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> serd
             })
             .collect();
     }
+    if scene.objects.iter().any(|o| !o.clip_tracks.is_empty()) {
+        out["clip_tracks"] = scene
+            .objects
+            .iter()
+            .filter(|o| !o.clip_tracks.is_empty())
+            .map(|o| {
+                json!({
+                    "object": o.name,
+                    "tracks": o.clip_tracks.iter().map(|t| json!({
+                        "name": t.name,
+                        "mute": t.mute,
+                        "solo": t.solo,
+                        "strips": t.strips.iter().map(|s| json!({
+                            "action": s.action,
+                            "start": s.start,
+                            "end": s.end(),
+                            "description": strip_text(s),
+                        })).collect::<Vec<_>>(),
+                    })).collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+    }
+    if !scene.layers.is_empty() {
+        out["layers"] = scene
+            .layers
+            .iter()
+            .map(|l| json!({"name": l.name, "action": l.action, "description": layer_text(l)}))
+            .collect();
+    }
     if !scene.markers.is_empty() {
         out["markers"] = scene
             .markers
@@ -832,4 +878,62 @@ fn summary_json(path: &Path, scene: &Scene, problems: &[LocatedProblem]) -> serd
             .collect();
     }
     out
+}
+
+/// One clip track: its name and whether it plays.
+fn track_text(track: &keyrig_core::ClipTrack) -> String {
+    let state = match (track.mute, track.solo) {
+        (true, _) => ", muted",
+        (false, true) => ", solo",
+        _ => "",
+    };
+    format!("track {:?}{state}: {} strip(s)", track.name, track.strips.len())
+}
+
+/// One strip: its action, frames and what is not at its default (docs/clips.md).
+fn strip_text(s: &keyrig_core::Strip) -> String {
+    let mut out =
+        format!("{:?} frames {}..{} (action {}..{})", s.action, s.start, s.end(), s.action_in, s.action_out);
+    if s.speed != 1.0 {
+        out += &format!(", speed {}", s.speed);
+    }
+    if s.repeat != 1.0 {
+        out += &format!(", repeat {}", s.repeat);
+    }
+    if s.reverse {
+        out += ", reversed";
+    }
+    if s.blend_in != 0.0 || s.blend_out != 0.0 {
+        out += &format!(", blend {}/{}", s.blend_in, s.blend_out);
+    }
+    if s.influence.is_animated() {
+        out += &format!(", influence keyed ({} keys)", s.influence.track.len());
+    } else if s.influence.value != 1.0 {
+        out += &format!(", influence {}", s.influence.value);
+    }
+    if s.blend != keyrig_core::StripBlend::Replace {
+        out += &format!(", {:?}", s.blend);
+    }
+    if s.extrapolation != keyrig_core::Extrapolation::HoldForward {
+        out += &format!(", extrapolation {:?}", s.extrapolation);
+    }
+    if s.continue_root {
+        out += ", root continues";
+    }
+    out
+}
+
+/// One layer: its action, mode, weight and state.
+fn layer_text(l: &keyrig_core::Layer) -> String {
+    let weight = if l.weight.is_animated() {
+        format!("weight keyed ({} keys)", l.weight.track.len())
+    } else {
+        format!("weight {}", l.weight.value)
+    };
+    let state = match (l.mute, l.solo) {
+        (true, _) => ", muted",
+        (false, true) => ", solo",
+        _ => "",
+    };
+    format!("{:?}: action {:?}, {:?}, {weight}{state}", l.name, l.action, l.mode)
 }
