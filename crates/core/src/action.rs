@@ -36,6 +36,8 @@ pub enum ActionError {
     BadName(String),
     #[error("there is no object {0}")]
     NoObject(usize),
+    #[error("object {0:?} has no keys to push down")]
+    NoKeys(String),
 }
 
 /// What one action holds: its name, how many channels and keys, and the time its keys span.

@@ -171,6 +171,8 @@ pub enum SceneEdit {
     RemoveReferenceImage,
     /// Makes, copies, renames, deletes or assigns an action (docs/actions.md).
     Action(ActionEdit),
+    /// Changes clip tracks, strips or layers (docs/clips.md).
+    Clip(ClipEdit),
     /// Reduces the keys of `channels` to within `tolerance` of their curves
     /// ([`crate::cleanup::reduce_keys`], docs/cleanup.md).
     ReduceKeys { channels: Vec<ChannelId>, tolerance: ReduceTolerance },
@@ -192,6 +194,169 @@ pub enum ActionEdit {
     Rename { old: String, new: String },
     /// Deletes an action and its keys.
     Delete { name: String },
+}
+
+/// The clip track and layer edits: each one undo step (docs/clips.md).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ClipEdit {
+    /// Pushes `object`'s active action down as a strip on a new top track.
+    PushDown { object: usize },
+    /// Adds a track on top with one strip playing `action`'s keyed frames from `start`.
+    AddStrip { object: usize, action: String, start: f64 },
+    /// Replaces a strip (a drag in the clip editor, a field of its menu).
+    Strip { object: usize, track: usize, strip: usize, value: keyrig_core::Strip },
+    /// Deletes a strip (and its track, when it was the last one there).
+    DeleteStrip { object: usize, track: usize, strip: usize },
+    /// Mutes or solos a track.
+    Track { object: usize, track: usize, mute: bool, solo: bool },
+    /// Adds a layer with a new empty action of the same name.
+    AddLayer { name: String },
+    /// Replaces a layer (its weight, mode, mute or solo).
+    Layer { layer: usize, value: keyrig_core::Layer },
+    /// Deletes a layer (its action stays).
+    DeleteLayer { layer: usize },
+    /// Bakes the clip tracks and layers into the active actions over the frame range
+    /// (`keyrig_eval::merge_down`).
+    MergeDown,
+}
+
+impl ClipEdit {
+    /// Applies the edit; a refused one changes nothing.
+    ///
+    /// # Errors
+    /// Why the edit was refused, in words for the status bar.
+    pub fn apply(&self, scene: &mut Scene) -> Result<(), String> {
+        match self {
+            ClipEdit::PushDown { object } => scene.push_down(*object).map(drop).map_err(|e| e.to_string()),
+            ClipEdit::AddStrip { object, action, start } => {
+                if scene.action_index(action).is_none() {
+                    return Err(format!("there is no action {action:?}"));
+                }
+                if *object >= scene.objects.len() {
+                    return Err(format!("there is no object {object}"));
+                }
+                // The frames the action's keys span on this object; without keys, one second.
+                let (first, last) = scene.action_frames_on(*object, action).unwrap_or((0.0, scene.fps));
+                let last = if last > first { last } else { first + 1.0 };
+                let tracks = &mut scene.objects[*object].clip_tracks;
+                let mut n = tracks.len() + 1;
+                while tracks.iter().any(|t| t.name == format!("Track {n}")) {
+                    n += 1;
+                }
+                tracks.push(keyrig_core::ClipTrack {
+                    name: format!("Track {n}"),
+                    strips: vec![keyrig_core::Strip::new(action.clone(), *start, first, last)],
+                    ..keyrig_core::ClipTrack::default()
+                });
+                Ok(())
+            }
+            ClipEdit::Strip { object, track, strip, value } => {
+                let slot = scene
+                    .objects
+                    .get_mut(*object)
+                    .and_then(|o| o.clip_tracks.get_mut(*track))
+                    .and_then(|t| t.strips.get_mut(*strip))
+                    .ok_or_else(|| format!("there is no strip {strip} on track {track}"))?;
+                *slot = value.clone();
+                Ok(())
+            }
+            ClipEdit::DeleteStrip { object, track, strip } => {
+                let tracks = scene
+                    .objects
+                    .get_mut(*object)
+                    .map(|o| &mut o.clip_tracks)
+                    .ok_or_else(|| format!("there is no object {object}"))?;
+                let t = tracks.get_mut(*track).ok_or_else(|| format!("there is no track {track}"))?;
+                if *strip >= t.strips.len() {
+                    return Err(format!("there is no strip {strip} on track {track}"));
+                }
+                t.strips.remove(*strip);
+                if t.strips.is_empty() {
+                    tracks.remove(*track);
+                }
+                Ok(())
+            }
+            ClipEdit::Track { object, track, mute, solo } => {
+                let t = scene
+                    .objects
+                    .get_mut(*object)
+                    .and_then(|o| o.clip_tracks.get_mut(*track))
+                    .ok_or_else(|| format!("there is no track {track}"))?;
+                t.mute = *mute;
+                t.solo = *solo;
+                Ok(())
+            }
+            ClipEdit::AddLayer { name } => {
+                if name.is_empty() || name.contains('/') {
+                    return Err(format!("a layer name cannot be empty or contain '/': {name:?}"));
+                }
+                if scene.layers.iter().any(|l| &l.name == name) {
+                    return Err(format!("there is already a layer {name:?}"));
+                }
+                let action = scene.unused_action_name(name);
+                scene.actions.push(keyrig_core::Action { name: action.clone(), channels: Vec::new() });
+                scene.layers.push(keyrig_core::Layer::new(name.clone(), action));
+                Ok(())
+            }
+            ClipEdit::Layer { layer, value } => {
+                let l = scene.layers.get_mut(*layer).ok_or_else(|| format!("there is no layer {layer}"))?;
+                *l = value.clone();
+                Ok(())
+            }
+            ClipEdit::DeleteLayer { layer } => {
+                if *layer >= scene.layers.len() {
+                    return Err(format!("there is no layer {layer}"));
+                }
+                scene.layers.remove(*layer);
+                Ok(())
+            }
+            ClipEdit::MergeDown => {
+                let (start, end) = (scene.frame_range.start, scene.frame_range.end);
+                keyrig_eval::merge_down(scene, start, end).map(drop).map_err(|e| e.to_string())
+            }
+        }
+    }
+
+    /// The undo label.
+    fn label(&self, scene: &Scene) -> String {
+        let object =
+            |o: usize| scene.objects.get(o).map_or_else(|| format!("object {o}"), |x| x.name.clone());
+        match self {
+            ClipEdit::PushDown { object: o } => format!("push down the action of {}", object(*o)),
+            ClipEdit::AddStrip { object: o, action, start } => {
+                format!("add a strip of {action} at frame {start} on {}", object(*o))
+            }
+            ClipEdit::Strip { object: o, value, .. } => format!(
+                "strip {} at frames {:.1}–{:.1} on {}",
+                value.action,
+                value.start,
+                value.end(),
+                object(*o)
+            ),
+            ClipEdit::DeleteStrip { object: o, .. } => format!("delete a strip on {}", object(*o)),
+            ClipEdit::Track { object: o, track, mute, solo } => {
+                let name = scene
+                    .objects
+                    .get(*o)
+                    .and_then(|x| x.clip_tracks.get(*track))
+                    .map_or_else(|| format!("track {track}"), |t| t.name.clone());
+                match (mute, solo) {
+                    (true, _) => format!("mute track {name}"),
+                    (false, true) => format!("solo track {name}"),
+                    _ => format!("play track {name}"),
+                }
+            }
+            ClipEdit::AddLayer { name } => format!("add layer {name}"),
+            ClipEdit::Layer { value, .. } => {
+                format!("layer {} {:?}, weight {}", value.name, value.mode, value.weight.value)
+            }
+            ClipEdit::DeleteLayer { layer } => format!(
+                "delete layer {}",
+                scene.layers.get(*layer).map_or_else(|| layer.to_string(), |l| l.name.clone())
+            ),
+            ClipEdit::MergeDown => "merge down clip tracks and layers".to_owned(),
+        }
+    }
 }
 
 impl ActionEdit {
@@ -333,6 +498,10 @@ impl SceneEdit {
                 // a refused edit changes nothing.
                 let _ = edit.apply(scene);
             }
+            SceneEdit::Clip(edit) => {
+                // A refused clip edit (a strip that is gone, a taken layer name) changes nothing.
+                let _ = edit.apply(scene);
+            }
             &SceneEdit::FrameRange { start, end } => {
                 scene.frame_range.start = start;
                 scene.frame_range.end = end;
@@ -442,6 +611,7 @@ impl SceneEdit {
                 ActionEdit::Rename { old, new } => format!("rename action {old} to {new}"),
                 ActionEdit::Delete { name } => format!("delete action {name}"),
             },
+            SceneEdit::Clip(edit) => edit.label(scene),
             SceneEdit::FrameRange { start, end } => format!("frame range {start}–{end}"),
             SceneEdit::PreviewRange(r) => format!("preview range {}–{}", r.start, r.end),
             SceneEdit::ReferenceOpacity(_) => "reference image opacity".to_owned(),

@@ -20,4 +20,4 @@ pub mod mirror;
 pub mod scene_add;
 pub mod spin;
 
-pub use edit::{KeyParamChange, KeyRef, SceneEdit};
+pub use edit::{ClipEdit, KeyParamChange, KeyRef, SceneEdit};

@@ -170,7 +170,21 @@ impl EditorApp {
             ui.horizontal_top(|ui| {
                 let sheet_size = Vec2::new((available.x - curves_width - 8.0).max(200.0), available.y);
                 let layout = egui::Layout::top_down(egui::Align::Min);
-                ui.allocate_ui_with_layout(sheet_size, layout, |ui| panels.dope_sheet.ui(ui, &ctx, actions));
+                ui.allocate_ui_with_layout(sheet_size, layout, |ui| {
+                    // The dope sheet and the clip editor share this place: a tab each.
+                    ui.horizontal(|ui| {
+                        ui.selectable_value(&mut panels.clips.shown, false, "Dope sheet");
+                        ui.selectable_value(&mut panels.clips.shown, true, "Clips")
+                            .on_hover_text("Clip tracks, strips and layers (docs/clips.md)");
+                    });
+                    if panels.clips.shown {
+                        egui::ScrollArea::vertical()
+                            .id_salt("clips")
+                            .show(ui, |ui| panels.clips.ui(ui, &ctx, actions));
+                    } else {
+                        panels.dope_sheet.ui(ui, &ctx, actions);
+                    }
+                });
                 ui.separator();
                 let size = Vec2::new(ui.available_width(), available.y);
                 ui.allocate_ui_with_layout(size, layout, |ui| panels.curves.ui(ui, &ctx, actions));

@@ -10,6 +10,7 @@
 //! the status bar and the dialogs keep no state and are functions of the same shape.
 
 pub mod cleanup_dialog;
+pub mod clips;
 pub mod curves;
 pub mod dialogs;
 pub mod dope_sheet;
@@ -26,6 +27,7 @@ pub mod viewport;
 pub struct Panels {
     pub timeline: timeline::Timeline,
     pub dope_sheet: dope_sheet::DopeSheet,
+    pub clips: clips::ClipEditor,
     pub curves: curves::CurveEditor,
     pub outliner: outliner::Outliner,
     pub inspector: inspector::Inspector,
