@@ -13,6 +13,9 @@
 //! object/<object>/joint/<joint>/scale        Vec3   the scale of T(j)
 //! object/<object>/ik/<constraint>/target     Vec3   an IK constraint's target (object space)
 //! object/<object>/ik/<constraint>/blend      f32    an IK constraint's IK/FK blend (0 FK, 1 IK)
+//! object/<object>/constraint/<constraint>/influence  f32  an object constraint's influence (0..1)
+//! object/<object>/constraint/<constraint>/parent     f32  a child-of constraint's parent index
+//! object/<object>/constraint/<constraint>/offset     f32  a follow-path constraint's offset (0..1)
 //! light/<light>/position             Vec3
 //! light/<light>/direction            Vec3
 //! light/<light>/colour               Vec3   linear RGB
@@ -32,14 +35,14 @@ use std::fmt;
 use glam::{Quat, Vec3};
 
 use crate::channel_id::attribute_id::{AttributeId, AttributeProperty};
-use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef};
+use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef, ConstraintProperty};
 use crate::key::Animated;
 use crate::scene::{Object, Scene};
 use crate::track::{AnimatedTrack, TrackError};
 use crate::validate::track_error_path;
 
 /// Properties of an object.
-pub const OBJECT_PROPERTIES: [&str; 14] = [
+pub const OBJECT_PROPERTIES: [&str; 15] = [
     "translation",
     "rotation",
     "rotation_euler",
@@ -47,6 +50,7 @@ pub const OBJECT_PROPERTIES: [&str; 14] = [
     "root_translation",
     "joint",
     "ik",
+    "constraint",
     "visible",
     "colour",
     "opacity",
@@ -59,6 +63,8 @@ pub const OBJECT_PROPERTIES: [&str; 14] = [
 pub const JOINT_PROPERTIES: [&str; 4] = ["translation", "rotation", "rotation_euler", "scale"];
 /// Properties of an IK constraint.
 pub const IK_PROPERTIES: [&str; 2] = ["target", "blend"];
+/// Properties of an object constraint (each constraint has the ones its kind keys).
+pub const CONSTRAINT_PROPERTIES: [&str; 3] = ["influence", "parent", "offset"];
 /// Properties of a light.
 pub const LIGHT_PROPERTIES: [&str; 8] =
     ["position", "direction", "colour", "intensity", "visible", "range", "cutoff_deg", "inner_angle_deg"];
@@ -190,6 +196,12 @@ pub enum ChannelPath {
         constraint: String,
         property: IkProperty,
     },
+    /// A keyed value of an object constraint (`object/<o>/constraint/<c>/<property>`).
+    Constraint {
+        object: String,
+        constraint: String,
+        property: ConstraintProperty,
+    },
     Light {
         light: String,
         property: LightProperty,
@@ -216,6 +228,9 @@ impl fmt::Display for ChannelPath {
             }
             ChannelPath::Ik { object, constraint, property } => {
                 write!(f, "object/{object}/ik/{constraint}/{}", property.name())
+            }
+            ChannelPath::Constraint { object, constraint, property } => {
+                write!(f, "object/{object}/constraint/{constraint}/{}", property.name())
             }
             ChannelPath::Light { light, property } => write!(f, "light/{light}/{}", property.name()),
             ChannelPath::Attribute { light, owner, property } => {
@@ -257,6 +272,12 @@ pub enum ChannelError {
         listing("IK constraints", available)
     )]
     UnknownConstraint { path: String, object: String, name: String, available: Vec<String> },
+
+    #[error(
+        "channel path {path:?}: object {object:?} has no constraint named {name:?}; {}",
+        listing("constraints", available)
+    )]
+    UnknownObjectConstraint { path: String, object: String, name: String, available: Vec<String> },
 
     #[error("channel path {path:?}: no light named {name:?}; {}", listing("lights", available))]
     UnknownLight { path: String, name: String, available: Vec<String> },
@@ -351,6 +372,24 @@ impl ChannelPath {
             ["object", _, "morph", ..] => {
                 Err(syntax("a morph-weight channel is object/<name>/morph/<target index>"))
             }
+            ["object", object, "constraint", constraint, property] => {
+                let Some(property) = ConstraintProperty::from_name(property) else {
+                    return Err(ChannelError::UnknownProperty {
+                        path: path.to_string(),
+                        owner: "constraint",
+                        property: (*property).to_string(),
+                        expected: CONSTRAINT_PROPERTIES.to_vec(),
+                    });
+                };
+                Ok(ChannelPath::Constraint {
+                    object: (*object).to_string(),
+                    constraint: (*constraint).to_string(),
+                    property,
+                })
+            }
+            ["object", _, "constraint", ..] => Err(syntax(
+                "an object constraint channel is object/<name>/constraint/<constraint>/<property>",
+            )),
             ["object", _, "ik", ..] => {
                 Err(syntax("an IK constraint channel is object/<name>/ik/<constraint>/<property>"))
             }
@@ -449,6 +488,11 @@ impl ChannelPath {
             let name = x.skeleton.as_ref()?.ik_constraints.get(c)?.name.clone();
             Some(ChannelPath::Ik { object: x.name.clone(), constraint: name, property })
         };
+        let constraint = |o: usize, c: usize, property| {
+            let x = scene.objects.get(o)?;
+            let name = x.constraints.get(c)?.name.clone();
+            Some(ChannelPath::Constraint { object: x.name.clone(), constraint: name, property })
+        };
         let light = |l: usize, property| {
             scene.lights.get(l).map(|x| ChannelPath::Light { light: x.name.clone(), property })
         };
@@ -482,6 +526,7 @@ impl ChannelPath {
             ChannelId::CameraVisible(c) => camera(c, CameraProperty::Visible),
             ChannelId::ObjectEuler(o) => on_object(o, ObjectProperty::RotationEuler),
             ChannelId::JointEuler { object, joint: j } => joint(object, j, JointProperty::RotationEuler),
+            ChannelId::Constraint { object, constraint: c, property } => constraint(object, c, property),
         }
     }
 
@@ -569,6 +614,26 @@ impl ChannelPath {
                     IkProperty::Target => ChannelId::IkTarget { object: i, constraint: c },
                     IkProperty::Blend => ChannelId::IkBlend { object: i, constraint: c },
                 }
+            }
+            ChannelPath::Constraint { object, constraint, property } => {
+                let (i, o) = find_object(object)?;
+                let c = o.constraints.iter().position(|c| c.name == *constraint).ok_or_else(|| {
+                    ChannelError::UnknownObjectConstraint {
+                        path: path.clone(),
+                        object: o.name.clone(),
+                        name: constraint.clone(),
+                        available: o.constraints.iter().map(|c| c.name.clone()).collect(),
+                    }
+                })?;
+                if property.of(&o.constraints[c]).is_none() {
+                    return Err(ChannelError::NotSet {
+                        path: path.clone(),
+                        owner: format!("constraint {constraint:?} of object {:?}", o.name),
+                        what: property.name().to_owned(),
+                        hint: format!(" (it is a {} constraint)", o.constraints[c].kind.label()),
+                    });
+                }
+                ChannelId::Constraint { object: i, constraint: c, property: *property }
             }
             ChannelPath::Attribute { light, owner, property } => {
                 let id = if *light {
@@ -719,6 +784,15 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
                         property,
                     });
                 }
+            }
+        }
+        for c in &o.constraints {
+            for property in ConstraintProperty::of_constraint(c) {
+                out.push(ChannelPath::Constraint {
+                    object: o.name.clone(),
+                    constraint: c.name.clone(),
+                    property,
+                });
             }
         }
     }

@@ -9,6 +9,7 @@ use glam::{EulerRot, Quat, Vec3};
 pub mod attribute_id;
 
 use crate::key::Animated;
+use crate::object_constraint::{ConstraintKind, ObjectConstraint};
 use crate::rotation_mode::RotationMode;
 use crate::scene::Scene;
 pub use attribute_id::AttributeId;
@@ -81,6 +82,89 @@ pub enum ChannelId {
         object: usize,
         joint: usize,
     },
+    /// A keyed value of an object constraint ([`crate::object_constraint`]): its influence, a
+    /// child-of constraint's parent index, a follow-path constraint's offset.
+    Constraint {
+        object: usize,
+        constraint: usize,
+        property: ConstraintProperty,
+    },
+}
+
+/// The keyed values of an object constraint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+pub enum ConstraintProperty {
+    /// 0 (no effect) to 1 (the constraint's result).
+    Influence,
+    /// A child-of constraint's parent: an index into its parents (Step keys).
+    Parent,
+    /// A follow-path constraint's offset along the path, 0 to 1.
+    Offset,
+}
+
+impl ConstraintProperty {
+    /// The name in channel paths (`object/<o>/constraint/<c>/<name>`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ConstraintProperty::Influence => "influence",
+            ConstraintProperty::Parent => "parent",
+            ConstraintProperty::Offset => "offset",
+        }
+    }
+
+    /// The property named `name` in a channel path.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Some(match name {
+            "influence" => ConstraintProperty::Influence,
+            "parent" => ConstraintProperty::Parent,
+            "offset" => ConstraintProperty::Offset,
+            _ => return None,
+        })
+    }
+
+    /// The field of the constraint that holds the channel, relative to the constraint.
+    fn field(self) -> &'static str {
+        match self {
+            ConstraintProperty::Influence => "influence",
+            ConstraintProperty::Parent => "kind.parent",
+            ConstraintProperty::Offset => "kind.offset",
+        }
+    }
+
+    /// The constraint's channel of this property, if it has one.
+    #[must_use]
+    pub fn of(self, c: &ObjectConstraint) -> Option<&Animated<f32>> {
+        match (self, &c.kind) {
+            (ConstraintProperty::Influence, _) => Some(&c.influence),
+            (ConstraintProperty::Parent, ConstraintKind::ChildOf { parent, .. }) => Some(parent),
+            (ConstraintProperty::Offset, ConstraintKind::FollowPath { offset, .. }) => Some(offset),
+            _ => None,
+        }
+    }
+
+    /// [`ConstraintProperty::of`], mutably.
+    pub fn of_mut(self, c: &mut ObjectConstraint) -> Option<&mut Animated<f32>> {
+        match (self, &mut c.kind) {
+            (ConstraintProperty::Influence, _) => Some(&mut c.influence),
+            (ConstraintProperty::Parent, ConstraintKind::ChildOf { parent, .. }) => Some(parent),
+            (ConstraintProperty::Offset, ConstraintKind::FollowPath { offset, .. }) => Some(offset),
+            _ => None,
+        }
+    }
+
+    /// The properties a constraint has: its influence, then its kind's own.
+    #[must_use]
+    pub fn of_constraint(c: &ObjectConstraint) -> Vec<ConstraintProperty> {
+        let mut out = vec![ConstraintProperty::Influence];
+        match c.kind {
+            ConstraintKind::ChildOf { .. } => out.push(ConstraintProperty::Parent),
+            ConstraintKind::FollowPath { .. } => out.push(ConstraintProperty::Offset),
+            _ => {}
+        }
+        out
+    }
 }
 
 /// What kind of value a channel holds.
@@ -103,7 +187,8 @@ impl ChannelId {
             | ChannelId::IkBlend { .. }
             | ChannelId::CameraLens(_)
             | ChannelId::CameraRoll(_)
-            | ChannelId::CameraVisible(_) => ChannelKind::Scalar,
+            | ChannelId::CameraVisible(_)
+            | ChannelId::Constraint { .. } => ChannelKind::Scalar,
             _ => ChannelKind::Vec3,
         }
     }
@@ -129,6 +214,11 @@ impl ChannelId {
             ChannelId::CameraRoll(_) => "roll",
             ChannelId::CameraVisible(_) => "visible",
             ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => "rotation (Euler °)",
+            ChannelId::Constraint { property, .. } => match property {
+                ConstraintProperty::Influence => "influence",
+                ConstraintProperty::Parent => "parent",
+                ConstraintProperty::Offset => "path offset",
+            },
         }
     }
 
@@ -170,6 +260,9 @@ impl ChannelId {
             ChannelId::JointEuler { object, joint } => {
                 format!("objects[{object}].skeleton.joints[{joint}].rotation_euler")
             }
+            ChannelId::Constraint { object, constraint, property } => {
+                format!("objects[{object}].constraints[{constraint}].{}", property.field())
+            }
         }
     }
 
@@ -208,6 +301,17 @@ impl ChannelId {
             for constraint in 0..skeleton.ik_constraints.len() {
                 out.push(ChannelId::IkTarget { object, constraint });
                 out.push(ChannelId::IkBlend { object, constraint });
+            }
+        }
+        if let Some(o) = scene.objects.get(object) {
+            for (constraint, c) in o.constraints.iter().enumerate() {
+                out.extend(
+                    ConstraintProperty::of_constraint(c).into_iter().map(|property| ChannelId::Constraint {
+                        object,
+                        constraint,
+                        property,
+                    }),
+                );
             }
         }
         out.extend(AttributeId::of_object(scene, object));
@@ -250,7 +354,8 @@ impl ChannelId {
     pub fn is_switch(self) -> bool {
         match self {
             ChannelId::Attribute(a) => a.is_switch(),
-            ChannelId::CameraVisible(_) => true,
+            ChannelId::CameraVisible(_)
+            | ChannelId::Constraint { property: ConstraintProperty::Parent, .. } => true,
             _ => false,
         }
     }
@@ -304,6 +409,9 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
             scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.name.clone()
         }
         ChannelId::Attribute(a) => a.owner_name(scene)?,
+        ChannelId::Constraint { object, constraint, .. } => {
+            scene.objects.get(object)?.constraints.get(constraint)?.name.clone()
+        }
         ChannelId::CameraTranslation(c)
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
@@ -386,6 +494,9 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::JointEuler { object, joint } => ChannelRef::Vec3(
             scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation_euler.as_ref()?,
         ),
+        ChannelId::Constraint { object, constraint, property } => {
+            ChannelRef::Scalar(property.of(scene.objects.get(object)?.constraints.get(constraint)?)?)
+        }
     })
 }
 
@@ -435,6 +546,9 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
                 .get_mut(joint)?
                 .rotation_euler
                 .as_mut()?,
+        ),
+        ChannelId::Constraint { object, constraint, property } => ChannelMut::Scalar(
+            property.of_mut(scene.objects.get_mut(object)?.constraints.get_mut(constraint)?)?,
         ),
     })
 }

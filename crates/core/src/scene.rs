@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::attributes::{LightAttributes, ObjectAttributes};
 use crate::camera_object::{Marker, RenderSize, SceneCamera};
 use crate::key::{Animated, RawTrack};
+use crate::object_constraint::ObjectConstraint;
 use crate::rotation_mode::RotationMode;
 
 /// A whole scene: timing, animated objects, lights and a camera.
@@ -200,6 +201,11 @@ pub struct Object {
     /// keys. `None` (left out of the file): keys that belong to no named action.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub action: Option<String>,
+    /// Constraints applied in order after the object's own transform (aim at, child of, copy
+    /// location or rotation, follow path; docs/constraints.md); left out of the file while
+    /// there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<ObjectConstraint>,
 }
 
 impl Object {
@@ -218,6 +224,7 @@ impl Object {
             deformer: DeformerSettings::default(),
             attributes: ObjectAttributes::default(),
             action: None,
+            constraints: Vec::new(),
         }
     }
 }

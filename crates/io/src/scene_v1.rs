@@ -86,6 +86,7 @@ impl ObjectV1 {
             deformer: self.deformer,
             attributes: keyrig_core::ObjectAttributes::default(),
             action: None,
+            constraints: Vec::new(),
         }
     }
 }
