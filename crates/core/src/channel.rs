@@ -24,6 +24,7 @@
 //! camera/<camera>/rotation           Quat   its orientation (looks down −Z, +Y up)
 //! camera/<camera>/lens               f32    field of view °, focal length mm or ortho height
 //! camera/<camera>/roll               f32    an aimed camera's roll about its view axis, °
+//! camera/<camera>/aim_influence      f32    an aimed camera's aim influence, 0..1
 //! ```
 //!
 //! [`ChannelPath::parse`] checks the syntax; [`ChannelPath::resolve`] finds the value in a
@@ -70,7 +71,8 @@ pub const LIGHT_PROPERTIES: [&str; 8] =
     ["position", "direction", "colour", "intensity", "visible", "range", "cutoff_deg", "inner_angle_deg"];
 
 /// Properties of a scene camera.
-pub const CAMERA_PROPERTIES: [&str; 5] = ["translation", "rotation", "lens", "roll", "visible"];
+pub const CAMERA_PROPERTIES: [&str; 6] =
+    ["translation", "rotation", "lens", "roll", "aim_influence", "visible"];
 
 /// One animated value of a scene camera.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -79,6 +81,7 @@ pub enum CameraProperty {
     Rotation,
     Lens,
     Roll,
+    AimInfluence,
     Visible,
 }
 
@@ -90,6 +93,7 @@ impl CameraProperty {
             CameraProperty::Rotation => "rotation",
             CameraProperty::Lens => "lens",
             CameraProperty::Roll => "roll",
+            CameraProperty::AimInfluence => "aim_influence",
             CameraProperty::Visible => "visible",
         }
     }
@@ -287,7 +291,9 @@ pub enum ChannelError {
     #[error("channel path {path:?}: no camera named {name:?}; {}", listing("cameras", available))]
     UnknownCamera { path: String, name: String, available: Vec<String> },
 
-    #[error("channel path {path:?}: camera {camera:?} has no aim constraint, so it has no roll")]
+    #[error(
+        "channel path {path:?}: camera {camera:?} has no aim constraint, so it has no roll or aim_influence"
+    )]
     NoAim { path: String, camera: String },
 
     /// The channel exists but its keys are invalid.
@@ -448,6 +454,7 @@ impl ChannelPath {
                     "rotation" => CameraProperty::Rotation,
                     "lens" => CameraProperty::Lens,
                     "roll" => CameraProperty::Roll,
+                    "aim_influence" => CameraProperty::AimInfluence,
                     "visible" => CameraProperty::Visible,
                     other => {
                         return Err(ChannelError::UnknownProperty {
@@ -523,6 +530,7 @@ impl ChannelPath {
             ChannelId::CameraRotation(c) => camera(c, CameraProperty::Rotation),
             ChannelId::CameraLens(c) => camera(c, CameraProperty::Lens),
             ChannelId::CameraRoll(c) => camera(c, CameraProperty::Roll),
+            ChannelId::CameraAimInfluence(c) => camera(c, CameraProperty::AimInfluence),
             ChannelId::CameraVisible(c) => camera(c, CameraProperty::Visible),
             ChannelId::ObjectEuler(o) => on_object(o, ObjectProperty::RotationEuler),
             ChannelId::JointEuler { object, joint: j } => joint(object, j, JointProperty::RotationEuler),
@@ -698,6 +706,12 @@ impl ChannelPath {
                         }
                         ChannelId::CameraRoll(i)
                     }
+                    CameraProperty::AimInfluence => {
+                        if scene.cameras[i].aim.is_none() {
+                            return Err(ChannelError::NoAim { path: path.clone(), camera: camera.clone() });
+                        }
+                        ChannelId::CameraAimInfluence(i)
+                    }
                     CameraProperty::Visible => ChannelId::CameraVisible(i),
                 }
             }
@@ -835,6 +849,7 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
         }
         if c.aim.is_some() {
             out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Roll });
+            out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::AimInfluence });
         }
         if c.visible.is_animated() || c.visible.value != 1.0 {
             out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Visible });

@@ -72,6 +72,8 @@ pub enum ChannelId {
     CameraLens(usize),
     /// The roll (degrees) of an aimed scene camera.
     CameraRoll(usize),
+    /// The influence of a scene camera's aim (0 its keyed rotation, 1 the aim).
+    CameraAimInfluence(usize),
     /// A scene camera's visibility: 1 shown, 0 hidden (Step keys).
     CameraVisible(usize),
     /// An object's Euler keys (x, y, z in degrees), listed in place of its rotation while it
@@ -187,6 +189,7 @@ impl ChannelId {
             | ChannelId::IkBlend { .. }
             | ChannelId::CameraLens(_)
             | ChannelId::CameraRoll(_)
+            | ChannelId::CameraAimInfluence(_)
             | ChannelId::CameraVisible(_)
             | ChannelId::Constraint { .. } => ChannelKind::Scalar,
             _ => ChannelKind::Vec3,
@@ -212,6 +215,7 @@ impl ChannelId {
             ChannelId::CameraRotation(_) => "rotation",
             ChannelId::CameraLens(_) => "lens",
             ChannelId::CameraRoll(_) => "roll",
+            ChannelId::CameraAimInfluence(_) => "aim influence",
             ChannelId::CameraVisible(_) => "visible",
             ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => "rotation (Euler °)",
             ChannelId::Constraint { property, .. } => match property {
@@ -255,6 +259,7 @@ impl ChannelId {
             ChannelId::CameraRotation(c) => format!("cameras[{c}].rotation"),
             ChannelId::CameraLens(c) => format!("cameras[{c}].lens"),
             ChannelId::CameraRoll(c) => format!("cameras[{c}].aim.roll"),
+            ChannelId::CameraAimInfluence(c) => format!("cameras[{c}].aim.influence"),
             ChannelId::CameraVisible(c) => format!("cameras[{c}].visible"),
             ChannelId::ObjectEuler(o) => format!("objects[{o}].rotation_euler"),
             ChannelId::JointEuler { object, joint } => {
@@ -342,6 +347,7 @@ impl ChannelId {
         let Some(c) = scene.cameras.get(camera) else { return out };
         if c.aim.is_some() {
             out.push(ChannelId::CameraRoll(camera));
+            out.push(ChannelId::CameraAimInfluence(camera));
         }
         if c.visible.is_animated() || c.visible.value != 1.0 {
             out.push(ChannelId::CameraVisible(camera));
@@ -416,6 +422,7 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
         | ChannelId::CameraRoll(c)
+        | ChannelId::CameraAimInfluence(c)
         | ChannelId::CameraVisible(c) => scene.cameras.get(c)?.name.clone(),
     })
 }
@@ -489,6 +496,9 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::CameraRotation(c) => ChannelRef::Rotation(&scene.cameras.get(c)?.rotation),
         ChannelId::CameraLens(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.roll),
+        ChannelId::CameraAimInfluence(c) => {
+            ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.influence)
+        }
         ChannelId::CameraVisible(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.visible),
         ChannelId::ObjectEuler(o) => ChannelRef::Vec3(scene.objects.get(o)?.rotation_euler.as_ref()?),
         ChannelId::JointEuler { object, joint } => ChannelRef::Vec3(
@@ -534,6 +544,9 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::CameraRotation(c) => ChannelMut::Rotation(&mut scene.cameras.get_mut(c)?.rotation),
         ChannelId::CameraLens(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.roll),
+        ChannelId::CameraAimInfluence(c) => {
+            ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.influence)
+        }
         ChannelId::CameraVisible(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.visible),
         ChannelId::ObjectEuler(o) => ChannelMut::Vec3(scene.objects.get_mut(o)?.rotation_euler.as_mut()?),
         ChannelId::JointEuler { object, joint } => ChannelMut::Vec3(

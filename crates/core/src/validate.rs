@@ -625,6 +625,7 @@ impl Checker {
                 self.push(join(&ap, "up"), "zero up direction");
             }
             self.animated(&join(&ap, "roll"), &aim.roll);
+            self.unit_interval(&join(&ap, "influence"), &aim.influence, "aim influence");
             self.target(&join(&ap, "target"), &aim.target, scene, "to aim at");
         }
     }
@@ -681,20 +682,21 @@ impl Checker {
         }
     }
 
+    /// A keyed value whose value and keys must lie in [0, 1].
+    fn unit_interval(&mut self, at: &str, a: &Animated<f32>, what: &str) {
+        self.animated(at, a);
+        let values = std::iter::once((join(at, "value"), a.value))
+            .chain(a.track.keys.iter().enumerate().map(|(i, k)| (format!("{at}.track[{i}].value"), k.value)));
+        for (p, v) in values {
+            if v.is_finite() && !(0.0..=1.0).contains(&v) {
+                self.push(p, format!("{what} {v} is outside [0, 1]"));
+            }
+        }
+    }
+
     fn object_constraint(&mut self, path: &str, object: &Object, c: &ObjectConstraint, scene: &Scene) {
         use crate::object_constraint::ConstraintKind as K;
-        let unit = |this: &mut Self, at: &str, a: &Animated<f32>, what: &str| {
-            this.animated(at, a);
-            let values = std::iter::once((join(at, "value"), a.value)).chain(
-                a.track.keys.iter().enumerate().map(|(i, k)| (format!("{at}.track[{i}].value"), k.value)),
-            );
-            for (p, v) in values {
-                if v.is_finite() && !(0.0..=1.0).contains(&v) {
-                    this.push(p, format!("{what} {v} is outside [0, 1]"));
-                }
-            }
-        };
-        unit(self, &join(path, "influence"), &c.influence, "influence");
+        self.unit_interval(&join(path, "influence"), &c.influence, "influence");
         let target = |this: &mut Self, tp: String, t: &AimTarget| {
             this.target(&tp, t, scene, "to constrain to");
             let own = match t {
@@ -741,7 +743,7 @@ impl Checker {
                 if let Some(space) = space {
                     target(self, join(path, "kind.space"), &AimTarget::Object(space.clone()));
                 }
-                unit(self, &join(path, "kind.offset"), offset, "path offset");
+                self.unit_interval(&join(path, "kind.offset"), offset, "path offset");
             }
         }
     }

@@ -490,6 +490,9 @@ impl SceneEvaluator {
             ChannelId::CameraRoll(c) => {
                 Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.roll.sample(time)))
             }
+            ChannelId::CameraAimInfluence(c) => {
+                Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.influence.sample(time)))
+            }
             ChannelId::CameraVisible(c) => {
                 Some(ChannelValue::Scalar(self.cameras.get(c)?.visible.sample(time)))
             }

@@ -485,3 +485,29 @@ fn baking_reproduces_every_frame_and_removes_the_constraints() {
         }
     }
 }
+
+// ---- a camera's aim, keyable --------------------------------------------------------------
+
+#[test]
+fn a_cameras_aim_has_a_keyed_influence() {
+    use keyrig_core::{Aim, SceneCamera};
+    let mut scene = hands();
+    let mut camera = SceneCamera::new("Dolly", Vec3::new(0.0, 2.0, 6.0));
+    camera.rotation = Animated::constant(Quat::from_rotation_y(0.3));
+    let mut looking = Aim::at(AimTarget::Object("Hand L".into()));
+    looking.influence.track = linear(vec![(0.0, 0.0), (2.0, 1.0)]);
+    camera.aim = Some(looking);
+    scene.cameras.push(camera);
+    let eval = evaluator(&scene);
+    let eye = DVec3::new(0.0, 2.0, 6.0);
+    for frame in [0, 15, 30, 45, 60] {
+        let t = f64::from(frame) / 30.0;
+        // The aim is an aim at with axis −Z and +Y up, blended from the keyed rotation.
+        let aimed = aim(hand_l(t).translation - eye, DVec3::Y, DVec3::NEG_Z, DVec3::Y);
+        let want = trs(eye, slerp(dq(Quat::from_rotation_y(0.3)), aimed, t / 2.0), DVec3::ONE);
+        let state = eval.evaluate(t, &Overrides::new());
+        assert_affine(&state.cameras[0].world_from_camera, &want, 2e-5, &format!("camera at {t}"));
+        let alone = eval.camera_at(0, t, &Overrides::new()).expect("the camera");
+        assert!(alone.world_from_camera.abs_diff_eq(state.cameras[0].world_from_camera, 1e-6));
+    }
+}

@@ -7,15 +7,17 @@ use std::collections::HashMap;
 
 use glam::{Quat, Vec3};
 use keyrig_core::{
-    AimAxis, AimTarget, Animated, ChildOfParent, ConstraintKind, Interpolation, Key, Object, ObjectConstraint,
-    RawTrack, Scene,
+    AimAxis, AimTarget, Animated, ChildOfParent, ConstraintKind, Interpolation, Key, Object,
+    ObjectConstraint, RawTrack, Scene,
 };
 use keyrig_eval::{switch_parent, Overrides, SceneEvaluator};
 use keyrig_io::gltf_export::{export_scene, BakeOptions, ExportOptions};
 use keyrig_io::gltf_import::import_gltf_slice;
 
 fn linear<T>(keys: Vec<(f64, T)>) -> RawTrack<T> {
-    RawTrack::new(keys.into_iter().map(|(t, v)| Key::new(t, v).with_interpolation(Interpolation::Linear)).collect())
+    RawTrack::new(
+        keys.into_iter().map(|(t, v)| Key::new(t, v).with_interpolation(Interpolation::Linear)).collect(),
+    )
 }
 
 fn scene() -> Scene {
@@ -49,8 +51,10 @@ fn constrained_objects_export_where_the_evaluator_puts_them() {
     let scene = scene();
     assert!(scene.problems().is_empty(), "{:?}", scene.problems());
     let eval = SceneEvaluator::new(&scene, &HashMap::new());
-    for options in [ExportOptions::default(), ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() }]
-    {
+    for options in [
+        ExportOptions::default(),
+        ExportOptions { bake: Some(BakeOptions::default()), ..ExportOptions::default() },
+    ] {
         let exported = export_scene(&scene, &options).expect("export");
         let model = import_gltf_slice(&exported.to_glb()).expect("re-import");
         for (o, name) in [(0, "Looker"), (1, "Prop")] {
@@ -71,4 +75,60 @@ fn constrained_objects_export_where_the_evaluator_puts_them() {
             }
         }
     }
+}
+
+/// The `constraints` example of docs/scene-format.md ("ObjectConstraint").
+fn documented_constraints() -> String {
+    let doc = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md"),
+    )
+    .expect("read docs/scene-format.md");
+    let section = doc.find("#### ObjectConstraint").expect("the section");
+    let start = section + doc[section..].find("```ron\n").expect("a ```ron block") + "```ron\n".len();
+    let len = doc[start..].find("```").expect("closing fence");
+    doc[start..start + len].to_string()
+}
+
+#[test]
+fn the_documented_constraints_load_and_save_in_version_4() {
+    let object = |name: &str, extra: &str| {
+        format!(
+            "(name: {name:?}, translation: (value: (0.0, 0.0, 0.0)), rotation: (value: (0.0, 0.0, 0.0, 1.0)), \
+             scale: (value: (1.0, 1.0, 1.0)), {extra})"
+        )
+    };
+    let arm = "skeleton: Some((joints: [(name: \"wrist\", parent: None, rest_translation: (0.0, 1.0, 0.0), \
+               rest_rotation: (0.0, 0.0, 0.0, 1.0), rotation: (value: (0.0, 0.0, 0.0, 1.0)))], \
+               root_translation: (value: (0.0, 0.0, 0.0))))";
+    let text = format!(
+        "(version: 4, scene: (fps: 30.0, frame_range: (start: 0, end: 60), objects: [{}, {}, {}, {}]))",
+        object("HandL", ""),
+        object("HandR", ""),
+        object("Arm", arm),
+        object("Prop", &documented_constraints()),
+    );
+    let path = std::path::Path::new("constraints.ron");
+    let scene = keyrig_io::scene_file::from_str(&text, path).expect("the documented constraints load");
+    let prop = &scene.objects[3];
+    assert_eq!(prop.constraints.len(), 2);
+    let ConstraintKind::ChildOf { parents, parent } = &prop.constraints[0].kind else { panic!("child of") };
+    assert_eq!(parents.len(), 2);
+    assert_eq!(parents[0].offset, glam::Mat4::IDENTITY);
+    assert_eq!(parents[1].offset.w_axis, glam::Vec4::new(-4.0, 0.0, 0.0, 1.0));
+    assert_eq!(parent.track.len(), 2);
+    assert_eq!(
+        prop.constraints[1].kind,
+        ConstraintKind::AimAt {
+            target: AimTarget::Joint { object: "Arm".into(), joint: "wrist".into() },
+            axis: AimAxis::NegZ,
+            up: Vec3::Y,
+        }
+    );
+    let saved = keyrig_io::scene_file::to_string(&scene).expect("saves");
+    assert!(saved.contains("version: 4"), "{saved}");
+    assert_eq!(keyrig_io::scene_file::from_str(&saved, path).expect("reads back"), scene);
+    // A scene without constraints writes no `constraints` field.
+    let mut plain = scene.clone();
+    plain.objects[3].constraints.clear();
+    assert!(!keyrig_io::scene_file::to_string(&plain).expect("saves").contains("constraints"));
 }
