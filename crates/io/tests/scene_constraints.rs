@@ -132,3 +132,36 @@ fn the_documented_constraints_load_and_save_in_version_4() {
     plain.objects[3].constraints.clear();
     assert!(!keyrig_io::scene_file::to_string(&plain).expect("saves").contains("constraints"));
 }
+
+/// VRML export bakes them too: the interpolators (read without the scene metadata, as another
+/// program would) put the prop and the looker where the evaluator does at every frame.
+#[test]
+fn vrml_export_bakes_constraints_into_its_interpolators() {
+    use keyrig_io::vrml::export::{ExportFormat, VrmlExportOptions, METADATA_TAG};
+    let mut scene = scene();
+    for o in &mut scene.objects {
+        o.mesh = Some(keyrig_core::MeshSource::Procedural(keyrig_core::ProceduralMesh::Cube));
+    }
+    let eval = SceneEvaluator::new(&scene, &HashMap::new());
+    let text =
+        keyrig_io::vrml::export::export_scene(&scene, ExportFormat::Vrml97, &VrmlExportOptions::default())
+            .expect("export");
+    // Without the metadata the importer reads the nodes and interpolators alone.
+    let text = text.replace(METADATA_TAG, "note");
+    let model = keyrig_io::vrml::import_vrml_slice(text.as_bytes(), "constraints.wrl").expect("import");
+    let back = model.to_scene("constraints.wrl");
+    let back_eval = SceneEvaluator::new(&back, &HashMap::new());
+    for (o, name) in [(0, "Looker"), (1, "Prop")] {
+        let b = back.objects.iter().position(|x| x.name == name).expect("the object comes back");
+        assert!(back.objects[b].constraints.is_empty());
+        for frame in scene.frame_range.start..=scene.frame_range.end {
+            let t = f64::from(frame) / scene.fps;
+            let want = eval.object_at(o, t, &Overrides::new()).expect("object").world_from_object;
+            let got = back_eval.object_at(b, t, &Overrides::new()).expect("object").world_from_object;
+            let (_, wr, wt) = want.to_scale_rotation_translation();
+            let (_, gr, gt) = got.to_scale_rotation_translation();
+            assert!(gt.abs_diff_eq(wt, 1e-2), "{name} at frame {frame}: {gt} vs {wt}");
+            assert!(gr.angle_between(wr) < 1e-2, "{name} at frame {frame}: {} rad off", gr.angle_between(wr));
+        }
+    }
+}
