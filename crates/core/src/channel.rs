@@ -1074,7 +1074,7 @@ mod tests {
             .contains("light properties are: position, direction, colour, intensity"));
         assert!(err("object/Arm/joint/elbow/size").contains("unknown joint property \"size\""));
         assert!(err("camera/x/y").contains(
-            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll, visible"
+            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll, aim_influence, visible"
         ));
         assert!(err("lamp/x/y").contains("unknown kind \"lamp\""));
         assert!(err("object/Arm").contains("missing property"));
@@ -1131,6 +1131,48 @@ mod tests {
     }
 
     #[test]
+    fn object_constraint_channels_resolve() {
+        use crate::object_constraint::{ChildOfParent, ConstraintKind, ObjectConstraint};
+        use crate::AimTarget;
+        let mut s = Scene::default();
+        s.objects.push(Object::new("Hand"));
+        let mut prop = Object::new("Prop");
+        prop.constraints.push(ObjectConstraint::new(
+            "Held",
+            ConstraintKind::ChildOf {
+                parents: vec![ChildOfParent::new(AimTarget::Object("Hand".into()))],
+                parent: Animated::constant(0.0),
+            },
+        ));
+        s.objects.push(prop);
+        let resolve = |p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(&s));
+        let parent = resolve("object/Prop/constraint/Held/parent").unwrap();
+        assert_eq!(parent.field, "objects[1].constraints[0].kind.parent");
+        assert_eq!(
+            resolve("object/Prop/constraint/Held/influence").unwrap().field,
+            "objects[1].constraints[0].influence"
+        );
+        let err = resolve("object/Prop/constraint/Held/offset").unwrap_err().to_string();
+        assert!(err.contains("has no offset channel (it is a Child of constraint)"), "{err}");
+        let err = resolve("object/Prop/constraint/Grip/influence").unwrap_err().to_string();
+        assert!(err.contains("no constraint named \"Grip\"; constraints: \"Held\""), "{err}");
+        let err = ChannelPath::parse("object/Prop/constraint/Held/size").unwrap_err().to_string();
+        assert!(err.contains("constraint properties are: influence, parent, offset"), "{err}");
+        let id = ChannelId::Constraint {
+            object: 1,
+            constraint: 0,
+            property: crate::channel_id::ConstraintProperty::Parent,
+        };
+        assert_eq!(
+            ChannelPath::of(&s, id).map(|p| p.to_string()).as_deref(),
+            Some("object/Prop/constraint/Held/parent")
+        );
+        assert!(id.is_switch());
+        let names: Vec<String> = list_channels(&s).iter().map(ToString::to_string).collect();
+        assert!(names.contains(&"object/Prop/constraint/Held/parent".to_owned()), "{names:?}");
+    }
+
+    #[test]
     fn camera_channels_resolve() {
         use crate::camera_object::{Aim, AimTarget, SceneCamera};
         let mut s = scene();
@@ -1152,9 +1194,16 @@ mod tests {
         assert_eq!(resolve(&s, "camera/Shot/roll").unwrap().field, "cameras[0].aim.roll");
         let names: Vec<String> = list_channels(&s).iter().map(ToString::to_string).collect();
         assert_eq!(
-            &names[names.len() - 4..],
-            ["camera/Shot/translation", "camera/Shot/rotation", "camera/Shot/lens", "camera/Shot/roll"]
+            &names[names.len() - 5..],
+            [
+                "camera/Shot/translation",
+                "camera/Shot/rotation",
+                "camera/Shot/lens",
+                "camera/Shot/roll",
+                "camera/Shot/aim_influence"
+            ]
         );
+        assert_eq!(resolve(&s, "camera/Shot/aim_influence").unwrap().field, "cameras[0].aim.influence");
         for text in
             ["camera/Shot/translation", "camera/Shot/rotation", "camera/Shot/lens", "camera/Shot/roll"]
         {
