@@ -94,3 +94,40 @@ fn add_retarget_key_and_remove_a_constraint_one_undo_step_each() {
     }
     assert_eq!(h.state().doc.scene(), &before);
 }
+
+/// A child-of constraint switched to another parent at the current frame from the inspector:
+/// the Cube does not move at the switch, the parent channel gets its Step keys, one undo step.
+#[test]
+fn switch_a_child_of_parent_here_without_a_pop() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness(dir.path(), None);
+    h.get_all_by_label("Cube").next().expect("the Cube in the outliner").click();
+    h.run();
+    let cube = cube_index(&h);
+    click(&mut h, Role::ComboBox, "Add constraint");
+    h.get_by_label("Child of").click();
+    h.run();
+    go_to_frame(&mut h, 20);
+    let world =
+        |h: &Harness<'_, EditorApp>| h.state().object_pose_now(cube).expect("the Cube").world_from_object;
+    let before = world(&h);
+    let steps = h.state().doc.undo_len();
+    click(&mut h, Role::ComboBox, "Switch Child of here to");
+    h.get_by_label("Arm / wrist").click();
+    h.run();
+    assert_eq!(h.state().doc.undo_len(), steps + 1);
+    assert_eq!(h.state().doc.undo_label(), Some("switch Child of to Arm / wrist"));
+    let after = world(&h);
+    assert!(after.abs_diff_eq(before, 1e-4), "no pop: {before:?} → {after:?}");
+    let scene = h.state().doc.scene().clone();
+    let ConstraintKind::ChildOf { parents, parent } = &scene.objects[cube].constraints[0].kind else {
+        panic!("a child of")
+    };
+    assert_eq!(parents.len(), 2);
+    let keys: Vec<(i64, f32)> =
+        parent.track.keys.iter().map(|k| ((k.time * scene.fps).round() as i64, k.value)).collect();
+    assert_eq!(keys, vec![(0, 0.0), (20, 1.0)]);
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    press(&mut h, Modifiers::COMMAND, Key::Z);
+    assert!(world(&h).abs_diff_eq(before, 1e-6), "undo takes the switch back");
+}

@@ -7,7 +7,7 @@ use egui::Ui;
 use keyrig_core::channel_id::ConstraintProperty;
 use keyrig_core::{AimTarget, ConstraintKind, Scene};
 
-use crate::actions::{Actions, Edit};
+use crate::actions::{Action, Actions, Edit};
 use crate::context::FrameCtx;
 use keyrig_edit::channels::ChannelId;
 use keyrig_edit::edit::{new_constraint, target_label, CONSTRAINT_KINDS};
@@ -36,7 +36,7 @@ pub(super) fn constraints_ui(
             | ConstraintKind::CopyLocation { target }
             | ConstraintKind::CopyRotation { target } => {
                 let label = format!("Target of {}", constraint.name);
-                if let Some(target) = target_combo(ui, scene, &object.name, target, &label) {
+                if let Some(target) = target_combo(ui, scene, &object.name, Some(target), &label) {
                     actions.edit(Edit::scene(SceneEdit::ConstraintTarget {
                         object: o,
                         constraint: c,
@@ -47,6 +47,12 @@ pub(super) fn constraints_ui(
             ConstraintKind::ChildOf { parents, .. } => {
                 let names: Vec<String> = parents.iter().map(|p| target_label(&p.target)).collect();
                 ui.weak(format!("parents: {}", names.join(", ")));
+                // A switch at the current frame, keeping the object where it is; the world is
+                // the point target at the origin (docs/constraints.md, "Child of").
+                let label = format!("Switch {} here to", constraint.name);
+                if let Some(target) = target_combo(ui, scene, &object.name, None, &label) {
+                    actions.push(Action::SwitchParent { object: o, constraint: c, target });
+                }
             }
             ConstraintKind::FollowPath { points, space, .. } => {
                 ui.weak(format!(
@@ -89,24 +95,29 @@ pub(super) fn constraints_ui(
 }
 
 /// A combo of the scene's objects and joints other than `own` (an object cannot be its own
-/// target); the one chosen, if any.
+/// target), showing `current`; without one (a parent switch) it also offers the world, the
+/// point target at the origin. The one chosen, if any.
 fn target_combo(
     ui: &mut Ui,
     scene: &Scene,
     own: &str,
-    current: &AimTarget,
+    current: Option<&AimTarget>,
     label: &str,
 ) -> Option<AimTarget> {
     let mut chosen = None;
-    egui::ComboBox::from_label(label).selected_text(target_label(current)).show_ui(ui, |ui| {
+    let shown = current.map_or_else(|| "…".to_owned(), target_label);
+    egui::ComboBox::from_label(label).selected_text(shown).show_ui(ui, |ui| {
+        if current.is_none() && ui.selectable_label(false, "World (release)").clicked() {
+            chosen = Some(AimTarget::Point(glam::Vec3::ZERO));
+        }
         for object in scene.objects.iter().filter(|x| x.name != own) {
             let target = AimTarget::Object(object.name.clone());
-            if ui.selectable_label(*current == target, &object.name).clicked() {
+            if ui.selectable_label(current == Some(&target), &object.name).clicked() {
                 chosen = Some(target);
             }
             for joint in object.skeleton.iter().flat_map(|s| &s.joints) {
                 let target = AimTarget::Joint { object: object.name.clone(), joint: joint.name.clone() };
-                if ui.selectable_label(*current == target, target_label(&target)).clicked() {
+                if ui.selectable_label(current == Some(&target), target_label(&target)).clicked() {
                     chosen = Some(target);
                 }
             }
