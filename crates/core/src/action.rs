@@ -513,7 +513,8 @@ pub fn channel_object(id: ChannelId) -> Option<usize> {
         | ChannelId::JointScale { object: o, .. }
         | ChannelId::JointEuler { object: o, .. }
         | ChannelId::IkTarget { object: o, .. }
-        | ChannelId::IkBlend { object: o, .. } => Some(o),
+        | ChannelId::IkBlend { object: o, .. }
+        | ChannelId::Constraint { object: o, .. } => Some(o),
         ChannelId::Attribute(a) => a.owner().ok(),
         _ => None,
     }

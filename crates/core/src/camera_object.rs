@@ -172,6 +172,18 @@ pub struct Aim {
     /// own +Z (positive tilts its up towards its left, so the image turns clockwise).
     #[serde(default = "no_roll")]
     pub roll: Animated<f32>,
+    /// Keyed influence in [0, 1] (docs/constraints.md): 0 the keyed rotation, 1 the aim, slerp
+    /// between; left out of the file while 1 and not keyed (channel `camera/<name>/aim_influence`).
+    #[serde(default = "full_influence", skip_serializing_if = "is_full_influence")]
+    pub influence: Animated<f32>,
+}
+
+fn full_influence() -> Animated<f32> {
+    Animated::constant(1.0)
+}
+
+fn is_full_influence(a: &Animated<f32>) -> bool {
+    !a.is_animated() && a.value == 1.0
 }
 
 fn y_up() -> Vec3 {
@@ -186,7 +198,7 @@ impl Aim {
     /// Looking at `target` with +Y up and no roll.
     #[must_use]
     pub fn at(target: AimTarget) -> Self {
-        Aim { target, up: y_up(), roll: no_roll() }
+        Aim { target, up: y_up(), roll: no_roll(), influence: full_influence() }
     }
 }
 

@@ -13,6 +13,9 @@
 //! object/<object>/joint/<joint>/scale        Vec3   the scale of T(j)
 //! object/<object>/ik/<constraint>/target     Vec3   an IK constraint's target (object space)
 //! object/<object>/ik/<constraint>/blend      f32    an IK constraint's IK/FK blend (0 FK, 1 IK)
+//! object/<object>/constraint/<constraint>/influence  f32  an object constraint's influence (0..1)
+//! object/<object>/constraint/<constraint>/parent     f32  a child-of constraint's parent index
+//! object/<object>/constraint/<constraint>/offset     f32  a follow-path constraint's offset (0..1)
 //! light/<light>/position             Vec3
 //! light/<light>/direction            Vec3
 //! light/<light>/colour               Vec3   linear RGB
@@ -21,6 +24,7 @@
 //! camera/<camera>/rotation           Quat   its orientation (looks down −Z, +Y up)
 //! camera/<camera>/lens               f32    field of view °, focal length mm or ortho height
 //! camera/<camera>/roll               f32    an aimed camera's roll about its view axis, °
+//! camera/<camera>/aim_influence      f32    an aimed camera's aim influence, 0..1
 //! ```
 //!
 //! [`ChannelPath::parse`] checks the syntax; [`ChannelPath::resolve`] finds the value in a
@@ -32,14 +36,14 @@ use std::fmt;
 use glam::{Quat, Vec3};
 
 use crate::channel_id::attribute_id::{AttributeId, AttributeProperty};
-use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef};
+use crate::channel_id::{channel, ChannelId, ChannelKind, ChannelRef, ConstraintProperty};
 use crate::key::Animated;
 use crate::scene::{Object, Scene};
 use crate::track::{AnimatedTrack, TrackError};
 use crate::validate::track_error_path;
 
 /// Properties of an object.
-pub const OBJECT_PROPERTIES: [&str; 14] = [
+pub const OBJECT_PROPERTIES: [&str; 15] = [
     "translation",
     "rotation",
     "rotation_euler",
@@ -47,6 +51,7 @@ pub const OBJECT_PROPERTIES: [&str; 14] = [
     "root_translation",
     "joint",
     "ik",
+    "constraint",
     "visible",
     "colour",
     "opacity",
@@ -59,12 +64,15 @@ pub const OBJECT_PROPERTIES: [&str; 14] = [
 pub const JOINT_PROPERTIES: [&str; 4] = ["translation", "rotation", "rotation_euler", "scale"];
 /// Properties of an IK constraint.
 pub const IK_PROPERTIES: [&str; 2] = ["target", "blend"];
+/// Properties of an object constraint (each constraint has the ones its kind keys).
+pub const CONSTRAINT_PROPERTIES: [&str; 3] = ["influence", "parent", "offset"];
 /// Properties of a light.
 pub const LIGHT_PROPERTIES: [&str; 8] =
     ["position", "direction", "colour", "intensity", "visible", "range", "cutoff_deg", "inner_angle_deg"];
 
 /// Properties of a scene camera.
-pub const CAMERA_PROPERTIES: [&str; 5] = ["translation", "rotation", "lens", "roll", "visible"];
+pub const CAMERA_PROPERTIES: [&str; 6] =
+    ["translation", "rotation", "lens", "roll", "aim_influence", "visible"];
 
 /// One animated value of a scene camera.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -73,6 +81,7 @@ pub enum CameraProperty {
     Rotation,
     Lens,
     Roll,
+    AimInfluence,
     Visible,
 }
 
@@ -84,6 +93,7 @@ impl CameraProperty {
             CameraProperty::Rotation => "rotation",
             CameraProperty::Lens => "lens",
             CameraProperty::Roll => "roll",
+            CameraProperty::AimInfluence => "aim_influence",
             CameraProperty::Visible => "visible",
         }
     }
@@ -190,6 +200,12 @@ pub enum ChannelPath {
         constraint: String,
         property: IkProperty,
     },
+    /// A keyed value of an object constraint (`object/<o>/constraint/<c>/<property>`).
+    Constraint {
+        object: String,
+        constraint: String,
+        property: ConstraintProperty,
+    },
     Light {
         light: String,
         property: LightProperty,
@@ -216,6 +232,9 @@ impl fmt::Display for ChannelPath {
             }
             ChannelPath::Ik { object, constraint, property } => {
                 write!(f, "object/{object}/ik/{constraint}/{}", property.name())
+            }
+            ChannelPath::Constraint { object, constraint, property } => {
+                write!(f, "object/{object}/constraint/{constraint}/{}", property.name())
             }
             ChannelPath::Light { light, property } => write!(f, "light/{light}/{}", property.name()),
             ChannelPath::Attribute { light, owner, property } => {
@@ -258,6 +277,12 @@ pub enum ChannelError {
     )]
     UnknownConstraint { path: String, object: String, name: String, available: Vec<String> },
 
+    #[error(
+        "channel path {path:?}: object {object:?} has no constraint named {name:?}; {}",
+        listing("constraints", available)
+    )]
+    UnknownObjectConstraint { path: String, object: String, name: String, available: Vec<String> },
+
     #[error("channel path {path:?}: no light named {name:?}; {}", listing("lights", available))]
     UnknownLight { path: String, name: String, available: Vec<String> },
 
@@ -266,7 +291,9 @@ pub enum ChannelError {
     #[error("channel path {path:?}: no camera named {name:?}; {}", listing("cameras", available))]
     UnknownCamera { path: String, name: String, available: Vec<String> },
 
-    #[error("channel path {path:?}: camera {camera:?} has no aim constraint, so it has no roll")]
+    #[error(
+        "channel path {path:?}: camera {camera:?} has no aim constraint, so it has no roll or aim_influence"
+    )]
     NoAim { path: String, camera: String },
 
     /// The channel exists but its keys are invalid.
@@ -351,6 +378,24 @@ impl ChannelPath {
             ["object", _, "morph", ..] => {
                 Err(syntax("a morph-weight channel is object/<name>/morph/<target index>"))
             }
+            ["object", object, "constraint", constraint, property] => {
+                let Some(property) = ConstraintProperty::from_name(property) else {
+                    return Err(ChannelError::UnknownProperty {
+                        path: path.to_string(),
+                        owner: "constraint",
+                        property: (*property).to_string(),
+                        expected: CONSTRAINT_PROPERTIES.to_vec(),
+                    });
+                };
+                Ok(ChannelPath::Constraint {
+                    object: (*object).to_string(),
+                    constraint: (*constraint).to_string(),
+                    property,
+                })
+            }
+            ["object", _, "constraint", ..] => Err(syntax(
+                "an object constraint channel is object/<name>/constraint/<constraint>/<property>",
+            )),
             ["object", _, "ik", ..] => {
                 Err(syntax("an IK constraint channel is object/<name>/ik/<constraint>/<property>"))
             }
@@ -409,6 +454,7 @@ impl ChannelPath {
                     "rotation" => CameraProperty::Rotation,
                     "lens" => CameraProperty::Lens,
                     "roll" => CameraProperty::Roll,
+                    "aim_influence" => CameraProperty::AimInfluence,
                     "visible" => CameraProperty::Visible,
                     other => {
                         return Err(ChannelError::UnknownProperty {
@@ -449,6 +495,11 @@ impl ChannelPath {
             let name = x.skeleton.as_ref()?.ik_constraints.get(c)?.name.clone();
             Some(ChannelPath::Ik { object: x.name.clone(), constraint: name, property })
         };
+        let constraint = |o: usize, c: usize, property| {
+            let x = scene.objects.get(o)?;
+            let name = x.constraints.get(c)?.name.clone();
+            Some(ChannelPath::Constraint { object: x.name.clone(), constraint: name, property })
+        };
         let light = |l: usize, property| {
             scene.lights.get(l).map(|x| ChannelPath::Light { light: x.name.clone(), property })
         };
@@ -479,9 +530,11 @@ impl ChannelPath {
             ChannelId::CameraRotation(c) => camera(c, CameraProperty::Rotation),
             ChannelId::CameraLens(c) => camera(c, CameraProperty::Lens),
             ChannelId::CameraRoll(c) => camera(c, CameraProperty::Roll),
+            ChannelId::CameraAimInfluence(c) => camera(c, CameraProperty::AimInfluence),
             ChannelId::CameraVisible(c) => camera(c, CameraProperty::Visible),
             ChannelId::ObjectEuler(o) => on_object(o, ObjectProperty::RotationEuler),
             ChannelId::JointEuler { object, joint: j } => joint(object, j, JointProperty::RotationEuler),
+            ChannelId::Constraint { object, constraint: c, property } => constraint(object, c, property),
         }
     }
 
@@ -570,6 +623,26 @@ impl ChannelPath {
                     IkProperty::Blend => ChannelId::IkBlend { object: i, constraint: c },
                 }
             }
+            ChannelPath::Constraint { object, constraint, property } => {
+                let (i, o) = find_object(object)?;
+                let c = o.constraints.iter().position(|c| c.name == *constraint).ok_or_else(|| {
+                    ChannelError::UnknownObjectConstraint {
+                        path: path.clone(),
+                        object: o.name.clone(),
+                        name: constraint.clone(),
+                        available: o.constraints.iter().map(|c| c.name.clone()).collect(),
+                    }
+                })?;
+                if property.of(&o.constraints[c]).is_none() {
+                    return Err(ChannelError::NotSet {
+                        path: path.clone(),
+                        owner: format!("constraint {constraint:?} of object {:?}", o.name),
+                        what: property.name().to_owned(),
+                        hint: format!(" (it is a {} constraint)", o.constraints[c].kind.label()),
+                    });
+                }
+                ChannelId::Constraint { object: i, constraint: c, property: *property }
+            }
             ChannelPath::Attribute { light, owner, property } => {
                 let id = if *light {
                     let l = scene.lights.iter().position(|l| l.name == *owner).ok_or_else(|| {
@@ -632,6 +705,12 @@ impl ChannelPath {
                             return Err(ChannelError::NoAim { path: path.clone(), camera: camera.clone() });
                         }
                         ChannelId::CameraRoll(i)
+                    }
+                    CameraProperty::AimInfluence => {
+                        if scene.cameras[i].aim.is_none() {
+                            return Err(ChannelError::NoAim { path: path.clone(), camera: camera.clone() });
+                        }
+                        ChannelId::CameraAimInfluence(i)
                     }
                     CameraProperty::Visible => ChannelId::CameraVisible(i),
                 }
@@ -721,6 +800,15 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
                 }
             }
         }
+        for c in &o.constraints {
+            for property in ConstraintProperty::of_constraint(c) {
+                out.push(ChannelPath::Constraint {
+                    object: o.name.clone(),
+                    constraint: c.name.clone(),
+                    property,
+                });
+            }
+        }
     }
     for l in &scene.lights {
         for property in [
@@ -761,6 +849,7 @@ pub fn list_channels(scene: &Scene) -> Vec<ChannelPath> {
         }
         if c.aim.is_some() {
             out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Roll });
+            out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::AimInfluence });
         }
         if c.visible.is_animated() || c.visible.value != 1.0 {
             out.push(ChannelPath::Camera { camera: c.name.clone(), property: CameraProperty::Visible });
@@ -985,7 +1074,7 @@ mod tests {
             .contains("light properties are: position, direction, colour, intensity"));
         assert!(err("object/Arm/joint/elbow/size").contains("unknown joint property \"size\""));
         assert!(err("camera/x/y").contains(
-            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll, visible"
+            "unknown camera property \"y\"; camera properties are: translation, rotation, lens, roll, aim_influence, visible"
         ));
         assert!(err("lamp/x/y").contains("unknown kind \"lamp\""));
         assert!(err("object/Arm").contains("missing property"));
@@ -1042,6 +1131,48 @@ mod tests {
     }
 
     #[test]
+    fn object_constraint_channels_resolve() {
+        use crate::object_constraint::{ChildOfParent, ConstraintKind, ObjectConstraint};
+        use crate::AimTarget;
+        let mut s = Scene::default();
+        s.objects.push(Object::new("Hand"));
+        let mut prop = Object::new("Prop");
+        prop.constraints.push(ObjectConstraint::new(
+            "Held",
+            ConstraintKind::ChildOf {
+                parents: vec![ChildOfParent::new(AimTarget::Object("Hand".into()))],
+                parent: Animated::constant(0.0),
+            },
+        ));
+        s.objects.push(prop);
+        let resolve = |p: &str| ChannelPath::parse(p).and_then(|c| c.resolve(&s));
+        let parent = resolve("object/Prop/constraint/Held/parent").unwrap();
+        assert_eq!(parent.field, "objects[1].constraints[0].kind.parent");
+        assert_eq!(
+            resolve("object/Prop/constraint/Held/influence").unwrap().field,
+            "objects[1].constraints[0].influence"
+        );
+        let err = resolve("object/Prop/constraint/Held/offset").unwrap_err().to_string();
+        assert!(err.contains("has no offset channel (it is a Child of constraint)"), "{err}");
+        let err = resolve("object/Prop/constraint/Grip/influence").unwrap_err().to_string();
+        assert!(err.contains("no constraint named \"Grip\"; constraints: \"Held\""), "{err}");
+        let err = ChannelPath::parse("object/Prop/constraint/Held/size").unwrap_err().to_string();
+        assert!(err.contains("constraint properties are: influence, parent, offset"), "{err}");
+        let id = ChannelId::Constraint {
+            object: 1,
+            constraint: 0,
+            property: crate::channel_id::ConstraintProperty::Parent,
+        };
+        assert_eq!(
+            ChannelPath::of(&s, id).map(|p| p.to_string()).as_deref(),
+            Some("object/Prop/constraint/Held/parent")
+        );
+        assert!(id.is_switch());
+        let names: Vec<String> = list_channels(&s).iter().map(ToString::to_string).collect();
+        assert!(names.contains(&"object/Prop/constraint/Held/parent".to_owned()), "{names:?}");
+    }
+
+    #[test]
     fn camera_channels_resolve() {
         use crate::camera_object::{Aim, AimTarget, SceneCamera};
         let mut s = scene();
@@ -1063,9 +1194,16 @@ mod tests {
         assert_eq!(resolve(&s, "camera/Shot/roll").unwrap().field, "cameras[0].aim.roll");
         let names: Vec<String> = list_channels(&s).iter().map(ToString::to_string).collect();
         assert_eq!(
-            &names[names.len() - 4..],
-            ["camera/Shot/translation", "camera/Shot/rotation", "camera/Shot/lens", "camera/Shot/roll"]
+            &names[names.len() - 5..],
+            [
+                "camera/Shot/translation",
+                "camera/Shot/rotation",
+                "camera/Shot/lens",
+                "camera/Shot/roll",
+                "camera/Shot/aim_influence"
+            ]
         );
+        assert_eq!(resolve(&s, "camera/Shot/aim_influence").unwrap().field, "cameras[0].aim.influence");
         for text in
             ["camera/Shot/translation", "camera/Shot/rotation", "camera/Shot/lens", "camera/Shot/roll"]
         {

@@ -9,6 +9,7 @@ use glam::{EulerRot, Quat, Vec3};
 pub mod attribute_id;
 
 use crate::key::Animated;
+use crate::object_constraint::{ConstraintKind, ObjectConstraint};
 use crate::rotation_mode::RotationMode;
 use crate::scene::Scene;
 pub use attribute_id::AttributeId;
@@ -71,6 +72,8 @@ pub enum ChannelId {
     CameraLens(usize),
     /// The roll (degrees) of an aimed scene camera.
     CameraRoll(usize),
+    /// The influence of a scene camera's aim (0 its keyed rotation, 1 the aim).
+    CameraAimInfluence(usize),
     /// A scene camera's visibility: 1 shown, 0 hidden (Step keys).
     CameraVisible(usize),
     /// An object's Euler keys (x, y, z in degrees), listed in place of its rotation while it
@@ -81,6 +84,89 @@ pub enum ChannelId {
         object: usize,
         joint: usize,
     },
+    /// A keyed value of an object constraint ([`crate::object_constraint`]): its influence, a
+    /// child-of constraint's parent index, a follow-path constraint's offset.
+    Constraint {
+        object: usize,
+        constraint: usize,
+        property: ConstraintProperty,
+    },
+}
+
+/// The keyed values of an object constraint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+pub enum ConstraintProperty {
+    /// 0 (no effect) to 1 (the constraint's result).
+    Influence,
+    /// A child-of constraint's parent: an index into its parents (Step keys).
+    Parent,
+    /// A follow-path constraint's offset along the path, 0 to 1.
+    Offset,
+}
+
+impl ConstraintProperty {
+    /// The name in channel paths (`object/<o>/constraint/<c>/<name>`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ConstraintProperty::Influence => "influence",
+            ConstraintProperty::Parent => "parent",
+            ConstraintProperty::Offset => "offset",
+        }
+    }
+
+    /// The property named `name` in a channel path.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Some(match name {
+            "influence" => ConstraintProperty::Influence,
+            "parent" => ConstraintProperty::Parent,
+            "offset" => ConstraintProperty::Offset,
+            _ => return None,
+        })
+    }
+
+    /// The field of the constraint that holds the channel, relative to the constraint.
+    fn field(self) -> &'static str {
+        match self {
+            ConstraintProperty::Influence => "influence",
+            ConstraintProperty::Parent => "kind.parent",
+            ConstraintProperty::Offset => "kind.offset",
+        }
+    }
+
+    /// The constraint's channel of this property, if it has one.
+    #[must_use]
+    pub fn of(self, c: &ObjectConstraint) -> Option<&Animated<f32>> {
+        match (self, &c.kind) {
+            (ConstraintProperty::Influence, _) => Some(&c.influence),
+            (ConstraintProperty::Parent, ConstraintKind::ChildOf { parent, .. }) => Some(parent),
+            (ConstraintProperty::Offset, ConstraintKind::FollowPath { offset, .. }) => Some(offset),
+            _ => None,
+        }
+    }
+
+    /// [`ConstraintProperty::of`], mutably.
+    pub fn of_mut(self, c: &mut ObjectConstraint) -> Option<&mut Animated<f32>> {
+        match (self, &mut c.kind) {
+            (ConstraintProperty::Influence, _) => Some(&mut c.influence),
+            (ConstraintProperty::Parent, ConstraintKind::ChildOf { parent, .. }) => Some(parent),
+            (ConstraintProperty::Offset, ConstraintKind::FollowPath { offset, .. }) => Some(offset),
+            _ => None,
+        }
+    }
+
+    /// The properties a constraint has: its influence, then its kind's own.
+    #[must_use]
+    pub fn of_constraint(c: &ObjectConstraint) -> Vec<ConstraintProperty> {
+        let mut out = vec![ConstraintProperty::Influence];
+        match c.kind {
+            ConstraintKind::ChildOf { .. } => out.push(ConstraintProperty::Parent),
+            ConstraintKind::FollowPath { .. } => out.push(ConstraintProperty::Offset),
+            _ => {}
+        }
+        out
+    }
 }
 
 /// What kind of value a channel holds.
@@ -103,7 +189,9 @@ impl ChannelId {
             | ChannelId::IkBlend { .. }
             | ChannelId::CameraLens(_)
             | ChannelId::CameraRoll(_)
-            | ChannelId::CameraVisible(_) => ChannelKind::Scalar,
+            | ChannelId::CameraAimInfluence(_)
+            | ChannelId::CameraVisible(_)
+            | ChannelId::Constraint { .. } => ChannelKind::Scalar,
             _ => ChannelKind::Vec3,
         }
     }
@@ -127,8 +215,14 @@ impl ChannelId {
             ChannelId::CameraRotation(_) => "rotation",
             ChannelId::CameraLens(_) => "lens",
             ChannelId::CameraRoll(_) => "roll",
+            ChannelId::CameraAimInfluence(_) => "aim influence",
             ChannelId::CameraVisible(_) => "visible",
             ChannelId::ObjectEuler(_) | ChannelId::JointEuler { .. } => "rotation (Euler °)",
+            ChannelId::Constraint { property, .. } => match property {
+                ConstraintProperty::Influence => "influence",
+                ConstraintProperty::Parent => "parent",
+                ConstraintProperty::Offset => "path offset",
+            },
         }
     }
 
@@ -165,10 +259,14 @@ impl ChannelId {
             ChannelId::CameraRotation(c) => format!("cameras[{c}].rotation"),
             ChannelId::CameraLens(c) => format!("cameras[{c}].lens"),
             ChannelId::CameraRoll(c) => format!("cameras[{c}].aim.roll"),
+            ChannelId::CameraAimInfluence(c) => format!("cameras[{c}].aim.influence"),
             ChannelId::CameraVisible(c) => format!("cameras[{c}].visible"),
             ChannelId::ObjectEuler(o) => format!("objects[{o}].rotation_euler"),
             ChannelId::JointEuler { object, joint } => {
                 format!("objects[{object}].skeleton.joints[{joint}].rotation_euler")
+            }
+            ChannelId::Constraint { object, constraint, property } => {
+                format!("objects[{object}].constraints[{constraint}].{}", property.field())
             }
         }
     }
@@ -210,6 +308,17 @@ impl ChannelId {
                 out.push(ChannelId::IkBlend { object, constraint });
             }
         }
+        if let Some(o) = scene.objects.get(object) {
+            for (constraint, c) in o.constraints.iter().enumerate() {
+                out.extend(
+                    ConstraintProperty::of_constraint(c).into_iter().map(|property| ChannelId::Constraint {
+                        object,
+                        constraint,
+                        property,
+                    }),
+                );
+            }
+        }
         out.extend(AttributeId::of_object(scene, object));
         out
     }
@@ -238,6 +347,7 @@ impl ChannelId {
         let Some(c) = scene.cameras.get(camera) else { return out };
         if c.aim.is_some() {
             out.push(ChannelId::CameraRoll(camera));
+            out.push(ChannelId::CameraAimInfluence(camera));
         }
         if c.visible.is_animated() || c.visible.value != 1.0 {
             out.push(ChannelId::CameraVisible(camera));
@@ -250,7 +360,8 @@ impl ChannelId {
     pub fn is_switch(self) -> bool {
         match self {
             ChannelId::Attribute(a) => a.is_switch(),
-            ChannelId::CameraVisible(_) => true,
+            ChannelId::CameraVisible(_)
+            | ChannelId::Constraint { property: ConstraintProperty::Parent, .. } => true,
             _ => false,
         }
     }
@@ -304,10 +415,14 @@ fn owner_name(scene: &Scene, id: ChannelId) -> Option<String> {
             scene.objects.get(object)?.skeleton.as_ref()?.ik_constraints.get(constraint)?.name.clone()
         }
         ChannelId::Attribute(a) => a.owner_name(scene)?,
+        ChannelId::Constraint { object, constraint, .. } => {
+            scene.objects.get(object)?.constraints.get(constraint)?.name.clone()
+        }
         ChannelId::CameraTranslation(c)
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
         | ChannelId::CameraRoll(c)
+        | ChannelId::CameraAimInfluence(c)
         | ChannelId::CameraVisible(c) => scene.cameras.get(c)?.name.clone(),
     })
 }
@@ -381,11 +496,17 @@ pub fn channel(scene: &Scene, id: ChannelId) -> Option<ChannelRef<'_>> {
         ChannelId::CameraRotation(c) => ChannelRef::Rotation(&scene.cameras.get(c)?.rotation),
         ChannelId::CameraLens(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.roll),
+        ChannelId::CameraAimInfluence(c) => {
+            ChannelRef::Scalar(&scene.cameras.get(c)?.aim.as_ref()?.influence)
+        }
         ChannelId::CameraVisible(c) => ChannelRef::Scalar(&scene.cameras.get(c)?.visible),
         ChannelId::ObjectEuler(o) => ChannelRef::Vec3(scene.objects.get(o)?.rotation_euler.as_ref()?),
         ChannelId::JointEuler { object, joint } => ChannelRef::Vec3(
             scene.objects.get(object)?.skeleton.as_ref()?.joints.get(joint)?.rotation_euler.as_ref()?,
         ),
+        ChannelId::Constraint { object, constraint, property } => {
+            ChannelRef::Scalar(property.of(scene.objects.get(object)?.constraints.get(constraint)?)?)
+        }
     })
 }
 
@@ -423,6 +544,9 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
         ChannelId::CameraRotation(c) => ChannelMut::Rotation(&mut scene.cameras.get_mut(c)?.rotation),
         ChannelId::CameraLens(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.lens),
         ChannelId::CameraRoll(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.roll),
+        ChannelId::CameraAimInfluence(c) => {
+            ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.aim.as_mut()?.influence)
+        }
         ChannelId::CameraVisible(c) => ChannelMut::Scalar(&mut scene.cameras.get_mut(c)?.visible),
         ChannelId::ObjectEuler(o) => ChannelMut::Vec3(scene.objects.get_mut(o)?.rotation_euler.as_mut()?),
         ChannelId::JointEuler { object, joint } => ChannelMut::Vec3(
@@ -435,6 +559,9 @@ pub fn channel_mut(scene: &mut Scene, id: ChannelId) -> Option<ChannelMut<'_>> {
                 .get_mut(joint)?
                 .rotation_euler
                 .as_mut()?,
+        ),
+        ChannelId::Constraint { object, constraint, property } => ChannelMut::Scalar(
+            property.of_mut(scene.objects.get_mut(object)?.constraints.get_mut(constraint)?)?,
         ),
     })
 }

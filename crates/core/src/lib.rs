@@ -13,6 +13,7 @@ pub mod ik;
 pub mod ik_constraint;
 pub mod key;
 pub mod material;
+pub mod object_constraint;
 pub mod pose_library;
 pub mod quat;
 pub mod rotation_mode;
@@ -31,6 +32,7 @@ pub use key::{
     Animated, Cycle, Cycles, Interpolation, Key, KeyType, Keys, RawTrack, Spin, Tcb, MAX_SPIN_TURNS,
 };
 pub use material::{FilterMode, Material, Sampler, TextureError, TextureImage, WrapMode};
+pub use object_constraint::{AimAxis, ChildOfParent, ConstraintKind, ObjectConstraint};
 pub use pose_library::{NamedPose, PoseValue, ReferenceImage};
 pub use rotation_mode::{EulerOrder, RotationMode};
 pub use scene::{

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::attributes::{LightAttributes, ObjectAttributes};
 use crate::camera_object::{Marker, RenderSize, SceneCamera};
 use crate::key::{Animated, RawTrack};
+use crate::object_constraint::ObjectConstraint;
 use crate::rotation_mode::RotationMode;
 
 /// A whole scene: timing, animated objects, lights and a camera.
@@ -209,6 +210,11 @@ pub struct Object {
     /// action. Left out of the file while empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub clip_tracks: Vec<crate::clip::ClipTrack>,
+    /// Constraints applied in order after the object's own transform (aim at, child of, copy
+    /// location or rotation, follow path; docs/constraints.md); left out of the file while
+    /// there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<ObjectConstraint>,
 }
 
 impl Object {
@@ -228,6 +234,7 @@ impl Object {
             attributes: ObjectAttributes::default(),
             action: None,
             clip_tracks: Vec::new(),
+            constraints: Vec::new(),
         }
     }
 }

@@ -34,6 +34,12 @@
 //!     orthographic camera has a far plane; an aim's up not zero, its object (and joint)
 //!     existing, its point finite; its visibility 0 or 1 with Step keys. Markers name existing cameras; `active_camera` names an
 //!     existing camera; a render size has sides in 1..=16384.
+//! 12. Object constraints ([`crate::object_constraint`]): a unique, non-empty name per object;
+//!     targets (an aim's, a copy's, each child-of parent's, a path's space) naming an existing
+//!     object or joint other than the constrained object itself, a point target finite; an
+//!     influence and a path offset with value and keys in [0, 1]; an aim's up not zero; a
+//!     child-of offset finite and invertible; a path of at least 2 finite points; no cycle of
+//!     objects whose constraints read each other.
 
 use std::collections::HashMap;
 
@@ -42,6 +48,7 @@ use glam::{Quat, Vec3};
 use crate::camera_object::{AimTarget, Projection, RenderSize, SceneCamera};
 use crate::ik_constraint::{ConstraintChain, ConstraintError};
 use crate::key::{Animated, Interpolation, RawTrack, Spin};
+use crate::object_constraint::ObjectConstraint;
 use crate::scene::{
     Camera, DeformerSettings, IkConstraint, Light, LightKind, MeshSource, Object, Problem, Scene, Skeleton,
 };
@@ -618,30 +625,125 @@ impl Checker {
                 self.push(join(&ap, "up"), "zero up direction");
             }
             self.animated(&join(&ap, "roll"), &aim.roll);
-            let tp = join(&ap, "target");
-            match &aim.target {
-                AimTarget::Point(p) => {
-                    self.value(&tp, p);
+            self.unit_interval(&join(&ap, "influence"), &aim.influence, "aim influence");
+            self.target(&join(&ap, "target"), &aim.target, scene, "to aim at");
+        }
+    }
+
+    /// An aim or constraint target: a finite point, an existing object, an existing joint.
+    fn target(&mut self, tp: &str, target: &AimTarget, scene: &Scene, purpose: &str) {
+        match target {
+            AimTarget::Point(p) => {
+                self.value(tp, p);
+            }
+            AimTarget::Object(name) => {
+                if !scene.objects.iter().any(|o| &o.name == name) {
+                    self.push(tp, format!("no object named {name:?} {purpose}"));
                 }
-                AimTarget::Object(name) => {
-                    if !scene.objects.iter().any(|o| &o.name == name) {
-                        self.push(tp, format!("no object named {name:?} to aim at"));
+            }
+            AimTarget::Joint { object, joint } => match scene.objects.iter().find(|o| &o.name == object) {
+                None => self.push(tp, format!("no object named {object:?} {purpose}")),
+                Some(o) => {
+                    let joints = o.skeleton.as_ref().map(|s| s.joints.as_slice()).unwrap_or_default();
+                    if !joints.iter().any(|j| &j.name == joint) {
+                        self.push(tp, format!("object {object:?} has no joint named {joint:?} {purpose}"));
                     }
                 }
-                AimTarget::Joint { object, joint } => {
-                    match scene.objects.iter().find(|o| &o.name == object) {
-                        None => self.push(tp, format!("no object named {object:?} to aim at")),
-                        Some(o) => {
-                            let joints = o.skeleton.as_ref().map(|s| s.joints.as_slice()).unwrap_or_default();
-                            if !joints.iter().any(|j| &j.name == joint) {
-                                self.push(
-                                    tp,
-                                    format!("object {object:?} has no joint named {joint:?} to aim at"),
-                                );
-                            }
-                        }
+            },
+        }
+    }
+
+    /// Rule 12: object constraints (docs/constraints.md).
+    fn object_constraints(&mut self, scene: &Scene) {
+        for (o, object) in scene.objects.iter().enumerate() {
+            let cp = |i: usize| format!("objects[{o}].constraints[{i}]");
+            for (i, c) in object.constraints.iter().enumerate() {
+                self.object_constraint(&cp(i), object, c, scene);
+            }
+            self.unique_names(
+                "constraint",
+                object.constraints.iter().enumerate().map(|(i, c)| (join(&cp(i), "name"), c.name.as_str())),
+            );
+        }
+        let (_, on_cycle) = crate::object_constraint::evaluation_order(scene);
+        for o in on_cycle {
+            let names: Vec<&str> = crate::object_constraint::dependencies(scene, o)
+                .into_iter()
+                .map(|d| scene.objects[d].name.as_str())
+                .collect();
+            self.push(
+                format!("objects[{o}].constraints"),
+                format!(
+                    "the constraints of {:?} form a cycle (its targets {} depend on it again): they are not applied",
+                    scene.objects[o].name,
+                    names.join(", ")
+                ),
+            );
+        }
+    }
+
+    /// A keyed value whose value and keys must lie in [0, 1].
+    fn unit_interval(&mut self, at: &str, a: &Animated<f32>, what: &str) {
+        self.animated(at, a);
+        let values = std::iter::once((join(at, "value"), a.value))
+            .chain(a.track.keys.iter().enumerate().map(|(i, k)| (format!("{at}.track[{i}].value"), k.value)));
+        for (p, v) in values {
+            if v.is_finite() && !(0.0..=1.0).contains(&v) {
+                self.push(p, format!("{what} {v} is outside [0, 1]"));
+            }
+        }
+    }
+
+    fn object_constraint(&mut self, path: &str, object: &Object, c: &ObjectConstraint, scene: &Scene) {
+        use crate::object_constraint::ConstraintKind as K;
+        self.unit_interval(&join(path, "influence"), &c.influence, "influence");
+        let target = |this: &mut Self, tp: String, t: &AimTarget| {
+            this.target(&tp, t, scene, "to constrain to");
+            let own = match t {
+                AimTarget::Object(name) | AimTarget::Joint { object: name, .. } => name == &object.name,
+                AimTarget::Point(_) => false,
+            };
+            if own {
+                this.push(tp, format!("{:?} cannot be constrained to itself", object.name));
+            }
+        };
+        match &c.kind {
+            K::AimAt { target: t, up, .. } => {
+                target(self, join(path, "kind.target"), t);
+                let up_path = join(path, "kind.up");
+                if self.value(&up_path, up) && up.length() < 1e-6 {
+                    self.push(up_path, "zero up direction");
+                }
+            }
+            K::CopyLocation { target: t } | K::CopyRotation { target: t } => {
+                target(self, join(path, "kind.target"), t);
+            }
+            K::ChildOf { parents, parent } => {
+                for (i, p) in parents.iter().enumerate() {
+                    target(self, format!("{path}.kind.parents[{i}].target"), &p.target);
+                    if !p.offset.is_finite() || p.offset.determinant().abs() < 1e-12 {
+                        self.push(
+                            format!("{path}.kind.parents[{i}].offset"),
+                            "the offset is not a finite, invertible matrix",
+                        );
                     }
                 }
+                self.animated(&join(path, "kind.parent"), parent);
+            }
+            K::FollowPath { points, space, offset, .. } => {
+                if points.len() < 2 {
+                    self.push(
+                        join(path, "kind.points"),
+                        format!("a path needs at least 2 points; it has {}", points.len()),
+                    );
+                }
+                for (i, p) in points.iter().enumerate() {
+                    self.value(&format!("{path}.kind.points[{i}]"), p);
+                }
+                if let Some(space) = space {
+                    target(self, join(path, "kind.space"), &AimTarget::Object(space.clone()));
+                }
+                self.unit_interval(&join(path, "kind.offset"), offset, "path offset");
             }
         }
     }
@@ -733,6 +835,7 @@ impl Scene {
         for (i, object) in self.objects.iter().enumerate() {
             c.object(&format!("objects[{i}]"), object);
         }
+        c.object_constraints(self);
         c.unique_names(
             "object",
             self.objects.iter().enumerate().map(|(i, o)| (format!("objects[{i}].name"), o.name.as_str())),

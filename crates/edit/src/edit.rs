@@ -10,8 +10,8 @@
 use glam::Vec3;
 use keyrig_core::channel_id::{set_rotation_keys, set_rotation_mode};
 use keyrig_core::{
-    AimTarget, Animated, Cycles, DeformerSettings, FrameRange, Interpolation, KeyType, MeshSource,
-    Projection, RotationMode, Scene, Tcb,
+    AimTarget, Animated, ConstraintKind, Cycles, DeformerSettings, FrameRange, Interpolation, KeyType,
+    MeshSource, ObjectConstraint, Projection, RotationMode, Scene, Tcb,
 };
 
 use crate::camera_edits::convert_lens;
@@ -152,6 +152,13 @@ pub enum SceneEdit {
     CameraClip { camera: usize, near: f32, far: Option<f32> },
     /// What a camera aims at (`None`: its keyed rotation).
     CameraAim { camera: usize, target: Option<AimTarget> },
+    /// Appends an object constraint (docs/constraints.md).
+    AddConstraint { object: usize, constraint: ObjectConstraint },
+    /// Removes an object's constraint `constraint`.
+    RemoveConstraint { object: usize, constraint: usize },
+    /// Sets the target of an aim-at, copy-location or copy-rotation constraint (other kinds
+    /// are left as they are).
+    ConstraintTarget { object: usize, constraint: usize, target: AimTarget },
     /// Adds a sound clip.
     AddSound(keyrig_core::SoundClip),
     /// Mutes or unmutes a sound clip.
@@ -481,6 +488,27 @@ impl SceneEdit {
                     };
                 }
             }
+            SceneEdit::AddConstraint { object, constraint } => {
+                if let Some(o) = scene.objects.get_mut(*object) {
+                    o.constraints.push(constraint.clone());
+                }
+            }
+            &SceneEdit::RemoveConstraint { object, constraint } => {
+                if let Some(o) = scene.objects.get_mut(object).filter(|o| constraint < o.constraints.len()) {
+                    o.constraints.remove(constraint);
+                }
+            }
+            SceneEdit::ConstraintTarget { object, constraint, target: new } => {
+                let c = scene.objects.get_mut(*object).and_then(|o| o.constraints.get_mut(*constraint));
+                if let Some(
+                    ConstraintKind::AimAt { target, .. }
+                    | ConstraintKind::CopyLocation { target }
+                    | ConstraintKind::CopyRotation { target },
+                ) = c.map(|c| &mut c.kind)
+                {
+                    target.clone_from(new);
+                }
+            }
             SceneEdit::AddSound(clip) => scene.sounds.push(clip.clone()),
             &SceneEdit::SoundMute { clip, muted } => {
                 if let Some(c) = scene.sounds.get_mut(clip) {
@@ -589,6 +617,27 @@ impl SceneEdit {
             SceneEdit::CameraProjection { camera: c, .. } => format!("{} projection", camera(*c)),
             SceneEdit::CameraClip { camera: c, .. } => format!("{} clip planes", camera(*c)),
             SceneEdit::CameraAim { .. } => "camera aim".to_owned(),
+            SceneEdit::AddConstraint { object: o, constraint } => {
+                format!("add constraint {} to {}", constraint.name, object(*o))
+            }
+            SceneEdit::RemoveConstraint { object: o, constraint } => format!(
+                "remove constraint {} from {}",
+                scene
+                    .objects
+                    .get(*o)
+                    .and_then(|x| x.constraints.get(*constraint))
+                    .map_or("?", |c| c.name.as_str()),
+                object(*o)
+            ),
+            SceneEdit::ConstraintTarget { object: o, constraint, target } => format!(
+                "{} target {}",
+                scene
+                    .objects
+                    .get(*o)
+                    .and_then(|x| x.constraints.get(*constraint))
+                    .map_or("?", |c| c.name.as_str()),
+                target_label(target)
+            ),
             SceneEdit::AddSound(clip) => {
                 format!("add sound clip {} at frame {}", clip.label(), clip.start_frame)
             }
@@ -703,3 +752,56 @@ pub fn retime(scene: &mut Scene, origin: (f64, i32, i32), fps: f64, keep_frames:
     }
     scene.fps = fps;
 }
+
+/// A target as the editor shows it: `Cube`, `Arm / wrist`, `point (1.00, 0.00, 2.00)`.
+#[must_use]
+pub fn target_label(target: &AimTarget) -> String {
+    match target {
+        AimTarget::Object(o) => o.clone(),
+        AimTarget::Joint { object, joint } => format!("{object} / {joint}"),
+        AimTarget::Point(p) => format!("point ({:.2}, {:.2}, {:.2})", p.x, p.y, p.z),
+    }
+}
+
+/// A new constraint of the kind labelled `kind` (an [`ConstraintKind::label`]) for object
+/// `object`, named after its kind and unique among the object's constraints, aimed at `target`
+/// (a follow path: a straight path 2 units along +X from where the object is, in world space;
+/// a child of: `target` as its only parent, in effect from the start, with no offset, so the
+/// object's own transform is read in the parent's frame). `None` for an unknown kind or object.
+#[must_use]
+pub fn new_constraint(
+    scene: &Scene,
+    object: usize,
+    kind: &str,
+    target: AimTarget,
+) -> Option<ObjectConstraint> {
+    let o = scene.objects.get(object)?;
+    let at = o.translation.value;
+    let kind = match kind {
+        "Aim at" => ConstraintKind::AimAt { target, axis: keyrig_core::AimAxis::NegZ, up: Vec3::Y },
+        "Copy location" => ConstraintKind::CopyLocation { target },
+        "Copy rotation" => ConstraintKind::CopyRotation { target },
+        "Child of" => ConstraintKind::ChildOf {
+            parents: vec![keyrig_core::ChildOfParent::new(target)],
+            parent: Animated::constant(0.0),
+        },
+        "Follow path" => ConstraintKind::FollowPath {
+            points: vec![at, at + Vec3::new(2.0, 0.0, 0.0)],
+            space: None,
+            offset: Animated::constant(0.0),
+            axis: None,
+        },
+        _ => return None,
+    };
+    let base = kind.label();
+    let taken = |name: &str| o.constraints.iter().any(|c| c.name == name);
+    let name = std::iter::once(base.to_owned())
+        .chain((2..).map(|i| format!("{base} {i}")))
+        .find(|n| !taken(n))
+        .expect("an unbounded list of names");
+    Some(ObjectConstraint::new(name, kind))
+}
+
+/// The kinds [`new_constraint`] makes, as the editor lists them.
+pub const CONSTRAINT_KINDS: [&str; 5] =
+    ["Aim at", "Copy location", "Copy rotation", "Child of", "Follow path"];

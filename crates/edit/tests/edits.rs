@@ -319,3 +319,39 @@ fn frame_rate_ranges_and_a_motion_path_key() {
     assert_eq!(channels::key_value(&after, cube, 1), Some(ChannelValue::Vec3(Vec3::new(1.0, 2.0, 3.0))));
     assert_eq!(channels::key_count(&after, cube), channels::key_count(&scene, cube));
 }
+
+#[test]
+fn object_constraints_are_added_retargeted_and_removed() {
+    use keyrig_core::ConstraintKind;
+    use keyrig_edit::edit::{new_constraint, CONSTRAINT_KINDS};
+    let scene = demo();
+    let cube = scene.objects.iter().position(|o| o.name == "Cube").expect("the demo's cube");
+    let arm = AimTarget::Object("Arm".into());
+    for kind in CONSTRAINT_KINDS {
+        let c = new_constraint(&scene, cube, kind, arm.clone()).expect("a constraint");
+        assert_eq!((c.name.as_str(), c.kind.label()), (kind, kind));
+    }
+    assert!(new_constraint(&scene, cube, "Spin", arm.clone()).is_none());
+    let aim = new_constraint(&scene, cube, "Aim at", arm.clone()).unwrap();
+    let (after, label) = applied(&scene, &SceneEdit::AddConstraint { object: cube, constraint: aim });
+    assert_eq!(label, "add constraint Aim at to Cube");
+    assert!(after.problems().is_empty(), "{:?}", after.problems());
+    // A second one of the same kind gets a name of its own.
+    assert_eq!(new_constraint(&after, cube, "Aim at", arm.clone()).unwrap().name, "Aim at 2");
+    let wrist = AimTarget::Joint { object: "Arm".into(), joint: "wrist".into() };
+    let edit = SceneEdit::ConstraintTarget { object: cube, constraint: 0, target: wrist.clone() };
+    let (retargeted, label) = applied(&after, &edit);
+    assert_eq!(label, "Aim at target Arm / wrist");
+    assert!(
+        matches!(&retargeted.objects[cube].constraints[0].kind, ConstraintKind::AimAt { target, .. } if *target == wrist)
+    );
+    let (removed, label) = applied(&retargeted, &SceneEdit::RemoveConstraint { object: cube, constraint: 0 });
+    assert_eq!(label, "remove constraint Aim at from Cube");
+    assert_eq!(removed, scene);
+    // Indices that do not exist change nothing.
+    assert_eq!(applied(&scene, &SceneEdit::RemoveConstraint { object: cube, constraint: 3 }).0, scene);
+    assert_eq!(
+        applied(&scene, &SceneEdit::ConstraintTarget { object: 9, constraint: 0, target: wrist }).0,
+        scene
+    );
+}

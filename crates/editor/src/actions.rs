@@ -73,6 +73,13 @@ pub enum Action {
         object: usize,
         constraint: usize,
     },
+    /// Switches a child-of constraint's parent to `target` at the current frame, without a
+    /// jump (inspector; `keyrig_eval::switch_parent`).
+    SwitchParent {
+        object: usize,
+        constraint: usize,
+        target: keyrig_core::AimTarget,
+    },
     /// Adds an IK constraint on the IK-posing chain that ends at `joint` (inspector).
     KeepIk {
         object: usize,

@@ -1612,6 +1612,9 @@ impl EditorApp {
                 self.rename_item(item, &name);
             }
             Action::BakeIk { object, constraint } => self.bake_ik_constraint(object, constraint),
+            Action::SwitchParent { object, constraint, target } => {
+                self.switch_parent(object, constraint, target);
+            }
             Action::PoseLibrary(action) => self.pose_library(action),
             Action::KeepIk { object, joint } => self.keep_ik_constraint(object, joint),
             Action::FrameObjects(objects) => self.frame_objects(&objects),

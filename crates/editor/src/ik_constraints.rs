@@ -72,4 +72,32 @@ impl EditorApp {
             None => {}
         }
     }
+
+    /// Switches child-of constraint `constraint` of `object` to `target` at the current time
+    /// without moving the object there ([`keyrig_eval::switch_parent`]: a parent entry with the
+    /// offset taken now, a Step key on the parent channel). One undo step; nothing changes when
+    /// the switch is refused.
+    pub fn switch_parent(&mut self, object: usize, constraint: usize, target: keyrig_core::AimTarget) {
+        let time = self.time();
+        let mut switched = self.doc.scene().clone();
+        match keyrig_eval::switch_parent(&mut switched, object, constraint, time, target.clone()) {
+            Ok(_) => {
+                let Some(new) =
+                    switched.objects.get(object).and_then(|o| o.constraints.get(constraint)).cloned()
+                else {
+                    return;
+                };
+                let label = format!("switch {} to {}", new.name, keyrig_edit::edit::target_label(&target));
+                self.doc.edit(&label, |scene| {
+                    if let Some(c) =
+                        scene.objects.get_mut(object).and_then(|o| o.constraints.get_mut(constraint))
+                    {
+                        *c = new;
+                    }
+                });
+                self.info(format!("{label} at frame {}", self.session.playback.whole_frame()));
+            }
+            Err(e) => self.error(format!("Switch parent: {e}")),
+        }
+    }
 }

@@ -79,7 +79,9 @@ pub fn owner_of(channel: ChannelId) -> Selected {
         | ChannelId::LightDirection(l)
         | ChannelId::LightColour(l)
         | ChannelId::LightIntensity(l) => Selected::Light(l),
-        ChannelId::IkTarget { object, .. } | ChannelId::IkBlend { object, .. } => Selected::Object(object),
+        ChannelId::IkTarget { object, .. }
+        | ChannelId::IkBlend { object, .. }
+        | ChannelId::Constraint { object, .. } => Selected::Object(object),
         ChannelId::Attribute(a) => match a.owner() {
             Ok(o) => Selected::Object(o),
             Err(l) => Selected::Light(l),
@@ -88,6 +90,7 @@ pub fn owner_of(channel: ChannelId) -> Selected {
         | ChannelId::CameraRotation(c)
         | ChannelId::CameraLens(c)
         | ChannelId::CameraRoll(c)
+        | ChannelId::CameraAimInfluence(c)
         | ChannelId::CameraVisible(c) => Selected::Camera(c),
     }
 }

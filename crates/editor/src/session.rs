@@ -303,6 +303,9 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         (C::IkBlend { object, constraint }, Selected::Object(r)) => {
             C::IkBlend { object: shift(object, r)?, constraint }
         }
+        (C::Constraint { object, constraint, property }, Selected::Object(r)) => {
+            C::Constraint { object: shift(object, r)?, constraint, property }
+        }
         (C::Attribute(a), Selected::Object(r)) if a.owner().is_ok() => {
             C::Attribute(a.with_owner(shift(a.owner().ok()?, r)?))
         }
@@ -313,6 +316,7 @@ pub fn shifted(id: ChannelId, removed: Selected) -> Option<ChannelId> {
         (C::CameraRotation(c), Selected::Camera(r)) => C::CameraRotation(shift(c, r)?),
         (C::CameraLens(c), Selected::Camera(r)) => C::CameraLens(shift(c, r)?),
         (C::CameraRoll(c), Selected::Camera(r)) => C::CameraRoll(shift(c, r)?),
+        (C::CameraAimInfluence(c), Selected::Camera(r)) => C::CameraAimInfluence(shift(c, r)?),
         (C::CameraVisible(c), Selected::Camera(r)) => C::CameraVisible(shift(c, r)?),
         (id, _) => id,
     })

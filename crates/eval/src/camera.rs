@@ -117,6 +117,7 @@ pub(crate) struct AimRig {
     pub(crate) target: Target,
     up: Vec3,
     pub(crate) roll: Slot<f32>,
+    pub(crate) influence: Slot<f32>,
 }
 
 /// A scene camera's runtime form.
@@ -188,7 +189,8 @@ impl CameraRig {
         match (&mut self.aim, &camera.aim) {
             (_, None) => self.aim = None,
             (Some(rig), Some(aim)) => {
-                n += usize::from(rig.roll.refresh(&aim.roll, ChannelId::CameraRoll(c)));
+                n += usize::from(rig.roll.refresh(&aim.roll, ChannelId::CameraRoll(c)))
+                    + usize::from(rig.influence.refresh(&aim.influence, ChannelId::CameraAimInfluence(c)));
                 rig.up = aim.up;
                 let (target, problem) = resolve(scene, &aim.target);
                 rig.target = target;
@@ -196,10 +198,14 @@ impl CameraRig {
                     problem.map(|message| EvalProblem { path: format!("cameras[{c}].aim.target"), message });
             }
             (None, Some(aim)) => {
-                n += 1;
+                n += 2;
                 let (target, problem) = resolve(scene, &aim.target);
-                self.aim =
-                    Some(AimRig { target, up: aim.up, roll: Slot::new(&aim.roll, ChannelId::CameraRoll(c)) });
+                self.aim = Some(AimRig {
+                    target,
+                    up: aim.up,
+                    roll: Slot::new(&aim.roll, ChannelId::CameraRoll(c)),
+                    influence: Slot::new(&aim.influence, ChannelId::CameraAimInfluence(c)),
+                });
                 self.problem =
                     problem.map(|message| EvalProblem { path: format!("cameras[{c}].aim.target"), message });
             }
@@ -208,7 +214,7 @@ impl CameraRig {
     }
 
     pub(crate) fn channel_count(&self) -> usize {
-        4 + usize::from(self.aim.is_some())
+        4 + 2 * usize::from(self.aim.is_some())
     }
 
     pub(crate) fn for_each_problem(&self, f: &mut dyn FnMut(&EvalProblem)) {
@@ -220,7 +226,7 @@ impl CameraRig {
             &self.visible.problem,
         ]
         .into_iter()
-        .chain(self.aim.as_ref().map(|a| &a.roll.problem))
+        .chain(self.aim.iter().flat_map(|a| [&a.roll.problem, &a.influence.problem]))
         .flatten()
         {
             f(p);
@@ -257,7 +263,17 @@ impl CameraRig {
                     Some(ChannelValue::Scalar(v)) => *v,
                     _ => aim.roll.sample(time),
                 };
-                keyrig_core::camera_object::aim_rotation(eye, target(&aim.target)?, aim.up, roll)
+                let influence = match overrides.get(&ChannelId::CameraAimInfluence(c)) {
+                    Some(ChannelValue::Scalar(v)) => *v,
+                    _ => aim.influence.sample(time),
+                };
+                if influence.is_nan() || influence <= 0.0 {
+                    return None;
+                }
+                let aimed =
+                    keyrig_core::camera_object::aim_rotation(eye, target(&aim.target)?, aim.up, roll)?;
+                // Keyed influence (docs/constraints.md): slerp from the keyed rotation.
+                Some(if influence >= 1.0 { aimed } else { keyed.slerp(aimed, influence).normalize() })
             })
             .unwrap_or(keyed);
         let lens = match overrides.get(&ChannelId::CameraLens(c)) {

@@ -16,8 +16,10 @@ use crate::clips::{ObjectMix, PoseValues};
 use crate::morph::{MorphBlend, MorphClips, MorphError};
 
 mod attributes;
+pub(crate) mod constraints;
 pub use attributes::ObjectLook;
 use attributes::{LightAttributeRig, ObjectAttributeRig};
+use constraints::ConstraintRigs;
 
 pub use crate::slot::{EvalProblem, Overrides};
 use crate::slot::{RotationSlot, Slot, SlotEval};
@@ -299,6 +301,9 @@ pub struct SceneEvaluator {
     objects: Vec<ObjectRig>,
     lights: Vec<LightRig>,
     cameras: Vec<CameraRig>,
+    /// Object constraints (aim at, child of, copy, follow path) and the order objects are
+    /// evaluated in so that targets come first.
+    constraints: ConstraintRigs,
     problems: Vec<EvalProblem>,
 }
 
@@ -313,6 +318,7 @@ impl SceneEvaluator {
             objects: (0..scene.objects.len()).map(|o| ObjectRig::new(scene, o, meshes.get(&o))).collect(),
             lights: scene.lights.iter().enumerate().map(|(l, light)| LightRig::new(l, light)).collect(),
             cameras: (0..scene.cameras.len()).map(|c| CameraRig::new(scene, c)).collect(),
+            constraints: ConstraintRigs::build(scene),
             problems: Vec::new(),
         };
         eval.collect_problems();
@@ -367,6 +373,9 @@ impl SceneEvaluator {
                 }
             }
         }
+        // Object constraints are few and cheap to build: they are built again (targets
+        // resolved by name) on every update.
+        self.constraints = ConstraintRigs::build(scene);
         self.collect_problems();
         rebuilt
     }
@@ -392,6 +401,7 @@ impl SceneEvaluator {
         for rig in &self.cameras {
             rig.for_each_problem(&mut |p| self.problems.push(p.clone()));
         }
+        self.constraints.for_each_problem(&mut |p| self.problems.push(p.clone()));
     }
 
     /// What could not be evaluated, with field paths; empty for a valid scene.
@@ -484,9 +494,15 @@ impl SceneEvaluator {
             ChannelId::CameraRoll(c) => {
                 Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.roll.sample(time)))
             }
+            ChannelId::CameraAimInfluence(c) => {
+                Some(ChannelValue::Scalar(self.cameras.get(c)?.aim.as_ref()?.influence.sample(time)))
+            }
             ChannelId::CameraVisible(c) => {
                 Some(ChannelValue::Scalar(self.cameras.get(c)?.visible.sample(time)))
             }
+            ChannelId::Constraint { object, constraint, property } => Some(ChannelValue::Scalar(
+                self.constraints.objects.get(object)?.get(constraint)?.value(property, time)?,
+            )),
         }
     }
 
@@ -523,14 +539,20 @@ impl SceneEvaluator {
     pub fn evaluate_into(&self, time: f64, overrides: &Overrides, state: &mut SceneState) {
         state.time = time;
         state.objects.truncate(self.objects.len());
-        for (o, rig) in self.objects.iter().enumerate() {
-            match state.objects.get_mut(o) {
-                Some(object) => Self::fill_object(rig, o, time, overrides, usize::MAX, object),
-                None => {
-                    let mut object = ObjectState::empty();
-                    Self::fill_object(rig, o, time, overrides, usize::MAX, &mut object);
-                    state.objects.push(object);
-                }
+        state.objects.resize_with(self.objects.len(), ObjectState::empty);
+        // Objects in dependency order, so that every constraint's targets are evaluated (and
+        // constrained) before it.
+        for &o in &self.constraints.order {
+            let Some(rig) = self.objects.get(o) else { continue };
+            Self::fill_object(rig, o, time, overrides, usize::MAX, &mut state.objects[o]);
+            let rigs = self.constraints.objects.get(o).map_or(&[][..], Vec::as_slice);
+            if !rigs.is_empty() {
+                let mut world = state.objects[o].world_from_object;
+                let objects = &state.objects;
+                constraints::apply(rigs, o, time, overrides, usize::MAX, &mut world, &|t| {
+                    Self::frame_in(objects, t)
+                });
+                state.objects[o].world_from_object = world;
             }
         }
         state.lights.clear();
@@ -568,6 +590,56 @@ impl SceneEvaluator {
         self.cameras.len()
     }
 
+    /// The frame of a constraint target in evaluated objects: an object's world transform, a
+    /// joint's (world from object · model from joint), a point's translation.
+    fn frame_in(objects: &[ObjectState], target: &Target) -> Option<Affine3A> {
+        match *target {
+            Target::Point(p) => Some(Affine3A::from_translation(p)),
+            Target::Object(o) => Some(objects.get(o)?.world_from_object),
+            Target::Joint { object, joint } => Self::joint_frame(objects.get(object)?, joint),
+            Target::Missing => None,
+        }
+    }
+
+    fn joint_frame(state: &ObjectState, joint: usize) -> Option<Affine3A> {
+        Some(state.world_from_object * *state.palette.as_ref()?.model_from_joint.get(joint)?)
+    }
+
+    /// The frame of `target` at `time`, evaluating the object it names (with its constraints).
+    pub(crate) fn frame_of(&self, target: &Target, time: f64, overrides: &Overrides) -> Option<Affine3A> {
+        match *target {
+            Target::Point(p) => Some(Affine3A::from_translation(p)),
+            Target::Object(o) => Some(self.object_at(o, time, overrides)?.world_from_object),
+            Target::Joint { object, joint } => {
+                Self::joint_frame(&self.object_at(object, time, overrides)?, joint)
+            }
+            Target::Missing => None,
+        }
+    }
+
+    /// Object `o`'s world transform at `time` going into its constraint `c` (its own transform
+    /// with constraints `0..c` applied) and constraint `c`'s own result for it (unblended; the
+    /// incoming transform where the constraint does nothing at this time). `None` when there
+    /// is no such object or constraint.
+    #[must_use]
+    pub fn constraint_frames(
+        &self,
+        o: usize,
+        c: usize,
+        time: f64,
+        overrides: &Overrides,
+    ) -> Option<(Affine3A, Affine3A)> {
+        let rigs = self.constraints.objects.get(o)?;
+        let rig = rigs.get(c)?;
+        let mut state = ObjectState::empty();
+        Self::fill_object(self.objects.get(o)?, o, time, overrides, usize::MAX, &mut state);
+        let mut world = state.world_from_object;
+        let frame_of = |t: &Target| self.frame_of(t, time, overrides);
+        constraints::apply(rigs, o, time, overrides, c, &mut world, &frame_of);
+        let out = constraints::result(rig, o, c, time, overrides, &world, &frame_of).unwrap_or(world);
+        Some((world, out))
+    }
+
     /// The world position of an aim target in evaluated objects.
     fn target_in(objects: &[ObjectState], target: &Target) -> Option<Vec3> {
         match *target {
@@ -603,6 +675,16 @@ impl SceneEvaluator {
         let rig = self.objects.get(o)?;
         let mut state = ObjectState::empty();
         Self::fill_object(rig, o, time, overrides, constraints, &mut state);
+        let rigs = self.constraints.objects.get(o).map_or(&[][..], Vec::as_slice);
+        if !rigs.is_empty() {
+            let mut world = state.world_from_object;
+            // Targets come before this object in the evaluation order (a cycle's constraints
+            // are off), so this recursion ends.
+            constraints::apply(rigs, o, time, overrides, usize::MAX, &mut world, &|t| {
+                self.frame_of(t, time, overrides)
+            });
+            state.world_from_object = world;
+        }
         Some(state)
     }
 

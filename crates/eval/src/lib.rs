@@ -10,7 +10,10 @@
 //! motion path and the curve view all see them.
 //!
 //! IK constraints are solved after forward kinematics, blended by their IK/FK blend channel;
-//! [`bake`] writes their result as rotation keys.
+//! [`bake`] writes their result as rotation keys. Object constraints (aim at, child of, copy
+//! location and rotation, follow path; docs/constraints.md) are applied to each object's world
+//! transform after its targets are evaluated; [`constraints`] switches a child-of parent and
+//! bakes them to keys.
 //!
 //! Pure: no files, GPU or UI. Model files are loaded by keyrig-io and handed in as
 //! [`LoadedMesh`]es.
@@ -18,6 +21,7 @@
 pub mod bake;
 pub mod camera;
 mod clips;
+pub mod constraints;
 mod evaluator;
 pub mod merge;
 pub mod morph;
@@ -25,6 +29,7 @@ mod slot;
 
 pub use bake::{bake_all_ik, bake_ik_constraint, BakeError, Baked};
 pub use camera::CameraState;
+pub use constraints::{bake_object_constraints, switch_parent, SwitchError};
 pub use evaluator::{
     EvalProblem, LightState, LoadedMesh, MorphRig, ObjectLook, ObjectState, Overrides, Rebuilt,
     SceneEvaluator, SceneState, SkinRig,

@@ -88,6 +88,7 @@ fn an_aimed_camera_looks_at_its_joint() {
         up: Vec3::Y,
         roll: keyrig_core::Animated::new(0.0, RawTrack::new(vec![Key::new(0.0, 0.0), Key::new(2.0, 90.0)])),
         target: AimTarget::Joint { object: "Arm".into(), joint: last },
+        influence: keyrig_core::Animated::constant(1.0),
     });
     let eval = SceneEvaluator::new(&scene, &HashMap::new());
     for t in [0.0, 1.0, 2.0] {

@@ -540,7 +540,9 @@ impl Document {
 ///
 /// glTF has no IK: IK constraints are baked first (`keyrig_eval::bake_all_ik` over the scene's
 /// frame range, a rotation key per frame on each chain joint), so the file shows the solved
-/// chains as keyrig evaluates them at every frame.
+/// chains as keyrig evaluates them at every frame. Object constraints (aim at, child of, copy,
+/// follow path) are baked likewise (`keyrig_eval::bake_object_constraints`): a constrained
+/// object's node gets LINEAR keys of its evaluated transform at every frame.
 ///
 /// # Errors
 /// A track that does not validate, a skeleton that does not fit its mesh, a mesh file that
@@ -621,6 +623,10 @@ fn write_document(
     let mut baked = scene.clone();
     keyrig_eval::bake_all_ik(&mut baked, scene.frame_range.start, scene.frame_range.end)
         .map_err(|e| scene_err("ik_constraints", e.to_string()))?;
+    // Nor object constraints: each constrained object's evaluated transform becomes LINEAR keys
+    // at every frame (docs/constraints.md, "Baking and export").
+    keyrig_eval::bake_object_constraints(&mut baked, scene.frame_range.start, scene.frame_range.end)
+        .map_err(|e| scene_err("constraints", e.to_string()))?;
     // glTF rotations are quaternions: Euler keys become quaternion keys that follow them within
     // a tenth of the tolerance (docs/channels.md, "Euler keys"), resampled below like any.
     let range =

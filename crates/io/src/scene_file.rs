@@ -590,6 +590,7 @@ mod tests {
             up: glam::Vec3::Y,
             roll: Animated::new(0.0, RawTrack::new(vec![Key::new(0.0, 0.0), Key::new(1.0, 15.0)])),
             target: AimTarget::Joint { object: scene.objects[0].name.clone(), joint: "elbow".into() },
+            influence: Animated::constant(1.0),
         });
         let mut top = SceneCamera::new("Top", glam::Vec3::new(0.0, 10.0, 0.0));
         top.projection = Projection::Orthographic;

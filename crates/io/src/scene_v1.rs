@@ -87,6 +87,7 @@ impl ObjectV1 {
             attributes: keyrig_core::ObjectAttributes::default(),
             action: None,
             clip_tracks: Vec::new(),
+            constraints: Vec::new(),
         }
     }
 }

@@ -226,6 +226,7 @@ fn scene() -> Scene {
         up: Vec3::Y,
         roll: Animated::new(0.0, RawTrack::new(vec![Key::new(0.0, 0.0), Key::new(2.0, 20.0)])),
         target: AimTarget::Object("Cube".into()),
+        influence: Animated::constant(1.0),
     });
     follow.far = None;
     follow.visible = Animated::constant(0.0);

@@ -527,6 +527,10 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
                 keyrig_core::channel::IkProperty::Target => span(&c.target.track.keys),
                 keyrig_core::channel::IkProperty::Blend => span(&c.blend.track.keys),
             }),
+        ChannelPath::Constraint { object: name, constraint, property } => object(name)
+            .and_then(|(_, o)| o.constraints.iter().find(|c| c.name == *constraint))
+            .and_then(|c| property.of(c))
+            .map_or((0, None), |a| span(&a.track.keys)),
         ChannelPath::Attribute { light, owner, property } => {
             let id = if *light {
                 names.lights.get(owner.as_str()).and_then(|&l| property.light_id(l))
@@ -559,6 +563,7 @@ fn channel_keys(scene: &Scene, names: &ByName<'_>, channel: &ChannelPath) -> (us
                 C::Rotation => span(&c.rotation.track.keys),
                 C::Lens => span(&c.lens.track.keys),
                 C::Roll => c.aim.as_ref().map_or((0, None), |a| span(&a.roll.track.keys)),
+                C::AimInfluence => c.aim.as_ref().map_or((0, None), |a| span(&a.influence.track.keys)),
                 C::Visible => span(&c.visible.track.keys),
             }
         }

@@ -156,6 +156,15 @@ fn rows(scene: &Scene, collapsed: &BTreeSet<Selected>) -> Vec<Row> {
                 out.push(channel_row(id, attribute_label(id), 1, item));
             }
         }
+        // Object constraints: influence, a child-of parent, a path offset, where keyed.
+        for (c, constraint) in object.constraints.iter().enumerate() {
+            for property in keyrig_core::channel_id::ConstraintProperty::of_constraint(constraint) {
+                let id = ChannelId::Constraint { object: o, constraint: c, property };
+                if keyed(id) {
+                    out.push(channel_row(id, format!("{} {}", constraint.name, id.channel_name()), 1, item));
+                }
+            }
+        }
         let Some(skeleton) = &object.skeleton else { continue };
         let root = ChannelId::RootTranslation(o);
         if keyed(root) {

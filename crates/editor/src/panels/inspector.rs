@@ -1,10 +1,12 @@
 //! The inspector: the selection's transform (changes go through record mode or the pose), the
 //! key inspector (interpolation mode and T/C/B of the selected keys, and the cycles of their
 //! channel before and after its keys), and the deformer with its
-//! parameters, plus the cross-section measure of the selected joint.
+//! parameters, plus the cross-section measure of the selected joint, and an object's
+//! constraints (`constraints`: add, retarget, remove, key their influence).
 
 pub mod action;
 mod camera;
+mod constraints;
 pub mod pose_library;
 
 use egui::Ui;
@@ -340,7 +342,12 @@ fn channel_editor(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions, id: Ch
                 id,
                 ChannelId::Attribute(
                     AttributeId::ObjectOpacity(_) | AttributeId::BlendParent(_) | AttributeId::BlendChild(_)
-                )
+                ) | ChannelId::CameraAimInfluence(_)
+                    | ChannelId::Constraint {
+                        property: keyrig_core::channel_id::ConstraintProperty::Influence
+                            | keyrig_core::channel_id::ConstraintProperty::Offset,
+                        ..
+                    }
             ) =>
         {
             let changed = ui
@@ -447,6 +454,7 @@ fn selection_ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
             channel_editor(ui, ctx, actions, rotation, "Rotation (°)");
             channel_editor(ui, ctx, actions, ChannelId::ObjectScale(o), "Scale");
             md2_ui(ui, ctx, actions, o);
+            constraints::constraints_ui(ui, ctx, actions, o, channel_editor);
         }
         Some(Selected::Joint { object, joint }) => {
             let name = scene

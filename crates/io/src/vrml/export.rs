@@ -390,7 +390,16 @@ pub fn export_scene(
     let original = scene;
     let range =
         (f64::from(scene.frame_range.start) / scene.fps, f64::from(scene.frame_range.end) / scene.fps);
-    let following = scene
+    // VRML has no constraints: a constrained object's evaluated transform becomes keys at every
+    // frame first (docs/constraints.md, "Baking and export"); the metadata keeps them.
+    let mut constrained = std::borrow::Cow::Borrowed(scene);
+    if scene.objects.iter().any(|o| !o.constraints.is_empty()) {
+        let mut baked = scene.clone();
+        keyrig_eval::bake_object_constraints(&mut baked, scene.frame_range.start, scene.frame_range.end)
+            .map_err(|e| VrmlExportError::Evaluate(format!("constraints: {e}")))?;
+        constrained = std::borrow::Cow::Owned(baked);
+    }
+    let following = constrained
         .with_quaternion_keys(range, options.rotation_tolerance_deg / 10.0)
         .map_err(|(path, e)| VrmlExportError::Metadata(format!("{path}: {e}")))?;
     let scene = following.as_ref();

@@ -28,7 +28,11 @@ pub(super) fn camera_ui(
     channel_editor(ui, ctx, actions, ChannelId::CameraTranslation(c), "Translation");
     match &camera.aim {
         None => channel_editor(ui, ctx, actions, ChannelId::CameraRotation(c), "Rotation (°)"),
-        Some(_) => channel_editor(ui, ctx, actions, ChannelId::CameraRoll(c), "Roll (°)"),
+        Some(_) => {
+            channel_editor(ui, ctx, actions, ChannelId::CameraRoll(c), "Roll (°)");
+            // Keyed like any channel: 0 the keyed rotation, 1 the aim (docs/constraints.md).
+            channel_editor(ui, ctx, actions, ChannelId::CameraAimInfluence(c), "Aim influence");
+        }
     }
     let projection = camera.projection;
     let lens_label = match projection {

@@ -5,6 +5,7 @@
 //! keyrig-render on the GPU ([`crate::gpu_view`]) or, without one, by egui's painter
 //! (`painter.rs`) from the meshes the frame skinned on the CPU.
 
+mod constraint_lines;
 mod gizmo;
 mod grab;
 pub mod ik_handle;
@@ -182,6 +183,7 @@ impl Viewport {
                 painter::paint_bones(&painter, &projection, ctx);
             }
             painter::paint_lights(&painter, &projection, ctx);
+            constraint_lines::paint(&painter, &projection, ctx);
             if !gpu_drawn {
                 painter::paint_cameras(&painter, &projection, ctx);
             }
