@@ -74,6 +74,8 @@ struct Measured {
     /// target and in the source itself.
     target_slide: f32,
     source_slide: f32,
+    /// Largest vertical drift of the target's foot during a contact, as a fraction of the leg.
+    target_lift: f32,
     /// Largest angle between the target's and the source's knee bend directions (source knee
     /// bent ≥ 10°).
     knee_side_deg: f32,
@@ -150,7 +152,7 @@ fn measure(
         }
     }
     let horizontal = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
-    let (mut target_slide, mut source_slide) = (0.0f32, 0.0f32);
+    let (mut target_slide, mut source_slide, mut target_lift) = (0.0f32, 0.0f32, 0.0f32);
     for contact in &report.contacts {
         let slot = match contact.side {
             Side::Left => Slot::Left(Limb::Foot),
@@ -159,6 +161,7 @@ fn measure(
         let (sf, tf) = (joint_in(source, 0, slot), joint_in(target, object, slot));
         let (mut t_slide, mut s_slide) = (0.0f32, 0.0f32);
         for k in contact.first..=contact.last {
+            target_lift = target_lift.max((tgt[k][tf].y - tgt[contact.first][tf].y).abs());
             t_slide = t_slide.max(horizontal(tgt[k][tf] - tgt[contact.first][tf]).length());
             s_slide = s_slide.max(horizontal(src[k][sf] - src[contact.first][sf]).length());
         }
@@ -226,6 +229,7 @@ fn measure(
         leg_deg,
         extra_deg,
         target_slide: target_slide / leg,
+        target_lift: target_lift / leg,
         source_slide: source_slide / report.source_leg,
         knee_side_deg,
         step_deg,
@@ -284,7 +288,7 @@ fn cmu_walk_onto_cesium_man() {
     let m = measure(&source, &target, 0, &map, &report);
     eprintln!(
         "CMU 131 → CesiumMan: {} frames, leg ratio {:.5} ({:.3} → {:.4}), {} contacts, {} IK solves ({} unreachable)\n\
-         bone directions: {:.3}° (body), {:.3}° (held legs), {:.3}° (through a source-only joint); foot slide {:.4} % of the leg (source {:.3} %);\n\
+         bone directions: {:.3}° (body), {:.3}° (held legs), {:.3}° (through a source-only joint); foot slide {:.4} % of the leg (source {:.3} %), vertical {:.3} %;\n\
          knee side {:.2}°, largest step {:.2}° (source {:.2}°)",
         report.frames,
         report.leg_ratio,
@@ -298,6 +302,7 @@ fn cmu_walk_onto_cesium_man() {
         m.extra_deg,
         100.0 * m.target_slide,
         100.0 * m.source_slide,
+        100.0 * m.target_lift,
         m.knee_side_deg,
         m.step_deg,
         m.source_step_deg
@@ -309,4 +314,136 @@ fn cmu_walk_onto_cesium_man() {
     // The source's own right wrist turns by 54.8° between two frames (frame 237), and the
     // target follows it: no joint turns by more than its source.
     assert!(m.step_deg <= m.source_step_deg + 0.5, "{} {}", m.step_deg, m.source_step_deg);
+}
+
+/// The FBX corpus's humanoid, `blender_293_barbarian`: a low-poly rig without knees or elbows
+/// (`jambe` → `pied`, `bras` → `main`), in two skinned objects that each carry the skeleton.
+/// Its legs are one bone each, so a planted foot is held by turning the leg about its root
+/// towards the planted point, which it reaches only where the distance allows.
+#[test]
+fn cmu_walk_onto_the_fbx_barbarian() {
+    let source = cmu_walk();
+    let mut target = model("fbx/ufbx/blender_293_barbarian_7400_binary.fbx");
+    let body = target.objects.iter().position(|o| o.name == "body").expect("the body object");
+    let map = BoneMap::automatic(
+        source.objects[0].skeleton.as_ref().unwrap(),
+        target.objects[body].skeleton.as_ref().unwrap(),
+    );
+    let pairs: Vec<(&str, &str)> = map.pairs.iter().map(|p| (p.source.as_str(), p.target.as_str())).collect();
+    assert_eq!(
+        pairs,
+        [
+            ("Hips", "bassin"),
+            ("lowerback", "torse"),
+            ("LeftHip", "jambe gauche"),
+            ("RightHip", "jambe droite"),
+            ("Head", "tête"),
+            ("RightShoulder", "bras droit"),
+            ("LeftShoulder", "bras gauche"),
+            ("LeftAnkle", "pied gauche"),
+            ("RightAnkle", "pied droit"),
+            ("RightWrist", "main droite"),
+            ("LeftWrist", "main gauche"),
+        ]
+    );
+    let report =
+        retarget(&source, 0, &mut target, body, &map, &RetargetOptions::new("Walk")).expect("retargets");
+    assert!(target.problems().is_empty(), "{:?}", target.problems());
+    assert!(report.not_held.is_empty());
+    let m = measure(&source, &target, body, &map, &report);
+    eprintln!(
+        "CMU 131 → barbarian: leg ratio {:.5} ({:.3} → {:.4}), {} contacts, {} holds ({} out of reach)\n\
+         bone directions: {:.3}° (body), {:.3}° (through a source-only joint); foot slide {:.3} % of the leg (source {:.3} %), vertical {:.2} %;\n\
+         largest step {:.2}° (source {:.2}°)",
+        report.leg_ratio,
+        report.source_leg,
+        report.target_leg,
+        report.contacts.len(),
+        report.ik_solves,
+        report.ik_unreachable,
+        m.body_deg,
+        m.extra_deg,
+        100.0 * m.target_slide,
+        100.0 * m.source_slide,
+        100.0 * m.target_lift,
+        m.step_deg,
+        m.source_step_deg
+    );
+    assert!(m.body_deg <= 5.0, "{}", m.body_deg);
+    assert!(m.step_deg <= m.source_step_deg + 0.5, "{} {}", m.step_deg, m.source_step_deg);
+}
+
+/// A rig retargeted onto itself with its arms lowered 40° at rest (a T-pose source, an A-pose
+/// target): the rest alignment brings every bone back onto the source's, and the root
+/// follows the source's exactly (leg ratio 1).
+#[test]
+fn a_pose_copy_of_the_source_follows_it_bone_for_bone() {
+    let source = cmu_walk();
+    let mut target = source.clone();
+    target.objects[0].name = "Copy".to_owned();
+    let skeleton = target.objects[0].skeleton.as_mut().unwrap();
+    for (name, angle) in [("LeftShoulder", -40.0f32), ("RightShoulder", 40.0)] {
+        let joint = skeleton.joints.iter_mut().find(|j| j.name == name).unwrap();
+        joint.rest_rotation = Quat::from_rotation_z(angle.to_radians()) * joint.rest_rotation;
+    }
+    let map = BoneMap::automatic(
+        source.objects[0].skeleton.as_ref().unwrap(),
+        target.objects[0].skeleton.as_ref().unwrap(),
+    );
+    let options = RetargetOptions { contacts: None, ..RetargetOptions::new("Walk") };
+    let report = retarget(&source, 0, &mut target, 0, &map, &options).expect("retargets");
+    assert!((report.leg_ratio - 1.0).abs() < 1e-6, "{}", report.leg_ratio);
+    let m = measure(&source, &target, 0, &map, &report);
+    assert!(m.body_deg < 0.1, "{}", m.body_deg);
+    assert!(m.leg_deg < 0.1, "{}", m.leg_deg);
+    let (src, _) = evaluated(&source, 0, report.frames, report.fps);
+    let (tgt, _) = evaluated(&target, 0, report.frames, report.fps);
+    let hips = joint_in(&source, 0, Slot::Hips);
+    // The copy walks the source's path from where its rest pose stands (the ground at its rest
+    // feet): a constant offset.
+    let offset = tgt[0][hips] - src[0][hips];
+    for k in 0..report.frames {
+        let expected = src[k][hips] + offset;
+        assert!(tgt[k][hips].distance(expected) < 1e-3, "frame {k}: {} {}", tgt[k][hips], expected);
+    }
+}
+
+/// The new action is made of ordinary keys: reducing them within 0.1° and 0.5 mm (CesiumMan is
+/// in metres) keeps the planted feet within the bound. (Within the default 0.5° and 1 mm the
+/// feet slide by up to 2.1 % of the leg: each of the hips, thigh and shin may turn by 0.5°.)
+#[test]
+fn the_retargeted_walk_reduces_like_any_keys() {
+    let source = cmu_walk();
+    let mut target = model("gltf/CesiumMan/CesiumMan.glb");
+    let map = BoneMap::automatic(
+        source.objects[0].skeleton.as_ref().unwrap(),
+        target.objects[0].skeleton.as_ref().unwrap(),
+    );
+    let options = RetargetOptions {
+        reduce: Some(keyrig_edit::cleanup::ReduceTolerance {
+            angle_deg: 0.1,
+            distance: 0.0005,
+            ..keyrig_edit::cleanup::ReduceTolerance::DEFAULT
+        }),
+        ..RetargetOptions::new("Walk")
+    };
+    let report = retarget(&source, 0, &mut target, 0, &map, &options).expect("retargets");
+    let reduced = report.reduced.clone().expect("reduced");
+    eprintln!(
+        "reduced {} channels from {} to {} keys (largest error {:.3}°, {:.2e})",
+        reduced.channels,
+        reduced.keys_before,
+        reduced.keys_after,
+        reduced.max_angle_deg,
+        reduced.max_distance
+    );
+    assert!(reduced.keys_after * 4 < reduced.keys_before);
+    let m = measure(&source, &target, 0, &map, &report);
+    eprintln!(
+        "after reduction: foot slide {:.3} % of the leg, bones {:.3}°",
+        100.0 * m.target_slide,
+        m.body_deg
+    );
+    assert!(m.target_slide <= 0.01, "{}", m.target_slide);
+    assert!(m.body_deg <= 5.0, "{}", m.body_deg);
 }

@@ -241,10 +241,12 @@ pub struct RetargetReport {
     /// Target leg length, in the target's world units.
     pub target_leg: f32,
     pub contacts: Vec<Contact>,
-    /// Sides whose contacts could not be held: the target has no two-bone leg (upper leg,
-    /// lower leg and foot mapped, each the parent of the next).
+    /// Sides whose contacts could not be held: the target's mapped leg is neither two bones
+    /// (upper leg, lower leg and foot, each the parent of the next) nor one (upper leg and
+    /// foot).
     pub not_held: Vec<Side>,
-    /// Frames × feet the IK solved, and of those how many could not reach their target.
+    /// Frames × feet the IK solved (or a one-bone leg was turned), and of those how many could
+    /// not reach their target.
     pub ik_solves: usize,
     pub ik_unreachable: usize,
     /// The key reduction, when asked for.
@@ -565,8 +567,13 @@ pub fn retarget(
         })
         .collect();
     // Each aimed bone in its joint's frame at rest (the target's own offsets).
-    let local_offset =
-        |b: MappedBone| rotation_of(&tgt_rest[b.target.0]).inverse() * rest_direction(&tgt_rest, b.target);
+    // Each aimed bone in its joint's frame, with the unmapped joints along it in their static
+    // pose (as the evaluator will pose them).
+    let mut tgt_static = Vec::new();
+    tgt_rig.world(0.0, false, &mut tgt_static);
+    let local_offset = |b: MappedBone| {
+        rotation_of(&tgt_static[b.target.0]).inverse() * rest_direction(&tgt_static, b.target)
+    };
     // A joint without mapped bones below it turns as the nearest aligned joint above it.
     for j in 0..n {
         if align[j].is_none() && source_of(j).is_some() {
@@ -714,10 +721,11 @@ pub fn retarget(
             let Some(src_foot) = source_of(foot) else { continue };
             let found = find_contacts(&src_world, src_foot, source_leg, fps, &settings);
             let chain = leg(side);
-            let two_bone = chain.len() == 3
-                && tgt_skeleton.joints[chain[1]].parent == Some(chain[0])
-                && tgt_skeleton.joints[chain[2]].parent == Some(chain[1]);
-            if !two_bone {
+            let linked = chain.windows(2).all(|w| tgt_skeleton.joints[w[1]].parent == Some(w[0]));
+            let two_bone = linked && chain.len() == 3;
+            // A leg of one bone (no knee) is turned about its root towards the planted point.
+            let one_bone = linked && chain.len() == 2;
+            if !two_bone && !one_bone {
                 if !found.is_empty() {
                     not_held.push(side);
                 }
@@ -756,6 +764,42 @@ pub fn retarget(
                 let parent = parent_of(world, upper);
                 let fk_foot = position_of(&world[foot]);
                 let goal = fk_foot.lerp(plant, w);
+                let foot_world = rotation_of(&world[foot]);
+                let keep_foot = |world: &mut [Affine3A], local: &mut [Quat], above: usize| {
+                    let joint = &tgt_skeleton.joints[foot];
+                    local[foot] = ((rotation_of(&world[above]) * joint.rest_rotation).inverse() * foot_world)
+                        .normalize();
+                    world[foot] = compose(world[above], foot, local[foot], static_translation(foot));
+                };
+                if one_bone {
+                    // The leg cannot change its length: the foot goes to the planted point's
+                    // place on the ground plane (below the hip at the leg's length), or as
+                    // near it as the leg reaches.
+                    let hip = position_of(&world[upper]);
+                    let length = fk_foot.distance(hip);
+                    let across = horizontal(goal - hip);
+                    let goal = if across.length() < length {
+                        hip + across - UP * (length * length - across.length_squared()).sqrt()
+                    } else {
+                        goal
+                    };
+                    let (Some(from), Some(to)) =
+                        ((fk_foot - hip).try_normalize(), (goal - hip).try_normalize())
+                    else {
+                        continue;
+                    };
+                    let turned = Quat::from_rotation_arc(from, to) * rotation_of(&world[upper]);
+                    let joint = &tgt_skeleton.joints[upper];
+                    local[upper] =
+                        ((rotation_of(&parent) * joint.rest_rotation).inverse() * turned).normalize();
+                    world[upper] = compose(parent, upper, local[upper], static_translation(upper));
+                    keep_foot(world, local, upper);
+                    ik_solves += 1;
+                    if horizontal(position_of(&world[foot]) - goal).length() > 1e-3 * target_leg {
+                        ik_unreachable += 1;
+                    }
+                    continue;
+                }
                 let (hip, knee) = (position_of(&world[upper]), position_of(&world[lower]));
                 let axis = (fk_foot - hip).normalize_or_zero();
                 let bend = (knee - hip) - axis * (knee - hip).dot(axis);
@@ -783,15 +827,11 @@ pub fn retarget(
                 if !report.reachable {
                     ik_unreachable += 1;
                 }
-                let foot_world = rotation_of(&world[foot]);
                 local[upper] = out[0];
                 local[lower] = out[1];
                 world[upper] = compose(parent, upper, out[0], static_translation(upper));
                 world[lower] = compose(world[upper], lower, out[1], static_translation(lower));
-                let joint = &tgt_skeleton.joints[foot];
-                local[foot] =
-                    ((rotation_of(&world[lower]) * joint.rest_rotation).inverse() * foot_world).normalize();
-                world[foot] = compose(world[lower], foot, local[foot], static_translation(foot));
+                keep_foot(world, local, lower);
             }
             contacts.extend(found.into_iter().map(|(first, last)| Contact { side, first, last }));
         }
