@@ -447,3 +447,44 @@ fn the_retargeted_walk_reduces_like_any_keys() {
     assert!(m.target_slide <= 0.01, "{}", m.target_slide);
     assert!(m.body_deg <= 5.0, "{}", m.body_deg);
 }
+
+#[test]
+fn what_retargeting_refuses() {
+    use keyrig_edit::retarget::{BonePair, RetargetError};
+    let source = cmu_walk();
+    let mut target = model("gltf/CesiumMan/CesiumMan.glb");
+    let options = RetargetOptions::new("Walk");
+    let pair = |s: &str, t: &str| BonePair { source: s.to_owned(), target: t.to_owned() };
+    let unknown = BoneMap { pairs: vec![pair("Hips", "NoSuchJoint")] };
+    assert_eq!(
+        retarget(&source, 0, &mut target.clone(), 0, &unknown, &options),
+        Err(RetargetError::UnknownJoint { side: "target", name: "NoSuchJoint".to_owned() })
+    );
+    let twice = BoneMap { pairs: vec![pair("Hips", "Z_UP"), pair("Head", "Z_UP")] };
+    assert_eq!(
+        retarget(&source, 0, &mut target.clone(), 0, &twice, &options),
+        Err(RetargetError::TargetTwice("Z_UP".to_owned()))
+    );
+    assert_eq!(
+        retarget(&source, 0, &mut target.clone(), 0, &BoneMap::default(), &options),
+        Err(RetargetError::EmptyMap)
+    );
+    let bad_name = RetargetOptions::new("a/b");
+    let map = BoneMap { pairs: vec![pair("Hips", "Skeleton_torso_joint_1")] };
+    assert!(matches!(
+        retarget(&source, 0, &mut target.clone(), 0, &map, &bad_name),
+        Err(RetargetError::Action(_))
+    ));
+    assert_eq!(retarget(&source, 3, &mut target, 0, &map, &options), Err(RetargetError::NoObject(3)));
+
+    // Editing the map: one pair replaced, one removed.
+    let mut map = BoneMap::automatic(
+        source.objects[0].skeleton.as_ref().unwrap(),
+        target.objects[0].skeleton.as_ref().unwrap(),
+    );
+    map.set("Skeleton_neck_joint_2", Some("Neck"));
+    assert_eq!(map.source_of("Skeleton_neck_joint_2"), Some("Neck"));
+    map.set("Skeleton_neck_joint_2", None);
+    assert_eq!(map.source_of("Skeleton_neck_joint_2"), None);
+    assert_eq!(map.pairs.len(), 18);
+}
