@@ -268,6 +268,8 @@ pub enum RetargetError {
     EmptyMap,
     #[error("the source has no keys")]
     NoKeys,
+    #[error("the source's keys span {seconds} s, too many frames at {fps} fps")]
+    TooLong { seconds: f64, fps: f64 },
     #[error("the frame rate {0} is not a positive number")]
     FrameRate(f64),
     #[error("{field}: {message}")]
@@ -482,6 +484,10 @@ fn frame_alignment(u_from: Vec3, v_from: Vec3, u_to: Vec3, v_to: Vec3) -> Option
     Some(Quat::from_mat3(&(to * from.transpose())).normalize())
 }
 
+/// The most frames one retargeting keys (a day at 120 fps), so that keys hours apart at a
+/// million frames per second are refused rather than filling memory with poses.
+const MAX_FRAMES: usize = 10_368_000;
+
 /// The world up direction both rigs are read in (glTF's and BVH's +Y).
 const UP: Vec3 = Vec3::Y;
 
@@ -491,8 +497,9 @@ const UP: Vec3 = Vec3::Y;
 ///
 /// # Errors
 /// [`RetargetError`]: an object without a skeleton, a map naming joints the skeletons do not
-/// have or driving nothing, a source without keys, a bad frame rate, an invalid source channel,
-/// a bad action name.
+/// have or driving nothing, a source without keys or with too many frames, a bad frame rate,
+/// an invalid channel, a bad action name, a bad reduction tolerance. The target scene is
+/// unchanged on an error.
 pub fn retarget(
     source: &Scene,
     source_object: usize,
@@ -516,8 +523,20 @@ pub fn retarget(
     if !(fps.is_finite() && fps > 0.0) {
         return Err(RetargetError::FrameRate(fps));
     }
+    if let Some(tolerance) = options.reduce {
+        tolerance.check().map_err(|e| RetargetError::Reduce(e.to_string()))?;
+        if !(target.fps.is_finite() && target.fps > 0.0) {
+            return Err(RetargetError::FrameRate(target.fps));
+        }
+    }
     let (t0, t1) = src.domain().ok_or(RetargetError::NoKeys)?;
-    let frames = ((t1 - t0) * fps).round().max(0.0) as usize + 1;
+    let span = ((t1 - t0) * fps).round();
+    if !(span.is_finite() && span < MAX_FRAMES as f64) {
+        return Err(RetargetError::TooLong { seconds: t1 - t0, fps });
+    }
+    let frames = span.max(0.0) as usize + 1;
+    // Checked before the target changes: its channels must validate too.
+    Rig::new(&target.objects[target_object])?;
 
     // The target plays the new action from here on: its old keys are stored, and what it
     // holds without keys (the static values) is what the new keys are built on.
