@@ -50,8 +50,8 @@ pub struct RetargetArgs {
     /// Copy the legs' rotations only: do not hold the feet the source plants.
     #[arg(long)]
     pub no_contacts: bool,
-    /// Reduce the new keys within 0.1° and 0.5 mm (scene units / 1000 × 0.5), which keeps
-    /// planted feet within 1 % of the leg.
+    /// Reduce the new keys within 0.1° and 0.0005 scene units (0.5 mm in metres), which
+    /// keeps planted feet within 1 % of the leg (docs/retargeting.md).
     #[arg(long)]
     pub reduce: bool,
 }
