@@ -17,6 +17,7 @@ pub mod inspector;
 pub mod menu;
 pub mod outliner;
 pub mod render_dialog;
+pub mod retarget_dialog;
 pub mod status;
 pub mod timeline;
 pub mod viewport;
@@ -32,4 +33,5 @@ pub struct Panels {
     pub viewport: viewport::Viewport,
     pub render: render_dialog::RenderDialog,
     pub cleanup: cleanup_dialog::CleanupDialog,
+    pub retarget: retarget_dialog::RetargetDialog,
 }
