@@ -186,6 +186,15 @@ pub enum SceneEdit {
     /// Smooths `channels` with a Butterworth low-pass at `cutoff_hz`
     /// ([`crate::cleanup::smooth_keys`], docs/cleanup.md).
     SmoothKeys { channels: Vec<ChannelId>, cutoff_hz: f64 },
+    /// Puts the action `source`'s object `source_object` plays onto object `object` as a new
+    /// action through `map` ([`crate::retarget::retarget`], docs/retargeting.md).
+    Retarget {
+        source: Box<Scene>,
+        source_object: usize,
+        object: usize,
+        map: crate::retarget::BoneMap,
+        options: crate::retarget::RetargetOptions,
+    },
 }
 
 /// The action edits: each one undo step (docs/actions.md).
@@ -548,6 +557,10 @@ impl SceneEdit {
             SceneEdit::SmoothKeys { channels, cutoff_hz } => {
                 let _ = crate::cleanup::smooth_keys(scene, channels, *cutoff_hz);
             }
+            // A refused retargeting leaves the scene as it was (the dialog checks first).
+            SceneEdit::Retarget { source, source_object, object, map, options } => {
+                let _ = crate::retarget::retarget(source, *source_object, scene, *object, map, options);
+            }
         }
     }
 
@@ -674,6 +687,9 @@ impl SceneEdit {
             ),
             SceneEdit::SmoothKeys { channels, cutoff_hz } => {
                 format!("smooth {} below {cutoff_hz} Hz", channels_named(scene, channels))
+            }
+            SceneEdit::Retarget { options, object: o, .. } => {
+                format!("retarget {} onto {}", options.action, object(*o))
             }
         }
     }

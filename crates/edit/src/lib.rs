@@ -5,6 +5,8 @@
 //!   function and named by its undo label (docs/ARCHITECTURE.md, "Edits as data").
 //! - [`channels`]: addressing animated values and the key operations on them.
 //! - [`cleanup`]: key reduction to an error bound and Butterworth smoothing of dense keys.
+//! - [`retarget`]: an action of one rig put onto another (bone map, rest alignment, root
+//!   motion, planted feet).
 //! - [`spin`]: the spins of turned keys and the unwrapped twist about a bone.
 //! - [`mirror`]: left/right names, a skeleton's symmetry plane, mirrored poses.
 //! - [`camera_edits`]: scene edits of cameras and markers shared by renaming and deleting.
@@ -17,6 +19,7 @@ pub mod cleanup;
 pub mod edit;
 pub mod ik;
 pub mod mirror;
+pub mod retarget;
 pub mod scene_add;
 pub mod spin;
 

@@ -32,7 +32,7 @@ pub enum Side {
 /// The words of a name: runs of letters or digits split at separators, at lower-to-upper case
 /// changes (`LeftArm` → `Left`, `Arm`), before the last capital of a capital run followed by a
 /// lower-case letter (`LArm` → `L`, `Arm`) and between letters and digits.
-fn words(name: &str) -> Vec<&str> {
+pub(crate) fn words(name: &str) -> Vec<&str> {
     let mut out = Vec::new();
     let chars: Vec<(usize, char)> = name.char_indices().collect();
     let mut start: Option<usize> = None;

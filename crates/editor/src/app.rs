@@ -1073,6 +1073,7 @@ impl EditorApp {
             Command::SmoothKeys => {
                 self.panels.cleanup.open = Some(crate::panels::cleanup_dialog::CleanupMode::Smooth);
             }
+            Command::Retarget => self.panels.retarget.open = true,
         }
         ctx.request_repaint();
     }

@@ -61,6 +61,7 @@ pub enum Command {
     UndoHistory,
     ReduceKeys,
     SmoothKeys,
+    Retarget,
     ShowHelp,
 }
 
@@ -76,7 +77,7 @@ impl Command {
     /// All commands, in the order the help window lists them. Commands that share a shortcut
     /// key with fewer modifiers come after the ones with more (Ctrl+Shift+Z before Ctrl+Z), so
     /// the shortcut handler tries the most specific first.
-    pub const ALL: [Command; 58] = [
+    pub const ALL: [Command; 59] = [
         Command::New,
         Command::Open,
         Command::SaveAs,
@@ -95,6 +96,8 @@ impl Command {
         Command::InsertKey,
         Command::Delete,
         Command::DuplicateItem,
+        // Before Rename (Ctrl+R), which its Ctrl+Alt+R contains.
+        Command::Retarget,
         Command::RenameItem,
         Command::CopyKeys,
         Command::PasteKeys,
@@ -197,6 +200,7 @@ impl Command {
             Command::UndoHistory => "Undo history",
             Command::ReduceKeys => "Reduce keys…",
             Command::SmoothKeys => "Smooth keys…",
+            Command::Retarget => "Retarget…",
             Command::ShowHelp => "Keyboard shortcuts",
         }
     }
@@ -299,6 +303,9 @@ impl Command {
             Command::ReduceKeys => {
                 "Keep as few keys as hold the curves within an angle and a distance of what they are (the selected keys' channels, else the selected object's, else the scene's)"
             }
+            Command::Retarget => {
+                "Put the action a skeleton in another file plays (a BVH take, a glTF or FBX character) onto the selected character as a new action"
+            }
             Command::SmoothKeys => {
                 "Filter out motion faster than a cutoff in Hz (Butterworth, no lag) from the selected keys' channels, else the selected object's, else the scene's"
             }
@@ -367,6 +374,7 @@ impl Command {
             Command::UndoHistory => vec![sc(CMD.plus(Modifiers::ALT), Key::Z)],
             Command::ReduceKeys => vec![sc(CMD.plus(Modifiers::ALT), Key::K)],
             Command::SmoothKeys => vec![sc(CMD_SHIFT, Key::K)],
+            Command::Retarget => vec![sc(CMD.plus(Modifiers::ALT), Key::R)],
             Command::ShowHelp => vec![sc(NONE, Key::F12)],
         }
     }

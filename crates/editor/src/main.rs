@@ -37,6 +37,9 @@ enum Command {
     /// Clean up dense keys: Butterworth smoothing (--smooth-hz) and key reduction within an
     /// angle and a distance (--reduce, --reduce-angle, --reduce-distance), to a scene file.
     Clean(cli::clean::CleanArgs),
+    /// Put the action one skeleton plays onto another (bone map from joint names or a file,
+    /// rest poses aligned, root motion scaled by leg length, planted feet held), to a scene file.
+    Retarget(cli::retarget::RetargetArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         Some(Command::Sample(args)) => cli::sample::run(args),
         Some(Command::Deform(args)) => cli::deform::run(args),
         Some(Command::Clean(args)) => cli::clean::run(args),
+        Some(Command::Retarget(args)) => cli::retarget::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

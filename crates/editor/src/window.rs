@@ -200,6 +200,7 @@ impl EditorApp {
         panels::dialogs::recovery_ui(egui_ctx, &ctx, actions);
         panels.render.ui(egui_ctx, &ctx, actions);
         panels.cleanup.ui(egui_ctx, &ctx, actions);
+        panels.retarget.ui(egui_ctx, &ctx, actions);
     }
 }
 

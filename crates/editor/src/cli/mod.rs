@@ -10,4 +10,5 @@ pub mod export;
 pub mod import;
 pub mod info;
 pub mod render;
+pub mod retarget;
 pub mod sample;

@@ -144,7 +144,7 @@ pub fn ui(ui: &mut Ui, ctx: &FrameCtx<'_>, actions: &mut Actions) {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();
-                for c in [Command::ReduceKeys, Command::SmoothKeys] {
+                for c in [Command::ReduceKeys, Command::SmoothKeys, Command::Retarget] {
                     command_button(ui, ctx, actions, c, None);
                 }
                 ui.separator();

@@ -18,6 +18,7 @@ pub mod inspector;
 pub mod menu;
 pub mod outliner;
 pub mod render_dialog;
+pub mod retarget_dialog;
 pub mod status;
 pub mod timeline;
 pub mod viewport;
@@ -34,4 +35,5 @@ pub struct Panels {
     pub viewport: viewport::Viewport,
     pub render: render_dialog::RenderDialog,
     pub cleanup: cleanup_dialog::CleanupDialog,
+    pub retarget: retarget_dialog::RetargetDialog,
 }
