@@ -325,6 +325,28 @@ pub fn vertex_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
     normals.iter().map(|n| n.normalize_or_zero()).collect()
 }
 
+/// A closed circular tube of `radius` along +X from 0 to `length`: `rings` evenly spaced rings
+/// of `sides` vertices, capped at both ends, counter-clockwise from outside. Returns positions
+/// and the triangle list (for the binding tests and benchmarks).
+#[must_use]
+pub fn tube_mesh(rings: usize, sides: usize, length: f32, radius: f32) -> (Vec<Vec3>, Vec<u32>) {
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    let step = length / (rings.max(2) - 1) as f32;
+    let angle = move |k: usize| std::f32::consts::TAU * k as f32 / sides as f32;
+    tube(
+        rings.max(2),
+        sides.max(3),
+        |i| Vec3::X * (i as f32 * step),
+        |k| {
+            let (s, c) = angle(k).sin_cos();
+            (radius * c, radius * s)
+        },
+        &mut positions,
+        &mut indices,
+    );
+    (positions, indices)
+}
+
 /// A closed tube: `rings` rings of `sides` vertices each, ring i at `centre(i)` with the
 /// cross-section `section(k)` (in the ring's YZ plane), both ends capped by a fan without an
 /// extra vertex. Returns positions and indices; (rings − 1)·sides·2 + 2·(sides − 2) triangles.
