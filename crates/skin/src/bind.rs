@@ -117,6 +117,16 @@ const SSOR_OMEGA: f32 = 1.5;
 const CG_MAX_ITERATIONS: usize = 2000;
 
 /// Binds a mesh to a skeleton: borrowed inputs, [`BindJob::run`] returns the influences.
+///
+/// ```
+/// use keyrig_skin::{BindJob, BindMethod};
+///
+/// let mut mesh = keyrig_skin::mesh_for(keyrig_core::ProceduralMesh::ArmHighPoly);
+/// let job = BindJob::new(&mesh.positions, &mesh.indices, &mesh.skeleton, BindMethod::Heat);
+/// mesh.influences = job.run()?;
+/// assert_eq!(mesh.influences.len(), 1250);
+/// # Ok::<(), keyrig_skin::SkinError>(())
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct BindJob<'a> {
     /// Rest positions, in the skeleton's model (bind) space.
