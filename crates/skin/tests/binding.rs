@@ -51,3 +51,37 @@ fn allowed(method: BindMethod) -> f32 {
         BindMethod::Heat => 0.065,
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// Any triangle soup — repeated, coincident and collinear vertices, triangles sharing one
+    /// index twice — binds to any chain without an error, with every weight finite and in
+    /// [0, 1] (`Influences` itself guarantees the sums).
+    #[test]
+    fn any_triangle_soup_binds(
+        points in proptest::collection::vec((0i8..6, 0i8..4, 0i8..4), 3..40),
+        triangles in proptest::collection::vec((0usize..40, 0usize..40, 0usize..40), 0..60),
+        bones in 1usize..5,
+        heat in proptest::bool::ANY,
+    ) {
+        // Coordinates on a coarse grid, so that coincident and collinear vertices are common.
+        let positions: Vec<glam::Vec3> =
+            points.iter().map(|&(x, y, z)| glam::Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * 0.5).collect();
+        let n = positions.len();
+        let indices: Vec<u32> =
+            triangles.iter().flat_map(|&(a, b, c)| [a % n, b % n, c % n]).map(|i| i as u32).collect();
+        let joints: Vec<keyrig_skin::RestJoint> = (0..bones)
+            .map(|j| {
+                let t = if j == 0 { glam::Vec3::ZERO } else { glam::Vec3::X };
+                keyrig_skin::RestJoint::new(format!("j{j}"), j.checked_sub(1), t, Quat::IDENTITY)
+            })
+            .collect();
+        let skeleton = keyrig_skin::RestSkeleton::new(&joints).unwrap();
+        let method = if heat { BindMethod::Heat } else { BindMethod::Envelope };
+        let influences = BindJob::new(&positions, &indices, &skeleton, method).run().unwrap();
+        proptest::prop_assert_eq!(influences.len(), n);
+        for ws in influences.weights() {
+            proptest::prop_assert!(ws.iter().all(|w| w.is_finite() && (0.0..=1.0 + 1e-6).contains(w)), "{:?}", ws);
+        }
+    }
+}
