@@ -21,10 +21,7 @@ fn the_arm_bound_automatically_bends_like_its_own_weights() {
     let own = arm.bindings(BlendZone::default()).expect("bindings");
     let (mut report, mut failures) = (Vec::new(), Vec::new());
     for method in BindMethod::ALL {
-        let mut bound = arm.clone();
-        bound.influences =
-            BindJob::new(&arm.positions, &arm.indices, &arm.skeleton, method).run().expect("bind");
-        bound.bones = None;
+        let bound = arm.clone().rebound(method, None).expect("bind");
         let bindings = bound.bindings(BlendZone::default()).expect("bindings");
         for (name, rotation) in poses {
             let pose = Pose::rest(arm.skeleton.len()).with_rotation(forearm, rotation);
