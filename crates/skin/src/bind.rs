@@ -94,7 +94,7 @@ const ENVELOPE_MIN_WEIGHT: f32 = 0.01;
 /// Envelope drop-off exponent (Maya's default drop-off rate for closest-distance binding).
 const ENVELOPE_DROPOFF: i32 = 4;
 /// Heat: each joint's weights are solved on the vertices that have it among their this many
-/// nearest visible bones, and held at 0 elsewhere.
+/// nearest bones (visible or not), and held at 0 elsewhere.
 const REGION_BONES: usize = 6;
 /// Heat: c in H = c/d².
 const HEAT_C: f64 = 1.0;
@@ -111,10 +111,10 @@ const COT_MAX: f64 = 1e4;
 const DEGENERATE_AREA_FRACTION: f64 = 1e-12;
 /// Conjugate gradients stop at |r| ≤ CG_TOLERANCE·|b| …
 const CG_TOLERANCE: f64 = 1e-3;
-/// The over-relaxation factor of the SSOR preconditioner (1 is symmetric Gauss–Seidel).
-const SSOR_OMEGA: f32 = 1.5;
 /// … or after this many iterations.
 const CG_MAX_ITERATIONS: usize = 2000;
+/// The over-relaxation factor of the SSOR preconditioner (1 is symmetric Gauss–Seidel).
+const SSOR_OMEGA: f32 = 1.5;
 
 /// Binds a mesh to a skeleton: borrowed inputs, [`BindJob::run`] returns the influences.
 ///
