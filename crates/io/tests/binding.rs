@@ -24,7 +24,7 @@ const FPS: f64 = 30.0;
 /// the figure it reaches (docs/binding.md says why).
 fn allowed(method: BindMethod) -> f32 {
     match method {
-        BindMethod::Envelope => 0.058,
+        BindMethod::Envelope => 0.047,
         BindMethod::Heat => 0.033,
     }
 }

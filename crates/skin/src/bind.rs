@@ -11,12 +11,13 @@
 //! child's; a leaf's is one segment of a quarter of its parent's distance, continuing the
 //! parent's direction (a lone root is a point). Only the joints marked `deforming` get weights.
 //!
-//! **Visibility (approximated).** Baran & Popović (and Blender) let a vertex see a bone only
-//! when the segment from the vertex to the bone's nearest point stays inside the mesh (a ray
-//! test). keyrig does not cast rays: bone b is visible from vertex v when its nearest point
-//! q lies behind the surface at v, (v − q)·n(v) > 0 with n(v) the area-weighted normal
-//! of the welded mesh; when no bone passes, every bone counts. This rejects an arm bone for the
-//! torso vertices that face it, but not a bone seen through a thin fold.
+//! **Visibility.** As Baran & Popović and Blender, a vertex sees a bone only when the segment
+//! from the vertex to the bone's nearest point q stays inside the mesh: it must cross no
+//! triangle but those around the vertex (triangles bucketed in a uniform grid, a 3D DDA walk,
+//! Möller–Trumbore per triangle), and q must lie behind the surface, (v − q)·n(v) > 0 with n(v)
+//! the area-weighted normal of the welded mesh (the segment would otherwise leave through the
+//! vertex's own triangles, which the ray test skips). The vertex's six nearest bones are tested;
+//! when none passes both, those that pass the normal test count, and when none does, all.
 //!
 //! **[`BindMethod::Envelope`]** (nearest bones, Maya's "closest distance" with drop-off 4):
 //! the nearest visible bone j₁ (distance d₁) and those of its parent and children among the
@@ -197,12 +198,34 @@ impl<'a> BindJob<'a> {
         let welded = Welded::new(self.positions, self.indices);
         let size = bounding_size(self.positions);
         let normals = crate::mesh::vertex_normals(&welded.positions, &welded.indices);
-        let nearest: Vec<Nearest> = welded
+        let mut nearest: Vec<Nearest> = welded
             .positions
             .iter()
             .zip(&normals)
             .map(|(&p, &nm)| nearest_bones(p, nm, &bones, size))
             .collect();
+        let grid = TriangleGrid::new(&welded.positions, &welded.indices);
+        let mut stamps = vec![0u32; welded.indices.len() / 3];
+        for (v, near) in nearest.iter_mut().enumerate() {
+            let p = welded.positions[v];
+            let seen: Vec<(u16, f32)> = near
+                .joints
+                .iter()
+                .copied()
+                .filter(|&(j, _)| {
+                    let q = bones
+                        .iter()
+                        .filter(|s| s.joint == j)
+                        .map(|s| s.nearest_point(p))
+                        .min_by(|a, b| a.distance_squared(p).total_cmp(&b.distance_squared(p)))
+                        .unwrap_or(p);
+                    grid.segment_is_clear(&welded.positions, &welded.indices, v as u32, p, q, &mut stamps)
+                })
+                .collect();
+            if !seen.is_empty() {
+                near.joints = seen;
+            }
+        }
         let per_unique = match self.method {
             BindMethod::Envelope => {
                 nearest.iter().map(|near| envelope_weights(near, self.skeleton.parents())).collect()
@@ -302,6 +325,151 @@ impl Welded {
         let indices = indices.iter().map(|&i| unique_of[i as usize]).collect();
         Welded { positions: unique, indices, unique_of }
     }
+}
+
+/// Triangles bucketed in a uniform grid (about one cell per triangle), for segment tests.
+struct TriangleGrid {
+    origin: Vec3,
+    cell: f32,
+    dims: [usize; 3],
+    /// Triangles of cell c: `triangles[cell_start[c]..cell_start[c + 1]]`.
+    cell_start: Vec<u32>,
+    triangles: Vec<u32>,
+    /// Query counter for `stamps` (a triangle is tested once per query).
+    query: std::cell::Cell<u32>,
+}
+
+impl TriangleGrid {
+    fn new(positions: &[Vec3], indices: &[u32]) -> Self {
+        let (lo, hi) = positions.iter().fold((Vec3::MAX, Vec3::MIN), |(l, h), &p| (l.min(p), h.max(p)));
+        let extent = (hi - lo).max(Vec3::splat(1e-6));
+        let tris = (indices.len() / 3).max(1) as f32;
+        let cell = (extent.x * extent.y * extent.z / tris).cbrt().max(extent.max_element() / 256.0);
+        let dims = [0, 1, 2].map(|k| ((extent[k] / cell).ceil() as usize).clamp(1, 256));
+        let cell_of = |p: Vec3| -> [usize; 3] {
+            [0, 1, 2].map(|k| (((p[k] - lo[k]) / cell).floor().max(0.0) as usize).min(dims[k] - 1))
+        };
+        let index = |c: [usize; 3]| (c[2] * dims[1] + c[1]) * dims[0] + c[0];
+        let mut count = vec![0u32; dims[0] * dims[1] * dims[2] + 1];
+        let each = |f: &mut dyn FnMut(usize, u32)| {
+            for (t, tri) in indices.chunks_exact(3).enumerate() {
+                let p = [0, 1, 2].map(|k| positions[tri[k] as usize]);
+                let (a, b) = (cell_of(p[0].min(p[1]).min(p[2])), cell_of(p[0].max(p[1]).max(p[2])));
+                for z in a[2]..=b[2] {
+                    for y in a[1]..=b[1] {
+                        for x in a[0]..=b[0] {
+                            f(index([x, y, z]), t as u32);
+                        }
+                    }
+                }
+            }
+        };
+        each(&mut |c, _| count[c + 1] += 1);
+        for c in 1..count.len() {
+            count[c] += count[c - 1];
+        }
+        let mut fill = count.clone();
+        let mut triangles = vec![0u32; *count.last().unwrap_or(&0) as usize];
+        each(&mut |c, t| {
+            triangles[fill[c] as usize] = t;
+            fill[c] += 1;
+        });
+        TriangleGrid { origin: lo, cell, dims, cell_start: count, triangles, query: std::cell::Cell::new(0) }
+    }
+
+    /// Whether the segment from vertex `from` (at `a`) to `b` crosses no triangle other than
+    /// those `from` is a corner of (3D DDA through the cells, Möller–Trumbore per triangle).
+    fn segment_is_clear(
+        &self,
+        positions: &[Vec3],
+        indices: &[u32],
+        from: u32,
+        a: Vec3,
+        b: Vec3,
+        stamps: &mut [u32],
+    ) -> bool {
+        let query = self.query.get().wrapping_add(1);
+        self.query.set(query);
+        let d = b - a;
+        let length = d.length();
+        if length <= 0.0 {
+            return true;
+        }
+        let start = (a - self.origin) / self.cell;
+        let mut c = [0, 1, 2].map(|k| (start[k].floor().max(0.0) as usize).min(self.dims[k] - 1));
+        let step = [0, 1, 2].map(|k| if d[k] > 0.0 { 1i64 } else { -1 });
+        let t_delta = [0, 1, 2].map(|k| if d[k] != 0.0 { (self.cell / d[k]).abs() } else { f32::INFINITY });
+        let mut t_max = [0, 1, 2].map(|k| {
+            if d[k] == 0.0 {
+                f32::INFINITY
+            } else {
+                let boundary = if d[k] > 0.0 { (c[k] + 1) as f32 } else { c[k] as f32 };
+                ((self.origin[k] + boundary * self.cell) - a[k]) / d[k]
+            }
+        });
+        loop {
+            let cell = (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0];
+            let range = self.cell_start[cell] as usize..self.cell_start[cell + 1] as usize;
+            for &t in &self.triangles[range] {
+                if stamps[t as usize] == query {
+                    continue;
+                }
+                stamps[t as usize] = query;
+                let tri = &indices[3 * t as usize..3 * t as usize + 3];
+                if tri.contains(&from) {
+                    continue;
+                }
+                if let Some(h) = segment_hits_triangle(a, d, tri.iter().map(|&i| positions[i as usize])) {
+                    if h > 1e-4 && h < 1.0 - 1e-4 {
+                        return false;
+                    }
+                }
+            }
+            let k = if t_max[0] < t_max[1] {
+                if t_max[0] < t_max[2] {
+                    0
+                } else {
+                    2
+                }
+            } else if t_max[1] < t_max[2] {
+                1
+            } else {
+                2
+            };
+            if t_max[k] > 1.0 {
+                return true;
+            }
+            let next = c[k] as i64 + step[k];
+            if next < 0 || next >= self.dims[k] as i64 {
+                return true;
+            }
+            c[k] = next as usize;
+            t_max[k] += t_delta[k];
+        }
+    }
+}
+
+/// The parameter h of a + h·d where it crosses the triangle, if it does (Möller–Trumbore).
+fn segment_hits_triangle(a: Vec3, d: Vec3, mut corners: impl Iterator<Item = Vec3>) -> Option<f32> {
+    let (p0, p1, p2) = (corners.next()?, corners.next()?, corners.next()?);
+    let (e1, e2) = (p1 - p0, p2 - p0);
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det.abs() <= f32::EPSILON * e1.length_squared().max(e2.length_squared()) * d.length() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = a - p0;
+    let u = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(qv) * inv)
 }
 
 /// A vertex's bones by distance: the visible ones, nearest first (all bones when none is
