@@ -955,6 +955,27 @@ mod tests {
     }
 
     #[test]
+    fn a_segment_is_clear_inside_the_mesh_and_blocked_through_it() {
+        let (positions, indices) = tube(21, 16, 10.0);
+        let grid = TriangleGrid::new(&positions, &indices);
+        let mut stamps = vec![0u32; indices.len() / 3];
+        // Vertex 8·16 + 4 (ring 8, angle 90°) is at (4, 0, 1).
+        let v = 8 * 16 + 4;
+        let p = positions[v];
+        assert!((p - Vec3::new(4.0, 0.0, 1.0)).length() < 1e-5, "{p}");
+        let mut clear = |to: Vec3| grid.segment_is_clear(&positions, &indices, v as u32, p, to, &mut stamps);
+        // To the axis and to points inside: clear.
+        assert!(clear(Vec3::new(4.0, 0.0, 0.0)));
+        assert!(clear(Vec3::new(7.5, 0.3, -0.5)));
+        // Through the far wall, or out past the end cap: blocked.
+        assert!(!clear(Vec3::new(4.0, 0.0, -3.0)));
+        assert!(!clear(Vec3::new(12.0, 0.0, 0.0)));
+        // Outwards through the vertex's own triangles only: the ray test does not see it (the
+        // normal test does).
+        assert!(clear(Vec3::new(4.0, 0.0, 3.0)));
+    }
+
+    #[test]
     fn bad_inputs_are_named() {
         let skeleton = chain(2, 1.0);
         let positions = [Vec3::ZERO, Vec3::X, Vec3::new(f32::NAN, 0.0, 0.0)];
