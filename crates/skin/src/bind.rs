@@ -46,8 +46,8 @@
 //! successive over-relaxation preconditioner (SSOR, ω = 1.5: a forward and a backward
 //! Gauss–Seidel sweep, 4–5× fewer iterations than Jacobi on the benchmark tube), started from
 //! p_j, to a residual of 10⁻³·|b|. Each vertex keeps its four largest weights, scaled to sum 1.
-//! No sparse-matrix crate is used: sprs brings 23 crates (ndarray) and has no preconditioned CG,
-//! faer 98; the matrix here is one compressed-row array.
+//! No sparse-matrix crate is used (docs/binding.md says why): the matrix is one compressed-row
+//! array.
 //!
 //! **Meshes as files give them.** Vertices at bitwise-equal positions (glTF splits vertices at
 //! UV seams) are welded before the Laplacian is built, so both sides of a seam get one weight.
