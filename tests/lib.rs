@@ -14,6 +14,8 @@ pub mod docs {
     pub struct Interpolation;
     #[doc = include_str!("../docs/skinning.md")]
     pub struct Skinning;
+    #[doc = include_str!("../docs/binding.md")]
+    pub struct Binding;
     #[doc = include_str!("../docs/rendering.md")]
     pub struct Rendering;
 }

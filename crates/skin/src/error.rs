@@ -62,6 +62,8 @@ pub enum SkinError {
     NoSuchJoint { joint: usize, joint_count: usize },
     #[error("triangle {triangle}: vertex index {index} is out of range ({vertex_count} vertices)")]
     TriangleIndexOutOfRange { triangle: usize, index: u32, vertex_count: usize },
+    #[error("binding: no joint is marked deforming, so no vertex could be bound")]
+    NoDeformingJoint,
 }
 
 /// [`SkinError::LengthMismatch`] unless `found == expected`.

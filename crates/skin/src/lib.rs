@@ -7,6 +7,7 @@
 //! a deformer job ([`RigidJob`], [`LinearBlendJob`], [`BonesBlendJob`], [`DualQuatJob`]) or
 //! [`deform_mesh`] for a whole [`SkinnedMesh`].
 
+pub mod bind;
 pub mod binding;
 pub mod deform;
 pub mod deformer;
@@ -19,6 +20,7 @@ pub mod paper;
 pub mod pose;
 pub mod skeleton;
 
+pub use bind::{BindJob, BindMethod, MAX_BOUND_INFLUENCES};
 pub use binding::{bind_from_weights, bind_single_weights, smooth_weights, weights_from_bindings, BlendZone};
 pub use deform::{BonesBlendJob, DualQuatJob, Execution, LinearBlendJob, RigidJob};
 pub use deformer::{deform_mesh, deform_mesh_into, Deformed};
@@ -30,8 +32,8 @@ pub use influences::{
 };
 pub use measure::{enclosed_volume, joint_cross_section, CrossSection};
 pub use mesh::{
-    mesh_for, scene_skeleton_for, MeshBindings, MorphTarget, SkinnedMesh, ARM_BONES, ARM_JOINT_NAMES,
-    ARM_LENGTH_CM,
+    mesh_for, scene_skeleton_for, tube_mesh, MeshBindings, MorphTarget, SkinnedMesh, ARM_BONES,
+    ARM_JOINT_NAMES, ARM_LENGTH_CM,
 };
 pub use pose::{BonesBlendJoint, JointPalette, Pose};
 pub use skeleton::{RestJoint, RestSkeleton, MAX_JOINTS};

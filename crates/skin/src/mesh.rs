@@ -7,6 +7,7 @@
 use glam::{Quat, Vec2, Vec3};
 use keyrig_core::{Joint, ProceduralMesh, Skeleton};
 
+use crate::bind::{BindJob, BindMethod};
 use crate::binding::{bind_from_weights, bind_single_weights, smooth_weights, BlendZone};
 use crate::error::SkinError;
 use crate::influences::{BonesBlendBindings, Influences};
@@ -238,6 +239,36 @@ impl SkinnedMesh {
         self.influences.check_joint_count(self.skeleton.len())
     }
 
+    /// The mesh with weights computed from its rest positions and skeleton by [`BindJob`]
+    /// (docs/binding.md) in place of its own; `deforming` (one flag per joint, `None`: all)
+    /// says which joints may get weight. The single weights are dropped, so
+    /// [`SkinnedMesh::bindings`] derives the rigid and bones-blending bindings from the new
+    /// weights.
+    ///
+    /// ```
+    /// use keyrig_skin::{BindJob, BindMethod};
+    ///
+    /// let arm = keyrig_skin::mesh_for(keyrig_core::ProceduralMesh::ArmHighPoly);
+    /// let job = BindJob::new(&arm.positions, &arm.indices, &arm.skeleton, BindMethod::Envelope);
+    /// let influences = job.run()?; // one (joints, weights) per vertex, validated
+    /// assert_eq!(influences.len(), arm.positions.len());
+    /// // Or the whole mesh, its single weights dropped so that bindings() follow the new weights:
+    /// let arm = arm.rebound(BindMethod::Heat, None)?;
+    /// let bindings = arm.bindings(keyrig_skin::BlendZone::default())?;
+    /// assert_eq!(bindings.rigid.len(), 1250);
+    /// # Ok::<(), keyrig_skin::SkinError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`BindJob::validate`].
+    pub fn rebound(mut self, method: BindMethod, deforming: Option<&[bool]>) -> Result<Self, SkinError> {
+        let job =
+            BindJob { deforming, ..BindJob::new(&self.positions, &self.indices, &self.skeleton, method) };
+        self.influences = job.run()?;
+        self.bones = None;
+        Ok(self)
+    }
+
     /// Replaces the rest skeleton (e.g. by the scene object's own, possibly edited, one),
     /// keeping the weights; fails if a joint index no longer exists.
     pub fn with_skeleton(mut self, skeleton: RestSkeleton) -> Result<Self, SkinError> {
@@ -323,6 +354,28 @@ pub fn vertex_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
         normals[c] += n;
     }
     normals.iter().map(|n| n.normalize_or_zero()).collect()
+}
+
+/// A closed circular tube of `radius` along +X from 0 to `length`: `rings` evenly spaced rings
+/// of `sides` vertices, capped at both ends, counter-clockwise from outside. Returns positions
+/// and the triangle list (for the binding tests and benchmarks).
+#[must_use]
+pub fn tube_mesh(rings: usize, sides: usize, length: f32, radius: f32) -> (Vec<Vec3>, Vec<u32>) {
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    let step = length / (rings.max(2) - 1) as f32;
+    let angle = move |k: usize| std::f32::consts::TAU * k as f32 / sides as f32;
+    tube(
+        rings.max(2),
+        sides.max(3),
+        |i| Vec3::X * (i as f32 * step),
+        |k| {
+            let (s, c) = angle(k).sin_cos();
+            (radius * c, radius * s)
+        },
+        &mut positions,
+        &mut indices,
+    );
+    (positions, indices)
 }
 
 /// A closed tube: `rings` rings of `sides` vertices each, ring i at `centre(i)` with the
