@@ -269,6 +269,13 @@ impl Scene {
         if o >= self.objects.len() {
             return Err(ActionError::NoObject(o));
         }
+        if self.objects[o].action.is_none() {
+            // Keys in no action have no action to keep a copy: they become `name`'s (stashing
+            // them first would take `<object>Action`, which may be `name` itself).
+            self.actions.push(Action { name: name.to_owned(), channels: Vec::new() });
+            self.objects[o].action = Some(name.to_owned());
+            return Ok(());
+        }
         let copy = {
             let mut scratch = self.clone();
             scratch.take_keyed_channels(o)

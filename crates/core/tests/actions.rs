@@ -199,3 +199,17 @@ fn problems_of_actions_name_the_place() {
     assert!(has("actions[2].channels[2].path", "light"), "{problems:#?}");
     assert!(has("actions[2].channels[3].keys", "out of order"), "{problems:#?}");
 }
+
+#[test]
+fn keys_in_no_action_duplicated_under_the_objects_default_name_are_one_action() {
+    let mut scene = scene();
+    scene.duplicate_action(0, "CubeAction").expect("duplicate");
+    assert_eq!(scene.objects[0].action.as_deref(), Some("CubeAction"));
+    assert!(scene.objects[0].translation.is_animated(), "the keys play on");
+    assert_eq!(scene.actions.iter().filter(|a| a.name == "CubeAction").count(), 1);
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+    // Pushed down: one strip of it, nothing lost.
+    let track = scene.push_down(1).expect("the arm's keys");
+    assert_eq!(scene.objects[1].clip_tracks[track].strips[0].action, "ArmAction");
+    assert!(scene.problems().is_empty(), "{:?}", scene.problems());
+}
