@@ -200,6 +200,7 @@ impl ClipEditor {
                 self.drag = None;
             }
         }
+        ui.add_space(ROW * 0.5);
         ui.separator();
         self.layers_ui(ui, scene, actions);
     }
@@ -443,7 +444,7 @@ impl ClipEditor {
                     actions.edit(Edit::scene(SceneEdit::Clip(ClipEdit::Layer { layer: l, value })));
                 }
                 if ui
-                    .small_button("✕")
+                    .small_button("Delete")
                     .on_hover_text(format!("Delete layer {} (its action stays)", layer.name))
                     .clicked()
                 {
