@@ -275,6 +275,23 @@ fn bright_centroid(png: &Path, around: Pos2, radius: f32) -> Option<Pos2> {
     (n > 0.0).then(|| Pos2::new(sum.x / n + 0.5, sum.y / n + 0.5))
 }
 
+/// The centre of the pixels of `colour` (within 3 per channel) within `radius` of `around`.
+fn colour_centroid(png: &Path, around: Pos2, radius: f32, colour: [u8; 3]) -> Option<Pos2> {
+    let image = image::open(png).ok()?.to_rgb8();
+    let (mut sum, mut n) = (egui::Vec2::ZERO, 0.0f32);
+    let (x0, y0) = ((around.x - radius).max(0.0) as u32, (around.y - radius).max(0.0) as u32);
+    for y in y0..((around.y + radius) as u32).min(image.height()) {
+        for x in x0..((around.x + radius) as u32).min(image.width()) {
+            let p = image.get_pixel(x, y).0;
+            if p.iter().zip(colour).all(|(a, b)| a.abs_diff(b) <= 3) {
+                sum += egui::vec2(x as f32, y as f32);
+                n += 1.0;
+            }
+        }
+    }
+    (n > 0.0).then(|| Pos2::new(sum.x / n + 0.5, sum.y / n + 0.5))
+}
+
 fn wrist_on_screen(app: &EditorApp) -> Pos2 {
     let rect = app.viewport_rect().expect("laid out");
     let pose = app.object_pose_now(0).expect("the arm");
@@ -1888,4 +1905,79 @@ fn a_model_far_too_large_is_said_and_imports_at_the_chosen_scale_in_a_real_x_win
     let foxes: Vec<_> = scene.objects.iter().filter(|o| o.name.starts_with("fox")).collect();
     assert_eq!(foxes.len(), 1, "the first import was undone");
     assert!((foxes[0].scale.value - glam::Vec3::splat(0.01)).length() < 1e-6, "{:?}", foxes[0].scale.value);
+}
+
+/// Issue 39, 7 in the real window: the Cube's action pushed down in the Clips tab, its strip
+/// dragged 10 frames later and given a blend in with its handle, saved with Ctrl+S and read
+/// back: the file holds the strip as the model editor's identical drags made it.
+#[test]
+fn a_strip_dragged_and_blended_in_the_clip_editor_of_a_real_x_window() {
+    let session = Session::new();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo.ron");
+    let mut scene = keyrig_io::scene_file::load(&demo).expect("the demo scene");
+    scene.name_unnamed_keys("Wave");
+    let file = dir.path().join("clips.ron");
+    keyrig_io::project::save_scene(&file, &scene).expect("save the scene");
+
+    let (_keyrig, _window) = session.start_keyrig(&["edit", file.to_str().expect("utf-8 path")]);
+    let model_dir = tempfile::tempdir().expect("temp dir");
+    let mut h = common::harness(model_dir.path(), Some(file.clone()));
+    h.run();
+    session.wait_idle();
+    for label in ["Cube", "Clips", "Push down"] {
+        let at = h.get_all_by_label(label).next().unwrap_or_else(|| panic!("{label}")).rect().center();
+        session.click(at);
+        h.get_all_by_label(label).next().expect("label").click();
+        h.run();
+        session.wait_idle();
+    }
+    let cube = |h: &Harness<'_, EditorApp>| {
+        h.state().doc.scene().objects.iter().find(|o| o.name == "Cube").expect("Cube").clone()
+    };
+    assert_eq!(cube(&h).clip_tracks.len(), 1, "the model pushed the action down");
+    let strip = h.get_by_label("strip Wave on track Track 1").rect();
+    let before = cube(&h).clip_tracks[0].strips[0].clone();
+    let per_frame = strip.width() / before.length() as f32;
+
+    // The body dragged 10 frames later.
+    let from = strip.center();
+    let path: Vec<Pos2> =
+        (0..=6).map(|i| from + egui::vec2(10.0 * per_frame * i as f32 / 6.0, 0.0)).collect();
+    session.drag(&path);
+    model_drag(&mut h, &path);
+    session.wait_idle();
+    let moved = cube(&h).clip_tracks[0].strips[0].clone();
+    assert_eq!(moved.start, before.start + 10.0, "the model's drag");
+
+    // The blend-in handle at its top left dragged 8 frames in.
+    // The axis refits to the moved strip: frames per point are measured again. The handle is
+    // small: the real window's is found on screen (its grey square), the model's from its rect.
+    let strip = h.get_by_label("strip Wave on track Track 1").rect();
+    let per_frame = strip.width() / moved.length() as f32;
+    let handle = Pos2::new(strip.left() + 2.0, strip.top() + 6.0);
+    let shot = session.screenshot("probe-clips-handle");
+    let real = colour_centroid(&shot, handle, 16.0, [230, 230, 230]).expect("the blend handle on screen");
+    let step = |from: Pos2| -> Vec<Pos2> {
+        (0..=6).map(|i| from + egui::vec2(8.0 * per_frame * i as f32 / 6.0, 0.0)).collect()
+    };
+    session.drag(&step(real));
+    model_drag(&mut h, &step(handle));
+    session.wait_idle();
+    let blended = cube(&h).clip_tracks[0].strips[0].clone();
+    assert_eq!(blended.blend_in, 8.0, "the model's blend drag");
+    session.screenshot("probe-clips");
+
+    let before_save = std::fs::metadata(&file).and_then(|m| m.modified()).ok();
+    session.key("ctrl+s");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(&file).and_then(|m| m.modified()).ok() == before_save && Instant::now() < deadline
+    {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let saved = keyrig_io::project::load_scene(&file).expect("the saved scene");
+    let saved_cube = saved.objects.iter().find(|o| o.name == "Cube").expect("Cube");
+    assert_eq!(saved_cube.action, None, "pushed down in the real window");
+    assert_eq!(saved_cube.clip_tracks[0].strips[0], blended, "the real window's drags made the same strip");
 }

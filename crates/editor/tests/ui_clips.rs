@@ -63,7 +63,7 @@ fn the_clip_editor_pushes_down_drags_blends_and_saves_strips() {
 
     // The blend-in handle at the strip's top left: dragged right, the strip ramps in.
     let rect = h.get_by_label(STRIP).rect();
-    let handle = Pos2::new(rect.left() + 1.0, rect.top() + 3.0);
+    let handle = Pos2::new(rect.left() + 2.0, rect.top() + 6.0);
     drag(&mut h, handle, handle + egui::vec2(40.0, 0.0));
     let blended = cube(&h).clip_tracks[0].strips[0].clone();
     assert!(blended.blend_in >= 1.0, "blend in {}", blended.blend_in);

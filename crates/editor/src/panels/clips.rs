@@ -20,7 +20,7 @@ use crate::widgets::time_axis::TimeAxis;
 const ROW: f32 = 24.0;
 const NAMES: f32 = 150.0;
 const EDGE: f32 = 6.0;
-const HANDLE: f32 = 7.0;
+const HANDLE: f32 = 10.0;
 
 /// What part of a strip a drag holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +41,9 @@ struct StripDrag {
     /// The strip when the drag began, and the pointer's frame then.
     origin: Strip,
     from_frame: f64,
+    /// The pointer's frame in the last frame the button was down: the drag ends there (a
+    /// release can come with a move away in the same frame).
+    last_frame: f64,
 }
 
 /// The clip editor's state: whether its tab is shown, the drag in progress, the action the
@@ -163,6 +166,11 @@ impl ClipEditor {
             );
         }
         let pointer = ui.input(|i| i.pointer.interact_pos());
+        if let (Some(d), Some(p)) = (&mut self.drag, pointer) {
+            if ui.input(|i| i.pointer.any_down()) {
+                d.last_frame = axis.frame(p.x);
+            }
+        }
         let any_solo = object.clip_tracks.iter().any(|t| t.solo);
         // Tracks bottom-up: the first track is drawn lowest.
         for (k, track) in object.clip_tracks.iter().enumerate() {
@@ -172,9 +180,9 @@ impl ClipEditor {
             let faded = !track.plays(any_solo);
             for (i, strip) in track.strips.iter().enumerate() {
                 let dragging = self.drag.as_ref().filter(|d| (d.object, d.track, d.strip) == (o, k, i));
-                let shown = match (dragging, pointer) {
-                    (Some(d), Some(p)) => d.dragged(track, axis.frame(p.x)),
-                    _ => strip.clone(),
+                let shown = match dragging {
+                    Some(d) => d.dragged(track, d.last_frame),
+                    None => strip.clone(),
                 };
                 self.strip_ui(ui, &painter, &axis, row, (o, k, i), track, &shown, faded, actions);
             }
@@ -188,9 +196,8 @@ impl ClipEditor {
         // A drag ends: one undo step.
         if let Some(d) = &self.drag {
             if !ui.input(|i| i.pointer.any_down()) {
-                let track = &object.clip_tracks.get(d.track);
-                if let (Some(track), Some(p)) = (track, ui.input(|i| i.pointer.latest_pos())) {
-                    let value = d.dragged(track, axis.frame(p.x));
+                if let Some(track) = object.clip_tracks.get(d.track) {
+                    let value = d.dragged(track, d.last_frame);
                     if value != d.origin {
                         let edit =
                             ClipEdit::Strip { object: d.object, track: d.track, strip: d.strip, value };
@@ -332,16 +339,19 @@ impl ClipEditor {
         );
         // Hit areas: the blend handles at the top corners, the edges, then the body.
         let id = ui.id().with(("clip strip", o, k, i));
-        let handle_in = Rect::from_center_size(
-            Pos2::new(axis.x(strip.start + strip.blend_in), rect.top() + HANDLE / 2.0),
-            Vec2::splat(HANDLE),
-        );
-        let handle_out = Rect::from_center_size(
-            Pos2::new(axis.x(strip.end() - strip.blend_out), rect.top() + HANDLE / 2.0),
-            Vec2::splat(HANDLE),
-        );
+        // A handle takes the upper part of the strip's height around its blend's end (drawn
+        // as a small square at the top), so a press a little below the corner still finds it.
+        let handle = |x: f32| {
+            Rect::from_min_max(
+                Pos2::new(x - HANDLE / 2.0, rect.top()),
+                Pos2::new(x + HANDLE / 2.0, rect.top() + rect.height() * 0.7),
+            )
+        };
+        let handle_in = handle(axis.x(strip.start + strip.blend_in));
+        let handle_out = handle(axis.x(strip.end() - strip.blend_out));
         for h in [handle_in, handle_out] {
-            painter.rect_filled(h, 1.0, Color32::from_gray(230));
+            let square = Rect::from_min_size(Pos2::new(h.left() + 1.5, h.top()), Vec2::splat(HANDLE - 3.0));
+            painter.rect_filled(square, 1.0, Color32::from_gray(230));
         }
         let label = format!("strip {} on track {}", strip.action, track.name);
         let body = ui.interact(rect, id, Sense::click_and_drag()).on_hover_text(format!(
@@ -372,8 +382,11 @@ impl ClipEditor {
                 .unwrap_or(rect.center());
             let grip = parts.iter().find(|(r, _, _)| r.contains(p)).map_or(Grip::Body, |(_, g, _)| *g);
             let origin = track.strips.get(i).cloned().unwrap_or_else(|| strip.clone());
+            let from_frame = axis.frame(p.x);
+            // The pointer has moved on since the press: the drag is where it is now.
+            let last_frame = body.interact_pointer_pos().map_or(from_frame, |q| axis.frame(q.x));
             self.drag =
-                Some(StripDrag { object: o, track: k, strip: i, grip, origin, from_frame: axis.frame(p.x) });
+                Some(StripDrag { object: o, track: k, strip: i, grip, origin, from_frame, last_frame });
         }
         if let Some(p) = body.hover_pos() {
             let icon = match parts.iter().find(|(r, _, _)| r.contains(p)).map(|(_, g, _)| *g) {
