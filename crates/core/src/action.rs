@@ -559,3 +559,87 @@ pub fn stored_channel_id(scene: &Scene, path: &str) -> Result<ChannelId, crate::
         None => parsed.id(scene),
     }
 }
+
+// Clip tracks built from actions (docs/clips.md): here, not in `clip`, so that `clip` does not
+// import `action` (no module import cycle).
+impl Scene {
+    /// Pushes object `o`'s active action down as a strip (Blender's *Push Down*): a new track
+    /// on top of its tracks gets a strip playing the action over the frames its keys span, at
+    /// those frames, and the object then plays no action (the keys are stored in the action,
+    /// nothing is lost). Keys in no action are first named `<object>Action`. Returns the new
+    /// track's index.
+    ///
+    /// # Errors
+    /// No such object, or the object has no keys to push down.
+    pub fn push_down(&mut self, o: usize) -> Result<usize, ActionError> {
+        if o >= self.objects.len() {
+            return Err(ActionError::NoObject(o));
+        }
+        let keyed = self.keyed_channels_of(o);
+        let span = keyed
+            .iter()
+            .filter_map(|&id| key_span(self, id))
+            .fold(None, |acc: Option<(f64, f64)>, (a, b)| {
+                Some(acc.map_or((a, b), |(x, y)| (x.min(a), y.max(b))))
+            });
+        let Some((first, last)) = span else {
+            return Err(ActionError::NoKeys(self.objects[o].name.clone()));
+        };
+        if self.objects[o].action.is_none() {
+            let name = self.unused_action_name(&format!("{}Action", self.objects[o].name));
+            self.duplicate_action(o, &name)?;
+        }
+        let name = self.objects[o].action.clone().unwrap_or_default();
+        self.assign_action(o, None)?;
+        let fps = self.fps;
+        let (start, end) = (first * fps, last * fps);
+        // A single key spans no time: the strip plays one frame of it.
+        let end = if end > start { end } else { start + 1.0 };
+        let object = &mut self.objects[o];
+        let mut n = object.clip_tracks.len() + 1;
+        while object.clip_tracks.iter().any(|t| t.name == format!("Track {n}")) {
+            n += 1;
+        }
+        object.clip_tracks.push(crate::clip::ClipTrack {
+            name: format!("Track {n}"),
+            strips: vec![crate::clip::Strip::new(name, start, start, end)],
+            ..crate::clip::ClipTrack::default()
+        });
+        Ok(object.clip_tracks.len() - 1)
+    }
+}
+
+impl Scene {
+    /// The frames action `name`'s keys for object `o` span (its keyed channels when it is the
+    /// object's active action, else its stored channels that name the object); `None` without
+    /// keys there.
+    #[must_use]
+    pub fn action_frames_on(&self, o: usize, name: &str) -> Option<(f64, f64)> {
+        let object = self.objects.get(o)?;
+        let join = |acc: Option<(f64, f64)>, (a, b): (f64, f64)| {
+            Some(acc.map_or((a, b), |(x, y)| (x.min(a), y.max(b))))
+        };
+        let span = if object.action.as_deref() == Some(name) {
+            self.keyed_channels_of(o).into_iter().filter_map(|id| key_span(self, id)).fold(None, join)
+        } else {
+            let action = &self.actions[self.action_index(name)?];
+            action
+                .channels
+                .iter()
+                .filter(|c| stored_channel_id(self, &c.path).is_ok_and(|id| channel_object(id) == Some(o)))
+                .filter_map(|c| c.keys.time_range())
+                .fold(None, join)
+        };
+        span.map(|(a, b)| (a * self.fps, b * self.fps))
+    }
+}
+
+/// First and last key time of channel `id` (seconds).
+fn key_span(scene: &Scene, id: crate::channel_id::ChannelId) -> Option<(f64, f64)> {
+    use crate::channel_id::{channel, ChannelRef};
+    match channel(scene, id)? {
+        ChannelRef::Vec3(a) => a.key_time_range(),
+        ChannelRef::Rotation(a) => a.key_time_range(),
+        ChannelRef::Scalar(a) => a.key_time_range(),
+    }
+}

@@ -887,7 +887,7 @@ impl Scene {
             self.poses.iter().enumerate().map(|(i, p)| (format!("poses[{i}].name"), p.name.as_str())),
         );
         self.action_problems(&mut c);
-        crate::clip::clip_problems(self, &mut c);
+        clip_problems(self, &mut c);
         if let Some(image) = &self.reference_image {
             if image.path.is_empty() {
                 c.push("reference_image.path", "the path is empty".to_owned());
@@ -897,6 +897,116 @@ impl Scene {
             }
         }
         c.problems
+    }
+}
+
+/// The problems of the scene's clip tracks and layers, each at its field path
+/// (docs/clips.md, "Checks").
+pub(crate) fn clip_problems(scene: &crate::Scene, c: &mut Checker) {
+    let unit = |c: &mut Checker, path: &str, a: &crate::key::Animated<f32>| {
+        c.animated(path, a);
+        let outside = std::iter::once(a.value)
+            .chain(a.track.keys.iter().map(|k| k.value))
+            .find(|v| !(0.0..=1.0).contains(v));
+        if let Some(v) = outside {
+            c.push(path, format!("{v} is outside 0..=1"));
+        }
+    };
+    for (o, object) in scene.objects.iter().enumerate() {
+        c.unique_names(
+            "clip track",
+            object
+                .clip_tracks
+                .iter()
+                .enumerate()
+                .map(|(t, track)| (format!("objects[{o}].clip_tracks[{t}].name"), track.name.as_str())),
+        );
+        for (t, track) in object.clip_tracks.iter().enumerate() {
+            let mut previous_end: Option<f64> = None;
+            for (s, strip) in track.strips.iter().enumerate() {
+                let at = |field: &str| format!("objects[{o}].clip_tracks[{t}].strips[{s}].{field}");
+                if scene.action_index(&strip.action).is_none() {
+                    c.push(at("action"), format!("there is no action {:?} in actions", strip.action));
+                }
+                let finite = [
+                    ("start", strip.start),
+                    ("action_in", strip.action_in),
+                    ("action_out", strip.action_out),
+                    ("speed", strip.speed),
+                    ("repeat", strip.repeat),
+                    ("blend_in", strip.blend_in),
+                    ("blend_out", strip.blend_out),
+                ]
+                .into_iter()
+                .fold(true, |ok, (field, v)| c.f64(&at(field), v) && ok);
+                if !finite {
+                    continue;
+                }
+                if strip.action_out <= strip.action_in {
+                    c.push(
+                        at("action_out"),
+                        format!("{} must be after action_in {}", strip.action_out, strip.action_in),
+                    );
+                }
+                for (field, v) in [("speed", strip.speed), ("repeat", strip.repeat)] {
+                    if v <= 0.0 {
+                        c.push(at(field), format!("{v} must be > 0"));
+                    }
+                }
+                for (field, v) in [("blend_in", strip.blend_in), ("blend_out", strip.blend_out)] {
+                    if v < 0.0 {
+                        c.push(at(field), format!("{v} must be ≥ 0"));
+                    }
+                }
+                let length = strip.length();
+                if length.is_finite()
+                    && length > 0.0
+                    && strip.blend_in + strip.blend_out > length * (1.0 + 1e-9)
+                {
+                    c.push(
+                        at("blend_out"),
+                        format!(
+                            "blend in {} and blend out {} are longer than the strip ({length} frames)",
+                            strip.blend_in, strip.blend_out
+                        ),
+                    );
+                }
+                if let Some(end) = previous_end {
+                    if strip.start < end - 1e-9 {
+                        c.push(
+                            at("start"),
+                            format!(
+                                "frame {} is before the end of the strip before it (frame {end}): strips \
+                                 of a track are in time order and do not overlap",
+                                strip.start
+                            ),
+                        );
+                    }
+                }
+                previous_end = Some(strip.end());
+                unit(c, &at("influence"), &strip.influence);
+            }
+        }
+    }
+    c.unique_names(
+        "layer",
+        scene.layers.iter().enumerate().map(|(l, layer)| (format!("layers[{l}].name"), layer.name.as_str())),
+    );
+    for (l, layer) in scene.layers.iter().enumerate() {
+        let path = format!("layers[{l}].action");
+        if scene.action_index(&layer.action).is_none() {
+            c.push(path, format!("there is no action {:?} in actions", layer.action));
+        } else if let Some(o) = scene.objects.iter().position(|o| o.action.as_deref() == Some(&layer.action))
+        {
+            c.push(
+                path,
+                format!(
+                    "action {:?} is active on object {:?}: a layer's action plays only in the layer",
+                    layer.action, scene.objects[o].name
+                ),
+            );
+        }
+        unit(c, &format!("layers[{l}].weight"), &layer.weight);
     }
 }
 

@@ -445,6 +445,11 @@ fn check_fragment(field: &str, value: &str) -> Result<(), String> {
                 Err(problems.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))
             }
         }
+        // Object constraints: parsed here; crates/io/tests/scene_constraints.rs loads the same
+        // example into a scene with the objects it names and validates it.
+        "constraints" => {
+            ron.from_str::<Vec<keyrig_core::ObjectConstraint>>(value).map(drop).map_err(|e| e.to_string())
+        }
         // Sound clips: parsed and validated as a scene's.
         "sounds" => {
             let sounds: Vec<keyrig_core::SoundClip> = ron.from_str(value).map_err(|e| e.to_string())?;

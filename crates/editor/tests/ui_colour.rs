@@ -97,6 +97,9 @@ fn animate_colour_keeps_the_colour_the_object_shows() {
         h.get_by_label("Visibility and look").click();
         h.run();
     }
+    // The inspector's sections above (constraints, key) may put it below the fold.
+    h.get_by_label("Animate colour").scroll_to_me();
+    h.run();
     h.get_by_label("Animate colour").click();
     h.run();
     let colour = h.state().doc.scene().objects[1].attributes.colour.as_ref().map(|c| c.value);

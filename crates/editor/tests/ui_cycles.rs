@@ -32,6 +32,8 @@ fn choosing_repeat_after_the_keys_is_an_undoable_edit() {
     assert_eq!(channels::cycles(h.state().doc.scene(), CUBE_ROTATION), Some(Cycles::HOLD));
     let held = cube_rotation_at(h.state(), 4.0);
 
+    h.get_by_label("After keys").scroll_to_me();
+    h.run();
     h.get_by_label("After keys").click();
     h.run();
     h.get_by_label("Repeat with offset").click();

@@ -825,6 +825,40 @@ fn keep_largest(slot: &mut VertexInfluences, joint: u16, w: f32) {
     }
 }
 
+/// Binding lives here, not in `mesh`, so that `mesh` does not import `bind` (which builds on
+/// `mesh`'s normals and tubes): no module import cycle.
+impl crate::mesh::SkinnedMesh {
+    /// The mesh with weights computed from its rest positions and skeleton by [`BindJob`]
+    /// (docs/binding.md) in place of its own; `deforming` (one flag per joint, `None`: all)
+    /// says which joints may get weight. The single weights are dropped, so
+    /// [`crate::SkinnedMesh::bindings`] derives the rigid and bones-blending bindings from the new
+    /// weights.
+    ///
+    /// ```
+    /// use keyrig_skin::{BindJob, BindMethod};
+    ///
+    /// let arm = keyrig_skin::mesh_for(keyrig_core::ProceduralMesh::ArmHighPoly);
+    /// let job = BindJob::new(&arm.positions, &arm.indices, &arm.skeleton, BindMethod::Envelope);
+    /// let influences = job.run()?; // one (joints, weights) per vertex, validated
+    /// assert_eq!(influences.len(), arm.positions.len());
+    /// // Or the whole mesh, its single weights dropped so that bindings() follow the new weights:
+    /// let arm = arm.rebound(BindMethod::Heat, None)?;
+    /// let bindings = arm.bindings(keyrig_skin::BlendZone::default())?;
+    /// assert_eq!(bindings.rigid.len(), 1250);
+    /// # Ok::<(), keyrig_skin::SkinError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`BindJob::validate`].
+    pub fn rebound(mut self, method: BindMethod, deforming: Option<&[bool]>) -> Result<Self, SkinError> {
+        let job =
+            BindJob { deforming, ..BindJob::new(&self.positions, &self.indices, &self.skeleton, method) };
+        self.influences = job.run()?;
+        self.bones = None;
+        Ok(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
