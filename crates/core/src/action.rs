@@ -575,37 +575,50 @@ impl Scene {
         if o >= self.objects.len() {
             return Err(ActionError::NoObject(o));
         }
-        let keyed = self.keyed_channels_of(o);
-        let span = keyed
-            .iter()
-            .filter_map(|&id| key_span(self, id))
-            .fold(None, |acc: Option<(f64, f64)>, (a, b)| {
-                Some(acc.map_or((a, b), |(x, y)| (x.min(a), y.max(b))))
-            });
-        let Some((first, last)) = span else {
+        if self.keyed_channels_of(o).is_empty() {
             return Err(ActionError::NoKeys(self.objects[o].name.clone()));
-        };
+        }
         if self.objects[o].action.is_none() {
             let name = self.unused_action_name(&format!("{}Action", self.objects[o].name));
             self.duplicate_action(o, &name)?;
         }
         let name = self.objects[o].action.clone().unwrap_or_default();
+        let (start, end) = self.action_frames_on(o, &name).unwrap_or((0.0, 0.0));
         self.assign_action(o, None)?;
-        let fps = self.fps;
-        let (start, end) = (first * fps, last * fps);
         // A single key spans no time: the strip plays one frame of it.
         let end = if end > start { end } else { start + 1.0 };
-        let object = &mut self.objects[o];
-        let mut n = object.clip_tracks.len() + 1;
-        while object.clip_tracks.iter().any(|t| t.name == format!("Track {n}")) {
+        Ok(self.push_clip_track(o, crate::clip::Strip::new(name, start, start, end)))
+    }
+
+    /// Adds a track named `Track N` (the first free N) on top of object `o`'s tracks, holding
+    /// `strip`; returns its index. `o` must be an object of the scene.
+    pub fn push_clip_track(&mut self, o: usize, strip: crate::clip::Strip) -> usize {
+        let tracks = &mut self.objects[o].clip_tracks;
+        let mut n = tracks.len() + 1;
+        while tracks.iter().any(|t| t.name == format!("Track {n}")) {
             n += 1;
         }
-        object.clip_tracks.push(crate::clip::ClipTrack {
+        tracks.push(crate::clip::ClipTrack {
             name: format!("Track {n}"),
-            strips: vec![crate::clip::Strip::new(name, start, start, end)],
+            strips: vec![strip],
             ..crate::clip::ClipTrack::default()
         });
-        Ok(object.clip_tracks.len() - 1)
+        tracks.len() - 1
+    }
+
+    /// The names of the actions object `o`'s strips and the scene's layers play, sorted, each
+    /// once: what its clip mix reads.
+    #[must_use]
+    pub fn mixed_action_names(&self, o: usize) -> Vec<&str> {
+        let mut names: Vec<&str> = self.objects[o]
+            .clip_tracks
+            .iter()
+            .flat_map(|t| t.strips.iter().map(|s| s.action.as_str()))
+            .chain(self.layers.iter().map(|l| l.action.as_str()))
+            .collect();
+        names.sort_unstable();
+        names.dedup();
+        names
     }
 }
 

@@ -254,16 +254,7 @@ impl ClipEdit {
                 // The frames the action's keys span on this object; without keys, one second.
                 let (first, last) = scene.action_frames_on(*object, action).unwrap_or((0.0, scene.fps));
                 let last = if last > first { last } else { first + 1.0 };
-                let tracks = &mut scene.objects[*object].clip_tracks;
-                let mut n = tracks.len() + 1;
-                while tracks.iter().any(|t| t.name == format!("Track {n}")) {
-                    n += 1;
-                }
-                tracks.push(keyrig_core::ClipTrack {
-                    name: format!("Track {n}"),
-                    strips: vec![keyrig_core::Strip::new(action.clone(), *start, first, last)],
-                    ..keyrig_core::ClipTrack::default()
-                });
+                scene.push_clip_track(*object, keyrig_core::Strip::new(action.clone(), *start, first, last));
                 Ok(())
             }
             ClipEdit::Strip { object, track, strip, value } => {

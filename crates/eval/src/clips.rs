@@ -328,14 +328,7 @@ impl MixSource {
         if object.clip_tracks.is_empty() && scene.layers.is_empty() {
             return None;
         }
-        let mut names: Vec<&str> = object
-            .clip_tracks
-            .iter()
-            .flat_map(|t| t.strips.iter().map(|s| s.action.as_str()))
-            .chain(scene.layers.iter().map(|l| l.action.as_str()))
-            .collect();
-        names.sort_unstable();
-        names.dedup();
+        let names = scene.mixed_action_names(o);
         Some(MixSource {
             tracks: object.clip_tracks.clone(),
             layers: scene.layers.clone(),

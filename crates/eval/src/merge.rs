@@ -26,14 +26,7 @@ pub struct Merged {
 /// layers' actions key: those the mix can move.
 fn mixed_channels(scene: &Scene, o: usize) -> BTreeSet<ChannelId> {
     let object = &scene.objects[o];
-    let mut names: Vec<&str> = object
-        .clip_tracks
-        .iter()
-        .flat_map(|t| t.strips.iter().map(|s| s.action.as_str()))
-        .chain(scene.layers.iter().map(|l| l.action.as_str()))
-        .collect();
-    names.sort_unstable();
-    names.dedup();
+    let names = scene.mixed_action_names(o);
     let pose = |id: ChannelId| match id {
         ChannelId::ObjectEuler(o) => Some(ChannelId::ObjectRotation(o)),
         ChannelId::JointEuler { object, joint } => Some(ChannelId::JointRotation { object, joint }),
